@@ -1,0 +1,1 @@
+"""flexsat: fmu package."""
