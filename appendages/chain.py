@@ -1,0 +1,407 @@
+"""Chains of hinged rigid bodies: the lumped-parameter appendage model.
+
+A :class:`HingedChain` is n rigid bodies in a line along the undeformed appendage axis x, joined by
+torsional springs (and dampers) at hinges, moving in the plane xy, linearised about the straight
+configuration. The attachment end (x = 0) is the start of the first body (``root="rigid"``) or,
+with ``root="hinged"``, a massless mount joined to the first body by one more spring hinge (a
+solar-array drive).
+
+Generalised coordinates (the attachment-end coordinates of :class:`~appendages.interface.RootModel`)
+
+- ``root="rigid"``: ``q = [delta, phi, theta_2, ..., theta_n]`` with ``phi = theta_1``;
+- ``root="hinged"``: ``q = [delta, phi, theta_1, ..., theta_n]`` with ``phi`` the massless mount's
+  rotation,
+
+where ``delta`` [m] is the transverse displacement of the attachment end and ``theta_i`` [rad] the
+absolute (small) rotation of body i about +z. Body i starts at ``x_i = l_1 + ... + l_(i-1)``; its
+centre of mass lies at ``x_i + a_i`` (``a_i`` the com offset) and moves transversally by
+
+    y_i = delta + sum_(j<i) l_j theta_j + a_i theta_i                                   (1)
+
+so the kinetic energy ``T = 1/2 sum_i (m_i y_i'^2 + J_i theta_i'^2)`` gives the mass matrix
+``M = sum_i m_i g_i g_i^T + diag(J)`` with ``g_i = dy_i/dq``. Writing ``S_k = m_(k+1) + ... + m_n``
+(mass outboard of body k) and ``P_k = m_k a_k + l_k S_k`` (first moment of bodies k..n about the
+start of body k, per unit rotation of body k), and ``l_0 = 1`` for the ``delta`` coordinate,
+
+    M[j, k] = l_j P_k  (j < k),      M[0, 0] = m,      M[k, k] = J_k + m_k a_k**2 + l_k**2 S_k     (2)
+
+a sum of positive terms (no cancellation), built in O(n**2). Absolute angles make the stiffness
+and damping matrices tridiagonal: hinge h between bodies k and k+1 adds
+``c_h (theta_(k+1) - theta_k)**2 / 2`` to the potential energy. Absolute angles keep the mass
+matrix well conditioned (its condition number grows like n**2, as a finite-element one's, not
+exponentially as with relative angles), so chains of hundreds of bodies keep their accuracy.
+
+References
+----------
+.. [1] P. A. Belonozhko, P. P. Belonozhko, A. A. Fokov et al., "On the equivalence of mechanical
+   design schemes with distributed and lumped parameters for spatially developed peripheral
+   elements of spacecraft", Institute of Technical Mechanics, NAS of Ukraine, 2009 (the
+   three-body chain and the static-equivalence rules).
+.. [2] E. Wittbrodt, I. Adamiec-Wojcik, S. Wojciech, "Dynamics of Flexible Multibody Systems:
+   Rigid Finite Element Method", Springer, 2006 (the rigid finite element chain, c = EJ/H).
+.. [3] K. Molenaar, "Superelements", cited in [1]: three rods kL, (1-2k)L, kL and two hinges
+   c = 6 EJ/L (1-2k)**2, k = (1 - 1/sqrt(3))/2.
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Sequence
+
+import numpy as np
+
+from .interface import FiniteAppendage, RootModel, check_positive
+
+__all__ = ["HingedChain", "MOLENAAR_K"]
+
+#: Molenaar's superelement end-rod fraction k = (1 - 1/sqrt(3))/2 [1]_.
+MOLENAAR_K: float = 0.5 * (1.0 - 1.0 / np.sqrt(3.0))
+
+_ROOTS = ("rigid", "hinged")
+
+
+def _as_vector(name: str, values, unit: str, *, size: int | None = None,
+               allow_zero: bool = False) -> np.ndarray:
+    """Validate a 1-D sequence of non-negative (or positive) finite reals; return float64 copy."""
+    if isinstance(values, (str, bytes)) or values is None:
+        raise TypeError(f"{name} must be a sequence of real numbers [{unit}]; "
+                        f"got {type(values).__name__}")
+    if isinstance(values, numbers.Number) or np.ndim(values) == 0:
+        raise TypeError(f"{name} must be a sequence of real numbers [{unit}], one per "
+                        f"{'hinge' if 'hinge' in name else 'body'}; got the scalar {values!r}")
+    arr = np.asarray(values)
+    if arr.dtype == bool or arr.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must contain real numbers [{unit}]; got dtype {arr.dtype}")
+    if arr.ndim != 1:
+        raise ValueError(f"{name} must be one-dimensional [{unit}]; got shape {arr.shape}")
+    if size is not None and arr.size != size:
+        raise ValueError(f"{name} must have {size} entries [{unit}]; got {arr.size}")
+    arr = arr.astype(np.float64)
+    bad = ~np.isfinite(arr) | ((arr < 0.0) if allow_zero else (arr <= 0.0))
+    if np.any(bad):
+        what = "non-negative" if allow_zero else "positive"
+        k = int(np.flatnonzero(bad)[0])
+        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {arr[k]!r} at index {k}")
+    arr.flags.writeable = False
+    return arr
+
+
+def _check_count(name: str, value, *, minimum: int) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer; got {type(value).__name__} {value!r}")
+    if value < minimum:
+        raise ValueError(f"{name} must be at least {minimum}; got {value}")
+    return int(value)
+
+
+def _frozen_pieces(lengths: np.ndarray, linear_density: float):
+    """Masses [kg] and central inertias [kg*m^2] of thin uniform rods cut from one rod."""
+    masses = linear_density * lengths
+    return masses, masses * lengths**2 / 12.0
+
+
+class HingedChain(FiniteAppendage):
+    """A chain of rigid bodies joined by torsional spring hinges (planar, linearised).
+
+    Parameters
+    ----------
+    lengths : sequence of float, m
+        Length of each body, from the attachment end outward (n >= 1 entries, positive).
+    masses : sequence of float, kg
+        Mass of each body (positive).
+    inertias : sequence of float, kg*m^2
+        Moment of inertia of each body about its own centre of mass (non-negative; 0 for a
+        point mass, as long as the mass matrix stays nonsingular).
+    hinge_stiffnesses : sequence of float, N*m/rad
+        Torsional stiffness of each hinge: n - 1 entries for ``root="rigid"`` (hinge k between
+        bodies k and k+1), n entries for ``root="hinged"`` (the first between mount and body 1).
+    hinge_dampings : sequence of float, N*m*s/rad, optional
+        Viscous damping of each hinge (same count; default zero).
+    com_offsets : sequence of float, m, optional
+        Distance of each body's centre of mass from the body's start, in [0, length]
+        (default: mid-length).
+    root : {"rigid", "hinged"}
+        How the first body is attached to the mount.
+
+    Attributes
+    ----------
+    lengths, masses, inertias, hinge_stiffnesses, hinge_dampings, com_offsets : ndarray
+        The inputs as read-only float64 arrays.
+    root : str
+    n_bodies : int
+
+    Notes
+    -----
+    Coordinates, mass and stiffness matrices: see :mod:`appendages.chain` (eq. (1), (2)). W(s),
+    poles, zeros, gains and the state-space model come from
+    :class:`~appendages.interface.FiniteAppendage`.
+
+    References
+    ----------
+    .. [1] Belonozhko et al. 2009 (see :mod:`appendages.chain`).
+    """
+
+    #: Eigenvalues of K - lambda M below this fraction of the largest one count as rigid-body
+    #: ones. The rigid-body eigenvalues come out of the QZ algorithm at ~1e-20 of the largest;
+    #: a chain's first elastic one is ~500/n**4 of it (4e-9 at n = 200, 7e-12 at n = 1000), so
+    #: the base class's 1e-9 would drop real modes beyond ~220 bodies.
+    _rigid_tol = 1e-14
+
+    def __init__(self, lengths: Sequence[float], masses: Sequence[float],
+                 inertias: Sequence[float], hinge_stiffnesses: Sequence[float], *,
+                 hinge_dampings: Sequence[float] | None = None,
+                 com_offsets: Sequence[float] | None = None, root: str = "rigid") -> None:
+        if not isinstance(root, str) or root not in _ROOTS:
+            raise ValueError(f"root must be 'rigid' or 'hinged'; got {root!r}")
+        self.root = root
+        self.lengths = _as_vector("lengths", lengths, "m")
+        n = self.lengths.size
+        if n < 1:
+            raise ValueError("lengths must have at least one entry [m]; got an empty sequence")
+        self.n_bodies = n
+        self.masses = _as_vector("masses", masses, "kg", size=n)
+        self.inertias = _as_vector("inertias", inertias, "kg*m^2", size=n, allow_zero=True)
+        n_hinges = n - 1 if root == "rigid" else n
+        self.hinge_stiffnesses = _as_vector(
+            f"hinge_stiffnesses (root={root!r}: one per hinge)", hinge_stiffnesses, "N*m/rad",
+            size=n_hinges)
+        if hinge_dampings is None:
+            dampings = np.zeros(n_hinges)
+            dampings.flags.writeable = False
+            self.hinge_dampings = dampings
+        else:
+            self.hinge_dampings = _as_vector(
+                f"hinge_dampings (root={root!r}: one per hinge)", hinge_dampings, "N*m*s/rad",
+                size=n_hinges, allow_zero=True)
+        if com_offsets is None:
+            offsets = 0.5 * self.lengths
+            offsets.flags.writeable = False
+            self.com_offsets = offsets
+        else:
+            self.com_offsets = _as_vector("com_offsets", com_offsets, "m", size=n,
+                                          allow_zero=True)
+            over = self.com_offsets > self.lengths * (1.0 + 1e-12)
+            if np.any(over):
+                k = int(np.flatnonzero(over)[0])
+                raise ValueError(
+                    f"com_offsets must lie in [0, length of the body] [m]; got "
+                    f"{self.com_offsets[k]!r} for body {k} of length {self.lengths[k]!r}")
+        self._check_mass_matrix()
+
+    # -- constructors -------------------------------------------------------------------------
+    @classmethod
+    def three_body(cls, length: float, mass: float, k_L: float, stiffness: float) -> "HingedChain":
+        """The paper's symmetric three-body chain [1]_.
+
+        Rods of lengths ``(1 - k_L) L/2``, ``k_L L``, ``(1 - k_L) L/2``, cut as "frozen pieces"
+        of a uniform thin rod of mass m (``m_i = m l_i / L``, ``J_i = m_i l_i**2 / 12``, so that
+        the chain's inertia about its centre of mass equals the rod's ``m L**2 / 12``), joined
+        by two hinges of equal stiffness.
+
+        Parameters
+        ----------
+        length : float, m
+        mass : float, kg
+        k_L : float
+            Fraction of the length taken by the middle rod, in (0, 1).
+        stiffness : float, N*m/rad
+            Stiffness c of both hinges.
+
+        References
+        ----------
+        .. [1] Belonozhko et al. 2009, the worked example (see :mod:`appendages.chain`).
+        """
+        length = check_positive("length", length, "m")
+        mass = check_positive("mass", mass, "kg")
+        stiffness = check_positive("stiffness", stiffness, "N*m/rad")
+        if isinstance(k_L, (bool, np.bool_)) or not isinstance(k_L, numbers.Real):
+            raise TypeError(f"k_L must be a real number [-]; got {type(k_L).__name__} {k_L!r}")
+        k_L = float(k_L)
+        if not (0.0 < k_L < 1.0):
+            raise ValueError(f"k_L must lie in the open interval (0, 1) [-]; got {k_L!r}")
+        lengths = np.array([(1.0 - k_L) / 2.0, k_L, (1.0 - k_L) / 2.0]) * length
+        masses, inertias = _frozen_pieces(lengths, mass / length)
+        return cls(lengths, masses, inertias, [stiffness, stiffness])
+
+    @classmethod
+    def rfem(cls, beam, n_bodies: int) -> "HingedChain":
+        """Rigid-finite-element chain of a uniform beam [2]_.
+
+        ``n_bodies`` rods: two end rods of length H/2 and ``n_bodies - 2`` inner rods of length
+        H = L/(n_bodies - 1), frozen pieces of the beam, joined by hinges of stiffness
+        ``c = EJ/H`` (pure bending of an arc of length H). If the beam has a modal damping ratio
+        zeta, the hinges get stiffness-proportional damping ``2 zeta c / w_1`` (damping ratio
+        zeta at the beam's first frequency w_1).
+
+        Parameters
+        ----------
+        beam : Beam
+            Uniform beam (``length``, ``bending_stiffness``, ``linear_density``).
+        n_bodies : int
+            Number of rods, at least 2.
+
+        References
+        ----------
+        .. [2] Wittbrodt, Adamiec-Wojcik, Wojciech 2006; rule 1 of Belonozhko et al. 2009.
+        """
+        n_bodies = _check_count("n_bodies", n_bodies, minimum=2)
+        L, EJ, rho = _beam_properties(beam)
+        H = L / (n_bodies - 1)
+        lengths = np.full(n_bodies, H)
+        lengths[0] = lengths[-1] = H / 2.0
+        masses, inertias = _frozen_pieces(lengths, rho)
+        stiffnesses = np.full(n_bodies - 1, EJ / H)
+        return cls(lengths, masses, inertias, stiffnesses,
+                   hinge_dampings=_proportional_damping(beam, stiffnesses))
+
+    @classmethod
+    def superelements(cls, beam, n: int) -> "HingedChain":
+        """Chain of n Molenaar superelements [3]_.
+
+        Each superelement of length l = L/n is three rods ``k l, (1 - 2k) l, k l`` with
+        ``k = (1 - 1/sqrt(3))/2`` and two hinges ``c = 6 EJ/l (1 - 2k)**2`` (= 2 EJ/l), which
+        give a cantilever's static tip deflection and rotation under an end force and moment.
+        The rigidly joined end rods of neighbouring superelements form one body of length
+        2kl, so the chain has 2n + 1 bodies and 2n hinges; frozen pieces of the beam.
+        Damping as in :meth:`rfem`.
+
+        Parameters
+        ----------
+        beam : Beam
+        n : int
+            Number of superelements, at least 1.
+
+        References
+        ----------
+        .. [3] Molenaar, cited as rule 2 in Belonozhko et al. 2009.
+        """
+        n = _check_count("n", n, minimum=1)
+        L, EJ, rho = _beam_properties(beam)
+        ell = L / n
+        k = MOLENAAR_K
+        lengths = np.empty(2 * n + 1)
+        lengths[0] = lengths[-1] = k * ell
+        lengths[1::2] = (1.0 - 2.0 * k) * ell
+        lengths[2:-1:2] = 2.0 * k * ell
+        masses, inertias = _frozen_pieces(lengths, rho)
+        stiffnesses = np.full(2 * n, 6.0 * EJ / ell * (1.0 - 2.0 * k) ** 2)
+        return cls(lengths, masses, inertias, stiffnesses,
+                   hinge_dampings=_proportional_damping(beam, stiffnesses))
+
+    # -- rigid properties ---------------------------------------------------------------------
+    @property
+    def length(self) -> float:
+        """Total length [m]."""
+        return float(np.sum(self.lengths))
+
+    @property
+    def mass(self) -> float:
+        """Total mass [kg]."""
+        return float(np.sum(self.masses))
+
+    @property
+    def body_starts(self) -> np.ndarray:
+        """x coordinate of each body's start [m] (the first is 0)."""
+        return np.concatenate([[0.0], np.cumsum(self.lengths)[:-1]])
+
+    @property
+    def center_of_mass(self) -> float:
+        """x coordinate of the chain's centre of mass, undeformed [m]."""
+        return float(np.dot(self.masses, self.body_starts + self.com_offsets) / self.mass)
+
+    @property
+    def inertia(self) -> float:
+        """Moment of inertia about the chain's centre of mass, undeformed [kg*m^2].
+
+        ``sum_i (J_i + m_i d_i**2)`` with d_i the distance of body i's centre of mass from the
+        chain's (parallel-axis theorem).
+        """
+        d = self.body_starts + self.com_offsets - self.center_of_mass
+        return float(np.sum(self.inertias) + np.dot(self.masses, d * d))
+
+    def __repr__(self) -> str:
+        return (f"HingedChain(n_bodies={self.n_bodies}, root={self.root!r}, "
+                f"length={self.length:.6g} m, mass={self.mass:.6g} kg)")
+
+    # -- matrices -----------------------------------------------------------------------------
+    def _matrices(self):
+        """Mass, stiffness, damping matrices and tip row in the coordinates of eq. (1)."""
+        n = self.n_bodies
+        hinged = self.root == "hinged"
+        ell, m, a, J = self.lengths, self.masses, self.com_offsets, self.inertias
+        # Index of body k's rotation (k = 0..n-1): 1 + k for the rigid root (theta_1 = phi),
+        # 2 + k for the hinged root (index 1 is the massless mount).
+        first = 2 if hinged else 1
+        size = n + first
+        outboard = np.concatenate([np.cumsum(m[::-1])[::-1][1:], [0.0]])  # S_k
+        moment = m * a + ell * outboard                                      # P_k
+        M = np.zeros((size, size))
+        idx = first + np.arange(n)
+        # eq. (2): M[j, k] = l_j P_k for j < k (upper triangle over the bodies), l_0 = 1.
+        M[np.ix_(idx, idx)] = np.triu(np.outer(ell, moment), k=1)
+        M[0, idx] = moment
+        M = M + M.T
+        M[0, 0] = np.sum(m)
+        M[idx, idx] = J + m * a * a + ell * ell * outboard
+        K = np.zeros((size, size))
+        C = np.zeros((size, size))
+        # Hinge h joins coordinates (left[h], right[h]).
+        if hinged:
+            left = np.concatenate([[1], idx[:-1]])
+        else:
+            left = idx[:-1]
+        right = left + 1 if not hinged else np.concatenate([[2], idx[1:]])
+        for matrix, values in ((K, self.hinge_stiffnesses), (C, self.hinge_dampings)):
+            np.add.at(matrix, (left, left), values)
+            np.add.at(matrix, (right, right), values)
+            np.add.at(matrix, (left, right), -values)
+            np.add.at(matrix, (right, left), -values)
+        tip = np.zeros(size)
+        tip[idx] = ell
+        tip[1] -= self.length  # w(L) - delta - L*phi, with w(L) = delta + sum l_k theta_k
+        return M, C, K, tip
+
+    def _check_mass_matrix(self) -> None:
+        """Raise ValueError when the bodies' mass matrix is singular (e.g. massless last rod)."""
+        M = self._matrices()[0]
+        keep = np.flatnonzero(np.diag(M) != 0.0)
+        Mk = M[np.ix_(keep, keep)]
+        d = np.sqrt(np.diag(Mk))
+        scaled = Mk / np.outer(d, d)
+        try:
+            chol = np.linalg.cholesky(scaled)
+            smallest = np.min(np.abs(np.diag(chol))) ** 2
+        except np.linalg.LinAlgError:
+            smallest = 0.0
+        if keep.size < M.shape[0] - (self.root == "hinged") or smallest < 1e-13:
+            raise ValueError(
+                "inertias and com_offsets give a singular mass matrix: some body rotation "
+                "carries no inertia (e.g. a point-mass last body with com_offset 0 and "
+                "inertia 0 [kg*m^2]); give it a positive inertia or com offset")
+
+    def _root_model(self) -> RootModel:
+        M, C, K, tip = self._matrices()
+        if self.root == "hinged":
+            names = ("delta", "phi") + tuple(f"theta_{k + 1}" for k in range(self.n_bodies))
+        else:
+            names = ("delta", "phi") + tuple(f"theta_{k + 1}" for k in range(1, self.n_bodies))
+        return RootModel(mass=M, damping=C, stiffness=K, tip=tip, coordinate_names=names)
+
+
+def _beam_properties(beam) -> tuple[float, float, float]:
+    """(length [m], bending_stiffness [N*m^2], linear_density [kg/m]) of a beam-like object."""
+    try:
+        return (float(beam.length), float(beam.bending_stiffness), float(beam.linear_density))
+    except AttributeError as exc:
+        raise TypeError(
+            "beam must be a uniform beam with length [m], bending_stiffness [N*m^2] and "
+            f"linear_density [kg/m]; got {type(beam).__name__}") from exc
+
+
+def _proportional_damping(beam, stiffnesses: np.ndarray) -> np.ndarray | None:
+    """Hinge dampings 2 zeta c / w_1 (zeta at the beam's first frequency), or None if zeta = 0."""
+    zeta = float(getattr(beam, "damping_ratio", 0.0) or 0.0)
+    if zeta == 0.0:
+        return None
+    w1 = float(beam.natural_frequencies(1)[0])
+    return 2.0 * zeta * stiffnesses / w1
