@@ -1,0 +1,1003 @@
+"""Closed-loop analysis of attitude controllers on plants with named signals.
+
+Signal conventions (DESIGN.md): a plant is a continuous-time ``control.StateSpace`` (or, for the
+frequency-domain functions, a ``control.FrequencyResponseData``) with input ``'torque'`` [N*m]
+(possibly other inputs such as ``'disturbance_torque'``) and outputs ``'theta'`` [rad] and
+``'omega'`` [rad/s], optionally ``'<appendage>.tip_deflection'`` [m] outputs. A controller is a
+``control.StateSpace`` with output ``'torque'`` and inputs ``'theta_ref'``, ``'theta'``,
+``'omega'`` (torque = controller(inputs), no hidden minus sign). A controller with ``dt`` set is
+a digital controller: its loop with a continuous plant is the sampled-data loop (zero-order hold
+on the torque, sampled measurements).
+
+The loop transfer function is taken with the loop broken at the plant's torque input and the
+negative-feedback convention, L(s) = -sum_i K_i(s) P_i(s), where P_i is the transfer from torque to
+the i-th measured plant output and K_i the controller's transfer from that measurement to torque.
+For a PD controller on a rigid hub, L(s) = (Kp + Kd s) / (J s^2).
+"""
+from __future__ import annotations
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from typing import Callable, Mapping, Sequence
+
+import control
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+__all__ = [
+    "FlexibleMode",
+    "Margins",
+    "SpilloverVerdict",
+    "METRIC_UNITS",
+    "rigid_body_inertia",
+    "flexible_modes",
+    "close_loop",
+    "loop_frequency_response",
+    "slew_profile",
+    "slew",
+    "step_response",
+    "disturbance_response",
+    "metrics",
+    "margins",
+    "spillover",
+]
+
+#: Units of the metrics returned by :func:`metrics` and :func:`margins` (for tables).
+METRIC_UNITS: dict[str, str] = {
+    "overshoot": "%",
+    "settling_time": "s",
+    "peak_torque": "N*m",
+    "peak_tip_deflection": "m",
+    "peak_attitude_error": "rad",
+    "final_attitude_error": "rad",
+    "gain_margin": "dB",
+    "phase_margin": "deg",
+    "modulus_margin": "1",
+}
+
+TORQUE = "torque"
+THETA = "theta"
+OMEGA = "omega"
+THETA_REF = "theta_ref"
+TIP_SUFFIX = "tip_deflection"
+
+
+# --------------------------------------------------------------------------------------------
+# signal and system checks
+# --------------------------------------------------------------------------------------------
+def _labels(system, kind: str) -> list[str]:
+    return list(system.input_labels if kind == "input" else system.output_labels)
+
+
+def _require_signal(system, name: str, kind: str, what: str) -> int:
+    labels = _labels(system, kind)
+    if name not in labels:
+        raise ValueError(f"{what} must have an {kind} named {name!r}; got {kind}s {labels}")
+    return labels.index(name)
+
+
+def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> None:
+    allowed = (control.StateSpace, control.FrequencyResponseData) if allow_frd else (
+        control.StateSpace,)
+    if not isinstance(plant, allowed):
+        expected = " or ".join(t.__name__ for t in allowed)
+        raise TypeError(f"{what} must be a control.{expected}; got {type(plant).__name__}")
+    if isinstance(plant, control.StateSpace) and not plant.isctime(strict=True):
+        raise ValueError(f"{what} must be continuous-time (dt=0); got dt={plant.dt}")
+    _require_signal(plant, TORQUE, "input", what)
+    _require_signal(plant, THETA, "output", what)
+    _require_signal(plant, OMEGA, "output", what)
+
+
+def _check_controller(controller, what: str = "controller") -> None:
+    if not isinstance(controller, control.StateSpace):
+        raise TypeError(f"{what} must be a control.StateSpace; got {type(controller).__name__}")
+    if controller.noutputs != 1 or controller.output_labels[0] != TORQUE:
+        raise ValueError(f"{what} must have exactly one output named 'torque'; got outputs "
+                         f"{list(controller.output_labels)}")
+    if controller.isdtime(strict=True) and not (controller.dt is True or controller.dt > 0):
+        raise ValueError(f"{what} must have a positive sample time dt [s]; got {controller.dt}")
+    if controller.dt is True:
+        raise ValueError(f"{what} is discrete-time with an unspecified sample time (dt=True); "
+                         "give dt in seconds")
+
+
+def _measurements(plant, controller) -> list[str]:
+    """Controller inputs that are plant outputs (the fed-back signals)."""
+    outputs = _labels(plant, "output")
+    measured = [name for name in controller.input_labels if name in outputs]
+    if not measured:
+        raise ValueError(f"controller inputs {list(controller.input_labels)} contain none of the "
+                         f"plant outputs {outputs}: nothing is fed back")
+    return measured
+
+
+def _reference_inputs(controller, plant_outputs: Sequence[str]) -> list[str]:
+    others = [n for n in controller.input_labels if n not in plant_outputs]
+    bad = [n for n in others if "ref" not in n]
+    if bad:
+        raise ValueError(f"controller inputs {bad} are neither plant outputs nor reference inputs "
+                         "(names containing 'ref')")
+    return others
+
+
+def _is_digital(controller) -> bool:
+    return bool(controller.isdtime(strict=True))
+
+
+# --------------------------------------------------------------------------------------------
+# fast frequency response of a state-space model
+# --------------------------------------------------------------------------------------------
+class _ModalEvaluator:
+    """Evaluate C (sI - A)^-1 B + D at many complex points in O(n) per point.
+
+    A is brought to complex Schur form with its near-zero eigenvalues (the rigid-body Jordan
+    block of a free-floating plant, which is defective and cannot be diagonalised) first,
+    T = [[T11, T12], [0, T22]]. The Sylvester equation T11 X - X T22 = -T12 block-diagonalises
+    T with S = [[I, X], [0, I]]: S^-1 T S = diag(T11, T22). T22 (well separated, non-defective
+    eigenvalues) is diagonalised; the small block T11 is solved directly.
+
+    References
+    ----------
+    G. H. Golub and C. F. Van Loan, Matrix Computations, 4th ed., 2013, sec. 7.6.3
+    (block diagonalisation by a Sylvester equation).
+    """
+
+    def __init__(self, A, B, C, D):
+        A = np.asarray(A, dtype=float)
+        self.B = np.asarray(B, dtype=float)
+        self.C = np.asarray(C, dtype=float)
+        self.D = np.asarray(D, dtype=float)
+        n = A.shape[0]
+        self.n = n
+        self.rigid_tol = 1e-5 * math.sqrt(max(np.linalg.norm(A, 1), 1.0)) if n else 0.0
+        if n == 0:
+            self.k = 0
+            self.modal = True
+            return
+        T, Z, k = scipy.linalg.schur(A.astype(complex), output="complex",
+                                     sort=lambda x: abs(x) <= self.rigid_tol)
+        self.k = int(k)
+        T11, T12, T22 = T[:k, :k], T[:k, k:], T[k:, k:]
+        if 0 < k < n:
+            X = scipy.linalg.solve_sylvester(T11, -T22, -T12)
+        else:
+            X = np.zeros((k, n - k), dtype=complex)
+        CZ = self.C @ Z
+        ZB = Z.conj().T @ self.B
+        # C Z S and S^-1 Z^H B with S = [[I, X], [0, I]], S^-1 = [[I, -X], [0, I]]
+        self.C1 = CZ[:, :k]
+        C2 = CZ[:, k:] + CZ[:, :k] @ X
+        self.B1 = ZB[:k] - X @ ZB[k:]
+        B2 = ZB[k:]
+        self.T11 = T11
+        self.modal = True
+        if n - k:
+            lam, V = np.linalg.eig(T22)
+            cond = np.linalg.cond(V)
+            if not np.isfinite(cond) or cond > 1e10:
+                self.modal = False
+            else:
+                self.lam = lam
+                self.Cm = C2 @ V
+                self.Bm = np.linalg.solve(V, B2)
+        else:
+            self.lam = np.zeros(0, dtype=complex)
+            self.Cm = np.zeros((self.C.shape[0], 0), dtype=complex)
+            self.Bm = np.zeros((0, self.B.shape[1]), dtype=complex)
+        self.A = A
+
+    def __call__(self, s: np.ndarray) -> np.ndarray:
+        """Return G(s), shape (len(s), n_outputs, n_inputs), complex128."""
+        s = np.asarray(s, dtype=complex).reshape(-1)
+        p, m = self.C.shape[0], self.B.shape[1]
+        G = np.broadcast_to(self.D.astype(complex), (s.size, p, m)).copy()
+        if self.n == 0:
+            return G
+        if not self.modal:
+            M = s[:, None, None] * np.eye(self.n) - self.A
+            return G + self.C @ np.linalg.solve(M, np.broadcast_to(self.B, (s.size,) + self.B.shape))
+        if self.k:
+            M = s[:, None, None] * np.eye(self.k) - self.T11
+            G += self.C1 @ np.linalg.solve(M, np.broadcast_to(self.B1, (s.size,) + self.B1.shape))
+        if self.lam.size:
+            G += np.einsum("pi,fi,im->fpm", self.Cm, 1.0 / (s[:, None] - self.lam), self.Bm)
+        return G
+
+    def characteristic_frequencies(self) -> np.ndarray:
+        """Undamped natural frequencies |lambda| of the non-rigid eigenvalues [rad/s]."""
+        if self.n == 0:
+            return np.zeros(0)
+        lam = self.lam if self.modal else np.linalg.eigvals(self.A)
+        w = np.abs(lam)
+        return w[w > self.rigid_tol]
+
+
+def _evaluator(system, inputs: Sequence[str], outputs: Sequence[str]) -> _ModalEvaluator:
+    i_in = [list(system.input_labels).index(n) for n in inputs]
+    i_out = [list(system.output_labels).index(n) for n in outputs]
+    return _ModalEvaluator(system.A, system.B[:, i_in], system.C[i_out, :],
+                           system.D[np.ix_(i_out, i_in)])
+
+
+# --------------------------------------------------------------------------------------------
+# plant properties
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class FlexibleMode:
+    """One flexible mode of a plant channel.
+
+    Attributes
+    ----------
+    frequency : float, rad/s
+        Undamped natural frequency |lambda|.
+    damping_ratio : float
+        -Re(lambda) / |lambda|.
+    residue : complex
+        Residue r of the channel's transfer function at lambda (the term r / (s - lambda)),
+        units of output / (input * s).
+    participation : float
+        2 |r| omega J: for a collocated modal form phi^2 / (s^2 + 2 zeta omega s + omega^2) this is
+        phi^2 J, the fraction of the total inertia that takes part in the mode.
+    """
+
+    frequency: float
+    damping_ratio: float
+    residue: complex
+    participation: float
+
+
+def _rigid_gain(ev: _ModalEvaluator) -> tuple[complex, complex]:
+    """Coefficients (a1, a2) of the singular part a1/s + a2/s^2 at s = 0 of a SISO evaluator.
+
+    With the rigid block T11 nilpotent of index 2, (sI - T11)^-1 = I/s + T11/s^2, so
+    a1 = C1 B1 and a2 = C1 T11 B1.
+    """
+    if ev.k == 0:
+        return 0j, 0j
+    a1 = (ev.C1 @ ev.B1)[0, 0]
+    a2 = (ev.C1 @ ev.T11 @ ev.B1)[0, 0]
+    return a1, a2
+
+
+def rigid_body_inertia(plant: control.StateSpace) -> float:
+    """Total inertia J [kg*m^2] seen by the torque: lim_{s->0} s^2 theta(s)/torque(s) = 1/J.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        Continuous-time free-floating plant with input ``'torque'`` and output ``'theta'``.
+
+    Returns
+    -------
+    float
+        J in kg*m^2 (about the system's centre of mass for a free-floating spacecraft).
+
+    Raises
+    ------
+    ValueError
+        If the channel torque -> theta has no rigid-body double integrator.
+
+    References
+    ----------
+    Low-frequency limit of the free-floating plant theta/torque -> 1/(J s^2); e.g. P. C. Hughes,
+    Spacecraft Attitude Dynamics, Wiley 1986, ch. 12 (hybrid coordinates).
+    """
+    _check_plant(plant)
+    ev = _evaluator(plant, [TORQUE], [THETA])
+    a1, a2 = _rigid_gain(ev)
+    scale = abs(a2) if a2 else 1.0
+    nilpotent_ok = ev.k == 0 or np.linalg.norm(ev.T11 @ ev.T11) <= 1e-6 * max(
+        np.linalg.norm(ev.T11), 1e-300)
+    if (ev.k == 0 or not nilpotent_ok or abs(a2.imag) > 1e-8 * scale or a2.real <= 0
+            or abs(a1) > 1e-6 * math.sqrt(scale) * max(1.0, math.sqrt(np.linalg.norm(ev.A, 1)))):
+        raise ValueError(
+            "plant must be free-floating: the channel torque -> theta needs a rigid-body double "
+            f"integrator 1/(J s^2) with J > 0 [kg*m^2]; got singular part {a1:.3g}/s + {a2:.3g}/s^2 "
+            f"({ev.k} eigenvalue(s) of A near zero)")
+    return float(1.0 / a2.real)
+
+
+def flexible_modes(plant: control.StateSpace, *, input: str = TORQUE, output: str = THETA,
+                   min_participation: float = 1e-9) -> list[FlexibleMode]:
+    """Flexible (lightly damped, complex) modes visible in one channel of a plant.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        Continuous-time plant with named signals.
+    input, output : str
+        Channel (default torque -> theta).
+    min_participation : float
+        Modes whose participation (see :class:`FlexibleMode`) is below this are dropped
+        (uncontrollable or unobservable in the channel, e.g. symmetric modes of two wings).
+
+    Returns
+    -------
+    list of FlexibleMode
+        Sorted by frequency, one entry per complex-conjugate pair.
+    """
+    _check_plant(plant)
+    _require_signal(plant, input, "input", "plant")
+    _require_signal(plant, output, "output", "plant")
+    ev = _evaluator(plant, [input], [output])
+    try:
+        J = rigid_body_inertia(plant)
+    except ValueError:
+        J = 1.0
+    if not ev.modal:
+        lam, V = np.linalg.eig(plant.A)
+        raise ValueError("plant A is defective outside its rigid-body block; cannot list modes "
+                         f"(eigenvalues {lam[:6]}...)")
+    modes = []
+    for lam, c, b in zip(ev.lam, ev.Cm[0], ev.Bm[:, 0]):
+        if lam.imag <= 0:
+            continue
+        w = abs(lam)
+        r = complex(c * b)
+        participation = 2.0 * abs(r) * w * J
+        if participation < min_participation:
+            continue
+        modes.append(FlexibleMode(float(w), float(-lam.real / w), r, float(participation)))
+    return sorted(modes, key=lambda m: m.frequency)
+
+
+# --------------------------------------------------------------------------------------------
+# closing the loop
+# --------------------------------------------------------------------------------------------
+def close_loop(plant: control.StateSpace, controller: control.StateSpace) -> control.StateSpace:
+    """Close the attitude loop by signal names.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        Continuous-time plant (input ``'torque'``, outputs ``'theta'``, ``'omega'``, ...).
+    controller : control.StateSpace
+        Controller with output ``'torque'``; its inputs are plant outputs (measurements) and
+        reference inputs (names containing ``'ref'``). If the controller is discrete-time
+        (``dt`` > 0), the plant is discretised with a zero-order hold at that ``dt`` and the
+        result is the exact sampled-data loop at the sampling instants (every plant input,
+        including disturbances, is then held constant over a sample).
+
+    Returns
+    -------
+    control.StateSpace
+        Inputs: the controller's reference inputs, then the plant's inputs other than torque.
+        Outputs: every plant output, then ``'torque'``. States: plant states, controller states.
+    """
+    _check_plant(plant)
+    _check_controller(controller)
+    measured = _measurements(plant, controller)
+    refs = _reference_inputs(controller, _labels(plant, "output"))
+    disturbances = [n for n in plant.input_labels if n != TORQUE]
+    if _is_digital(controller):
+        plant = control.c2d(plant, controller.dt, method="zoh")
+    p = control.ss(plant.A, plant.B, plant.C, plant.D, plant.dt, inputs=list(plant.input_labels),
+                   outputs=list(plant.output_labels), name="plant")
+    c = control.ss(controller.A, controller.B, controller.C, controller.D, controller.dt,
+                   inputs=list(controller.input_labels), outputs=[TORQUE], name="controller")
+    inputs = refs + disturbances
+    outputs = list(plant.output_labels) + [TORQUE]
+    del measured
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        loop = control.interconnect(
+            [p, c], inplist=inputs, outlist=[f"plant.{n}" for n in plant.output_labels]
+            + ["controller.torque"], inputs=inputs, outputs=outputs, name="closed_loop")
+    return control.ss(loop.A, loop.B, loop.C, loop.D, loop.dt, inputs=inputs, outputs=outputs,
+                      name="closed_loop")
+
+
+# --------------------------------------------------------------------------------------------
+# loop transfer function
+# --------------------------------------------------------------------------------------------
+class _Loop:
+    """L(omega) = -sum_i K_i P_i at real frequencies omega [rad/s] (see module docstring)."""
+
+    def __init__(self, plant, controller):
+        _check_plant(plant, allow_frd=True)
+        _check_controller(controller)
+        self.measured = _measurements(plant, controller)
+        self.digital = _is_digital(controller)
+        self.dt = float(controller.dt) if self.digital else 0.0
+        self.frd = isinstance(plant, control.FrequencyResponseData)
+        self.controller_ev = _evaluator(controller, self.measured, [TORQUE])
+        if self.frd:
+            i_t = list(plant.input_labels).index(TORQUE)
+            i_m = [list(plant.output_labels).index(n) for n in self.measured]
+            self.omega = np.asarray(plant.omega, dtype=float)
+            if self.digital:
+                self.omega = self.omega[self.omega < math.pi / self.dt]
+            data = np.asarray(plant.frdata)[i_m, i_t, :]
+            self.plant_data = data[:, : self.omega.size]
+        else:
+            p = control.c2d(plant, self.dt, method="zoh") if self.digital else plant
+            self.plant_ev = _evaluator(p, [TORQUE], self.measured)
+        self.plant = plant
+        self.controller = controller
+
+    def _point(self, omega: np.ndarray) -> np.ndarray:
+        omega = np.asarray(omega, dtype=float)
+        if self.digital:
+            return np.exp(1j * omega * self.dt)
+        return 1j * omega
+
+    def __call__(self, omega) -> np.ndarray:
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        z = self._point(omega)
+        K = self.controller_ev(z)[:, 0, :]  # (f, n_meas)
+        if self.frd:
+            if omega.shape != self.omega.shape or np.any(omega != self.omega):
+                raise ValueError("a FrequencyResponseData plant is known only on its own grid")
+            P = self.plant_data.T  # (f, n_meas)
+            if self.digital:
+                # zero-order hold seen from continuous time, aliasing neglected:
+                # H(jw) = (1 - exp(-jwT)) / (jwT) (Franklin, Powell & Workman, sec. 6.3)
+                wT = omega * self.dt
+                P = P * ((1 - np.exp(-1j * wT)) / (1j * wT))[:, None]
+        else:
+            P = self.plant_ev(z)[:, :, 0]
+        return -np.sum(K * P, axis=1)
+
+    def grid(self, n_points: int = 600) -> np.ndarray:
+        """Frequency grid [rad/s] refined around every lightly damped pole."""
+        if self.frd:
+            return self.omega
+        poles = [self.plant_ev, self.controller_ev]
+        w_char = np.concatenate([ev.characteristic_frequencies() for ev in poles])
+        if self.digital:
+            # poles of the discretised system are z-plane poles: map back, s = log(z) / T
+            lam = np.concatenate([_poles_of(ev) for ev in poles])
+            lam = lam[np.abs(lam) > 1e-12]
+            s = np.log(lam.astype(complex)) / self.dt
+        else:
+            s = np.concatenate([_poles_of(ev) for ev in poles])
+        w_all = np.abs(s)
+        w_all = w_all[w_all > 1e-9]
+        if w_char.size == 0 and w_all.size == 0:
+            w_char = np.array([1.0])
+        ref = np.concatenate([w_char, w_all]) if w_all.size else w_char
+        w_lo = 1e-3 * ref.min()
+        w_hi = 1e3 * ref.max()
+        if self.digital:
+            w_hi = min(w_hi, math.pi / self.dt * (1 - 1e-9))
+            w_lo = min(w_lo, 1e-3 * math.pi / self.dt)
+        grid = [np.logspace(math.log10(w_lo), math.log10(w_hi), n_points)]
+        # points concentrated in the half-power band of each lightly damped pole: a pole
+        # -zeta w + j w sqrt(1-zeta^2) has |response| falling to 1/sqrt(2) at about w(1 +/- zeta),
+        # so steps of a fraction of zeta w resolve its peak and its 180 deg phase swing.
+        theta = np.linspace(-1.45, 1.45, 41)
+        for lam in s:
+            w = abs(lam)
+            if lam.imag <= 0 or w <= 0:
+                continue
+            zeta = max(-lam.real / w, 1e-7)
+            if zeta > 0.3:
+                continue
+            pts = lam.imag + zeta * w * np.tan(theta)
+            grid.append(pts[(pts > w_lo) & (pts < w_hi)])
+        return np.unique(np.concatenate(grid))
+
+
+def _poles_of(ev: _ModalEvaluator) -> np.ndarray:
+    if ev.n == 0:
+        return np.zeros(0, dtype=complex)
+    if ev.modal:
+        return np.concatenate([np.diag(ev.T11), ev.lam])
+    return np.linalg.eigvals(ev.A).astype(complex)
+
+
+def loop_frequency_response(plant, controller, omega: np.ndarray | None = None
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """Open-loop transfer L(j omega) with the loop broken at the torque input.
+
+    Parameters
+    ----------
+    plant : control.StateSpace or control.FrequencyResponseData
+        Plant with named signals (FRD: only its own frequency grid is available).
+    controller : control.StateSpace
+        Continuous or digital controller.
+    omega : array of float, rad/s, optional
+        Frequencies; default a logarithmic grid refined around the lightly damped poles
+        (the FRD's own grid for an FRD plant).
+
+    Returns
+    -------
+    omega : ndarray, shape (n,), rad/s
+    L : ndarray, shape (n,), complex128
+        L = -sum_i K_i P_i (negative-feedback convention: the loop is unstable at L = -1).
+    """
+    loop = _Loop(plant, controller)
+    if omega is None:
+        omega = loop.grid()
+    omega = np.asarray(omega, dtype=float).reshape(-1)
+    if omega.size == 0 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
+        raise ValueError("omega must be positive finite frequencies [rad/s]; got "
+                         f"{omega[:5]}...")
+    return omega, loop(omega)
+
+
+# --------------------------------------------------------------------------------------------
+# margins
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Margins:
+    """Classical stability margins of a loop (see :func:`margins`).
+
+    Attributes
+    ----------
+    gain_margin : float, dB
+        -20 log10 |L| at the phase crossover (L real and negative) closest to 0 dB;
+        positive: the gain may rise by that much; negative: it may fall by that much (a
+        conditionally stable loop). +inf if L never crosses the negative real axis.
+    phase_margin : float, deg
+        180 deg + arg L at the gain crossover (|L| = 1) with the smallest |margin|, wrapped to
+        (-180, 180]; +inf if |L| never crosses 1.
+    modulus_margin : float
+        min over omega of |1 + L(j omega)| (the distance from L to the critical point -1;
+        1/max|S|).
+    gain_crossover_frequency, phase_crossover_frequency, modulus_margin_frequency : float, rad/s
+        Where those margins are attained (nan-free: +inf when there is no crossover).
+    """
+
+    gain_margin: float
+    phase_margin: float
+    modulus_margin: float
+    gain_crossover_frequency: float
+    phase_crossover_frequency: float
+    modulus_margin_frequency: float
+
+    def as_dict(self) -> dict[str, float]:
+        """The three margins under their metric names (gain_margin, phase_margin, modulus_margin)."""
+        return {"gain_margin": self.gain_margin, "phase_margin": self.phase_margin,
+                "modulus_margin": self.modulus_margin}
+
+
+def _crossings(f: Callable[[float], float], omega: np.ndarray, values: np.ndarray,
+               exact: bool) -> list[float]:
+    """Zeros of f between grid points where `values` changes sign (refined with brentq)."""
+    roots = []
+    sign = np.sign(values)
+    idx = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
+    for i in idx:
+        a, b = omega[i], omega[i + 1]
+        if exact:
+            roots.append(scipy.optimize.brentq(f, a, b, xtol=1e-14 * b, rtol=1e-13))
+        else:
+            # linear interpolation in log frequency between the grid points
+            t = values[i] / (values[i] - values[i + 1])
+            roots.append(float(math.exp(math.log(a) + t * (math.log(b) - math.log(a)))))
+    roots.extend(omega[sign == 0].tolist())
+    return roots
+
+
+def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
+    """Gain, phase and modulus margins of the loop plant-controller.
+
+    Parameters
+    ----------
+    plant : control.StateSpace or control.FrequencyResponseData
+        Plant with named signals. For a FrequencyResponseData plant the margins are computed on
+        its own frequency grid (crossings interpolated linearly in log frequency), so the grid
+        must resolve its resonances.
+    controller : control.StateSpace
+        Continuous or digital controller. For a digital controller and a StateSpace plant, L is
+        the exact sampled-data loop gain L(e^{j omega T}) with the plant discretised by a
+        zero-order hold; with an FRD plant, the hold is modelled as (1 - e^{-j omega T})/(j omega T)
+        (aliasing neglected). Frequencies stop at the Nyquist frequency pi/T.
+    omega : array of float, rad/s, optional
+        Frequency grid; default: logarithmic, 1e-3 x the lowest to 1e3 x the highest
+        characteristic frequency, refined with 41 points across the half-power band of every
+        pole with damping ratio below 0.3 (lightly damped modes of plant and controller).
+        Crossings and the minimum of |1 + L| are then refined on the exact L.
+
+    Returns
+    -------
+    Margins
+
+    References
+    ----------
+    G. F. Franklin, J. D. Powell, A. Emami-Naeini, Feedback Control of Dynamic Systems, 7th ed.,
+    sec. 6.4 (gain and phase margins); S. Skogestad, I. Postlethwaite, Multivariable Feedback
+    Control, 2nd ed., sec. 2.4.3 (modulus margin = 1/||S||_inf).
+    """
+    loop = _Loop(plant, controller)
+    if omega is None:
+        omega = loop.grid()
+    omega = np.asarray(omega, dtype=float).reshape(-1)
+    L = loop(omega)
+    exact = not loop.frd
+
+    def imag_L(w):
+        return float(loop(np.array([w]))[0].imag)
+
+    def log_mag(w):
+        return float(np.log(abs(loop(np.array([w]))[0])))
+
+    # phase crossovers: Im L = 0 with Re L < 0
+    gm_w = [w for w in _crossings(imag_L, omega, L.imag, exact)
+            if loop(np.array([w]))[0].real < 0] if exact else []
+    if not exact:
+        for w in _crossings(imag_L, omega, L.imag, False):
+            i = min(np.searchsorted(omega, w), omega.size - 1)
+            if L[i].real < 0:
+                gm_w.append(w)
+    gain_margin, w_pc = math.inf, math.inf
+    for w in gm_w:
+        Lw = loop(np.array([w]))[0] if exact else np.interp(w, omega, L.real)
+        gm = -20.0 * math.log10(abs(Lw))
+        if abs(gm) < abs(gain_margin):
+            gain_margin, w_pc = gm, float(w)
+    # gain crossovers: |L| = 1
+    log_abs = np.log(np.abs(L))
+    phase_margin, w_gc = math.inf, math.inf
+    for w in _crossings(log_mag, omega, log_abs, exact):
+        if exact:
+            Lw = loop(np.array([w]))[0]
+        else:
+            i = int(np.clip(np.searchsorted(omega, w), 1, omega.size - 1))
+            t = (math.log(w) - math.log(omega[i - 1])) / (math.log(omega[i]) - math.log(omega[i - 1]))
+            Lw = L[i - 1] * (L[i] / L[i - 1]) ** t
+        pm = 180.0 + math.degrees(np.angle(Lw))
+        pm = (pm + 180.0) % 360.0 - 180.0
+        if pm == -180.0:
+            pm = 180.0
+        if abs(pm) < abs(phase_margin):
+            phase_margin, w_gc = pm, float(w)
+    # modulus margin: min |1 + L|
+    dist = np.abs(1.0 + L)
+    i = int(np.argmin(dist))
+    mm, w_mm = float(dist[i]), float(omega[i])
+    if exact and 0 < i < omega.size - 1:
+        res = scipy.optimize.minimize_scalar(
+            lambda lw: abs(1.0 + loop(np.array([math.exp(lw)]))[0]),
+            bounds=(math.log(omega[i - 1]), math.log(omega[i + 1])), method="bounded",
+            options={"xatol": 1e-12})
+        if res.fun < mm:
+            mm, w_mm = float(res.fun), float(math.exp(res.x))
+    return Margins(float(gain_margin), float(phase_margin), mm, float(w_gc), float(w_pc), w_mm)
+
+
+# --------------------------------------------------------------------------------------------
+# spillover verdict
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SpilloverVerdict:
+    """Is a controller (designed on one model) stable on a truth model, and by how much.
+
+    Attributes
+    ----------
+    stable : bool
+        True if the closed loop is asymptotically stable (every pole strictly in the open left
+        half-plane, inside the unit circle for a digital loop).
+    n_unstable_poles : int
+        Closed-loop poles in the closed right half-plane (outside or on the unit circle).
+    least_damping_ratio : float or None
+        Damping ratio of the least-damped closed-loop pole (negative when unstable);
+        None for a FrequencyResponseData truth plant (no poles available).
+    least_damped_frequency : float or None, rad/s
+        Natural frequency of that pole.
+    margins : Margins
+        Margins of the loop on the truth plant.
+    method : str
+        ``'eigenvalues'`` (StateSpace truth) or ``'nyquist'`` (FrequencyResponseData truth).
+    """
+
+    stable: bool
+    n_unstable_poles: int
+    least_damping_ratio: float | None
+    least_damped_frequency: float | None
+    margins: Margins
+    method: str
+
+    def __str__(self) -> str:
+        state = "STABLE" if self.stable else f"UNSTABLE ({self.n_unstable_poles} unstable poles)"
+        lines = [f"spillover verdict: {state} ({self.method})"]
+        if self.least_damping_ratio is not None:
+            lines.append(f"  least-damped pole: zeta = {self.least_damping_ratio:.4g} at "
+                         f"{self.least_damped_frequency:.6g} rad/s")
+        m = self.margins
+        lines.append(f"  gain margin {m.gain_margin:.4g} dB, phase margin {m.phase_margin:.4g} deg,"
+                     f" modulus margin {m.modulus_margin:.4g}")
+        return "\n".join(lines)
+
+
+def _continuous_poles(system) -> np.ndarray:
+    lam = np.linalg.eigvals(system.A) if system.nstates else np.zeros(0, dtype=complex)
+    if system.isdtime(strict=True):
+        lam = np.log(lam.astype(complex)) / float(system.dt)
+    return lam.astype(complex)
+
+
+def spillover(truth_plant, controller) -> SpilloverVerdict:
+    """Stability verdict of a controller on a truth model (never raises for an unstable loop).
+
+    Parameters
+    ----------
+    truth_plant : control.StateSpace or control.FrequencyResponseData
+        The high-fidelity plant (e.g. hub + beam with many modes, or the exact distributed
+        model as FRD).
+    controller : control.StateSpace
+        Controller designed on another model.
+
+    Returns
+    -------
+    SpilloverVerdict
+        For a StateSpace truth plant, from the closed-loop eigenvalues (a pole counts as
+        unstable if Re(s) >= -1e-10 max(1, |s|): undamped, uncontrolled modes make the loop
+        only marginally stable, reported as not stable). For an FRD truth plant, from the Nyquist
+        criterion: the plant is assumed to have no poles in the open right half-plane and
+        n0 poles at s = 0 (n0 from the low-frequency slope of |L|, 2 for a free-floating plant);
+        the contour is indented to the right around s = 0, so
+        Z = P - (2 Delta - n0 pi) / (2 pi), where Delta is the phase change of 1 + L(j omega) over
+        the FRD grid and P the controller's open right-half-plane poles. This needs |L| > 10 at the
+        lowest and < 0.1 at the highest grid frequency.
+
+    References
+    ----------
+    M. J. Balas, "Feedback control of flexible systems", IEEE Trans. Automatic Control 23(4),
+    1978 (control and observation spillover); Skogestad & Postlethwaite, Multivariable Feedback
+    Control, 2nd ed., sec. 4.9 (Nyquist criterion with poles on the imaginary axis).
+    """
+    _check_plant(truth_plant, "truth_plant", allow_frd=True)
+    _check_controller(controller)
+    mg = margins(truth_plant, controller)
+    if isinstance(truth_plant, control.StateSpace):
+        loop = close_loop(truth_plant, controller)
+        s = _continuous_poles(loop)
+        w = np.abs(s)
+        unstable = s.real >= -1e-10 * np.maximum(1.0, w)
+        zeta = np.where(w > 0, -s.real / np.where(w > 0, w, 1.0), -1.0)
+        i = int(np.argmin(zeta)) if s.size else None
+        return SpilloverVerdict(
+            stable=bool(not unstable.any()), n_unstable_poles=int(unstable.sum()),
+            least_damping_ratio=None if i is None else float(zeta[i]),
+            least_damped_frequency=None if i is None else float(w[i]),
+            margins=mg, method="eigenvalues")
+    omega, L = loop_frequency_response(truth_plant, controller)
+    if abs(L[0]) < 10 or abs(L[-1]) > 0.1:
+        raise ValueError(
+            "truth_plant frequency grid too narrow for the Nyquist criterion: need |L| > 10 at the "
+            f"lowest and < 0.1 at the highest frequency; got |L| = {abs(L[0]):.3g} at "
+            f"{omega[0]:.3g} rad/s and {abs(L[-1]):.3g} at {omega[-1]:.3g} rad/s")
+    slope = (math.log(abs(L[1])) - math.log(abs(L[0]))) / (math.log(omega[1]) - math.log(omega[0]))
+    n0 = int(round(-slope))
+    phase = np.unwrap(np.angle(1.0 + L))
+    delta = phase[-1] - phase[0]
+    lam_c = _continuous_poles(controller)
+    p_rhp = int(np.sum(lam_c.real > 1e-10 * np.maximum(1.0, np.abs(lam_c))))
+    z = p_rhp - (2.0 * delta - n0 * math.pi) / (2.0 * math.pi)
+    n_unstable = int(round(z))
+    return SpilloverVerdict(stable=n_unstable == 0, n_unstable_poles=max(n_unstable, 0),
+                            least_damping_ratio=None, least_damped_frequency=None,
+                            margins=mg, method="nyquist")
+
+
+# --------------------------------------------------------------------------------------------
+# time responses
+# --------------------------------------------------------------------------------------------
+def _simulate(system, T, U):
+    """Time response through controllers.simulate (continuous) or forced_response (digital)."""
+    if system.isdtime(strict=True):
+        return control.forced_response(system, T, U, squeeze=False)
+    try:
+        from .simulate import simulate
+    except ImportError:  # pragma: no cover - until controllers/simulate.py exists
+        return control.forced_response(system, T, U, squeeze=False)
+    return simulate(system, T, U)
+
+
+def _time_grid(system, t_final: float, dt: float | None, default_dt: float) -> np.ndarray:
+    if not (np.isfinite(t_final) and t_final > 0):
+        raise ValueError(f"t_final must be positive and finite [s]; got {t_final}")
+    if system.isdtime(strict=True):
+        step = float(system.dt)
+        if dt is not None and not math.isclose(dt, step, rel_tol=1e-9):
+            raise ValueError(f"dt must equal the digital loop's sample time {step} [s]; got {dt}")
+    else:
+        step = default_dt if dt is None else float(dt)
+        if not (np.isfinite(step) and step > 0):
+            raise ValueError(f"dt must be positive and finite [s]; got {dt}")
+    n = int(math.floor(t_final / step + 1e-9)) + 1
+    if n < 2:
+        raise ValueError(f"t_final {t_final} [s] must exceed one time step {step} [s]")
+    return np.arange(n, dtype=float) * step
+
+
+def _check_closed_loop(closed_loop) -> None:
+    if not isinstance(closed_loop, control.StateSpace):
+        raise TypeError("closed_loop must be a control.StateSpace (from close_loop); got "
+                        f"{type(closed_loop).__name__}")
+    for name in (THETA, TORQUE):
+        _require_signal(closed_loop, name, "output", "closed_loop")
+
+
+def slew_profile(t: np.ndarray, angle: float, duration: float) -> np.ndarray:
+    """Cycloidal slew profile from 0 to ``angle`` in ``duration``.
+
+    theta_ref(t) = angle (t/T - sin(2 pi t/T) / (2 pi)) for 0 <= t <= T, angle afterwards,
+    0 before. Rate angle/T (1 - cos(2 pi t/T)) and acceleration 2 pi angle/T^2 sin(2 pi t/T) are
+    zero at both ends (continuous acceleration, no torque jump); peak rate 2 angle/T, peak
+    acceleration 2 pi angle/T^2.
+
+    Parameters
+    ----------
+    t : array of float, s
+    angle : float, rad
+    duration : float, s
+
+    Returns
+    -------
+    ndarray, rad, same shape as t
+
+    References
+    ----------
+    R. L. Norton, Design of Machinery, 5th ed., sec. 8.6 (cycloidal displacement).
+    """
+    t = np.asarray(t, dtype=float)
+    tau = np.clip(t / duration, 0.0, 1.0)
+    return angle * (tau - np.sin(2.0 * np.pi * tau) / (2.0 * np.pi))
+
+
+def _inputs(closed_loop, n_t: int, **rows: np.ndarray) -> np.ndarray:
+    U = np.zeros((closed_loop.ninputs, n_t))
+    labels = list(closed_loop.input_labels)
+    for name, values in rows.items():
+        U[labels.index(name)] = values
+    return U
+
+
+def slew(closed_loop: control.StateSpace, angle: float, duration: float, *,
+         t_final: float | None = None, dt: float | None = None) -> control.TimeResponseData:
+    """Response of a closed loop to a cycloidal slew of ``angle`` in ``duration``.
+
+    Parameters
+    ----------
+    closed_loop : control.StateSpace
+        From :func:`close_loop` (input ``'theta_ref'``).
+    angle : float, rad
+        Slew angle (non-zero, finite).
+    duration : float, s
+        Duration of the reference profile (:func:`slew_profile`).
+    t_final : float, s, optional
+        End of the simulation; default 3 * duration.
+    dt : float, s, optional
+        Output sample step; default duration / 500 (the digital loop's dt for a digital loop).
+        The continuous simulation is exact for the piecewise-linear reference between samples.
+
+    Returns
+    -------
+    control.TimeResponseData
+        Outputs of the closed loop (``theta``, ``omega``, ``torque``, tip deflections, ...),
+        inputs (``theta_ref`` profile, zero disturbances).
+    """
+    _check_closed_loop(closed_loop)
+    _require_signal(closed_loop, THETA_REF, "input", "closed_loop")
+    if not (np.isfinite(angle) and angle != 0):
+        raise ValueError(f"angle must be non-zero and finite [rad]; got {angle}")
+    if not (np.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be positive and finite [s]; got {duration}")
+    t_final = 3.0 * duration if t_final is None else float(t_final)
+    T = _time_grid(closed_loop, t_final, dt, duration / 500.0)
+    U = _inputs(closed_loop, T.size, theta_ref=slew_profile(T, angle, duration))
+    return _simulate(closed_loop, T, U)
+
+
+def step_response(closed_loop: control.StateSpace, *, amplitude: float = 1.0,
+                  t_final: float = 10.0, dt: float | None = None) -> control.TimeResponseData:
+    """Response to a step of ``amplitude`` [rad] in theta_ref at t = 0.
+
+    Parameters
+    ----------
+    closed_loop : control.StateSpace
+    amplitude : float, rad
+    t_final : float, s
+    dt : float, s, optional
+        Default t_final / 2000.
+    """
+    _check_closed_loop(closed_loop)
+    _require_signal(closed_loop, THETA_REF, "input", "closed_loop")
+    if not (np.isfinite(amplitude) and amplitude != 0):
+        raise ValueError(f"amplitude must be non-zero and finite [rad]; got {amplitude}")
+    T = _time_grid(closed_loop, t_final, dt, t_final / 2000.0)
+    U = _inputs(closed_loop, T.size, theta_ref=np.full(T.size, float(amplitude)))
+    return _simulate(closed_loop, T, U)
+
+
+def disturbance_response(closed_loop: control.StateSpace, input: str = "disturbance_torque", *,
+                         amplitude: float = 1.0, t_final: float = 10.0, dt: float | None = None
+                         ) -> control.TimeResponseData:
+    """Response to a step of ``amplitude`` on a disturbance input (theta_ref = 0).
+
+    Parameters
+    ----------
+    closed_loop : control.StateSpace
+    input : str
+        Name of the closed-loop disturbance input (default ``'disturbance_torque'``).
+    amplitude : float
+        Step size in the input's unit (N*m for a torque).
+    t_final : float, s
+    dt : float, s, optional
+        Default t_final / 2000.
+    """
+    _check_closed_loop(closed_loop)
+    _require_signal(closed_loop, input, "input", "closed_loop")
+    if not (np.isfinite(amplitude) and amplitude != 0):
+        raise ValueError(f"amplitude must be non-zero and finite; got {amplitude}")
+    T = _time_grid(closed_loop, t_final, dt, t_final / 2000.0)
+    U = _inputs(closed_loop, T.size, **{input: np.full(T.size, float(amplitude))})
+    return _simulate(closed_loop, T, U)
+
+
+def _trace(response, name: str, kind: str = "output") -> np.ndarray | None:
+    labels = list(response.output_labels if kind == "output" else response.input_labels)
+    if name not in labels:
+        return None
+    data = np.asarray(response.y if kind == "output" else response.u)
+    data = data.reshape(len(labels), -1)
+    return data[labels.index(name)]
+
+
+def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
+            ) -> dict[str, float]:
+    """Time-domain metrics of a closed-loop response.
+
+    Parameters
+    ----------
+    response : control.TimeResponseData
+        From :func:`slew`, :func:`step_response` or :func:`disturbance_response` (outputs
+        ``theta``, ``torque``, optionally ``*tip_deflection``; input ``theta_ref`` if any).
+    settling_band : float
+        Settling band as a fraction of the final reference (default 0.02, the 2 % criterion).
+
+    Returns
+    -------
+    dict of str to float
+        ``peak_torque`` [N*m] max |torque|; ``peak_attitude_error`` [rad] max |theta - theta_ref|;
+        ``final_attitude_error`` [rad] |theta - theta_ref| at the last sample;
+        ``peak_tip_deflection`` [m] max |tip deflection| over every ``*tip_deflection`` output
+        (only if there is one). If the final reference r_f is non-zero also
+        ``overshoot`` [%] = 100 max(0, max(theta/r_f) - 1), and ``settling_time`` [s], the first
+        time after which |theta - r_f| <= settling_band |r_f| up to the end of the response
+        (+inf if the last sample is still outside the band: simulate longer).
+
+    References
+    ----------
+    Franklin, Powell & Emami-Naeini, Feedback Control of Dynamic Systems, 7th ed., sec. 3.4
+    (overshoot, settling time).
+    """
+    if not isinstance(response, control.TimeResponseData):
+        raise TypeError(f"response must be a control.TimeResponseData; got {type(response).__name__}")
+    if not (0 < settling_band < 1):
+        raise ValueError(f"settling_band must be in (0, 1) [fraction of the reference]; "
+                         f"got {settling_band}")
+    t = np.asarray(response.t, dtype=float).reshape(-1)
+    theta = _trace(response, THETA)
+    torque = _trace(response, TORQUE)
+    if theta is None or torque is None:
+        raise ValueError("response must have outputs 'theta' and 'torque'; got "
+                         f"{list(response.output_labels)}")
+    ref = _trace(response, THETA_REF, "input")
+    ref = np.zeros_like(theta) if ref is None else ref
+    error = theta - ref
+    out = {"peak_torque": float(np.max(np.abs(torque))),
+           "peak_attitude_error": float(np.max(np.abs(error))),
+           "final_attitude_error": float(abs(error[-1]))}
+    tips = [n for n in response.output_labels if n.endswith(TIP_SUFFIX)]
+    if tips:
+        out["peak_tip_deflection"] = float(max(np.max(np.abs(_trace(response, n))) for n in tips))
+    r_f = float(ref[-1])
+    if r_f != 0.0:
+        out["overshoot"] = float(100.0 * max(0.0, np.max(theta / r_f) - 1.0))
+        outside = np.nonzero(np.abs(theta - r_f) > settling_band * abs(r_f))[0]
+        if outside.size == 0:
+            out["settling_time"] = float(t[0])
+        elif outside[-1] == t.size - 1:
+            out["settling_time"] = math.inf
+        else:
+            out["settling_time"] = float(t[outside[-1] + 1])
+    if not all(np.isfinite(v) or k == "settling_time" for k, v in out.items()):
+        raise FloatingPointError(f"non-finite metrics {out}: the response diverged")
+    return out

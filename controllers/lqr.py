@@ -1,0 +1,395 @@
+"""LQR attitude controller with an estimator: an implementable output-feedback controller.
+
+The regulator minimises J = integral (y_w^T W y_w + r torque^2) dt with y_w the weighted outputs
+(theta, omega, optionally tip deflections) of the design plant, i.e. Q = C_w^T W C_w,
+N = C_w^T W D_w, R = r + D_w^T W D_w on the design plant's states. The states are not measured:
+a Kalman filter (or a user-given Luenberger gain) built on the same design model estimates them
+from the measured theta and omega. The controller handed to the spacecraft has inputs
+['theta_ref', 'theta', 'omega'] and output ['torque'] only.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import control
+import numpy as np
+import scipy.linalg
+
+from .analysis import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant,
+                       rigid_body_inertia)
+from .pd import _positive, check_sample_time
+
+__all__ = ["lqr", "KalmanNoise", "LQRDesign", "lqr_design", "reference_state"]
+
+
+@dataclass(frozen=True)
+class KalmanNoise:
+    """Noise intensities of the Kalman filter's model (continuous-time white noises).
+
+    The design model is driven by a white torque disturbance w entering like the torque
+    (x' = A x + B (torque + w)) and measured as theta + v_theta, omega + v_omega.
+
+    Attributes
+    ----------
+    torque_noise : float, N^2 m^2 s
+        Intensity of w.
+    attitude_noise : float, rad^2 s
+        Intensity of v_theta.
+    rate_noise : float, rad^2/s
+        Intensity of v_omega.
+    """
+
+    torque_noise: float
+    attitude_noise: float
+    rate_noise: float
+
+    def __post_init__(self):
+        for name, unit in (("torque_noise", "N^2 m^2 s"), ("attitude_noise", "rad^2 s"),
+                           ("rate_noise", "rad^2/s")):
+            _positive(getattr(self, name), name, unit)
+
+    @classmethod
+    def default(cls, inertia: float, attitude_weight: float, torque_weight: float,
+                estimator_speed: float = 3.0) -> "KalmanNoise":
+        """Noises that make the filter about ``estimator_speed`` times faster than the regulator.
+
+        For the rigid body theta'' = (torque + w)/J the LQR with weights q (theta), r (torque) has
+        poles of natural frequency w_r = (q / (r J^2))^(1/4), and the dual Kalman filter with
+        intensities W (w), V (v_theta) has w_e = (W / (V J^2))^(1/4). Taking V = 1/q and
+        W = k^4 / r gives w_e = k w_r. The rate noise V_omega = V w_e^2 makes a rate
+        measurement as informative as the attitude one at the estimator bandwidth.
+
+        References
+        ----------
+        B. D. O. Anderson, J. B. Moore, Optimal Control: Linear Quadratic Methods, 1990, sec. 5.2
+        (asymptotic LQ poles: w_r = (q/r)^(1/4) for a double integrator) and the duality of
+        LQR and Kalman filtering.
+        """
+        k = _positive(estimator_speed, "estimator_speed", "1")
+        w_r = (attitude_weight / (torque_weight * inertia ** 2)) ** 0.25
+        w_e = k * w_r
+        V = 1.0 / attitude_weight
+        return cls(torque_noise=k ** 4 / torque_weight, attitude_noise=V,
+                   rate_noise=V * w_e ** 2)
+
+
+@dataclass(frozen=True)
+class LQRDesign:
+    """Everything an LQR design produced (returned by :func:`lqr_design`).
+
+    Attributes
+    ----------
+    controller : control.StateSpace
+        Output-feedback controller, inputs ['theta_ref', 'theta', 'omega'], output ['torque'].
+    K : ndarray, shape (1, n_states)
+        State-feedback gain, torque = -K (x_hat - x_ref theta_ref).
+    L : ndarray, shape (n_states, 2)
+        Estimator gain on (theta, omega) innovations.
+    Q, R, N : ndarray
+        Weights on the design plant's states (shapes (n, n), (1, 1), (n, 1)).
+    x_ref : ndarray, shape (n_states,)
+        Equilibrium state of a unit rigid rotation (A x_ref = 0, theta = 1, omega = 0).
+    regulator_poles, estimator_poles : ndarray, complex128
+        Eigenvalues of A - B K and A - L C_m (z-plane for a digital design).
+    """
+
+    controller: control.StateSpace
+    K: np.ndarray
+    L: np.ndarray
+    Q: np.ndarray
+    R: np.ndarray
+    N: np.ndarray
+    x_ref: np.ndarray
+    regulator_poles: np.ndarray
+    estimator_poles: np.ndarray
+
+
+def _nonneg(value, name: str, unit: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
+    value = float(value)
+    if not (np.isfinite(value) and value >= 0):
+        raise ValueError(f"{name} must be non-negative and finite [{unit}]; got {value}")
+    return value
+
+
+def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray]:
+    tips = [n for n in plant.output_labels if n.endswith(TIP_SUFFIX)]
+    if deflection_weight is None:
+        return [], np.zeros((0, 0))
+    if not tips:
+        raise ValueError("deflection_weight given but the plant has no '*tip_deflection' output; "
+                         f"outputs are {list(plant.output_labels)}")
+    if isinstance(deflection_weight, Mapping):
+        unknown = [k for k in deflection_weight if k not in tips]
+        if unknown:
+            raise ValueError(f"deflection_weight names {unknown} are not tip-deflection outputs "
+                             f"{tips}")
+        names = list(deflection_weight)
+        W = np.diag([_nonneg(deflection_weight[n], f"deflection_weight[{n!r}]", "1/m^2")
+                     for n in names])
+        return names, W
+    if np.isscalar(deflection_weight):
+        w = _nonneg(deflection_weight, "deflection_weight", "1/m^2")
+        return tips, w * np.eye(len(tips))
+    W = np.asarray(deflection_weight, dtype=float)
+    if W.shape != (len(tips), len(tips)):
+        raise ValueError(f"deflection_weight matrix must have shape ({len(tips)}, {len(tips)}) "
+                         f"for the outputs {tips}; got {W.shape}")
+    if not np.allclose(W, W.T, rtol=1e-12, atol=0) or np.min(np.linalg.eigvalsh(W)) < -1e-12 * max(
+            1.0, np.abs(W).max()):
+        raise ValueError("deflection_weight must be symmetric positive semidefinite [1/m^2]; got "
+                         f"eigenvalues {np.linalg.eigvalsh((W + W.T) / 2)}")
+    return tips, W
+
+
+def _pbh_defective(A, M, *, side: str, tol: float) -> list[complex]:
+    """Eigenvalues lambda with Re >= -tol for which rank [A - lambda I, M] (or stacked) < n."""
+    n = A.shape[0]
+    bad = []
+    for lam in np.linalg.eigvals(A):
+        if lam.real < -tol * max(1.0, abs(lam)):
+            continue
+        E = A - lam * np.eye(n)
+        test = np.hstack([E, M]) if side == "input" else np.vstack([E, M])
+        sv = np.linalg.svd(test, compute_uv=False)
+        # rank n <=> the n-th singular value is non-zero (both shapes have min dimension n)
+        smallest = sv[n - 1]
+        if smallest <= 1e-9 * max(1.0, sv[0]):
+            bad.append(complex(lam))
+    return bad
+
+
+def reference_state(plant: control.StateSpace) -> np.ndarray:
+    """State x_ref of a unit rigid rotation: A x_ref = 0, theta(x_ref) = 1, omega(x_ref) = 0.
+
+    A rigid rotation of a free-floating spacecraft is an equilibrium with zero torque, so the
+    reference theta_ref shifts the regulator's state target to x_ref theta_ref.
+
+    Raises
+    ------
+    ValueError
+        If no such equilibrium exists (the plant is not free-floating).
+    """
+    _check_plant(plant)
+    labels = list(plant.output_labels)
+    c_theta = plant.C[labels.index(THETA)]
+    c_omega = plant.C[labels.index(OMEGA)]
+    n = plant.nstates
+    M = np.vstack([plant.A, c_theta, c_omega])
+    rhs = np.zeros(n + 2)
+    rhs[n] = 1.0
+    x, *_ = np.linalg.lstsq(M, rhs, rcond=None)
+    residual = np.linalg.norm(M @ x - rhs)
+    if residual > 1e-8 * max(1.0, np.linalg.norm(M) * np.linalg.norm(x)):
+        raise ValueError("plant has no rigid-rotation equilibrium (A x = 0 with theta = 1 rad, "
+                         f"omega = 0): it is not free-floating (residual {residual:.3g})")
+    return x
+
+
+def _check_weights(attitude_weight, rate_weight, torque_weight):
+    q_theta = _nonneg(attitude_weight, "attitude_weight", "1/rad^2")
+    q_omega = _nonneg(rate_weight, "rate_weight", "s^2/rad^2")
+    if isinstance(torque_weight, bool) or not isinstance(torque_weight, (int, float, np.floating,
+                                                                         np.integer)):
+        raise TypeError(f"torque_weight must be a real number [1/(N*m)^2]; got "
+                        f"{type(torque_weight).__name__}")
+    r = float(torque_weight)
+    if not (np.isfinite(r) and r > 0):
+        raise ValueError(f"torque_weight R must be positive definite (> 0) [1/(N*m)^2]; got {r}")
+    if q_theta <= 0:
+        raise ValueError("attitude_weight must be positive [1/rad^2]: with no weight on theta the "
+                         "rigid-body attitude mode is undetectable in the cost (A, sqrt(Q)) and "
+                         f"the attitude is not regulated; got {q_theta}")
+    return q_theta, q_omega, r
+
+
+def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float,
+               torque_weight: float, deflection_weight=None,
+               estimator: str | KalmanNoise | np.ndarray = "kalman",
+               estimator_speed: float = 3.0, sample_time: float | None = None) -> LQRDesign:
+    """LQR + estimator design; see :func:`lqr` (which returns only the controller)."""
+    _check_plant(plant)
+    q_theta, q_omega, r = _check_weights(attitude_weight, rate_weight, torque_weight)
+    tip_names, W_tip = _deflection_weights(plant, deflection_weight)
+    labels = list(plant.output_labels)
+    i_t = list(plant.input_labels).index(TORQUE)
+    A = np.asarray(plant.A, dtype=float)
+    B = np.asarray(plant.B[:, [i_t]], dtype=float)
+    n = A.shape[0]
+    weighted = [THETA, OMEGA] + tip_names
+    rows = [labels.index(name) for name in weighted]
+    Cw = plant.C[rows]
+    Dw = plant.D[np.ix_(rows, [i_t])]
+    W = scipy.linalg.block_diag(np.diag([q_theta, q_omega]), W_tip)
+    Q = Cw.T @ W @ Cw
+    Q = 0.5 * (Q + Q.T)
+    N = Cw.T @ W @ Dw
+    R = np.array([[r]]) + Dw.T @ W @ Dw
+    # checks: Q - N R^-1 N^T >= 0 (cost PSD), (A, B) stabilisable, (A, sqrt Q) detectable
+    Qc = Q - N @ np.linalg.solve(R, N.T)
+    eig_q = np.linalg.eigvalsh(0.5 * (Qc + Qc.T))
+    if eig_q.min() < -1e-10 * max(1.0, abs(eig_q).max()):
+        raise ValueError(f"state weight Q must be positive semidefinite; got eigenvalue "
+                         f"{eig_q.min():.3g}")
+    tol = 1e-9
+    uncontrollable = _pbh_defective(A, B, side="input", tol=tol)
+    if uncontrollable:
+        raise ValueError(
+            "uncontrollable design: (A, B) from 'torque' is not stabilisable; modes with "
+            f"eigenvalues {np.round(uncontrollable, 6)} (Re >= 0) cannot be moved by the torque "
+            "(remove modes the torque cannot excite, e.g. symmetric modes of symmetric wings, or "
+            "give them damping)")
+    sqrtW = scipy.linalg.sqrtm(W).real
+    undetectable = _pbh_defective(A, sqrtW @ Cw, side="output", tol=tol)
+    if undetectable:
+        raise ValueError(f"(A, sqrt(Q)) is not detectable: modes with eigenvalues "
+                         f"{np.round(undetectable, 6)} (Re >= 0) are not seen by the weighted "
+                         f"outputs {weighted}; weight them or remove them from the design plant")
+    x_ref = reference_state(plant)
+    meas_rows = [labels.index(THETA), labels.index(OMEGA)]
+    Cm = plant.C[meas_rows]
+    Dm = plant.D[np.ix_(meas_rows, [i_t])]
+    J = rigid_body_inertia(plant)
+    if isinstance(estimator, str):
+        if estimator != "kalman":
+            raise ValueError(f"estimator must be 'kalman', a KalmanNoise or a Luenberger gain "
+                             f"array of shape ({n}, 2); got {estimator!r}")
+        noise = KalmanNoise.default(J, q_theta, r, estimator_speed)
+    elif isinstance(estimator, KalmanNoise):
+        noise = estimator
+    else:
+        noise = None
+        L_given = np.asarray(estimator, dtype=float)
+        if L_given.shape != (n, 2):
+            raise ValueError(f"Luenberger estimator gain must have shape ({n}, 2) (states x "
+                             f"[theta, omega]); got {L_given.shape}")
+    if noise is not None:
+        unobservable = _pbh_defective(A, Cm, side="output", tol=tol)
+        if unobservable:
+            raise ValueError(f"(A, C) from theta and omega is not detectable: modes with "
+                             f"eigenvalues {np.round(unobservable, 6)} are invisible to the "
+                             "sensors; remove them from the design plant")
+
+    u_ref = 0.0  # a rigid rotation needs no torque
+    if sample_time is None:
+        P = scipy.linalg.solve_continuous_are(A, B, Q, R, s=N)
+        K = np.linalg.solve(R, B.T @ P + N.T)
+        if noise is not None:
+            Wn = noise.torque_noise * (B @ B.T)
+            V = np.diag([noise.attitude_noise, noise.rate_noise])
+            S = scipy.linalg.solve_continuous_are(A.T, Cm.T, Wn, V)
+            L = S @ Cm.T @ np.linalg.inv(V)
+        else:
+            L = L_given
+        Bm = B - L @ Dm
+        Ac = A - L @ Cm - Bm @ K
+        g = K @ x_ref + u_ref  # torque per rad of reference
+        Bc = np.hstack([Bm * g, L])
+        Cc = -K
+        Dc = np.array([[g[0], 0.0, 0.0]])
+        controller = control.ss(Ac, Bc, Cc, Dc, inputs=[THETA_REF, THETA, OMEGA],
+                                outputs=[TORQUE], name="lqr")
+        reg_poles = np.linalg.eigvals(A - B @ K)
+        est_poles = np.linalg.eigvals(A - L @ Cm)
+        if est_poles.real.max() >= 0:
+            raise ValueError(f"estimator is not stable: A - L C has eigenvalue "
+                             f"{est_poles[np.argmax(est_poles.real)]:.4g}")
+        design = LQRDesign(controller, K, L, Q, R, N, x_ref, reg_poles, est_poles)
+        return design
+    # digital design on the zero-order-hold plant (Phi, Gamma); the continuous cost sampled at T
+    # to first order: Q_d = Q T, N_d = N T, R_d = R T (valid for T well below the closed-loop time
+    # constants, which check_sample_time enforces); noises W_d = B W B^T T, V_d = V / T.
+    # Predictor estimator: x_hat[k+1] = Phi x_hat + Gamma u + L (y[k] - C x_hat - D u), so the
+    # torque at k uses measurements up to k-1 (one sample for computation).
+    continuous = lqr_design(plant, attitude_weight=attitude_weight, rate_weight=rate_weight,
+                            torque_weight=torque_weight, deflection_weight=deflection_weight,
+                            estimator=estimator, estimator_speed=estimator_speed)
+    T = _positive(sample_time, "sample_time", "s")
+    check_sample_time(T, plant, continuous.controller)
+    Phi = scipy.linalg.expm(A * T)
+    # Gamma = integral_0^T e^{A t} dt B via the block exponential of [[A, B], [0, 0]] T
+    E = scipy.linalg.expm(np.block([[A, B], [np.zeros((1, n + 1))]]) * T)
+    Gamma = E[:n, n:]
+    P = scipy.linalg.solve_discrete_are(Phi, Gamma, Q * T, R * T, s=N * T)
+    K = np.linalg.solve(R * T + Gamma.T @ P @ Gamma, Gamma.T @ P @ Phi + (N * T).T)
+    if noise is not None:
+        Wd = noise.torque_noise * T * (B @ B.T)
+        Vd = np.diag([noise.attitude_noise, noise.rate_noise]) / T
+        S = scipy.linalg.solve_discrete_are(Phi.T, Cm.T, Wd, Vd)
+        L = Phi @ S @ Cm.T @ np.linalg.inv(Cm @ S @ Cm.T + Vd)
+    else:
+        raise ValueError("a Luenberger gain array is a continuous-time estimator; with sample_time "
+                         "use estimator='kalman' or a KalmanNoise")
+    Bm = Gamma - L @ Dm
+    Ac = Phi - L @ Cm - Bm @ K
+    g = K @ x_ref + u_ref
+    Bc = np.hstack([Bm * g, L])
+    controller = control.ss(Ac, Bc, -K, np.array([[g[0], 0.0, 0.0]]), T,
+                            inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="lqr")
+    return LQRDesign(controller, K, L, Q, R, N, x_ref, np.linalg.eigvals(Phi - Gamma @ K),
+                     np.linalg.eigvals(Phi - L @ Cm))
+
+
+def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float,
+        torque_weight: float, deflection_weight=None,
+        estimator: str | KalmanNoise | np.ndarray = "kalman", estimator_speed: float = 3.0,
+        sample_time: float | None = None) -> control.StateSpace:
+    """LQR attitude controller with a state estimator, as a dynamic output-feedback controller.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        Continuous free-floating design plant (e.g. hub + chain): input ``'torque'`` [N*m],
+        outputs ``'theta'`` [rad], ``'omega'`` [rad/s], optionally ``'*tip_deflection'`` [m].
+    attitude_weight : float, 1/rad^2
+        Weight q_theta > 0 on theta^2 in the cost.
+    rate_weight : float, s^2/rad^2
+        Weight q_omega >= 0 on omega^2.
+    torque_weight : float, 1/(N*m)^2
+        R = r > 0 on torque^2.
+    deflection_weight : float (1/m^2), mapping name -> float, or (n_tip, n_tip) PSD array, optional
+        Weight on the plant's tip-deflection outputs (a float applies to each of them).
+    estimator : "kalman", KalmanNoise or ndarray (n_states, 2)
+        "kalman" (default): steady-state Kalman filter on the design model with the noises of
+        :meth:`KalmanNoise.default` (torque disturbance entering with the torque, attitude and rate
+        sensor noise; filter about ``estimator_speed`` times faster than the regulator's rigid-body
+        poles). A KalmanNoise: a Kalman filter with those intensities. An array: a Luenberger gain
+        L on the innovations [theta - theta_hat, omega - omega_hat] (continuous designs only).
+    estimator_speed : float
+        Ratio of estimator to regulator bandwidth for the default Kalman noises (default 3).
+    sample_time : float, s, optional
+        Digital design at this sample time: discrete LQR and discrete (predictor) Kalman filter
+        on the zero-order-hold discretisation of the plant; the controller has ``dt =
+        sample_time``. The sampling frequency must be at least 10 times the continuous design's
+        highest gain crossover (:func:`controllers.pd.check_sample_time`).
+
+    Returns
+    -------
+    control.StateSpace
+        Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']``, states = the estimate
+        x_hat of the design plant's states:
+        x_hat' = A x_hat + B torque + L (y - C x_hat - D torque),
+        torque = -K (x_hat - x_ref theta_ref), with x_ref from :func:`reference_state`. On a
+        free-floating truth plant the steady state is theta = theta_ref exactly (a rigid
+        rotation is an equilibrium of plant and estimator, and K x_ref != 0).
+
+    Raises
+    ------
+    ValueError
+        Negative or non-finite weights, R not > 0, Q not PSD, (A, B) not stabilisable (an
+        uncontrollable design), (A, sqrt(Q)) or (A, C_meas) not detectable, a sample time too long.
+
+    References
+    ----------
+    B. D. O. Anderson, J. B. Moore, Optimal Control: Linear Quadratic Methods, Prentice Hall 1990
+    (LQR with cross term N, stabilisability/detectability conditions); Franklin, Powell &
+    Workman, Digital Control of Dynamic Systems, 3rd ed., ch. 9 (discrete LQR, predictor
+    estimator); M. J. Balas, IEEE TAC 23(4), 1978 (observer-based control of flexible structures).
+    """
+    return lqr_design(plant, attitude_weight=attitude_weight, rate_weight=rate_weight,
+                      torque_weight=torque_weight, deflection_weight=deflection_weight,
+                      estimator=estimator, estimator_speed=estimator_speed,
+                      sample_time=sample_time).controller

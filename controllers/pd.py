@@ -1,0 +1,213 @@
+"""PD attitude controller tuned from a closed-loop specification.
+
+On the rigid-body part of the plant, theta/torque = 1/(J s^2), the control law
+torque = Kp (theta_ref - theta) - Kd omega gives the closed loop J s^2 + Kd s + Kp = 0, i.e.
+s^2 + 2 zeta wn s + wn^2 = 0 with Kp = J wn^2 and Kd = 2 zeta wn J.
+"""
+from __future__ import annotations
+
+import math
+
+import control
+import numpy as np
+
+from .analysis import (OMEGA, THETA, THETA_REF, TORQUE, _check_plant, flexible_modes,
+                       loop_frequency_response, rigid_body_inertia)
+
+__all__ = [
+    "pd",
+    "pd_gains",
+    "natural_frequency_from_bandwidth",
+    "check_sample_time",
+    "ROLL_OFF_DAMPING",
+    "NOTCH_ZERO_DAMPING",
+    "NOTCH_POLE_DAMPING",
+    "MIN_SAMPLES_PER_CROSSOVER",
+]
+
+#: Damping of the second-order roll-off low-pass (1/sqrt(2): Butterworth, flat pass band).
+ROLL_OFF_DAMPING = 1.0 / math.sqrt(2.0)
+#: Damping of the notch's zeros: depth at the notch frequency = 20 log10(0.02 / 0.5) = -28 dB.
+NOTCH_ZERO_DAMPING = 0.02
+#: Damping of the notch's poles: sets its width (about +/- 50 % of the frequency at -3 dB),
+#: wide enough to cover the usual mismatch between a chain model's and the beam's first mode.
+NOTCH_POLE_DAMPING = 0.5
+#: A digital controller needs a sampling frequency 2 pi / T at least this many times the
+#: highest gain-crossover frequency of its continuous design loop (Franklin, Powell & Workman,
+#: Digital Control of Dynamic Systems, 3rd ed., sec. 11.2: 10 to 30 times the bandwidth; below 10
+#: the hold's phase lag omega T / 2 at crossover exceeds 18 deg).
+MIN_SAMPLES_PER_CROSSOVER = 10.0
+
+
+def _positive(value, name: str, unit: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
+    value = float(value)
+    if not (np.isfinite(value) and value > 0):
+        raise ValueError(f"{name} must be positive and finite [{unit}]; got {value}")
+    return value
+
+
+def natural_frequency_from_bandwidth(bandwidth: float, damping: float) -> float:
+    """Natural frequency wn [rad/s] of the second-order prototype with a given -3 dB bandwidth.
+
+    For T(s) = wn^2 / (s^2 + 2 zeta wn s + wn^2), |T(j wb)| = 1/sqrt(2) at
+    wb = wn sqrt(1 - 2 zeta^2 + sqrt(4 zeta^4 - 4 zeta^2 + 2)); this inverts it. (The PD loop's
+    complementary sensitivity also has the zero of Kd s + Kp, so its own bandwidth is somewhat
+    higher than this prototype value.)
+
+    Parameters
+    ----------
+    bandwidth : float, rad/s
+    damping : float
+        Damping ratio zeta > 0.
+
+    References
+    ----------
+    Franklin, Powell & Emami-Naeini, Feedback Control of Dynamic Systems, 7th ed., ch. 6
+    (bandwidth of the standard second-order system); K. Ogata, Modern Control Engineering, 5th ed.,
+    ch. 7 (same relation).
+    """
+    bandwidth = _positive(bandwidth, "bandwidth", "rad/s")
+    damping = _positive(damping, "damping", "1")
+    z2 = damping * damping
+    return bandwidth / math.sqrt(1.0 - 2.0 * z2 + math.sqrt(4.0 * z2 * z2 - 4.0 * z2 + 2.0))
+
+
+def pd_gains(inertia: float, natural_frequency: float, damping: float) -> tuple[float, float]:
+    """Kp [N*m/rad] = J wn^2 and Kd [N*m*s/rad] = 2 zeta wn J (closed loop J s^2 + Kd s + Kp)."""
+    return inertia * natural_frequency ** 2, 2.0 * damping * natural_frequency * inertia
+
+
+def check_sample_time(sample_time: float, plant, continuous_controller) -> float:
+    """Validate a sample time against the continuous design loop's highest crossover.
+
+    Raises ValueError if 2 pi / sample_time < MIN_SAMPLES_PER_CROSSOVER * omega_c, with omega_c
+    the highest frequency at which |L(j omega)| = 1 on the design plant.
+
+    Returns
+    -------
+    float
+        omega_c [rad/s].
+    """
+    sample_time = _positive(sample_time, "sample_time", "s")
+    omega, L = loop_frequency_response(plant, continuous_controller)
+    above = np.nonzero(np.abs(L) >= 1.0)[0]
+    omega_c = float(omega[above[-1]]) if above.size else 0.0
+    omega_s = 2.0 * math.pi / sample_time
+    if omega_s < MIN_SAMPLES_PER_CROSSOVER * omega_c:
+        raise ValueError(
+            f"sample_time {sample_time:.4g} s is too long for the loop bandwidth: the sampling "
+            f"frequency 2*pi/T = {omega_s:.4g} rad/s must be at least "
+            f"{MIN_SAMPLES_PER_CROSSOVER:g} x the gain-crossover frequency {omega_c:.4g} rad/s, "
+            f"i.e. sample_time <= {2 * math.pi / (MIN_SAMPLES_PER_CROSSOVER * omega_c):.4g} s")
+    return omega_c
+
+
+def _second_order(numerator: tuple[float, float, float], w: float, zeta: float):
+    """(n2 s^2 + n1 s + n0) / (s^2 + 2 zeta w s + w^2) as a SISO StateSpace."""
+    return control.ss(control.tf(list(numerator), [1.0, 2.0 * zeta * w, w * w]))
+
+
+def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
+       bandwidth: float | None = None, damping: float = 0.7, roll_off: float | None = None,
+       notch: float | str | None = None, sample_time: float | None = None
+       ) -> control.StateSpace:
+    """PD attitude controller tuned on a free-floating design plant.
+
+    The control law is torque = F(s) N(s) [Kp (theta_ref - theta) - Kd omega] with
+    Kp = J wn^2, Kd = 2 zeta wn J, J the plant's total inertia from its rigid-body low-frequency
+    gain (lim s^2 theta/torque = 1/J, :func:`controllers.analysis.rigid_body_inertia`); the
+    rigid-body closed loop is then J s^2 + Kd s + Kp = 0, natural frequency wn and damping zeta.
+    The rate is measured (omega), so no derivative filter is needed.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        Continuous design plant: input ``'torque'`` [N*m], outputs ``'theta'`` [rad],
+        ``'omega'`` [rad/s]; free-floating (rigid-body double integrator).
+    natural_frequency : float, rad/s, optional
+        Closed-loop natural frequency wn. Give exactly one of natural_frequency, bandwidth.
+    bandwidth : float, rad/s, optional
+        Closed-loop -3 dB bandwidth wb of the second-order prototype, converted with
+        :func:`natural_frequency_from_bandwidth`.
+    damping : float
+        Closed-loop damping ratio zeta (default 0.7).
+    roll_off : float, rad/s, optional
+        Corner wr of a second-order Butterworth low-pass F(s) = wr^2 / (s^2 + sqrt(2) wr s + wr^2)
+        on the controller output (-40 dB/decade above wr, gain-stabilising the flexible modes).
+        Must exceed 2 wn (it costs about 2 zeta_r wn / wr rad of phase at wn).
+    notch : float (rad/s) or "first_mode", optional
+        Notch N(s) = (s^2 + 2 zeta_z wz s + wz^2) / (s^2 + 2 zeta_p wz s + wz^2),
+        zeta_z = NOTCH_ZERO_DAMPING, zeta_p = NOTCH_POLE_DAMPING, at wz = the given frequency, or
+        with "first_mode" at the natural frequency of the plant's first flexible mode visible from
+        torque to theta. Must exceed 2 wn.
+    sample_time : float, s, optional
+        Digital implementation: the continuous controller is discretised with a zero-order hold
+        (``control.c2d(..., method="zoh")``) and returned with ``dt = sample_time``;
+        :func:`controllers.analysis.close_loop` closes it on the ZOH-discretised plant (the
+        sampled-data loop). The sampling frequency must be at least MIN_SAMPLES_PER_CROSSOVER times
+        the continuous design loop's highest gain crossover.
+
+    Returns
+    -------
+    control.StateSpace
+        Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']``; continuous, or discrete
+        with ``dt = sample_time``. The gains themselves are given by :func:`pd_gains`.
+
+    Raises
+    ------
+    ValueError
+        Bad specification (names the parameter and unit), a plant without a rigid-body mode, a
+        roll-off or notch too close to wn, a plant without flexible modes for "first_mode", or a
+        sample time too long for the bandwidth.
+
+    References
+    ----------
+    Franklin, Powell & Emami-Naeini, Feedback Control of Dynamic Systems, 7th ed., ch. 4 (PD
+    control) and ch. 10 (control of a satellite with a flexible appendage, notch filters);
+    B. Wie, Space Vehicle Dynamics and Control, 2nd ed., AIAA 2008 (gain and phase stabilisation
+    of flexible modes).
+    """
+    _check_plant(plant)
+    if (natural_frequency is None) == (bandwidth is None):
+        raise ValueError("give exactly one of natural_frequency [rad/s] or bandwidth [rad/s]; got "
+                         f"natural_frequency={natural_frequency}, bandwidth={bandwidth}")
+    damping = _positive(damping, "damping", "1")
+    if natural_frequency is not None:
+        wn = _positive(natural_frequency, "natural_frequency", "rad/s")
+    else:
+        wn = natural_frequency_from_bandwidth(bandwidth, damping)
+    J = rigid_body_inertia(plant)
+    Kp, Kd = pd_gains(J, wn, damping)
+    controller = control.ss([], [], [], [[Kp, -Kp, -Kd]])
+    if notch is not None:
+        if isinstance(notch, str):
+            if notch != "first_mode":
+                raise ValueError(f"notch must be a frequency [rad/s] or 'first_mode'; got {notch!r}")
+            modes = flexible_modes(plant)
+            if not modes:
+                raise ValueError("notch='first_mode' but the plant has no flexible mode visible "
+                                 "from torque to theta")
+            wz = modes[0].frequency
+        else:
+            wz = _positive(notch, "notch", "rad/s")
+        if wz <= 2.0 * wn:
+            raise ValueError(f"notch frequency must exceed 2 x natural frequency = {2 * wn:.4g} "
+                             f"rad/s (it would cut into the rigid-body loop); got {wz:.4g} rad/s")
+        controller = _second_order((1.0, 2.0 * NOTCH_ZERO_DAMPING * wz, wz * wz), wz,
+                                   NOTCH_POLE_DAMPING) * controller
+    if roll_off is not None:
+        wr = _positive(roll_off, "roll_off", "rad/s")
+        if wr <= 2.0 * wn:
+            raise ValueError(f"roll_off corner must exceed 2 x natural frequency = {2 * wn:.4g} "
+                             f"rad/s; got {wr:.4g} rad/s")
+        controller = _second_order((0.0, 0.0, wr * wr), wr, ROLL_OFF_DAMPING) * controller
+    controller = control.ss(controller.A, controller.B, controller.C, controller.D,
+                            inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="pd")
+    if sample_time is not None:
+        check_sample_time(sample_time, plant, controller)
+        digital = control.c2d(controller, float(sample_time), method="zoh")
+        controller = control.ss(digital.A, digital.B, digital.C, digital.D, float(sample_time),
+                                inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="pd")
+    return controller
