@@ -1,0 +1,499 @@
+r"""The distributed-parameter appendage: a uniform free-free Euler-Bernoulli beam.
+
+Exact transfer matrix
+---------------------
+Transverse motion w(x, t) of a uniform beam (bending stiffness EJ, mass per length rho*A) obeys
+``EJ w'''' + rho*A w_tt = 0``. In Laplace form with zero initial conditions
+``w'''' = beta**4 w`` where ``beta**4 = -s**2 rho*A/EJ``. The attachment end x = 0 carries the
+force F_y and the moment M; virtual work gives the boundary conditions
+
+    EJ w'''(0) = F_y,   EJ w''(0) = -M,   w''(L) = w'''(L) = 0.
+
+Solving with ``w = a cosh(beta x) + b sinh(beta x) + c cos(beta x) + d sin(beta x)`` and writing
+``x = beta L``, ``D(x) = 1 - cos x cosh x``:
+
+    W1 = delta/F_y = L**3/EJ * (cos x sinh x - sin x cosh x) / (x**3 D(x))
+    W2 = delta/M   = L**2/EJ *  sin x sinh x                  / (x**2 D(x))   (= W3)
+    W4 = phi/M     = L/EJ    * -(cos x sinh x + sin x cosh x) / (x    D(x))
+
+Every ratio is an even function of x and invariant under x -> i x, so it is a function of
+``y = x**4 = -s**2 rho*A L**4/EJ`` alone and any fourth root may be taken. Two branches keep full
+accuracy:
+
+* |x| < 2: every numerator and denominator is a power series in y (derived from
+  ``cos x cosh x = sum (-4)**k x**(4k)/(4k)!`` and its relatives), so the ratios are evaluated
+  without the cancellation of the closed form near s = 0; the factor 1/y is the rigid-body 1/s**2.
+* |x| >= 2: the principal root has ``Re x >= |Im x|``; with ``t = exp(-2x)``,
+  ``u = exp(2i sigma x)`` (sigma = sign Im x) and ``g = 4 exp(-x + i sigma x)`` all of modulus
+  at most 4, ``cos x cosh x = P (1+u)(1+t)/4`` etc. with the common factor
+  ``P = exp(x - i sigma x)``, which cancels. The scaled forms never overflow.
+
+Natural frequencies and zeros
+-----------------------------
+Free-free frequencies are ``w_k = x_k**2 sqrt(EJ/(rho*A L**4))`` with ``cos x cosh x = 1``; solved
+as ``cos x = sech x`` (sech evaluated as 2 exp(-x)/(1 + exp(-2x))) by Newton's method from
+(k + 1/2) pi, which does not lose the roots at any k (the textbook ``cos x cosh x - 1`` overflows
+beyond k ~ 230 and loses all digits of the correction long before). Zeros of W_r: W1 vanishes
+where ``tan x = tanh x`` (pinned-free frequencies), W2 where ``sin x = 0`` (x = k pi), W4 where
+``tan x = -tanh x`` (sliding-free frequencies).
+
+Mode shapes
+-----------
+Free-free ``phi = cosh bx + cos bx - sigma (sinh bx + sin bx)``, clamped-free
+``psi = cosh bx - cos bx - sigma (sinh bx - sin bx)``, both with integral of the square = L, are
+evaluated in the stable form of Goncalves et al. (2007): ``cosh bx - sigma sinh bx`` is rewritten
+as ``[(1-sigma) e^{bx} + (1+sigma) e^{-bx}]/2`` with ``(1-sigma)`` and ``sigma`` computed from
+exponentials scaled by ``e^{-bL}``. This removes the cancellation that ruins the textbook form
+beyond about 12 modes (Tang 2003).
+
+References
+----------
+.. [1] R. D. Blevins, "Formulas for Natural Frequency and Mode Shape", Van Nostrand, 1979,
+   table 8-1 (uniform beams: frequencies, mode shapes, sigma_k).
+.. [2] R. E. D. Bishop, D. C. Johnson, "The Mechanics of Vibration", Cambridge, 1960
+   (receptances of free-free beams).
+.. [3] Y. Tang, "Numerical evaluation of uniform beam modes", J. Eng. Mech. 129(12), 2003.
+.. [4] P. J. P. Goncalves, M. J. Brennan, S. J. Elliott, "Numerical evaluation of high-order
+   modes of vibration in uniform Euler-Bernoulli beams", J. Sound Vib. 301, 2007.
+.. [5] Belonozhko et al. 2009 (the paper of PAPER.md): the rod and its two-mode reference.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .interface import as_frequency_array, check_positive
+
+__all__ = ["Beam", "characteristic_roots"]
+
+_SERIES_RADIUS = 2.0  # |x| below which the power series in y = x**4 are used
+_N_SERIES = 18        # terms: 4**k |y|**k/(4k)! < 1e-30 at |x| = 2 for k = 18
+
+
+def _series_coefficients():
+    """Coefficients in y = x**4 of the four functions that make up W (see module docstring)."""
+    f = math.factorial
+    k = np.arange(_N_SERIES)
+    # Q(y) = (1 - cos x cosh x)/y = -sum_{k>=1} (-4)^k y^(k-1)/(4k)!
+    q = np.array([-((-4.0) ** (j + 1)) / f(4 * j + 4) for j in k])
+    # (cos x sinh x - sin x cosh x)/x**3 = sum (-1)^(k+1) 2^(2k+2) y^k/(4k+3)!
+    p1 = np.array([(-1.0) ** (j + 1) * 2.0 ** (2 * j + 2) / f(4 * j + 3) for j in k])
+    # sin x sinh x / x**2 = sum (-1)^k 2^(2k+1) y^k/(4k+2)!
+    p2 = np.array([(-1.0) ** j * 2.0 ** (2 * j + 1) / f(4 * j + 2) for j in k])
+    # -(cos x sinh x + sin x cosh x)/x = -sum (-1)^k 2^(2k+1) y^k/(4k+1)!
+    p4 = np.array([-((-1.0) ** j) * 2.0 ** (2 * j + 1) / f(4 * j + 1) for j in k])
+    return q, p1, p2, p4
+
+
+_Q, _P1, _P2, _P4 = _series_coefficients()
+
+
+def _polyval(coefficients: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Horner evaluation of sum c_k y**k."""
+    out = np.zeros_like(y)
+    for c in coefficients[::-1]:
+        out = out * y + c
+    return out
+
+
+def _dimensionless_W(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """f1, f2, f4 with W1 = L^3/EJ f1, W2 = L^2/EJ f2, W4 = L/EJ f4, as functions of y = x**4."""
+    f1 = np.empty_like(y)
+    f2 = np.empty_like(y)
+    f4 = np.empty_like(y)
+    small = np.abs(y) < _SERIES_RADIUS**4
+    if np.any(small):
+        ys = y[small]
+        denominator = ys * _polyval(_Q, ys)
+        f1[small] = _polyval(_P1, ys) / denominator
+        f2[small] = _polyval(_P2, ys) / denominator
+        f4[small] = _polyval(_P4, ys) / denominator
+    large = ~small
+    if np.any(large):
+        x = y[large] ** 0.25  # principal root: Re x >= |Im x|
+        sigma = np.where(x.imag >= 0.0, 1.0, -1.0)
+        t = np.exp(-2.0 * x)
+        u = np.exp(2j * sigma * x)
+        g = 4.0 * np.exp(-x + 1j * sigma * x)
+        den = g - (1.0 + u) * (1.0 + t)
+        a = (1.0 + u) * (1.0 - t)            # 4 cos x sinh x / P
+        b = 1j * sigma * (1.0 - u) * (1.0 + t)  # 4 sin x cosh x / P
+        f1[large] = (a - b) / (x**3 * den)
+        f2[large] = 1j * sigma * (1.0 - u) * (1.0 - t) / (x**2 * den)
+        f4[large] = -(a + b) / (x * den)
+    return f1, f2, f4
+
+
+def _newton(function, derivative, x0: np.ndarray, n_iter: int = 50) -> np.ndarray:
+    """Vectorised Newton iteration, stopped when every step is below 1e-15 relative."""
+    x = np.array(x0, dtype=float)
+    for _ in range(n_iter):
+        step = function(x) / derivative(x)
+        x = x - step
+        if np.all(np.abs(step) <= 1e-15 * np.abs(x)):
+            break
+    return x
+
+
+def _sech(x):
+    e = np.exp(-np.abs(x))
+    return 2.0 * e / (1.0 + e * e)
+
+
+def characteristic_roots(kind: str, n: int) -> np.ndarray:
+    """First n positive roots x_k of a uniform-beam characteristic equation (dimensionless).
+
+    Parameters
+    ----------
+    kind : {"free-free", "clamped-free", "pinned-free", "sliding-free", "w2"}
+        ``cos x cosh x = 1``, ``cos x cosh x = -1``, ``tan x = tanh x``, ``tan x = -tanh x``, and
+        ``sin x = 0`` (zeros of W2) respectively. The trivial root x = 0 is not counted.
+    n : int
+        Number of roots.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        Frequencies follow as ``x_k**2 sqrt(EJ/(rho*A L**4))``.
+    """
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n must be a positive integer (number of roots); got {n!r}")
+    k = np.arange(1, n + 1, dtype=float)
+    if kind == "free-free":    # cos x = sech x
+        return _newton(lambda x: np.cos(x) - _sech(x),
+                       lambda x: -np.sin(x) + _sech(x) * np.tanh(x), (k + 0.5) * np.pi)
+    if kind == "clamped-free":  # cos x = -sech x
+        return _newton(lambda x: np.cos(x) + _sech(x),
+                       lambda x: -np.sin(x) - _sech(x) * np.tanh(x), (k - 0.5) * np.pi)
+    if kind == "pinned-free":  # sin x - cos x tanh x = 0
+        return _newton(lambda x: np.sin(x) - np.cos(x) * np.tanh(x),
+                       lambda x: np.cos(x) + np.sin(x) * np.tanh(x) - np.cos(x) * _sech(x) ** 2,
+                       (k + 0.25) * np.pi)
+    if kind == "sliding-free":  # sin x + cos x tanh x = 0
+        return _newton(lambda x: np.sin(x) + np.cos(x) * np.tanh(x),
+                       lambda x: np.cos(x) - np.sin(x) * np.tanh(x) + np.cos(x) * _sech(x) ** 2,
+                       (k - 0.25) * np.pi)
+    if kind == "w2":
+        return k * np.pi
+    raise ValueError(
+        "kind must be 'free-free', 'clamped-free', 'pinned-free', 'sliding-free' or 'w2'; "
+        f"got {kind!r}"
+    )
+
+
+def _shape_terms(kind: str, xk: np.ndarray):
+    """sigma_k and (1 - sigma_k) e^{x_k} / 2 ... in scaled form (Goncalves et al. 2007).
+
+    Returns (sigma, c_plus) where the mode shape on xi = x/L in [0, 1] is
+
+        free-free:    cos(x xi) - sigma sin(x xi) + c_plus e^{x (xi-1)} + (1+sigma)/2 e^{-x xi}
+        clamped-free: -cos(x xi) + sigma sin(x xi) + c_plus e^{x (xi-1)} + (1+sigma)/2 e^{-x xi}
+
+    with ``c_plus = (1 - sigma) e^{x} / 2`` computed without overflow.
+    """
+    e = np.exp(-xk)
+    if kind == "free-free":
+        # sigma = (cosh - cos)/(sinh - sin)
+        num = (1.0 + e * e) - 2.0 * np.cos(xk) * e
+        den = (1.0 - e * e) - 2.0 * np.sin(xk) * e
+        c_plus = (np.cos(xk) - np.sin(xk) - e) / den
+    else:
+        # sigma = (cosh + cos)/(sinh + sin)
+        num = (1.0 + e * e) + 2.0 * np.cos(xk) * e
+        den = (1.0 - e * e) + 2.0 * np.sin(xk) * e
+        c_plus = (np.sin(xk) - np.cos(xk) - e) / den
+    return num / den, c_plus
+
+
+class Beam:
+    """Uniform Euler-Bernoulli beam, free at both ends, loaded at its attachment end x = 0.
+
+    Parameters
+    ----------
+    length : float, m
+        Length L.
+    bending_stiffness : float, N*m**2
+        EJ (Young's modulus times the second moment of area of the section).
+    linear_density : float, kg/m
+        Mass per unit length rho*A.
+    damping_ratio : float, optional
+        Modal damping ratio, the same for every bending mode (dimensionless, 0 <= zeta < 1).
+        The exact W(s) of a damped beam is the undamped closed form plus the exact damping
+        correction of each mode, summed until the rest is below round-off.
+
+    Notes
+    -----
+    Rotary inertia and shear deformation are neglected (Euler-Bernoulli), so the moment of
+    inertia about the centre of mass is ``m L**2/12``, as in the paper [5]_.
+
+    References
+    ----------
+    See the module docstring.
+    """
+
+    def __init__(self, length: float, bending_stiffness: float, linear_density: float, *,
+                 damping_ratio: float = 0.0):
+        self.length = check_positive("length", length, "m")
+        self.bending_stiffness = check_positive("bending_stiffness", bending_stiffness, "N*m^2")
+        self.linear_density = check_positive("linear_density", linear_density, "kg/m")
+        self.damping_ratio = check_positive("damping_ratio", damping_ratio, "-", allow_zero=True)
+        if self.damping_ratio >= 1.0:
+            raise ValueError(f"damping_ratio must be below 1 (underdamped modes) [-]; got {damping_ratio!r}")
+        self._cache: dict = {}
+
+    # -- constructors -------------------------------------------------------------------------
+    @classmethod
+    def circular_rod(cls, length: float, diameter: float, density: float, youngs_modulus: float,
+                     *, damping_ratio: float = 0.0) -> "Beam":
+        """Solid circular rod (the paper's example: 10 m, 0.01 m, 7800 kg/m**3, 2.06e11 Pa).
+
+        Parameters
+        ----------
+        length : float, m
+        diameter : float, m
+        density : float, kg/m**3
+        youngs_modulus : float, Pa
+        damping_ratio : float, optional
+        """
+        d = check_positive("diameter", diameter, "m")
+        rho = check_positive("density", density, "kg/m^3")
+        E = check_positive("youngs_modulus", youngs_modulus, "Pa")
+        area = math.pi * d**2 / 4.0
+        second_moment = math.pi * d**4 / 64.0
+        return cls(length, E * second_moment, rho * area, damping_ratio=damping_ratio)
+
+    @classmethod
+    def tube(cls, length: float, outer_diameter: float, wall_thickness: float, density: float,
+             youngs_modulus: float, *, damping_ratio: float = 0.0) -> "Beam":
+        """Thin- or thick-walled circular tube (a typical deployable boom).
+
+        Parameters
+        ----------
+        length : float, m
+        outer_diameter : float, m
+        wall_thickness : float, m
+            Must be at most half the outer diameter (a solid rod at equality).
+        density : float, kg/m**3
+        youngs_modulus : float, Pa
+        damping_ratio : float, optional
+        """
+        D = check_positive("outer_diameter", outer_diameter, "m")
+        t = check_positive("wall_thickness", wall_thickness, "m")
+        if t > D / 2.0:
+            raise ValueError(
+                f"wall_thickness must be at most outer_diameter/2 = {D / 2.0!r} [m]; got {t!r}"
+            )
+        rho = check_positive("density", density, "kg/m^3")
+        E = check_positive("youngs_modulus", youngs_modulus, "Pa")
+        d = D - 2.0 * t
+        area = math.pi * (D**2 - d**2) / 4.0
+        second_moment = math.pi * (D**4 - d**4) / 64.0
+        return cls(length, E * second_moment, rho * area, damping_ratio=damping_ratio)
+
+    @classmethod
+    def rectangular(cls, length: float, width: float, thickness: float, density: float,
+                    youngs_modulus: float, *, damping_ratio: float = 0.0) -> "Beam":
+        """Rectangular section bending about its thin direction (a panel strip or tape).
+
+        Parameters
+        ----------
+        length, width, thickness : float, m
+            ``thickness`` is the dimension in the bending plane.
+        density : float, kg/m**3
+        youngs_modulus : float, Pa
+        """
+        b = check_positive("width", width, "m")
+        h = check_positive("thickness", thickness, "m")
+        rho = check_positive("density", density, "kg/m^3")
+        E = check_positive("youngs_modulus", youngs_modulus, "Pa")
+        return cls(length, E * b * h**3 / 12.0, rho * b * h, damping_ratio=damping_ratio)
+
+    def __repr__(self) -> str:
+        return (f"Beam(length={self.length!r}, bending_stiffness={self.bending_stiffness!r}, "
+                f"linear_density={self.linear_density!r}, damping_ratio={self.damping_ratio!r})")
+
+    # -- rigid properties ---------------------------------------------------------------------
+    @property
+    def mass(self) -> float:
+        """Mass m = rho*A L [kg]."""
+        return self.linear_density * self.length
+
+    @property
+    def inertia(self) -> float:
+        """Moment of inertia about the centre of mass, undeformed: m L**2/12 [kg*m**2]."""
+        return self.mass * self.length**2 / 12.0
+
+    @property
+    def frequency_scale(self) -> float:
+        """sqrt(EJ/(rho*A L**4)) [rad/s]: a root x_k gives the frequency x_k**2 times this."""
+        return math.sqrt(self.bending_stiffness / (self.linear_density * self.length**4))
+
+    # -- frequencies --------------------------------------------------------------------------
+    def _roots(self, kind: str, n: int) -> np.ndarray:
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"n must be a positive integer (number of frequencies); got {n!r}")
+        cached = self._cache.get(kind)
+        if cached is None or cached.size < n:
+            cached = characteristic_roots(kind, max(n, 16))
+            self._cache[kind] = cached
+        return cached[:n]
+
+    def natural_frequencies(self, n: int) -> np.ndarray:
+        """First n free-free bending frequencies w_k [rad/s] (rigid-body modes excluded)."""
+        return self._roots("free-free", n) ** 2 * self.frequency_scale
+
+    def cantilever_frequencies(self, n: int) -> np.ndarray:
+        """First n clamped-free frequencies [rad/s] (attachment end clamped)."""
+        return self._roots("clamped-free", n) ** 2 * self.frequency_scale
+
+    def zeros(self, r: int, n: int = 2) -> np.ndarray:
+        """First n zero frequencies of the exact W_r [rad/s] (r = 1, 2, 3, 4).
+
+        W1: pinned-free frequencies (``tan x = tanh x``); W2 = W3: ``x = k pi``;
+        W4: sliding-free frequencies (``tan x = -tanh x``).
+        """
+        if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r not in (1, 2, 3, 4):
+            raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {r!r}")
+        kind = {1: "pinned-free", 2: "w2", 3: "w2", 4: "sliding-free"}[r]
+        return self._roots(kind, n) ** 2 * self.frequency_scale
+
+    # -- mode shapes --------------------------------------------------------------------------
+    def mode_shapes(self, x, n: int, *, boundary: str = "free-free") -> np.ndarray:
+        """Mass-normalised bending mode shapes at positions x [m], shape (len(x), n) [1/sqrt(kg)].
+
+        Normalised so that ``integral rho*A phi_j phi_k dx = delta_jk``. Accurate at any mode
+        number (stable form of Goncalves et al. 2007, see the module docstring).
+
+        Parameters
+        ----------
+        x : array_like, m
+            Positions along the beam, 0 <= x <= L.
+        n : int
+            Number of modes.
+        boundary : {"free-free", "clamped-free"}
+            Free-free modes, or cantilever modes clamped at the attachment end.
+        """
+        xi = np.atleast_1d(np.asarray(x, dtype=float)) / self.length
+        if not np.all(np.isfinite(xi)) or np.any(xi < -1e-12) or np.any(xi > 1 + 1e-12):
+            raise ValueError(f"x must lie in [0, length] = [0, {self.length!r}] [m]")
+        if boundary not in ("free-free", "clamped-free"):
+            raise ValueError(f"boundary must be 'free-free' or 'clamped-free'; got {boundary!r}")
+        xk = self._roots(boundary, n)
+        sigma, c_plus = _shape_terms(boundary, xk)
+        arg = np.outer(xi, xk)
+        trig = np.cos(arg) - sigma * np.sin(arg)
+        if boundary == "clamped-free":
+            trig = -trig
+        shapes = trig + c_plus * np.exp(arg - xk) + 0.5 * (1.0 + sigma) * np.exp(-arg)
+        return shapes / math.sqrt(self.mass)
+
+    def _free_free_root_values(self, n: int):
+        """Mass-normalised (phi_k(0), phi_k'(0)) and phi_k(L) of the first n free-free modes."""
+        xk = self._roots("free-free", n)
+        sigma, c_plus = _shape_terms("free-free", xk)
+        root = np.column_stack([np.full(n, 2.0), -2.0 * sigma * xk / self.length])
+        tip = np.cos(xk) - sigma * np.sin(xk) + c_plus + 0.5 * (1.0 + sigma) * np.exp(-xk)
+        return root / math.sqrt(self.mass), tip / math.sqrt(self.mass)
+
+    def modal_participation(self, n: int) -> np.ndarray:
+        """Participation factors of the first n cantilever modes, shape (n, 2).
+
+        Row k is ``[integral rho*A psi_k dx, integral rho*A x psi_k dx]`` [sqrt(kg), sqrt(kg)*m]
+        for mass-normalised cantilever modes psi_k: the coupling of mode k with a translation and
+        a rotation of the clamped end. From the beam equation, ``integral psi = -psi'''(0)/b**4
+        = 2 sigma_k/b_k`` and ``integral x psi = psi''(0)/b**4 = 2/b_k**2`` (unnormalised shapes
+        with integral of the square L), exact at any k. Their squares summed over all modes
+        give m and m L**2/3 (the effective masses), a check used in the tests.
+        """
+        xk = self._roots("clamped-free", n)
+        sigma, _ = _shape_terms("clamped-free", xk)
+        beta = xk / self.length
+        scale = self.linear_density / math.sqrt(self.mass)
+        return np.column_stack([2.0 * sigma / beta, 2.0 / beta**2]) * scale
+
+    def _cantilever_tip_values(self, n: int) -> np.ndarray:
+        xk = self._roots("clamped-free", n)
+        sigma, c_plus = _shape_terms("clamped-free", xk)
+        tip = -(np.cos(xk) - sigma * np.sin(xk)) + c_plus + 0.5 * (1.0 + sigma) * np.exp(-xk)
+        return tip / math.sqrt(self.mass)
+
+    # -- exact W(s) ---------------------------------------------------------------------------
+    def W(self, s) -> np.ndarray:
+        """Exact transfer matrix W(s) of the free distributed beam (see the module docstring).
+
+        Parameters
+        ----------
+        s : complex or array_like of complex, rad/s
+            Laplace variable, any magnitude (tested from 1e-8 to 1e8 rad/s). s = 0 is the
+            rigid-body pole and is rejected.
+
+        Returns
+        -------
+        ndarray of complex128, shape ``np.shape(s) + (2, 2)``
+            ``[[W1, W2], [W2, W4]]`` in m/N, 1/N and 1/(N*m).
+        """
+        s = as_frequency_array(s)
+        if np.any(s == 0):
+            raise ValueError("s = 0 is the rigid-body pole of W (W is infinite there) [rad/s]")
+        EJ, L = self.bending_stiffness, self.length
+        y = -(s**2) * (self.linear_density * L**4 / EJ)
+        f1, f2, f4 = _dimensionless_W(y.ravel())
+        out = np.empty(y.shape + (2, 2), dtype=np.complex128)
+        w1 = f1.reshape(y.shape) * (L**3 / EJ)
+        w2 = f2.reshape(y.shape) * (L**2 / EJ)
+        w4 = f4.reshape(y.shape) * (L / EJ)
+        if self.damping_ratio > 0.0:
+            d1, d2, d4 = self._damping_correction(s)
+            w1, w2, w4 = w1 + d1, w2 + d2, w4 + d4
+        out[..., 0, 0] = w1
+        out[..., 0, 1] = out[..., 1, 0] = w2
+        out[..., 1, 1] = w4
+        return out
+
+    def _damping_correction(self, s: np.ndarray):
+        """Sum over modes of b b^T [1/(s^2 + 2 zeta w s + w^2) - 1/(s^2 + w^2)].
+
+        Term k behaves as -2 zeta s w_k b b^T / w_k**4 once w_k >> |s|; b_k b_k^T grows at most
+        like w_k (the rotation entry), so the tail after mode N is below
+        ``sum_{k>N} 2 zeta |s| |b_k|^2/w_k^3 ~ N^-3``. Modes are added until that bound is below
+        1e-14 of the correction already summed or of the undamped W.
+        """
+        zeta = self.damping_ratio
+        s_max = float(np.abs(s).max())
+        # enough modes that w_N exceeds |s| by a factor giving a negligible tail
+        x_needed = math.sqrt(max(s_max, 1e-300) / self.frequency_scale)
+        n = int(min(max(64, 60.0 * x_needed / math.pi + 64), 200_000))
+        root, _ = self._free_free_root_values(n)
+        w = self.natural_frequencies(n)
+        ss = s[..., None]
+        term = 1.0 / (ss**2 + 2.0 * zeta * w * ss + w**2) - 1.0 / (ss**2 + w**2)
+        d1 = term @ (root[:, 0] ** 2)
+        d2 = term @ (root[:, 0] * root[:, 1])
+        d4 = term @ (root[:, 1] ** 2)
+        return d1, d2, d4
+
+    # -- finite models ------------------------------------------------------------------------
+    def truncated(self, n_modes: int, *, method: str = "craig-bampton"):
+        """A finite modal model of this beam with ``n_modes`` bending modes.
+
+        Parameters
+        ----------
+        n_modes : int
+            Number of elastic modes kept (>= 1).
+        method : {"craig-bampton", "residual", "free-free"}
+            ``"free-free"``: the paper's truncation, rigid-body modes plus the first free-free
+            bending modes. ``"residual"``: the same plus the static flexibility of the dropped
+            modes at the attachment end (mode acceleration); exact poles, better zeros. ``"craig-bampton"`` (default, the most accurate): attachment-end
+            motion (two constraint modes, exact rigid-body inertia) plus the first cantilever
+            modes, i.e. the hybrid coordinates of flexible-spacecraft dynamics; the zeros of W
+            and coupled frequencies converge much faster (see benchmarks/truncation_table.py).
+
+        Returns
+        -------
+        ModalBeam
+        """
+        from .modal import ModalBeam
+
+        return ModalBeam(self, n_modes, method=method)

@@ -1,0 +1,326 @@
+"""The W-matrix interface shared by every appendage model.
+
+An appendage is loaded only at its attachment end (x = 0) by a transverse force ``F_y`` [N] and a
+moment ``M`` [N*m]; it answers with the attachment end's transverse displacement ``delta`` [m] and
+rotation ``phi`` [rad]. In Laplace form (zero initial conditions)
+
+    [delta]   [W1  W2] [F_y]
+    [ phi ] = [W3  W4] [ M ],      W2 = W3 (reciprocity),
+
+where W(s) includes the free rigid-body motion (the 1/s**2 term).
+
+Finite models (truncated beams, hinged chains) also expose a realisation of W in *attachment-end
+coordinates*, a :class:`RootModel`: generalised coordinates ``q = [delta, phi, q_2, ...]`` with
+
+    M q'' + C q' + K q = [F_y, M, 0, ..., 0]^T,
+
+so that ``W(s) = [(M s**2 + C s + K)^-1]`` restricted to the first two coordinates. This is the
+form in which a hub couples to any appendage: the first two coordinates are set equal to the hub's
+motion at the mount, whatever the appendage's class (``spacecraft.coupling``). The mass matrix may
+be singular (a massless spring between the mount and the first body); the coupled system is not.
+
+References
+----------
+.. [1] P. A. Belonozhko, P. P. Belonozhko, A. A. Fokov et al., "On the equivalence of mechanical
+   design schemes with distributed and lumped parameters for spatially developed peripheral
+   elements of spacecraft", Institute of Technical Mechanics, NAS of Ukraine, 2009 (eq. (2)-(5)).
+.. [2] R. R. Craig, A. J. Kurdila, "Fundamentals of Structural Dynamics", 2nd ed., Wiley, 2006,
+   ch. 17 (component-mode synthesis, constraint modes).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+import scipy.linalg
+
+__all__ = [
+    "Appendage",
+    "FiniteAppendage",
+    "RootModel",
+    "as_frequency_array",
+    "check_positive",
+    "FlexsatError",
+    "ConvergenceError",
+]
+
+
+class FlexsatError(Exception):
+    """Base class of flexsat's own errors."""
+
+
+class ConvergenceError(FlexsatError, RuntimeError):
+    """A numerical procedure (root search, fit) did not converge."""
+
+
+def check_positive(name: str, value, unit: str, *, allow_zero: bool = False) -> float:
+    """Return ``value`` as float after checking that it is a positive finite real number.
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a real number.
+    ValueError
+        If it is not finite or not positive (or negative when ``allow_zero``).
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} {value!r}")
+    value = float(value)
+    ok = np.isfinite(value) and (value >= 0.0 if allow_zero else value > 0.0)
+    if not ok:
+        what = "non-negative" if allow_zero else "positive"
+        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {value!r}")
+    return value
+
+
+def as_frequency_array(s) -> np.ndarray:
+    """Return the Laplace variable ``s`` [rad/s] as a complex128 array, checking its type."""
+    if isinstance(s, (str, bytes)) or s is None:
+        raise TypeError(f"s must be a complex number or array of them [rad/s]; got {type(s).__name__}")
+    try:
+        arr = np.asarray(s)
+    except Exception as exc:  # pragma: no cover - numpy raises many kinds here
+        raise TypeError(f"s must be a complex number or array of them [rad/s]; got {s!r}") from exc
+    if arr.dtype.kind not in "biufc":
+        raise TypeError(f"s must be a complex number or array of them [rad/s]; got dtype {arr.dtype}")
+    arr = arr.astype(np.complex128)
+    if not np.all(np.isfinite(arr)):
+        raise ValueError("s must be finite [rad/s]; got a NaN or infinite value")
+    return arr
+
+
+@runtime_checkable
+class Appendage(Protocol):
+    """What the hub needs of an appendage: its rigid properties and W(s)."""
+
+    @property
+    def length(self) -> float: ...  # m
+
+    @property
+    def mass(self) -> float: ...  # kg
+
+    @property
+    def inertia(self) -> float: ...  # kg*m**2 about the centre of mass, undeformed
+
+    def W(self, s) -> np.ndarray: ...
+
+
+@dataclasses.dataclass(frozen=True)
+class RootModel:
+    """Second-order realisation of W(s) in attachment-end coordinates.
+
+    Attributes
+    ----------
+    mass, damping, stiffness : ndarray, shape (n, n)
+        Symmetric matrices [SI units of the coordinates]; coordinates 0 and 1 are ``delta`` [m] and
+        ``phi`` [rad] of the attachment end, on which ``F_y`` and ``M`` act.
+    tip : ndarray, shape (n,)
+        Row giving the elastic tip deflection [m]: the free end's transverse displacement relative
+        to the line tangent to the appendage at its attachment end, ``w(L) - delta - L*phi``.
+    coordinate_names : tuple of str
+        Names of the coordinates (for state names).
+    """
+
+    mass: np.ndarray
+    damping: np.ndarray
+    stiffness: np.ndarray
+    tip: np.ndarray
+    coordinate_names: tuple
+
+    @property
+    def n(self) -> int:
+        """Number of generalised coordinates."""
+        return self.mass.shape[0]
+
+    def dynamic_stiffness(self, s: np.ndarray) -> np.ndarray:
+        """Attachment-end dynamic stiffness D(s) = W(s)^-1, by static condensation.
+
+        ``D = Z_rr - Z_ri Z_ii^-1 Z_ir`` with ``Z = M s**2 + C s + K`` partitioned into the two
+        attachment-end coordinates (r) and the internal ones (i). Returns shape ``s.shape + (2, 2)``.
+        """
+        s = np.asarray(s, dtype=complex)[..., None, None]
+        Z = self.mass * s**2 + self.damping * s + self.stiffness
+        Zrr, Zri, Zir, Zii = Z[..., :2, :2], Z[..., :2, 2:], Z[..., 2:, :2], Z[..., 2:, 2:]
+        if self.n == 2:
+            return Zrr
+        return Zrr - Zri @ np.linalg.solve(Zii, Zir)
+
+
+class FiniteAppendage:
+    """Base of appendage models with a finite number of degrees of freedom.
+
+    Subclasses implement :meth:`_root_model` (and the properties ``length``, ``mass``,
+    ``inertia``); this class derives from it W(s), the poles, the zeros and gains of every W_r,
+    and a python-control state-space model, the paper's quantities (eq. (4)) [1]_.
+
+    References
+    ----------
+    .. [1] Belonozhko et al. 2009, see :mod:`appendages.interface`.
+    """
+
+    #: Relative size below which an eigenvalue of K - lambda M counts as a rigid-body one.
+    _rigid_tol = 1e-9
+
+    def _root_model(self) -> RootModel:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def root_model(self) -> RootModel:
+        """The realisation of W(s) in attachment-end coordinates (computed once)."""
+        cached = self.__dict__.get("_root_model_cache")
+        if cached is None:
+            cached = self._root_model()
+            self.__dict__["_root_model_cache"] = cached
+        return cached
+
+    # -- W(s) ---------------------------------------------------------------------------------
+    def W(self, s) -> np.ndarray:
+        """Transfer matrix W(s) of the free appendage [m/N, 1/N; 1/N, 1/(N*m)].
+
+        Parameters
+        ----------
+        s : complex or array_like of complex, rad/s
+            Laplace variable. ``s = 0`` is a pole (rigid-body motion).
+
+        Returns
+        -------
+        ndarray of complex128, shape ``np.shape(s) + (2, 2)``
+        """
+        s = as_frequency_array(s)
+        W = np.linalg.inv(self.root_model().dynamic_stiffness(s))
+        W[..., 1, 0] = W[..., 0, 1]  # exact reciprocity (inv() leaves round-off asymmetry)
+        return W
+
+    # -- poles, zeros, gains ------------------------------------------------------------------
+    @staticmethod
+    def _pencil_frequencies(K: np.ndarray, M: np.ndarray, rigid_tol: float) -> np.ndarray:
+        """Non-zero undamped frequencies [rad/s] of ``(K - w**2 M) v = 0``, ascending.
+
+        M may be singular and K singular (rigid-body modes); both are symmetric. The eigenvalues
+        are taken from the generalized problem, infinite ones (massless coordinates) and
+        rigid-body ones (|lambda| below ``rigid_tol`` times the largest finite one) dropped.
+        """
+        if K.shape[0] == 0:
+            return np.zeros(0)
+        lam = scipy.linalg.eigvals(K, M, homogeneous_eigvals=True)
+        alpha, beta = lam[0], lam[1]
+        finite = np.abs(beta) > 1e-12 * np.abs(alpha).max(initial=1.0)
+        values = (alpha[finite] / beta[finite]).real
+        if values.size == 0:
+            return np.zeros(0)
+        scale = max(np.abs(values).max(), 1e-300)
+        values = values[values > rigid_tol * scale]
+        return np.sqrt(np.sort(values))
+
+    def poles(self) -> np.ndarray:
+        """Undamped natural frequencies w_k of the free appendage [rad/s], ascending.
+
+        The rigid-body modes (double pole at s = 0) are left out.
+        """
+        rm = self.root_model()
+        cached = self.__dict__.get("_poles_cache")
+        if cached is None:
+            cached = self._pencil_frequencies(rm.stiffness, rm.mass, self._rigid_tol)
+            self.__dict__["_poles_cache"] = cached
+        return cached.copy()
+
+    def zeros(self, r: int) -> np.ndarray:
+        """Undamped zero frequencies n_r of W_r [rad/s], ascending (r = 1, 2, 3, 4).
+
+        W_r(i n) = 0 at these frequencies. For W1 they are the natural frequencies with the
+        attachment end pinned (delta = 0); for W4 with its rotation held (phi = 0); for W2 = W3
+        the transmission zeros of the force-to-rotation path, from the Rosenbrock pencil
+        ``[[K - n**2 M, b], [c^T, 0]]``. Zeros at s = 0 (cancelled by the rigid-body poles) are
+        left out.
+        """
+        if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r not in (1, 2, 3, 4):
+            raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {r!r}")
+        rm = self.root_model()
+        n = rm.n
+        out_index, in_index = {1: (0, 0), 2: (0, 1), 3: (1, 0), 4: (1, 1)}[r]
+        # Rosenbrock pencil (A - lambda E) with lambda = n**2 = -s**2.
+        A = np.zeros((n + 1, n + 1))
+        E = np.zeros((n + 1, n + 1))
+        A[:n, :n] = rm.stiffness
+        E[:n, :n] = rm.mass
+        A[in_index, n] = 1.0
+        A[n, out_index] = 1.0
+        return self._pencil_frequencies(A, E, self._rigid_tol)
+
+    def gains(self) -> np.ndarray:
+        """High-frequency gains k_r = lim s**2 W_r(s), r = 1..4 [m/(N s^2), 1/(N s^2), ...].
+
+        For a model with a mass matrix M these are the attachment-end block of M^-1 (the
+        paper's k_1, k_2 = k_3, k_4). Raises ValueError for a model with a massless attachment
+        end (W tends to a constant flexibility, the gains are infinite).
+        """
+        rm = self.root_model()
+        try:
+            inv = np.linalg.inv(rm.mass)
+        except np.linalg.LinAlgError:
+            inv = None
+        if inv is None or not np.all(np.isfinite(inv)) or np.linalg.cond(rm.mass) > 1e14:
+            raise ValueError(
+                "gains are undefined for a model whose attachment end carries no mass "
+                "(W(s) tends to a constant flexibility as s -> infinity)"
+            )
+        return np.array([inv[0, 0], inv[0, 1], inv[0, 1], inv[1, 1]])
+
+    # -- realisation --------------------------------------------------------------------------
+    def state_space(self, *, tip: bool = False, name: str | None = None):
+        """python-control StateSpace of W: inputs ``F_y``, ``M``; outputs ``delta``, ``phi``.
+
+        Built in modal coordinates of the free appendage (mass-normalised mode shapes of
+        ``K v = w**2 M v``), states ``[eta, eta_dot]``: A = [[0, I], [-Omega**2, -V^T C V]],
+        a well-scaled realisation for any number of modes. Massless coordinates (a spring at
+        the mount) are condensed statically, which gives W a constant part (D != 0).
+
+        Parameters
+        ----------
+        tip : bool
+            Also output ``tip_deflection`` [m] (elastic, relative to the attachment-end tangent).
+        name : str, optional
+            System name.
+        """
+        import control
+
+        rm = self.root_model()
+        M, C, K = rm.mass, rm.damping, rm.stiffness
+        n = rm.n
+        out_rows = np.zeros((3, n))
+        out_rows[0, 0] = out_rows[1, 1] = 1.0
+        out_rows[2] = rm.tip
+        load = np.zeros((n, 2))
+        load[0, 0] = load[1, 1] = 1.0
+        massless = np.flatnonzero(np.all(rm.mass == 0.0, axis=1))
+        feedthrough = np.zeros((3, 2))
+        if massless.size:
+            if np.any(C[massless] != 0.0):
+                raise ValueError(
+                    "state_space() of a free appendage cannot condense a damped massless "
+                    "coordinate (a damped root hinge); couple it to a hub instead"
+                )
+            keep = np.setdiff1d(np.arange(n), massless)
+            Kmm, Kmk = K[np.ix_(massless, massless)], K[np.ix_(massless, keep)]
+            # q_m = Kmm^-1 (f_m - Kmk q_k): exact for massless, undamped coordinates.
+            G = np.linalg.solve(Kmm, np.hstack([Kmk, load[massless]]))
+            Gq, Gf = G[:, : keep.size], G[:, keep.size:]
+            Kk = K[np.ix_(keep, keep)] - K[np.ix_(keep, massless)] @ Gq
+            load_k = load[keep] - K[np.ix_(keep, massless)] @ Gf
+            feedthrough = out_rows[:, massless] @ Gf
+            out_rows = out_rows[:, keep] - out_rows[:, massless] @ Gq
+            M, C, K, load = M[np.ix_(keep, keep)], C[np.ix_(keep, keep)], 0.5 * (Kk + Kk.T), load_k
+        lam, V = scipy.linalg.eigh(K, M)
+        lam = np.where(np.abs(lam) < self._rigid_tol * np.abs(lam).max(initial=1.0), 0.0, lam)
+        m = lam.size
+        A = np.block([[np.zeros((m, m)), np.eye(m)], [-np.diag(lam), -(V.T @ C @ V)]])
+        B = np.vstack([np.zeros((m, 2)), V.T @ load])
+        Cout = np.hstack([out_rows @ V, np.zeros((3, m))])
+        outputs = ["delta", "phi", "tip_deflection"]
+        rows = 3 if tip else 2
+        states = [f"eta[{k}]" for k in range(m)] + [f"eta_dot[{k}]" for k in range(m)]
+        return control.ss(
+            A, B, Cout[:rows], feedthrough[:rows], inputs=["F_y", "M"], outputs=outputs[:rows],
+            states=states, name=name,
+        )
