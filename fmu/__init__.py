@@ -1,1 +1,19 @@
-"""flexsat: fmu package."""
+"""flexsat.fmu: FMI 2.0 export of python-control StateSpace systems and co-simulation.
+
+Public API
+----------
+export
+    Write an FMU (Model Exchange + Co-Simulation, compiled for this platform).
+cosimulate
+    Fixed-step co-simulation of a plant FMU with a controller FMU.
+FMUError, FMUBuildError, CosimulationError
+    Exceptions.
+"""
+
+from .cosim import cosimulate
+from .errors import CosimulationError, FMUBuildError, FMUError
+from .export import DEFAULT_STEP, DEFAULT_STOP_TIME, export
+from .units import SI_UNITS, guess_unit
+
+__all__ = ["export", "cosimulate", "FMUError", "FMUBuildError", "CosimulationError",
+           "DEFAULT_STEP", "DEFAULT_STOP_TIME", "SI_UNITS", "guess_unit"]

@@ -1,0 +1,202 @@
+/* flexsat FMU template: arithmetic of the linear model (no FMI calls here).
+ *
+ * The zero-order-hold discretisation uses the block-matrix identity (Van Loan 1978)
+ *
+ *     expm([[A, B], [0, 0]] h) = [[Phi, Gamma], [0, I]],
+ *     Phi = expm(A h),  Gamma = int_0^h expm(A s) ds B,
+ *
+ * which is exact for any A (singular or not), and evaluates the exponential by scaling and
+ * squaring with the degree-13 Pade approximant of Higham (2005), accurate to double
+ * round-off for any norm after scaling.
+ *
+ * References
+ *   C. F. Van Loan, "Computing integrals involving the matrix exponential",
+ *     IEEE Trans. Automatic Control 23(3), 395-404, 1978.
+ *   N. J. Higham, "The scaling and squaring method for the matrix exponential revisited",
+ *     SIAM J. Matrix Anal. Appl. 26(4), 1179-1193, 2005 (Algorithm 2.3, Table 2.3).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "linear_model.h"
+
+void lm_derivatives(const LinearModel *model, const double *x, const double *u, double *dx)
+{
+    const size_t n = model->n_states, m = model->n_inputs;
+    for (size_t i = 0; i < n; i++) {
+        double sum = 0.0;
+        const double *a = model->A + i * n;
+        const double *b = model->B + i * m;
+        for (size_t j = 0; j < n; j++) sum += a[j] * x[j];
+        for (size_t k = 0; k < m; k++) sum += b[k] * u[k];
+        dx[i] = sum;
+    }
+}
+
+void lm_outputs(const LinearModel *model, const double *x, const double *u, double *y)
+{
+    const size_t n = model->n_states, m = model->n_inputs, p = model->n_outputs;
+    for (size_t i = 0; i < p; i++) {
+        double sum = 0.0;
+        const double *c = model->C + i * n;
+        const double *d = model->D + i * m;
+        for (size_t j = 0; j < n; j++) sum += c[j] * x[j];
+        for (size_t k = 0; k < m; k++) sum += d[k] * u[k];
+        y[i] = sum;
+    }
+}
+
+void lm_step(const LinearModel *model, const double *Phi, const double *Gamma,
+             const double *x, const double *u, double *x_next)
+{
+    const size_t n = model->n_states, m = model->n_inputs;
+    for (size_t i = 0; i < n; i++) {
+        double sum = 0.0;
+        const double *f = Phi + i * n;
+        const double *g = Gamma + i * m;
+        for (size_t j = 0; j < n; j++) sum += f[j] * x[j];
+        for (size_t k = 0; k < m; k++) sum += g[k] * u[k];
+        x_next[i] = sum;
+    }
+}
+
+/* Workspace: 9 matrices of size N x N plus N pivot indices, N = n_states + n_inputs. */
+size_t lm_workspace_size(const LinearModel *model)
+{
+    const size_t N = model->n_states + model->n_inputs;
+    return 9 * N * N + N + 1;
+}
+
+/* R = P Q for N x N row-major matrices (R must not alias P or Q). */
+static void matmul(size_t N, const double *P, const double *Q, double *R)
+{
+    memset(R, 0, N * N * sizeof(double));
+    for (size_t i = 0; i < N; i++) {
+        double *r = R + i * N;
+        for (size_t k = 0; k < N; k++) {
+            const double p = P[i * N + k];
+            if (p == 0.0) continue;
+            const double *q = Q + k * N;
+            for (size_t j = 0; j < N; j++) r[j] += p * q[j];
+        }
+    }
+}
+
+/* Solve Q X = P in place (X overwrites P) by LU with partial pivoting; Q is destroyed. */
+static int lu_solve(size_t N, double *Q, double *P, double *pivot)
+{
+    for (size_t k = 0; k < N; k++) {
+        size_t best = k;
+        double best_abs = fabs(Q[k * N + k]);
+        for (size_t i = k + 1; i < N; i++) {
+            const double v = fabs(Q[i * N + k]);
+            if (v > best_abs) { best_abs = v; best = i; }
+        }
+        if (!(best_abs > 0.0)) return -2;
+        pivot[k] = (double)best;
+        if (best != k) {
+            for (size_t j = 0; j < N; j++) {
+                double t = Q[k * N + j]; Q[k * N + j] = Q[best * N + j]; Q[best * N + j] = t;
+                t = P[k * N + j]; P[k * N + j] = P[best * N + j]; P[best * N + j] = t;
+            }
+        }
+        const double diag = Q[k * N + k];
+        for (size_t i = k + 1; i < N; i++) {
+            const double l = Q[i * N + k] / diag;
+            if (l == 0.0) continue;
+            Q[i * N + k] = l;
+            for (size_t j = k + 1; j < N; j++) Q[i * N + j] -= l * Q[k * N + j];
+            for (size_t j = 0; j < N; j++) P[i * N + j] -= l * P[k * N + j];
+        }
+    }
+    /* back substitution, all N right-hand sides at once */
+    for (size_t kk = N; kk-- > 0;) {
+        const double diag = Q[kk * N + kk];
+        for (size_t j = 0; j < N; j++) {
+            double sum = P[kk * N + j];
+            for (size_t i = kk + 1; i < N; i++) sum -= Q[kk * N + i] * P[i * N + j];
+            P[kk * N + j] = sum / diag;
+        }
+    }
+    return 0;
+}
+
+int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma, double *work)
+{
+    /* Pade [13/13] coefficients b_0..b_13 and theta_13 (Higham 2005, Table 2.3). */
+    static const double b[14] = {
+        64764752532480000.0, 32382376266240000.0, 7771770303897600.0,
+        1187353796428800.0, 129060195264000.0, 10559470521600.0, 670442572800.0,
+        33522128640.0, 1323241920.0, 40840800.0, 960960.0, 16380.0, 182.0, 1.0};
+    const double theta13 = 5.371920351148152;
+
+    const size_t n = model->n_states, m = model->n_inputs, N = n + m;
+    if (!(h > 0.0) || !isfinite(h)) return -1;
+    if (n == 0) return 0;
+
+    double *M = work, *A2 = M + N * N, *A4 = A2 + N * N, *A6 = A4 + N * N;
+    double *U = A6 + N * N, *V = U + N * N, *T = V + N * N, *P = T + N * N, *Q = P + N * N;
+    double *pivot = Q + N * N;
+
+    /* augmented matrix [[A h, B h], [0, 0]] */
+    memset(M, 0, N * N * sizeof(double));
+    for (size_t i = 0; i < n; i++) {
+        for (size_t j = 0; j < n; j++) M[i * N + j] = model->A[i * n + j] * h;
+        for (size_t k = 0; k < m; k++) M[i * N + n + k] = model->B[i * m + k] * h;
+    }
+
+    /* scaling: ||M / 2^s||_1 <= theta_13 */
+    double norm1 = 0.0;
+    for (size_t j = 0; j < N; j++) {
+        double col = 0.0;
+        for (size_t i = 0; i < N; i++) col += fabs(M[i * N + j]);
+        if (col > norm1) norm1 = col;
+    }
+    if (!isfinite(norm1)) return -3;
+    int s = 0;
+    if (norm1 > theta13) {
+        s = (int)ceil(log2(norm1 / theta13));
+        if (s < 0) s = 0;
+        for (size_t i = 0; i < N * N; i++) M[i] = ldexp(M[i], -s);
+    }
+
+    matmul(N, M, M, A2);
+    matmul(N, A2, A2, A4);
+    matmul(N, A4, A2, A6);
+
+    /* U = M [A6 (b13 A6 + b11 A4 + b9 A2) + b7 A6 + b5 A4 + b3 A2 + b1 I] */
+    for (size_t i = 0; i < N * N; i++) T[i] = b[13] * A6[i] + b[11] * A4[i] + b[9] * A2[i];
+    matmul(N, A6, T, P);
+    for (size_t i = 0; i < N * N; i++) P[i] += b[7] * A6[i] + b[5] * A4[i] + b[3] * A2[i];
+    for (size_t i = 0; i < N; i++) P[i * N + i] += b[1];
+    matmul(N, M, P, U);
+
+    /* V = A6 (b12 A6 + b10 A4 + b8 A2) + b6 A6 + b4 A4 + b2 A2 + b0 I */
+    for (size_t i = 0; i < N * N; i++) T[i] = b[12] * A6[i] + b[10] * A4[i] + b[8] * A2[i];
+    matmul(N, A6, T, V);
+    for (size_t i = 0; i < N * N; i++) V[i] += b[6] * A6[i] + b[4] * A4[i] + b[2] * A2[i];
+    for (size_t i = 0; i < N; i++) V[i * N + i] += b[0];
+
+    /* r_13(M) = (V - U)^-1 (V + U) */
+    for (size_t i = 0; i < N * N; i++) {
+        P[i] = V[i] + U[i];
+        Q[i] = V[i] - U[i];
+    }
+    int status = lu_solve(N, Q, P, pivot);
+    if (status != 0) return status;
+
+    /* undo the scaling: expm(M 2^s) = expm(M)^(2^s) */
+    double *R = P, *S = T;
+    for (int k = 0; k < s; k++) {
+        matmul(N, R, R, S);
+        double *tmp = R; R = S; S = tmp;
+    }
+
+    for (size_t i = 0; i < n; i++) {
+        for (size_t j = 0; j < n; j++) Phi[i * n + j] = R[i * N + j];
+        for (size_t k = 0; k < m; k++) Gamma[i * m + k] = R[i * N + n + k];
+    }
+    for (size_t i = 0; i < n * n; i++) if (!isfinite(Phi[i])) return -3;
+    for (size_t i = 0; i < n * m; i++) if (!isfinite(Gamma[i])) return -3;
+    return 0;
+}

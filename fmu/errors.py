@@ -1,0 +1,24 @@
+"""Exceptions of the fmu package.
+
+The package defines its own small hierarchy rather than importing one from another flexsat
+package (the fmu package imports no other package of ours).
+"""
+
+__all__ = ["FMUError", "FMUBuildError", "CosimulationError"]
+
+
+class FMUError(Exception):
+    """Base class of every error raised by the fmu package."""
+
+
+class FMUBuildError(FMUError):
+    """The system cannot be exported as an FMU, or the FMU could not be built.
+
+    Raised for input the FMU cannot represent (a non-LTI or discrete-time system, NaN or
+    infinite matrices, duplicate or invalid signal names) and for a failed build (no C
+    compiler, a compiler error). The message says what to do.
+    """
+
+
+class CosimulationError(FMUError):
+    """An FMU call failed during co-simulation, or the FMUs cannot be connected."""
