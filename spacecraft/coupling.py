@@ -1,0 +1,457 @@
+r"""A rigid hub coupled to appendages through their W-matrix interface.
+
+Planar motion: the hub has coordinates ``h = (X, Y, theta)`` (its centre of mass and attitude).
+Each appendage i is mounted at point p_i along the unit vector e_i (normal n_i); its attachment
+end follows the hub rigidly,
+
+    (axial_i, delta_i, phi_i) = G_i h        (Mount.kinematics)
+
+Finite appendages (realisation in attachment-end coordinates, RootModel)
+    The appendage's first two coordinates are replaced by ``G_i h``, its internal ones kept:
+    ``q_i = T_i [h; z_i]``. Its axial motion is rigid (Euler-Bernoulli members are inextensible),
+    a point mass m_i moving with ``axial_i``. The coupled second-order system is
+
+        M = M_hub + sum_i (T_i^T M_i T_i + m_i g_i g_i^T),  C, K likewise,
+
+    in coordinates ``[h, z_1, z_2, ...]``, and the state-space plant is built from its
+    undamped modes (mass-normalised, ``K V = M V Lambda``): states ``[eta, eta_dot]`` with
+    ``A = [[0, I], [-Lambda, -V^T C V]]``, a well-scaled realisation of any size.
+
+Distributed appendages (exact reference)
+    Eliminating the appendage gives the hub's dynamic stiffness, with ``D_i = W_i^-1``,
+
+        Z(s) = M_hub s**2 + sum_i ( G_r,i^T D_i(s) G_r,i + m_i s**2 g_i g_i^T ),
+
+    and ``theta/torque = [Z(s)^-1]_{theta theta}``: the exact frequency response. The coupled
+    natural frequencies are counted with the Wittrick-Williams algorithm: the number of
+    frequencies below w is ``J(w) = sum_i J0_i(w) + s{Z(i w)}``, where J0_i counts the
+    appendage's frequencies with its attachment end clamped (the cantilever frequencies of a
+    beam) and s{.} the negative eigenvalues of the real symmetric Z(iw). Bisection on J finds
+    every frequency without missing one.
+
+References
+----------
+.. [1] P. W. Likins, "Dynamics and control of flexible space vehicles", JPL TR 32-1329, 1970.
+.. [2] W. H. Wittrick, F. W. Williams, "A general algorithm for computing natural frequencies of
+   elastic structures", Q. J. Mech. Appl. Math. 24(3), 1971.
+.. [3] Belonozhko et al. 2009 (PAPER.md), the W-matrix interface.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import scipy.linalg
+
+from .hub import Hub, Mount
+
+__all__ = ["Spacecraft", "SecondOrderModel"]
+
+_HUB_NAMES = ("X", "Y", "theta")
+
+
+@dataclasses.dataclass(frozen=True)
+class SecondOrderModel:
+    """Assembled ``M z'' + C z' + K z = F u`` of hub and finite appendages.
+
+    Attributes
+    ----------
+    mass, damping, stiffness : ndarray (n, n)
+    coordinate_names : tuple of str
+    blocks : list of (Mount, ndarray)
+        For each mount the matrix T_i with ``q_i = T_i z`` (appendage coordinates from the
+        global ones).
+    """
+
+    mass: np.ndarray
+    damping: np.ndarray
+    stiffness: np.ndarray
+    coordinate_names: tuple
+    blocks: list
+
+
+class Spacecraft:
+    """Rigid hub with appendages mounted on it.
+
+    Parameters
+    ----------
+    hub : Hub
+    mounts : sequence of Mount
+        Any number (zero for a rigid spacecraft) of appendages of any model that offers the
+        W-matrix interface.
+    """
+
+    def __init__(self, hub: Hub, mounts=()):
+        if not isinstance(hub, Hub):
+            raise TypeError(f"hub must be a Hub; got {type(hub).__name__}")
+        mounts = list(mounts)
+        for k, mount in enumerate(mounts):
+            if not isinstance(mount, Mount):
+                raise TypeError(f"mounts[{k}] must be a Mount; got {type(mount).__name__}")
+        names = [m.name or f"appendage{k + 1}" for k, m in enumerate(mounts)]
+        if len(set(names)) != len(names):
+            raise ValueError(f"mount names must be unique; got {names}")
+        self.hub = hub
+        self.mounts = mounts
+        self.names = names
+        self._cache: dict = {}
+
+    def __repr__(self) -> str:
+        return f"Spacecraft({self.hub!r}, {self.mounts!r})"
+
+    # -- rigid properties ---------------------------------------------------------------------
+    def _appendage_centres(self) -> list:
+        return [m.position + 0.5 * m.appendage.length * m.axis for m in self.mounts]
+
+    @property
+    def mass(self) -> float:
+        """Total mass [kg]."""
+        return self.hub.mass + sum(m.appendage.mass for m in self.mounts)
+
+    @property
+    def center_of_mass(self) -> np.ndarray:
+        """Centre of mass of the undeformed spacecraft in hub axes [m].
+
+        Appendage centres are taken at mid-length, exact for uniform beams; for chains the
+        chain's own centre of mass is used when it offers ``center_of_mass`` (from its root).
+        """
+        moment = np.zeros(2)
+        for mount in self.mounts:
+            moment += mount.appendage.mass * self._centre(mount)
+        return moment / self.mass
+
+    @staticmethod
+    def _centre(mount: Mount) -> np.ndarray:
+        a = mount.appendage
+        distance = getattr(a, "center_of_mass", None)
+        if distance is None:
+            distance = 0.5 * a.length
+        return mount.position + float(distance) * mount.axis
+
+    @property
+    def inertia(self) -> float:
+        """Moment of inertia of the undeformed spacecraft about its centre of mass [kg*m**2]."""
+        c = self.center_of_mass
+        J = self.hub.inertia + self.hub.mass * float(c @ c)
+        for mount in self.mounts:
+            d = self._centre(mount) - c
+            J += mount.appendage.inertia + mount.appendage.mass * float(d @ d)
+        return J
+
+    # -- finite assembly ----------------------------------------------------------------------
+    def second_order_model(self) -> SecondOrderModel:
+        """Assemble M, C, K of hub and appendages (all appendages must be finite models)."""
+        cached = self._cache.get("second_order")
+        if cached is not None:
+            return cached
+        models = []
+        for name, mount in zip(self.names, self.mounts):
+            if not hasattr(mount.appendage, "root_model"):
+                raise TypeError(
+                    f"appendage '{name}' ({type(mount.appendage).__name__}) has no finite "
+                    "realisation (root_model); use a truncated model, e.g. beam.truncated(n_modes), "
+                    "or the exact frequency-domain methods"
+                )
+            models.append(mount.appendage.root_model())
+        n = 3 + sum(rm.n - 2 for rm in models)
+        M = np.zeros((n, n))
+        M[:2, :2] = np.eye(2) * self.hub.mass
+        M[2, 2] = self.hub.inertia
+        C = np.zeros((n, n))
+        K = np.zeros((n, n))
+        names = list(_HUB_NAMES)
+        blocks = []
+        offset = 3
+        for name, mount, rm in zip(self.names, self.mounts, models):
+            G = mount.kinematics()
+            T = np.zeros((rm.n, n))
+            T[:2, :3] = G[1:]
+            T[2:, offset:offset + rm.n - 2] = np.eye(rm.n - 2)
+            M += T.T @ rm.mass @ T
+            g = np.zeros(n)  # axial rigid motion of the appendage
+
+            g[:3] = G[0]
+            M += mount.appendage.mass * np.outer(g, g)
+            C += T.T @ rm.damping @ T
+            K += T.T @ rm.stiffness @ T
+            names += [f"{name}.{c}" for c in rm.coordinate_names[2:]]
+            blocks.append((mount, T))
+            offset += rm.n - 2
+        model = SecondOrderModel(0.5 * (M + M.T), 0.5 * (C + C.T), 0.5 * (K + K.T), tuple(names), blocks)
+        self._cache["second_order"] = model
+        return model
+
+    # -- modes and the state-space plant ------------------------------------------------------
+    def modes(self):
+        """Undamped modes of the assembled finite model (computed once).
+
+        Returns
+        -------
+        frequencies : ndarray (n,), rad/s
+            Ascending; the three rigid-body modes (X, Y, theta) are exactly 0.
+        shapes : ndarray (n, n)
+            Mass-normalised mode shapes in the assembled coordinates (columns).
+        """
+        cached = self._cache.get("modes")
+        if cached is None:
+            model = self.second_order_model()
+            lam, V = scipy.linalg.eigh(model.stiffness, model.mass)
+            # A free-floating planar spacecraft has exactly three rigid-body modes; every
+            # hinge/bending stiffness is positive, so the rest are elastic.
+            lam[:3] = 0.0
+            if np.any(lam[3:] <= 0.0):
+                raise ValueError(
+                    "the assembled stiffness matrix has more than three zero or negative "
+                    "eigenvalues: the stiffness range is too wide for double precision "
+                    f"(smallest elastic eigenvalue {lam[3]!r}, largest {lam[-1]!r} [rad^2/s^2])"
+                )
+            cached = (np.sqrt(lam), V)
+            self._cache["modes"] = cached
+        return cached[0].copy(), cached[1]
+
+    def natural_frequencies(self, n: int, *, exact: bool | None = None) -> np.ndarray:
+        """First n coupled elastic natural frequencies [rad/s] (rigid-body modes left out).
+
+        Parameters
+        ----------
+        n : int
+            Number of frequencies.
+        exact : bool, optional
+            True: roots of the coupled characteristic equation through each appendage's exact
+            W(s) (Wittrick-Williams count and bisection); the accuracy reference for truncated
+            models of a distributed beam. False: eigenvalues of the assembled finite model.
+            Default: exact when some appendage has no finite realisation.
+        """
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+            raise ValueError(f"n must be a positive integer (number of frequencies); got {n!r}")
+        finite = all(hasattr(m.appendage, "root_model") for m in self.mounts)
+        if exact is None:
+            exact = not finite
+        if not exact:
+            w, _ = self.modes()
+            if w.size - 3 < n:
+                raise ValueError(f"the finite model has only {w.size - 3} elastic modes; asked for {n}")
+            return w[3:3 + n]
+        return self._wittrick_williams(n)
+
+    def plant(self, *, tip_deflection: bool = False, root_loads: bool = False,
+              disturbances: bool = False, n_modes: int | None = None, prune: bool = False,
+              name: str = "spacecraft"):
+        """Linear state-space model of the free-floating spacecraft.
+
+        Parameters
+        ----------
+        tip_deflection : bool
+            Add outputs ``<name>_tip_deflection`` [m] (elastic, relative to the mount's tangent).
+        root_loads : bool
+            Add outputs ``<name>_root_force`` [N] and ``<name>_root_moment`` [N*m], the load
+            the hub applies to each appendage at its attachment end (F_y, M of PAPER.md).
+        disturbances : bool
+            Add inputs ``force_x``, ``force_y`` [N] (at the hub's centre of mass, hub axes) and
+            ``<name>_tip_force`` [N] (transverse, at each appendage's free end).
+        n_modes : int, optional
+            Keep only the rigid-body modes and the first ``n_modes`` coupled elastic modes.
+        prune : bool
+            Drop modes that no input excites and no output sees (e.g. the symmetric bending of
+            two symmetric wings under pure torque); the input-output behaviour is unchanged.
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs ``torque`` [N*m] (+ disturbances), outputs ``theta`` [rad], ``omega``
+            [rad/s] (+ requested), states ``mode[k]``, ``mode_rate[k]`` (modal coordinates).
+        """
+        import control
+
+        model = self.second_order_model()
+        w, V = self.modes()
+        n = w.size
+        index_theta = 2
+        inputs = ["torque"]
+        load_columns = [np.eye(n)[:, index_theta]]
+        if disturbances:
+            inputs += ["force_x", "force_y"]
+            load_columns += [np.eye(n)[:, 0], np.eye(n)[:, 1]]
+        out_pos, out_vel, outputs = [np.eye(n)[index_theta]], [np.zeros(n)], ["theta", "omega"]
+        out_pos.append(np.zeros(n))
+        out_vel[0] = np.zeros(n)
+        out_vel.append(np.eye(n)[index_theta])
+        load_rows = []  # (name, row in appendage coordinates, appendage T) for root loads
+        for name, (mount, T) in zip(self.names, model.blocks):
+            rm = mount.appendage.root_model()
+            if disturbances:
+                tip_abs = rm.tip.copy()
+                tip_abs[0] += 1.0
+                tip_abs[1] += mount.appendage.length
+                inputs.append(f"{name}_tip_force")
+                load_columns.append(T.T @ tip_abs)
+            if tip_deflection:
+                outputs.append(f"{name}_tip_deflection")
+                out_pos.append(rm.tip @ T)
+                out_vel.append(np.zeros(n))
+            if root_loads:
+                for row, label in ((0, "root_force"), (1, "root_moment")):
+                    outputs.append(f"{name}_{label}")
+                    load_rows.append((rm, T, row))
+        F = np.column_stack(load_columns)
+        keep = np.arange(n)
+        if n_modes is not None:
+            if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 0:
+                raise ValueError(f"n_modes must be a non-negative integer; got {n_modes!r}")
+            keep = keep[: 3 + n_modes]
+        modal_damping = V.T @ model.damping @ V
+        Vk = V[:, keep]
+        lam = w[keep] ** 2
+        Ck = modal_damping[np.ix_(keep, keep)]
+        Bq = Vk.T @ F                      # modal loads
+        Pq = np.array(out_pos) @ Vk        # outputs from modal displacements
+        Pv = np.array(out_vel) @ Vk        # outputs from modal velocities
+        if prune:
+            # a mode with zero modal load and zero output participation can be removed exactly
+            # when damping does not couple it to the kept ones
+            seen = np.abs(Pq).max(axis=0, initial=0) + np.abs(Pv).max(axis=0, initial=0)
+            driven = np.abs(Bq).max(axis=1, initial=0)
+            scale = np.abs(Vk).max(axis=0)
+            active = (seen + driven) > 1e-12 * scale * (np.abs(F).max() + 1.0)
+            active[:3] = True
+            coupled = np.abs(Ck - np.diag(np.diag(Ck))) > 0
+            for _ in range(active.size):  # close over damping coupling
+                grown = active | (coupled[:, active].any(axis=1))
+                if np.array_equal(grown, active):
+                    break
+                active = grown
+            keep, lam, Ck, Bq, Pq, Pv = (keep[active], lam[active], Ck[np.ix_(active, active)],
+                                         Bq[active], Pq[:, active], Pv[:, active])
+            Vk = V[:, keep]
+        m = keep.size
+        A = np.block([[np.zeros((m, m)), np.eye(m)], [-np.diag(lam), -Ck]])
+        B = np.vstack([np.zeros((m, len(inputs))), Bq])
+        Cmat = np.hstack([Pq, Pv])
+        D = np.zeros((len(outputs), len(inputs)))
+        if load_rows:
+            # root load = e_r^T (M_i q_i'' + C_i q_i' + K_i q_i), q_i = T_i V eta,
+            # with eta'' = -Lambda eta - C_modal eta' + B_modal u
+            rows_C, rows_D = [], []
+            for rm, T, row in load_rows:
+                mrow = rm.mass[row] @ T @ Vk
+                crow = rm.damping[row] @ T @ Vk
+                krow = rm.stiffness[row] @ T @ Vk
+                rows_C.append(np.concatenate([krow - mrow * lam, crow - mrow @ Ck]))
+                rows_D.append(mrow @ Bq)
+            Cmat = np.vstack([Cmat, rows_C])
+            D[-len(load_rows):] = np.array(rows_D)
+        states = [f"mode[{k}]" for k in keep] + [f"mode_rate[{k}]" for k in keep]
+        return control.ss(A, B, Cmat, D, inputs=inputs, outputs=outputs, states=states, name=name)
+
+    # -- exact frequency-domain reference -------------------------------------------------------
+    def _hub_dynamic_stiffness(self, s: np.ndarray, *, undamped: bool = False) -> np.ndarray:
+        """Z(s) of the hub with every appendage eliminated through W_i(s)^-1 (shape s + (3, 3))."""
+        s = np.asarray(s, dtype=complex)
+        Z = np.zeros(s.shape + (3, 3), dtype=complex)
+        M_hub = np.diag([self.hub.mass, self.hub.mass, self.hub.inertia])
+        Z += M_hub * (s**2)[..., None, None]
+        for mount in self.mounts:
+            G = mount.kinematics()
+            W = _W_of(mount.appendage, s, undamped=undamped)
+            D = np.linalg.inv(W)
+            Z += G[1:].T @ D @ G[1:]
+            Z += mount.appendage.mass * np.outer(G[0], G[0]) * (s**2)[..., None, None]
+        return Z
+
+    def frequency_response(self, omega, *, output: str = "theta"):
+        """Exact frequency response from ``torque`` through every appendage's W(s).
+
+        Parameters
+        ----------
+        omega : array_like, rad/s
+            Positive frequencies.
+        output : {"theta", "omega"}
+            theta/torque [rad/(N*m)] or omega/torque [rad/(s*N*m)].
+
+        Returns
+        -------
+        control.FrequencyResponseData
+            With input ``torque`` and the requested output name.
+        """
+        import control
+
+        omega = np.asarray(omega, dtype=float)
+        if omega.ndim != 1 or omega.size == 0 or not np.all(np.isfinite(omega)) or np.any(omega <= 0):
+            raise ValueError("omega must be a 1-D array of positive finite frequencies [rad/s]")
+        if output not in ("theta", "omega"):
+            raise ValueError(f"output must be 'theta' or 'omega'; got {output!r}")
+        s = 1j * omega
+        Z = self._hub_dynamic_stiffness(s)
+        e_theta = np.broadcast_to(np.array([[0.0], [0.0], [1.0]]), Z.shape[:-1] + (1,))
+        response = np.linalg.solve(Z, e_theta)[..., 2, 0]
+        if output == "omega":
+            response = response * s
+        return control.frd(response.reshape(1, 1, -1), omega, inputs=["torque"], outputs=[output])
+
+    def _wittrick_williams(self, n: int) -> np.ndarray:
+        """First n elastic coupled frequencies by the Wittrick-Williams count and bisection."""
+        def count(omega: np.ndarray) -> np.ndarray:
+            Z = self._hub_dynamic_stiffness(1j * omega, undamped=True).real
+            Z = 0.5 * (Z + np.swapaxes(Z, -1, -2))
+            negative = (np.linalg.eigvalsh(Z) < 0).sum(axis=-1)
+            clamped = sum(_clamped_count(m.appendage, omega) for m in self.mounts)
+            return negative + clamped
+
+        n_total = n + 3  # the three rigid-body modes count as frequencies <= any omega > 0
+        scale = min((_first_frequency(m.appendage) for m in self.mounts), default=1.0)
+        lo = np.full(n, 1e-9 * scale)
+        hi = np.full(n, scale)
+        while count(hi[:1])[0] < n_total:
+            hi = hi * 2.0
+            if hi[0] > 1e12 * scale:
+                raise RuntimeError("Wittrick-Williams bracket search failed")
+        hi[:] = hi[0]
+        target = np.arange(4, n_total + 1)  # frequency k is where the count reaches k
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            above = count(mid) >= target
+            hi = np.where(above, mid, hi)
+            lo = np.where(above, lo, mid)
+            if np.all(hi - lo <= 4e-16 * hi):
+                break
+        return 0.5 * (lo + hi)
+
+
+def _W_of(appendage, s: np.ndarray, *, undamped: bool) -> np.ndarray:
+    """W(s) of an appendage, without damping when asked (natural frequencies are undamped)."""
+    if undamped and getattr(appendage, "damping_ratio", 0.0):
+        from appendages import Beam
+
+        if isinstance(appendage, Beam):
+            appendage = Beam(appendage.length, appendage.bending_stiffness, appendage.linear_density)
+    if undamped and hasattr(appendage, "root_model"):
+        rm = appendage.root_model()
+        if np.any(rm.damping):
+            rm = dataclasses.replace(rm, damping=np.zeros_like(rm.damping))
+        return np.linalg.inv(rm.dynamic_stiffness(s))
+    return appendage.W(s)
+
+
+def _clamped_count(appendage, omega: np.ndarray) -> np.ndarray:
+    """Number of natural frequencies of the appendage with its attachment end clamped, < omega."""
+    if hasattr(appendage, "cantilever_frequencies"):
+        n = 8
+        while True:
+            wc = appendage.cantilever_frequencies(n)
+            if wc[-1] > omega.max():
+                break
+            n *= 2
+        return np.searchsorted(wc, omega)
+    rm = appendage.root_model()
+    Kii, Mii = rm.stiffness[2:, 2:], rm.mass[2:, 2:]
+    if Kii.shape[0] == 0:
+        return np.zeros(omega.shape, dtype=int)
+    wc = np.sqrt(np.clip(scipy.linalg.eigvalsh(Kii, Mii), 0.0, None))
+    return np.searchsorted(wc, omega)
+
+
+def _first_frequency(appendage) -> float:
+    if hasattr(appendage, "cantilever_frequencies"):
+        return float(appendage.cantilever_frequencies(1)[0])
+    return float(appendage.poles()[0])
