@@ -1,0 +1,363 @@
+"""Tests of controllers.simulate: the exact LTI simulator.
+
+Reference values are closed forms derived in each test's docstring, or the
+responses of python-control's forced_response (same first-order-hold input
+interpretation) and of control.c2d(..., "zoh") + a discrete-time response.
+"""
+
+import control
+import numpy as np
+import pytest
+
+from controllers.simulate import Simulator, simulate
+
+
+def modal_system(rng, n_modes, *, n_inputs=1, n_outputs=2, zeta=(0.001, 0.05),
+                 omega=(0.2, 30.0), n_rigid=0, mix=True):
+    """Random lightly damped system in a random (well-conditioned) basis.
+
+    n_modes oscillators x'' + 2 zeta w x' + w^2 x = b u plus n_rigid double
+    integrators (rigid-body modes: a 2x2 Jordan block at s = 0 each).
+    """
+    w = np.sort(rng.uniform(*omega, n_modes))
+    z = rng.uniform(*zeta, n_modes)
+    n = 2 * (n_modes + n_rigid)
+    A = np.zeros((n, n))
+    for i in range(n_modes):
+        A[2 * i:2 * i + 2, 2 * i:2 * i + 2] = [[0, 1], [-w[i] ** 2,
+                                                      -2 * z[i] * w[i]]]
+    for i in range(n_modes, n_modes + n_rigid):
+        A[2 * i, 2 * i + 1] = 1.0
+    if mix:
+        # Orthogonal change of basis: same eigenvalues, dense matrices.
+        Q, _ = np.linalg.qr(rng.standard_normal((n, n)))
+        A = Q @ A @ Q.T
+    B = rng.standard_normal((n, n_inputs))
+    C = rng.standard_normal((n_outputs, n))
+    D = rng.standard_normal((n_outputs, n_inputs))
+    return control.ss(A, B, C, D)
+
+
+def signal_range(y):
+    """Peak-to-peak range per signal (rows), at least tiny to avoid 0/0."""
+    return np.maximum(np.ptp(y, axis=-1), 1e-300)
+
+
+# --------------------------------------------------------------------------
+# Closed forms
+# --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("hold", ["linear", "zero"])
+def test_double_integrator_step_is_exact_parabola(hold):
+    """x'' = u, u = 1 for t >= 0 (constant: both holds are exact).
+
+    Closed form: x(t) = x0 + v0 t + t^2/2, v(t) = v0 + t.
+    """
+    sys = control.ss([[0, 1], [0, 0]], [[0], [1]], np.eye(2), 0)
+    T = np.linspace(0.0, 20.0, 2001)
+    x0, v0 = 0.3, -1.2
+    resp = simulate(sys, T, np.ones_like(T), [x0, v0], hold=hold)
+    expected = np.array([x0 + v0 * T + T ** 2 / 2, v0 + T])
+    # Exact discretisation: only round-off, O(eps * |x| * steps).
+    np.testing.assert_allclose(resp.states, expected, rtol=1e-12, atol=1e-11)
+    np.testing.assert_allclose(resp.outputs, expected, rtol=1e-12,
+                               atol=1e-11)
+
+
+def test_double_integrator_ramp_is_exact_cubic():
+    """x'' = u with u = t (linear: the first-order hold is exact).
+
+    Closed form: x(t) = t^3 / 6, v(t) = t^2 / 2.
+    """
+    sys = control.ss([[0, 1], [0, 0]], [[0], [1]], [[1, 0]], 0)
+    T = np.linspace(0.0, 10.0, 1001)
+    resp = simulate(sys, T, T)
+    np.testing.assert_allclose(resp.states[0], T ** 3 / 6, rtol=1e-12,
+                               atol=1e-11)
+    np.testing.assert_allclose(resp.states[1], T ** 2 / 2, rtol=1e-12,
+                               atol=1e-11)
+
+
+def test_undamped_oscillator_is_exact_cos_sin():
+    """x'' + w^2 x = 0, x(0) = x0, x'(0) = v0.
+
+    Closed form: x = x0 cos(w t) + v0/w sin(w t), x' = -x0 w sin + v0 cos.
+    """
+    w = 2.7
+    sys = control.ss([[0, 1], [-w ** 2, 0]], [[0], [1]], [[1, 0]], 0)
+    T = np.arange(5000) * 0.013
+    x0, v0 = 0.8, -0.4
+    resp = simulate(sys, T, X0=[x0, v0])
+    x = x0 * np.cos(w * T) + v0 / w * np.sin(w * T)
+    v = -x0 * w * np.sin(w * T) + v0 * np.cos(w * T)
+    # expm is accurate to ~eps per step; 5000 steps -> ~1e-12.
+    np.testing.assert_allclose(resp.states[0], x, rtol=0, atol=1e-11)
+    np.testing.assert_allclose(resp.states[1], v, rtol=0, atol=1e-11)
+
+
+@pytest.mark.parametrize("hold", ["linear", "zero"])
+def test_first_order_system_under_linear_input(hold):
+    """x' = -a x + b u, u(t) = c0 + c1 t, x(0) = x0.
+
+    Closed form (variation of constants):
+      x(t) = x0 e^{-a t} + b [ c0/a (1 - e^{-a t})
+                               + c1 (t/a - (1 - e^{-a t})/a^2) ].
+    With hold="linear" this is exact at every sample; with hold="zero" the
+    input is held at u[k] over [t_k, t_k + dt), whose closed form is the
+    ZOH recursion x[k+1] = e^{-a dt} x[k] + b (1 - e^{-a dt})/a u[k].
+    """
+    a, b, c0, c1, x0 = 1.7, 0.6, 0.5, -0.3, 2.0
+    sys = control.ss([[-a]], [[b]], [[1.0]], [[0.0]])
+    T = np.linspace(0.0, 8.0, 801)
+    U = c0 + c1 * T
+    resp = simulate(sys, T, U, [x0], hold=hold)
+    if hold == "linear":
+        e = np.exp(-a * T)
+        x = x0 * e + b * (c0 / a * (1 - e) + c1 * (T / a - (1 - e) / a ** 2))
+    else:
+        dt = T[1] - T[0]
+        ad, bd = np.exp(-a * dt), b * (1 - np.exp(-a * dt)) / a
+        x = np.empty_like(T)
+        x[0] = x0
+        for k in range(T.size - 1):
+            x[k + 1] = ad * x[k] + bd * U[k]
+    np.testing.assert_allclose(resp.states[0], x, rtol=1e-12, atol=1e-13)
+
+
+# --------------------------------------------------------------------------
+# Against python-control
+# --------------------------------------------------------------------------
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_matches_forced_response_lightly_damped(seed):
+    """Same first-order-hold interpretation: agree to round-off."""
+    rng = np.random.default_rng(seed)
+    sys = modal_system(rng, 20, n_inputs=2, n_outputs=3)
+    T = np.arange(3000) * 0.01
+    U = np.vstack([np.sin(0.9 * T), rng.standard_normal(T.size)])
+    X0 = rng.standard_normal(sys.nstates)
+    ref = control.forced_response(sys, T, U, X0)
+    resp = simulate(sys, T, U, X0)
+    # Round-off of two different propagations of the same exact discrete
+    # system: ~1e-12 of the signal range; 1e-9 leaves a wide margin.
+    scale = signal_range(ref.y)[:, None]
+    assert np.max(np.abs(resp.y - ref.y) / scale) < 1e-9
+    np.testing.assert_allclose(resp.x, ref.x, rtol=0,
+                               atol=1e-9 * np.abs(ref.x).max())
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_matches_forced_response_with_rigid_body_modes(seed):
+    """Defective eigenvalues (double integrators) take the Schur path."""
+    rng = np.random.default_rng(seed)
+    sys = modal_system(rng, 10, n_rigid=2, n_inputs=1, n_outputs=2)
+    T = np.arange(2000) * 0.01
+    U = np.cos(0.5 * T) + 0.1 * rng.standard_normal(T.size)
+    X0 = rng.standard_normal(sys.nstates)
+    ref = control.forced_response(sys, T, U, X0)
+    resp = simulate(sys, T, U, X0)
+    scale = signal_range(ref.y)[:, None]
+    # Round-off only (see test above).
+    assert np.max(np.abs(resp.y - ref.y) / scale) < 1e-9
+
+
+def test_matches_forced_response_stiff_and_stable_random():
+    """Stiff modes (|lambda| up to 1e4 rad/s, e^{-100} per step) and rss."""
+    rng = np.random.default_rng(7)
+    poles = -np.logspace(-1, 4, 12)
+    A = np.diag(poles)
+    Q, _ = np.linalg.qr(rng.standard_normal((12, 12)))
+    stiff = control.ss(Q @ A @ Q.T, rng.standard_normal((12, 1)),
+                       rng.standard_normal((2, 12)), 0)
+    control.config.defaults["statesp.remove_useless_states"] = False
+    random = control.rss(30, 2, 2, strictly_proper=False)
+    for sys in (stiff, random):
+        m = sys.ninputs
+        T = np.arange(1500) * 0.01
+        U = rng.standard_normal((m, T.size))
+        ref = control.forced_response(sys, T, U, 0.0)
+        resp = simulate(sys, T, U, 0.0)
+        scale = signal_range(ref.y)[:, None]
+        # Round-off only.
+        assert np.max(np.abs(resp.y - ref.y) / scale) < 1e-9
+
+
+def test_zero_order_hold_matches_c2d_zoh():
+    """hold="zero" is control.c2d(sys, dt, "zoh") simulated in discrete time."""
+    rng = np.random.default_rng(11)
+    sys = modal_system(rng, 8, n_inputs=2, n_outputs=2, n_rigid=1)
+    dt = 0.02
+    T = np.arange(1500) * dt
+    U = rng.standard_normal((2, T.size))
+    X0 = rng.standard_normal(sys.nstates)
+    ref = control.forced_response(control.c2d(sys, dt, "zoh"), T, U, X0)
+    resp = simulate(sys, T, U, X0, hold="zero")
+    scale = signal_range(ref.y)[:, None]
+    # Same exact ZOH discretisation (both via expm): round-off only.
+    assert np.max(np.abs(resp.y - ref.y) / scale) < 1e-9
+
+
+def test_simulator_reuse_matches_simulate():
+    """One set-up, several runs: identical to fresh simulate() calls."""
+    rng = np.random.default_rng(5)
+    sys = modal_system(rng, 6)
+    T = np.arange(500) * 0.05
+    sim = Simulator(sys, 0.05)
+    for gain in (0.5, 2.0):
+        U = gain * np.sin(T)
+        np.testing.assert_array_equal(sim.run(T, U).y,
+                                      simulate(sys, T, U).y)
+    # A grid that starts later with the same step is fine too.
+    resp = sim.run(T + 3.0, np.ones_like(T))
+    np.testing.assert_array_equal(resp.time, T + 3.0)
+
+
+# --------------------------------------------------------------------------
+# Long undamped simulation: conservation
+# --------------------------------------------------------------------------
+
+@pytest.mark.slow
+def test_long_undamped_simulation_conserves_energy_and_rigid_motion():
+    """1e5 s, 1e5 samples: oscillator w = 1.3 rad/s plus a free rigid body.
+
+    Free motion of the undamped oscillator keeps E = (v^2 + w^2 x^2)/2
+    constant; the free rigid body moves as p(t) = p0 + v0 t exactly.  The
+    exact discretisation keeps E to ~eps per step (1e5 steps -> ~1e-11
+    relative); required: 1e-9 relative.  The rigid body may deviate only
+    by round-off: each of the N steps adds p + q dt with a rounding error
+    of at most eps |p| / 2, so |p - exact| <= N eps max|p| (~2e-7 here);
+    a systematic drift (a wrong discrete rigid-body block) would show as
+    an error growing like t and far larger.
+    """
+    w = 1.3
+    A = np.zeros((4, 4))
+    A[0, 1] = 1.0
+    A[1, 0] = -w ** 2
+    A[2, 3] = 1.0
+    sys = control.ss(A, np.zeros((4, 1)), np.eye(4), 0)
+    T = np.arange(100_001) * 1.0
+    x0, v0, p0, q0 = 0.7, -0.2, 1.5, 0.1
+    resp = simulate(sys, T, X0=[x0, v0, p0, q0])
+    x, v, p, q = resp.states
+    energy = 0.5 * (v ** 2 + w ** 2 * x ** 2)
+    e0 = 0.5 * (v0 ** 2 + w ** 2 * x0 ** 2)
+    assert np.max(np.abs(energy / e0 - 1.0)) < 1e-9
+    bound = T.size * np.finfo(float).eps * np.abs(p).max()
+    np.testing.assert_allclose(p, p0 + q0 * T, rtol=0, atol=bound)
+    # q is propagated by multiplications with exactly 1: ~eps per step.
+    np.testing.assert_allclose(q, q0, rtol=T.size * np.finfo(float).eps,
+                               atol=0)
+
+
+# --------------------------------------------------------------------------
+# Shapes and signal names
+# --------------------------------------------------------------------------
+
+def test_shapes_and_names_match_forced_response():
+    sys = control.ss(np.diag([-1.0, -2.0, -3.0]), np.ones((3, 2)),
+                     np.ones((4, 3)), np.zeros((4, 2)),
+                     inputs=["torque", "force"],
+                     outputs=["theta", "omega", "a", "b"],
+                     states=["s1", "s2", "s3"], name="plant")
+    T = np.linspace(0, 1, 11)
+    U = np.ones((2, 11))
+    ref = control.forced_response(sys, T, U)
+    resp = simulate(sys, T, U)
+    assert isinstance(resp, control.TimeResponseData)
+    for attr in ("time", "outputs", "states", "inputs"):
+        assert getattr(resp, attr).shape == getattr(ref, attr).shape, attr
+    assert resp.output_labels == ["theta", "omega", "a", "b"]
+    assert resp.input_labels == ["torque", "force"]
+    assert resp.state_labels == ["s1", "s2", "s3"]
+    assert resp.states.dtype == np.float64
+
+
+def test_siso_squeeze_like_forced_response():
+    sys = control.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+    T = np.linspace(0, 1, 5)
+    for squeeze in (None, False, True):
+        ref = control.forced_response(sys, T, 1.0, squeeze=squeeze)
+        resp = simulate(sys, T, 1.0, squeeze=squeeze)
+        assert resp.outputs.shape == ref.outputs.shape
+        assert resp.inputs.shape == ref.inputs.shape
+    # Default: 1-D outputs for SISO, like forced_response.
+    assert simulate(sys, T).outputs.shape == (5,)
+    t, y = simulate(sys, T, 1.0)
+    assert t.shape == (5,) and y.shape == (5,)
+
+
+# --------------------------------------------------------------------------
+# Errors
+# --------------------------------------------------------------------------
+
+@pytest.fixture
+def sys2():
+    return control.ss(np.diag([-1.0, -2.0]), [[1.0], [1.0]], [[1.0, 1.0]], 0)
+
+
+def test_error_not_state_space(sys2):
+    with pytest.raises(TypeError, match="system must be a control.StateSpace"):
+        simulate(control.tf([1], [1, 1]), np.linspace(0, 1, 5))
+    with pytest.raises(TypeError, match="system"):
+        Simulator(np.eye(2), 0.1)
+
+
+def test_error_discrete_time(sys2):
+    dsys = control.c2d(sys2, 0.1)
+    with pytest.raises(ValueError, match="continuous-time"):
+        simulate(dsys, np.arange(5) * 0.1)
+
+
+@pytest.mark.parametrize("T, match", [
+    (None, "T must be given"),
+    ([0.0, 0.1, np.nan], "T must be finite"),
+    ([0.0], "at least 2 samples"),
+    ([0.0, 0.1, 0.3], "evenly spaced"),
+    ([1.0, 0.5, 0.0], "increasing"),
+    (np.zeros((2, 3)), "1-D"),
+    (["a", "b"], "T must be real"),
+])
+def test_error_bad_time(sys2, T, match):
+    with pytest.raises(ValueError, match=match):
+        simulate(sys2, T)
+
+
+def test_error_bad_inputs(sys2):
+    T = np.linspace(0, 1, 5)
+    with pytest.raises(ValueError, match=r"U must have shape \(n_inputs, "):
+        simulate(sys2, T, np.ones(4))
+    with pytest.raises(ValueError, match="U must be finite"):
+        simulate(sys2, T, [0, 1, np.inf, 0, 0])
+    with pytest.raises(ValueError, match="U must be real"):
+        simulate(sys2, T, np.ones(5) * 1j)
+
+
+def test_error_bad_initial_state(sys2):
+    T = np.linspace(0, 1, 5)
+    with pytest.raises(ValueError, match=r"X0 must have shape \(n_states,\)"):
+        simulate(sys2, T, X0=[1.0, 2.0, 3.0])
+    with pytest.raises(ValueError, match="X0 must be finite"):
+        simulate(sys2, T, X0=[np.nan, 0.0])
+
+
+def test_error_bad_hold_and_step(sys2):
+    with pytest.raises(ValueError, match="hold must be one of"):
+        simulate(sys2, np.linspace(0, 1, 5), hold="cubic")
+    with pytest.raises(ValueError, match=r"dt must be positive and finite \[s\]"):
+        Simulator(sys2, -0.1)
+    sim = Simulator(sys2, 0.1)
+    with pytest.raises(ValueError, match="simulator's step"):
+        sim.run(np.linspace(0, 1, 5))
+
+
+def test_error_nan_in_system():
+    sys = control.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+    sys.A[0, 0] = np.nan
+    with pytest.raises(ValueError, match="system.A must be finite"):
+        simulate(sys, np.linspace(0, 1, 5))
+
+
+def test_unstable_overflow_is_an_error_not_inf():
+    sys = control.ss([[50.0]], [[1.0]], [[1.0]], [[0.0]])
+    with pytest.raises(FloatingPointError, match="overflowed"):
+        simulate(sys, np.linspace(0, 100, 1001), X0=[1.0])
