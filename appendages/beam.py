@@ -437,22 +437,66 @@ class Beam:
         s = as_frequency_array(s)
         if np.any(s == 0):
             raise ValueError("s = 0 is the rigid-body pole of W (W is infinite there) [rad/s]")
+        W = np.empty(s.shape + (2, 2), dtype=np.complex128)
+        W[..., 0, 0], W[..., 0, 1], W[..., 1, 1] = self._undamped_entries(s)
+        if self.damping_ratio > 0.0:
+            with np.errstate(divide="ignore", invalid="ignore"):  # undamped poles, repaired below
+                corrections = self._damping_correction(s)
+            for (i, j), d in zip(((0, 0), (0, 1), (1, 1)), corrections):
+                W[..., i, j] += d
+            self._repair_near_poles(s, W)
+        elif not np.all(np.isfinite(W)):
+            raise ValueError("s is a natural frequency of the undamped beam: W is infinite there "
+                             "[rad/s]")
+        W[..., 1, 0] = W[..., 0, 1]
+        return W
+
+    def _undamped_entries(self, s: np.ndarray):
+        """W1, W2, W4 of the undamped closed form (module docstring), each of shape s.shape."""
         EJ, L = self.bending_stiffness, self.length
         y = -(s**2) * (self.linear_density * L**4 / EJ)
-        f1, f2, f4 = _dimensionless_W(y.ravel())
-        out = np.empty(y.shape + (2, 2), dtype=np.complex128)
-        w1 = f1.reshape(y.shape) * (L**3 / EJ)
-        w2 = f2.reshape(y.shape) * (L**2 / EJ)
-        w4 = f4.reshape(y.shape) * (L / EJ)
-        if self.damping_ratio > 0.0:
-            d1, d2, d4 = self._damping_correction(s)
-            w1, w2, w4 = w1 + d1, w2 + d2, w4 + d4
-        out[..., 0, 0] = w1
-        out[..., 0, 1] = out[..., 1, 0] = w2
-        out[..., 1, 1] = w4
-        return out
+        with np.errstate(divide="ignore", invalid="ignore"):
+            f1, f2, f4 = _dimensionless_W(y.ravel())
+        return (f1.reshape(s.shape) * (L**3 / EJ), f2.reshape(s.shape) * (L**2 / EJ),
+                f4.reshape(s.shape) * (L / EJ))
 
-    def _damping_correction(self, s: np.ndarray):
+    def _repair_near_poles(self, s: np.ndarray, W: np.ndarray, n_points: int = 32) -> None:
+        """Re-evaluate damped W near an undamped pole +-i w_k without cancellation.
+
+        There the undamped closed form is huge and the damping correction cancels it. Instead,
+        ``g(s) = W_undamped(s) - b_k b_k^T/(s^2 + w_k^2)`` is analytic in a disc around i w_k and
+        equals its mean over a circle of radius r (mean-value property; the trapezoidal rule
+        with 32 points converges like (|s - i w_k|/r)^32 there). Then
+        ``W = g(s) + b_k b_k^T/(s^2 + 2 zeta w_k s + w_k^2) + sum_{j != k} corrections``.
+        """
+        flat = s.ravel()
+        W_flat = W.reshape(-1, 2, 2)
+        x_est = np.sqrt(np.abs(flat) / self.frequency_scale)
+        n = int(min(x_est.max() / math.pi + 3, 20000))
+        w = self.natural_frequencies(n)
+        gaps = np.diff(np.concatenate([[0.0], w, [w[-1] + (w[-1] - w[-2] if n > 1 else w[-1])]]))
+        radius = 0.25 * np.minimum(gaps[:-1], gaps[1:])
+        root, _ = self._free_free_root_values(n)
+        zeta = self.damping_ratio
+        theta = 2 * np.pi * (np.arange(n_points) + 0.5) / n_points
+        for index, si in enumerate(flat):
+            k = int(np.argmin(np.abs(np.abs(si) - w)))
+            pole = 1j * w[k] if si.imag >= 0 else -1j * w[k]
+            if abs(si - pole) > 0.1 * radius[k]:
+                continue
+            z = si + radius[k] * np.exp(1j * theta)
+            u1, u2, u4 = self._undamped_entries(z)
+            bb = np.outer(root[k], root[k])
+            pole_term = 1.0 / (z**2 + w[k] ** 2)
+            g = np.array([[np.mean(u1 - bb[0, 0] * pole_term), np.mean(u2 - bb[0, 1] * pole_term)],
+                          [0.0, np.mean(u4 - bb[1, 1] * pole_term)]])
+            damped = 1.0 / (si**2 + 2 * zeta * w[k] * si + w[k] ** 2)
+            others = [d[0] for d in self._damping_correction(np.array([si]), exclude=k)]
+            W_flat[index, 0, 0] = g[0, 0] + bb[0, 0] * damped + others[0]
+            W_flat[index, 0, 1] = g[0, 1] + bb[0, 1] * damped + others[1]
+            W_flat[index, 1, 1] = g[1, 1] + bb[1, 1] * damped + others[2]
+
+    def _damping_correction(self, s: np.ndarray, exclude: int | None = None):
         """Sum over all modes of b_k b_k^T [1/(s^2 + 2 zeta w_k s + w_k^2) - 1/(s^2 + w_k^2)].
 
         The undamped closed form holds every mode without damping; this adds each mode's
@@ -461,17 +505,22 @@ class Beam:
         the asymptotic ``b_k = (2, -2 x_k/L)/sqrt(m)``, ``x_k = (k + 1/2) pi``, and the sum of
         ``x_k^-p`` over k > N is replaced by its midpoint integral
         ``((N + 1) pi)^(1-p)/(pi (p - 1))`` (p = 6, 5, 4 for the three entries).
-        Returns the three distinct entries, each of shape ``s.shape``.
+        Returns the three distinct entries, each of shape ``s.shape``. Mode ``exclude`` (an
+        index from 0) is left out of the sum.
         """
         zeta, m, L, c0 = self.damping_ratio, self.mass, self.length, self.frequency_scale
         s_max = float(np.abs(s).max())
         x_needed = math.sqrt(1e3 * s_max / c0)
-        n = int(min(max(64, x_needed / math.pi + 1), 20000))
+        n = int(min(max(64, x_needed / math.pi + 1, (exclude or 0) + 64), 20000))
         root, _ = self._free_free_root_values(n)
         w = self.natural_frequencies(n)
         flat = s.ravel()
         d = np.empty((3, flat.size), dtype=np.complex128)
         products = np.stack([root[:, 0] ** 2, root[:, 0] * root[:, 1], root[:, 1] ** 2], axis=1)
+        if exclude is not None:
+            products[exclude] = 0.0
+            w = w.copy()
+            w[exclude] = 1.0  # any finite value: its products are zero
         chunk = max(1, 2_000_000 // n)
         for start in range(0, flat.size, chunk):
             ss = flat[start:start + chunk, None]

@@ -307,3 +307,33 @@ def test_damped_resonance_peak_height():
     root, _ = beam._free_free_root_values(1)
     peak = abs(beam.W(1j * w1)[1, 1]) * 2 * zeta * w1**2
     assert peak == pytest.approx(root[0, 1] ** 2, rel=1e-3)
+
+
+def test_damped_W_is_smooth_through_the_undamped_poles():
+    # Near s = i w_k the undamped closed form and the damping correction cancel; the circle
+    # mean keeps full accuracy. W is analytic there (the damped poles are off the axis, the
+    # peak has relative width zeta), so values 2e-9 apart in frequency differ by ~2e-9/zeta
+    # = 2e-7 relative, and the second difference is ~(2e-9/zeta)^2: any cancellation error
+    # (~eps/distance to the pole) would show in it.
+    beam = Beam(1.0, 1.0, 1.0, damping_ratio=0.01)
+    w = beam.natural_frequencies(3)
+    for wk in w:
+        s = 1j * wk * (1 + np.array([-2e-9, -1e-9, 0.0, 1e-9, 2e-9]))
+        W = beam.W(s)
+        assert np.all(np.isfinite(W))
+        np.testing.assert_allclose(W, np.broadcast_to(W[2], W.shape), rtol=1e-6)
+        second = W[0] - 2 * W[2] + W[4]
+        assert np.abs(second).max() < 1e-9 * np.abs(W[2]).max()
+
+
+def test_undamped_pole_is_an_error_not_a_nan():
+    beam = Beam(1.0, 1.0, 1.0)
+    # exactly at the (float) root the denominator underflows to 0 only if it rounds there;
+    # check that no NaN is ever returned: either finite or ValueError
+    w1 = beam.natural_frequencies(1)[0]
+    try:
+        W = beam.W(1j * w1)
+    except ValueError as error:
+        assert "natural frequency" in str(error)
+    else:
+        assert np.all(np.isfinite(W))
