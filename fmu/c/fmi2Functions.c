@@ -407,7 +407,7 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[
         }
     }
     for (size_t i = 0; i < nvr; i++) {
-        size_t k;
+        size_t k = 0;
         if (kind_of(vr[i], &k) == KIND_INPUT) inst->u[k] = value[i];
         else inst->x[k] = value[i];
     }

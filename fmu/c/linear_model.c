@@ -60,11 +60,12 @@ void lm_step(const LinearModel *model, const double *Phi, const double *Gamma,
     }
 }
 
-/* Workspace: 9 matrices of size N x N plus N pivot indices, N = n_states + n_inputs. */
+/* Workspace: 9 matrices of size N x N, N pivot indices and N balancing factors,
+ * N = n_states + n_inputs. */
 size_t lm_workspace_size(const LinearModel *model)
 {
     const size_t N = model->n_states + model->n_inputs;
-    return 9 * N * N + N + 1;
+    return 9 * N * N + 2 * N + 1;
 }
 
 /* R = P Q for N x N row-major matrices (R must not alias P or Q). */
@@ -80,6 +81,17 @@ static void matmul(size_t N, const double *P, const double *Q, double *R)
             for (size_t j = 0; j < N; j++) r[j] += p * q[j];
         }
     }
+}
+
+static double norm_1(size_t N, const double *P)
+{
+    double norm = 0.0;
+    for (size_t j = 0; j < N; j++) {
+        double column = 0.0;
+        for (size_t i = 0; i < N; i++) column += fabs(P[i * N + j]);
+        if (column > norm) norm = column;
+    }
+    return norm;
 }
 
 /* Solve Q X = P in place (X overwrites P) by LU with partial pivoting; Q is destroyed. */
@@ -145,24 +157,59 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
         for (size_t k = 0; k < m; k++) M[i * N + n + k] = model->B[i * m + k] * h;
     }
 
-    /* scaling: ||M / 2^s||_1 <= theta_13 */
-    double norm1 = 0.0;
-    for (size_t j = 0; j < N; j++) {
-        double col = 0.0;
-        for (size_t i = 0; i < N; i++) col += fabs(M[i * N + j]);
-        if (col > norm1) norm1 = col;
-    }
-    if (!isfinite(norm1)) return -3;
-    int s = 0;
-    if (norm1 > theta13) {
-        s = (int)ceil(log2(norm1 / theta13));
-        if (s < 0) s = 0;
-        for (size_t i = 0; i < N * N; i++) M[i] = ldexp(M[i], -s);
+    /* Balance: M <- D^-1 M D with D diagonal powers of 2 (exact), so that rows and columns
+     * have comparable norms (Parlett & Reinsch 1969, as LAPACK dgebal). A lightly damped
+     * mode [[0, 1], [-w^2, -2 z w]] becomes nearly normal, which keeps the number of
+     * squarings - and their error growth - small; expm(M) = D expm(D^-1 M D) D^-1. */
+    double *d = pivot + N; /* balancing scale factors */
+    for (size_t i = 0; i < N; i++) d[i] = 1.0;
+    for (int sweep = 0, changed = 1; changed && sweep < 100; sweep++) {
+        changed = 0;
+        for (size_t i = 0; i < N; i++) {
+            double c = 0.0, r = 0.0;
+            for (size_t j = 0; j < N; j++) {
+                if (j == i) continue;
+                c += fabs(M[j * N + i]);
+                r += fabs(M[i * N + j]);
+            }
+            if (c == 0.0 || r == 0.0) continue;
+            const double total = c + r;
+            double f = 1.0;
+            while (c < r / 2.0) { f *= 2.0; c *= 4.0; }
+            while (c > r * 2.0) { f /= 2.0; c /= 4.0; }
+            if ((c + r) / f < 0.95 * total) {
+                changed = 1;
+                d[i] *= f;
+                for (size_t j = 0; j < N; j++) {
+                    M[i * N + j] /= f;
+                    M[j * N + i] *= f;
+                }
+            }
+        }
     }
 
     matmul(N, M, M, A2);
     matmul(N, A2, A2, A4);
     matmul(N, A4, A2, A6);
+
+    /* Scaling s from alpha = max(||M^6||^(1/6), ||M^8||^(1/8)) rather than ||M||: the
+     * exact powers are at hand, and for non-normal M they give far fewer squarings
+     * (Al-Mohy & Higham 2009, eq. (3.10) and Algorithm 5.1 with eta_3). */
+    matmul(N, A4, A4, T);
+    const double d6 = pow(norm_1(N, A6), 1.0 / 6.0), d8 = pow(norm_1(N, T), 1.0 / 8.0);
+    if (!isfinite(d6) || !isfinite(d8)) return -3;
+    const double alpha = d6 > d8 ? d6 : d8;
+    int s = 0;
+    if (alpha > theta13) {
+        s = (int)ceil(log2(alpha / theta13));
+        if (s < 0) s = 0;
+        for (size_t i = 0; i < N * N; i++) {
+            M[i] = ldexp(M[i], -s);
+            A2[i] = ldexp(A2[i], -2 * s);
+            A4[i] = ldexp(A4[i], -4 * s);
+            A6[i] = ldexp(A6[i], -6 * s);
+        }
+    }
 
     /* U = M [A6 (b13 A6 + b11 A4 + b9 A2) + b7 A6 + b5 A4 + b3 A2 + b1 I] */
     for (size_t i = 0; i < N * N; i++) T[i] = b[13] * A6[i] + b[11] * A4[i] + b[9] * A2[i];
@@ -192,9 +239,10 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
         double *tmp = R; R = S; S = tmp;
     }
 
+    /* undo the balancing: expm(M) = D expm(B) D^-1 */
     for (size_t i = 0; i < n; i++) {
-        for (size_t j = 0; j < n; j++) Phi[i * n + j] = R[i * N + j];
-        for (size_t k = 0; k < m; k++) Gamma[i * m + k] = R[i * N + n + k];
+        for (size_t j = 0; j < n; j++) Phi[i * n + j] = R[i * N + j] * d[i] / d[j];
+        for (size_t k = 0; k < m; k++) Gamma[i * m + k] = R[i * N + n + k] * d[i] / d[n + k];
     }
     for (size_t i = 0; i < n * n; i++) if (!isfinite(Phi[i])) return -3;
     for (size_t i = 0; i < n * m; i++) if (!isfinite(Gamma[i])) return -3;
