@@ -248,7 +248,8 @@ class Spacecraft:
             Add outputs ``<name>_root_force`` [N] and ``<name>_root_moment`` [N*m], the load
             the hub applies to each appendage at its attachment end (F_y, M of PAPER.md).
         disturbances : bool
-            Add inputs ``force_x``, ``force_y`` [N] (at the hub's centre of mass, hub axes) and
+            Add inputs ``disturbance_torque`` [N*m] (on the hub, apart from the actuator's
+            ``torque``), ``force_x``, ``force_y`` [N] (at the hub's centre of mass, hub axes) and
             ``<name>_tip_force`` [N] (transverse, at each appendage's free end).
         n_modes : int, optional
             Keep only the rigid-body modes and the first ``n_modes`` coupled elastic modes.
@@ -271,8 +272,8 @@ class Spacecraft:
         inputs = ["torque"]
         load_columns = [np.eye(n)[:, index_theta]]
         if disturbances:
-            inputs += ["force_x", "force_y"]
-            load_columns += [np.eye(n)[:, 0], np.eye(n)[:, 1]]
+            inputs += ["disturbance_torque", "force_x", "force_y"]
+            load_columns += [np.eye(n)[:, index_theta], np.eye(n)[:, 0], np.eye(n)[:, 1]]
         out_pos, out_vel, outputs = [np.eye(n)[index_theta]], [np.zeros(n)], ["theta", "omega"]
         out_pos.append(np.zeros(n))
         out_vel[0] = np.zeros(n)

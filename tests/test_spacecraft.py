@@ -97,7 +97,7 @@ def test_exact_frequency_response_matches_truncated_plant():
 def test_plant_signals_and_pruning_of_symmetric_modes():
     craft = wings(ROD.truncated(8))
     P = craft.plant(tip_deflection=True, root_loads=True, disturbances=True)
-    assert P.input_labels == ["torque", "force_x", "force_y", "left_tip_force", "right_tip_force"]
+    assert P.input_labels == ["torque", "disturbance_torque", "force_x", "force_y", "left_tip_force", "right_tip_force"]
     assert P.output_labels == ["theta", "omega", "left_tip_deflection", "left_root_force",
                                "left_root_moment", "right_tip_deflection", "right_root_force",
                                "right_root_moment"]
