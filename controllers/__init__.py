@@ -1,1 +1,48 @@
-"""flexsat: controllers package."""
+"""flexsat controllers: PD and LQR attitude controllers for any plant with named signals.
+
+Works on any python-control LTI plant with input ``'torque'`` and outputs ``'theta'``,
+``'omega'`` (optionally ``'*tip_deflection'``); imports no other flexsat package.
+"""
+from .analysis import (FlexibleMode, Margins, METRIC_UNITS, SpilloverVerdict, close_loop,
+                       disturbance_response, flexible_modes, loop_frequency_response, margins,
+                       metrics, rigid_body_inertia, slew, slew_profile, spillover, step_response)
+from .compare import Comparison, compare
+from .lqr import KalmanNoise, LQRDesign, lqr, lqr_design, reference_state
+from .pd import natural_frequency_from_bandwidth, pd, pd_gains
+try:
+    from .simulate import Simulator, simulate
+except ImportError:  # TODO(switch): controllers/simulate.py not committed yet
+    pass
+from .testing import assert_closed_loops_close, compare_metrics
+
+__all__ = [
+    "Comparison",
+    "FlexibleMode",
+    "KalmanNoise",
+    "LQRDesign",
+    "METRIC_UNITS",
+    "Margins",
+    "Simulator",
+    "SpilloverVerdict",
+    "assert_closed_loops_close",
+    "close_loop",
+    "compare",
+    "compare_metrics",
+    "disturbance_response",
+    "flexible_modes",
+    "loop_frequency_response",
+    "lqr",
+    "lqr_design",
+    "margins",
+    "metrics",
+    "natural_frequency_from_bandwidth",
+    "pd",
+    "pd_gains",
+    "reference_state",
+    "rigid_body_inertia",
+    "simulate",
+    "slew",
+    "slew_profile",
+    "spillover",
+    "step_response",
+]

@@ -59,7 +59,10 @@ class KalmanNoise:
         poles of natural frequency w_r = (q / (r J^2))^(1/4), and the dual Kalman filter with
         intensities W (w), V (v_theta) has w_e = (W / (V J^2))^(1/4). Taking V = 1/q and
         W = k^4 / r gives w_e = k w_r. The rate noise V_omega = V w_e^2 makes a rate
-        measurement as informative as the attitude one at the estimator bandwidth.
+        measurement as informative as the attitude one at the estimator bandwidth. On a rigid
+        hub the filter's Riccati equation is then solved by
+        P = V [[a w_e, b w_e^2], [b w_e^2, c w_e^3]] with b = 1/2, a = c = sqrt(3)/2, and the
+        estimator poles are exactly the roots of s^2 + sqrt(3) w_e s + w_e^2.
 
         References
         ----------

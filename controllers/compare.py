@@ -1,0 +1,217 @@
+"""One-call comparison of a controller on its design plant and on a truth plant.
+
+Typical use: a controller tuned on hub + chain (the design plant) is closed around hub + beam
+with many modes (the truth plant); :func:`compare` returns the metrics of both loops side by
+side, both slew responses and their difference, the spillover verdict on the truth plant, and
+plots.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import control
+import numpy as np
+
+from .analysis import (METRIC_UNITS, THETA, THETA_REF, TIP_SUFFIX, TORQUE, SpilloverVerdict,
+                       _check_controller, _check_plant, _trace, close_loop,
+                       loop_frequency_response, margins, metrics, slew, spillover)
+
+__all__ = ["Comparison", "compare", "metric_table", "difference_columns"]
+
+
+def difference_columns(actual: float, expected: float) -> tuple[float, float]:
+    """(|actual - expected|, |actual - expected| / |expected|) with inf handled, never NaN.
+
+    Equal values (including equal infinities) differ by 0; a finite value against an infinite
+    one differs by inf; the relative difference against expected = 0 is inf unless both are 0.
+    """
+    if actual == expected:
+        return 0.0, 0.0
+    if not (math.isfinite(actual) and math.isfinite(expected)):
+        return math.inf, math.inf
+    diff = abs(actual - expected)
+    return diff, (diff / abs(expected) if expected != 0 else math.inf)
+
+
+def _fmt(value) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, str):
+        return value
+    return f"{value:.6g}"
+
+
+def metric_table(rows: Sequence[Sequence], header: Sequence[str]) -> str:
+    """Plain-text table with left-aligned columns (numbers with 6 significant digits)."""
+    cells = [[str(h) for h in header]] + [[_fmt(v) for v in row] for row in rows]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(header))]
+    lines = ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+@dataclass
+class Comparison:
+    """Result of :func:`compare`.
+
+    Attributes
+    ----------
+    design_metrics, truth_metrics : dict of str to float
+        :func:`controllers.analysis.metrics` of the slew plus the margins (``gain_margin`` [dB],
+        ``phase_margin`` [deg], ``modulus_margin``) of each loop.
+    design_response, truth_response : control.TimeResponseData
+        Slew responses on the same time grid.
+    difference : dict of str to ndarray
+        truth - design for every output both loops have (theta, omega, torque, tip deflections).
+    verdict : SpilloverVerdict
+        Stability of the controller on the truth plant.
+    design_plant, truth_plant, controller
+        What was compared (kept for :meth:`plot`).
+    """
+
+    design_metrics: dict[str, float]
+    truth_metrics: dict[str, float]
+    design_response: control.TimeResponseData
+    truth_response: control.TimeResponseData
+    difference: dict[str, np.ndarray]
+    verdict: SpilloverVerdict
+    design_plant: object = field(repr=False)
+    truth_plant: object = field(repr=False)
+    controller: control.StateSpace = field(repr=False)
+
+    @property
+    def t(self) -> np.ndarray:
+        """Time grid of both responses [s]."""
+        return np.asarray(self.design_response.t, dtype=float)
+
+    @property
+    def rows(self) -> list[tuple[str, str, float, float, float, float]]:
+        """(metric, unit, design, truth, |truth - design|, relative difference) per metric."""
+        out = []
+        for name in self.design_metrics:
+            if name not in self.truth_metrics:
+                continue
+            d, t = self.design_metrics[name], self.truth_metrics[name]
+            out.append((name, METRIC_UNITS.get(name, ""), d, t, *difference_columns(t, d)))
+        return out
+
+    @property
+    def peak_difference(self) -> dict[str, float]:
+        """max |truth - design| of each common output over the response."""
+        return {name: float(np.max(np.abs(v))) for name, v in self.difference.items()}
+
+    def table(self) -> str:
+        """The metrics table (design vs truth, absolute and relative difference)."""
+        return metric_table(self.rows, ("metric", "unit", "design", "truth", "abs diff",
+                                        "rel diff"))
+
+    def __str__(self) -> str:
+        peaks = ", ".join(f"{k} {v:.3g}" for k, v in self.peak_difference.items())
+        return f"{self.table()}\npeak |truth - design|: {peaks}\n{self.verdict}"
+
+    def plot(self):
+        """Figure of both slew responses, their difference and both open-loop responses.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Built on the Agg canvas (no display needed). Left: theta (with theta_ref), torque,
+            tip deflection (or omega); right: |L(j omega)| [dB], arg L [deg] of both loops,
+            theta_truth - theta_design. Degrees and Hz-free axes as DESIGN.md allows in plots.
+        """
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(12, 9), layout="constrained")
+        FigureCanvasAgg(fig)
+        axes = fig.subplots(3, 2)
+        t = self.t
+        third = next((n for n in self.difference if n.endswith(TIP_SUFFIX)), "omega")
+        units = {THETA: "rad", TORQUE: "N*m", "omega": "rad/s"}
+        for ax, name in zip(axes[:, 0], (THETA, TORQUE, third)):
+            for label, resp, style in (("design", self.design_response, "-"),
+                                       ("truth", self.truth_response, "--")):
+                y = _trace(resp, name)
+                if y is not None:
+                    ax.plot(t, y, style, label=f"{name} ({label})")
+            if name == THETA:
+                ref = _trace(self.design_response, THETA_REF, "input")
+                if ref is not None:
+                    ax.plot(t, ref, ":", color="gray", label="theta_ref")
+            ax.set_ylabel(f"{name} [{units.get(name, 'm')}]")
+            ax.legend(loc="best", fontsize="small")
+            ax.grid(True)
+        axes[-1, 0].set_xlabel("time [s]")
+        for label, plant, style in (("design", self.design_plant, "-"),
+                                    ("truth", self.truth_plant, "--")):
+            omega, L = loop_frequency_response(plant, self.controller)
+            axes[0, 1].semilogx(omega, 20 * np.log10(np.abs(L)), style, label=f"L ({label})")
+            axes[1, 1].semilogx(omega, np.degrees(np.unwrap(np.angle(L))), style,
+                                label=f"L ({label})")
+        axes[0, 1].axhline(0.0, color="gray", lw=0.5)
+        axes[0, 1].set_ylabel("|L| [dB]")
+        axes[1, 1].set_ylabel("arg L [deg]")
+        axes[1, 1].set_xlabel("frequency [rad/s]")
+        for ax in axes[:2, 1]:
+            ax.legend(loc="best", fontsize="small")
+            ax.grid(True, which="both")
+        axes[2, 1].plot(t, self.difference[THETA])
+        axes[2, 1].set_ylabel("theta truth - design [rad]")
+        axes[2, 1].set_xlabel("time [s]")
+        axes[2, 1].grid(True)
+        fig.suptitle("design vs truth: " + ("stable" if self.verdict.stable else "UNSTABLE")
+                     + " on truth")
+        return fig
+
+
+def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
+            controller: control.StateSpace, *, angle: float, duration: float,
+            t_final: float | None = None, dt: float | None = None) -> Comparison:
+    """Close one controller around a design plant and a truth plant and compare.
+
+    Parameters
+    ----------
+    design_plant : control.StateSpace
+        Plant the controller was tuned on (e.g. hub + chain).
+    truth_plant : control.StateSpace
+        High-fidelity plant (e.g. hub + beam with many modes). Both plants need the signals of
+        :mod:`controllers.analysis`.
+    controller : control.StateSpace
+        Continuous or digital controller (output ``'torque'``).
+    angle : float, rad
+        Slew angle.
+    duration : float, s
+        Slew duration (cycloidal profile, :func:`controllers.analysis.slew_profile`).
+    t_final : float, s, optional
+        Simulation length; default 3 * duration.
+    dt : float, s, optional
+        Output step; default duration / 500 (the controller's dt if digital).
+
+    Returns
+    -------
+    Comparison
+        An unstable truth loop is reported (``verdict.stable`` False, diverging metrics may be
+        inf), not raised.
+    """
+    _check_plant(design_plant, "design_plant")
+    if isinstance(truth_plant, control.FrequencyResponseData):
+        raise TypeError("truth_plant must be a control.StateSpace for time responses; for a "
+                        "FrequencyResponseData truth use controllers.spillover / margins")
+    _check_plant(truth_plant, "truth_plant")
+    _check_controller(controller)
+    design_loop = close_loop(design_plant, controller)
+    truth_loop = close_loop(truth_plant, controller)
+    design_response = slew(design_loop, angle, duration, t_final=t_final, dt=dt)
+    truth_response = slew(truth_loop, angle, duration, t_final=t_final, dt=dt)
+    verdict = spillover(truth_plant, controller)
+    design_metrics = metrics(design_response) | margins(design_plant, controller).as_dict()
+    truth_metrics = metrics(truth_response) | verdict.margins.as_dict()
+    difference = {}
+    for name in design_response.output_labels:
+        a, b = _trace(truth_response, name), _trace(design_response, name)
+        if a is not None and b is not None:
+            difference[name] = a - b
+    return Comparison(design_metrics, truth_metrics, design_response, truth_response,
+                      difference, verdict, design_plant, truth_plant, controller)

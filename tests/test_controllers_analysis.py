@@ -1,0 +1,312 @@
+"""Loop analysis: inertia, modes, close_loop, margins, spillover, responses, metrics, compare."""
+import ast
+import math
+import pathlib
+
+import control
+import numpy as np
+import pytest
+
+import controllers
+from controllers.pd import pd_gains
+
+
+def modal_plant(inertia, modes=(), *, disturbance=True):
+    """theta/torque = 1/(J s^2) + sum b_k c_k / (s^2 + 2 zeta_k w_k s + w_k^2), omega = s theta.
+
+    modes = [(w_k [rad/s], zeta_k, b_k, c_k)]; b_k c_k > 0 is a collocated mode, b_k c_k < 0 a
+    non-collocated one (attitude sensor on the other side of a node of the mode).
+    """
+    n = 2 + 2 * len(modes)
+    A = np.zeros((n, n))
+    B = np.zeros((n, 1))
+    C = np.zeros((2, n))
+    A[0, 1] = 1.0
+    B[1, 0] = 1.0 / inertia
+    C[0, 0] = C[1, 1] = 1.0
+    for k, (w, zeta, b, c) in enumerate(modes):
+        i = 2 + 2 * k
+        A[i, i + 1] = 1.0
+        A[i + 1, i] = -w * w
+        A[i + 1, i + 1] = -2.0 * zeta * w
+        B[i + 1, 0] = b
+        C[0, i] = c
+        C[1, i + 1] = c
+    inputs = ["torque", "disturbance_torque"] if disturbance else ["torque"]
+    return control.ss(A, np.hstack([B, B]) if disturbance else B, C, 0.0, inputs=inputs,
+                      outputs=["theta", "omega"])
+
+
+def two_inertia_plant(hub_inertia, appendage_inertia, stiffness, damping):
+    """Hub J_h driven by the torque, appendage J_a on a torsion spring k and damper c.
+
+    States [theta_h, omega_h, theta_a, omega_a]; outputs theta = theta_h, omega = omega_h and
+    the appendage's relative rotation (as 'wing_tip_deflection' times a 1 m lever)."""
+    Jh, Ja, k, c = hub_inertia, appendage_inertia, stiffness, damping
+    A = np.array([[0, 1, 0, 0], [-k / Jh, -c / Jh, k / Jh, c / Jh], [0, 0, 0, 1],
+                  [k / Ja, c / Ja, -k / Ja, -c / Ja]], dtype=float)
+    B = np.array([[0], [1 / Jh], [0], [0]])
+    C = np.array([[1, 0, 0, 0], [0, 1, 0, 0], [-1, 0, 1, 0]], dtype=float)
+    return control.ss(A, B, C, 0, inputs=["torque"],
+                      outputs=["theta", "omega", "wing_tip_deflection"])
+
+
+J = 250.0  # kg m^2
+RIGID = modal_plant(J)
+COLLOCATED = modal_plant(J, [(2.0, 0.005, 1.0, 0.002)])
+NONCOLLOCATED = modal_plant(J, [(2.0, 0.005, 1.0, -0.002)])
+
+
+# ----- plant properties ------------------------------------------------------------------------
+def test_rigid_body_inertia_modal_and_two_inertia():
+    plant = modal_plant(J, [(2.0, 0.005, 0.04, 0.04), (9.0, 0.01, 0.02, 0.02)])
+    # the flexible terms vanish at s = 0 after multiplying by s^2: lim s^2 G = 1/J
+    assert controllers.rigid_body_inertia(plant) == pytest.approx(J, rel=1e-10)
+    two = two_inertia_plant(200.0, 50.0, 400.0, 2.0)
+    # the total inertia of hub + appendage: 250 kg m^2
+    assert controllers.rigid_body_inertia(two) == pytest.approx(250.0, rel=1e-10)
+
+
+def test_flexible_modes_match_construction():
+    plant = modal_plant(J, [(9.0, 0.01, 0.02, 0.02), (2.0, 0.005, 0.04, 0.04)])
+    modes = controllers.flexible_modes(plant)
+    assert [m.frequency for m in modes] == pytest.approx([2.0, 9.0], rel=1e-12)
+    assert [m.damping_ratio for m in modes] == pytest.approx([0.005, 0.01], rel=1e-9)
+    # residue of bc/(s^2 + 2 zeta w s + w^2) at its pole: bc / (2 j w sqrt(1 - zeta^2)),
+    # so participation 2 |r| w J = bc J / sqrt(1 - zeta^2)
+    assert modes[0].participation == pytest.approx(0.04 ** 2 * J / math.sqrt(1 - 0.005 ** 2),
+                                                   rel=1e-9)
+    two = two_inertia_plant(200.0, 50.0, 400.0, 0.0)
+    # two-inertia antiresonance-free mode: w^2 = k (J_h + J_a) / (J_h J_a)
+    (mode,) = controllers.flexible_modes(two)
+    assert mode.frequency == pytest.approx(math.sqrt(400.0 * 250.0 / (200.0 * 50.0)), rel=1e-12)
+    # a mode the torque cannot excite is not listed
+    hidden = modal_plant(J, [(2.0, 0.005, 0.0, 0.04)])
+    assert controllers.flexible_modes(hidden) == []
+
+
+# ----- closing the loop ------------------------------------------------------------------------
+def test_close_loop_signals():
+    plant = two_inertia_plant(200.0, 50.0, 400.0, 2.0)
+    K = controllers.pd(plant, natural_frequency=0.5, roll_off=5.0)
+    loop = controllers.close_loop(plant, K)
+    assert list(loop.input_labels) == ["theta_ref"]
+    assert list(loop.output_labels) == ["theta", "omega", "wing_tip_deflection", "torque"]
+    assert loop.nstates == plant.nstates + K.nstates
+    loop = controllers.close_loop(COLLOCATED, K)
+    assert list(loop.input_labels) == ["theta_ref", "disturbance_torque"]
+    with pytest.raises(TypeError, match="plant must be a control.StateSpace"):
+        controllers.close_loop(control.frd(COLLOCATED, [1.0, 2.0]), K)
+    bad = control.ss([], [], [], [[1.0, 1.0]], inputs=["theta", "gyro"], outputs=["torque"])
+    with pytest.raises(ValueError, match=r"\['gyro'\] are neither plant outputs nor reference"):
+        controllers.close_loop(COLLOCATED, bad)
+    wrong_output = control.ss([], [], [], [[1.0]], inputs=["theta"], outputs=["u"])
+    with pytest.raises(ValueError, match="exactly one output named 'torque'"):
+        controllers.close_loop(COLLOCATED, wrong_output)
+
+
+def test_disturbance_step_closed_form():
+    """theta/d = 1/(J s^2 + Kd s + Kp) under PD: final value d/Kp, peak d/Kp (1 + Mp) at
+    t_p = pi / (wn sqrt(1 - zeta^2)), Mp = exp(-pi zeta / sqrt(1 - zeta^2))."""
+    wn, zeta, d = 0.5, 0.4, 2.0
+    K = controllers.pd(RIGID, natural_frequency=wn, damping=zeta)
+    Kp, _ = pd_gains(J, wn, zeta)
+    t_p = math.pi / (wn * math.sqrt(1 - zeta ** 2))
+    dt = t_p / 400  # the peak lies on the grid
+    response = controllers.disturbance_response(controllers.close_loop(RIGID, K), amplitude=d,
+                                                t_final=4000 * dt, dt=dt)
+    m = controllers.metrics(response)
+    Mp = math.exp(-math.pi * zeta / math.sqrt(1 - zeta ** 2))
+    assert m["peak_attitude_error"] == pytest.approx(d / Kp * (1 + Mp), rel=1e-9)
+    # after 10 t_p the decay exp(-zeta wn t) = exp(-13.7) leaves a relative error ~1e-6
+    assert m["final_attitude_error"] == pytest.approx(d / Kp, rel=1e-5)
+    torque = response.y[list(response.output_labels).index("torque")]
+    assert torque[-1] == pytest.approx(-d, rel=1e-5)  # the controller balances the disturbance
+    assert "overshoot" not in m  # no reference to overshoot
+
+
+def test_slew_profile():
+    T, angle = 20.0, 0.3
+    t = np.array([0.0, 5.0, 10.0, 15.0, 20.0, 30.0])
+    # closed form at t = T/4: angle (1/4 - 1/(2 pi))
+    np.testing.assert_allclose(controllers.slew_profile(t, angle, T),
+                               angle * np.array([0.0, 0.25 - 1 / (2 * np.pi), 0.5,
+                                                 0.75 + 1 / (2 * np.pi), 1.0, 1.0]),
+                               rtol=1e-14, atol=1e-16)
+    # zero rate at both ends: central differences of order h^2 (the profile is C^2 at 0 and T)
+    h = 1e-4
+    rate = lambda x: (controllers.slew_profile(x + h, angle, T)  # noqa: E731
+                      - controllers.slew_profile(x - h, angle, T)) / (2 * h)
+    assert abs(rate(0.0)) < 1e-8 and abs(rate(T)) < 1e-8
+    assert rate(T / 2) == pytest.approx(2 * angle / T, rel=1e-7)
+
+
+def test_slew_reaches_angle_and_metrics_keys():
+    K = controllers.pd(COLLOCATED, natural_frequency=0.5)
+    response = controllers.slew(controllers.close_loop(COLLOCATED, K), 0.2, 20.0, t_final=100.0)
+    m = controllers.metrics(response)
+    assert set(m) == {"peak_torque", "peak_attitude_error", "final_attitude_error", "overshoot",
+                      "settling_time"}
+    assert m["final_attitude_error"] < 1e-8  # 80 s after the slew, slowest decay e^-0.35 t
+    assert 10.0 < m["settling_time"] < 100.0  # may settle before the end of the profile
+    assert response.t[-1] == pytest.approx(100.0)
+    np.testing.assert_allclose(response.u[0], controllers.slew_profile(response.t, 0.2, 20.0))
+
+
+def test_metrics_on_hand_made_response():
+    t = np.arange(6.0)
+    theta = np.array([0.0, 0.5, 1.1, 1.03, 1.01, 1.0])
+    torque = np.array([0.0, 3.0, -2.0, 0.5, 0.1, 0.0])
+    tip = np.array([0.0, 0.01, -0.02, 0.0, 0.0, 0.0])
+    response = control.TimeResponseData(t, np.vstack([theta, torque, tip]),
+                                        inputs=np.ones((1, 6)), input_labels=["theta_ref"],
+                                        output_labels=["theta", "torque", "boom_tip_deflection"])
+    m = controllers.metrics(response)
+    assert m["overshoot"] == pytest.approx(10.0, rel=1e-12)
+    assert m["settling_time"] == 4.0  # last sample outside the 2 % band is t = 3 (1.03)
+    assert m["peak_torque"] == 3.0 and m["peak_tip_deflection"] == 0.02
+    assert m["final_attitude_error"] == 0.0
+    unsettled = control.TimeResponseData(t, np.vstack([theta[::-1], torque]), inputs=np.ones((1, 6)),
+                                         input_labels=["theta_ref"],
+                                         output_labels=["theta", "torque"])
+    assert controllers.metrics(unsettled)["settling_time"] == math.inf
+    diverged = control.TimeResponseData(t, np.vstack([theta, np.where(t > 2, np.inf, torque)]),
+                                        inputs=np.ones((1, 6)), input_labels=["theta_ref"],
+                                        output_labels=["theta", "torque"])
+    assert controllers.metrics(diverged)["peak_torque"] == math.inf
+    with pytest.raises(ValueError, match="settling_band must be in"):
+        controllers.metrics(response, settling_band=2.0)
+
+
+# ----- margins ---------------------------------------------------------------------------------
+@pytest.mark.parametrize("zeta", [0.3, 0.5, 0.7])
+def test_margins_rigid_pd_closed_form(zeta):
+    """L = (Kp + Kd s)/(J s^2) = (wn^2 + 2 zeta wn s)/s^2.
+
+    |L| = 1 at wc^2 = wn^2 (2 zeta^2 + sqrt(4 zeta^4 + 1)); PM = atan(2 zeta wc / wn); the phase
+    stays above -180 deg, GM = inf. S = 1/(1+L) = s^2/(s^2 + 2 zeta wn s + wn^2) peaks at
+    1/(2 zeta sqrt(1 - zeta^2)) for zeta < 1/sqrt(2): modulus margin 2 zeta sqrt(1 - zeta^2)."""
+    wn = 0.5
+    K = controllers.pd(RIGID, natural_frequency=wn, damping=zeta)
+    m = controllers.margins(RIGID, K)
+    wc = wn * math.sqrt(2 * zeta ** 2 + math.sqrt(4 * zeta ** 4 + 1))
+    assert m.gain_crossover_frequency == pytest.approx(wc, rel=1e-10)
+    assert m.phase_margin == pytest.approx(math.degrees(math.atan(2 * zeta * wc / wn)), rel=1e-10)
+    assert m.gain_margin == math.inf and m.phase_crossover_frequency == math.inf
+    # minimum located by a bounded scalar search: accurate to ~1e-12 in |1 + L|
+    assert m.modulus_margin == pytest.approx(2 * zeta * math.sqrt(1 - zeta ** 2), rel=1e-9)
+
+
+def test_gain_margin_third_order_closed_form():
+    """L = k / (s (s+1) (s+2)): phase -180 deg at w = sqrt(2), |L| = k/6 there, so
+    GM = 20 log10(6/k) (Ogata, Modern Control Engineering, the classic example)."""
+    k = 1.5
+    plant = control.ss(control.tf([1.0], [1.0, 3.0, 2.0, 0.0]))
+    plant = control.ss(plant.A, plant.B, np.vstack([plant.C, plant.C @ plant.A]), [[0], [0]],
+                       inputs=["torque"], outputs=["theta", "omega"])
+    controller = control.ss([], [], [], [[k, -k, 0.0]], inputs=["theta_ref", "theta", "omega"],
+                            outputs=["torque"])
+    m = controllers.margins(plant, controller)
+    assert m.phase_crossover_frequency == pytest.approx(math.sqrt(2), rel=1e-12)
+    assert m.gain_margin == pytest.approx(20 * math.log10(6 / k), rel=1e-12)
+
+
+def test_margins_flexible_loop_agree_with_python_control():
+    plant = modal_plant(J, [(2.0, 0.002, 1.0, 0.004), (7.0, 0.002, 1.0, 0.002)])
+    K = controllers.pd(plant, natural_frequency=0.5, roll_off=4.0)
+    m = controllers.margins(plant, K)
+    # independent reference: python-control on L = -K_theta P_theta - K_omega P_omega
+    P = control.ss(plant.A, plant.B[:, :1], plant.C, 0)
+    Kfb = control.ss(K.A, K.B[:, 1:], K.C, K.D[:, 1:])
+    L = -(Kfb * P)
+    gm, pm, _, _, wpc, wgc = control.stability_margins(L, returnall=True)
+    assert m.phase_margin == pytest.approx(min(pm, key=abs), rel=1e-6)
+    i = int(np.argmin(np.abs(np.log(gm))))
+    assert m.gain_margin == pytest.approx(20 * np.log10(gm[i]), rel=1e-6)
+    # modulus margin against brute force: a coarse grid, then a fine one around its minimum
+    w = np.linspace(0.01, 20.0, 4001)
+    w0 = w[np.argmin(np.abs(1 + np.ravel(L(1j * w))))]
+    w = np.linspace(w0 - 0.005, w0 + 0.005, 10001)
+    ref = np.min(np.abs(1 + np.ravel(L(1j * w))))
+    assert m.modulus_margin <= ref + 1e-12 and m.modulus_margin == pytest.approx(ref, rel=1e-6)
+
+
+def test_margins_on_frequency_response_data():
+    """On a dense FRD of the same plant the margins agree to the interpolation error."""
+    plant = modal_plant(J, [(2.0, 0.005, 1.0, 0.004)])
+    K = controllers.pd(plant, natural_frequency=0.5, roll_off=4.0)
+    exact = controllers.margins(plant, K)
+    frd = control.frd(plant, np.logspace(-3, 3, 30000))
+    approx = controllers.margins(frd, K)
+    assert approx.phase_margin == pytest.approx(exact.phase_margin, rel=1e-5)
+    assert approx.gain_margin == pytest.approx(exact.gain_margin, rel=1e-4)
+    assert approx.modulus_margin == pytest.approx(exact.modulus_margin, rel=1e-4)
+
+
+def test_digital_margins_lose_phase_to_the_hold():
+    """The ZOH costs about w T / 2 rad of phase at crossover (Franklin, Powell & Workman)."""
+    K = controllers.pd(RIGID, natural_frequency=0.5, damping=0.5)
+    T = 0.2
+    Kd = controllers.pd(RIGID, natural_frequency=0.5, damping=0.5, sample_time=T)
+    mc, md = controllers.margins(RIGID, K), controllers.margins(RIGID, Kd)
+    expected_loss = math.degrees(mc.gain_crossover_frequency * T / 2)
+    assert mc.phase_margin - md.phase_margin == pytest.approx(expected_loss, rel=0.05)
+
+
+# ----- spillover -------------------------------------------------------------------------------
+def test_spillover_verdict_stable_and_unstable():
+    """A PD on a collocated plant is stable at any gain (passive loop); the same PD on a plant
+    whose mode is seen with the opposite sign (non-collocated) is destabilised."""
+    K = controllers.pd(COLLOCATED, natural_frequency=1.0)
+    good = controllers.spillover(COLLOCATED, K)
+    assert good.stable and good.n_unstable_poles == 0 and good.method == "eigenvalues"
+    assert 0 < good.least_damping_ratio < 1
+    bad = controllers.spillover(NONCOLLOCATED, K)  # a verdict, not an exception
+    assert not bad.stable and bad.n_unstable_poles == 2
+    assert bad.least_damping_ratio < 0
+    assert bad.least_damped_frequency == pytest.approx(2.0, rel=0.2)
+    assert "UNSTABLE" in str(bad)
+    # the same verdicts from the Nyquist criterion on frequency-response data
+    w = np.logspace(-4, 4, 20000)
+    assert controllers.spillover(control.frd(COLLOCATED, w), K).stable
+    frd_bad = controllers.spillover(control.frd(NONCOLLOCATED, w), K)
+    assert not frd_bad.stable and frd_bad.n_unstable_poles == 2 and frd_bad.method == "nyquist"
+    with pytest.raises(ValueError, match="frequency grid too narrow"):
+        controllers.spillover(control.frd(COLLOCATED, np.logspace(-1, 1, 100)), K)
+
+
+# ----- compare ---------------------------------------------------------------------------------
+def test_compare_design_vs_truth():
+    design = modal_plant(J, [(2.0, 0.005, 1.0, 0.004)])
+    truth = modal_plant(J, [(2.1, 0.005, 1.0, 0.0042), (12.0, 0.005, 1.0, 0.001)])
+    K = controllers.lqr(design, attitude_weight=400.0, rate_weight=1000.0, torque_weight=1.0)
+    result = controllers.compare(design, truth, K, angle=0.2, duration=20.0)
+    assert result.verdict.stable
+    names = [row[0] for row in result.rows]
+    assert names[:2] == ["peak_torque", "peak_attitude_error"]
+    assert {"overshoot", "settling_time", "gain_margin", "phase_margin",
+            "modulus_margin"} <= set(names)
+    np.testing.assert_allclose(result.difference["theta"],
+                               result.truth_response.y[0] - result.design_response.y[0])
+    assert 0 < result.peak_difference["theta"] < 0.01 * 0.2
+    text = str(result)
+    assert "design" in text and "truth" in text and "STABLE" in text
+    fig = result.plot()
+    assert len(fig.axes) == 6
+    with pytest.raises(TypeError, match="truth_plant must be a control.StateSpace"):
+        controllers.compare(design, control.frd(truth, [1.0]), K, angle=0.2, duration=20.0)
+
+
+def test_controllers_import_no_other_flexsat_package():
+    """DESIGN.md: controllers works on any LTI plant and imports no other package of ours."""
+    ours = {"appendages", "spacecraft", "fmu"}
+    for path in pathlib.Path(controllers.__file__).parent.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names = [node.module or ""]
+            else:
+                continue
+            assert not {n.split(".")[0] for n in names} & ours, f"{path.name} imports {names}"

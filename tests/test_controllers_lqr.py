@@ -1,0 +1,200 @@
+"""LQR + estimator: rigid-body closed form, output feedback, tracking, digital design, errors."""
+import math
+
+import control
+import numpy as np
+import pytest
+
+import controllers
+from controllers.lqr import KalmanNoise, lqr_design, reference_state
+
+
+def modal_plant(inertia, modes=(), *, tips=()):
+    """theta/torque = 1/(J s^2) + sum b_k c_k / (s^2 + 2 zeta_k w_k s + w_k^2), omega = s theta.
+
+    modes = [(w_k [rad/s], zeta_k, b_k, c_k)]; tips = [(name, [d_k per mode])]: tip deflection
+    outputs sum_k d_k q_k [m].
+    """
+    n = 2 + 2 * len(modes)
+    A = np.zeros((n, n))
+    B = np.zeros((n, 1))
+    C = np.zeros((2 + len(tips), n))
+    A[0, 1] = 1.0
+    B[1, 0] = 1.0 / inertia
+    C[0, 0] = C[1, 1] = 1.0
+    for k, (w, zeta, b, c) in enumerate(modes):
+        i = 2 + 2 * k
+        A[i, i + 1] = 1.0
+        A[i + 1, i] = -w * w
+        A[i + 1, i + 1] = -2.0 * zeta * w
+        B[i + 1, 0] = b
+        C[0, i] = c
+        C[1, i + 1] = c
+        for j, (_, d) in enumerate(tips):
+            C[2 + j, i] = d[k]
+    return control.ss(A, np.hstack([B, B]), C, 0.0, inputs=["torque", "disturbance_torque"],
+                      outputs=["theta", "omega"] + [name for name, _ in tips])
+
+
+J = 250.0  # kg m^2
+RIGID = modal_plant(J)
+CHAIN = modal_plant(J, [(2.0, 0.005, 0.04, 0.04)],
+                    tips=[("wing_tip_deflection", [0.5])])
+BEAM = modal_plant(J, [(2.1, 0.005, 0.041, 0.041), (12.0, 0.005, 0.015, 0.015),
+                       (35.0, 0.005, 0.006, 0.006)], tips=[("wing_tip_deflection", [0.5, -0.2, 0.1])])
+WEIGHTS = dict(attitude_weight=400.0, rate_weight=1000.0, torque_weight=1.0)
+
+
+def test_rigid_hub_lqr_gain_closed_form():
+    """Double integrator J theta'' = torque, cost q theta^2 + q_w omega^2 + r torque^2.
+
+    The Riccati equation in P = [[p1, p2], [p2, p3]] gives p2 = J sqrt(q r),
+    p3 = J sqrt(r (2 p2 + q_w)), so K = [sqrt(q/r), sqrt((2 J sqrt(q r) + q_w)/r)]
+    (Anderson & Moore, Optimal Control, ex. 3.3-type derivation)."""
+    q, qw, r = 400.0, 1000.0, 2.0
+    design = lqr_design(RIGID, attitude_weight=q, rate_weight=qw, torque_weight=r)
+    K_exact = [math.sqrt(q / r), math.sqrt((2 * J * math.sqrt(q * r) + qw) / r)]
+    np.testing.assert_allclose(design.K, [K_exact], rtol=1e-10)  # ARE solver: ~1e-13
+    np.testing.assert_allclose(design.Q, np.diag([q, qw]), rtol=1e-15)
+    np.testing.assert_allclose(design.R, [[r]], rtol=1e-15)
+
+
+def test_output_feedback_controller_signals_and_separation():
+    design = lqr_design(CHAIN, **WEIGHTS)
+    K = design.controller
+    assert list(K.input_labels) == ["theta_ref", "theta", "omega"]
+    assert list(K.output_labels) == ["torque"]
+    assert K.nstates == CHAIN.nstates  # the estimate of the chain's states, nothing else
+    loop = controllers.close_loop(CHAIN, K)
+    # separation principle: closed-loop poles = regulator poles + estimator poles
+    expected = np.concatenate([design.regulator_poles, design.estimator_poles])
+    got = loop.poles()
+    for p in expected:
+        assert np.min(np.abs(got - p)) < 1e-7 * max(1.0, abs(p))
+    assert got.real.max() < 0
+
+
+def test_closed_loop_stable_on_design_and_truth_for_several_weights():
+    rng = np.random.default_rng(3)
+    for _ in range(5):
+        q, qw, r = 10 ** rng.uniform(0, 3), 10 ** rng.uniform(0, 3), 10 ** rng.uniform(-1, 1)
+        K = controllers.lqr(CHAIN, attitude_weight=q, rate_weight=qw, torque_weight=r)
+        assert controllers.close_loop(CHAIN, K).poles().real.max() < 0
+        assert controllers.spillover(BEAM, K).stable
+
+
+def test_reference_tracking_zero_steady_state_error():
+    """DC gain theta_ref -> theta of the closed loop is exactly 1, on the design plant and on a
+    different free-floating truth plant (a rigid rotation is an equilibrium of both)."""
+    K = controllers.lqr(CHAIN, **WEIGHTS)
+    for plant in (CHAIN, BEAM):
+        loop = controllers.close_loop(plant, K)
+        dc = loop.D - loop.C @ np.linalg.solve(loop.A, loop.B)
+        i_theta = list(loop.output_labels).index("theta")
+        i_tip = list(loop.output_labels).index("wing_tip_deflection")
+        assert dc[i_theta, 0] == pytest.approx(1.0, rel=1e-9)  # linear solve: round-off only
+        assert abs(dc[i_tip, 0]) < 1e-9  # a rigid rotation does not bend the wing
+    response = controllers.slew(controllers.close_loop(BEAM, K), 0.3, 30.0, t_final=120.0)
+    m = controllers.metrics(response)
+    assert m["final_attitude_error"] < 1e-6 * 0.3  # slowest pole decays ~e^-0.2t over 90 s
+
+
+def test_reference_state_is_unit_rigid_rotation():
+    x_ref = reference_state(BEAM)
+    np.testing.assert_allclose(BEAM.A @ x_ref, 0.0, atol=1e-14)
+    np.testing.assert_allclose(BEAM.C @ x_ref, [1.0, 0.0, 0.0], atol=1e-14)
+
+
+def test_deflection_weight_enters_Q():
+    d = lqr_design(CHAIN, **WEIGHTS, deflection_weight=1e4)
+    Cw = CHAIN.C  # rows theta, omega, tip
+    W = np.diag([WEIGHTS["attitude_weight"], WEIGHTS["rate_weight"], 1e4])
+    np.testing.assert_allclose(d.Q, Cw.T @ W @ Cw, rtol=1e-14)
+    d2 = lqr_design(CHAIN, **WEIGHTS, deflection_weight={"wing_tip_deflection": 1e4})
+    np.testing.assert_allclose(d2.K, d.K, rtol=1e-12)
+    base = lqr_design(CHAIN, **WEIGHTS)
+    # weighting the deflection adds damping to the flexible mode (regulator pole at ~2 rad/s)
+    zeta = lambda p: np.min(-p.real / np.abs(p))  # noqa: E731
+    assert zeta(d.regulator_poles) > zeta(base.regulator_poles)
+
+
+def test_kalman_and_luenberger_estimators():
+    base = lqr_design(CHAIN, **WEIGHTS)
+    assert base.L.shape == (CHAIN.nstates, 2)
+    assert base.estimator_poles.real.max() < 0
+    noise = KalmanNoise.default(J, WEIGHTS["attitude_weight"], WEIGHTS["torque_weight"])
+    explicit = lqr_design(CHAIN, **WEIGHTS, estimator=noise)
+    np.testing.assert_allclose(explicit.L, base.L, rtol=1e-12)
+    luenberger = lqr_design(CHAIN, **WEIGHTS, estimator=base.L)
+    np.testing.assert_allclose(luenberger.controller.A, base.controller.A, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("speed", [1.0, 3.0, 6.0])
+def test_default_kalman_filter_rigid_body_closed_form(speed):
+    """Rigid hub, default noises V_theta = 1/q, W = k^4/r, V_omega = V_theta w_e^2 with
+    w_e = k (q/(r J^2))^(1/4). The filter Riccati equation (dual LQR on A^T with C^T = I,
+    scaled by V_theta) is solved by P = [[a w_e, b w_e^2], [b w_e^2, c w_e^3]] with b = 1/2,
+    a = c = sqrt(3)/2, so the estimator poles are the roots of s^2 + sqrt(3) w_e s + w_e^2."""
+    q, r = WEIGHTS["attitude_weight"], WEIGHTS["torque_weight"]
+    design = lqr_design(RIGID, **WEIGHTS, estimator_speed=speed)
+    w_e = speed * (q / (r * J * J)) ** 0.25
+    expected = np.roots([1.0, math.sqrt(3.0) * w_e, w_e * w_e])
+    np.testing.assert_allclose(np.sort_complex(design.estimator_poles), np.sort_complex(expected),
+                               rtol=1e-9)  # Riccati solver round-off, ~1e-13
+
+
+def test_digital_lqr():
+    T = 0.05
+    design = lqr_design(CHAIN, **WEIGHTS, sample_time=T)
+    K = design.controller
+    assert K.dt == T
+    assert list(K.input_labels) == ["theta_ref", "theta", "omega"]
+    assert np.abs(design.regulator_poles).max() < 1 and np.abs(design.estimator_poles).max() < 1
+    loop = controllers.close_loop(CHAIN, K)
+    assert np.abs(loop.poles()).max() < 1
+    dc = loop.D - loop.C @ np.linalg.solve(loop.A - np.eye(loop.nstates), loop.B)
+    assert dc[0, 0] == pytest.approx(1.0, rel=1e-9)
+    verdict = controllers.spillover(BEAM, K)
+    assert verdict.stable
+    # the digital design approaches the continuous one as T -> 0 (first-order cost sampling)
+    fine = lqr_design(CHAIN, **WEIGHTS, sample_time=1e-4)
+    cont = lqr_design(CHAIN, **WEIGHTS)
+    np.testing.assert_allclose(fine.K, cont.K, rtol=2e-3)
+
+
+def test_errors():
+    with pytest.raises(ValueError, match=r"torque_weight R must be positive definite"):
+        controllers.lqr(CHAIN, attitude_weight=1.0, rate_weight=1.0, torque_weight=0.0)
+    with pytest.raises(ValueError, match=r"rate_weight must be non-negative"):
+        controllers.lqr(CHAIN, attitude_weight=1.0, rate_weight=-1.0, torque_weight=1.0)
+    with pytest.raises(ValueError, match=r"attitude_weight must be positive .*undetectable"):
+        controllers.lqr(CHAIN, attitude_weight=0.0, rate_weight=1.0, torque_weight=1.0)
+    with pytest.raises(TypeError, match="torque_weight must be a real number"):
+        controllers.lqr(CHAIN, attitude_weight=1.0, rate_weight=1.0, torque_weight="1")
+    with pytest.raises(ValueError, match="positive semidefinite"):
+        controllers.lqr(CHAIN, **WEIGHTS, deflection_weight=np.array([[-1.0]]))
+    with pytest.raises(ValueError, match="no '\\*tip_deflection' output"):
+        controllers.lqr(RIGID, **WEIGHTS, deflection_weight=1.0)
+    with pytest.raises(ValueError, match="not tip-deflection outputs"):
+        controllers.lqr(CHAIN, **WEIGHTS, deflection_weight={"boom_tip_deflection": 1.0})
+    # an undamped mode the torque cannot move (e.g. a symmetric mode of two wings)
+    stuck = modal_plant(J, [(2.0, 0.0, 0.0, 0.04)])
+    with pytest.raises(ValueError, match=r"uncontrollable design: \(A, B\) from 'torque'"):
+        controllers.lqr(stuck, **WEIGHTS)
+    # torque has no effect at all
+    dead = control.ss(RIGID.A, np.zeros((2, 1)), RIGID.C, 0, inputs=["torque"],
+                      outputs=["theta", "omega"])
+    with pytest.raises(ValueError, match="uncontrollable design"):
+        controllers.lqr(dead, **WEIGHTS)
+    # an undamped mode invisible to theta/omega: undetectable for the cost and the sensors
+    hidden = modal_plant(J, [(2.0, 0.0, 0.04, 0.0)])
+    with pytest.raises(ValueError, match="not detectable"):
+        controllers.lqr(hidden, **WEIGHTS)
+    with pytest.raises(ValueError, match="Luenberger estimator gain must have shape"):
+        controllers.lqr(CHAIN, **WEIGHTS, estimator=np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="estimator must be 'kalman'"):
+        controllers.lqr(CHAIN, **WEIGHTS, estimator="luenberger")
+    with pytest.raises(ValueError, match="sample_time .* too long"):
+        controllers.lqr(CHAIN, **WEIGHTS, sample_time=1.0)
+    with pytest.raises(ValueError, match="attitude_noise must be positive"):
+        KalmanNoise(torque_noise=1.0, attitude_noise=0.0, rate_noise=1.0)

@@ -1,0 +1,175 @@
+"""PD controller: rigid-hub closed form, filters, digital implementation, errors."""
+import math
+
+import control
+import numpy as np
+import pytest
+
+import controllers
+from controllers.pd import (MIN_SAMPLES_PER_CROSSOVER, NOTCH_POLE_DAMPING, NOTCH_ZERO_DAMPING,
+                            natural_frequency_from_bandwidth, pd_gains)
+
+
+def modal_plant(inertia, modes=(), *, disturbance=True):
+    """Hub of total inertia J with flexible modes in modal form.
+
+    theta/torque = 1/(J s^2) + sum_k b_k c_k / (s^2 + 2 zeta_k w_k s + w_k^2), omega = s theta;
+    modes = [(w_k [rad/s], zeta_k, b_k, c_k)]; b_k = c_k is a collocated (hub-measured) mode.
+    """
+    n = 2 + 2 * len(modes)
+    A = np.zeros((n, n))
+    B = np.zeros((n, 1))
+    C = np.zeros((2, n))
+    A[0, 1] = 1.0
+    B[1, 0] = 1.0 / inertia
+    C[0, 0] = C[1, 1] = 1.0
+    for k, (w, zeta, b, c) in enumerate(modes):
+        i = 2 + 2 * k
+        A[i, i + 1] = 1.0
+        A[i + 1, i] = -w * w
+        A[i + 1, i + 1] = -2.0 * zeta * w
+        B[i + 1, 0] = b
+        C[0, i] = c
+        C[1, i + 1] = c
+    inputs = ["torque", "disturbance_torque"] if disturbance else ["torque"]
+    return control.ss(A, np.hstack([B, B]) if disturbance else B, C, 0.0, inputs=inputs,
+                      outputs=["theta", "omega"])
+
+
+J = 250.0  # kg m^2
+RIGID = modal_plant(J)
+FLEX = modal_plant(J, [(2.0, 0.005, 0.04, 0.04), (11.0, 0.005, 0.02, 0.02)])
+
+
+@pytest.mark.parametrize("wn, zeta", [(0.3, 0.7), (1.0, 0.5), (0.05, 1.2)])
+def test_rigid_hub_closed_loop_matches_spec(wn, zeta):
+    """Closed loop on 1/(J s^2) is J s^2 + Kd s + Kp: poles -zeta wn +/- wn sqrt(zeta^2 - 1)."""
+    K = controllers.pd(RIGID, natural_frequency=wn, damping=zeta)
+    loop = controllers.close_loop(RIGID, K)
+    poles = np.sort_complex(loop.poles())
+    expected = np.sort_complex(np.roots([1.0, 2.0 * zeta * wn, wn * wn]).astype(complex))
+    # closed form vs a 2x2 eigenvalue problem: round-off only (1e-10 relative to wn);
+    # a repeated root (zeta = 1) would be sqrt(eps)-sensitive, hence zeta != 1 here
+    np.testing.assert_allclose(poles, expected, rtol=0, atol=1e-10 * wn)
+    # Vieta: product of the poles = wn^2, sum = -2 zeta wn
+    np.testing.assert_allclose(np.prod(poles).real, wn * wn, rtol=1e-10)
+    np.testing.assert_allclose(np.sum(poles).real, -2 * zeta * wn, rtol=1e-10)
+    if zeta < 1:
+        np.testing.assert_allclose(np.abs(poles), wn, rtol=1e-10)
+        np.testing.assert_allclose(-poles.real / np.abs(poles), zeta, rtol=1e-10)
+    Kp, Kd = pd_gains(J, wn, zeta)
+    np.testing.assert_allclose(K.D, [[Kp, -Kp, -Kd]], rtol=1e-13)
+    assert list(K.input_labels) == ["theta_ref", "theta", "omega"]
+    assert list(K.output_labels) == ["torque"]
+
+
+def test_inertia_taken_from_flexible_plant():
+    """The PD gains use the total inertia J (rigid-body gain), not the hub's alone."""
+    K = controllers.pd(FLEX, natural_frequency=0.4, damping=0.7)
+    Kp, Kd = pd_gains(J, 0.4, 0.7)
+    np.testing.assert_allclose(K.D, [[Kp, -Kp, -Kd]], rtol=1e-9)  # inertia from Schur: ~1e-12
+
+
+def test_bandwidth_relation_of_second_order_prototype():
+    """|wn^2 / (s^2 + 2 zeta wn s + wn^2)| = 1/sqrt(2) at s = j wb (definition of wb)."""
+    for zeta in (0.3, 0.7, 1.0):
+        wb = 2.0
+        wn = natural_frequency_from_bandwidth(wb, zeta)
+        T = wn ** 2 / ((1j * wb) ** 2 + 2 * zeta * wn * 1j * wb + wn ** 2)
+        assert abs(abs(T) - 1 / math.sqrt(2)) < 1e-12
+    # zeta = 1/sqrt(2): wb = wn exactly (Butterworth)
+    assert natural_frequency_from_bandwidth(3.0, 1 / math.sqrt(2)) == pytest.approx(3.0, rel=1e-14)
+    K = controllers.pd(RIGID, bandwidth=1.0, damping=0.7)
+    wn = natural_frequency_from_bandwidth(1.0, 0.7)
+    np.testing.assert_allclose(K.D[0, 0], J * wn ** 2, rtol=1e-13)
+
+
+def test_roll_off_is_butterworth_at_the_corner():
+    """F(s) = wr^2/(s^2 + sqrt(2) wr s + wr^2): |F(j wr)| = 1/sqrt(2), unity DC gain."""
+    wn, wr = 0.4, 4.0
+    K = controllers.pd(RIGID, natural_frequency=wn, roll_off=wr)
+    Kp, Kd = pd_gains(J, wn, 0.7)
+    dc = K(0.0)
+    np.testing.assert_allclose(np.real(dc), [[Kp, -Kp, -Kd]], rtol=1e-12)
+    np.testing.assert_allclose(abs(K(1j * wr)[0, 0]), Kp / math.sqrt(2), rtol=1e-12)
+    assert K.nstates == 2
+
+
+def test_notch_depth_at_its_frequency_and_first_mode_choice():
+    """N(j wz) = zeta_z / zeta_p exactly (the s^2 + wz^2 terms cancel at s = j wz)."""
+    wn = 0.3
+    K = controllers.pd(FLEX, natural_frequency=wn, notch="first_mode")
+    Kp, _ = pd_gains(J, wn, 0.7)
+    # the first flexible mode of FLEX is built at 2.0 rad/s
+    np.testing.assert_allclose(abs(K(2.0j)[0, 0]), Kp * NOTCH_ZERO_DAMPING / NOTCH_POLE_DAMPING,
+                               rtol=1e-9)
+    K5 = controllers.pd(FLEX, natural_frequency=wn, notch=5.0)
+    np.testing.assert_allclose(abs(K5(5.0j)[0, 0]), Kp * NOTCH_ZERO_DAMPING / NOTCH_POLE_DAMPING,
+                               rtol=1e-12)
+
+
+def test_digital_pd_sampled_data_loop_closed_form():
+    """ZOH double integrator: Phi = [[1, T], [0, 1]], Gamma = [T^2/(2J), T/J]; with
+    u = -Kp theta - Kd omega the loop's characteristic polynomial is
+    z^2 - (2 - a Kp - b Kd) z + (1 + a Kp - b Kd), a = T^2/(2J), b = T/J."""
+    wn, T = 0.5, 0.05
+    K = controllers.pd(RIGID, natural_frequency=wn, sample_time=T)
+    assert K.dt == T
+    Kp, Kd = pd_gains(J, wn, 0.7)
+    loop = controllers.close_loop(RIGID, K)
+    assert loop.dt == T
+    a, b = T * T / (2 * J), T / J
+    expected = np.roots([1.0, -(2 - a * Kp - b * Kd), 1 + a * Kp - b * Kd])
+    np.testing.assert_allclose(np.sort_complex(loop.poles()), np.sort_complex(expected),
+                               rtol=0, atol=1e-12)
+    assert np.all(np.abs(loop.poles()) < 1)
+
+
+def test_digital_pd_with_filters_is_zoh_of_continuous():
+    wn, T = 0.3, 0.02
+    Kc = controllers.pd(FLEX, natural_frequency=wn, roll_off=3.0)
+    Kd = controllers.pd(FLEX, natural_frequency=wn, roll_off=3.0, sample_time=T)
+    ref = control.c2d(Kc, T, method="zoh")
+    np.testing.assert_allclose(Kd.A, ref.A, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(Kd.B, ref.B, rtol=1e-12, atol=1e-14)
+    assert controllers.spillover(FLEX, Kd).stable
+
+
+def test_sample_time_too_long_for_bandwidth():
+    # crossover of (Kp + Kd s)/(J s^2) with zeta = 0.7: wc = wn sqrt(2 zeta^2 + sqrt(4 zeta^4 + 1))
+    wn = 1.0
+    wc = wn * math.sqrt(2 * 0.49 + math.sqrt(4 * 0.49 ** 2 + 1))
+    T_max = 2 * math.pi / (MIN_SAMPLES_PER_CROSSOVER * wc)
+    controllers.pd(RIGID, natural_frequency=wn, sample_time=0.95 * T_max)
+    with pytest.raises(ValueError, match=r"sample_time .* too long .* gain-crossover"):
+        controllers.pd(RIGID, natural_frequency=wn, sample_time=1.1 * T_max)
+
+
+def test_errors_name_the_parameter():
+    with pytest.raises(ValueError, match="exactly one of natural_frequency"):
+        controllers.pd(RIGID, natural_frequency=1.0, bandwidth=1.0)
+    with pytest.raises(ValueError, match="exactly one of natural_frequency"):
+        controllers.pd(RIGID)
+    with pytest.raises(ValueError, match=r"damping must be positive and finite \[1\]; got -0.1"):
+        controllers.pd(RIGID, natural_frequency=1.0, damping=-0.1)
+    with pytest.raises(ValueError, match=r"natural_frequency must be positive .*rad/s"):
+        controllers.pd(RIGID, natural_frequency=float("nan"))
+    with pytest.raises(ValueError, match="roll_off corner must exceed"):
+        controllers.pd(RIGID, natural_frequency=1.0, roll_off=1.5)
+    with pytest.raises(ValueError, match="notch frequency must exceed"):
+        controllers.pd(FLEX, natural_frequency=1.5, notch="first_mode")
+    with pytest.raises(ValueError, match="no flexible mode"):
+        controllers.pd(RIGID, natural_frequency=1.0, notch="first_mode")
+    with pytest.raises(ValueError, match="notch must be a frequency"):
+        controllers.pd(FLEX, natural_frequency=0.1, notch="second")
+    with pytest.raises(TypeError, match="plant must be a control.StateSpace"):
+        controllers.pd(control.tf([1], [J, 0, 0]), natural_frequency=1.0)
+    no_omega = control.ss([[0, 1], [0, 0]], [[0], [1 / J]], [[1, 0]], 0, inputs=["torque"],
+                          outputs=["theta"])
+    with pytest.raises(ValueError, match="output named 'omega'"):
+        controllers.pd(no_omega, natural_frequency=1.0)
+    # hub on a torsion spring: no rigid-body mode, the design rule does not apply
+    sprung = control.ss([[0, 1], [-4.0, 0]], [[0], [1 / J]], np.eye(2), 0, inputs=["torque"],
+                        outputs=["theta", "omega"])
+    with pytest.raises(ValueError, match="free-floating"):
+        controllers.pd(sprung, natural_frequency=1.0)
