@@ -9,10 +9,7 @@ from .analysis import (FlexibleMode, Margins, METRIC_UNITS, SpilloverVerdict, cl
 from .compare import Comparison, compare
 from .lqr import KalmanNoise, LQRDesign, lqr, lqr_design, reference_state
 from .pd import natural_frequency_from_bandwidth, pd, pd_gains
-try:
-    from .simulate import Simulator, simulate
-except ImportError:  # TODO(switch): controllers/simulate.py not committed yet
-    pass
+from .simulate import Simulator, simulate
 from .testing import assert_closed_loops_close, compare_metrics
 
 __all__ = [

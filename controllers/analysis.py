@@ -26,6 +26,8 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
+from .simulate import simulate
+
 __all__ = [
     "FlexibleMode",
     "Margins",
@@ -779,11 +781,10 @@ def spillover(truth_plant, controller) -> SpilloverVerdict:
 # time responses
 # --------------------------------------------------------------------------------------------
 def _simulate(system, T, U):
-    """Time response through controllers.simulate (continuous) or forced_response (digital)."""
+    """Time response: controllers.simulate (exact, continuous) or forced_response (digital)."""
     if system.isdtime(strict=True):
         return control.forced_response(system, T, U, squeeze=False)
-    # TODO(switch): controllers.simulate once controllers/simulate.py is committed
-    return control.forced_response(system, T, U, squeeze=False)
+    return simulate(system, T, U)
 
 
 def _time_grid(system, t_final: float, dt: float | None, default_dt: float) -> np.ndarray:
