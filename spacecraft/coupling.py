@@ -206,9 +206,29 @@ class Spacecraft:
                     "eigenvalues: the stiffness range is too wide for double precision "
                     f"(smallest elastic eigenvalue {lam[3]!r}, largest {lam[-1]!r} [rad^2/s^2])"
                 )
+            V = V.copy()
+            V[:, :3] = self._rigid_modes(V[:, :3], model.mass)
             cached = (np.sqrt(lam), V)
             self._cache["modes"] = cached
         return cached[0].copy(), cached[1]
+
+    @staticmethod
+    def _rigid_modes(R: np.ndarray, M: np.ndarray) -> np.ndarray:
+        """Physical rigid-body modes from any basis R of the null space of K.
+
+        Within span(R), the motions with hub displacement (1, 0, 0), (0, 1, 0) and (0, 0, 1)
+        are unique (the hub block of R is invertible); the two translations are M-orthogonal
+        to each other (a rigid translation carries the total mass), and the rotation is made
+        M-orthogonal to them by Gram-Schmidt, which turns it into the rotation about the
+        system's centre of mass. Returned mass-normalised: [x translation, y translation,
+        rotation]; torque excites only the last, and theta sees only the last.
+        """
+        physical = R @ np.linalg.solve(R[:3, :3], np.eye(3))
+        tx, ty, rot = physical.T
+        for t in (tx, ty):
+            rot = rot - (t @ M @ rot) / (t @ M @ t) * t
+        modes = np.column_stack([tx, ty, rot])
+        return modes / np.sqrt(np.einsum("ij,ik,kj->j", modes, M, modes))
 
     def natural_frequencies(self, n: int, *, exact: bool | None = None) -> np.ndarray:
         """First n coupled elastic natural frequencies [rad/s] (rigid-body modes left out).
@@ -274,11 +294,11 @@ class Spacecraft:
         if disturbances:
             inputs += ["disturbance_torque", "force_x", "force_y"]
             load_columns += [np.eye(n)[:, index_theta], np.eye(n)[:, 0], np.eye(n)[:, 1]]
-        out_pos, out_vel, outputs = [np.eye(n)[index_theta]], [np.zeros(n)], ["theta", "omega"]
-        out_pos.append(np.zeros(n))
-        out_vel[0] = np.zeros(n)
-        out_vel.append(np.eye(n)[index_theta])
-        load_rows = []  # (name, row in appendage coordinates, appendage T) for root loads
+        e_theta = np.eye(n)[index_theta]
+        outputs = ["theta", "omega"]
+        out_pos = [e_theta, np.zeros(n)]  # rows on displacements z
+        out_vel = [np.zeros(n), e_theta]  # rows on velocities z'
+        load_rows = []  # (root model, T, row) of each root-load output
         for name, (mount, T) in zip(self.names, model.blocks):
             rm = mount.appendage.root_model()
             if disturbances:
@@ -302,48 +322,58 @@ class Spacecraft:
                 raise ValueError(f"n_modes must be a non-negative integer; got {n_modes!r}")
             keep = keep[: 3 + n_modes]
         modal_damping = V.T @ model.damping @ V
-        Vk = V[:, keep]
-        lam = w[keep] ** 2
+        if not disturbances:
+            # the centre of mass cannot translate without an external force: leave out the two
+            # translation modes (zero load from torque, unseen by theta and tip deflections)
+            keep = keep[keep >= 2]
+        Vk, lam = V[:, keep], w[keep] ** 2
         Ck = modal_damping[np.ix_(keep, keep)]
-        Bq = Vk.T @ F                      # modal loads
-        Pq = np.array(out_pos) @ Vk        # outputs from modal displacements
-        Pv = np.array(out_vel) @ Vk        # outputs from modal velocities
         if prune:
-            # a mode with zero modal load and zero output participation can be removed exactly
-            # when damping does not couple it to the kept ones
-            seen = np.abs(Pq).max(axis=0, initial=0) + np.abs(Pv).max(axis=0, initial=0)
-            driven = np.abs(Bq).max(axis=1, initial=0)
-            scale = np.abs(Vk).max(axis=0)
-            active = (seen + driven) > 1e-12 * scale * (np.abs(F).max() + 1.0)
-            active[:3] = True
+            # Keep a mode only if some input excites it and some output sees it, directly or
+            # through damping coupling (closure of each set over the coupling graph): the
+            # input-output behaviour from rest is unchanged.
+            Bq = Vk.T @ F
+            Cq, Cv, _ = self._output_rows(out_pos, out_vel, load_rows, Vk, lam, Ck, Bq)
+            tol = 1e-12 * (np.abs(Vk).max(axis=0))
+            driven = np.abs(Bq).max(axis=1, initial=0) > tol * np.abs(F).max()
+            out_scale = max(np.abs(Cq).max(initial=0), np.abs(Cv).max(initial=0), 1e-300)
+            seen = (np.abs(Cq).max(axis=0, initial=0) + np.abs(Cv).max(axis=0, initial=0)) > 1e-12 * out_scale
             coupled = np.abs(Ck - np.diag(np.diag(Ck))) > 0
-            for _ in range(active.size):  # close over damping coupling
-                grown = active | (coupled[:, active].any(axis=1))
-                if np.array_equal(grown, active):
-                    break
-                active = grown
-            keep, lam, Ck, Bq, Pq, Pv = (keep[active], lam[active], Ck[np.ix_(active, active)],
-                                         Bq[active], Pq[:, active], Pv[:, active])
-            Vk = V[:, keep]
+            driven, seen = _closure(driven, coupled), _closure(seen, coupled)
+            active = driven & seen
+            keep, Vk, lam, Ck = keep[active], Vk[:, active], lam[active], Ck[np.ix_(active, active)]
+        Bq = Vk.T @ F
+        Pq, Pv, D_rows = self._output_rows(out_pos, out_vel, load_rows, Vk, lam, Ck, Bq)
         m = keep.size
         A = np.block([[np.zeros((m, m)), np.eye(m)], [-np.diag(lam), -Ck]])
         B = np.vstack([np.zeros((m, len(inputs))), Bq])
         Cmat = np.hstack([Pq, Pv])
         D = np.zeros((len(outputs), len(inputs)))
         if load_rows:
-            # root load = e_r^T (M_i q_i'' + C_i q_i' + K_i q_i), q_i = T_i V eta,
-            # with eta'' = -Lambda eta - C_modal eta' + B_modal u
-            rows_C, rows_D = [], []
-            for rm, T, row in load_rows:
-                mrow = rm.mass[row] @ T @ Vk
-                crow = rm.damping[row] @ T @ Vk
-                krow = rm.stiffness[row] @ T @ Vk
-                rows_C.append(np.concatenate([krow - mrow * lam, crow - mrow @ Ck]))
-                rows_D.append(mrow @ Bq)
-            Cmat = np.vstack([Cmat, rows_C])
-            D[-len(load_rows):] = np.array(rows_D)
+            D[-len(load_rows):] = D_rows
         states = [f"mode[{k}]" for k in keep] + [f"mode_rate[{k}]" for k in keep]
         return control.ss(A, B, Cmat, D, inputs=inputs, outputs=outputs, states=states, name=name)
+
+    @staticmethod
+    def _output_rows(out_pos, out_vel, load_rows, Vk, lam, Ck, Bq):
+        """Output matrices on modal displacements and velocities, and root-load feedthrough.
+
+        A root load is ``e_r^T (M_i q_i'' + C_i q_i' + K_i q_i)`` with ``q_i = T_i V eta`` and
+        ``eta'' = -Lambda eta - C_modal eta' + B_modal u``.
+        """
+        Pq = np.array(out_pos) @ Vk
+        Pv = np.array(out_vel) @ Vk
+        D_rows = np.zeros((len(load_rows), Bq.shape[1]))
+        if load_rows:
+            rows_q, rows_v = [], []
+            for k, (rm, T, row) in enumerate(load_rows):
+                mrow = rm.mass[row] @ T @ Vk
+                rows_q.append(rm.stiffness[row] @ T @ Vk - mrow * lam)
+                rows_v.append(rm.damping[row] @ T @ Vk - mrow @ Ck)
+                D_rows[k] = mrow @ Bq
+            Pq = np.vstack([Pq, rows_q])
+            Pv = np.vstack([Pv, rows_v])
+        return Pq, Pv, D_rows
 
     # -- exact frequency-domain reference -------------------------------------------------------
     def _hub_dynamic_stiffness(self, s: np.ndarray, *, undamped: bool = False) -> np.ndarray:
@@ -417,6 +447,16 @@ class Spacecraft:
             if np.all(hi - lo <= 4e-16 * hi):
                 break
         return 0.5 * (lo + hi)
+
+
+def _closure(active: np.ndarray, coupled: np.ndarray) -> np.ndarray:
+    """Grow a set of modes by every mode coupled to it (boolean adjacency), to a fixed point."""
+    active = active.copy()
+    while True:
+        grown = active | coupled[:, active].any(axis=1)
+        if np.array_equal(grown, active):
+            return active
+        active = grown
 
 
 def _W_of(appendage, s: np.ndarray, *, undamped: bool) -> np.ndarray:
