@@ -17,7 +17,6 @@ For a PD controller on a rigid hub, L(s) = (Kp + Kd s) / (J s^2).
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from typing import Callable, Mapping, Sequence
 
@@ -373,23 +372,48 @@ def close_loop(plant: control.StateSpace, controller: control.StateSpace) -> con
     _check_controller(controller)
     measured = _measurements(plant, controller)
     refs = _reference_inputs(controller, _labels(plant, "output"))
-    disturbances = [n for n in plant.input_labels if n != TORQUE]
+    p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
+    c_in = list(controller.input_labels)
+    disturbances = [n for n in p_in if n != TORQUE]
     if _is_digital(controller):
         plant = control.c2d(plant, controller.dt, method="zoh")
-    p = control.ss(plant.A, plant.B, plant.C, plant.D, plant.dt, inputs=list(plant.input_labels),
-                   outputs=list(plant.output_labels), name="plant")
-    c = control.ss(controller.A, controller.B, controller.C, controller.D, controller.dt,
-                   inputs=list(controller.input_labels), outputs=[TORQUE], name="controller")
+    Ap, Bp, Cp, Dp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))
+    Ac, Bc, Cc, Dc = (np.asarray(M, dtype=float)
+                      for M in (controller.A, controller.B, controller.C, controller.D))
+    i_t = p_in.index(TORQUE)
+    i_d = [p_in.index(n) for n in disturbances]
+    i_m = [p_out.index(n) for n in measured]
+    j_m = [c_in.index(n) for n in measured]
+    j_r = [c_in.index(n) for n in refs]
+    # torque = Cc xc + Dr r + Dy y_m,  y_m = Cm xp + Dmt torque + Dmd d: solve the (scalar)
+    # algebraic loop torque (1 - Dy Dmt) = Cc xc + Dr r + Dy (Cm xp + Dmd d)
+    Dy = Dc[:, j_m]
+    gain = 1.0 - float((Dy @ Dp[i_m, i_t])[0])
+    if abs(gain) < 1e-12:
+        raise ValueError("algebraic loop: the controller's direct feedthrough times the plant's "
+                         "feedthrough from torque to the measurements is 1")
+    # torque = F [xp; xc; r; d]
+    F = np.hstack([Dy @ Cp[i_m], Cc, Dc[:, j_r], Dy @ Dp[np.ix_(i_m, i_d)]]) / gain
+    n_p, n_c = Ap.shape[0], Ac.shape[0]
+    n_r = len(j_r)
+    # the plant with the torque substituted, then the controller driven by r and y_m
+    Fx, Fr, Fd = F[:, : n_p + n_c], F[:, n_p + n_c: n_p + n_c + n_r], F[:, n_p + n_c + n_r:]
+    bt = Bp[:, [i_t]]
+    A_top = np.hstack([Ap, np.zeros((n_p, n_c))]) + bt @ Fx
+    ym_x = np.hstack([Cp[i_m], np.zeros((len(i_m), n_c))]) + Dp[np.ix_(i_m, [i_t])] @ Fx
+    A_bot = np.hstack([np.zeros((n_c, n_p)), Ac]) + Bc[:, j_m] @ ym_x
+    B_top = np.hstack([bt @ Fr, Bp[:, i_d] + bt @ Fd])
+    ym_r = Dp[np.ix_(i_m, [i_t])] @ Fr
+    ym_d = Dp[np.ix_(i_m, i_d)] + Dp[np.ix_(i_m, [i_t])] @ Fd
+    B_bot = np.hstack([Bc[:, j_r] + Bc[:, j_m] @ ym_r, Bc[:, j_m] @ ym_d])
+    C = np.vstack([np.hstack([Cp, np.zeros((Cp.shape[0], n_c))]) + Dp[:, [i_t]] @ Fx, Fx])
+    D = np.vstack([np.hstack([Dp[:, [i_t]] @ Fr, Dp[:, i_d] + Dp[:, [i_t]] @ Fd]),
+                   np.hstack([Fr, Fd])])
     inputs = refs + disturbances
-    outputs = list(plant.output_labels) + [TORQUE]
-    del measured
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        loop = control.interconnect(
-            [p, c], inplist=inputs, outlist=[f"plant.{n}" for n in plant.output_labels]
-            + ["controller.torque"], inputs=inputs, outputs=outputs, name="closed_loop")
-    return control.ss(loop.A, loop.B, loop.C, loop.D, loop.dt, inputs=inputs, outputs=outputs,
-                      name="closed_loop")
+    outputs = p_out + [TORQUE]
+    states = [f"plant_x{i}" for i in range(n_p)] + [f"controller_x{i}" for i in range(n_c)]
+    return control.ss(np.vstack([A_top, A_bot]), np.vstack([B_top, B_bot]), C, D, plant.dt,
+                      inputs=inputs, outputs=outputs, states=states, name="closed_loop")
 
 
 # --------------------------------------------------------------------------------------------

@@ -105,6 +105,33 @@ def test_close_loop_signals():
         controllers.close_loop(COLLOCATED, wrong_output)
 
 
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_close_loop_against_frequency_domain_algebra(seed):
+    """close_loop's state-space algebra (with the algebraic loop through the plant's and the
+    controller's feedthrough solved) against the loop closed at each s:
+    y = P_t torque + P_d d, torque = K_r r + K_y y_m  =>
+    torque = (K_r r + K_y P_md d) / (1 - K_y P_mt). Equal to round-off."""
+    rng = np.random.default_rng(seed)
+    plant = control.ss(rng.normal(size=(5, 5)), rng.normal(size=(5, 2)), rng.normal(size=(4, 5)),
+                       rng.normal(size=(4, 2)), inputs=["disturbance_torque", "torque"],
+                       outputs=["omega", "x", "theta", "a_tip_deflection"])
+    controller = control.ss(rng.normal(size=(3, 3)), rng.normal(size=(3, 3)),
+                            rng.normal(size=(1, 3)), 0.3 * rng.normal(size=(1, 3)),
+                            inputs=["omega", "theta_ref", "theta"], outputs=["torque"])
+    loop = controllers.close_loop(plant, controller)
+    assert list(loop.input_labels) == ["theta_ref", "disturbance_torque"]
+    assert list(loop.output_labels) == ["omega", "x", "theta", "a_tip_deflection", "torque"]
+    for s in (0.3j, 1.7j, 5.0j, 2.0 + 1.0j):
+        P, K = plant(s), controller(s)  # P: (4 outputs, [d, torque]); K: (1, [omega, ref, theta])
+        m = [0, 2]  # plant rows of omega and theta
+        Ky = K[0, [0, 2]]
+        denominator = 1.0 - Ky @ P[m, 1]
+        torque = np.array([K[0, 1], Ky @ P[m, 0]]) / denominator  # per unit r, per unit d
+        y = np.outer(P[:, 1], torque) + np.hstack([np.zeros((4, 1)), P[:, [0]]])
+        expected = np.vstack([y, torque])
+        np.testing.assert_allclose(loop(s), expected, rtol=1e-10, atol=1e-12)
+
+
 def test_disturbance_step_closed_form():
     """theta/d = 1/(J s^2 + Kd s + Kp) under PD: final value d/Kp, peak d/Kp (1 + Mp) at
     t_p = pi / (wn sqrt(1 - zeta^2)), Mp = exp(-pi zeta / sqrt(1 - zeta^2))."""
