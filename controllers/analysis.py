@@ -88,6 +88,12 @@ def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> None
     if isinstance(plant, control.StateSpace) and not plant.isctime(strict=True):
         raise ValueError(f"{what} must be continuous-time (dt=0); got dt={plant.dt}")
     _require_signal(plant, TORQUE, "input", what)
+    if isinstance(plant, control.FrequencyResponseData):
+        # an FRD needs one of theta, omega: the other follows from omega = j w theta
+        if THETA not in plant.output_labels and OMEGA not in plant.output_labels:
+            raise ValueError(f"{what} must have an output named 'theta' or 'omega'; got outputs "
+                             f"{list(plant.output_labels)}")
+        return
     _require_signal(plant, THETA, "output", what)
     _require_signal(plant, OMEGA, "output", what)
 
@@ -98,11 +104,9 @@ def _check_controller(controller, what: str = "controller") -> None:
     if controller.noutputs != 1 or controller.output_labels[0] != TORQUE:
         raise ValueError(f"{what} must have exactly one output named 'torque'; got outputs "
                          f"{list(controller.output_labels)}")
-    if controller.isdtime(strict=True) and not (controller.dt is True or controller.dt > 0):
-        raise ValueError(f"{what} must have a positive sample time dt [s]; got {controller.dt}")
-    if controller.dt is True:
-        raise ValueError(f"{what} is discrete-time with an unspecified sample time (dt=True); "
-                         "give dt in seconds")
+    if controller.dt is True:  # None: a static gain, usable in either time base
+        raise ValueError(f"{what} must be continuous (dt=0) or have a sample time dt > 0 [s]; "
+                         f"got dt={controller.dt}")
 
 
 def _measurements(plant, controller) -> list[str]:
@@ -290,10 +294,12 @@ def rigid_body_inertia(plant: control.StateSpace) -> float:
     ev = _evaluator(plant, [TORQUE], [THETA])
     a1, a2 = _rigid_gain(ev)
     scale = abs(a2) if a2 else 1.0
+    # a frequency scale to compare the 1/s and 1/s^2 coefficients: a1/a2 is in rad/s
+    w_scale = math.sqrt(max(np.linalg.norm(ev.A, 1), 1e-300))
     nilpotent_ok = ev.k == 0 or np.linalg.norm(ev.T11 @ ev.T11) <= 1e-6 * max(
         np.linalg.norm(ev.T11), 1e-300)
     if (ev.k == 0 or not nilpotent_ok or abs(a2.imag) > 1e-8 * scale or a2.real <= 0
-            or abs(a1) > 1e-6 * math.sqrt(scale) * max(1.0, math.sqrt(np.linalg.norm(ev.A, 1)))):
+            or abs(a1) > 1e-6 * scale * w_scale):
         raise ValueError(
             "plant must be free-floating: the channel torque -> theta needs a rigid-body double "
             f"integrator 1/(J s^2) with J > 0 [kg*m^2]; got singular part {a1:.3g}/s + {a2:.3g}/s^2 "
@@ -425,20 +431,37 @@ class _Loop:
     def __init__(self, plant, controller):
         _check_plant(plant, allow_frd=True)
         _check_controller(controller)
-        self.measured = _measurements(plant, controller)
         self.digital = _is_digital(controller)
         self.dt = float(controller.dt) if self.digital else 0.0
         self.frd = isinstance(plant, control.FrequencyResponseData)
-        self.controller_ev = _evaluator(controller, self.measured, [TORQUE])
         if self.frd:
+            outputs = list(plant.output_labels)
+            # theta or omega alone is enough: omega(jw) = jw theta(jw)
+            derivable = {THETA, OMEGA} if (THETA in outputs or OMEGA in outputs) else set()
+            self.measured = [n for n in controller.input_labels
+                             if n in outputs or n in derivable]
+            if not self.measured:
+                raise ValueError(f"controller inputs {list(controller.input_labels)} contain none "
+                                 f"of the plant outputs {outputs}: nothing is fed back")
             i_t = list(plant.input_labels).index(TORQUE)
-            i_m = [list(plant.output_labels).index(n) for n in self.measured]
             self.omega = np.asarray(plant.omega, dtype=float)
             if self.digital:
                 self.omega = self.omega[self.omega < math.pi / self.dt]
-            data = np.asarray(plant.frdata)[i_m, i_t, :]
-            self.plant_data = data[:, : self.omega.size]
+            data = np.asarray(plant.frdata)[:, i_t, : self.omega.size]
+            jw = 1j * self.omega
+            rows = []
+            for name in self.measured:
+                if name in outputs:
+                    rows.append(data[outputs.index(name)])
+                elif name == OMEGA:
+                    rows.append(jw * data[outputs.index(THETA)])
+                else:
+                    rows.append(data[outputs.index(OMEGA)] / jw)
+            self.plant_data = np.array(rows, dtype=complex).reshape(len(rows), self.omega.size)
         else:
+            self.measured = _measurements(plant, controller)
+        self.controller_ev = _evaluator(controller, self.measured, [TORQUE])
+        if not self.frd:
             p = control.c2d(plant, self.dt, method="zoh") if self.digital else plant
             self.plant_ev = _evaluator(p, [TORQUE], self.measured)
         self.plant = plant
@@ -607,7 +630,8 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     plant : control.StateSpace or control.FrequencyResponseData
         Plant with named signals. For a FrequencyResponseData plant the margins are computed on
         its own frequency grid (crossings interpolated linearly in log frequency), so the grid
-        must resolve its resonances.
+        must resolve its resonances; it needs output 'theta' or 'omega' (the other one is
+        derived as omega = j w theta).
     controller : control.StateSpace
         Continuous or digital controller. For a digital controller and a StateSpace plant, L is
         the exact sampled-data loop gain L(e^{j omega T}) with the plant discretised by a

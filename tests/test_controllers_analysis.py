@@ -268,6 +268,14 @@ def test_margins_on_frequency_response_data():
     assert approx.phase_margin == pytest.approx(exact.phase_margin, rel=1e-5)
     assert approx.gain_margin == pytest.approx(exact.gain_margin, rel=1e-4)
     assert approx.modulus_margin == pytest.approx(exact.modulus_margin, rel=1e-4)
+    # an FRD of theta alone (as the exact distributed model gives): omega = j w theta
+    theta_only = control.ss(plant.A, plant.B[:, :1], plant.C[:1], 0, inputs=["torque"],
+                            outputs=["theta"])
+    alone = controllers.margins(control.frd(theta_only, np.logspace(-3, 3, 30000)), K)
+    assert alone.phase_margin == pytest.approx(approx.phase_margin, rel=1e-12)
+    assert alone.modulus_margin == pytest.approx(approx.modulus_margin, rel=1e-12)
+    with pytest.raises(ValueError, match="output named 'theta' or 'omega'"):
+        controllers.margins(control.frd(control.ss(theta_only, outputs=["x"]), [1.0, 2.0]), K)
 
 
 def test_digital_margins_lose_phase_to_the_hold():
