@@ -1,0 +1,155 @@
+"""Peer benchmark: the same closed-loop slew in Exudyn (optional; PyPI ``exudyn``).
+
+The rod is modelled as the same chain of identical panels as in the Basilisk peer
+(:func:`peer_basilisk.panel_chain`: n panels of length L/n, root hinge 2 EJ/h, the others EJ/h),
+built the way an Exudyn user builds a planar chain: ``ObjectRigidBody2D`` bodies (the hub, free
+in the plane, and the panels), ``ObjectJointRevolute2D`` hinges and
+``ObjectConnectorTorsionalSpringDamper`` springs. The PD torque on the hub
+(``LoadTorqueVector`` with a Python user function reading the hub's rotation and angular velocity)
+is evaluated at the solver's current state, i.e. continuous in time like flexsat's reference.
+Integration: Exudyn's default implicit generalized-alpha solver with 100 steps per second.
+
+Outputs sampled at 10 Hz (sensors): the hub angle and the elastic tip deflection (the free end's
+position in hub axes minus the undeformed one). Errors against the same reference as flexsat's
+models; ``agreement``: against flexsat's exact simulation of the same panel chain with the
+continuous PD (the integration error of Exudyn alone).
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from _common import (PD_DAMPING, PD_NATURAL_FREQUENCY, SLEW_ANGLE, SLEW_DURATION, paper_rod,
+                     pd_closed_loop, slew_errors, slew_response, spacecraft_with)
+from peer_basilisk import _pd_gains, panel_chain
+
+__all__ = ["run", "simulate_exudyn"]
+
+STEPS_PER_SECOND = 100
+
+
+def simulate_exudyn(chain, *, t_final: float, record_dt: float):
+    """Run the Exudyn model of a root-hinged chain of panels on the default hub.
+
+    Returns (t, theta, tip, build_seconds, simulate_seconds).
+    """
+    import exudyn as exu
+    from exudyn.itemInterface import (LoadTorqueVector, MarkerBodyRigid, MarkerNodeRigid,
+                                      NodeRigidBody2D, ObjectConnectorTorsionalSpringDamper,
+                                      ObjectJointRevolute2D, ObjectRigidBody2D, SensorBody,
+                                      SensorNode)
+
+    import controllers
+
+    Kp, Kd = _pd_gains(chain)
+    t0 = time.perf_counter()
+    SC = exu.SystemContainer()
+    mbs = SC.AddSystem()
+    hub_node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[0.0, 0.0, 0.0]))
+    hub = mbs.AddObject(ObjectRigidBody2D(nodeNumber=hub_node, mass=100.0, inertia=50.0))
+    hub_marker = mbs.AddMarker(MarkerNodeRigid(nodeNumber=hub_node))
+    previous, joint_position = hub, [0.5, 0.0, 0.0]
+    x = 0.5
+    last = hub
+    for k in range(chain.n_bodies):
+        h = float(chain.lengths[k])
+        node = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=[x + h / 2.0, 0.0, 0.0]))
+        body = mbs.AddObject(ObjectRigidBody2D(nodeNumber=node, mass=float(chain.masses[k]),
+                                               inertia=float(chain.inertias[k])))
+        a = mbs.AddMarker(MarkerBodyRigid(bodyNumber=previous, localPosition=joint_position))
+        b = mbs.AddMarker(MarkerBodyRigid(bodyNumber=body, localPosition=[-h / 2.0, 0.0, 0.0]))
+        mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[a, b]))
+        mbs.AddObject(ObjectConnectorTorsionalSpringDamper(
+            markerNumbers=[a, b], stiffness=float(chain.hinge_stiffnesses[k]), damping=0.0))
+        previous, joint_position, last = body, [h / 2.0, 0.0, 0.0], body
+        x += h
+    length = x - 0.5
+    Rotation = exu.OutputVariableType.Rotation
+    AngularVelocity = exu.OutputVariableType.AngularVelocity
+
+    def pd_torque(mbs, t, load):
+        theta = mbs.GetNodeOutput(hub_node, Rotation)[2]
+        omega = mbs.GetNodeOutput(hub_node, AngularVelocity)[2]
+        ref = float(controllers.slew_profile(np.array([t]), SLEW_ANGLE, SLEW_DURATION)[0])
+        return [0.0, 0.0, Kp * (ref - theta) - Kd * omega]
+
+    mbs.AddLoad(LoadTorqueVector(markerNumber=hub_marker, loadVector=[0.0, 0.0, 0.0],
+                                 loadVectorUserFunction=pd_torque))
+    hub_sensor = mbs.AddSensor(SensorNode(nodeNumber=hub_node, storeInternal=True,
+                                          outputVariableType=exu.OutputVariableType.Coordinates))
+    tip_sensor = mbs.AddSensor(SensorBody(bodyNumber=last, localPosition=[joint_position[0], 0, 0],
+                                          storeInternal=True,
+                                          outputVariableType=exu.OutputVariableType.Position))
+    mbs.Assemble()
+    settings = exu.SimulationSettings()
+    settings.timeIntegration.numberOfSteps = int(round(t_final * STEPS_PER_SECOND))
+    settings.timeIntegration.endTime = t_final
+    settings.timeIntegration.verboseMode = 0
+    settings.solutionSettings.sensorsWritePeriod = record_dt
+    settings.solutionSettings.writeSolutionToFile = False
+    settings.displayStatistics = False
+    t1 = time.perf_counter()
+    mbs.SolveDynamic(settings)
+    t2 = time.perf_counter()
+    hub_data = mbs.GetSensorStoredData(hub_sensor)
+    tip_data = mbs.GetSensorStoredData(tip_sensor)
+    t = hub_data[:, 0]
+    X, Y, theta = hub_data[:, 1], hub_data[:, 2], hub_data[:, 3]
+    px, py = tip_data[:, 1] - X, tip_data[:, 2] - Y
+    # free end in hub axes; its undeformed position is (0.5 + L, 0)
+    tip = -np.sin(theta) * px + np.cos(theta) * py
+    del length
+    return t, theta, tip, t1 - t0, t2 - t1
+
+
+def run(*, quick: bool, reference: dict, exact: dict) -> dict:
+    """Benchmark Exudyn on panel chains of several sizes (see the module docstring)."""
+    import importlib.metadata
+    import warnings
+
+    import exudyn  # noqa: F401  (ImportError -> "not installed")
+
+    beam = paper_rod()
+    sizes = [1, 2, 4] if quick else [1, 2, 3, 4, 6, 8]
+    rows = []
+    notes = [f"exudyn {importlib.metadata.version('exudyn')}; default implicit "
+             "generalized-alpha solver, 100 steps/s"]
+    for n in sizes:
+        chain = panel_chain(beam, n)
+        row = {"model": "Exudyn panels (gen.-alpha)", "n_panels": n}
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", DeprecationWarning)
+                t, theta, tip, build, sim_200 = simulate_exudyn(chain, t_final=200.0,
+                                                                record_dt=0.1)
+            grid = min(t.size, reference["t"].size)
+            if not np.allclose(t[:grid], reference["t"][:grid], atol=1e-6):
+                raise RuntimeError("Exudyn's sensor times do not match the 10 Hz grid")
+            response = {"theta": theta[:grid], "tip": tip[:grid], "torque": np.zeros(grid)}
+            ref = {k: reference[k][:grid] for k in ("theta", "tip", "torque")}
+            errors = slew_errors(response, ref)
+            row["slew_theta"], row["slew_tip"] = errors["theta"], errors["tip"]
+            same = slew_response(pd_closed_loop(chain)[2])
+            same = {k: v[:grid] for k, v in same.items()}
+            agree = slew_errors(response, same)
+            row["agreement_theta"], row["agreement_tip"] = agree["theta"], agree["tip"]
+            row["flexsat_same_chain_slew_tip"] = slew_errors(same, ref)["tip"]
+            row["poles"] = float(abs(chain.poles()[0] / exact["poles"][0] - 1.0))
+            times = []
+            for _ in range(3):
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", DeprecationWarning)
+                    _, _, _, b, s = simulate_exudyn(chain, t_final=100.0, record_dt=0.01)
+                times.append((b, s))
+            row["time_build"] = float(np.median([b for b, _ in times]))
+            row["time_sim"] = float(np.median([s for _, s in times]))
+        except Exception as exc:
+            row["failure"] = f"{type(exc).__name__}: {exc}"
+        rows.append(row)
+        print(f"  Exudyn n={n}: " + ", ".join(f"{k}={v:.3g}" if isinstance(v, float) else
+                                              f"{k}={v}" for k, v in row.items()), flush=True)
+    failed = [r for r in rows if "failure" in r]
+    return {"status": "ok" if len(failed) < len(rows) else "failed", "rows": rows,
+            "notes": notes, "reason": "; ".join(r["failure"] for r in failed)}
