@@ -16,6 +16,7 @@ For a PD controller on a rigid hub, L(s) = (Kp + Kd s) / (J s^2).
 """
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass, field
 from typing import Callable, Mapping, Sequence
@@ -464,6 +465,7 @@ class _Loop:
         if not self.frd:
             p = control.c2d(plant, self.dt, method="zoh") if self.digital else plant
             self.plant_ev = _evaluator(p, [TORQUE], self.measured)
+            self._plant_discretised = p
         self.plant = plant
         self.controller = controller
 
@@ -490,39 +492,55 @@ class _Loop:
             P = self.plant_ev(z)[:, :, 0]
         return -np.sum(K * P, axis=1)
 
+    def zeros(self) -> np.ndarray:
+        """Invariant zeros of L (z-plane for a digital loop): finite generalized eigenvalues of
+        ([[A, B], [C, D]], [[I, 0], [0, 0]]) for the series connection plant -> controller."""
+        p, c = self._plant_discretised, self.controller
+        i_t = list(p.input_labels).index(TORQUE)
+        i_m = [list(p.output_labels).index(n) for n in self.measured]
+        j_m = [list(c.input_labels).index(n) for n in self.measured]
+        Ap, Bt, Cm, Dmt = p.A, p.B[:, [i_t]], p.C[i_m], p.D[np.ix_(i_m, [i_t])]
+        Ac, Bcm, Cc, Dcm = c.A, c.B[:, j_m], c.C, c.D[:, j_m]
+        n_p, n_c = Ap.shape[0], Ac.shape[0]
+        A = np.block([[Ap, np.zeros((n_p, n_c))], [Bcm @ Cm, Ac]])
+        B = np.vstack([Bt, Bcm @ Dmt])
+        C = -np.hstack([Dcm @ Cm, Cc])
+        D = -Dcm @ Dmt
+        n = n_p + n_c
+        M = np.block([[A, B], [C, D]])
+        N = scipy.linalg.block_diag(np.eye(n), np.zeros((1, 1)))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = scipy.linalg.eigvals(M, N)
+        return z[np.isfinite(z) & (np.abs(z) < 1e12)]
+
     def grid(self, n_points: int = 600) -> np.ndarray:
-        """Frequency grid [rad/s] refined around every lightly damped pole."""
+        """Frequency grid [rad/s] refined around every lightly damped pole and zero of L."""
         if self.frd:
             return self.omega
-        poles = [self.plant_ev, self.controller_ev]
-        w_char = np.concatenate([ev.characteristic_frequencies() for ev in poles])
+        roots = np.concatenate([_poles_of(self.plant_ev), _poles_of(self.controller_ev),
+                                self.zeros()]).astype(complex)
         if self.digital:
-            # poles of the discretised system are z-plane poles: map back, s = log(z) / T
-            lam = np.concatenate([_poles_of(ev) for ev in poles])
-            lam = lam[np.abs(lam) > 1e-12]
-            s = np.log(lam.astype(complex)) / self.dt
-        else:
-            s = np.concatenate([_poles_of(ev) for ev in poles])
-        w_all = np.abs(s)
-        w_all = w_all[w_all > 1e-9]
-        if w_char.size == 0 and w_all.size == 0:
-            w_char = np.array([1.0])
-        ref = np.concatenate([w_char, w_all]) if w_all.size else w_char
-        w_lo = 1e-3 * ref.min()
-        w_hi = 1e3 * ref.max()
+            # z-plane roots: map back with s = log(z) / T (z = 0 is infinitely fast: drop it)
+            roots = np.log(roots[np.abs(roots) > 1e-12]) / self.dt
+        w_all = np.abs(roots)
+        w_all = w_all[w_all > 1e-5 * max(w_all.max(initial=0.0), 1e-300)]
+        if w_all.size == 0:
+            w_all = np.array([1.0])
+        w_lo, w_hi = 1e-3 * w_all.min(), 1e3 * w_all.max()
         if self.digital:
             w_hi = min(w_hi, math.pi / self.dt * (1 - 1e-9))
             w_lo = min(w_lo, 1e-3 * math.pi / self.dt)
         grid = [np.logspace(math.log10(w_lo), math.log10(w_hi), n_points)]
-        # points concentrated in the half-power band of each lightly damped pole: a pole
+        # points concentrated in the half-power band of each lightly damped root: a pole
         # -zeta w + j w sqrt(1-zeta^2) has |response| falling to 1/sqrt(2) at about w(1 +/- zeta),
-        # so steps of a fraction of zeta w resolve its peak and its 180 deg phase swing.
+        # so steps of a fraction of zeta w resolve its peak and its 180 deg phase swing (the
+        # same for the notch of a lightly damped zero, an antiresonance).
         theta = np.linspace(-1.45, 1.45, 41)
-        for lam in s:
+        for lam in roots:
             w = abs(lam)
             if lam.imag <= 0 or w <= 0:
                 continue
-            zeta = max(-lam.real / w, 1e-7)
+            zeta = max(abs(lam.real) / w, 1e-7)
             if zeta > 0.3:
                 continue
             pts = lam.imag + zeta * w * np.tan(theta)
@@ -604,21 +622,13 @@ class Margins:
                 "modulus_margin": self.modulus_margin}
 
 
-def _crossings(f: Callable[[float], float], omega: np.ndarray, values: np.ndarray,
-               exact: bool) -> list[float]:
-    """Zeros of f between grid points where `values` changes sign (refined with brentq)."""
-    roots = []
+def _crossings(f: Callable[[float], float], omega: np.ndarray, values: np.ndarray) -> list[float]:
+    """Zeros of f: grid points where `values` is 0 and brentq roots where it changes sign."""
+    roots = [float(w) for w in omega[values == 0]]
     sign = np.sign(values)
-    idx = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
-    for i in idx:
-        a, b = omega[i], omega[i + 1]
-        if exact:
-            roots.append(scipy.optimize.brentq(f, a, b, xtol=1e-14 * b, rtol=1e-13))
-        else:
-            # linear interpolation in log frequency between the grid points
-            t = values[i] / (values[i] - values[i + 1])
-            roots.append(float(math.exp(math.log(a) + t * (math.log(b) - math.log(a)))))
-    roots.extend(omega[sign == 0].tolist())
+    for i in np.nonzero(sign[:-1] * sign[1:] < 0)[0]:
+        roots.append(float(scipy.optimize.brentq(f, omega[i], omega[i + 1],
+                                                 xtol=1e-14 * omega[i + 1], rtol=1e-13)))
     return roots
 
 
@@ -656,53 +666,42 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     loop = _Loop(plant, controller)
     if omega is None:
         omega = loop.grid()
-    omega = np.asarray(omega, dtype=float).reshape(-1)
+    omega = np.unique(np.asarray(omega, dtype=float).reshape(-1))
+    if omega.size < 2 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
+        raise ValueError("omega must hold at least two positive finite frequencies [rad/s]")
     L = loop(omega)
-    exact = not loop.frd
-
-    def imag_L(w):
-        return float(loop(np.array([w]))[0].imag)
-
-    def log_mag(w):
-        return float(np.log(abs(loop(np.array([w]))[0])))
-
-    # phase crossovers: Im L = 0 with Re L < 0
-    gm_w = [w for w in _crossings(imag_L, omega, L.imag, exact)
-            if loop(np.array([w]))[0].real < 0] if exact else []
-    if not exact:
-        for w in _crossings(imag_L, omega, L.imag, False):
-            i = min(np.searchsorted(omega, w), omega.size - 1)
-            if L[i].real < 0:
-                gm_w.append(w)
-    gain_margin, w_pc = math.inf, math.inf
-    for w in gm_w:
-        Lw = loop(np.array([w]))[0] if exact else np.interp(w, omega, L.real)
-        gm = -20.0 * math.log10(abs(Lw))
-        if abs(gm) < abs(gain_margin):
-            gain_margin, w_pc = gm, float(w)
-    # gain crossovers: |L| = 1
-    log_abs = np.log(np.abs(L))
-    phase_margin, w_gc = math.inf, math.inf
-    for w in _crossings(log_mag, omega, log_abs, exact):
-        if exact:
-            Lw = loop(np.array([w]))[0]
-        else:
+    if loop.frd:
+        # between grid points: linear in log frequency for log|L| and arg L
+        def value(w: float) -> complex:
             i = int(np.clip(np.searchsorted(omega, w), 1, omega.size - 1))
             t = (math.log(w) - math.log(omega[i - 1])) / (math.log(omega[i]) - math.log(omega[i - 1]))
-            Lw = L[i - 1] * (L[i] / L[i - 1]) ** t
-        pm = 180.0 + math.degrees(np.angle(Lw))
-        pm = (pm + 180.0) % 360.0 - 180.0
-        if pm == -180.0:
-            pm = 180.0
+            return complex(L[i - 1] * (L[i] / L[i - 1]) ** t)
+    else:
+        def value(w: float) -> complex:
+            return complex(loop(np.array([w]))[0])
+
+    # phase crossovers: L real and negative (Im L changes sign where Re L < 0)
+    gain_margin, w_pc = math.inf, math.inf
+    for w in _crossings(lambda w: value(w).imag, omega, L.imag):
+        Lw = value(w)
+        if Lw.real < 0:
+            gm = -20.0 * math.log10(abs(Lw))
+            if abs(gm) < abs(gain_margin):
+                gain_margin, w_pc = gm, w
+    # gain crossovers: |L| = 1
+    phase_margin, w_gc = math.inf, math.inf
+    for w in _crossings(lambda w: math.log(abs(value(w))), omega, np.log(np.abs(L))):
+        pm = 180.0 + math.degrees(cmath.phase(value(w)))  # in (0, 360]
+        pm = pm - 360.0 if pm > 180.0 else pm
         if abs(pm) < abs(phase_margin):
-            phase_margin, w_gc = pm, float(w)
-    # modulus margin: min |1 + L|
+            phase_margin, w_gc = pm, w
+    # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
     dist = np.abs(1.0 + L)
     i = int(np.argmin(dist))
     mm, w_mm = float(dist[i]), float(omega[i])
-    if exact and 0 < i < omega.size - 1:
+    if 0 < i < omega.size - 1:
         res = scipy.optimize.minimize_scalar(
-            lambda lw: abs(1.0 + loop(np.array([math.exp(lw)]))[0]),
+            lambda lw: abs(1.0 + value(math.exp(lw))),
             bounds=(math.log(omega[i - 1]), math.log(omega[i + 1])), method="bounded",
             options={"xatol": 1e-12})
         if res.fun < mm:
@@ -755,10 +754,13 @@ class SpilloverVerdict:
 
 
 def _continuous_poles(system) -> np.ndarray:
+    """Poles in the s-plane; a digital system's z-plane poles mapped by s = log(z) / T
+    (poles at z = 0, infinitely fast and deadbeat, are left out)."""
     lam = np.linalg.eigvals(system.A) if system.nstates else np.zeros(0, dtype=complex)
+    lam = lam.astype(complex)
     if system.isdtime(strict=True):
-        lam = np.log(lam.astype(complex)) / float(system.dt)
-    return lam.astype(complex)
+        lam = np.log(lam[np.abs(lam) > 1e-300]) / float(system.dt)
+    return lam
 
 
 def spillover(truth_plant, controller) -> SpilloverVerdict:
@@ -799,7 +801,7 @@ def spillover(truth_plant, controller) -> SpilloverVerdict:
         s = _continuous_poles(loop)
         w = np.abs(s)
         unstable = s.real >= -1e-10 * np.maximum(1.0, w)
-        zeta = np.where(w > 0, -s.real / np.where(w > 0, w, 1.0), -1.0)
+        zeta = np.where(w > 0, -s.real / np.where(w > 0, w, 1.0), 0.0)  # a pole at 0: zeta 0
         i = int(np.argmin(zeta)) if s.size else None
         return SpilloverVerdict(
             stable=bool(not unstable.any()), n_unstable_poles=int(unstable.sum()),
