@@ -1,0 +1,691 @@
+r"""The paper's dynamic-equivalence criterion and equivalent-chain fits.
+
+Two appendage models are dynamically equivalent at their attachment end when they have
+
+* (3) equal frozen mass m, moment of inertia J about the centre of mass, and length L, and
+* (4)/(5) equal transfer matrices W(s): in the two-mode form
+  ``W_r = k_r (s**2 + n_r1**2)(s**2 + n_r2**2) / (s**2 (s**2 + w1**2)(s**2 + w2**2))``
+  equal gains k_r, zeros n_r1, n_r2 (r = 1..4, W2 = W3) and poles w1, w2 [1]_.
+
+:func:`criterion` tabulates these quantities for a reference and a candidate model and their
+relative differences, plus a frequency-domain error of each W_r over a band. :func:`fit_chain`
+builds a :class:`~appendages.chain.HingedChain` equivalent to a beam: the paper's fit
+(``match="frequencies"``) or flexsat's (``match="poles-and-zeros"``), which also redistributes the
+mass among the bodies (keeping m, J, L and the centre of mass) so that the zeros of every W_r come
+close to those of the exact distributed beam.
+
+Frequency-domain error
+----------------------
+On the imaginary axis the error of W_r is infinite at every pole or zero that the two models do
+not share, so it is measured on the ray ``s = omega (zeta_e + i)`` slightly to the right of the
+axis (``zeta_e``, the *evaluation damping*, default 0.02): an undamped mode term
+``1/(s**2 + w**2)`` evaluated there equals ``1/(w**2 - (1 - zeta_e**2) omega**2 + 2 i zeta_e
+omega**2)``, the response of that mode with damping ratio about zeta_e. The error is the complex
+logarithm of the ratio,
+
+    e_r(omega) = | ln( W_r^cand(s) / W_r^ref(s) ) |,    s = omega (zeta_e + i),
+
+which combines the gain error (its real part, ln of the magnitude ratio: 0.1 ~ 10 %, 1.15 ~ 10 dB)
+and the phase error (its imaginary part, rad). :class:`EquivalenceResult` holds its maximum and its
+root mean square over log-spaced omega in the band (by default from w1/10 of the reference up to
+1.5 w2, or up to just below the reference's third pole or zero, see :func:`criterion`).
+
+References
+----------
+.. [1] P. A. Belonozhko, P. P. Belonozhko, A. A. Fokov et al., "On the equivalence of mechanical
+   design schemes with distributed and lumped parameters for spatially developed peripheral
+   elements of spacecraft", Institute of Technical Mechanics, NAS of Ukraine, 2009
+   (conditions (3)-(5), the worked example and its table).
+.. [2] R. D. Blevins, "Formulas for Natural Frequency and Mode Shape", Van Nostrand, 1979,
+   table 8-1 (free-free, pinned-free and sliding-free beam frequencies: the exact poles and zeros).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+import scipy.optimize
+
+from .chain import HingedChain
+from .interface import ConvergenceError, FiniteAppendage, as_frequency_array
+
+__all__ = [
+    "EquivalenceResult",
+    "FitWarning",
+    "ModelQuantities",
+    "criterion",
+    "fit_chain",
+    "spectral_errors",
+]
+
+_FIT_TOL = 1e-6  # relative change of the cost (ftol, xtol, gtol): finer ones only polish a flat valley
+MATCHES = ("poles-and-zeros", "frequencies")
+
+# (label, unit) of the rows of the paper's table, in the paper's order.
+_ROWS = (
+    ("m", "kg"),
+    ("J", "kg*m^2"),
+    ("L", "m"),
+    ("k1", "m/(N*s^2)"),
+    ("k2 = k3", "1/(N*s^2)"),
+    ("k4", "1/(m*N*s^2)"),
+    ("n11", "rad/s"),
+    ("n21 = n31", "rad/s"),
+    ("n41", "rad/s"),
+    ("n12", "rad/s"),
+    ("n22 = n32", "rad/s"),
+    ("n42", "rad/s"),
+    ("w1", "rad/s"),
+    ("w2", "rad/s"),
+)
+
+
+class FitWarning(RuntimeWarning):
+    """A chain fit stopped at its evaluation budget; the chain returned is the best found."""
+
+
+# ---------------------------------------------------------------------------------------------
+# quantities of one model
+# ---------------------------------------------------------------------------------------------
+def _is_distributed(model) -> bool:
+    return (not isinstance(model, FiniteAppendage)) and hasattr(model, "natural_frequencies") \
+        and hasattr(model, "zeros") and hasattr(model, "W")
+
+
+def _check_model(name: str, model) -> None:
+    if isinstance(model, FiniteAppendage) or _is_distributed(model):
+        for attribute in ("mass", "inertia", "length"):
+            if not hasattr(model, attribute):
+                break
+        else:
+            return
+    raise TypeError(f"{name} must be an appendage model (Beam, ModalBeam, HingedChain); "
+                    f"got {type(model).__name__}")
+
+
+def _first(values: np.ndarray, n: int) -> tuple:
+    """The first n entries as floats, None where the model has fewer."""
+    return tuple(float(values[k]) if k < values.size else None for k in range(n))
+
+
+def _model_frequencies(model, what, n: int) -> np.ndarray:
+    """First (up to) n poles (what = 0) or zeros of W_what [rad/s] of any appendage model."""
+    if _is_distributed(model):
+        values = model.natural_frequencies(n) if what == 0 else model.zeros(what, n)
+    else:
+        values = model.poles() if what == 0 else model.zeros(what)
+    return np.asarray(values, dtype=np.float64)[:n]
+
+
+@dataclasses.dataclass(frozen=True)
+class ModelQuantities:
+    """The paper's quantities (3) and (5) of one appendage model.
+
+    Attributes
+    ----------
+    name : str
+    mass : float, kg
+    inertia : float, kg*m^2
+        About the centre of mass, undeformed.
+    length : float, m
+    gains : tuple of 4 float, or None
+        k_1..k_4 = lim s**2 W_r(s) [m/(N s^2), 1/(N s^2), 1/(N s^2), 1/(m N s^2)]; None for a
+        model without finite gains (the distributed beam, a chain with a spring at the mount).
+    zeros : dict
+        ``zeros[r] = (n_r1, n_r2)`` [rad/s] for r = 1..4; None where the model has fewer zeros.
+    poles : tuple of 2 float
+        ``(w1, w2)`` [rad/s]; None where the model has fewer modes.
+    """
+
+    name: str
+    mass: float
+    inertia: float
+    length: float
+    gains: tuple | None
+    zeros: dict
+    poles: tuple
+
+    @classmethod
+    def of(cls, model, name: str | None = None) -> "ModelQuantities":
+        """Collect the quantities of ``model`` (a FiniteAppendage or a distributed Beam)."""
+        _check_model("model", model)
+        gains = None
+        if not _is_distributed(model):
+            try:
+                gains = tuple(float(g) for g in model.gains())
+            except ValueError:
+                gains = None
+        zeros = {r: _first(_model_frequencies(model, r, 2), 2) for r in (1, 2, 3, 4)}
+        return cls(
+            name=name or type(model).__name__,
+            mass=float(model.mass),
+            inertia=float(model.inertia),
+            length=float(model.length),
+            gains=gains,
+            zeros=zeros,
+            poles=_first(_model_frequencies(model, 0, 2), 2),
+        )
+
+    def values(self) -> tuple:
+        """The 14 values in the order of the paper's table rows (None: not applicable)."""
+        g = self.gains if self.gains is not None else (None,) * 4
+        z = self.zeros
+        return (self.mass, self.inertia, self.length, g[0], g[1], g[3],
+                z[1][0], z[2][0], z[4][0], z[1][1], z[2][1], z[4][1],
+                self.poles[0], self.poles[1])
+
+
+def _relative(candidate, reference):
+    if candidate is None or reference is None or reference == 0.0:
+        return None
+    return (candidate - reference) / abs(reference)
+
+
+def _fmt(value, digits: int = 5) -> str:
+    if value is None:
+        return "n/a"
+    return f"{value:.{digits}g}"
+
+
+@dataclasses.dataclass(frozen=True)
+class EquivalenceResult:
+    """Outcome of :func:`criterion`: both models' quantities, differences and band errors.
+
+    Attributes
+    ----------
+    reference, candidate : ModelQuantities
+    relative_differences : dict
+        Row label (``"m"``, ``"k2 = k3"``, ``"n11"``, ``"w1"``...) -> ``(cand - ref)/|ref|``
+        [-], None where either value is not applicable.
+    band : tuple of float
+        ``(omega_min, omega_max)`` [rad/s] of the frequency-domain comparison.
+    evaluation_damping : float
+        zeta_e of the ray ``s = omega (zeta_e + i)`` on which W is compared [-].
+    max_log_error, rms_log_error : ndarray, shape (4,)
+        Maximum and root mean square over the band of ``|ln(W_r^cand/W_r^ref)|`` for
+        r = 1..4 [-] (module docstring).
+    """
+
+    reference: ModelQuantities
+    candidate: ModelQuantities
+    relative_differences: dict
+    band: tuple
+    evaluation_damping: float
+    max_log_error: np.ndarray
+    rms_log_error: np.ndarray
+
+    def rows(self) -> list:
+        """``(label, unit, reference, candidate, relative difference)`` per table row."""
+        ref, cand = self.reference.values(), self.candidate.values()
+        return [(label, unit, r, c, self.relative_differences[label])
+                for (label, unit), r, c in zip(_ROWS, ref, cand)]
+
+    def to_markdown(self, digits: int = 5) -> str:
+        """The paper's table (plus m, J, L and the band errors) as a Markdown string."""
+        lines = [f"| quantity | {self.reference.name} | {self.candidate.name} | rel. diff. |",
+                 "|---|---|---|---|"]
+        for label, unit, r, c, d in self.rows():
+            diff = "n/a" if d is None else f"{d:+.2e}"
+            lines.append(f"| {label} [{unit}] | {_fmt(r, digits)} | {_fmt(c, digits)} | {diff} |")
+        lines.append("")
+        lines.append(f"Frequency-domain error |ln(W_r^cand / W_r^ref)| on s = omega "
+                     f"({self.evaluation_damping:g} + i), omega in "
+                     f"[{self.band[0]:.4g}, {self.band[1]:.4g}] rad/s:")
+        lines.append("")
+        lines.append("| | W1 | W2 | W3 | W4 |")
+        lines.append("|---|---|---|---|---|")
+        lines.append("| max | " + " | ".join(f"{e:.3g}" for e in self.max_log_error) + " |")
+        lines.append("| rms | " + " | ".join(f"{e:.3g}" for e in self.rms_log_error) + " |")
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        width = max(len(f"{label} [{unit}]") for label, unit in _ROWS)
+        head = (f"{'quantity':<{width}}  {self.reference.name[:14]:>14}  "
+                f"{self.candidate.name[:14]:>14}  {'rel. diff.':>10}")
+        lines = [head, "-" * len(head)]
+        for label, unit, r, c, d in self.rows():
+            diff = "n/a" if d is None else f"{d:+.2e}"
+            lines.append(f"{label + ' [' + unit + ']':<{width}}  {_fmt(r):>14}  {_fmt(c):>14}  "
+                         f"{diff:>10}")
+        lines.append("")
+        lines.append(f"max |ln(W_cand/W_ref)| on s = w({self.evaluation_damping:g} + i), "
+                     f"w in [{self.band[0]:.4g}, {self.band[1]:.4g}] rad/s: "
+                     + ", ".join(f"W{r} {e:.3g}" for r, e in zip((1, 2, 3, 4),
+                                                                 self.max_log_error)))
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable form."""
+        def quantities(q: ModelQuantities) -> dict:
+            return {"name": q.name, "values": dict(zip([r[0] for r in _ROWS], q.values()))}
+        return {
+            "reference": quantities(self.reference),
+            "candidate": quantities(self.candidate),
+            "relative_differences": dict(self.relative_differences),
+            "band": list(self.band),
+            "evaluation_damping": self.evaluation_damping,
+            "max_log_error": self.max_log_error.tolist(),
+            "rms_log_error": self.rms_log_error.tolist(),
+        }
+
+
+def _check_real(name: str, value, unit: str, *, low=None, high=None) -> float:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} "
+                        f"{value!r}")
+    value = float(value)
+    if not math.isfinite(value) or (low is not None and value <= low) or \
+            (high is not None and value >= high):
+        raise ValueError(f"{name} must be finite and in ({low}, {high}) [{unit}]; got {value!r}")
+    return value
+
+
+def _default_band(reference, quantities: ModelQuantities) -> tuple:
+    """``[w1/10, upper]`` [rad/s]: upper = 1.5 w2, or less so as to stop before the reference's
+    next pole or zero beyond the paper's quantities (which no two-mode model can match)."""
+    w = [p for p in quantities.poles if p is not None]
+    if len(w) < 2:
+        raise ValueError("band must be given [rad/s] when the reference has fewer than two "
+                         "natural frequencies")
+    covered = max([w[1]] + [z for r in (1, 2, 4) for z in quantities.zeros[r] if z is not None])
+    upper = 1.5 * w[1]
+    third = [v[2] for v in (_model_frequencies(reference, what, 3) for what in (0, 1, 2, 4))
+             if v.size > 2]
+    if third and min(third) > covered:
+        upper = min(upper, math.sqrt(covered * min(third)))
+    return (w[0] / 10.0, upper)
+
+
+def criterion(reference, candidate, *, band: Sequence[float] | None = None,
+              n_points: int = 2000, evaluation_damping: float = 0.02,
+              names: Sequence[str] | None = None) -> EquivalenceResult:
+    """The paper's equivalence criterion: quantities (3), (5) of two models and their differences.
+
+    Parameters
+    ----------
+    reference : Beam or FiniteAppendage
+        The model to compare against: the exact distributed beam (no finite gains: its k_r
+        rows show n/a) or a finite model such as ``beam.truncated(2, method="free-free")``.
+    candidate : Beam or FiniteAppendage
+        Typically a :class:`~appendages.chain.HingedChain`.
+    band : (float, float), rad/s, optional
+        Frequency band of the W_r comparison. Default ``[w1/10, w_top]`` of the reference, with
+        ``w_top = 1.5 w2`` or, if the reference has a third pole or zero f3 below that, the
+        geometric mean of f3 and the largest of its w2, n_r2 (so the band holds the paper's
+        quantities and no feature that a two-mode model lacks: for the exact beam, whose third
+        W4 zero is 1.21 w2, w_top = 1.10 w2).
+    n_points : int
+        Number of log-spaced frequencies in the band (>= 10). The error peaks have a relative
+        width of about ``evaluation_damping``; the default resolves them.
+    evaluation_damping : float
+        zeta_e in (0, 1) of the comparison ray ``s = omega (zeta_e + i)`` (module docstring).
+    names : (str, str), optional
+        Column names; default the class names.
+
+    Returns
+    -------
+    EquivalenceResult
+
+    References
+    ----------
+    .. [1] Belonozhko et al. 2009, conditions (3)-(5) (see :mod:`appendages.equivalence`).
+    """
+    _check_model("reference", reference)
+    _check_model("candidate", candidate)
+    if isinstance(n_points, (bool, np.bool_)) or not isinstance(n_points, (int, np.integer)):
+        raise TypeError(f"n_points must be an integer; got {type(n_points).__name__}")
+    if n_points < 10:
+        raise ValueError(f"n_points must be at least 10; got {n_points}")
+    zeta = _check_real("evaluation_damping", evaluation_damping, "-", low=0.0, high=1.0)
+    if names is None:
+        names = (type(reference).__name__, type(candidate).__name__)
+    elif isinstance(names, str) or len(names) != 2:
+        raise ValueError(f"names must be two strings (reference, candidate); got {names!r}")
+    ref_q = ModelQuantities.of(reference, names[0])
+    cand_q = ModelQuantities.of(candidate, names[1])
+    differences = {label: _relative(c, r) for (label, _), r, c in
+                   zip(_ROWS, ref_q.values(), cand_q.values())}
+    if band is None:
+        band = _default_band(reference, ref_q)
+    band = np.asarray(band, dtype=np.float64) if not isinstance(band, (str, bytes)) else None
+    if band is None or band.shape != (2,) or not np.all(np.isfinite(band)) or \
+            not 0.0 < band[0] < band[1]:
+        raise ValueError(f"band must be (omega_min, omega_max) with 0 < omega_min < omega_max "
+                         f"[rad/s]; got {band!r}")
+    omega = np.geomspace(band[0], band[1], int(n_points))
+    s = as_frequency_array(omega * (zeta + 1j))
+    W_ref, W_cand = reference.W(s), candidate.W(s)
+    entries = [(0, 0), (0, 1), (1, 0), (1, 1)]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        err = np.stack([np.abs(np.log(W_cand[:, i, j] / W_ref[:, i, j])) for i, j in entries])
+    if not np.all(np.isfinite(err)):
+        raise FloatingPointError("W of a model vanished or overflowed on the comparison ray; "
+                                 "choose another band [rad/s] or evaluation_damping")
+    return EquivalenceResult(
+        reference=ref_q, candidate=cand_q, relative_differences=differences,
+        band=(float(band[0]), float(band[1])), evaluation_damping=zeta,
+        max_log_error=err.max(axis=1), rms_log_error=np.sqrt(np.mean(err**2, axis=1)),
+    )
+
+
+def spectral_errors(reference, candidate, n: int | None = None) -> dict:
+    """Relative errors of the candidate's first poles and zeros against the reference's.
+
+    Parameters
+    ----------
+    reference : Beam or FiniteAppendage
+        E.g. the exact distributed beam.
+    candidate : FiniteAppendage or Beam
+    n : int, optional
+        How many of each to compare; default: as many as the candidate has natural
+        frequencies (a chain of n bodies: n - 1).
+
+    Returns
+    -------
+    dict
+        ``{"poles": e, "W1": e, "W2": e, "W4": e}`` with ``e = cand/ref - 1`` [-], arrays of
+        length n (W3 = W2). A missing candidate value raises ValueError.
+    """
+    _check_model("reference", reference)
+    _check_model("candidate", candidate)
+    if n is None:
+        n = _model_frequencies(candidate, 0, 10**6).size
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n must be a positive integer; got {n!r}")
+    out = {}
+    for key, what in (("poles", 0), ("W1", 1), ("W2", 2), ("W4", 4)):
+        ref = _model_frequencies(reference, what, n)
+        cand = _model_frequencies(candidate, what, n)
+        if ref.size < n or cand.size < n:
+            raise ValueError(f"{key}: a model has fewer than n = {n} values "
+                             f"(reference {ref.size}, candidate {cand.size})")
+        out[key] = cand / ref - 1.0
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# fits
+# ---------------------------------------------------------------------------------------------
+def _beam_data(beam):
+    try:
+        L, EJ, rho = float(beam.length), float(beam.bending_stiffness), float(beam.linear_density)
+    except AttributeError as exc:
+        raise TypeError("beam must be a uniform Beam (length [m], bending_stiffness [N*m^2], "
+                        f"linear_density [kg/m]); got {type(beam).__name__}") from exc
+    return L, EJ, rho
+
+
+def _symmetric(half: np.ndarray, n: int) -> np.ndarray:
+    """Full symmetric profile of n entries from its first ceil(n/2)."""
+    return np.concatenate([half, half[: n // 2][::-1]])
+
+
+def _frequencies_chain(x: np.ndarray, n: int, L: float, EJ: float, rho: float) -> HingedChain:
+    """Symmetric frozen-piece chain from x = [log length weights (ceil(n/2) - 1),
+    log stiffness factors (ceil((n-1)/2))]."""
+    h = (n + 1) // 2
+    weights = _symmetric(np.exp(np.concatenate([x[: h - 1], [0.0]])), n)
+    lengths = L * weights / weights.sum()
+    masses = rho * lengths
+    factors = _symmetric(np.exp(x[h - 1:]), n - 1) if n > 1 else np.zeros(0)
+    return HingedChain(lengths, masses, masses * lengths**2 / 12.0,
+                       factors * EJ * (n - 1) / L)
+
+
+def _fit_frequencies(beam, n: int, frequencies) -> HingedChain:
+    """The paper's fit generalised: a symmetric frozen-piece chain matching n - 1 frequencies."""
+    L, EJ, rho = _beam_data(beam)
+    if frequencies is None:
+        target = np.asarray(beam.natural_frequencies(n - 1), dtype=np.float64)
+    else:
+        target = np.asarray(frequencies, dtype=np.float64)
+        if target.shape != (n - 1,) or not np.all(np.isfinite(target)) or np.any(target <= 0) \
+                or np.any(np.diff(target) <= 0):
+            raise ValueError(f"frequencies must be {n - 1} increasing positive values [rad/s] "
+                             f"(one per hinge); got {frequencies!r}")
+    h = (n + 1) // 2
+    # Start: the RFEM chain (end rods half as long as the inner ones, c = EJ/H).
+    x0 = np.zeros(h - 1 + n // 2)
+    if h > 1:
+        x0[0] = math.log(0.5)
+
+    def residual(x):
+        poles = _frequencies_chain(x, n, L, EJ, rho).poles()
+        return np.log(poles[: n - 1] / target) if poles.size >= n - 1 else np.full(n - 1, 10.0)
+
+    bounds = (np.full(x0.size, -8.0), np.full(x0.size, 8.0))
+    result = scipy.optimize.least_squares(residual, x0, bounds=bounds, xtol=1e-15, ftol=1e-15,
+                                          gtol=1e-15, max_nfev=200 * (x0.size + 1))
+    worst = float(np.max(np.abs(result.fun)))
+    if worst > 1e-9:
+        raise ConvergenceError(
+            f"fit_chain(match='frequencies', n_bodies={n}) did not match the frequencies: "
+            f"largest relative mismatch {worst:.2e} after {result.nfev} evaluations "
+            f"({result.message})")
+    return _frequencies_chain(result.x, n, L, EJ, rho)
+
+
+class _MassLayout:
+    """Parametrisation of a general chain with exact m, L, J and centre of mass at L/2.
+
+    x = [u (n-1), s (n), v (n-2), g (n-1), c (n-1)]:
+
+    * lengths ``l = L e^u / sum e^u`` (u_n = 0);
+    * centre-of-mass fractions ``a_i = s_i l_i``, s_i in [0, 1];
+    * masses: frozen pieces ``rho l_i`` times ``e^v`` (v_1 = v_n = 0), then *tilted*,
+      ``m_i ~ e^(v_i + tau d_i)`` with d_i the distance of body i's centre of mass from L/2 and
+      tau the root of ``sum m_i d_i = 0`` (a monotone equation: its derivative is a variance),
+      scaled to the total mass: this keeps m and the centre of mass exact;
+    * inertias: frozen ``m_i l_i**2/12`` times ``e^g`` (g_n = 0), scaled by the one factor that
+      makes ``sum J_i + m_i d_i**2 = J`` (parallel-axis theorem): J exact;
+    * stiffnesses ``e^c EJ/H``, H = L/(n - 1).
+    """
+
+    def __init__(self, n: int, L: float, EJ: float, rho: float):
+        self.n, self.L, self.EJ, self.rho = n, L, EJ, rho
+        self.mass = rho * L
+        self.inertia = self.mass * L**2 / 12.0
+        self.sizes = (n - 1, n, n - 2, n - 1, n - 1)
+        self.size = sum(self.sizes)
+
+    def split(self, x):
+        out, i = [], 0
+        for k in self.sizes:
+            out.append(x[i:i + k])
+            i += k
+        return out
+
+    def bounds(self):
+        lo = np.concatenate([np.full(self.n - 1, -4.0), np.zeros(self.n), np.full(self.n - 2, -4.0),
+                             np.full(self.n - 1, -8.0), np.full(self.n - 1, -6.0)])
+        hi = np.concatenate([np.full(self.n - 1, 4.0), np.ones(self.n), np.full(self.n - 2, 4.0),
+                             np.full(self.n - 1, 4.0), np.full(self.n - 1, 6.0)])
+        return lo, hi
+
+    def from_chain(self, chain: HingedChain) -> np.ndarray:
+        """Parameters of a frozen-piece chain (approximately; used as a starting point)."""
+        n = self.n
+        u = np.log(chain.lengths[:-1] / chain.lengths[-1])
+        s = chain.com_offsets / chain.lengths
+        frozen = chain.lengths * self.rho
+        v = np.log(chain.masses[1:-1] / frozen[1:-1])
+        g_all = np.log(chain.inertias / (chain.masses * chain.lengths**2 / 12.0))
+        g = g_all[:-1] - g_all[-1]
+        c = np.log(chain.hinge_stiffnesses * self.L / (self.EJ * (n - 1)))
+        lo, hi = self.bounds()
+        return np.clip(np.concatenate([u, s, v, g, c]), lo + 1e-9, hi - 1e-9)
+
+    def build(self, x):
+        """(chain, penalty): penalty > 0 when the layout cannot hold J (mass too far out)."""
+        n, L = self.n, self.L
+        u, s, v, g, c = self.split(x)
+        weights = np.exp(np.concatenate([u, [0.0]]))
+        lengths = L * weights / weights.sum()
+        offsets = s * lengths
+        centres = np.concatenate([[0.0], np.cumsum(lengths)[:-1]]) + offsets
+        d = (centres - 0.5 * L) / L
+        logm = np.log(self.rho * lengths) + np.concatenate([[0.0], v, [0.0]])
+        penalty = 0.0
+        if d.min() < 0.0 < d.max():
+            def mean(tau):
+                e = np.exp(logm + tau * d - np.max(logm + tau * d))
+                return np.dot(e, d) / e.sum()
+            lo, hi = -1.0, 1.0
+            while mean(lo) > 0.0:
+                lo *= 2.0
+            while mean(hi) < 0.0:
+                hi *= 2.0
+            tau = scipy.optimize.brentq(mean, lo, hi, xtol=1e-14, rtol=1e-15)
+        else:  # every centre on one side of L/2: keep the masses, penalise the offset
+            tau = 0.0
+            penalty += abs(float(np.mean(d)))
+        e = np.exp(logm + tau * d - np.max(logm + tau * d))
+        masses = self.mass * e / e.sum()
+        # restore the centre of mass to round-off (the tilt leaves ~1e-15 L)
+        spread = np.dot(masses, (d * L) ** 2)
+        rest = self.inertia - spread
+        raw = np.exp(np.concatenate([g, [0.0]])) * masses * lengths**2 / 12.0
+        if rest <= 1e-6 * self.inertia:
+            penalty += (1e-6 * self.inertia - rest) / self.inertia
+            rest = 1e-6 * self.inertia
+        inertias = raw * (rest / raw.sum())
+        stiffnesses = np.exp(c) * self.EJ * (n - 1) / L
+        chain = HingedChain(lengths, masses, inertias, stiffnesses,
+                            com_offsets=np.minimum(offsets, lengths))
+        return chain, penalty
+
+
+def _targets(beam, n_values: int) -> np.ndarray:
+    return np.concatenate([np.asarray(beam.natural_frequencies(n_values), dtype=np.float64)]
+                          + [np.asarray(beam.zeros(r, n_values), dtype=np.float64)
+                             for r in (1, 2, 4)])
+
+
+def _chain_values(chain: HingedChain, n_values: int) -> np.ndarray | None:
+    """First n_values poles and zeros of W1, W2, W4 [rad/s]; None if any list is short."""
+    out = []
+    for what in (0, 1, 2, 4):
+        values = chain.poles() if what == 0 else chain.zeros(what)
+        if values.size < n_values:
+            return None
+        out.append(values[:n_values])
+    return np.concatenate(out)
+
+
+def _fit_poles_and_zeros(beam, n: int, max_nfev: int | None) -> HingedChain:
+    L, EJ, rho = _beam_data(beam)
+    k = n - 1
+    log_target = np.log(_targets(beam, k))
+    layout = _MassLayout(n, L, EJ, rho)
+    lo, hi = layout.bounds()
+
+    def residual(x):
+        chain, penalty = layout.build(x)
+        values = _chain_values(chain, k)
+        if values is None:
+            return np.full(4 * k + 1, 10.0)
+        return np.concatenate([np.log(values) - log_target, [10.0 * penalty]])
+
+    starts = [HingedChain.rfem(beam, n)]
+    if n == 3:
+        starts.append(_fit_frequencies(beam, 3, None))
+    if max_nfev is None:
+        max_nfev = 60 * layout.size
+    best = None
+    for start in starts:
+        x0 = layout.from_chain(start)
+        result = scipy.optimize.least_squares(residual, x0, bounds=(lo, hi), x_scale="jac",
+                                              xtol=_FIT_TOL, ftol=_FIT_TOL, gtol=_FIT_TOL,
+                                              max_nfev=max_nfev)
+        if best is None or result.cost < best.cost:
+            best = result
+    chain, penalty = layout.build(best.x)
+    start_cost = 0.5 * float(np.sum(residual(layout.from_chain(starts[0])) ** 2))
+    if penalty > 0.0 or not np.isfinite(best.cost) or best.cost >= start_cost:
+        raise ConvergenceError(
+            f"fit_chain(match='poles-and-zeros', n_bodies={n}) did not converge to a physical "
+            f"chain better than the RFEM start (cost {best.cost:.3e} vs {start_cost:.3e}, "
+            f"layout penalty {penalty:.2e}; {best.message})")
+    if best.status == 0:
+        warnings.warn(
+            f"fit_chain(match='poles-and-zeros', n_bodies={n}) stopped at max_nfev={max_nfev} "
+            f"evaluations before its tolerances were met; returning the best chain found "
+            f"(cost {best.cost:.3e}, RFEM start {start_cost:.3e})", FitWarning, stacklevel=3)
+    return chain
+
+
+def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
+              frequencies: Sequence[float] | None = None,
+              max_nfev: int | None = None) -> HingedChain:
+    """A hinged chain dynamically equivalent to a uniform beam.
+
+    Parameters
+    ----------
+    beam : Beam
+        The distributed beam (``length``, ``bending_stiffness``, ``linear_density``,
+        ``natural_frequencies(n)``, ``zeros(r, n)``).
+    n_bodies : int
+        Number of rigid bodies (>= 2); the chain has n_bodies - 1 hinges and
+        n_bodies + 1 degrees of freedom.
+    match : {"poles-and-zeros", "frequencies"}
+        ``"frequencies"``: the paper's fit. A symmetric chain of frozen pieces of the beam
+        (``m_i = rho l_i``, ``J_i = m_i l_i**2/12``, so m, J and L are the beam's) whose
+        symmetric body lengths and hinge stiffnesses (ceil(n/2) - 1 + ceil((n-1)/2) = n - 1
+        unknowns) are solved so that its n - 1 natural frequencies equal the beam's first n - 1.
+        For n_bodies = 3 the unknowns are the paper's k_L (middle rod ``k_L L``) and c.
+        ``"poles-and-zeros"`` (default): flexsat's fit. Any body lengths, masses, centre-of-mass
+        offsets, inertias and hinge stiffnesses (5 n - 5 parameters, :class:`_MassLayout`) with
+        m, J, L and the centre of mass (L/2) kept exactly equal to the beam's; least squares in
+        log-frequency of the first n - 1 natural frequencies and the first n - 1 zeros of W1,
+        W2 (= W3) and W4 against the *exact* distributed beam (4 n - 4 targets), from the RFEM
+        chain (and for three bodies also the paper's chain), within bounds that keep the chain
+        physical.
+    frequencies : sequence of float, rad/s, optional
+        ``match="frequencies"`` only: the n - 1 target frequencies instead of the beam's exact
+        ones (e.g. the paper's printed 2.8744, 7.9231, which give its k_L = 0.26989 and
+        c = 37.134 N*m; the exact Blevins frequencies 2.87446, 7.92356 give 0.26988, 37.137).
+    max_nfev : int, optional
+        ``match="poles-and-zeros"`` only: budget of residual evaluations per start (default
+        60 times the number of parameters).
+
+    Returns
+    -------
+    HingedChain
+
+    Raises
+    ------
+    ConvergenceError
+        If the frequencies cannot be matched, or the poles-and-zeros fit ends no better than its
+        start or outside the physical layout.
+
+    Warns
+    -----
+    FitWarning
+        If the poles-and-zeros fit stops at its evaluation budget (the chain is returned).
+
+    References
+    ----------
+    .. [1] Belonozhko et al. 2009 (the frequency fit; the suggestion to redistribute mass).
+    .. [2] Blevins 1979, table 8-1 (exact targets).
+    """
+    if isinstance(n_bodies, (bool, np.bool_)) or not isinstance(n_bodies, (int, np.integer)):
+        raise TypeError(f"n_bodies must be an integer; got {type(n_bodies).__name__} {n_bodies!r}")
+    if n_bodies < 2:
+        raise ValueError(f"n_bodies must be at least 2 (a chain needs a hinge); got {n_bodies}")
+    if not isinstance(match, str) or match not in MATCHES:
+        raise ValueError(f"match must be one of {MATCHES}; got {match!r}")
+    _beam_data(beam)
+    n = int(n_bodies)
+    if match == "frequencies":
+        return _fit_frequencies(beam, n, frequencies)
+    if frequencies is not None:
+        raise ValueError("frequencies [rad/s] applies to match='frequencies' only")
+    if max_nfev is not None and (isinstance(max_nfev, bool) or not isinstance(max_nfev, int)
+                                 or max_nfev < 1):
+        raise ValueError(f"max_nfev must be a positive integer; got {max_nfev!r}")
+    return _fit_poles_and_zeros(beam, n, max_nfev)
