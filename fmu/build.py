@@ -7,6 +7,8 @@ functions (``-fvisibility=hidden`` plus ``FMI2_Export`` on the API functions).
 
 from __future__ import annotations
 
+import atexit
+import hashlib
 import os
 import platform
 import shutil
@@ -20,6 +22,10 @@ from .errors import FMUBuildError
 __all__ = ["platform_folder", "find_compiler", "SharedLibraryBuild", "compile_shared_library"]
 
 COMPILE_FLAGS = ("-shared", "-fPIC", "-std=c99", "-O2", "-fvisibility=hidden")
+
+# Object files of the fixed templates, compiled once per process (see compile_cached).
+_OBJECT_CACHE: dict[str, Path] = {}
+_CACHE_DIR: Path | None = None
 
 
 def platform_folder() -> tuple[str, str]:
@@ -87,6 +93,7 @@ class SharedLibraryBuild:
         self.objects: list[Path] = []
         self.processes: list[tuple[list[str], subprocess.Popen]] = []
         self.object_dir = Path(tempfile.mkdtemp(prefix="flexsat-fmu-obj-"))
+        self.pending_cache: dict[str, Path] = {}
 
     def __enter__(self) -> "SharedLibraryBuild":
         return self
@@ -98,9 +105,33 @@ class SharedLibraryBuild:
             process.communicate()
         shutil.rmtree(self.object_dir, ignore_errors=True)
 
-    def compile(self, source: Path) -> None:
+    def compile_cached(self, source: Path, headers: list[Path]) -> None:
+        """Like :meth:`compile` for a file that is the same in every FMU (a template).
+
+        The object file is kept for the life of the process, keyed by the compiler, the
+        flags and the contents of the source and its headers, so that later exports compile
+        only their generated model.c.
+        """
+        # the include folder is a fresh temporary one each time: hash header contents instead
+        digest = hashlib.sha256("\0".join([self.cc, *COMPILE_FLAGS]).encode())
+        for path in (source, *headers):
+            digest.update(path.read_bytes())
+        key = digest.hexdigest()
+        cached = _OBJECT_CACHE.get(key)
+        if cached is not None and cached.is_file():
+            self.objects.append(cached)
+            return
+        global _CACHE_DIR
+        if _CACHE_DIR is None:
+            _CACHE_DIR = Path(tempfile.mkdtemp(prefix="flexsat-fmu-cache-"))
+            atexit.register(shutil.rmtree, _CACHE_DIR, True)
+        self.compile(source, _CACHE_DIR / f"{key[:16]}_{source.stem}.o")
+        self.pending_cache[key] = self.objects[-1]
+
+    def compile(self, source: Path, obj: Path | None = None) -> None:
         """Start compiling one C file."""
-        obj = self.object_dir / f"{len(self.objects)}_{source.stem}.o"
+        if obj is None:
+            obj = self.object_dir / f"{len(self.objects)}_{source.stem}.o"
         command = [self.cc, "-c", *COMPILE_FLAGS[1:], *self.includes, "-o", str(obj), str(source)]
         try:
             process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -121,6 +152,7 @@ class SharedLibraryBuild:
                    *(str(o) for o in self.objects), "-lm"]
         result = subprocess.run(command, capture_output=True, text=True, check=False)
         _check(command, result.returncode, result.stderr)
+        _OBJECT_CACHE.update(self.pending_cache)
 
 
 def _check(command: list[str], code: int, stderr: str) -> None:

@@ -179,8 +179,9 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         with SharedLibraryBuild(root / "binaries" / folder / f"{identifier}{suffix}", [sources],
                                 compiler) as build:
             # the fixed templates compile while the matrices are computed and written
+            headers = [sources / h for h in (*TEMPLATE_HEADERS, *FMI2_HEADERS)]
             for name in TEMPLATE_SOURCES:
-                build.compile(sources / name)
+                build.compile_cached(sources / name, headers)
             Phi, Gamma = zoh_matrices(model.A, model.B, step)
             if not (np.all(np.isfinite(Phi)) and np.all(np.isfinite(Gamma))):
                 raise FMUBuildError(

@@ -1,0 +1,327 @@
+"""The FMU binary under misuse: it returns fmi2Error/fmi2Discard with a logged message and
+never crashes. The binary is called directly through ctypes (null pointers, wrong GUID,
+calls in the wrong state, NaN inputs) and through fmpy's low-level FMU2Model API (direct
+feedthrough in Model Exchange).
+"""
+
+import ctypes
+import zipfile
+from ctypes import POINTER, byref, c_char_p, c_double, c_int, c_size_t, c_uint, c_void_p
+
+import control
+import numpy as np
+import pytest
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi2 import (FMU2Model, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE, fmi2EventInfo)
+
+from fmu import export
+
+OK, WARNING, DISCARD, ERROR = 0, 1, 2, 3
+MODEL_EXCHANGE, CO_SIMULATION = 0, 1
+LAST_SUCCESSFUL_TIME = 2
+
+
+def plant():
+    """Rigid body J theta'' = torque, J = 10 kg m^2; outputs theta, omega."""
+    return control.ss([[0, 1], [0, 0]], [[0], [0.1]], np.eye(2), 0, inputs=["torque"],
+                      outputs=["theta", "omega"], states=["angle", "rate"], name="body")
+
+
+def pd_controller():
+    """torque = 20 (theta_ref - theta) - 30 omega: 0 states, D != 0."""
+    return control.ss(np.zeros((0, 0)), np.zeros((0, 3)), np.zeros((1, 0)), [[20.0, -20.0, -30.0]],
+                      inputs=["theta_ref", "theta", "omega"], outputs=["torque"], name="pd")
+
+
+def unstable():
+    """x' = 100 x: exp(100 h) overflows for h > 7.1 s."""
+    return control.ss([[100.0]], [[1.0]], [[1.0]], 0, inputs=["u"], outputs=["y"], states=["x"])
+
+
+class Binary:
+    """The FMU's shared library with typed FMI functions and a logger that records."""
+
+    def __init__(self, path, folder):
+        with zipfile.ZipFile(path) as archive:
+            archive.extractall(folder)
+        description = read_model_description(str(path))
+        self.guid = description.guid.encode()
+        self.vr = {v.name: v.valueReference for v in description.modelVariables}
+        identifier = (description.coSimulation or description.modelExchange).modelIdentifier
+        self.lib = ctypes.CDLL(str(folder / "binaries" / "linux64" / f"{identifier}.so"))
+        self.messages = []
+
+        def logger(environment, instance, status, category, message):
+            self.messages.append((status, category.decode(), message.decode()))
+
+        self.callbacks = fmi2CallbackFunctions()
+        self.callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+        self.callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self.callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        signatures = {
+            "fmi2Instantiate": (c_void_p, [c_char_p, c_int, c_char_p, c_char_p,
+                                           POINTER(fmi2CallbackFunctions), c_int, c_int]),
+            "fmi2FreeInstance": (None, [c_void_p]),
+            "fmi2SetupExperiment": (c_int, [c_void_p, c_int, c_double, c_double, c_int, c_double]),
+            "fmi2EnterInitializationMode": (c_int, [c_void_p]),
+            "fmi2ExitInitializationMode": (c_int, [c_void_p]),
+            "fmi2Terminate": (c_int, [c_void_p]),
+            "fmi2Reset": (c_int, [c_void_p]),
+            "fmi2GetReal": (c_int, [c_void_p, POINTER(c_uint), c_size_t, POINTER(c_double)]),
+            "fmi2SetReal": (c_int, [c_void_p, POINTER(c_uint), c_size_t, POINTER(c_double)]),
+            "fmi2GetInteger": (c_int, [c_void_p, POINTER(c_uint), c_size_t, POINTER(c_int)]),
+            "fmi2DoStep": (c_int, [c_void_p, c_double, c_double, c_int]),
+            "fmi2GetRealStatus": (c_int, [c_void_p, c_int, POINTER(c_double)]),
+            "fmi2SetDebugLogging": (c_int, [c_void_p, c_int, c_size_t, POINTER(c_char_p)]),
+            "fmi2NewDiscreteStates": (c_int, [c_void_p, POINTER(fmi2EventInfo)]),
+            "fmi2GetDerivatives": (c_int, [c_void_p, POINTER(c_double), c_size_t]),
+            "fmi2SetContinuousStates": (c_int, [c_void_p, POINTER(c_double), c_size_t]),
+            "fmi2SetTime": (c_int, [c_void_p, c_double]),
+            "fmi2GetFMUstate": (c_int, [c_void_p, POINTER(c_void_p)]),
+        }
+        for name, (restype, argtypes) in signatures.items():
+            function = getattr(self.lib, name)
+            function.restype, function.argtypes = restype, argtypes
+            setattr(self, name[4:], function)
+
+    def instantiate(self, kind=CO_SIMULATION, guid=None, name=b"test"):
+        return self.Instantiate(name, kind, self.guid if guid is None else guid, None,
+                                byref(self.callbacks), 0, 0)
+
+    def initialised(self, kind=CO_SIMULATION):
+        c = self.instantiate(kind)
+        assert c
+        assert self.SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == OK
+        assert self.EnterInitializationMode(c) == OK
+        assert self.ExitInitializationMode(c) == OK
+        return c
+
+    def get(self, c, *names):
+        vrs = (c_uint * len(names))(*(self.vr[n] for n in names))
+        values = (c_double * len(names))()
+        status = self.GetReal(c, vrs, len(names), values)
+        return status, list(values)
+
+    def set(self, c, **values):
+        vrs = (c_uint * len(values))(*(self.vr[n] for n in values))
+        array = (c_double * len(values))(*values.values())
+        return self.SetReal(c, vrs, len(values), array)
+
+    def last_message(self):
+        return self.messages[-1][2] if self.messages else ""
+
+
+@pytest.fixture(scope="module")
+def binaries(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("misuse")
+    result = {}
+    for name, system in (("body", plant()), ("pd", pd_controller()), ("unstable", unstable())):
+        path = export(system, folder / f"{name}.fmu")
+        result[name] = Binary(path, folder / name)
+    return result
+
+
+@pytest.fixture
+def body(binaries):
+    binary = binaries["body"]
+    binary.messages.clear()
+    return binary
+
+
+def test_wrong_guid_is_refused_with_a_message(body):
+    assert not body.instantiate(guid=b"{00000000-0000-0000-0000-000000000000}")
+    assert body.messages[-1][0] == ERROR
+    assert "wrong GUID {00000000-0000-0000-0000-000000000000}" in body.last_message()
+    assert body.guid.decode() in body.last_message()
+
+
+def test_null_arguments_to_instantiate(body):
+    assert not body.Instantiate(None, CO_SIMULATION, body.guid, None, byref(body.callbacks), 0, 0)
+    assert "instanceName must be a non-empty string" in body.last_message()
+    assert not body.Instantiate(b"x", CO_SIMULATION, None, None, byref(body.callbacks), 0, 0)
+    assert "wrong GUID (null)" in body.last_message()
+    assert not body.Instantiate(b"x", CO_SIMULATION, body.guid, None, None, 0, 0)  # no callbacks
+    assert not body.Instantiate(b"x", 7, body.guid, None, byref(body.callbacks), 0, 0)
+    assert "unknown fmuType 7" in body.last_message()
+
+
+def test_null_instance_is_an_error_not_a_crash(body):
+    values = (c_double * 1)()
+    vrs = (c_uint * 1)(0)
+    assert body.GetReal(None, vrs, 1, values) == ERROR
+    assert body.SetReal(None, vrs, 1, values) == ERROR
+    assert body.DoStep(None, 0.0, 0.01, 1) == ERROR
+    assert body.Terminate(None) == ERROR
+    assert body.Reset(None) == ERROR
+    body.FreeInstance(None)  # returns without touching anything
+
+
+def test_null_arrays_are_errors(body):
+    c = body.initialised()
+    try:
+        values = (c_double * 2)()
+        vrs = (c_uint * 2)(body.vr["theta"], body.vr["omega"])
+        assert body.GetReal(c, None, 2, values) == ERROR
+        assert "fmi2GetReal: argument vr is NULL although 2 values were requested" in body.last_message()
+        assert body.GetReal(c, vrs, 2, None) == ERROR
+        assert "argument value is NULL" in body.last_message()
+        assert body.SetReal(c, vrs, 1, None) == ERROR
+        assert body.GetReal(c, None, 0, None) == OK  # nothing requested, nothing read
+        assert body.GetRealStatus(c, LAST_SUCCESSFUL_TIME, None) == ERROR
+        assert body.SetDebugLogging(c, 1, 1, None) == ERROR
+    finally:
+        body.FreeInstance(c)
+
+
+def test_calls_in_the_wrong_state(body):
+    c = body.instantiate()
+    try:
+        assert body.DoStep(c, 0.0, 0.01, 1) == ERROR
+        assert body.last_message() == "fmi2DoStep must not be called in state Instantiated."
+        assert body.get(c, "theta")[0] == ERROR
+        assert body.ExitInitializationMode(c) == ERROR
+        assert "fmi2ExitInitializationMode must not be called in state Instantiated" in body.last_message()
+        assert body.EnterInitializationMode(c) == OK
+        assert body.SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == ERROR
+        assert body.ExitInitializationMode(c) == OK
+        # Model Exchange functions on a Co-Simulation instance
+        assert body.SetTime(c, 1.0) == ERROR
+        assert "Model Exchange function; this instance is Co-Simulation" in body.last_message()
+        assert body.Terminate(c) == OK
+        assert body.DoStep(c, 0.0, 0.01, 1) == ERROR
+        assert "state Terminated" in body.last_message()
+        assert body.get(c, "theta") == (OK, [0.0])  # reading after termination is allowed
+        assert body.Reset(c) == OK  # back to Instantiated, usable again
+        assert body.EnterInitializationMode(c) == OK
+    finally:
+        body.FreeInstance(c)
+
+
+def test_nan_input_is_refused_and_changes_nothing(body):
+    c = body.initialised()
+    try:
+        assert body.set(c, torque=2.0) == OK
+        assert body.set(c, torque=float("nan")) == ERROR
+        assert "input torque must be finite; got nan" in body.last_message()
+        assert body.set(c, torque=float("inf")) == ERROR
+        assert body.get(c, "torque") == (OK, [2.0])
+        # the instance stays usable: one exact step of J theta'' = 2 N m from rest
+        assert body.DoStep(c, 0.0, 0.1, 1) == OK
+        status, (theta, omega) = body.get(c, "theta", "omega")
+        assert status == OK
+        assert theta == pytest.approx(2.0 / 10.0 * 0.1**2 / 2, rel=1e-14)  # torque/J t^2/2
+        assert omega == pytest.approx(2.0 / 10.0 * 0.1, rel=1e-14)
+    finally:
+        body.FreeInstance(c)
+
+
+def test_bad_value_references_and_causalities(body):
+    c = body.instantiate()
+    try:
+        assert body.set(c, angle=0.3) == OK  # a state before initialisation: start value
+        vrs = (c_uint * 1)(999)
+        value = (c_double * 1)(1.0)
+        assert body.SetReal(c, vrs, 1, value) == ERROR
+        assert "unknown value reference 999" in body.last_message()
+        assert body.set(c, theta=1.0) == ERROR
+        assert "theta is calculated and cannot be set" in body.last_message()
+        assert body.EnterInitializationMode(c) == OK
+        assert body.ExitInitializationMode(c) == OK
+        assert body.get(c, "theta") == (OK, [0.3])
+        assert body.set(c, angle=0.0) == ERROR
+        assert "state angle can only be set before initialisation" in body.last_message()
+        ints = (c_int * 1)()
+        assert body.GetInteger(c, vrs, 1, ints) == ERROR
+        assert "only Real variables" in body.last_message()
+    finally:
+        body.FreeInstance(c)
+
+
+def test_bad_steps(body):
+    c = body.initialised()
+    try:
+        assert body.DoStep(c, 0.0, 0.0, 1) == ERROR
+        assert "communicationStepSize must be positive and finite [s]; got 0" in body.last_message()
+        assert body.DoStep(c, 0.0, float("nan"), 1) == ERROR
+        assert body.DoStep(c, 5.0, 0.01, 1) == ERROR
+        assert "currentCommunicationPoint must equal the time reached so far" in body.last_message()
+        assert body.DoStep(c, 0.0, 0.01, 1) == OK
+        time = c_double()
+        assert body.GetRealStatus(c, LAST_SUCCESSFUL_TIME, byref(time)) == OK
+        assert time.value == 0.01
+    finally:
+        body.FreeInstance(c)
+
+
+def test_unsupported_capabilities_are_errors(body):
+    c = body.initialised()
+    try:
+        state = c_void_p()
+        assert body.GetFMUstate(c, byref(state)) == ERROR
+        assert "canGetAndSetFMUstate" in body.last_message()
+        categories = (c_char_p * 1)(b"logEverything")
+        assert body.SetDebugLogging(c, 1, 1, categories) == ERROR
+        assert 'unknown log category "logEverything"' in body.last_message()
+    finally:
+        body.FreeInstance(c)
+
+
+def test_overflowing_step_is_discarded(binaries):
+    """x' = 100 x over 10 s: exp(1000) overflows; the step is discarded, state kept."""
+    binary = binaries["unstable"]
+    c = binary.instantiate()
+    try:
+        assert binary.set(c, x=1.0) == OK
+        assert binary.SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == OK
+        assert binary.EnterInitializationMode(c) == OK
+        assert binary.ExitInitializationMode(c) == OK
+        assert binary.DoStep(c, 0.0, 10.0, 1) == DISCARD
+        assert "not finite" in binary.last_message()
+        assert binary.get(c, "x") == (OK, [1.0])
+        time = c_double(-1.0)
+        assert binary.GetRealStatus(c, LAST_SUCCESSFUL_TIME, byref(time)) == OK
+        assert time.value == 0.0
+        assert binary.DoStep(c, 0.0, 0.01, 1) == ERROR  # StepFailed: only reset or free
+        assert binary.Terminate(c) == OK
+    finally:
+        binary.FreeInstance(c)
+
+
+def test_model_exchange_misuse(body):
+    c = body.initialised(MODEL_EXCHANGE)
+    try:
+        assert body.NewDiscreteStates(c, None) == ERROR
+        assert "eventInfo is NULL" in body.last_message()
+        derivatives = (c_double * 2)()
+        assert body.GetDerivatives(c, derivatives, 3) == ERROR
+        assert "nx must be 2; got 3" in body.last_message()
+        assert body.SetContinuousStates(c, derivatives, 2) == ERROR  # EventMode: not allowed
+        assert body.SetTime(c, float("nan")) == ERROR
+        assert body.DoStep(c, 0.0, 0.01, 1) == ERROR
+        assert "Co-Simulation function; this instance is Model Exchange" in body.last_message()
+    finally:
+        body.FreeInstance(c)
+
+
+def test_direct_feedthrough_in_model_exchange(binaries, tmp_path):
+    """Outputs read right after setting inputs reflect them (fmpy's FMU2Model API)."""
+    path = tmp_path / "pd.fmu"
+    export(pd_controller(), path)
+    description = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in description.modelVariables}
+    model = FMU2Model(guid=description.guid, unzipDirectory=extract(str(path)),
+                      modelIdentifier=description.modelExchange.modelIdentifier, instanceName="pd")
+    model.instantiate()
+    try:
+        model.setupExperiment(startTime=0.0)
+        model.enterInitializationMode()
+        model.setReal([vr["theta_ref"], vr["theta"], vr["omega"]], [0.5, 0.1, 0.2])
+        assert model.getReal([vr["torque"]]) == [20.0 * (0.5 - 0.1) - 30.0 * 0.2]
+        model.exitInitializationMode()
+        model.enterContinuousTimeMode()
+        model.setReal([vr["theta"]], [0.4])
+        assert model.getReal([vr["torque"]]) == [20.0 * (0.5 - 0.4) - 30.0 * 0.2]
+        model.terminate()
+    finally:
+        model.freeInstance()
