@@ -215,6 +215,9 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
                estimator_speed: float = 3.0, sample_time: float | None = None) -> LQRDesign:
     """LQR + estimator design; see :func:`lqr` (which returns only the controller)."""
     _check_plant(plant)
+    if sample_time is not None and not isinstance(estimator, (str, KalmanNoise)):
+        raise ValueError("a Luenberger gain array is a continuous-time estimator; with sample_time "
+                         "use estimator='kalman' or a KalmanNoise")
     q_theta, q_omega, r = _check_weights(attitude_weight, rate_weight, torque_weight)
     tip_names, W_tip = _deflection_weights(plant, deflection_weight)
     labels = list(plant.output_labels)
@@ -318,14 +321,11 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
     Gamma = E[:n, n:]
     P = scipy.linalg.solve_discrete_are(Phi, Gamma, Q * T, R * T, s=N * T)
     K = np.linalg.solve(R * T + Gamma.T @ P @ Gamma, Gamma.T @ P @ Phi + (N * T).T)
-    if noise is not None:
-        Wd = noise.torque_noise * T * (B @ B.T)
-        Vd = np.diag([noise.attitude_noise, noise.rate_noise]) / T
-        S = scipy.linalg.solve_discrete_are(Phi.T, Cm.T, Wd, Vd)
-        L = Phi @ S @ Cm.T @ np.linalg.inv(Cm @ S @ Cm.T + Vd)
-    else:
-        raise ValueError("a Luenberger gain array is a continuous-time estimator; with sample_time "
-                         "use estimator='kalman' or a KalmanNoise")
+    # (noise is set: a Luenberger gain array with sample_time was rejected at the top)
+    Wd = noise.torque_noise * T * (B @ B.T)
+    Vd = np.diag([noise.attitude_noise, noise.rate_noise]) / T
+    S = scipy.linalg.solve_discrete_are(Phi.T, Cm.T, Wd, Vd)
+    L = Phi @ S @ Cm.T @ np.linalg.inv(Cm @ S @ Cm.T + Vd)
     Bm = Gamma - L @ Dm
     Ac = Phi - L @ Cm - Bm @ K
     g = K @ x_ref + u_ref

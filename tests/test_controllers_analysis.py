@@ -310,6 +310,32 @@ def test_spillover_verdict_stable_and_unstable():
         controllers.spillover(control.frd(COLLOCATED, np.logspace(-1, 1, 100)), K)
 
 
+def test_spillover_least_damped_pole_closed_form():
+    """Rigid hub under PD: the closed-loop poles are those of s^2 + 2 zeta wn s + wn^2."""
+    K = controllers.pd(RIGID, natural_frequency=0.7, damping=0.35)
+    verdict = controllers.spillover(RIGID, K)
+    assert verdict.stable
+    assert verdict.least_damping_ratio == pytest.approx(0.35, rel=1e-10)
+    assert verdict.least_damped_frequency == pytest.approx(0.7, rel=1e-10)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_pd_without_roll_off_stable_on_any_collocated_plant(seed):
+    """Property: torque and hub attitude/rate are collocated, the plant is passive from torque
+    to omega and a PD is strictly passive, so the loop is stable whatever the modes and gains
+    (Balas 1978; Wie 2008, collocated control). Seeded random modes, damping and gains."""
+    rng = np.random.default_rng(seed)
+    n_modes = int(rng.integers(1, 5))
+    modes = [(float(w), float(z), float(c), float(c)) for w, z, c in
+             zip(np.sort(10 ** rng.uniform(-0.5, 2, n_modes)), 10 ** rng.uniform(-3, -1, n_modes),
+                 rng.uniform(0.01, 0.05, n_modes))]
+    plant = modal_plant(float(10 ** rng.uniform(1, 3)), modes)
+    K = controllers.pd(plant, natural_frequency=float(10 ** rng.uniform(-1.5, 0.5)),
+                       damping=float(rng.uniform(0.3, 1.5)))
+    verdict = controllers.spillover(plant, K)
+    assert verdict.stable and verdict.least_damping_ratio > 0
+
+
 # ----- compare ---------------------------------------------------------------------------------
 def test_compare_design_vs_truth():
     design = modal_plant(J, [(2.0, 0.005, 1.0, 0.004)])

@@ -192,6 +192,11 @@ def test_errors():
         controllers.lqr(hidden, **WEIGHTS)
     with pytest.raises(ValueError, match="Luenberger estimator gain must have shape"):
         controllers.lqr(CHAIN, **WEIGHTS, estimator=np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="estimator is not stable"):
+        controllers.lqr(CHAIN, **WEIGHTS, estimator=np.zeros((CHAIN.nstates, 2)))
+    with pytest.raises(ValueError, match="Luenberger gain array is a continuous-time estimator"):
+        controllers.lqr(CHAIN, **WEIGHTS, estimator=np.zeros((CHAIN.nstates, 2)),
+                        sample_time=0.01)
     with pytest.raises(ValueError, match="estimator must be 'kalman'"):
         controllers.lqr(CHAIN, **WEIGHTS, estimator="luenberger")
     with pytest.raises(ValueError, match="sample_time .* too long"):
