@@ -212,6 +212,83 @@ def test_simulator_reuse_matches_simulate():
     np.testing.assert_array_equal(resp.time, T + 3.0)
 
 
+def test_rigid_body_modes_take_the_triangular_cluster_path():
+    """A Jordan block at s = 0 has no eigenvector basis: it must be kept as
+    a triangular cluster (white-box check that the path is exercised)."""
+    rng = np.random.default_rng(3)
+    sim = Simulator(modal_system(rng, 5, n_rigid=2), 0.01)
+    assert sim._modes.clusters
+    assert max(c.R.shape[0] for c in sim._modes.clusters) >= 2
+
+
+@pytest.mark.parametrize("case", ["repeated", "nearly_defective"])
+def test_close_and_repeated_eigenvalues_match_forced_response(case):
+    """Two identical decoupled oscillators (repeated, non-defective
+    eigenvalues) and a pair 1e-9 apart (nearly defective) in a dense basis."""
+    rng = np.random.default_rng(21)
+    w1, w2 = (3.0, 3.0) if case == "repeated" else (3.0, 3.0 + 1e-9)
+    A = np.zeros((6, 6))
+    A[0:2, 0:2] = [[0, 1], [-w1 ** 2, -0.01]]
+    A[2:4, 2:4] = [[0, 1], [-w2 ** 2, -0.01]]
+    A[4:6, 4:6] = [[0, 1], [-0.25, -0.02]]
+    if case == "nearly_defective":
+        A[1, 2] = 1.0                   # couples the two close modes
+    S = rng.standard_normal((6, 6))
+    sys = control.ss(S @ A @ np.linalg.inv(S), rng.standard_normal((6, 1)),
+                     rng.standard_normal((2, 6)), 0)
+    T = np.arange(2500) * 0.02
+    U = np.sin(1.3 * T)
+    ref = control.forced_response(sys, T, U, np.ones(6))
+    resp = simulate(sys, T, U, np.ones(6))
+    scale = signal_range(ref.y)[:, None]
+    # Round-off only; the random basis S has cond ~ 1e2.
+    assert np.max(np.abs(resp.y - ref.y) / scale) < 1e-9
+
+
+@pytest.mark.parametrize("n_samples", [2, 3, 17, 1001])
+def test_short_and_odd_lengths_match_forced_response(n_samples):
+    """Grids shorter than, and not a multiple of, the chunk length."""
+    rng = np.random.default_rng(n_samples)
+    sys = modal_system(rng, 4, n_inputs=2, n_rigid=1)
+    T = 0.5 + np.arange(n_samples) * 0.03
+    U = rng.standard_normal((2, n_samples))
+    X0 = rng.standard_normal(sys.nstates)
+    ref = control.forced_response(sys, T, U, X0)
+    resp = simulate(sys, T, U, X0)
+    # Round-off only.
+    np.testing.assert_allclose(resp.y, ref.y, rtol=1e-10,
+                               atol=1e-10 * np.abs(ref.y).max())
+    np.testing.assert_allclose(resp.x, ref.x, rtol=1e-10,
+                               atol=1e-10 * np.abs(ref.x).max())
+
+
+def test_outputs_only_path_equals_run():
+    rng = np.random.default_rng(8)
+    sys = modal_system(rng, 10, n_inputs=2, n_outputs=3, n_rigid=1)
+    T = np.arange(1234) * 0.01
+    U = rng.standard_normal((2, T.size))
+    sim = Simulator(sys, 0.01)
+    Y = sim.outputs(T, U, 0.1)
+    assert Y.shape == (3, T.size) and Y.dtype == np.float64
+    # Same products, same order of operations: equal to round-off.
+    np.testing.assert_allclose(Y, sim.run(T, U, 0.1).y, rtol=1e-14,
+                               atol=1e-14 * np.abs(Y).max())
+
+
+def test_static_gain_and_inputless_system():
+    """y = D u for a static gain; free oscillation x = (cos t, -sin t)."""
+    gain = control.ss([], [], [], [[2.0]])
+    T = np.linspace(0, 1, 5)
+    np.testing.assert_array_equal(simulate(gain, T, T).outputs, 2 * T)
+    free = control.ss([[0, 1], [-1, 0]], np.zeros((2, 0)), np.eye(2),
+                      np.zeros((2, 0)))
+    T = np.linspace(0, np.pi, 9)
+    resp = simulate(free, T, X0=[1.0, 0.0])
+    # Closed form; expm accurate to ~eps.
+    np.testing.assert_allclose(resp.y, [np.cos(T), -np.sin(T)], rtol=0,
+                               atol=1e-14)
+
+
 # --------------------------------------------------------------------------
 # Long undamped simulation: conservation
 # --------------------------------------------------------------------------
