@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import cmath
 import math
-from dataclasses import dataclass, field
-from typing import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Callable, Sequence
 
 import control
 import numpy as np
@@ -158,12 +158,19 @@ class _ModalEvaluator:
         self.D = np.asarray(D, dtype=float)
         n = A.shape[0]
         self.n = n
-        self.rigid_tol = 1e-5 * math.sqrt(max(np.linalg.norm(A, 1), 1.0)) if n else 0.0
         if n == 0:
             self.k = 0
             self.modal = True
+            self.rigid_tol = 0.0
             return
-        T, Z, k = scipy.linalg.schur(A.astype(complex), output="complex",
+        # balancing (an exact diagonal similarity, powers of 2) brings a modal block
+        # [[0, 1], [-w^2, -2 zeta w]] to norm ~w; the rigid-body Jordan block's eigenvalues are
+        # then perturbed by ~sqrt(eps |A|), far below this tolerance
+        Ab, (scale, perm) = scipy.linalg.matrix_balance(A, separate=True)
+        Tb = np.zeros((n, n))
+        Tb[perm, np.arange(n)] = scale  # A = Tb Ab Tb^-1
+        self.rigid_tol = 1e-6 * math.sqrt(max(np.linalg.norm(Ab, 1), 1.0))
+        T, Z, k = scipy.linalg.schur(Ab.astype(complex), output="complex",
                                      sort=lambda x: abs(x) <= self.rigid_tol)
         self.k = int(k)
         T11, T12, T22 = T[:k, :k], T[:k, k:], T[k:, k:]
@@ -171,8 +178,8 @@ class _ModalEvaluator:
             X = scipy.linalg.solve_sylvester(T11, -T22, -T12)
         else:
             X = np.zeros((k, n - k), dtype=complex)
-        CZ = self.C @ Z
-        ZB = Z.conj().T @ self.B
+        CZ = (self.C @ Tb) @ Z
+        ZB = Z.conj().T @ np.linalg.solve(Tb, self.B)
         # C Z S and S^-1 Z^H B with S = [[I, X], [0, I]], S^-1 = [[I, -X], [0, I]]
         self.C1 = CZ[:, :k]
         C2 = CZ[:, k:] + CZ[:, :k] @ X

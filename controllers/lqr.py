@@ -9,7 +9,6 @@ from the measured theta and omega. The controller handed to the spacecraft has i
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Mapping
 
