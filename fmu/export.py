@@ -112,7 +112,8 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         Also write FMI cross-check files ``<model_name>_in.csv``, ``_ref.csv`` and
         ``_ref.opt`` next to the FMU (see :mod:`fmu.reference`).
     compiler : str, optional
-        C compiler to use; default ``$CC``, else gcc or cc on PATH.
+        C compiler to use; default ``$CC``, else gcc or cc on PATH. The fixed C templates
+        are compiled once per process and reused; each export compiles its ``model.c``.
     description : str, optional
         Text of the modelDescription's description attribute.
 

@@ -9,7 +9,7 @@
 - Steps other than the default one (computed in C) and a stiff lightly damped mode.
 """
 
-import zipfile
+import ctypes
 
 import control
 import mpmath
@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 import scipy.linalg
 from fmpy import extract, read_model_description, simulate_fmu
-from fmpy.fmi2 import FMU2Slave
+from fmpy.util import read_csv
+from fmpy.fmi2 import FMU2Model, FMU2Slave
 
 from fmu import export
 
@@ -43,7 +44,8 @@ def stiff_plant():
 def fmus(tmp_path_factory):
     folder = tmp_path_factory.mktemp("sim")
     return {
-        "hub": export(hub_with_flexible_mode(), folder / "hub.fmu", step=0.01, stop_time=4.0),
+        "hub": export(hub_with_flexible_mode(), folder / "hub.fmu", step=0.01, stop_time=4.0,
+                      reference=True),
         "stiff": export(stiff_plant(), folder / "stiff.fmu", step=0.01),
     }
 
@@ -227,3 +229,78 @@ def test_repeated_cs_steps_are_consistent(fmus):
         for s in (slave, slave2):
             s.terminate()
             s.freeInstance()
+
+
+def test_reference_files_cross_check_in_fmpy(fmus):
+    """What another tool would do with <Model>_in.csv, _ref.csv and _ref.opt."""
+    folder = fmus["hub"].parent
+    options = dict(line.split(",") for line in (folder / "hub_ref.opt").read_text().splitlines())
+    result = simulate_fmu(str(fmus["hub"]), fmi_type="CoSimulation",
+                          start_time=float(options["StartTime"]), stop_time=float(options["StopTime"]),
+                          output_interval=float(options["StepSize"]),
+                          input=read_csv(str(folder / "hub_in.csv")))
+    reference = read_csv(str(folder / "hub_ref.csv"))
+    last = np.r_[np.diff(reference["time"]) > 0, True]  # one row per time (D = 0: equal rows)
+    np.testing.assert_allclose(result["time"], reference["time"][last], rtol=0, atol=1e-12)
+    for name in ("theta", "omega"):
+        expected = reference[name][last]
+        np.testing.assert_allclose(result[name], expected, rtol=0, atol=1e-9 * np.max(np.abs(expected)))
+
+
+def test_200_states_any_step(tmp_path):
+    """A 200-state modal plant (rigid body + 99 modes up to 1000 rad/s, damping 0.005):
+    one step of 0.0123 s (computed in C, a 201 x 201 exponential) against scipy's augmented
+    exponential; 1e-11 relative to |x(h)| allows for scipy's own round-off (~1e-13 here)."""
+    rng = np.random.default_rng(1)
+    blocks = [np.array([[0.0, 1.0], [0.0, 0.0]])]
+    blocks += [np.array([[0.0, 1.0], [-w * w, -0.01 * w]]) for w in np.linspace(1.0, 1000.0, 99)]
+    A = scipy.linalg.block_diag(*blocks)
+    B = rng.standard_normal((200, 1))
+    system = control.ss(A, B, rng.standard_normal((2, 200)), 0, inputs=["torque"],
+                        outputs=["theta", "omega"])
+    x0 = rng.standard_normal(200)
+    path = export(system, tmp_path / "modal.fmu", x0=x0)
+    slave, vr = _slave(path, "modal")
+    states = [vr[f"x[{i}]"] for i in range(200)]
+    try:
+        slave.setReal([vr["torque"]], [0.3])
+        slave.doStep(0.0, 0.0123)
+        got = np.array(slave.getReal(states))
+    finally:
+        slave.terminate()
+        slave.freeInstance()
+    M = np.zeros((201, 201))
+    M[:200, :200], M[:200, 200:] = A * 0.0123, B * 0.0123
+    E = scipy.linalg.expm(M)
+    expected = E[:200, :200] @ x0 + E[:200, 200] * 0.3
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-11 * np.max(np.abs(expected)))
+
+
+def test_me_derivatives_and_outputs(fmus):
+    """fmi2GetDerivatives = A x + B u and outputs C x + D u for states set by the
+    integrator (fmi2SetContinuousStates): 1e-15 relative, one dot product of round-off."""
+    path = fmus["hub"]
+    description = read_model_description(str(path))
+    vr = {v.name: v.valueReference for v in description.modelVariables}
+    model = FMU2Model(guid=description.guid, unzipDirectory=extract(str(path)),
+                      modelIdentifier=description.modelExchange.modelIdentifier, instanceName="me")
+    system = hub_with_flexible_mode()
+    x, u = np.array([0.3, -1.0, 0.02, 0.5]), 2.5
+    model.instantiate()
+    try:
+        model.setupExperiment(startTime=0.0)
+        model.enterInitializationMode()
+        model.exitInitializationMode()
+        model.enterContinuousTimeMode()
+        model.setTime(0.5)
+        model.setContinuousStates((ctypes.c_double * 4)(*x), 4)
+        model.setReal([vr["torque"]], [u])
+        derivatives = (ctypes.c_double * 4)()
+        model.getDerivatives(derivatives, 4)
+        outputs = model.getReal([vr["theta"], vr["omega"]])
+        model.terminate()
+    finally:
+        model.freeInstance()
+    np.testing.assert_allclose(list(derivatives), np.asarray(system.A) @ x + np.asarray(system.B)[:, 0] * u,
+                               rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(outputs, np.asarray(system.C) @ x, rtol=1e-15, atol=0)
