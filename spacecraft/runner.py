@@ -29,7 +29,7 @@ from .hub import Hub, Mount
 from .coupling import Spacecraft
 from .scene import AppendageSpec, ChainSpec, Scene, SceneError, load_scene
 
-__all__ = ["RunStats", "RunResult", "run", "ProgressCallback"]
+__all__ = ["RunStats", "RunResult", "run", "ProgressCallback", "equivalence_table", "FIT_LABELS"]
 
 ProgressCallback = Callable[[str], None]
 
@@ -131,7 +131,9 @@ class RunResult:
 
 
 class _Runner:
-    def __init__(self, scene: Scene, progress: ProgressCallback | None, stats: RunStats):
+    def __init__(self, scene: Scene, progress: ProgressCallback | None, stats: RunStats,
+                 time_responses: bool = True):
+        self.time_responses = time_responses
         self.scene = scene
         self.progress = progress or (lambda message: None)
         self.stats = stats
@@ -429,7 +431,7 @@ class _Runner:
                                 row["exact_verdict"] = _verdict(controllers.spillover(exact_frd, K))
                             except ValueError as exc:
                                 row["exact_verdict"] = {"error": str(exc)}
-                    if scene.manoeuvre is not None:
+                    if scene.manoeuvre is not None and self.time_responses:
                         for which, plant in (("design", d["sim_plant"]), ("truth", truth_sim)):
                             loop = controllers.close_loop(plant, K)
                             loops[(variant, kind, which)] = loop
@@ -457,7 +459,8 @@ class _Runner:
             if a.design == "fit":
                 entry["fits"] = {m: self.fit(a, m) for m in a.fit.match}
             models[a.name] = entry
-        if scene.report.equivalence and any(a.design == "fit" for a in scene.appendages):
+        if (scene.report.equivalence and self.time_responses
+                and any(a.design == "fit" for a in scene.appendages)):
             with self.stage("equivalence tables"):
                 data["equivalence"] = self.equivalence_tables(models)
 
@@ -507,9 +510,7 @@ class _Runner:
         return control.frd(data, omega, inputs=["torque"], outputs=["theta", "omega"])
 
     def equivalence_tables(self, models) -> list:
-        """Paper's table per fitted appendage: exact beam, 2-mode beam, each fitted chain."""
-        from appendages.equivalence import criterion
-
+        """Paper's table per fitted beam: exact beam, 2-mode beam, each fitted chain."""
         tables = []
         done = set()
         for a in self.scene.appendages:
@@ -519,36 +520,60 @@ class _Runner:
             if key in done:
                 continue
             done.add(key)
-            beam = self.beam(a)
-            candidates = [("beam, 2 modes (paper)", beam.truncated(2, method="free-free"))]
-            names = {"poles-and-zeros": "chain, flexsat fit", "frequencies": "chain, paper's fit"}
-            for match in a.fit.match:
-                candidates.append((names[match], models[a.name]["fits"][match]))
-            columns = []
-            reference = None
-            for label, model in candidates:
-                self.stats.exact_reference_evaluations += 1
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", RuntimeWarning)
-                    result = criterion(beam, model, names=("beam (exact)", label))
-                if reference is None:
-                    reference = [r[2] for r in result.rows()]
-                    units = [(r[0], r[1]) for r in result.rows()]
-                columns.append({"name": label,
-                                "values": [r[3] for r in result.rows()],
-                                "relative_error": [r[4] for r in result.rows()],
-                                "max_log_error": result.max_log_error.tolist(),
-                                "band": list(result.band)})
-            if a.fit.n_bodies:
-                for match in a.fit.match:
-                    chain = models[a.name]["fits"][match]
-                    for col in columns:
-                        if col["name"] == names[match]:
-                            col["parameters"] = _describe(chain)
-            tables.append({"appendage": a.name, "quantities": [u[0] for u in units],
-                           "units": [u[1] for u in units], "exact": reference,
-                           "columns": columns})
+            fits = {m: models[a.name]["fits"][m] for m in a.fit.match}
+            table = equivalence_table(self.beam(a), fits, stats=self.stats)
+            table["appendage"] = a.name
+            tables.append(table)
         return tables
+
+
+#: Column labels of the fitted chains in the equivalence table.
+FIT_LABELS = {"poles-and-zeros": "chain, flexsat fit", "frequencies": "chain, paper's fit"}
+
+
+def equivalence_table(beam, fits: dict, *, stats: RunStats | None = None) -> dict:
+    """The paper's equivalence table against the exact beam, JSON-ready.
+
+    Parameters
+    ----------
+    beam : appendages.Beam
+        The distributed beam (reference: its exact W, poles and zeros).
+    fits : dict
+        ``match -> HingedChain`` (keys of :data:`FIT_LABELS`) or ``label -> model``.
+    stats : RunStats, optional
+        Counts one exact-reference evaluation per column.
+
+    Returns
+    -------
+    dict
+        ``quantities``, ``units``, ``exact`` (the exact beam's values, None where not defined)
+        and ``columns``: for the paper's 2-mode free-free beam and each chain, ``name``,
+        ``values``, ``relative_error`` against the exact beam and ``max_log_error`` of
+        W1..W4 over the band (see :func:`appendages.equivalence.criterion`).
+    """
+    from appendages.equivalence import criterion
+
+    candidates = [("beam, 2 modes (paper)", beam.truncated(2, method="free-free"))]
+    candidates += [(FIT_LABELS.get(k, k), model) for k, model in fits.items()]
+    columns, reference, units = [], None, None
+    for label, model in candidates:
+        if stats is not None:
+            stats.exact_reference_evaluations += 1
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            result = criterion(beam, model, names=("beam (exact)", label))
+        rows = result.rows()
+        if reference is None:
+            reference = [r[2] for r in rows]
+            units = [(r[0], r[1]) for r in rows]
+        column = {"name": label, "values": [r[3] for r in rows],
+                  "relative_error": [r[4] for r in rows],
+                  "max_log_error": result.max_log_error.tolist(), "band": list(result.band)}
+        if hasattr(model, "hinge_stiffnesses"):
+            column["parameters"] = _describe(model)
+        columns.append(column)
+    return {"quantities": [u[0] for u in units], "units": [u[1] for u in units],
+            "exact": reference, "columns": columns}
 
 
 def _trace(response, name):
@@ -588,7 +613,7 @@ def _describe(model) -> dict:
 
 
 def run(scene=None, *, progress: ProgressCallback | None = None,
-        stats: RunStats | None = None) -> RunResult:
+        stats: RunStats | None = None, time_responses: bool = True) -> RunResult:
     """Run a scene: build the models it needs, tune, close the loops, collect the numbers.
 
     Parameters
@@ -599,6 +624,8 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
         Called with a short message at the start of each stage.
     stats : RunStats, optional
         Counters to add to (a new one by default).
+    time_responses : bool
+        Simulate the manoeuvre (False: only tune and close the loops, e.g. for FMU export).
 
     Returns
     -------
@@ -612,4 +639,4 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     """
     scene = load_scene(scene)
     stats = RunStats() if stats is None else stats
-    return _Runner(scene, progress, stats).run()
+    return _Runner(scene, progress, stats, time_responses).run()

@@ -1,0 +1,346 @@
+"""The ``flexsat`` command.
+
+Subcommands
+-----------
+``flexsat run [SCENE] [--out DIR] [--json] [--no-fmu] [--no-plots] [--quiet]``
+    Run a scene (a TOML file, or the name of an embedded scene such as ``two_wings``; the
+    default scene without argument) and write its report folder.
+``flexsat table [beam options | --scene SCENE] [--n-bodies N] [--json]``
+    The paper's equivalence table for a beam: exact beam, the paper's two-mode beam, the chains
+    fitted by flexsat and by the paper's criterion, with errors against the exact beam.
+``flexsat fit [beam options | --scene SCENE] [--n-bodies N] [--match M] [--json]``
+    Fit a chain to a beam and print its parameters.
+``flexsat export [SCENE] [--out DIR] [--quiet]``
+    FMUs only (plant, controllers, closed loops) with their cross-check files.
+``flexsat scenes``
+    List the embedded scenes.
+
+Exit codes: 0 success; 2 user error (bad scene, bad option, output folder taken: one line on
+stderr, no traceback); 1 internal error (one line; ``--debug`` shows the traceback).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import traceback
+from pathlib import Path
+
+__all__ = ["main", "build_parser"]
+
+#: The paper's rod (PAPER.md): the default beam of ``flexsat table`` and ``flexsat fit``.
+PAPER_ROD = {"section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
+             "youngs_modulus": 2.06e11}
+
+_BEAM_OPTIONS = (
+    ("--section", str, "rod, tube, rectangular or uniform (default: rod)"),
+    ("--length", float, "beam length [m] (default 10)"),
+    ("--diameter", float, "rod diameter [m] (default 0.01)"),
+    ("--outer-diameter", float, "tube outer diameter [m]"),
+    ("--wall-thickness", float, "tube wall thickness [m]"),
+    ("--width", float, "rectangular width [m]"),
+    ("--thickness", float, "rectangular thickness (bending plane) [m]"),
+    ("--density", float, "material density [kg/m^3] (default 7800)"),
+    ("--youngs-modulus", float, "Young's modulus [Pa] (default 2.06e11)"),
+    ("--bending-stiffness", float, "uniform: EJ [N m^2]"),
+    ("--linear-density", float, "uniform: mass per length [kg/m]"),
+    ("--damping-ratio", float, "modal damping ratio [-] (default 0)"),
+)
+
+
+class _Progress:
+    """Progress lines on stderr: '[  1.2 s] stage...'."""
+
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+        self.t0 = time.perf_counter()
+
+    def __call__(self, message: str) -> None:
+        if not self.quiet:
+            print(f"[{time.perf_counter() - self.t0:6.1f} s] {message}...", file=sys.stderr,
+                  flush=True)
+
+
+class _UserError(Exception):
+    """A command-line mistake (exit code 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # argparse's own errors: usage + one line, exit 2
+        self.print_usage(sys.stderr)
+        print(f"flexsat: error: {message}", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``flexsat`` command."""
+    parser = _Parser(prog="flexsat", description=(
+        "Attitude control design for spacecraft with flexible appendages: exact beams, "
+        "equivalent hinged chains, PD/LQR tuned on the chain and checked on the beam, FMUs."))
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    run = sub.add_parser("run", help="run a scene and write its report folder",
+                         description="Run a scene (TOML file or embedded scene name; the "
+                                     "default scene without argument) and write report.md, "
+                                     "report.html, results.json, plots and FMUs into a folder.")
+    run.add_argument("scene", nargs="?", help="scene file or embedded scene name "
+                                              "(see 'flexsat scenes')")
+    run.add_argument("--out", type=Path, help="output folder (default: a new "
+                                              "flexsat-<timestamp> folder here)")
+    run.add_argument("--json", action="store_true", help="print results.json to stdout")
+    run.add_argument("--no-fmu", action="store_true", help="skip FMU export")
+    run.add_argument("--no-plots", action="store_true", help="skip plots")
+    run.add_argument("--quiet", action="store_true", help="no progress display")
+
+    export = sub.add_parser("export", help="export FMUs only",
+                            description="Tune the scene's controllers and export the FMUs of "
+                                        "plant, controllers and closed loops (with cross-check "
+                                        "files) into a folder; no report, plots or slews.")
+    export.add_argument("scene", nargs="?", help="scene file or embedded scene name")
+    export.add_argument("--out", type=Path, help="output folder (default: a new folder here)")
+    export.add_argument("--quiet", action="store_true", help="no progress display")
+
+    for name, helptext, description in (
+            ("table", "the paper's equivalence table for a beam",
+             "The paper's equivalence table for a beam (default: the paper's steel rod): exact "
+             "beam, the paper's two-mode beam and the chains fitted by flexsat and by the paper, "
+             "with relative errors against the exact beam."),
+            ("fit", "fit a chain to a beam and print its parameters",
+             "Fit a chain of rigid bodies to a beam (default: the paper's steel rod) and print "
+             "its body lengths, masses, inertias and hinge stiffnesses.")):
+        p = sub.add_parser(name, help=helptext, description=description)
+        p.add_argument("--scene", help="take the beam of the scene's first beam appendage")
+        for option, kind, text in _BEAM_OPTIONS:
+            p.add_argument(option, type=kind, help=text)
+        p.add_argument("--n-bodies", type=int, default=3, help="bodies of the chain (default 3)")
+        if name == "fit":
+            p.add_argument("--match", choices=("poles-and-zeros", "frequencies"),
+                           default="poles-and-zeros",
+                           help="flexsat's fit (default) or the paper's")
+        p.add_argument("--json", action="store_true", help="JSON on stdout")
+
+    sub.add_parser("scenes", help="list the embedded scenes",
+                   description="List the embedded scenes (usable as 'flexsat run NAME').")
+    return parser
+
+
+def _scene(argument):
+    from .scene import example_scenes, load_scene, scene_path
+
+    if argument is None:
+        return load_scene(None)
+    path = Path(argument)
+    if not path.exists() and argument in example_scenes():
+        return load_scene(scene_path(argument), source=f"{argument} (embedded scene)")
+    return load_scene(path)
+
+
+def _beam_from(args):
+    from .scene import SceneError, _Reader, _read_beam, load_scene
+
+    given = {option[2:].replace("-", "_"): getattr(args, option[2:].replace("-", "_"))
+             for option, _, _ in _BEAM_OPTIONS}
+    given = {k: v for k, v in given.items() if v is not None}
+    if args.scene is not None:
+        if given:
+            raise _UserError("give either --scene or beam options, not both")
+        scene = _scene(args.scene)
+        for a in scene.appendages:
+            if a.beam is not None:
+                return a.beam.build(), f"{scene.source}: {a.name}"
+        raise SceneError(f"{scene.source}: no appendage has a beam table")
+    section = given.get("section", "rod")
+    if section == "rod":
+        spec = {**PAPER_ROD, **given}
+    elif section in ("tube", "rectangular"):
+        spec = {k: PAPER_ROD[k] for k in ("length", "density", "youngs_modulus")} | given
+    else:
+        spec = {"length": PAPER_ROD["length"]} | given
+    spec["section"] = section
+    return _read_beam(_Reader("command line"), spec, "beam").build(), "command line"
+
+
+def _cmd_run(args, *, export_only: bool = False) -> int:
+    from .report import default_output_folder, output_folder, summary_lines, to_json, write_report
+    from .runner import run
+
+    progress = _Progress(args.quiet)
+    scene = _scene(args.scene)
+    out = args.out if args.out is not None else default_output_folder()
+    if export_only and not scene.export.fmu:
+        import dataclasses
+
+        scene = scene.replace(export=dataclasses.replace(scene.export, fmu=True))
+        if scene.manoeuvre is None and scene.export.step is None:
+            raise _UserError(f"{scene.source}: export.step [s] is needed without a manoeuvre")
+    with output_folder(out) as folder:
+        result = run(scene, progress=progress, time_responses=not export_only)
+        if export_only:
+            data = write_report(result, folder, fmus=True, plots=False, pages=False,
+                                progress=progress)
+        else:
+            data = write_report(result, folder, fmus=not args.no_fmu,
+                                plots=not args.no_plots, progress=progress)
+    progress(f"done in {time.perf_counter() - progress.t0:.1f} s")
+    if getattr(args, "json", False):
+        print(to_json(data))
+        return 0
+    fmus = data["files"].get("fmu", [])
+    if export_only:
+        for f in fmus:
+            print(f"{out / f['path']}: {f['description']}")
+        return 0
+    for line in summary_lines(data):
+        print(line)
+    what = ["report.md", "report.html", "results.json"]
+    if data["files"].get("plots"):
+        what.append(f"{len(data['files']['plots'])} plots")
+    if fmus:
+        what.append(f"{len(fmus)} FMUs")
+    print(f"wrote {', '.join(what)} to {out}")
+    return 0
+
+
+def _equivalence(args):
+    from .runner import equivalence_table
+
+    beam, source = _beam_from(args)
+    from appendages.equivalence import fit_chain
+    import warnings
+
+    fits = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        for match in ("poles-and-zeros", "frequencies"):
+            fits[match] = fit_chain(beam, args.n_bodies, match=match)
+    return beam, source, equivalence_table(beam, fits)
+
+
+def _cmd_table(args) -> int:
+    from .report import equivalence_markdown, to_json
+
+    if args.n_bodies < 2:
+        raise _UserError(f"--n-bodies must be at least 2; got {args.n_bodies}")
+    beam, source, table = _equivalence(args)
+    if args.json:
+        print(to_json({"beam": _beam_dict(beam), "source": source, **table}))
+        return 0
+    header, rows = equivalence_markdown(table)
+    print(f"beam ({source}): length {beam.length:g} m, EJ {beam.bending_stiffness:.6g} N m^2, "
+          f"rho*A {beam.linear_density:.6g} kg/m, mass {beam.mass:.5g} kg")
+    cells = [header] + rows
+    widths = [max(len(str(r[i])) for r in cells) for i in range(len(header))]
+    for k, row in enumerate(cells):
+        print("  ".join(str(c).rjust(w) if i else str(c).ljust(w)
+                        for i, (c, w) in enumerate(zip(row, widths))).rstrip())
+        if k == 0:
+            print("  ".join("-" * w for w in widths))
+    return 0
+
+
+def _beam_dict(beam) -> dict:
+    return {"length": beam.length, "bending_stiffness": beam.bending_stiffness,
+            "linear_density": beam.linear_density, "damping_ratio": beam.damping_ratio,
+            "mass": beam.mass, "inertia": beam.inertia}
+
+
+def _cmd_fit(args) -> int:
+    import warnings
+
+    from appendages.equivalence import fit_chain
+
+    from .report import to_json
+    from .runner import _describe
+
+    if args.n_bodies < 2:
+        raise _UserError(f"--n-bodies must be at least 2; got {args.n_bodies}")
+    beam, source = _beam_from(args)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        chain = fit_chain(beam, args.n_bodies, match=args.match)
+    data = {"beam": _beam_dict(beam), "source": source, "match": args.match,
+            "n_bodies": args.n_bodies, "chain": _describe(chain),
+            "beam_frequencies": beam.natural_frequencies(args.n_bodies - 1).tolist()}
+    if args.json:
+        print(to_json(data))
+        return 0
+    c = data["chain"]
+    print(f"chain of {args.n_bodies} bodies fitted to the beam ({source}) by "
+          f"match = {args.match!r}")
+    print(f"{'body':>4}  {'length [m]':>12}  {'mass [kg]':>12}  {'inertia [kg m^2]':>16}  "
+          f"{'com offset [m]':>14}")
+    for k in range(args.n_bodies):
+        print(f"{k + 1:>4}  {c['lengths'][k]:>12.6g}  {c['masses'][k]:>12.6g}  "
+              f"{c['inertias'][k]:>16.6g}  {c['com_offsets'][k]:>14.6g}")
+    print("hinge stiffnesses [N m/rad]: " + ", ".join(f"{v:.6g}" for v in c["hinge_stiffnesses"]))
+    print("natural frequencies [rad/s]: chain " + ", ".join(
+        f"{v:.5g}" for v in c["natural_frequencies"]) + "; beam " + ", ".join(
+        f"{v:.5g}" for v in data["beam_frequencies"]))
+    return 0
+
+
+def _cmd_scenes(args) -> int:
+    from .scene import example_scenes, load_scene, scene_path
+
+    for name in example_scenes():
+        print(f"{name:14s} {load_scene(scene_path(name)).title}")
+    return 0
+
+
+def _fmu_error():
+    from fmu import FMUError
+
+    return FMUError
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``flexsat`` console script; returns the exit code."""
+    from appendages.interface import FlexsatError
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return 2
+    try:
+        if args.command == "run":
+            return _cmd_run(args)
+        if args.command == "export":
+            return _cmd_run(args, export_only=True)
+        if args.command == "table":
+            return _cmd_table(args)
+        if args.command == "fit":
+            return _cmd_fit(args)
+        return _cmd_scenes(args)
+    except (FlexsatError, _UserError) as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"flexsat: error: {exc}", file=sys.stderr)
+        return 2
+    except _fmu_error() as exc:
+        if args.debug:
+            traceback.print_exc()
+        print(f"flexsat: FMU export failed: {exc}", file=sys.stderr)
+        return 1
+    except BrokenPipeError:
+        # stdout closed early (e.g. piped into head): not an error of flexsat
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except KeyboardInterrupt:
+        print("flexsat: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # an internal error: one line, traceback on --debug
+        if args.debug:
+            traceback.print_exc()
+        print(f"flexsat: internal error: {type(exc).__name__}: {exc} (run with --debug for the "
+              "traceback)", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
