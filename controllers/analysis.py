@@ -362,26 +362,34 @@ def flexible_modes(plant: control.StateSpace, *, input: str = TORQUE, output: st
 # --------------------------------------------------------------------------------------------
 # closing the loop
 # --------------------------------------------------------------------------------------------
-def close_loop(plant: control.StateSpace, controller: control.StateSpace) -> control.StateSpace:
+def close_loop(plant, controller: control.StateSpace):
     """Close the attitude loop by signal names.
 
     Parameters
     ----------
-    plant : control.StateSpace
-        Continuous-time plant (input ``'torque'``, outputs ``'theta'``, ``'omega'``, ...).
+    plant : control.StateSpace or control.FrequencyResponseData
+        Continuous-time plant (input ``'torque'``, outputs ``'theta'``, ``'omega'``, ...). An FRD
+        plant (e.g. the exact distributed model) gives the closed loop's frequency response on
+        its grid; it needs ``'theta'`` or ``'omega'`` (the other is j w times / divided by it).
     controller : control.StateSpace
         Controller with output ``'torque'``; its inputs are plant outputs (measurements) and
         reference inputs (names containing ``'ref'``). If the controller is discrete-time
         (``dt`` > 0), the plant is discretised with a zero-order hold at that ``dt`` and the
         result is the exact sampled-data loop at the sampling instants (every plant input,
-        including disturbances, is then held constant over a sample).
+        including disturbances, is then held constant over a sample). FRD plants need a
+        continuous controller.
 
     Returns
     -------
-    control.StateSpace
+    control.StateSpace or control.FrequencyResponseData
         Inputs: the controller's reference inputs, then the plant's inputs other than torque.
         Outputs: every plant output, then ``'torque'``. States: plant states, controller states.
+        With u = torque, y_m the measurements and d the other plant inputs:
+        torque = (K_r r + K_y (C_m x + D_md d)) / (1 - K_y D_mt), the algebraic loop through the
+        feedthroughs solved exactly (an error if 1 - K_y D_mt = 0).
     """
+    if isinstance(plant, control.FrequencyResponseData):
+        return _close_loop_frd(plant, controller)
     _check_plant(plant)
     _check_controller(controller)
     measured = _measurements(plant, controller)
@@ -428,6 +436,53 @@ def close_loop(plant: control.StateSpace, controller: control.StateSpace) -> con
     states = [f"plant_x{i}" for i in range(n_p)] + [f"controller_x{i}" for i in range(n_c)]
     return control.ss(np.vstack([A_top, A_bot]), np.vstack([B_top, B_bot]), C, D, plant.dt,
                       inputs=inputs, outputs=outputs, states=states, name="closed_loop")
+
+
+def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.StateSpace
+                    ) -> control.FrequencyResponseData:
+    """Closed-loop frequency response on an FRD plant's grid (see :func:`close_loop`)."""
+    _check_plant(plant, allow_frd=True)
+    _check_controller(controller)
+    if _is_digital(controller):
+        raise ValueError("close_loop on a FrequencyResponseData plant needs a continuous "
+                         f"controller; got dt={controller.dt}")
+    loop = _Loop(plant, controller)  # measured rows of the plant (theta/omega derived)
+    p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
+    refs = _reference_inputs(controller, sorted(set(p_out) | set(loop.measured)))
+    disturbances = [n for n in p_in if n != TORQUE]
+    omega = loop.omega
+    jw = 1j * omega
+    data = np.asarray(plant.frdata)[:, :, : omega.size]  # (p, m, f)
+    K = _evaluator(controller, list(controller.input_labels), [TORQUE])(jw)[:, 0, :]  # (f, c)
+    c_in = list(controller.input_labels)
+    Ky = K[:, [c_in.index(n) for n in loop.measured]]  # (f, n_meas)
+    Kr = K[:, [c_in.index(n) for n in refs]]  # (f, n_ref)
+
+    def measured_rows(column: int) -> np.ndarray:  # (f, n_meas) response of y_m to one input
+        rows = []
+        for name in loop.measured:
+            if name in p_out:
+                rows.append(data[p_out.index(name), column])
+            elif name == OMEGA:
+                rows.append(jw * data[p_out.index(THETA), column])
+            else:
+                rows.append(data[p_out.index(OMEGA), column] / jw)
+        return np.array(rows).T
+
+    i_t = p_in.index(TORQUE)
+    denominator = 1.0 - np.sum(Ky * measured_rows(i_t), axis=1)  # (f,)
+    torque_r = Kr / denominator[:, None]  # (f, n_ref)
+    torque_d = np.stack([np.sum(Ky * measured_rows(p_in.index(n)), axis=1) for n in disturbances],
+                        axis=1).reshape(omega.size, len(disturbances)) / denominator[:, None]
+    Pt = data[:, i_t, :].T  # (f, p)
+    Pd = np.stack([data[:, p_in.index(n), :].T for n in disturbances], axis=2).reshape(
+        omega.size, len(p_out), len(disturbances))
+    y_r = Pt[:, :, None] * torque_r[:, None, :]
+    y_d = Pt[:, :, None] * torque_d[:, None, :] + Pd
+    response = np.concatenate([np.concatenate([y_r, y_d], axis=2),
+                               np.concatenate([torque_r, torque_d], axis=1)[:, None, :]], axis=1)
+    return control.frd(np.moveaxis(response, 0, 2), omega, inputs=refs + disturbances,
+                       outputs=p_out + [TORQUE], name="closed_loop")
 
 
 # --------------------------------------------------------------------------------------------

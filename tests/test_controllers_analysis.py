@@ -96,7 +96,10 @@ def test_close_loop_signals():
     loop = controllers.close_loop(COLLOCATED, K)
     assert list(loop.input_labels) == ["theta_ref", "disturbance_torque"]
     with pytest.raises(TypeError, match="plant must be a control.StateSpace"):
-        controllers.close_loop(control.frd(COLLOCATED, [1.0, 2.0]), K)
+        controllers.close_loop(control.tf([1.0], [J, 0.0, 0.0]), K)
+    digital = controllers.pd(COLLOCATED, natural_frequency=0.1, sample_time=0.1)
+    with pytest.raises(ValueError, match="FrequencyResponseData plant needs a continuous"):
+        controllers.close_loop(control.frd(COLLOCATED, [1.0, 2.0]), digital)
     bad = control.ss([], [], [], [[1.0, 1.0]], inputs=["theta", "gyro"], outputs=["torque"])
     with pytest.raises(ValueError, match=r"\['gyro'\] are neither plant outputs nor reference"):
         controllers.close_loop(COLLOCATED, bad)
@@ -130,6 +133,24 @@ def test_close_loop_against_frequency_domain_algebra(seed):
         y = np.outer(P[:, 1], torque) + np.hstack([np.zeros((4, 1)), P[:, [0]]])
         expected = np.vstack([y, torque])
         np.testing.assert_allclose(loop(s), expected, rtol=1e-10, atol=1e-12)
+
+
+def test_close_loop_on_frequency_response_data():
+    """The closed loop on an FRD plant equals the state-space closed loop's frequency response,
+    also when the FRD has theta only (omega = j w theta), as the exact distributed model does."""
+    plant = modal_plant(J, [(2.0, 0.005, 1.0, 0.004), (9.0, 0.005, 1.0, 0.002)])
+    K = controllers.lqr(plant, attitude_weight=100.0, rate_weight=300.0, torque_weight=1.0)
+    w = np.logspace(-2, 2, 200)
+    reference = controllers.close_loop(plant, K)(1j * w)  # (outputs, inputs, f)
+    both = controllers.close_loop(control.frd(plant, w), K)
+    assert list(both.input_labels) == ["theta_ref", "disturbance_torque"]
+    assert list(both.output_labels) == ["theta", "omega", "torque"]
+    np.testing.assert_allclose(both.frdata, reference, rtol=1e-9, atol=1e-12)
+    theta_only = control.ss(plant.A, plant.B, plant.C[:1], 0, inputs=list(plant.input_labels),
+                            outputs=["theta"])
+    alone = controllers.close_loop(control.frd(theta_only, w), K)
+    assert list(alone.output_labels) == ["theta", "torque"]
+    np.testing.assert_allclose(alone.frdata, reference[[0, 2]], rtol=1e-9, atol=1e-12)
 
 
 def test_disturbance_step_closed_form():
