@@ -71,11 +71,12 @@ def fmus(tmp_path_factory):
                       reference=True, stop_time=2.0),
         "pd": export(pd_controller(), folder / "pd.fmu"),
         "rigid": export(rigid_body(), folder / "rigid.fmu", interfaces=("cs",)),
+        "rigid_me": export(rigid_body(), folder / "rigid_me.fmu", interfaces=("me",)),
         "modal": export(modal_plant(), folder / "modal.fmu"),
     }
 
 
-@pytest.mark.parametrize("name", ["hub", "pd", "rigid", "modal"])
+@pytest.mark.parametrize("name", ["hub", "pd", "rigid", "rigid_me", "modal"])
 def test_validate_fmu_finds_no_problems(fmus, name):
     assert validate_fmu(str(fmus[name])) == []
 
@@ -126,9 +127,11 @@ def test_model_structure_follows_sparsity(fmus):
     assert pd.derivatives == []
 
 
-def test_only_cs_interface_when_asked(fmus):
+def test_only_the_interfaces_asked_for(fmus):
     description = read_model_description(str(fmus["rigid"]))
     assert description.modelExchange is None and description.coSimulation is not None
+    description = read_model_description(str(fmus["rigid_me"]))
+    assert description.modelExchange is not None and description.coSimulation is None
 
 
 def test_binary_exports_only_fmi2_symbols(fmus, tmp_path):
