@@ -81,7 +81,8 @@ def _as_vector(name: str, values, unit: str, *, size: int | None = None,
     if np.any(bad):
         what = "non-negative" if allow_zero else "positive"
         k = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {arr[k]!r} at index {k}")
+        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {float(arr[k])!r} "
+                         f"at index {k}")
     arr.flags.writeable = False
     return arr
 
@@ -185,7 +186,8 @@ class HingedChain(FiniteAppendage):
                 k = int(np.flatnonzero(over)[0])
                 raise ValueError(
                     f"com_offsets must lie in [0, length of the body] [m]; got "
-                    f"{self.com_offsets[k]!r} for body {k} of length {self.lengths[k]!r}")
+                    f"{float(self.com_offsets[k])!r} for body {k} of length "
+                    f"{float(self.lengths[k])!r}")
         self._check_mass_matrix()
 
     # -- constructors -------------------------------------------------------------------------
