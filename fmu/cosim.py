@@ -232,11 +232,13 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
         if both:
             raise CosimulationError(f"plant and controller both output {sorted(both)}; "
                                     "rename one so every signal has one source")
-        external = {name: [s for s in slaves if name in s.inputs and not
-                           (s is controller and name in plant_to_controller) and not
-                           (s is plant and name in controller_to_plant)]
-                    for name in list(controller.inputs) + list(plant.inputs)}
-        external = {name: targets for name, targets in external.items() if targets}
+        # external inputs: inputs that no output feeds, by name (one name may be an input
+        # of both FMUs: it is then set on both)
+        external: dict[str, list[_Slave]] = {}
+        for slave, connected in ((controller, plant_to_controller), (plant, controller_to_plant)):
+            for name in slave.inputs:
+                if name not in connected:
+                    external.setdefault(name, []).append(slave)
         signals = {}
         for name, signal in (inputs or {}).items():
             if name not in external:
@@ -258,16 +260,18 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
             slave.call("fmi2EnterInitializationMode", t0, slave.fmu.enterInitializationMode)
             slave.call("fmi2ExitInitializationMode", t0, slave.fmu.exitInitializationMode)
 
-        p2c_out = [plant.outputs[n] for n in plant_to_controller]
-        p2c_in = [controller.inputs[n] for n in plant_to_controller]
-        c2p_out = [controller.outputs[n] for n in controller_to_plant]
-        c2p_in = [plant.inputs[n] for n in controller_to_plant]
         plant_out_names = list(plant.outputs)
         controller_out_names = list(controller.outputs)
         plant_out_vrs = [plant.outputs[n] for n in plant_out_names]
         controller_out_vrs = [controller.outputs[n] for n in controller_out_names]
-        external_names = [n for n in external if n not in plant.outputs and n not in controller.outputs]
-        recorded_external = [n for n in external_names]
+        # connections as (position in the source's output list, input value reference)
+        p2c_from = [plant_out_names.index(n) for n in plant_to_controller]
+        p2c_in = [controller.inputs[n] for n in plant_to_controller]
+        c2p_from = [controller_out_names.index(n) for n in controller_to_plant]
+        c2p_in = [plant.inputs[n] for n in controller_to_plant]
+        # a name that is also an output (of the same FMU, which cannot feed itself) would
+        # clash in the result: such an input keeps its value and is not recorded
+        recorded_external = [n for n in external if n not in plant.outputs and n not in controller.outputs]
 
         def apply_external(t: float) -> list[float]:
             values = []
@@ -291,15 +295,15 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
             if method == "gauss-seidel":
                 r = apply_external(t)
                 y = plant.get(plant_out_vrs, t)
-                controller.set(p2c_in, [y[plant_out_vrs.index(vr)] for vr in p2c_out], t)
+                controller.set(p2c_in, [y[i] for i in p2c_from], t)
                 u = controller.get(controller_out_vrs, t)
-                plant.set(c2p_in, [u[controller_out_vrs.index(vr)] for vr in c2p_out], t)
+                plant.set(c2p_in, [u[i] for i in c2p_from], t)
             else:
                 y = plant.get(plant_out_vrs, t)
                 u = controller.get(controller_out_vrs, t)
                 r = apply_external(t)
-                controller.set(p2c_in, [y[plant_out_vrs.index(vr)] for vr in p2c_out], t)
-                plant.set(c2p_in, [u[controller_out_vrs.index(vr)] for vr in c2p_out], t)
+                controller.set(p2c_in, [y[i] for i in p2c_from], t)
+                plant.set(c2p_in, [u[i] for i in c2p_from], t)
             rows[k] = [t, *y, *u, *r]
             if k < n_steps:
                 for slave in slaves:
