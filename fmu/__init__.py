@@ -10,10 +10,10 @@ FMUError, FMUBuildError, CosimulationError
     Exceptions.
 """
 
-from .cosim import cosimulate
+from .cosim import Signal, cosimulate
 from .errors import CosimulationError, FMUBuildError, FMUError
 from .export import DEFAULT_STEP, DEFAULT_STOP_TIME, export
 from .units import SI_UNITS, guess_unit
 
-__all__ = ["export", "cosimulate", "FMUError", "FMUBuildError", "CosimulationError",
+__all__ = ["export", "cosimulate", "Signal", "FMUError", "FMUBuildError", "CosimulationError",
            "DEFAULT_STEP", "DEFAULT_STOP_TIME", "SI_UNITS", "guess_unit"]
