@@ -310,8 +310,8 @@ def test_two_hundred_bodies_keep_their_accuracy():
         W = chain.W(s)
         np.testing.assert_allclose(W, recursive_W(chain, s), rtol=1e-9, atol=0.0)
         np.testing.assert_allclose(W, W.T, rtol=1e-12, atol=0.0)
-    # pinned-free zeros (tan x = tanh x roots 3.9266023120, 7.0685827500, Blevins)
-    pinned = np.array([3.9266023120, 7.0685827500]) ** 2 * exact[0] / BLEVINS_FREE_FREE[0] ** 2
+    # pinned-free zeros (tan x = tanh x roots 3.9266023120, 7.0685827456, mpmath.findroot)
+    pinned = np.array([3.9266023120, 7.0685827456]) ** 2 * exact[0] / BLEVINS_FREE_FREE[0] ** 2
     np.testing.assert_allclose(chain.zeros(1)[:2], pinned, rtol=1e-8)
 
 

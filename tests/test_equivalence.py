@@ -1,0 +1,339 @@
+"""Tests of appendages.equivalence: the paper's table, the criterion, and the chain fits.
+
+The paper (PAPER.md) prints its numbers to 5 significant digits. Its inputs are printed to the
+same precision (w1 = 2.8744, w2 = 7.9231 1/s; k_L = 0.26989, c = 37.134 N*m), and its w2 is not
+the exact free-free frequency of its rod: Blevins' beta_2 L = 7.853204624 gives 7.92356 (the
+ratio w2/w1 = (7.853204624/4.730040745)^2 = 2.756499 vs the paper's 7.9231/2.8744 = 2.756436,
+independent of the rod's data). The table's zeros were evidently computed with the paper's
+printed frequencies, so the reproduction below feeds them in; with them every number agrees
+to within 0.55 of a unit in its last printed digit except n22 = n32 (one unit; no consistent set of
+the paper's printed inputs reproduces its n22 to half a unit: the inputs' rounding alone moves
+it by up to 1.2 units, computed in test_paper_table_chain_column).
+"""
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+from appendages.beam import Beam
+from appendages.chain import HingedChain
+from appendages.equivalence import (EquivalenceResult, FitWarning, ModelQuantities, criterion,
+                                    fit_chain, spectral_errors)
+from appendages.interface import ConvergenceError, FiniteAppendage, RootModel
+
+PAPER_FREQUENCIES = (2.8744, 7.9231)  # [1/s], as printed (PAPER.md)
+
+# The paper's table, rows in its order: k1, k2 = k3, k4, n11, n21 = n31, n41, n12, n22 = n32, n42.
+ROWS = ("k1", "k2 = k3", "k4", "n11", "n21 = n31", "n41", "n12", "n22 = n32", "n42")
+PAPER_BEAM = (1.9588, -0.9145, 0.5639, 1.9965, 1.3322, 0.8793, 6.5858, 5.5945, 4.8272)
+PAPER_CHAIN = (1.5814, -0.5647, 0.2627, 2.0583, 1.4653, 1.0524, 7.1097, 6.4729, 5.9092)
+UNIT = 1e-4  # one unit in the last printed digit of every row above
+
+
+@pytest.fixture(scope="module")
+def rod():
+    """The paper's rod: L = 10 m, d = 0.01 m, rho = 7800 kg/m^3, E = 2.06e11 N/m^2."""
+    return Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11)
+
+
+@pytest.fixture(scope="module")
+def fitted3(rod):
+    return fit_chain(rod, 3)
+
+
+class _Realisation(FiniteAppendage):
+    """A FiniteAppendage around a given RootModel (to substitute modal frequencies)."""
+
+    def __init__(self, root_model, like):
+        self._rm, self.length, self.mass, self.inertia = (root_model, like.length, like.mass,
+                                                          like.inertia)
+
+    def _root_model(self):
+        return self._rm
+
+
+def two_mode_beam(rod, frequencies=None):
+    """The paper's 2-mode free-free truncation, optionally with other modal frequencies
+    (its root model has the modal stiffness diag(w^2) in the last two coordinates)."""
+    model = rod.truncated(2, method="free-free")
+    if frequencies is None:
+        return model
+    rm = model.root_model()
+    K = rm.stiffness.copy()
+    K[2:, 2:] = np.diag(np.square(frequencies))
+    return _Realisation(RootModel(rm.mass, rm.damping, K, rm.tip, rm.coordinate_names), model)
+
+
+def table_values(result: EquivalenceResult, column: str) -> np.ndarray:
+    rows = {label: (ref, cand) for label, _, ref, cand, _ in result.rows()}
+    index = 0 if column == "reference" else 1
+    return np.array([rows[label][index] for label in ROWS])
+
+
+# -- the paper's fit and table ------------------------------------------------------------------
+def test_frequency_fit_reproduces_paper_parameters(rod):
+    """k_L = 0.26989 and c = 37.134 N*m (PAPER.md), at half a unit of the printed digit."""
+    chain = fit_chain(rod, 3, match="frequencies", frequencies=PAPER_FREQUENCIES)
+    k_L = chain.lengths[1] / chain.length
+    np.testing.assert_allclose(k_L, 0.26989, rtol=0, atol=0.5e-5)
+    np.testing.assert_allclose(chain.hinge_stiffnesses, [37.134, 37.134], rtol=0, atol=0.5e-3)
+    np.testing.assert_allclose(chain.poles(), PAPER_FREQUENCIES, rtol=1e-10)
+    np.testing.assert_allclose(chain.lengths[0], chain.lengths[2], rtol=1e-14)
+
+
+def test_frequency_fit_to_exact_beam(rod):
+    """Against the exact frequencies 2.874459, 7.923556 the same fit gives k_L = 0.269877 and
+    c = 37.1368 N*m: 2.7 and 5.5 half-units from the paper's, the effect of its low w2.
+    The poles are matched to 1e-10; m, J, L are the rod's to round-off."""
+    chain = fit_chain(rod, 3, match="frequencies")
+    np.testing.assert_allclose(chain.poles(), rod.natural_frequencies(2), rtol=1e-10)
+    np.testing.assert_allclose(chain.lengths[1] / 10.0, 0.269877, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(chain.hinge_stiffnesses[0], 37.1368, rtol=0, atol=1e-4)
+    np.testing.assert_allclose([chain.mass, chain.inertia, chain.length],
+                               [rod.mass, rod.inertia, rod.length], rtol=1e-13)
+
+
+def test_paper_table_chain_column(rod):
+    """The chain column, from the chain fitted to the paper's frequencies.
+
+    Tolerance per number: half a unit in its last printed digit plus the change caused by
+    rounding the paper's printed inputs w1, w2 (half a unit of 1e-4 each), computed here by
+    refitting; that allowance is largest for the second zeros (0.4-1.2 units).
+    """
+    def values(frequencies):
+        chain = fit_chain(rod, 3, match="frequencies", frequencies=frequencies)
+        return table_values(criterion(two_mode_beam(rod), chain), "candidate")
+
+    base = values(PAPER_FREQUENCIES)
+    spread = np.zeros_like(base)
+    for k in range(2):
+        bumped = np.array(PAPER_FREQUENCIES)
+        bumped[k] += 0.5e-4
+        spread += np.abs(values(tuple(bumped)) - base)
+    np.testing.assert_array_less(np.abs(base - PAPER_CHAIN), 0.5 * UNIT + spread)
+    # and all but n22 = n32 at 0.55 units without any allowance
+    close = np.abs(base - PAPER_CHAIN) < 0.55 * UNIT
+    assert [label for label, ok in zip(ROWS, close) if not ok] in ([], ["n22 = n32"])
+
+
+def test_paper_table_beam_column(rod):
+    """The 2-mode beam column, from beam.truncated(2, "free-free") with the paper's printed
+    frequencies: every number within 0.55 units of its last digit but n22 = n32, within 1.1
+    (the module docstring explains the one-unit discrepancy)."""
+    result = criterion(two_mode_beam(rod, PAPER_FREQUENCIES),
+                       fit_chain(rod, 3, match="frequencies", frequencies=PAPER_FREQUENCIES))
+    beam = table_values(result, "reference")
+    deviation = np.abs(beam - PAPER_BEAM) / UNIT
+    assert np.all(deviation < 1.1), dict(zip(ROWS, deviation))
+    assert np.all(np.delete(deviation, ROWS.index("n22 = n32")) < 0.55), dict(zip(ROWS, deviation))
+
+
+def test_paper_table_with_exact_frequencies(rod):
+    """With the exact frequencies (the truncation as it is, the chain fitted to them) the
+    gains and first zeros still agree within 0.8 units; the second zeros move by up to 4.2
+    units, the effect of the paper's w2 being 4.6 units below the exact 7.92356 1/s."""
+    result = criterion(two_mode_beam(rod), fit_chain(rod, 3, match="frequencies"))
+    for column, paper in (("reference", PAPER_BEAM), ("candidate", PAPER_CHAIN)):
+        deviation = np.abs(table_values(result, column) - paper) / UNIT
+        assert np.all(deviation[:6] < 0.8) and np.all(deviation < 4.5), deviation
+
+
+def test_paper_signs_and_condition_3(rod):
+    """k1 > 0, k2 = k3 < 0, k4 > 0 for both models (DESIGN.md); m, J, L equal (condition (3)),
+    relative differences of the frequencies below 1e-9 (they are matched)."""
+    result = criterion(two_mode_beam(rod), fit_chain(rod, 3, match="frequencies"))
+    for q in (result.reference, result.candidate):
+        k1, k2, k3, k4 = q.gains
+        assert k1 > 0 and k2 < 0 and k4 > 0 and k2 == k3
+    for label in ("m", "J", "L"):
+        assert abs(result.relative_differences[label]) < 1e-13
+    for label in ("w1", "w2"):
+        assert abs(result.relative_differences[label]) < 1e-9
+
+
+# -- criterion ----------------------------------------------------------------------------------
+def test_criterion_against_exact_beam(rod):
+    """With the distributed beam as reference the gains are not applicable and the zeros are the
+    exact ones: pinned-free (tan x = tanh x), x = k pi and sliding-free (tan x = -tanh x) roots,
+    n11 = 3.9266023120^2 s0, n21 = pi^2 s0, n41 = 2.3650203724^2 s0 with
+    s0 = sqrt(EJ/(rho A L^4)) (roots from mpmath.findroot at 20 digits; rtol 1e-9)."""
+    chain = HingedChain.rfem(rod, 5)
+    result = criterion(rod, chain, names=("exact beam", "RFEM 5"))
+    assert result.reference.gains is None and result.candidate.gains is not None
+    s0 = np.sqrt(rod.bending_stiffness / (rod.linear_density * rod.length**4))
+    np.testing.assert_allclose(result.reference.zeros[1][0], 3.9266023120**2 * s0, rtol=1e-9)
+    np.testing.assert_allclose(result.reference.zeros[2][0], np.pi**2 * s0, rtol=1e-9)
+    np.testing.assert_allclose(result.reference.zeros[4][0], 2.3650203724**2 * s0, rtol=1e-9)
+    assert result.relative_differences["k1"] is None
+    text = str(result)
+    assert "exact beam" in text and "n/a" in text and "n22 = n32" in text
+    markdown = result.to_markdown()
+    assert "| k2 = k3 [1/(N*s^2)] | n/a |" in markdown
+    json.dumps(result.to_dict())  # serialisable
+
+
+def test_criterion_of_a_model_with_itself_is_zero(rod):
+    """Identical models: every relative difference is zero and the band errors are round-off
+    (W is evaluated twice; threaded BLAS may sum in another order: 1e-15)."""
+    chain = HingedChain.rfem(rod, 4)
+    result = criterion(chain, chain)
+    assert all(d == 0.0 for d in result.relative_differences.values())
+    np.testing.assert_allclose(result.max_log_error, np.zeros(4), rtol=0, atol=1e-15)
+
+
+def test_band_error_definition(rod):
+    """max_log_error is max |ln(W_cand/W_ref)| on s = omega (zeta_e + i): recomputed by hand on
+    the same grid (rtol 1e-12), W2 and W3 identical, and the default band stops below the exact
+    beam's third W4 zero (1.21 w2): geometric mean of w2 and that zero."""
+    chain = HingedChain.rfem(rod, 6)
+    result = criterion(rod, chain, n_points=50, evaluation_damping=0.05)
+    w = rod.natural_frequencies(2)
+    third_w4_zero = rod.zeros(4, 3)[2]
+    np.testing.assert_allclose(result.band, (w[0] / 10, np.sqrt(w[1] * third_w4_zero)),
+                               rtol=1e-12)
+    s = np.geomspace(*result.band, 50) * (0.05 + 1j)
+    by_hand = np.abs(np.log(chain.W(s)[:, 0, 0] / rod.W(s)[:, 0, 0])).max()
+    np.testing.assert_allclose(result.max_log_error[0], by_hand, rtol=1e-12)
+    assert result.max_log_error[1] == result.max_log_error[2]
+    assert np.all(result.rms_log_error <= result.max_log_error)
+
+
+def test_band_error_decreases_with_rfem_refinement(rod):
+    """RFEM chains converge to the beam, so their W_r error over a fixed band falls."""
+    band = (0.3, 8.0)
+    errors = [criterion(rod, HingedChain.rfem(rod, n), band=band).max_log_error
+              for n in (4, 8, 16, 32)]
+    assert np.all(np.diff(np.array(errors), axis=0) < 0)
+    assert np.all(errors[-1] < 0.05)
+
+
+def test_spectral_errors(rod):
+    """Relative pole and zero errors: length n - 1 for a chain of n bodies; zero for the
+    2-mode free-free truncation's poles (they are the exact ones, 1e-12)."""
+    errors = spectral_errors(rod, HingedChain.rfem(rod, 5))
+    assert set(errors) == {"poles", "W1", "W2", "W4"}
+    assert all(e.shape == (4,) for e in errors.values())
+    np.testing.assert_allclose(spectral_errors(rod, two_mode_beam(rod))["poles"], 0.0, atol=1e-12)
+    with pytest.raises(ValueError, match="fewer than n = 6"):
+        spectral_errors(rod, HingedChain.rfem(rod, 5), n=6)
+
+
+# -- flexsat's fit ------------------------------------------------------------------------------
+def max_error(rod, chain, n=None):
+    return max(np.abs(e).max() for e in spectral_errors(rod, chain, n).values())
+
+
+def test_fitted_chain_keeps_condition_3(rod, fitted3):
+    """m, J, L and the centre of mass of the fitted chain equal the rod's (rtol 1e-13)."""
+    np.testing.assert_allclose([fitted3.mass, fitted3.inertia, fitted3.length,
+                                fitted3.center_of_mass],
+                               [rod.mass, rod.inertia, rod.length, rod.length / 2], rtol=1e-13)
+    assert fitted3.n_bodies == 3 and np.all(fitted3.masses > 0) and np.all(fitted3.inertias >= 0)
+
+
+def test_fitted_three_body_chain_beats_the_paper_on_every_zero(rod, fitted3):
+    """Against the exact beam, each of the six zeros n_r1, n_r2 (r = 1, 2, 4) of the fitted chain
+    is closer than the paper's chain's; all its poles and zeros are within 2 % (measured 1.6 %;
+    the paper's chain is off by up to 52 %)."""
+    paper = spectral_errors(rod, HingedChain.three_body(10.0, rod.mass, 0.26989, 37.134))
+    ours = spectral_errors(rod, fitted3)
+    for key in ("W1", "W2", "W4"):
+        assert np.all(np.abs(ours[key]) < np.abs(paper[key])), key
+    assert max_error(rod, fitted3) < 0.02
+    criterion_result = criterion(rod, fitted3)
+    assert criterion_result.max_log_error.max() < criterion(
+        rod, HingedChain.three_body(10.0, rod.mass, 0.26989, 37.134)).max_log_error.max()
+
+
+@pytest.mark.parametrize("n_bodies", [4, 5])
+def test_fitted_chains_beat_rfem_and_superelements(rod, n_bodies):
+    """Fitted chains have smaller pole and zero errors than RFEM chains of the same size, both
+    over all their n - 1 poles and zeros and over the paper's first two (and than superelement
+    chains where the size matches: 2n + 1 bodies)."""
+    fitted, rfem = fit_chain(rod, n_bodies), HingedChain.rfem(rod, n_bodies)
+    assert max_error(rod, fitted) < max_error(rod, rfem)
+    assert max_error(rod, fitted, 2) < max_error(rod, rfem, 2)
+    if n_bodies % 2 == 1:
+        superelements = HingedChain.superelements(rod, (n_bodies - 1) // 2)
+        assert max_error(rod, fitted) < max_error(rod, superelements)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("n_bodies", [7, 9])
+def test_larger_fitted_chains_beat_rfem_and_superelements(rod, n_bodies):
+    """As above for 8 and 10 degrees of freedom; the fitted errors also fall with size."""
+    fitted, rfem = fit_chain(rod, n_bodies), HingedChain.rfem(rod, n_bodies)
+    superelements = HingedChain.superelements(rod, (n_bodies - 1) // 2)
+    for n in (None, 2):
+        assert max_error(rod, fitted, n) < min(max_error(rod, rfem, n),
+                                               max_error(rod, superelements, n))
+    assert max_error(rod, fitted) < 0.01
+
+
+def test_frequency_fit_for_more_bodies(rod):
+    """match="frequencies" with n bodies matches n - 1 frequencies with a symmetric
+    frozen-piece chain (rtol 1e-9)."""
+    for n in (2, 4, 5):
+        chain = fit_chain(rod, n, match="frequencies")
+        np.testing.assert_allclose(chain.poles()[: n - 1], rod.natural_frequencies(n - 1),
+                                   rtol=1e-9)
+        np.testing.assert_allclose(chain.lengths, chain.lengths[::-1], rtol=1e-12)
+        np.testing.assert_allclose(chain.inertia, rod.inertia, rtol=1e-13)
+
+
+def test_fit_that_cannot_match_says_so(rod):
+    """Two frequencies 0.1 % apart are out of reach of a symmetric three-body chain."""
+    with pytest.raises(ConvergenceError, match="did not match the frequencies"):
+        fit_chain(rod, 3, match="frequencies", frequencies=(1.0, 1.001))
+
+
+def test_fit_budget_warns_or_fails(rod):
+    """A budget too small to improve on the start raises; a small one warns."""
+    with pytest.raises(ConvergenceError, match="did not converge"):
+        fit_chain(rod, 4, max_nfev=1)
+    with pytest.warns(FitWarning, match="stopped at max_nfev=3"):
+        chain = fit_chain(rod, 4, max_nfev=3)
+    assert max_error(rod, chain) < max_error(rod, HingedChain.rfem(rod, 4))
+
+
+# -- bad input ----------------------------------------------------------------------------------
+def test_bad_input(rod):
+    chain = HingedChain.rfem(rod, 3)
+    with pytest.raises(ValueError, match="match must be one of"):
+        fit_chain(rod, 3, match="zeros")
+    with pytest.raises(ValueError, match="n_bodies must be at least 2"):
+        fit_chain(rod, 1)
+    with pytest.raises(TypeError, match="n_bodies must be an integer"):
+        fit_chain(rod, 3.0)
+    with pytest.raises(TypeError, match="beam must be a uniform Beam"):
+        fit_chain(chain, 3)
+    with pytest.raises(ValueError, match=r"frequencies must be 2 increasing positive values "
+                                         r"\[rad/s\]"):
+        fit_chain(rod, 3, match="frequencies", frequencies=(7.9, 2.8))
+    with pytest.raises(ValueError, match=r"frequencies \[rad/s\] applies to match='frequencies'"):
+        fit_chain(rod, 3, frequencies=(2.8, 7.9))
+    with pytest.raises(ValueError, match="max_nfev must be a positive integer"):
+        fit_chain(rod, 3, max_nfev=0)
+    with pytest.raises(TypeError, match="reference must be an appendage model"):
+        criterion("beam", chain)
+    with pytest.raises(TypeError, match="candidate must be an appendage model"):
+        criterion(rod, 3.0)
+    with pytest.raises(ValueError, match=r"band must be \(omega_min, omega_max\)"):
+        criterion(rod, chain, band=(5.0, 1.0))
+    with pytest.raises(ValueError, match="n_points must be at least 10"):
+        criterion(rod, chain, n_points=3)
+    with pytest.raises(ValueError, match=r"evaluation_damping must be finite and in \(0.0, 1.0\)"):
+        criterion(rod, chain, evaluation_damping=0.0)
+    with pytest.raises(ValueError, match="band must be given"):
+        criterion(HingedChain.rfem(rod, 2), chain)
+
+
+def test_model_quantities_of_hinged_root(rod):
+    """A chain with a drive spring has no finite gains: ModelQuantities says so (None)."""
+    rigid = HingedChain.rfem(rod, 3)
+    hinged = HingedChain(rigid.lengths, rigid.masses, rigid.inertias,
+                         np.concatenate([[100.0], rigid.hinge_stiffnesses]), root="hinged")
+    q = ModelQuantities.of(hinged, "hinged")
+    assert q.gains is None and q.poles[1] is not None
