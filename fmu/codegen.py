@@ -47,7 +47,8 @@ def _c_array(name: str, values: np.ndarray) -> str:
     if flat.size == 0:
         # C99 has no zero-length arrays; the dummy element is never read
         return f"static const double {name}[1] = {{0.0}};\n"
-    items = [c_double(v) for v in flat.tolist()]
+    # repr of a Python float is always a valid C double literal ("2.0", "1e-05", "1e+16")
+    items = list(map(repr, flat.tolist()))
     lines = [", ".join(items[i:i + 6]) for i in range(0, len(items), 6)]
     body = ",\n    ".join(lines)
     return f"static const double {name}[{flat.size}] = {{\n    {body}\n}};\n"
