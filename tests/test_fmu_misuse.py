@@ -146,6 +146,19 @@ def test_null_arguments_to_instantiate(body):
     assert "unknown fmuType 7" in body.last_message()
 
 
+def test_memory_callbacks(body):
+    """Without allocateMemory/freeMemory the FMU falls back to calloc/free; with only one
+    of them it refuses (it could not free what it allocated)."""
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = body.callbacks.logger
+    c = body.Instantiate(b"libc", CO_SIMULATION, body.guid, None, byref(callbacks), 0, 0)
+    assert c
+    body.FreeInstance(c)
+    callbacks.allocateMemory = body.callbacks.allocateMemory
+    assert not body.Instantiate(b"half", CO_SIMULATION, body.guid, None, byref(callbacks), 0, 0)
+    assert "allocateMemory and freeMemory must both be given" in body.last_message()
+
+
 def test_null_instance_is_an_error_not_a_crash(body):
     values = (c_double * 1)()
     vrs = (c_uint * 1)(0)
