@@ -542,9 +542,7 @@ class _Loop:
         z = self._point(omega)
         K = self.controller_ev(z)[:, 0, :]  # (f, n_meas)
         if self.frd:
-            if omega.shape != self.omega.shape or np.any(omega != self.omega):
-                raise ValueError("a FrequencyResponseData plant is known only on its own grid")
-            P = self.plant_data.T  # (f, n_meas)
+            P = self._interpolated_plant(omega)  # (f, n_meas)
             if self.digital:
                 # zero-order hold seen from continuous time, aliasing neglected:
                 # H(jw) = (1 - exp(-jwT)) / (jwT) (Franklin, Powell & Workman, sec. 6.3)
@@ -553,6 +551,39 @@ class _Loop:
         else:
             P = self.plant_ev(z)[:, :, 0]
         return -np.sum(K * P, axis=1)
+
+    def _interpolated_plant(self, omega: np.ndarray) -> np.ndarray:
+        """FRD plant rows at omega: exact on its grid, in between linear in log frequency for
+        log|P| and arg P (P_i (P_i+1 / P_i)^t), so the grid must resolve the plant's resonances;
+        the controller is always evaluated exactly."""
+        grid = self.omega
+        lo, hi = grid[0] * (1 - 1e-12), grid[-1] * (1 + 1e-12)
+        if np.any(omega < lo) or np.any(omega > hi):
+            raise ValueError(f"frequencies must lie within the FrequencyResponseData grid "
+                             f"[{grid[0]:.4g}, {grid[-1]:.4g}] rad/s; got [{omega.min():.4g}, "
+                             f"{omega.max():.4g}]")
+        i = np.clip(np.searchsorted(grid, omega), 1, grid.size - 1)
+        t = (np.log(omega) - np.log(grid[i - 1])) / (np.log(grid[i]) - np.log(grid[i - 1]))
+        P0, P1 = self.plant_data[:, i - 1], self.plant_data[:, i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            P = P0 * (P1 / P0) ** t
+        exact = np.isclose(t, 1.0, rtol=0, atol=1e-15)
+        P[:, exact] = P1[:, exact]
+        return P.T
+
+    def _controller_roots(self) -> np.ndarray:
+        """Poles of the controller and zeros of each of its measurement channels."""
+        c = self.controller
+        roots = [_poles_of(self.controller_ev)]
+        n = c.nstates
+        for name in self.measured:
+            j = list(c.input_labels).index(name)
+            M = np.block([[c.A, c.B[:, [j]]], [c.C, c.D[:, [j]]]])
+            N = scipy.linalg.block_diag(np.eye(n), np.zeros((1, 1)))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z = scipy.linalg.eigvals(M, N)
+            roots.append(z[np.isfinite(z) & (np.abs(z) < 1e12)])
+        return np.concatenate(roots).astype(complex)
 
     def zeros(self) -> np.ndarray:
         """Invariant zeros of L (z-plane for a digital loop): finite generalized eigenvalues of
@@ -578,9 +609,11 @@ class _Loop:
     def grid(self, n_points: int = 600) -> np.ndarray:
         """Frequency grid [rad/s] refined around every lightly damped pole and zero of L."""
         if self.frd:
-            return self.omega
-        roots = np.concatenate([_poles_of(self.plant_ev), _poles_of(self.controller_ev),
-                                self.zeros()]).astype(complex)
+            # the FRD's own grid (it must resolve the plant) plus the controller's resonances
+            roots = self._controller_roots()
+        else:
+            roots = np.concatenate([_poles_of(self.plant_ev), _poles_of(self.controller_ev),
+                                    self.zeros()]).astype(complex)
         if self.digital:
             # z-plane roots: map back with s = log(z) / T (z = 0 is infinitely fast: drop it)
             roots = np.log(roots[np.abs(roots) > 1e-12]) / self.dt
@@ -607,6 +640,9 @@ class _Loop:
                 continue
             pts = lam.imag + zeta * w * np.tan(theta)
             grid.append(pts[(pts > w_lo) & (pts < w_hi)])
+        if self.frd:
+            inside = [g[(g >= self.omega[0]) & (g <= self.omega[-1])] for g in grid[1:]]
+            return np.unique(np.concatenate([self.omega] + inside))
         return np.unique(np.concatenate(grid))
 
 
@@ -625,12 +661,13 @@ def loop_frequency_response(plant, controller, omega: np.ndarray | None = None
     Parameters
     ----------
     plant : control.StateSpace or control.FrequencyResponseData
-        Plant with named signals (FRD: only its own frequency grid is available).
+        Plant with named signals (FRD: frequencies within its grid, interpolated as in
+        :func:`margins`).
     controller : control.StateSpace
         Continuous or digital controller.
     omega : array of float, rad/s, optional
-        Frequencies; default a logarithmic grid refined around the lightly damped poles
-        (the FRD's own grid for an FRD plant).
+        Frequencies; default a logarithmic grid refined around the lightly damped poles and
+        zeros (for an FRD plant its own grid plus the controller's resonances).
 
     Returns
     -------
@@ -700,10 +737,11 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     Parameters
     ----------
     plant : control.StateSpace or control.FrequencyResponseData
-        Plant with named signals. For a FrequencyResponseData plant the margins are computed on
-        its own frequency grid (crossings interpolated linearly in log frequency), so the grid
-        must resolve its resonances; it needs output 'theta' or 'omega' (the other one is
-        derived as omega = j w theta).
+        Plant with named signals. For a FrequencyResponseData plant the grid is the FRD's own
+        plus the controller's resonances; between the FRD's points the plant is interpolated
+        linearly in log frequency (log|P| and arg P), the controller is evaluated exactly, so the
+        FRD grid must resolve the plant's resonances. It needs output 'theta' or 'omega' (the
+        other is derived as omega = j w theta).
     controller : control.StateSpace
         Continuous or digital controller. For a digital controller and a StateSpace plant, L is
         the exact sampled-data loop gain L(e^{j omega T}) with the plant discretised by a
@@ -732,15 +770,9 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     if omega.size < 2 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
         raise ValueError("omega must hold at least two positive finite frequencies [rad/s]")
     L = loop(omega)
-    if loop.frd:
-        # between grid points: linear in log frequency for log|L| and arg L
-        def value(w: float) -> complex:
-            i = int(np.clip(np.searchsorted(omega, w), 1, omega.size - 1))
-            t = (math.log(w) - math.log(omega[i - 1])) / (math.log(omega[i]) - math.log(omega[i - 1]))
-            return complex(L[i - 1] * (L[i] / L[i - 1]) ** t)
-    else:
-        def value(w: float) -> complex:
-            return complex(loop(np.array([w]))[0])
+
+    def value(w: float) -> complex:
+        return complex(loop(np.array([w]))[0])
 
     # phase crossovers: L real and negative (Im L changes sign where Re L < 0)
     gain_margin, w_pc = math.inf, math.inf

@@ -203,7 +203,7 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
             raise ValueError(f"roll_off corner must exceed 2 x natural frequency = {2 * wn:.4g} "
                              f"rad/s; got {wr:.4g} rad/s")
         controller = _second_order((0.0, 0.0, wr * wr), wr, ROLL_OFF_DAMPING) * controller
-    controller = control.ss(controller.A, controller.B, controller.C, controller.D,
+    controller = control.ss(controller.A, controller.B, controller.C, controller.D, 0,
                             inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="pd")
     if sample_time is not None:
         check_sample_time(sample_time, plant, controller)

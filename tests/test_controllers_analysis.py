@@ -299,6 +299,30 @@ def test_margins_on_frequency_response_data():
         controllers.margins(control.frd(control.ss(theta_only, outputs=["x"]), [1.0, 2.0]), K)
 
 
+def test_frd_loop_resolves_the_controllers_own_resonances():
+    """FRD grid refined only at the plant's mode (2.1 rad/s, 30 points per decade elsewhere,
+    steps of 8 %) and a PD with a sharp notch at 6 rad/s (zeta_z = 0.02: the dip is ~0.24 rad/s
+    wide, half an FRD step): the loop response adds points across the notch and evaluates the
+    controller exactly there, the plant interpolated between FRD points."""
+    truth = modal_plant(J, [(2.1, 0.005, 1.0, 0.004)])
+    K = controllers.pd(truth, natural_frequency=0.3, notch=6.0)
+    w = np.unique(np.concatenate([np.logspace(-3, 3, 181),
+                                  2.1 * (1 + 0.005 * np.tan(np.linspace(-1.5, 1.5, 61)))]))
+    frd = control.frd(truth, w)
+    omega, L = controllers.loop_frequency_response(frd, K)
+    assert omega.size > w.size
+    _, L_exact = controllers.loop_frequency_response(truth, K, omega=omega)
+    # plant interpolation error only (smooth away from 2.1 rad/s; exact for the 1/s^2 part)
+    np.testing.assert_allclose(L, L_exact, rtol=2e-3)
+    dense = np.linspace(5.5, 6.5, 20001)
+    depth = np.min(np.abs(controllers.loop_frequency_response(truth, K, omega=dense)[1]))
+    near = (omega > 5.5) & (omega < 6.5)
+    assert np.min(np.abs(L[near])) == pytest.approx(depth, rel=1e-2)
+    on_frd_grid = (w > 5.5) & (w < 6.5)
+    coarse = np.min(np.abs(controllers.loop_frequency_response(truth, K, omega=w[on_frd_grid])[1]))
+    assert coarse > 1.5 * depth  # the FRD's own points alone would miss the notch
+
+
 def test_digital_margins_lose_phase_to_the_hold():
     """The ZOH costs about w T / 2 rad of phase at crossover (Franklin, Powell & Workman)."""
     K = controllers.pd(RIGID, natural_frequency=0.5, damping=0.5)
