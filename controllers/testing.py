@@ -124,6 +124,7 @@ def assert_closed_loops_close(actual, expected, *,
         With a table of every compared metric: unit, actual, expected, abs and relative
         difference, tolerance, PASS/FAIL.
     """
+    __tracebackhide__ = True  # pytest: report the failure at the caller's line
     a = _as_metrics(actual, "actual", angle, duration, t_final)
     e = _as_metrics(expected, "expected", angle, duration, t_final)
     ok, table = compare_metrics(a, e, rtol=rtol, atol=atol, metrics=metrics)
