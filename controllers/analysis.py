@@ -879,7 +879,7 @@ def spillover(truth_plant, controller) -> SpilloverVerdict:
         the contour is indented to the right around s = 0, so
         Z = P - (2 Delta - n0 pi) / (2 pi), where Delta is the phase change of 1 + L(j omega) over
         the FRD grid and P the controller's open right-half-plane poles. This needs |L| > 10 at the
-        lowest and < 0.1 at the highest grid frequency.
+        lowest and < 0.1 at the highest grid frequency, and a continuous controller.
 
     References
     ----------
@@ -902,6 +902,10 @@ def spillover(truth_plant, controller) -> SpilloverVerdict:
             least_damping_ratio=None if i is None else float(zeta[i]),
             least_damped_frequency=None if i is None else float(w[i]),
             margins=mg, method="eigenvalues")
+    if _is_digital(controller):
+        raise ValueError("spillover on a FrequencyResponseData truth_plant needs a continuous "
+                         "controller (the sampled-data Nyquist count would need the aliased "
+                         f"plant response); got dt={controller.dt}: use a StateSpace truth_plant")
     omega, L = loop_frequency_response(truth_plant, controller)
     if abs(L[0]) < 10 or abs(L[-1]) > 0.1:
         raise ValueError(

@@ -353,6 +353,9 @@ def test_spillover_verdict_stable_and_unstable():
     assert not frd_bad.stable and frd_bad.n_unstable_poles == 2 and frd_bad.method == "nyquist"
     with pytest.raises(ValueError, match="frequency grid too narrow"):
         controllers.spillover(control.frd(COLLOCATED, np.logspace(-1, 1, 100)), K)
+    digital = controllers.pd(COLLOCATED, natural_frequency=0.1, sample_time=0.1)
+    with pytest.raises(ValueError, match="needs a continuous controller"):
+        controllers.spillover(control.frd(COLLOCATED, w), digital)
 
 
 def test_spillover_least_damped_pole_closed_form():
