@@ -1,0 +1,266 @@
+"""The flexsat command: exit codes, files written, JSON content, nothing half-written."""
+import json
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from appendages import Beam
+from appendages.equivalence import fit_chain
+from spacecraft import cli
+from spacecraft.runner import run
+
+# The small test scene of tests/test_scene.py as a file: no FMUs, plots only when asked.
+SCENE = """\
+title = "test boom"
+
+[hub]
+mass = 100.0
+inertia = 50.0
+
+[[appendages]]
+name = "rod"
+position = [0.5, 0.0]
+
+[appendages.beam]
+section = "rod"
+length = 10.0
+diameter = 0.01
+density = 7800.0
+youngs_modulus = 2.06e11
+damping_ratio = 0.005
+
+[appendages.fit]
+match = "frequencies"
+
+[fidelity]
+n_modes = 3
+
+[controller]
+types = ["pd"]
+
+[controller.pd]
+natural_frequency = 0.1
+
+[manoeuvre]
+slew_angle = 10.0
+slew_time = 60.0
+duration = 120.0
+step = 0.5
+
+[outputs]
+tip_deflection = true
+
+[report]
+equivalence = false
+"""
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    path = tmp_path / "boom.toml"
+    path.write_text(SCENE)
+    return path
+
+
+def flexsat(*args):
+    return cli.main([str(a) for a in args])
+
+
+def test_run_writes_the_report_folder(scene_file, tmp_path, capsys):
+    out = tmp_path / "report"
+    assert flexsat("run", scene_file, "--out", out, "--quiet") == 0
+    stdout = capsys.readouterr().out
+    assert f"to {out}" in stdout and "PD tuned on chain, paper's fit: stable" in stdout
+    for name in ("report.md", "report.html", "results.json", ".flexsat-complete"):
+        assert (out / name).is_file(), name
+    assert not (out / "fmu").exists() and not (out / "plots").exists()
+    data = json.loads((out / "results.json").read_text())
+    # every number of the report is in the JSON, equal to what the library gives directly
+    direct = run(scene_file)
+    row = data["closed_loops"][0]
+    assert row["controller"] == "pd" and row["design"] == "frequencies"
+    for which in ("design", "truth"):
+        for name, value in direct.data["closed_loops"][0]["metrics"][which].items():
+            assert row["metrics"][which][name] == pytest.approx(value, rel=1e-12), name
+    assert row["verdict"]["stable"] is True
+    assert data["fidelity"]["n_modes"] == 3 and data["truth"]["n_states"] > 0
+    assert data["stats"]["fmu_builds"] == 0 and data["stats"]["plots"] == 0
+    # report.md and report.html carry the same numbers
+    md, page = (out / "report.md").read_text(), (out / "report.html").read_text()
+    overshoot = f"{row['metrics']['truth']['overshoot']:.5g}"
+    assert overshoot in md and overshoot in page
+    assert "Verdicts" in md and "Verdicts" in page
+
+
+def test_run_json_on_stdout(scene_file, tmp_path, capsys):
+    assert flexsat("run", scene_file, "--out", tmp_path / "o", "--json", "--quiet") == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["closed_loops"][0]["metrics"]["truth"]["peak_tip_deflection"] > 0
+    assert data == json.loads((tmp_path / "o" / "results.json").read_text())
+
+
+def test_progress_goes_to_stderr(scene_file, tmp_path, capsys):
+    assert flexsat("run", scene_file, "--out", tmp_path / "o") == 0
+    captured = capsys.readouterr()
+    assert "closing the loops" in captured.err and "closing the loops" not in captured.out
+
+
+def test_no_plots_flag_and_plots_when_asked(scene_file, tmp_path):
+    text = SCENE.replace("equivalence = false", "equivalence = false\nplots = [\"slew\", "
+                                                "\"pole_zero\"]")
+    scene_file.write_text(text)
+    assert flexsat("run", scene_file, "--out", tmp_path / "a", "--quiet") == 0
+    assert sorted(p.name for p in (tmp_path / "a" / "plots").iterdir()) == [
+        "pole_zero.png", "slew_pd.png"]
+    assert json.loads((tmp_path / "a" / "results.json").read_text())["stats"]["plots"] == 2
+    assert flexsat("run", scene_file, "--out", tmp_path / "b", "--quiet", "--no-plots") == 0
+    assert not (tmp_path / "b" / "plots").exists()
+    assert json.loads((tmp_path / "b" / "results.json").read_text())["stats"]["plots"] == 0
+
+
+@pytest.mark.parametrize("edit, message", [
+    (("diameter = 0.01", "diameter = -0.01"),
+     r"boom\.toml: appendages\[0\]\.beam\.diameter: must be positive \[m\]; got -0\.01"),
+    (("[hub]", "colour = 'red'\n[hub]"), r"boom\.toml: colour: unknown key"),
+    (("mass = 100.0", "mass = 'heavy'"), r"boom\.toml: hub\.mass: must be a number"),
+])
+def test_user_errors_exit_2_with_one_line(scene_file, tmp_path, capsys, edit, message):
+    scene_file.write_text(SCENE.replace(*edit))
+    out = tmp_path / "o"
+    assert flexsat("run", scene_file, "--out", out, "--quiet") == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    import re
+    assert re.search(message, err)
+    assert not out.exists()
+    assert not list(tmp_path.glob(".o.partial-*"))
+
+
+def test_missing_scene_file_and_bad_option(tmp_path, capsys):
+    assert flexsat("run", tmp_path / "nope.toml", "--out", tmp_path / "o") == 2
+    assert "nope.toml: no such scene file" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:
+        flexsat("run", "--frobnicate")
+    assert exc.value.code == 2
+
+
+def test_output_folder_taken_is_a_user_error(scene_file, tmp_path, capsys):
+    out = tmp_path / "taken"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    assert flexsat("run", scene_file, "--out", out, "--quiet") == 2
+    assert "exists and is not empty" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == ["keep.txt"]
+
+
+def test_failure_leaves_no_half_written_folder(scene_file, tmp_path, capsys, monkeypatch):
+    import spacecraft.report
+
+    def broken(*args, **kwargs):
+        folder = args[1]
+        (folder / "report.md").write_text("half")
+        raise RuntimeError("disk on fire")
+
+    monkeypatch.setattr(spacecraft.report, "write_report", broken)
+    out = tmp_path / "o"
+    assert flexsat("run", scene_file, "--out", out, "--quiet") == 1
+    err = capsys.readouterr().err
+    assert "internal error: RuntimeError: disk on fire" in err and "Traceback" not in err
+    assert not out.exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["boom.toml"]
+
+
+def test_fit_json_reproduces_the_papers_chain(capsys):
+    assert flexsat("fit", "--match", "frequencies", "--json") == 0
+    data = json.loads(capsys.readouterr().out)
+    lengths = np.array(data["chain"]["lengths"])
+    # PAPER.md: k_L = 0.26989, c = 37.134 N*m (printed to 5 digits) from the printed
+    # frequencies; the exact Blevins frequencies give 0.26988 and 37.137 (fit_chain docstring)
+    assert lengths[1] / lengths.sum() == pytest.approx(0.26989, abs=2e-5)
+    assert data["chain"]["hinge_stiffnesses"] == pytest.approx([37.134, 37.134], abs=5e-3)
+    assert data["chain"]["mass"] == pytest.approx(6.1261, abs=5e-5)
+
+
+def test_table_json_matches_the_library(capsys):
+    assert flexsat("table", "--json") == 0
+    data = json.loads(capsys.readouterr().out)
+    beam = Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11)
+    names = [c["name"] for c in data["columns"]]
+    assert names == ["beam, 2 modes (paper)", "chain, flexsat fit", "chain, paper's fit"]
+    q = data["quantities"]
+    # exact beam: w1, w2 and the zeros of W1 (pinned-free frequencies), closed forms
+    assert data["exact"][q.index("w1")] == pytest.approx(beam.natural_frequencies(1)[0],
+                                                         rel=1e-12)
+    assert data["exact"][q.index("n11")] == pytest.approx(beam.zeros(1, 1)[0], rel=1e-12)
+    # the paper's two-mode beam column: its printed k1 = 1.9588, n41 = 0.8793
+    two_mode = data["columns"][0]["values"]
+    assert two_mode[q.index("k1")] == pytest.approx(1.9588, abs=5e-5)
+    assert two_mode[q.index("n41")] == pytest.approx(0.8793, abs=5e-5)
+    # the paper's chain column: its printed k1 = 1.5814
+    paper = data["columns"][2]["values"]
+    assert paper[q.index("k1")] == pytest.approx(fit_chain(beam, 3, match="frequencies")
+                                                 .gains()[0], rel=1e-9)
+    assert paper[q.index("k1")] == pytest.approx(1.5814, abs=5e-4)
+
+
+def test_table_prints_the_papers_layout(capsys):
+    assert flexsat("table", "--length", "10", "--diameter", "0.01") == 0
+    out = capsys.readouterr().out
+    for label in ("k2 = k3", "n21 = n31", "w2", "chain, paper's fit", "beam (exact)"):
+        assert label in out
+
+
+def test_table_bad_beam_option_is_a_user_error(capsys):
+    assert flexsat("table", "--diameter", "-1") == 2
+    assert "beam.diameter: must be positive [m]" in capsys.readouterr().err
+
+
+def test_help_everywhere(capsys):
+    for command in ([], ["run"], ["table"], ["fit"], ["export"], ["scenes"]):
+        with pytest.raises(SystemExit) as exc:
+            flexsat(*command, "--help")
+        assert exc.value.code == 0
+        assert "usage: flexsat" in capsys.readouterr().out
+
+
+def test_console_entry_point_runs_as_a_module():
+    done = subprocess.run([sys.executable, "-m", "spacecraft.cli", "scenes"],
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0
+    assert "two_wings" in done.stdout and "hinged_wing" in done.stdout
+
+
+def test_export_writes_fmus_and_cross_check_files(scene_file, tmp_path, capsys):
+    """The one test that compiles FMUs (about 0.3 s each)."""
+    out = tmp_path / "fmus"
+    assert flexsat("export", scene_file, "--out", out, "--quiet") == 0
+    names = sorted(p.name for p in (out / "fmu").iterdir())
+    for model in ("plant", "pd", "closed_loop_pd"):
+        for suffix in (".fmu", "_in.csv", "_ref.csv", "_ref.opt"):
+            assert model + suffix in names
+    assert not (out / "report.md").exists()
+    from fmpy import simulate_fmu
+    from fmpy.util import read_csv
+    from fmpy.validation import validate_fmu
+
+    folder = out / "fmu"
+    assert validate_fmu(str(folder / "closed_loop_pd.fmu")) == []
+    # the FMU reproduces its own cross-check reference (computed by python-control) when driven
+    # by the cross-check input file: co-simulation with zero-order hold is exact at the grid
+    reference = read_csv(str(folder / "closed_loop_pd_ref.csv"))
+    inputs = read_csv(str(folder / "closed_loop_pd_in.csv"))
+    options = dict(line.split(",") for line in
+                   (folder / "closed_loop_pd_ref.opt").read_text().split("\n") if line)
+    result = simulate_fmu(str(folder / "closed_loop_pd.fmu"), fmi_type="CoSimulation",
+                          stop_time=float(options["StopTime"]),
+                          output_interval=float(options["StepSize"]), input=inputs)
+    t_ref = reference["time"]
+    grid = np.concatenate([t_ref[:-1][np.diff(t_ref) > 0], t_ref[-1:]])  # right limits
+    theta_ref = np.array([reference["theta"][np.flatnonzero(t_ref == t)[-1]] for t in grid])
+    theta = np.interp(grid, result["time"], result["theta"])
+    # 1e-9 of the signal's size: ZOH stepping is exact, the rest is round-off
+    np.testing.assert_allclose(theta, theta_ref, rtol=0, atol=1e-9 * np.abs(theta_ref).max())
+    assert "closed_loop_pd.fmu" in capsys.readouterr().out

@@ -1,0 +1,209 @@
+"""The scene runner: each skip is proven by the runner's own work counters, and the results
+that were asked for are unchanged by the skip (or by pruning, or by the chosen fidelity)."""
+import copy
+import math
+
+import control
+import numpy as np
+import pytest
+
+import controllers
+from appendages import Beam
+from appendages.equivalence import fit_chain
+from spacecraft import Hub, Mount, Spacecraft
+from spacecraft.report import output_folder, write_report
+from spacecraft.runner import run
+
+from test_scene import scene_with
+
+WING = {"section": "rectangular", "length": 6.0, "width": 0.5, "thickness": 0.02,
+        "density": 1600.0, "youngs_modulus": 7.0e10, "damping_ratio": 0.0}
+
+
+def lean(**changes):
+    """The small test scene with nothing optional: no equivalence table, outputs or exports."""
+    return scene_with(**{"report.equivalence": False, **changes})
+
+
+def two_wings(prune: bool, damping_ratio: float = 0.0):
+    wing = dict(WING, damping_ratio=damping_ratio)
+    return {
+        "hub": {"mass": 500.0, "inertia": 400.0},
+        "appendages": [
+            {"name": "px", "position": [1.0, 0.0], "direction": 0.0, "beam": wing,
+             "fit": {"match": "frequencies"}},
+            {"name": "mx", "position": [-1.0, 0.0], "direction": 180.0, "beam": wing,
+             "fit": {"match": "frequencies"}}],
+        "fidelity": {"n_modes": 4, "prune": prune},
+        "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.2}},
+        "manoeuvre": {"slew_angle": 5.0, "slew_time": 40.0, "duration": 80.0, "step": 0.2},
+        "outputs": {"tip_deflection": True},
+        "report": {"equivalence": False},
+    }
+
+
+def trace(response, name):
+    labels = list(response.output_labels)
+    return np.asarray(response.y).reshape(len(labels), -1)[labels.index(name)]
+
+
+def test_lean_scene_builds_nothing_optional(tmp_path):
+    result = run(lean())
+    s = result.stats
+    assert s.exact_reference_evaluations == 0      # n_modes given, no exact outputs, no table
+    assert s.lqr_designs == 0 and s.pd_designs == 1
+    assert s.tip_deflection_outputs == 0 and s.root_load_outputs == 0
+    assert s.chain_fits == 1
+    # one design variant x one controller x (design, truth): two loops, one setup each
+    assert s.simulations == 2 and s.simulator_setups == 2
+    # one eigen-decomposition per model set (truth, design), reused by every plant and loop
+    assert s.eigendecompositions == 2
+    assert not any(n.endswith("tip_deflection") for n in result.truth["sim"].output_labels)
+    with output_folder(tmp_path / "out") as folder:
+        data = write_report(result, folder)
+    assert s.fmu_builds == 0 and s.plots == 0
+    assert not (tmp_path / "out" / "fmu").exists()
+    assert not list((tmp_path / "out").rglob("*.png"))
+    assert data["stats"]["fmu_builds"] == 0
+
+
+def test_tip_deflection_skip_leaves_attitude_unchanged():
+    without = run(lean())
+    with_tip = run(lean(**{"outputs.tip_deflection": True}))
+    assert without.stats.tip_deflection_outputs == 0
+    assert with_tip.stats.tip_deflection_outputs == 2   # one per plant: truth and design
+    key = ("frequencies", "pd", "truth")
+    assert "rod_tip_deflection" in with_tip.responses[key].output_labels
+    for name in ("theta", "omega", "torque"):
+        # same plant dynamics, extra output row only: identical to round-off
+        np.testing.assert_allclose(trace(with_tip.responses[key], name),
+                                   trace(without.responses[key], name), rtol=0, atol=1e-14)
+
+
+def test_lqr_only_when_asked():
+    assert run(lean()).stats.lqr_designs == 0
+    both = run(lean(**{"controller.types": ["pd", "lqr"],
+                       "controller.lqr": {"attitude_weight": 7.6, "torque_weight": 1.0}}))
+    assert both.stats.lqr_designs == 1 and both.stats.pd_designs == 1
+    assert {r["controller"] for r in both.data["closed_loops"]} == {"pd", "lqr"}
+    # PD results do not depend on whether an LQR was also tuned
+    pd_alone = run(lean()).data["closed_loops"][0]["metrics"]["truth"]
+    pd_both = [r for r in both.data["closed_loops"] if r["controller"] == "pd"][0]
+    for name, value in pd_alone.items():
+        assert pd_both["metrics"]["truth"][name] == pytest.approx(value, rel=1e-12, abs=1e-15)
+
+
+def test_exact_reference_only_when_asked():
+    plain = run(lean())
+    exact = run(lean(**{"outputs.exact_reference": True}))
+    assert plain.stats.exact_reference_evaluations == 0 and plain.exact_frd is None
+    assert exact.stats.exact_reference_evaluations > 0
+    assert exact.data["closed_loops"][0]["exact_verdict"]["stable"] is True
+    # the exact frequency response tends to the rigid body 1/(J s^2), J about the system's
+    # centre of mass (issue 3's low-frequency limit), at the lowest grid frequency
+    frd = exact.exact_frd
+    w0 = frd.omega[0]
+    J = exact.data["exact"]["inertia"]
+    theta0 = np.asarray(frd.frdata)[0, 0, 0]
+    assert theta0 * (-J * w0**2) == pytest.approx(1.0, rel=1e-6)  # error ~ (w0/w1)^2 ~ 1e-8
+
+
+def test_chain_fit_shared_by_identical_wings_and_plants_cached():
+    result = run(two_wings(prune=True))
+    assert result.stats.chain_fits == 1          # both wings: same beam, same criterion
+    assert result.stats.cache_hits > 0
+    assert result.stats.eigendecompositions == 2
+
+
+def test_pruning_two_symmetric_wings_drops_symmetric_modes_results_unchanged():
+    pruned, full = run(two_wings(prune=True)), run(two_wings(prune=False))
+    # 4 modes per wing: 8 coupled elastic modes, half of them symmetric (hub translation, no
+    # rotation): torque cannot excite them, so 1 rotation + 4 antisymmetric modes remain
+    assert full.data["truth"]["modes_kept"] == 9
+    assert pruned.data["truth"]["modes_kept"] == 5
+    assert pruned.stats.modes_dropped == full.stats.modes_dropped + 4
+    key = ("frequencies", "pd", "truth")
+    for name in ("theta", "torque", "px_tip_deflection", "mx_tip_deflection"):
+        a, b = trace(pruned.responses[key], name), trace(full.responses[key], name)
+        # an exact reduction: only round-off of the two realisations differs
+        np.testing.assert_allclose(a, b, rtol=0, atol=1e-9 * np.abs(b).max())
+    for name, value in full.data["closed_loops"][0]["metrics"]["truth"].items():
+        assert pruned.data["closed_loops"][0]["metrics"]["truth"][name] == pytest.approx(
+            value, rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.xfail(reason="Spacecraft.plant(prune=True) treats round-off (1e-16) off-diagonal "
+                          "modal damping as coupling, so damped symmetric modes are kept; "
+                          "fix proposed to the lead for spacecraft/coupling.py", strict=False)
+def test_pruning_damped_symmetric_wings():
+    pruned = run(two_wings(prune=True, damping_ratio=0.005))
+    assert pruned.data["truth"]["modes_kept"] == 5
+
+
+def test_fidelity_from_tolerance_is_small_and_accurate():
+    chosen = run(lean(**{"fidelity.n_modes": None, "fidelity.tolerance": 1e-3}))
+    n = chosen.data["fidelity"]["n_modes"]
+    choice = chosen.data["fidelity"]["choice"]
+    assert 1 <= n <= 4                       # not a fixed large number
+    last = choice["trials"][-1]
+    assert last["n_modes"] == n and last["frequency_error"] <= 1e-3 and last["gain_error"] <= 1e-3
+    # every smaller n failed the tolerance (the smallest n is chosen)
+    assert all(max(t["frequency_error"], t["gain_error"]) > 1e-3 for t in choice["trials"][:-1])
+    # the slew on the chosen truth model agrees with a 12-mode one to well below the
+    # tolerance relative to the slew angle (Craig-Bampton converges like n^-4 in frequency)
+    fine = run(lean(**{"fidelity.n_modes": 12}))
+    key = ("frequencies", "pd", "truth")
+    theta_c, theta_f = trace(chosen.responses[key], "theta"), trace(fine.responses[key], "theta")
+    assert np.max(np.abs(theta_c - theta_f)) < 1e-3 * math.radians(10.0)
+
+
+def test_results_match_the_library_called_directly():
+    result = run(lean(**{"outputs.tip_deflection": True}))
+    # the same models built by hand
+    beam = Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11, damping_ratio=0.005)
+    chain = fit_chain(beam, 3, match="frequencies")
+    w1 = float(chain.poles()[0])
+    from appendages.chain import HingedChain
+    chain = HingedChain(chain.lengths, chain.masses, chain.inertias, chain.hinge_stiffnesses,
+                        hinge_dampings=2 * 0.005 * chain.hinge_stiffnesses / w1,
+                        com_offsets=chain.com_offsets)
+    hub = Hub(100.0, 50.0)
+    truth = Spacecraft(hub, [Mount(beam.truncated(3), (0.5, 0.0), 0.0, name="rod")])
+    design = Spacecraft(hub, [Mount(chain, (0.5, 0.0), 0.0, name="rod")])
+    np.testing.assert_allclose(result.data["truth"]["coupled_frequencies"],
+                               truth.natural_frequencies(3), rtol=1e-12)
+    P_design = design.plant(prune=True)
+    K = controllers.pd(P_design, natural_frequency=0.1, damping=0.7)
+    loop = controllers.close_loop(truth.plant(prune=True, tip_deflection=True), K)
+    response = controllers.slew(loop, math.radians(10.0), 60.0, t_final=120.0, dt=0.5)
+    expected = controllers.metrics(response)
+    got = result.data["closed_loops"][0]["metrics"]["truth"]
+    for name, value in expected.items():
+        # forced_response vs the runner's exact simulator: the same interpretation of the
+        # input (linear between samples), agreement to round-off
+        assert got[name] == pytest.approx(value, rel=1e-8, abs=1e-12), name
+
+
+def test_disturbance_pulse_reaches_the_truth_loop():
+    result = run(lean(**{"manoeuvre.disturbance": {"input": "rod_tip_force", "amplitude": 0.01,
+                                                   "start": 10.0, "length": 5.0}}))
+    loop = result.loops[("frequencies", "pd", "truth")]
+    assert "rod_tip_force" in loop.input_labels
+    response = result.responses[("frequencies", "pd", "truth")]
+    u = np.asarray(response.u).reshape(loop.ninputs, -1)[list(loop.input_labels).index(
+        "rod_tip_force")]
+    t = np.asarray(response.t).reshape(-1)
+    assert u[(t >= 10.0) & (t < 15.0)] == pytest.approx(0.01)
+    assert np.all(u[(t < 10.0) | (t >= 15.0)] == 0.0)
+
+
+def test_hinged_root_chain_scene_runs():
+    from spacecraft.scene import scene_path
+
+    result = run(scene_path("hinged_wing"))
+    assert result.stats.exact_reference_evaluations == 0 and result.stats.chain_fits == 0
+    truth_chain = result.models["wing"]["truth"]
+    assert truth_chain.root == "hinged" and truth_chain.n_bodies == 20
+    assert {"wing_root_force", "wing_root_moment", "wing_tip_deflection"} <= set(
+        result.truth["sim"].output_labels)
+    assert result.data["closed_loops"][0]["verdict"]["stable"] is True
