@@ -11,14 +11,28 @@ The default scenario of every benchmark (issue 6 and issue 3):
 
 from __future__ import annotations
 
+import os
+import sys
+
+# Single-threaded BLAS unless asked otherwise (FLEXSAT_BENCH_BLAS_THREADS=default or a number):
+# on this 2-core machine, with other work running, OpenBLAS's threads make small dense
+# operations up to 100x slower (a 12x12 triangular solve: 12.7 ms threaded under load vs
+# 0.12 ms single-threaded), which would measure the machine's load, not the algorithms.
+# Must run before numpy is imported: every benchmark script imports this module first.
+BLAS_THREADS = os.environ.get("FLEXSAT_BENCH_BLAS_THREADS", "1")
+if BLAS_THREADS != "default":
+    if "numpy" in sys.modules:
+        print("warning: numpy imported before benchmarks/_common.py; BLAS threads not limited",
+              file=sys.stderr)
+    for _name in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ[_name] = BLAS_THREADS
+
 import datetime
 import gc
 import json
 import math
-import os
 import platform
 import statistics
-import sys
 import time
 from pathlib import Path
 from typing import Callable
@@ -116,6 +130,8 @@ def machine_info() -> dict:
         "scipy": scipy.__version__,
         "control": control.__version__,
         "platform": platform.platform(),
+        "blas_threads": BLAS_THREADS,
+        "load_average_1_5_15min": list(os.getloadavg()),
     }
 
 

@@ -26,6 +26,8 @@ integration error of Basilisk alone.
 
 from __future__ import annotations
 
+import _common  # noqa: F401  (first: limits BLAS threads before numpy is imported)
+
 import math
 import time
 

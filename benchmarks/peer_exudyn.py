@@ -17,6 +17,8 @@ continuous PD (the integration error of Exudyn alone).
 
 from __future__ import annotations
 
+import _common  # noqa: F401  (first: limits BLAS threads before numpy is imported)
+
 import time
 
 import numpy as np

@@ -50,6 +50,8 @@ Writes benchmarks/results/run_time_vs_error.json, .md and .png (``_quick`` suffi
 
 from __future__ import annotations
 
+import _common  # noqa: F401  (first: limits BLAS threads before numpy is imported)
+
 import argparse
 import math
 import sys

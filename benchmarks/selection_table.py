@@ -17,6 +17,8 @@ Run::
 
 from __future__ import annotations
 
+import _common  # noqa: F401  (first: limits BLAS threads before numpy is imported)
+
 import argparse
 import math
 import pprint

@@ -24,6 +24,8 @@ Writes benchmarks/results/truncation.json and truncation.md.
 
 from __future__ import annotations
 
+import _common  # noqa: F401  (first: limits BLAS threads before numpy is imported)
+
 import argparse
 import math
 import sys
