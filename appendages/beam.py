@@ -413,6 +413,35 @@ class Beam:
         scale = self.linear_density / math.sqrt(self.mass)
         return np.column_stack([2.0 * sigma / beta, 2.0 / beta**2]) * scale
 
+    def free_cantilever_overlap(self, n_free: int, n_cantilever: int) -> np.ndarray:
+        r"""Mass inner products of free-free and cantilever modes, shape (n_free, n_cantilever).
+
+        ``O[k, i] = integral rho*A phi_k psi_i dx`` (mass-normalised shapes, dimensionless).
+        From the beam equation and the boundary conditions (phi'' = phi''' = 0 at both ends,
+        psi = psi' = 0 at x = 0, psi'' = psi''' = 0 at x = L),
+        ``(b_k^4 - b_i^4) integral phi_k psi_i = phi_k(0) psi_i'''(0) - phi_k'(0) psi_i''(0)``,
+        exact where the roots are well apart. Free-free root k and cantilever root k + 1 both
+        tend to (k + 1/2) pi, where this form cancels; those pairs (k <= n_cantilever + 8) are
+        integrated by 2000-point Gauss-Legendre quadrature of the stable mode shapes instead.
+        """
+        L = self.length
+        xk = self._roots("free-free", n_free)
+        xi = self._roots("clamped-free", n_cantilever)
+        sk, _ = _shape_terms("free-free", xk)
+        si, _ = _shape_terms("clamped-free", xi)
+        # unnormalised shapes (integral of the square = L), in dimensionless roots x = b L:
+        # phi(0) = 2, phi'(0) = -2 sigma_k x_k/L, psi''(0) = 2 x_i^2/L^2, psi'''(0) = -2 sigma_i x_i^3/L^3
+        numerator = -4.0 * (si * xi**3)[None, :] + 4.0 * (sk * xk)[:, None] * (xi**2)[None, :]
+        with np.errstate(divide="ignore", invalid="ignore"):  # rows below are replaced
+            overlap = numerator / (xk[:, None] ** 4 - xi[None, :] ** 4)
+        n_quad = min(n_free, n_cantilever + 8)
+        nodes, weights = np.polynomial.legendre.leggauss(2000)
+        x = 0.5 * (nodes + 1.0) * L
+        phi = self.mode_shapes(x, n_quad)
+        psi = self.mode_shapes(x, n_cantilever, boundary="clamped-free")
+        overlap[:n_quad] = (phi * (0.5 * L * weights * self.linear_density)[:, None]).T @ psi
+        return overlap
+
     def _cantilever_tip_values(self, n: int) -> np.ndarray:
         xk = self._roots("clamped-free", n)
         sigma, c_plus = _shape_terms("clamped-free", xk)
