@@ -178,7 +178,7 @@ def test_matches_forced_response_lightly_damped(seed):
 
 @pytest.mark.parametrize("seed", [3, 4])
 def test_matches_forced_response_with_rigid_body_modes(seed):
-    """Defective eigenvalues (double integrators) take the Schur path."""
+    """Defective eigenvalues (double integrators, Jordan blocks at s = 0)."""
     rng = np.random.default_rng(seed)
     sys = modal_system(rng, 10, n_rigid=2, n_inputs=1, n_outputs=2)
     T = np.arange(2000) * 0.01
@@ -388,6 +388,16 @@ def test_siso_squeeze_like_forced_response():
     assert simulate(sys, T).outputs.shape == (5,)
     t, y = simulate(sys, T, 1.0)
     assert t.shape == (5,) and y.shape == (5,)
+
+
+def test_linspace_grid_with_round_off_is_accepted():
+    """np.linspace steps differ by ~eps * |T|; that is still even."""
+    sys = control.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
+    T = np.linspace(0.0, 1000.0, 100_001)
+    assert np.ptp(np.diff(T)) > 0          # not exactly even
+    y = simulate(sys, T, np.ones_like(T)).outputs
+    # Closed form 1 - e^-t; expm and propagation round-off only.
+    np.testing.assert_allclose(y, 1 - np.exp(-T), rtol=0, atol=1e-12)
 
 
 # --------------------------------------------------------------------------
