@@ -630,7 +630,9 @@ class _Loop:
         # -zeta w + j w sqrt(1-zeta^2) has |response| falling to 1/sqrt(2) at about w(1 +/- zeta),
         # so steps of a fraction of zeta w resolve its peak and its 180 deg phase swing (the
         # same for the notch of a lightly damped zero, an antiresonance).
-        theta = np.linspace(-1.45, 1.45, 41)
+        # an even count: no point falls on the peak itself, where an undamped pole (zeta = 0,
+        # a free beam mode) makes L infinite
+        theta = np.linspace(-1.45, 1.45, 40)
         for lam in roots:
             w = abs(lam)
             if lam.imag <= 0 or w <= 0:
@@ -726,8 +728,17 @@ def _crossings(f: Callable[[float], float], omega: np.ndarray, values: np.ndarra
     roots = [float(w) for w in omega[values == 0]]
     sign = np.sign(values)
     for i in np.nonzero(sign[:-1] * sign[1:] < 0)[0]:
-        roots.append(float(scipy.optimize.brentq(f, omega[i], omega[i + 1],
-                                                 xtol=1e-14 * omega[i + 1], rtol=1e-13)))
+        # a sign change may also be a pass through an undamped pole (f -> +-inf): brentq
+        # then closes in on the pole, where f is huge or not finite; such a point is no root
+        try:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                w = float(scipy.optimize.brentq(f, omega[i], omega[i + 1],
+                                                xtol=1e-14 * omega[i + 1], rtol=1e-13))
+                at_root = abs(f(w))
+        except ValueError:
+            continue
+        if math.isfinite(at_root) and at_root <= 1e-6 * max(abs(values[i]), abs(values[i + 1])):
+            roots.append(w)
     return roots
 
 
@@ -769,16 +780,20 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     omega = np.unique(np.asarray(omega, dtype=float).reshape(-1))
     if omega.size < 2 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
         raise ValueError("omega must hold at least two positive finite frequencies [rad/s]")
-    L = loop(omega)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        L = loop(omega)
+    finite = np.isfinite(L)  # a grid point exactly on an undamped pole: L is infinite there
+    omega, L = omega[finite], L[finite]
 
     def value(w: float) -> complex:
         return complex(loop(np.array([w]))[0])
 
-    # phase crossovers: L real and negative (Im L changes sign where Re L < 0)
+    # phase crossovers: L real and negative (Im L changes sign where Re L < 0). Crossings where
+    # |L| < 1e-9 (a gain margin above 180 dB) are round-off in Im L, not a margin.
     gain_margin, w_pc = math.inf, math.inf
     for w in _crossings(lambda w: value(w).imag, omega, L.imag):
         Lw = value(w)
-        if Lw.real < 0:
+        if Lw.real < 0 and abs(Lw) > 1e-9:
             gm = -20.0 * math.log10(abs(Lw))
             if abs(gm) < abs(gain_margin):
                 gain_margin, w_pc = gm, w
