@@ -105,12 +105,13 @@ def _chunk_maps(Ad, Bd0, Bd1, C, D, L: int, with_states: bool) -> _ChunkMaps:
     which enters only through Bd0.  y[s+t] = C x[s+t] + D u[s+t].
 
     The chunk-start transition is applied as x - Delta x with
-    Delta = I - Ad^L = (I - Ad) S_L, S_L = I + Ad + ... + Ad^(L-1): the
-    small quantity I - Ad is exact in floating point and S_L well
-    conditioned, so Delta carries relative round-off only.  Forming Ad^L
-    and subtracting it from I would lose the accuracy of slow modes
-    (|lambda| ~ 1), whose steady state (I - Ad^L)^-1 K u amplifies an
-    absolute error in Ad^L by 1 / (1 - |lambda|^L).
+    Delta = I - Ad^L = (I - Ad) S_L, S_L = I + Ad + ... + Ad^(L-1).  For
+    slow modes (eigenvalue lambda ~ 1) I - Ad has no cancellation error
+    (its diagonal is exact by Sterbenz's lemma) and S_L ~ L I none either,
+    so Delta carries relative round-off only.  Forming Ad^L and
+    subtracting it from I would leave an absolute error ~ L eps, which the
+    steady state (I - Ad^L)^-1 K u of a slow mode amplifies by
+    1 / (1 - |lambda|^L).  For other modes both forms carry ~ L eps.
 
     L is a power of two (S_L and Ad^L by doubling).  Cost
     O(n^3 log L + (n + p) n m L) without states; the states' map needs the
@@ -298,16 +299,16 @@ class Simulator:
         if with_states not in self._maps:
             L = self.chunk_length(with_states=with_states)
             with np.errstate(over="ignore", invalid="ignore"):
-                maps = _chunk_maps(self.Ad, self.Bd0, self.Bd1, self._C,
-                                   self._D, L, with_states)
-                if L > 1 and not all(
-                        np.all(np.isfinite(M)) for M in
-                        (maps.DeltaT, maps.KT, maps.Fy, maps.Fx)
-                        if M is not None):
-                    # Modes growing past the float range within one chunk
-                    # (absurdly unstable): one sample per chunk.
+                while True:
                     maps = _chunk_maps(self.Ad, self.Bd0, self.Bd1, self._C,
-                                       self._D, 1, with_states)
+                                       self._D, L, with_states)
+                    if L == 1 or all(np.all(np.isfinite(M)) for M in
+                                     (maps.DeltaT, maps.KT, maps.Fy, maps.Fx)
+                                     if M is not None):
+                        break
+                    # Modes growing past the float range within one chunk
+                    # (strongly unstable): shorter chunks.
+                    L //= 2
             self._maps[with_states] = maps
         return self._maps[with_states]
 
