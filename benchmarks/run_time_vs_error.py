@@ -329,7 +329,17 @@ def markdown(result: dict) -> str:
         f"`python benchmarks/run_time_vs_error.py{' --quick' if result['quick'] else ''}` on "
         f"{m['date_utc']} UTC; {m['cpu']}, {m['nproc']} cores; Python {m['python']}, numpy "
         f"{m['numpy']}, scipy {m['scipy']}, python-control {m['control']}. Medians of "
-        f"{result['repeats']} runs (peers: at least 3). Scenario: {result['scenario']}.",
+        f"{result['repeats']} runs (peers: at least 3); BLAS threads: "
+        f"{m.get('blas_threads')}; load average (1, 5, 15 min) at the end: "
+        f"{m.get('load_average_1_5_15min')}.",
+        "",
+        "Scenario: " + "; ".join(f"{k}: {v}" for k, v in result["scenario"].items()) + ".",
+        "Times: t_build = model + plant, t_freq = torque->theta frequency response at 1000 "
+        "points through W (t_freq_control: python-control on the plant), t_sim = closed-loop "
+        "slew 100 s at 100 Hz with controllers.simulate (t_sim_forced_response, t_sim_lsim: the "
+        "peers on the same loop), t_lqr = controllers.lqr on the plant. 'fitted' build times "
+        "include fit_chain. Errors: see the script's docstring; '-' = the model has fewer "
+        "poles/zeros than compared.",
         "",
         f"Closed-loop reference: {result['reference']['closed_loop']}; its own convergence "
         f"(vs {N_CHECK} modes): " + ", ".join(
@@ -375,6 +385,11 @@ def markdown(result: dict) -> str:
     return "\n".join(lines)
 
 
+def _num(value) -> float:
+    """A JSON error value: null (infinite: the model lacks the quantity) becomes inf."""
+    return math.inf if value is None else float(value)
+
+
 def plot(result: dict, path) -> None:
     import matplotlib
 
@@ -389,9 +404,11 @@ def plot(result: dict, path) -> None:
     floor = 1e-16
 
     def curve(ax, rows, x_of, y_of, label, style):
-        pts = [(x_of(r), y_of(r)) for r in rows]
+        pts = [(x_of(r), _num(y_of(r))) for r in rows]
+        # y == 0: the reference model itself (Craig-Bampton N_REF) -- not a measurement
         pts = [(x, max(y, floor)) for x, y in pts
-               if x is not None and y is not None and math.isfinite(y) and math.isfinite(x)]
+               if x is not None and y is not None and math.isfinite(y) and math.isfinite(x)
+               and y > 0]
         if pts:
             xs, ys = zip(*pts)
             ax.loglog(xs, ys, style, label=label)
@@ -402,7 +419,8 @@ def plot(result: dict, path) -> None:
         curve(axes[0], rows, lambda r: r["times"]["build"] + r["times"]["sim"],
               lambda r: r["errors"]["slew_tip"], f"{family} (controllers.simulate)", "o-")
         curve(axes[1], rows, lambda r: r["times"]["build"],
-              lambda r: max(r["errors"]["poles"], r["errors"]["zeros"]), family, "o-")
+              lambda r: max(_num(r["errors"]["poles"]), _num(r["errors"]["zeros"])), family,
+              "o-")
     for family in ("craig-bampton", "rfem"):
         rows = [r for r in ok if r["family"] == family]
         for peer, style in (("sim_forced_response", "s:"), ("sim_lsim", "^:")):
@@ -417,11 +435,6 @@ def plot(result: dict, path) -> None:
             sub = [r for r in rows if r["model"] == label]
             curve(axes[0], sub, lambda r: r["time_build"] + r["time_sim"],
                   lambda r: r["slew_tip"], label, "D--")
-        rows = [r for r in peer.get("rows", []) if r.get("poles") is not None]
-        for label in sorted({r["model"] for r in rows}):
-            sub = [r for r in rows if r["model"] == label]
-            curve(axes[1], sub, lambda r: r.get("time_eigen") or r["time_build"],
-                  lambda r: r["poles"], label, "D--")
     axes[0].set_xlabel("run time: build + simulate 100 s at 100 Hz [s]")
     axes[0].set_ylabel("closed-loop slew: peak tip-deflection error (relative)")
     axes[0].set_title("Closed-loop slew of the default hub")
@@ -445,11 +458,20 @@ def main(argv=None) -> int:
                         help="skip python-control/scipy/Basilisk/Exudyn peers")
     parser.add_argument("--repeats", type=int, default=None,
                         help="timing repetitions (default 5, quick 3)")
+    parser.add_argument("--replot", action="store_true",
+                        help="only rewrite the markdown and the plot from the JSON results")
     args = parser.parse_args(argv)
+    suffix = "_quick" if args.quick else ""
+    if args.replot:
+        import json
+
+        result = json.loads((RESULTS / f"run_time_vs_error{suffix}.json").read_text())
+        (RESULTS / f"run_time_vs_error{suffix}.md").write_text(markdown(result) + "\n")
+        plot(result, RESULTS / f"run_time_vs_error{suffix}.png")
+        return 0
     repeats = args.repeats or (3 if args.quick else 5)
     result = run(args.quick, not args.no_peers, repeats)
     result["ratios"] = ratios(result)
-    suffix = "_quick" if args.quick else ""
     write_json(f"run_time_vs_error{suffix}.json", result)
     text = markdown(result)
     (RESULTS / f"run_time_vs_error{suffix}.md").write_text(text + "\n")
