@@ -327,41 +327,9 @@ class HingedChain(FiniteAppendage):
 
     # -- matrices -----------------------------------------------------------------------------
     def _matrices(self):
-        """Mass, stiffness, damping matrices and tip row in the coordinates of eq. (1)."""
-        n = self.n_bodies
-        hinged = self.root == "hinged"
-        ell, m, a, J = self.lengths, self.masses, self.com_offsets, self.inertias
-        # Index of body k's rotation (k = 0..n-1): 1 + k for the rigid root (theta_1 = phi),
-        # 2 + k for the hinged root (index 1 is the massless mount).
-        first = 2 if hinged else 1
-        size = n + first
-        outboard = np.concatenate([np.cumsum(m[::-1])[::-1][1:], [0.0]])  # S_k
-        moment = m * a + ell * outboard                                      # P_k
-        M = np.zeros((size, size))
-        idx = first + np.arange(n)
-        # eq. (2): M[j, k] = l_j P_k for j < k (upper triangle over the bodies), l_0 = 1.
-        M[np.ix_(idx, idx)] = np.triu(np.outer(ell, moment), k=1)
-        M[0, idx] = moment
-        M = M + M.T
-        M[0, 0] = np.sum(m)
-        M[idx, idx] = J + m * a * a + ell * ell * outboard
-        K = np.zeros((size, size))
-        C = np.zeros((size, size))
-        # Hinge h joins coordinates (left[h], right[h]).
-        if hinged:
-            left = np.concatenate([[1], idx[:-1]])
-        else:
-            left = idx[:-1]
-        right = left + 1 if not hinged else np.concatenate([[2], idx[1:]])
-        for matrix, values in ((K, self.hinge_stiffnesses), (C, self.hinge_dampings)):
-            np.add.at(matrix, (left, left), values)
-            np.add.at(matrix, (right, right), values)
-            np.add.at(matrix, (left, right), -values)
-            np.add.at(matrix, (right, left), -values)
-        tip = np.zeros(size)
-        tip[idx] = ell
-        tip[1] -= self.length  # w(L) - delta - L*phi, with w(L) = delta + sum l_k theta_k
-        return M, C, K, tip
+        """Mass, damping, stiffness matrices and tip row in the coordinates of eq. (1)."""
+        return _assemble(self.lengths, self.masses, self.inertias, self.com_offsets,
+                         self.hinge_stiffnesses, self.hinge_dampings, self.root == "hinged")
 
     def _check_mass_matrix(self) -> None:
         """Raise ValueError when the bodies' mass matrix is singular (e.g. massless last rod)."""
@@ -407,3 +375,46 @@ def _proportional_damping(beam, stiffnesses: np.ndarray) -> np.ndarray | None:
         return None
     w1 = float(beam.natural_frequencies(1)[0])
     return 2.0 * zeta * stiffnesses / w1
+
+
+def _assemble(lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarray,
+              com_offsets: np.ndarray, stiffnesses: np.ndarray, dampings: np.ndarray | None,
+              hinged: bool):
+    """(M, C, K, tip) of a chain in the coordinates of eq. (1) (see the module docstring).
+
+    No validation: the arrays are float64 of consistent sizes (n bodies, n - 1 or n hinges).
+    """
+    n = lengths.size
+    ell, m, a, J = lengths, masses, com_offsets, inertias
+    # Index of body k's rotation (k = 0..n-1): 1 + k for the rigid root (theta_1 = phi),
+    # 2 + k for the hinged root (index 1 is the massless mount).
+    first = 2 if hinged else 1
+    size = n + first
+    outboard = np.concatenate([np.cumsum(m[::-1])[::-1][1:], [0.0]])  # S_k
+    moment = m * a + ell * outboard                                      # P_k
+    M = np.zeros((size, size))
+    idx = first + np.arange(n)
+    # eq. (2): M[j, k] = l_j P_k for j < k (upper triangle over the bodies), l_0 = 1.
+    M[first:, first:] = np.triu(np.outer(ell, moment), k=1)
+    M[0, first:] = moment
+    M = M + M.T
+    M[0, 0] = np.sum(m)
+    M[idx, idx] = J + m * a * a + ell * ell * outboard
+    # Hinge h joins coordinates (left[h], left[h] + 1): the mount (1) and body 1 (2) first
+    # for a hinged root, then body k and body k+1.
+    left = np.arange(1, size - 1)
+    K = np.zeros((size, size))
+    K[left, left] += stiffnesses
+    K[left + 1, left + 1] += stiffnesses
+    K[left, left + 1] -= stiffnesses
+    K[left + 1, left] -= stiffnesses
+    C = np.zeros((size, size))
+    if dampings is not None:
+        C[left, left] += dampings
+        C[left + 1, left + 1] += dampings
+        C[left, left + 1] -= dampings
+        C[left + 1, left] -= dampings
+    tip = np.zeros(size)
+    tip[idx] = ell
+    tip[1] -= np.sum(ell)  # w(L) - delta - L*phi, with w(L) = delta + sum l_k theta_k
+    return M, C, K, tip

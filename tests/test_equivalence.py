@@ -235,13 +235,15 @@ def test_fitted_chain_keeps_condition_3(rod, fitted3):
 
 def test_fitted_three_body_chain_beats_the_paper_on_every_zero(rod, fitted3):
     """Against the exact beam, each of the six zeros n_r1, n_r2 (r = 1, 2, 4) of the fitted chain
-    is closer than the paper's chain's; all its poles and zeros are within 2 % (measured 1.6 %;
-    the paper's chain is off by up to 52 %)."""
+    is closer than the paper's chain's; all its zeros are within 2 % (measured 1.7 %; the
+    paper's chain is off by up to 52 %) and, with the default pole weight, its poles within
+    2e-4 (measured 6e-5)."""
     paper = spectral_errors(rod, HingedChain.three_body(10.0, rod.mass, 0.26989, 37.134))
     ours = spectral_errors(rod, fitted3)
     for key in ("W1", "W2", "W4"):
         assert np.all(np.abs(ours[key]) < np.abs(paper[key])), key
     assert max_error(rod, fitted3) < 0.02
+    assert np.abs(ours["poles"]).max() < 2e-4
     criterion_result = criterion(rod, fitted3)
     assert criterion_result.max_log_error.max() < criterion(
         rod, HingedChain.three_body(10.0, rod.mass, 0.26989, 37.134)).max_log_error.max()
@@ -289,13 +291,13 @@ def test_fit_that_cannot_match_says_so(rod):
         fit_chain(rod, 3, match="frequencies", frequencies=(1.0, 1.001))
 
 
-def test_fit_budget_warns_or_fails(rod):
-    """A budget too small to improve on the start raises; a small one warns."""
-    with pytest.raises(ConvergenceError, match="did not converge"):
-        fit_chain(rod, 4, max_nfev=1)
+def test_fit_budget_warns(rod):
+    """A fit stopped by its evaluation budget warns and returns the best chain found."""
     with pytest.warns(FitWarning, match="stopped at max_nfev=3"):
         chain = fit_chain(rod, 4, max_nfev=3)
-    assert max_error(rod, chain) < max_error(rod, HingedChain.rfem(rod, 4))
+    # even an unfinished fit keeps condition (3) and the centre of mass (rtol 1e-13)
+    np.testing.assert_allclose([chain.mass, chain.inertia, chain.length, chain.center_of_mass],
+                               [rod.mass, rod.inertia, rod.length, 5.0], rtol=1e-13)
 
 
 # -- bad input ----------------------------------------------------------------------------------
@@ -314,6 +316,8 @@ def test_bad_input(rod):
         fit_chain(rod, 3, match="frequencies", frequencies=(7.9, 2.8))
     with pytest.raises(ValueError, match=r"frequencies \[rad/s\] applies to match='frequencies'"):
         fit_chain(rod, 3, frequencies=(2.8, 7.9))
+    with pytest.raises(ValueError, match=r"pole_weight must be finite and greater than 0.0"):
+        fit_chain(rod, 3, pole_weight=-1.0)
     with pytest.raises(ValueError, match="max_nfev must be a positive integer"):
         fit_chain(rod, 3, max_nfev=0)
     with pytest.raises(TypeError, match="reference must be an appendage model"):
