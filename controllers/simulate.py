@@ -53,6 +53,7 @@ References
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import control
@@ -211,12 +212,12 @@ def _power_of_two(x: float, low: int, high: int) -> int:
 class Simulator:
     """Exact simulator of one continuous-time StateSpace on a fixed step.
 
-    The discretisation (one matrix exponential) and the chunk maps are
-    computed on construction (O(n^3 log L), plus O(L n^3) for the states'
-    map); every run then costs O(n^2 / L) per sample for the chunk starts
-    plus one product that fills in the chunks (see the module docstring),
-    so design loops that simulate the same system many times pay the
-    set-up once.
+    The discretisation (one matrix exponential) and the chunk maps of
+    :meth:`run` are computed on construction (O(L n^3)), those of
+    :meth:`outputs` on its first call (O(n^3 log L)); every run then costs
+    O(n^2 / L) per sample for the chunk starts plus one product that fills
+    in the chunks (see the module docstring), so design loops that simulate
+    the same system many times pay the set-up once.
 
     Parameters
     ----------
@@ -271,8 +272,8 @@ class Simulator:
         self._C, self._D = C, D
         self.Ad, self.Bd0, self.Bd1 = _discretise(A, B, dt, hold)
         self._maps: dict[bool, _ChunkMaps] = {}
-        for with_states in (True, False):
-            self._chunk_maps(with_states)
+        self._chunk_maps(True)      # outputs()' map is built on first use
+        self._scratch = threading.local()
 
     @property
     def n_states(self) -> int:
@@ -439,7 +440,15 @@ class Simulator:
                 "system exceed the float64 range on this time grid")
         X = None
         if with_states:
-            XT = M @ maps.Fx[rows]
+            # Into a per-thread scratch buffer kept between runs: run()
+            # hands X to TimeResponseData, which copies it anyway, and a
+            # fresh multi-megabyte array costs its page faults every time.
+            shape = (n_chunks, L * n)
+            work = getattr(self._scratch, "states", None)
+            if work is None or work.size < n_chunks * L * n:
+                work = self._scratch.states = np.empty(shape)
+            out = work.reshape(-1)[:n_chunks * L * n].reshape(shape)
+            XT = np.matmul(M, maps.Fx[rows], out=out)
             X = XT.reshape(n_padded, n)[:n_samples].T
         return X, Y
 

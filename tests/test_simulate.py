@@ -240,6 +240,14 @@ def test_simulator_reuse_matches_simulate():
     # A grid that starts later with the same step is fine too.
     resp = sim.run(T + 3.0, np.ones_like(T))
     np.testing.assert_array_equal(resp.time, T + 3.0)
+    # Runs of other lengths reuse the scratch space; earlier results keep
+    # their values.
+    long_run = sim.run(np.arange(2000) * 0.05, 1.0)
+    kept = long_run.x.copy()
+    short = sim.run(T[:37], np.sin(T[:37]))
+    np.testing.assert_array_equal(short.x, simulate(sys, T[:37],
+                                                    np.sin(T[:37])).x)
+    np.testing.assert_array_equal(long_run.x, kept)
 
 
 @pytest.mark.parametrize("case", ["repeated", "nearly_defective"])
