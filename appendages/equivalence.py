@@ -211,6 +211,14 @@ class EquivalenceResult:
     max_log_error, rms_log_error : ndarray, shape (4,)
         Maximum and root mean square over the band of ``|ln(W_r^cand/W_r^ref)|`` for
         r = 1..4 [-] (module docstring).
+    exact : ModelQuantities or None
+        The exact (distributed) model's quantities, when :func:`criterion` was given one.
+    exact_differences : dict or None
+        ``{"reference": {label: rel}, "candidate": {label: rel}}``: each model's relative
+        differences from the exact model.
+    exact_max_log_error : ndarray, shape (2, 4), or None
+        Band error (maximum) of the reference (row 0) and the candidate (row 1) against the
+        exact model.
     """
 
     reference: ModelQuantities
@@ -220,6 +228,9 @@ class EquivalenceResult:
     evaluation_damping: float
     max_log_error: np.ndarray
     rms_log_error: np.ndarray
+    exact: ModelQuantities | None = None
+    exact_differences: dict | None = None
+    exact_max_log_error: np.ndarray | None = None
 
     def rows(self) -> list:
         """``(label, unit, reference, candidate, relative difference)`` per table row."""
@@ -227,45 +238,65 @@ class EquivalenceResult:
         return [(label, unit, r, c, self.relative_differences[label])
                 for (label, unit), r, c in zip(_ROWS, ref, cand)]
 
+    def _table(self, digits: int) -> tuple[list, list]:
+        """Header and rows of strings (shared by the text and Markdown forms)."""
+        head = ["quantity", self.reference.name, self.candidate.name, "rel. diff."]
+        if self.exact is not None:
+            head += [self.exact.name, f"{self.reference.name} vs exact",
+                     f"{self.candidate.name} vs exact"]
+        body = []
+        exact_values = self.exact.values() if self.exact is not None else None
+        for k, (label, unit, r, c, d) in enumerate(self.rows()):
+            row = [f"{label} [{unit}]", _fmt(r, digits), _fmt(c, digits), _diff(d)]
+            if exact_values is not None:
+                row += [_fmt(exact_values[k], digits),
+                        _diff(self.exact_differences["reference"][label]),
+                        _diff(self.exact_differences["candidate"][label])]
+            body.append(row)
+        return head, body
+
+    def _band_lines(self) -> list:
+        return [f"Frequency-domain error |ln(W_r^cand / W_r^ref)| on s = omega "
+                f"({self.evaluation_damping:g} + i), omega in [{self.band[0]:.4g}, "
+                f"{self.band[1]:.4g}] rad/s (log-spaced):"]
+
     def to_markdown(self, digits: int = 5) -> str:
         """The paper's table (plus m, J, L and the band errors) as a Markdown string."""
-        lines = [f"| quantity | {self.reference.name} | {self.candidate.name} | rel. diff. |",
-                 "|---|---|---|---|"]
-        for label, unit, r, c, d in self.rows():
-            diff = "n/a" if d is None else f"{d:+.2e}"
-            lines.append(f"| {label} [{unit}] | {_fmt(r, digits)} | {_fmt(c, digits)} | {diff} |")
-        lines.append("")
-        lines.append(f"Frequency-domain error |ln(W_r^cand / W_r^ref)| on s = omega "
-                     f"({self.evaluation_damping:g} + i), omega in "
-                     f"[{self.band[0]:.4g}, {self.band[1]:.4g}] rad/s:")
-        lines.append("")
-        lines.append("| | W1 | W2 | W3 | W4 |")
-        lines.append("|---|---|---|---|---|")
+        head, body = self._table(digits)
+        lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        lines += ["| " + " | ".join(row) + " |" for row in body]
+        lines += [""] + self._band_lines() + ["", "| | W1 | W2 | W3 | W4 |", "|---|---|---|---|---|"]
         lines.append("| max | " + " | ".join(f"{e:.3g}" for e in self.max_log_error) + " |")
         lines.append("| rms | " + " | ".join(f"{e:.3g}" for e in self.rms_log_error) + " |")
+        if self.exact_max_log_error is not None:
+            for name, errors in zip((self.reference.name, self.candidate.name),
+                                    self.exact_max_log_error):
+                lines.append(f"| max, {name} vs exact | "
+                             + " | ".join(f"{e:.3g}" for e in errors) + " |")
         return "\n".join(lines)
 
     def __str__(self) -> str:
-        width = max(len(f"{label} [{unit}]") for label, unit in _ROWS)
-        head = (f"{'quantity':<{width}}  {self.reference.name[:14]:>14}  "
-                f"{self.candidate.name[:14]:>14}  {'rel. diff.':>10}")
-        lines = [head, "-" * len(head)]
-        for label, unit, r, c, d in self.rows():
-            diff = "n/a" if d is None else f"{d:+.2e}"
-            lines.append(f"{label + ' [' + unit + ']':<{width}}  {_fmt(r):>14}  {_fmt(c):>14}  "
-                         f"{diff:>10}")
-        lines.append("")
-        lines.append(f"max |ln(W_cand/W_ref)| on s = w({self.evaluation_damping:g} + i), "
-                     f"w in [{self.band[0]:.4g}, {self.band[1]:.4g}] rad/s: "
-                     + ", ".join(f"W{r} {e:.3g}" for r, e in zip((1, 2, 3, 4),
-                                                                 self.max_log_error)))
+        head, body = self._table(5)
+        widths = [max(len(row[k]) for row in [head] + body) for k in range(len(head))]
+        def line(row):
+            return "  ".join(cell.ljust(w) if k == 0 else cell.rjust(w)
+                             for k, (cell, w) in enumerate(zip(row, widths)))
+        lines = [line(head), "-" * len(line(head))] + [line(row) for row in body]
+        lines += [""] + self._band_lines()
+        lines.append("  max: " + ", ".join(f"W{r} {e:.3g}" for r, e in
+                                            zip((1, 2, 3, 4), self.max_log_error)))
+        if self.exact_max_log_error is not None:
+            for name, errors in zip((self.reference.name, self.candidate.name),
+                                    self.exact_max_log_error):
+                lines.append(f"  max, {name} vs exact: " + ", ".join(
+                    f"W{r} {e:.3g}" for r, e in zip((1, 2, 3, 4), errors)))
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
         """JSON-serialisable form."""
         def quantities(q: ModelQuantities) -> dict:
             return {"name": q.name, "values": dict(zip([r[0] for r in _ROWS], q.values()))}
-        return {
+        out = {
             "reference": quantities(self.reference),
             "candidate": quantities(self.candidate),
             "relative_differences": dict(self.relative_differences),
@@ -274,6 +305,15 @@ class EquivalenceResult:
             "max_log_error": self.max_log_error.tolist(),
             "rms_log_error": self.rms_log_error.tolist(),
         }
+        if self.exact is not None:
+            out["exact"] = quantities(self.exact)
+            out["exact_differences"] = {k: dict(v) for k, v in self.exact_differences.items()}
+            out["exact_max_log_error"] = self.exact_max_log_error.tolist()
+        return out
+
+
+def _diff(value) -> str:
+    return "n/a" if value is None else f"{value:+.2e}"
 
 
 def _check_real(name: str, value, unit: str, *, low=None, high=None) -> float:
@@ -304,7 +344,18 @@ def _default_band(reference, quantities: ModelQuantities) -> tuple:
     return (w[0] / 10.0, upper)
 
 
-def criterion(reference, candidate, *, band: Sequence[float] | None = None,
+def _log_errors(W_cand: np.ndarray, W_ref: np.ndarray) -> np.ndarray:
+    """|ln(W_cand/W_ref)| per entry r = 1..4, shape (4, n_points)."""
+    entries = [(0, 0), (0, 1), (1, 0), (1, 1)]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        err = np.stack([np.abs(np.log(W_cand[:, i, j] / W_ref[:, i, j])) for i, j in entries])
+    if not np.all(np.isfinite(err)):
+        raise FloatingPointError("W of a model vanished or overflowed on the comparison ray; "
+                                 "choose another band [rad/s] or evaluation_damping")
+    return err
+
+
+def criterion(reference, candidate, *, exact=None, band: Sequence[float] | None = None,
               n_points: int = 2000, evaluation_damping: float = 0.02,
               names: Sequence[str] | None = None) -> EquivalenceResult:
     """The paper's equivalence criterion: quantities (3), (5) of two models and their differences.
@@ -316,6 +367,10 @@ def criterion(reference, candidate, *, band: Sequence[float] | None = None,
         rows show n/a) or a finite model such as ``beam.truncated(2, method="free-free")``.
     candidate : Beam or FiniteAppendage
         Typically a :class:`~appendages.chain.HingedChain`.
+    exact : Beam, optional
+        A third, exact model (the distributed beam) against which both are also measured
+        (extra columns and band errors), e.g. to see how far the paper's 2-mode reference and
+        its chain are from the real beam.
     band : (float, float), rad/s, optional
         Frequency band of the W_r comparison. Default ``[w1/10, w_top]`` of the reference, with
         ``w_top = 1.5 w2`` or, if the reference has a third pole or zero f3 below that, the
@@ -340,6 +395,8 @@ def criterion(reference, candidate, *, band: Sequence[float] | None = None,
     """
     _check_model("reference", reference)
     _check_model("candidate", candidate)
+    if exact is not None:
+        _check_model("exact", exact)
     if isinstance(n_points, (bool, np.bool_)) or not isinstance(n_points, (int, np.integer)):
         raise TypeError(f"n_points must be an integer; got {type(n_points).__name__}")
     if n_points < 10:
@@ -363,16 +420,25 @@ def criterion(reference, candidate, *, band: Sequence[float] | None = None,
     omega = np.geomspace(band[0], band[1], int(n_points))
     s = as_frequency_array(omega * (zeta + 1j))
     W_ref, W_cand = reference.W(s), candidate.W(s)
-    entries = [(0, 0), (0, 1), (1, 0), (1, 1)]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        err = np.stack([np.abs(np.log(W_cand[:, i, j] / W_ref[:, i, j])) for i, j in entries])
-    if not np.all(np.isfinite(err)):
-        raise FloatingPointError("W of a model vanished or overflowed on the comparison ray; "
-                                 "choose another band [rad/s] or evaluation_damping")
+    err = _log_errors(W_cand, W_ref)
+    extra = {}
+    if exact is not None:
+        exact_q = ModelQuantities.of(exact, "exact")
+        W_exact = exact.W(s)
+        extra = dict(
+            exact=exact_q,
+            exact_differences={
+                key: {label: _relative(v, e) for (label, _), v, e in
+                      zip(_ROWS, q.values(), exact_q.values())}
+                for key, q in (("reference", ref_q), ("candidate", cand_q))},
+            exact_max_log_error=np.stack([_log_errors(W_ref, W_exact).max(axis=1),
+                                          _log_errors(W_cand, W_exact).max(axis=1)]),
+        )
     return EquivalenceResult(
         reference=ref_q, candidate=cand_q, relative_differences=differences,
         band=(float(band[0]), float(band[1])), evaluation_damping=zeta,
         max_log_error=err.max(axis=1), rms_log_error=np.sqrt(np.mean(err**2, axis=1)),
+        **extra,
     )
 
 

@@ -174,6 +174,24 @@ def test_criterion_against_exact_beam(rod):
     json.dumps(result.to_dict())  # serialisable
 
 
+def test_criterion_with_exact_column(rod):
+    """exact=beam adds both models' differences from the exact beam: the same numbers as
+    spectral_errors (rtol 1e-12), zero for the truncation's poles, and the band errors."""
+    chain = HingedChain.three_body(10.0, rod.mass, 0.26989, 37.134)
+    result = criterion(two_mode_beam(rod), chain, exact=rod)
+    errors = spectral_errors(rod, chain, 2)
+    np.testing.assert_allclose([result.exact_differences["candidate"][label]
+                                for label in ("n41", "n42", "w1", "w2")],
+                               [*errors["W4"], *errors["poles"]], rtol=1e-12)
+    assert abs(result.exact_differences["reference"]["w2"]) < 1e-12
+    assert result.exact_differences["reference"]["k1"] is None
+    assert result.exact_max_log_error.shape == (2, 4)
+    assert "vs exact" in str(result) and "vs exact" in result.to_markdown()
+    assert "exact_differences" in json.loads(json.dumps(result.to_dict()))
+    with pytest.raises(TypeError, match="exact must be an appendage model"):
+        criterion(rod, chain, exact="beam")
+
+
 def test_criterion_of_a_model_with_itself_is_zero(rod):
     """Identical models: every relative difference is zero and the band errors are round-off
     (W is evaluated twice; threaded BLAS may sum in another order: 1e-15)."""
