@@ -6,6 +6,7 @@ One command runs everything::
     python benchmarks/run_time_vs_error.py            # full run (~10-20 min on 2 cores)
     python benchmarks/run_time_vs_error.py --quick    # short run (~1-2 min)
     python benchmarks/run_time_vs_error.py --no-peers # flexsat, python-control and scipy only
+    python benchmarks/run_time_vs_error.py --only-peers  # Basilisk and Exudyn into the results
 
 Model families (each against the exact distributed reference):
 
@@ -403,7 +404,10 @@ def plot(result: dict, path) -> None:
             families.append(row["family"])
     floor = 1e-16
 
-    def curve(ax, rows, x_of, y_of, label, style):
+    peer_colors = {"Basilisk panels (RK4)": "black", "Exudyn panels (gen.-alpha)": "teal",
+                   "Exudyn ANCF beam (gen.-alpha)": "darkgoldenrod"}
+
+    def curve(ax, rows, x_of, y_of, label, style, color=None):
         pts = [(x_of(r), _num(y_of(r))) for r in rows]
         # y == 0: the reference model itself (Craig-Bampton N_REF) -- not a measurement
         pts = [(x, max(y, floor)) for x, y in pts
@@ -411,7 +415,7 @@ def plot(result: dict, path) -> None:
                and y > 0]
         if pts:
             xs, ys = zip(*pts)
-            ax.loglog(xs, ys, style, label=label)
+            ax.loglog(xs, ys, style, label=label, color=color)
 
     ok = [r for r in result["rows"] if "errors" in r]
     for family in families:
@@ -434,7 +438,13 @@ def plot(result: dict, path) -> None:
         for label in sorted({r["model"] for r in rows}):
             sub = [r for r in rows if r["model"] == label]
             curve(axes[0], sub, lambda r: r["time_build"] + r["time_sim"],
-                  lambda r: r["slew_tip"], label, "D--")
+                  lambda r: r["slew_tip"], label, "D--", peer_colors.get(label))
+        rows = [r for r in peer.get("rows", []) if r.get("time_eigen") is not None
+                and r.get("poles") is not None]
+        for label in sorted({r["model"] for r in rows}):
+            sub = [r for r in rows if r["model"] == label]
+            curve(axes[1], sub, lambda r: r["time_eigen"], lambda r: r["poles"],
+                  label + " (poles only)", "D--", peer_colors.get(label))
     axes[0].set_xlabel("run time: build + simulate 100 s at 100 Hz [s]")
     axes[0].set_ylabel("closed-loop slew: peak tip-deflection error (relative)")
     axes[0].set_title("Closed-loop slew of the default hub")
@@ -458,6 +468,8 @@ def main(argv=None) -> int:
                         help="skip python-control/scipy/Basilisk/Exudyn peers")
     parser.add_argument("--repeats", type=int, default=None,
                         help="timing repetitions (default 5, quick 3)")
+    parser.add_argument("--only-peers", action="store_true",
+                        help="rerun Basilisk and Exudyn only, into the existing JSON results")
     parser.add_argument("--replot", action="store_true",
                         help="only rewrite the markdown and the plot from the JSON results")
     args = parser.parse_args(argv)
@@ -470,7 +482,20 @@ def main(argv=None) -> int:
         plot(result, RESULTS / f"run_time_vs_error{suffix}.png")
         return 0
     repeats = args.repeats or (3 if args.quick else 5)
-    result = run(args.quick, not args.no_peers, repeats)
+    if args.only_peers:
+        import json
+
+        result = json.loads((RESULTS / f"run_time_vs_error{suffix}.json").read_text())
+        beam = paper_rod()
+        reference = exact_reference(beam)
+        ref_response = slew_response(pd_closed_loop(beam.truncated(N_REF))[2])
+        for name in ("peer_basilisk", "peer_exudyn"):
+            print(f"{name} ...", flush=True)
+            result["peers"][name] = run_peer(name, quick=args.quick, reference=ref_response,
+                                             exact=reference)
+        result["peers_machine"] = machine_info()
+    else:
+        result = run(args.quick, not args.no_peers, repeats)
     result["ratios"] = ratios(result)
     write_json(f"run_time_vs_error{suffix}.json", result)
     text = markdown(result)
