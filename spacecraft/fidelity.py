@@ -165,9 +165,8 @@ def choose_n_modes(truncated_plant: Callable[[int], tuple], exact_frequencies: C
             trials.append({"n_modes": n, "frequency_error": math.inf, "gain_error": math.inf})
             continue
         f_err = float(np.max(np.abs(frequencies[:n_ref] / reference - 1.0)))
-        # gain (magnitude) error: damping models differ (modal damping of free-free modes in
-        # the exact W, of cantilever modes in Craig-Bampton); below the first resonance they
-        # change the phase at first order in zeta but the gain only at second order
+        # gain (magnitude) error: below the first resonance damping changes the phase at
+        # first order in zeta but the gain only at second order, so the gain is compared
         g_err = float(np.max(np.abs(np.abs(transfer_theta_torque(plant, omega) / exact) - 1.0)))
         trials.append({"n_modes": n, "frequency_error": f_err, "gain_error": g_err})
         if f_err <= tolerance and g_err <= tolerance:

@@ -295,7 +295,9 @@ def summary_lines(data: dict) -> list[str]:
     if fid.get("n_modes"):
         how = "chosen for tolerance " + _fmt(fid["choice"]["tolerance"]) if fid.get("choice") \
             else "given"
-        lines.append(f"truth model: {fid['n_modes']} modes per beam ({fid['method']}, {how}); "
+        modes = "mode" if fid["n_modes"] == 1 else "modes"
+        lines.append(f"truth model: {fid['n_modes']} bending {modes} per beam ({fid['method']}, "
+                     f"{how}); "
                      f"plant {data['truth']['n_states']} states, "
                      f"{data['truth']['modes_dropped']} modes pruned")
     else:
@@ -396,8 +398,10 @@ def _figure(rows: int, cols: int, size):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=size, layout="constrained")
+    # a fixed layout: constrained layout redraws every figure several times (half the cost)
+    fig = Figure(figsize=size)
     FigureCanvasAgg(fig)
+    fig.subplots_adjust(left=0.09, right=0.98, bottom=0.08, top=0.92, hspace=0.35, wspace=0.25)
     return fig, fig.subplots(rows, cols, squeeze=False)
 
 
@@ -462,7 +466,7 @@ def _plot_bode(result, folder: Path, stats, exact: bool) -> list:
         if hasattr(model, "poles"):
             w_ref.append(float(np.asarray(model.poles())[0]))
     w1 = min(w_ref) if w_ref else 1.0
-    omega = np.geomspace(w1 / 30.0, w1 * 30.0, 1500)
+    omega = np.geomspace(w1 / 30.0, w1 * 30.0, 800)
     s = 1j * omega
     fig, axes = _figure(2, 2, (11, 7))
     entries = [((0, 0), "W1 = delta/F_y [m/N]"), ((0, 1), "W2 = W3 = delta/M [1/N]"),
@@ -475,7 +479,8 @@ def _plot_bode(result, folder: Path, stats, exact: bool) -> list:
     for (i, j), title in entries:
         ax = axes[i, j]
         ax.set_title(title, fontsize="medium")
-        ax.grid(True, which="both")
+        ax.grid(True)
+        ax.minorticks_off()  # hundreds of minor log ticks cost seconds to draw
         ax.set_xlabel("frequency [rad/s]")
         ax.legend(fontsize="small")
     axes[1, 0].axis("off")
@@ -516,12 +521,9 @@ def _plot_pole_zero(result, folder: Path) -> list:
 # ---------------------------------------------------------------------------------------------
 # FMUs
 # ---------------------------------------------------------------------------------------------
-def _export_fmus(result, folder: Path, stats, progress) -> list:
-    import fmu
-
+def _fmu_jobs(result) -> list:
+    """(name, system, description) of every FMU the scene asks for."""
     scene = result.scene
-    step = scene.export.step or (scene.manoeuvre.step if scene.manoeuvre else None)
-    stop = scene.manoeuvre.duration if scene.manoeuvre else 100.0 * step
     primary = next(iter(result.designs))
     jobs = []
     if "plant" in scene.export.systems:
@@ -537,7 +539,16 @@ def _export_fmus(result, folder: Path, stats, progress) -> list:
                 loop = controllers.close_loop(result.truth["sim"], K)
             jobs.append((f"closed_loop_{kind}", loop,
                          f"{kind.upper()} loop closed on the truth plant"))
-    progress(f"exporting {len(jobs)} FMUs")
+    return jobs
+
+
+def _start_fmu_exports(result, folder: Path, pool) -> list:
+    """Submit the FMU builds to a thread pool; returns [(job, future)]."""
+    import fmu
+
+    scene = result.scene
+    step = scene.export.step or (scene.manoeuvre.step if scene.manoeuvre else None)
+    stop = scene.manoeuvre.duration if scene.manoeuvre else 100.0 * step
 
     def build(job):
         name, system, description = job
@@ -545,11 +556,13 @@ def _export_fmus(result, folder: Path, stats, progress) -> list:
                           stop_time=stop, reference=scene.export.reference_files,
                           description=f"flexsat: {description}")
 
-    # the C compiler runs in a subprocess: two builds at a time keep both cores busy
-    with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
-        paths = list(pool.map(build, jobs))
+    return [(job, pool.submit(build, job)) for job in _fmu_jobs(result)]
+
+
+def _finish_fmu_exports(started: list, stats) -> list:
     out = []
-    for (name, system, description), path in zip(jobs, paths):
+    for (name, system, description), future in started:
+        path = future.result()
         stats.fmu_builds += 1
         out.append({"path": f"fmu/{path.name}", "description": description,
                     "inputs": list(system.input_labels), "outputs": list(system.output_labels),
@@ -592,20 +605,18 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
     data["version"] = _version()
     data["created"] = datetime.datetime.now().isoformat(timespec="seconds")
     files: dict = {"fmu": [], "plots": []}
-    if do_fmus:
-        (folder / "fmu").mkdir(exist_ok=True)
-        files["fmu"] = _export_fmus(result, folder / "fmu", stats, progress)
-    images = []
-    if wanted_plots and pages:
-        (folder / "plots").mkdir(exist_ok=True)
-        progress("plotting")
-        if "slew" in wanted_plots and result.responses:
-            images += _plot_slews(result, folder / "plots")
-        if "bode" in wanted_plots:
-            images += _plot_bode(result, folder / "plots", stats, scene.outputs.exact_reference)
-        if "pole_zero" in wanted_plots:
-            images += _plot_pole_zero(result, folder / "plots")
-        stats.plots += len(images)
+    # The C compiler runs in subprocesses: the FMU builds (two at a time, both cores) proceed
+    # while the plots are drawn.
+    with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
+        started = []
+        if do_fmus:
+            (folder / "fmu").mkdir(exist_ok=True)
+            started = _start_fmu_exports(result, folder / "fmu", pool)
+            progress(f"exporting {len(started)} FMUs")
+        images = _plots(result, folder, wanted_plots if pages else (), progress)
+        if started:
+            progress("waiting for the FMU builds")
+        files["fmu"] = _finish_fmu_exports(started, stats)
     images = [(f"plots/{Path(p).name}", caption) for p, caption in images]
     files["plots"] = [p for p, _ in images]
     data["files"] = files
@@ -619,6 +630,24 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
         data["files"]["pages"] = ["report.md", "report.html", "results.json"]
         (folder / "results.json").write_text(to_json(data), encoding="utf-8")
     return data
+
+
+def _plots(result, folder: Path, wanted, progress) -> list:
+    """Draw the plots asked for; returns [(path, caption)]."""
+    scene, stats = result.scene, result.stats
+    images = []
+    if not wanted:
+        return images
+    (folder / "plots").mkdir(exist_ok=True)
+    progress("plotting")
+    if "slew" in wanted and result.responses:
+        images += _plot_slews(result, folder / "plots")
+    if "bode" in wanted:
+        images += _plot_bode(result, folder / "plots", stats, scene.outputs.exact_reference)
+    if "pole_zero" in wanted:
+        images += _plot_pole_zero(result, folder / "plots")
+    stats.plots += len(images)
+    return images
 
 
 def _version() -> str:

@@ -30,7 +30,6 @@ length = 10.0
 diameter = 0.01
 density = 7800.0
 youngs_modulus = 2.06e11
-damping_ratio = 0.005
 
 [appendages.fit]
 match = "frequencies"
