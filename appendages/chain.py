@@ -23,13 +23,16 @@ so the kinetic energy ``T = 1/2 sum_i (m_i y_i'^2 + J_i theta_i'^2)`` gives the 
 (mass outboard of body k) and ``P_k = m_k a_k + l_k S_k`` (first moment of bodies k..n about the
 start of body k, per unit rotation of body k), and ``l_0 = 1`` for the ``delta`` coordinate,
 
-    M[j, k] = l_j P_k  (j < k),      M[0, 0] = m,      M[k, k] = J_k + m_k a_k**2 + l_k**2 S_k     (2)
+    M[j, k] = l_j P_k  (j < k),    M[0, 0] = m,    M[k, k] = J_k + m_k a_k**2 + l_k**2 S_k   (2)
 
 a sum of positive terms (no cancellation), built in O(n**2). Absolute angles make the stiffness
 and damping matrices tridiagonal: hinge h between bodies k and k+1 adds
-``c_h (theta_(k+1) - theta_k)**2 / 2`` to the potential energy. Absolute angles keep the mass
-matrix well conditioned (its condition number grows like n**2, as a finite-element one's, not
-exponentially as with relative angles), so chains of hundreds of bodies keep their accuracy.
+``c_h (theta_(k+1) - theta_k)**2 / 2`` to the potential energy. Absolute angles also keep the mass
+matrix well conditioned: after diagonal scaling its condition number grows like n**2, as a
+finite-element mass matrix's (5e5 for a 200-body RFEM chain), against n**4 with relative hinge
+angles (5e10), so chains of hundreds of bodies keep their accuracy (tests: 200 bodies agree with
+an O(n) Newton-Euler recursion to 1e-9 and with Blevins' frequencies to their O(H**4)
+discretisation error).
 
 References
 ----------

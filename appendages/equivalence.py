@@ -100,12 +100,10 @@ def _is_distributed(model) -> bool:
 
 
 def _check_model(name: str, model) -> None:
-    if isinstance(model, FiniteAppendage) or _is_distributed(model):
-        for attribute in ("mass", "inertia", "length"):
-            if not hasattr(model, attribute):
-                break
-        else:
-            return
+    """TypeError unless ``model`` is a finite appendage or a distributed beam."""
+    is_model = isinstance(model, FiniteAppendage) or _is_distributed(model)
+    if is_model and all(hasattr(model, a) for a in ("mass", "inertia", "length")):
+        return
     raise TypeError(f"{name} must be an appendage model (Beam, ModalBeam, HingedChain); "
                     f"got {type(model).__name__}")
 
@@ -265,7 +263,8 @@ class EquivalenceResult:
         head, body = self._table(digits)
         lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
         lines += ["| " + " | ".join(row) + " |" for row in body]
-        lines += [""] + self._band_lines() + ["", "| | W1 | W2 | W3 | W4 |", "|---|---|---|---|---|"]
+        lines += [""] + self._band_lines()
+        lines += ["", "| | W1 | W2 | W3 | W4 |", "|---|---|---|---|---|"]
         lines.append("| max | " + " | ".join(f"{e:.3g}" for e in self.max_log_error) + " |")
         lines.append("| rms | " + " | ".join(f"{e:.3g}" for e in self.rms_log_error) + " |")
         if self.exact_max_log_error is not None:

@@ -271,7 +271,7 @@ def test_rfem_static_moment_response():
         np.testing.assert_allclose(C[0, 0], L**3 / (3 * EJ) * (1 - 1 / (4 * N**2)), rtol=1e-12)
 
 
-# -- convergence to the beam -------------------------------------------------------------------------
+# -- convergence to the beam ----------------------------------------------------------------------
 def test_rfem_converges_to_blevins_frequencies_at_fourth_order():
     """RFEM chains' first five frequencies tend to Blevins' free-free ones with an error
     O(H^4) (measured order 3.9-4.1 between 40 and 80 segments; the frozen rotary inertia and
@@ -315,7 +315,7 @@ def test_two_hundred_bodies_keep_their_accuracy():
     np.testing.assert_allclose(chain.zeros(1)[:2], pinned, rtol=1e-8)
 
 
-# -- rigid properties ---------------------------------------------------------------------------------
+# -- rigid properties -----------------------------------------------------------------------------
 def test_rigid_properties_parallel_axis():
     """length, mass and inertia about the centre of mass (parallel-axis theorem), rtol 1e-14."""
     chain = HingedChain([1.0, 3.0], [2.0, 4.0], [0.5, 1.5], [10.0], com_offsets=[0.25, 1.0])
@@ -345,7 +345,7 @@ def test_point_masses_allowed_when_mass_matrix_regular():
         HingedChain([1.0, 1.0], [1.0, 1.0], [0.0, 0.0], [5.0], com_offsets=[1.0, 1.0])
 
 
-# -- bad input ----------------------------------------------------------------------------------------
+# -- bad input ------------------------------------------------------------------------------------
 @pytest.mark.parametrize("kwargs, error, match", [
     (dict(lengths=[1.0, -1.0]), ValueError, r"lengths must be positive and finite \[m\]"),
     (dict(lengths=[1.0, np.nan]), ValueError, r"lengths .*\[m\]; got nan"),

@@ -12,7 +12,6 @@ it by up to 1.2 units, computed in test_paper_table_chain_column).
 """
 
 import json
-import warnings
 
 import numpy as np
 import pytest
