@@ -369,6 +369,14 @@ def markdown(result: dict) -> str:
                     + [fmt(e.get(k), 1) for k in ERROR_KEYS]
                     + [fmt(t.get(k), 1) for k in TIME_KEYS])
     lines += [markdown_table(header, body), ""]
+    lqr_failures = {}
+    for row in result["rows"]:
+        message = row.get("times", {}).get("lqr_error")
+        if message:
+            lqr_failures.setdefault(message.split(";")[0], []).append(
+                f"{row['family']} {row['size']}")
+    for message, models in lqr_failures.items():
+        lines += [f"t_lqr '-': controllers.lqr raised \"{message}\" for {', '.join(models)}.", ""]
     for name, peer in result["peers"].items():
         lines += [f"## {name}", ""]
         if peer.get("status") != "ok":
