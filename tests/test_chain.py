@@ -9,6 +9,7 @@ import pytest
 
 from appendages.beam import Beam
 from appendages.chain import MOLENAAR_K, HingedChain
+from appendages.interface import FiniteAppendage
 
 # Free-free Euler-Bernoulli roots beta_k L (Blevins 1979, table 8-1).
 BLEVINS_FREE_FREE = np.array([4.730040745, 7.853204624, 10.99560784, 14.13716549, 17.27875966])
@@ -182,11 +183,42 @@ def test_W_symmetric_and_real(n, root):
 
 @pytest.mark.parametrize("root", ["rigid", "hinged"])
 @pytest.mark.parametrize("n", [1, 3, 8])
-def test_W_matches_newton_euler_recursion(n, root):
-    """The Lagrangian realisation and an independent tip-to-root recursion agree (rtol 1e-11)."""
+def test_W_matches_lagrangian_realisation_and_recursion(n, root):
+    """HingedChain.W (a D-recursion), the Lagrangian realisation condensed by FiniteAppendage.W
+    and the test's own Newton-Euler recursion agree (rtol 1e-11)."""
     chain = random_chain(np.random.default_rng(10 + n), n, root)
     for s in S_POINTS:
-        np.testing.assert_allclose(chain.W(s), recursive_W(chain, s), rtol=1e-11, atol=0.0)
+        lagrangian = FiniteAppendage.W(chain, s)
+        np.testing.assert_allclose(chain.W(s), lagrangian, rtol=1e-11, atol=0.0)
+        np.testing.assert_allclose(recursive_W(chain, s), lagrangian, rtol=1e-11, atol=0.0)
+
+
+@pytest.mark.parametrize("n_bodies", [3, 10, 200])
+def test_W_keeps_the_rigid_body_limit_at_small_s(n_bodies):
+    """s^2 W(s) tends to the rigid-body flexibility of the whole chain; at |s| = 1e-6 rad/s the
+    elastic correction is ~ (|s|/w_1)^2 ~ 1e-13, so rtol 1e-10 (the matrix condensation of
+    FiniteAppendage.W loses 4e-2 here at 200 bodies: it subtracts stiffness-sized terms)."""
+    chain = HingedChain.rfem(paper_rod(), n_bodies)
+    s = np.array([1e-6j, 1e-6 + 2e-7j])
+    expected = rigid_body_W(s, chain.mass, chain.inertia, chain.center_of_mass)
+    np.testing.assert_allclose(chain.W(s), expected, rtol=1e-10, atol=0.0)
+
+
+def test_W_rejects_the_rigid_body_pole():
+    with pytest.raises(ValueError, match="s = 0 is the rigid-body pole"):
+        HingedChain.rfem(paper_rod(), 3).W(np.array([1j, 0.0]))
+
+
+def test_poles_and_zeros_by_count_at_any_spectrum_spread():
+    """Rigid-body modes are dropped by count: a one-body hinged chain has no pole (not a
+    round-off one), and a 400-body chain keeps its first mode (Blevins, rtol 1e-9 + its
+    O(H^4) discretisation error ~ 2e-11)."""
+    one = HingedChain([10.0], [6.0], [50.0], [20.0], root="hinged")
+    assert one.poles().size == 0 and one.zeros(1).size == 0
+    np.testing.assert_allclose(one.zeros(4), [np.sqrt(20.0 / 50.0)], rtol=1e-12)
+    rod = paper_rod()
+    exact = BLEVINS_FREE_FREE[0] ** 2 * np.sqrt(rod.bending_stiffness / (rod.linear_density * 1e4))
+    np.testing.assert_allclose(HingedChain.rfem(rod, 400).poles()[0], exact, rtol=1e-9)
 
 
 @pytest.mark.parametrize("root", ["rigid", "hinged"])
