@@ -9,6 +9,10 @@ compile only the generated model.c. Also times the parts: Python generation alon
 and the C-side transition matrix for a non-default step (one fmi2DoStep with a new step
 size), and a plant + PD co-simulation in steps per second.
 
+Timings depend on the machine's load: record it (the JSON has the 1-minute load average).
+On a busy machine a multithreaded BLAS can make scipy's expm of the 201 x 201 augmented
+matrix 30x slower (0.02 s -> 0.7 s); ``OPENBLAS_NUM_THREADS=1`` avoids that.
+
 Usage::
 
     python benchmarks/bench_fmu_export.py [--runs 7] [--json results.json]
@@ -18,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import statistics
 import tempfile
@@ -136,7 +141,8 @@ def main() -> None:
         folder = Path(tmp)
         results = {
             "machine": {"python": platform.python_version(), "processor": platform.machine(),
-                        "cpus": __import__("os").cpu_count()},
+                        "cpus": os.cpu_count(), "load_average_1min": os.getloadavg()[0],
+                        "OPENBLAS_NUM_THREADS": os.environ.get("OPENBLAS_NUM_THREADS")},
             "export": [bench_export(n, args.runs, folder) for n in (2, 50, 200)],
             "cosimulation": bench_cosim(folder, max(3, args.runs // 2)),
         }
