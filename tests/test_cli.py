@@ -263,3 +263,13 @@ def test_export_writes_fmus_and_cross_check_files(scene_file, tmp_path, capsys):
     # 1e-9 of the signal's size: ZOH stepping is exact, the rest is round-off
     np.testing.assert_allclose(theta, theta_ref, rtol=0, atol=1e-9 * np.abs(theta_ref).max())
     assert "closed_loop_pd.fmu" in capsys.readouterr().out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["single_boom", "two_wings", "hinged_wing"])
+def test_example_scenes_run(name, tmp_path, capsys):
+    out = tmp_path / name
+    assert flexsat("run", name, "--out", out, "--no-fmu", "--no-plots", "--quiet") == 0
+    data = json.loads((out / "results.json").read_text())
+    assert data["closed_loops"] and all(r["verdict"]["stable"] for r in data["closed_loops"])
+    assert f"to {out}" in capsys.readouterr().out
