@@ -63,6 +63,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.special
 
 from .interface import as_frequency_array, check_positive
 
@@ -422,7 +423,7 @@ class Beam:
         ``(b_k^4 - b_i^4) integral phi_k psi_i = phi_k(0) psi_i'''(0) - phi_k'(0) psi_i''(0)``,
         exact where the roots are well apart. Free-free root k and cantilever root k + 1 both
         tend to (k + 1/2) pi, where this form cancels; those pairs (k <= n_cantilever + 8) are
-        integrated by 2000-point Gauss-Legendre quadrature of the stable mode shapes instead.
+        integrated by Gauss-Legendre quadrature of the stable mode shapes instead.
         """
         L = self.length
         xk = self._roots("free-free", n_free)
@@ -435,7 +436,11 @@ class Beam:
         with np.errstate(divide="ignore", invalid="ignore"):  # rows below are replaced
             overlap = numerator / (xk[:, None] ** 4 - xi[None, :] ** 4)
         n_quad = min(n_free, n_cantilever + 8)
-        nodes, weights = np.polynomial.legendre.leggauss(2000)
+        # Gauss-Legendre nodes: scipy's asymptotic algorithm (numpy's leggauss solves a dense
+        # eigenproblem, seconds at this size); ~6 nodes per unit of the highest root x resolve
+        # the products of shapes to round-off
+        n_nodes = int(200 + 6 * (n_quad + 1) * math.pi)
+        nodes, weights = scipy.special.roots_legendre(n_nodes)
         x = 0.5 * (nodes + 1.0) * L
         phi = self.mode_shapes(x, n_quad)
         psi = self.mode_shapes(x, n_cantilever, boundary="clamped-free")
