@@ -338,7 +338,9 @@ class Spacecraft:
             driven = np.abs(Bq).max(axis=1, initial=0) > tol * np.abs(F).max()
             out_scale = max(np.abs(Cq).max(initial=0), np.abs(Cv).max(initial=0), 1e-300)
             seen = (np.abs(Cq).max(axis=0, initial=0) + np.abs(Cv).max(axis=0, initial=0)) > 1e-12 * out_scale
-            coupled = np.abs(Ck - np.diag(np.diag(Ck))) > 0
+            # damping couples two modes when C_jk is more than round-off of the damping scale
+            # (symmetric wings leave ~1e-16 between symmetric and antisymmetric modes)
+            coupled = np.abs(Ck - np.diag(np.diag(Ck))) > 1e-12 * max(np.abs(Ck).max(initial=0), 1e-300)
             driven, seen = _closure(driven, coupled), _closure(seen, coupled)
             active = driven & seen
             keep, Vk, lam, Ck = keep[active], Vk[:, active], lam[active], Ck[np.ix_(active, active)]
