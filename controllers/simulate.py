@@ -117,52 +117,73 @@ def _chunk_maps(Ad, Bd0, Bd1, C, D, L: int, with_states: bool) -> _ChunkMaps:
     steady state (I - Ad^L)^-1 K u of a slow mode amplifies by
     1 / (1 - |lambda|^L).  For other modes both forms carry ~ L eps.
 
-    L is a power of two (S_L and Ad^L by doubling).  Cost
-    O(n^3 log L + (n + p) n m L) without states; the states' map needs the
-    powers Ad^t, t < L: O(L n^3).
+    L is a power of two: every sequence of powers is built by doubling,
+    ``[Ad^t]_{t<2k} = [[Ad^t]_{t<k}, Ad^k [Ad^t]_{t<k}]``, so the set-up
+    makes O(log L) BLAS calls (each call can wake BLAS threads, which is
+    costly on a busy machine).  Cost O(n^3 log L + (n + p) n m L) without
+    states; the states' map holds the powers Ad^t, t < L: O(L n^3).
     """
     n, m = Bd0.shape
     p = C.shape[0]
-    # Doubling: S_2k = S_k + Ad^k S_k, Ad^2k = Ad^k Ad^k.
-    S, P, k = np.eye(n), Ad, 1
+    # Wide and tall arrays of power sequences, filled by doubling:
+    # MB = [Ad^t [Bd0, Bd1]]_{t<=L} (column blocks), CA = [C Ad^t]_{t<L}
+    # (row blocks), At = [Ad^t]_{t<L} (column blocks, states only).
+    MB = np.empty((n, (L + 1) * 2 * m))
+    MB[:, :2 * m] = np.hstack([Bd0, Bd1])
+    CA = np.empty((L * p, n))
+    CA[:p] = C
+    At = None
+    if with_states:
+        At = np.empty((n, L * n))
+        At[:, :n] = np.eye(n)
+    S = np.eye(n)                      # S_k = I + Ad + ... + Ad^(k-1)
+    Ak = Ad.copy()                     # Ad^k
+    k = 1
     while k < L:
-        S, P, k = S + P @ S, P @ P, 2 * k
+        S = S + Ak @ S
+        MB[:, 2 * m * k:2 * m * 2 * k] = Ak @ MB[:, :2 * m * k]
+        CA[p * k:p * 2 * k] = CA[:p * k] @ Ak
+        if At is not None:
+            At[:, n * k:n * 2 * k] = Ak @ At[:, :n * k]
+        Ak = Ak @ Ak
+        k *= 2
     Delta = (np.eye(n) - Ad) @ S
-    # Markov parameters Ad^(d-1) Bd0 (d = 1..L, index d) and Ad^d Bd1.
-    Psi0 = [np.zeros((n, m)), Bd0]
-    Psi1 = [Bd1]
-    for _ in range(L):
-        Psi0.append(Ad @ Psi0[-1])
-        Psi1.append(Ad @ Psi1[-1])
-    K = np.hstack([Psi0[L - j] + (Psi1[L - j] if j >= 1 else 0.0)
-                   for j in range(L + 1)]) if m else np.zeros((n, 0))
+    MB[:, 2 * m * L:] = Ak @ MB[:, :2 * m]            # t = L
+    MB = MB.reshape(n, L + 1, 2 * m).transpose(1, 0, 2)    # (t, n, 2m)
+    CA = CA.reshape(L, p, n)
+    # Markov parameters by d = t - j: Psi0[d] = Ad^(d-1) Bd0 (0 for d = 0),
+    # Psi1[d] = Ad^d Bd1, d = 0..L.
+    Psi0 = np.concatenate([np.zeros((1, n, m)), MB[:L, :, :m]])
+    Psi1 = MB[:, :, m:]
+    # K[:, j] = Gamma[L, j]: d = L - j.
+    K = np.concatenate([Psi0[L][None], Psi0[L - 1::-1][:L] + Psi1[L - 1::-1]
+                        [:L]]) if m else np.zeros((L + 1, n, 0))
+    KT = K.transpose(0, 2, 1).reshape((L + 1) * m, n)
 
     Fy = np.zeros((n + L * m, L * p))
-    CAt = C.copy()                                   # C Ad^t
-    for t in range(L):
-        Fy[:n, t * p:(t + 1) * p] = CAt.T
-        CAt = CAt @ Ad
+    Fy[:n] = CA.transpose(2, 0, 1).reshape(n, L * p)  # [state, (t, output)]
     Fx = None
     if with_states:
         Fx = np.zeros((n + L * m, L * n))
-        At = np.eye(n)                               # Ad^t
-        for t in range(L):
-            Fx[:n, t * n:(t + 1) * n] = At.T
-            At = At @ Ad
+        for t in range(L):        # block by block: cache-friendly
+            Fx[:n, t * n:(t + 1) * n] = At[:, t * n:(t + 1) * n].T
     if m:
+        CPsi0 = C @ Psi0[:L]                          # (L, p, m)
+        CG = CPsi0 + C @ Psi1[:L]
+        CPsi0[0] += D
+        CG[0] += D
         Fy_u = Fy[n:].reshape(L, m, L, p)            # [j, input, t, output]
         Fx_u = None if Fx is None else Fx[n:].reshape(L, m, L, n)
+        G = Psi0[:L] + Psi1[:L]
         for d in range(L):
-            feedthrough = D if d == 0 else 0.0
             j = np.arange(1, L - d)                  # chunk inputs j >= 1
-            G0, G = Psi0[d], Psi0[d] + Psi1[d]
-            Fy_u[0, :, d, :] = (C @ G0 + feedthrough).T
-            Fy_u[j, :, j + d, :] = (C @ G + feedthrough).T
+            Fy_u[0, :, d, :] = CPsi0[d].T
+            Fy_u[j, :, j + d, :] = CG[d].T
             if Fx_u is not None:
-                Fx_u[0, :, d, :] = G0.T
-                Fx_u[j, :, j + d, :] = G.T
+                Fx_u[0, :, d, :] = Psi0[d].T
+                Fx_u[j, :, j + d, :] = G[d].T
     return _ChunkMaps(L, np.ascontiguousarray(Delta.T),
-                      np.ascontiguousarray(K.T), Fy, Fx)
+                      np.ascontiguousarray(KT), Fy, Fx)
 
 
 # Cost model of the chunk length choice (orders of magnitude measured on a
