@@ -9,7 +9,7 @@ Prints, and writes to benchmarks/results/equivalence.json and equivalence.md:
    flexsat's fitted chains of the same sizes (a chain of n bodies has n + 1 degrees of freedom:
    delta, phi and n - 1 hinge angles; n - 1 elastic modes);
 3. the six zeros of the two three-body chains against the exact beam;
-4. fit times (median of several runs).
+4. fit times (median of several runs), and the cost of a chain's W(s), poles and zeros.
 
 Error measures: "first two" is the largest |relative error| of w1, w2 and n_r1, n_r2 (r = 1, 2, 4:
 the paper's quantities); "all" the largest over all n - 1 poles and the first n - 1 zeros of W1,
@@ -32,6 +32,7 @@ import numpy as np
 from appendages.beam import Beam
 from appendages.chain import HingedChain
 from appendages.equivalence import criterion, fit_chain, spectral_errors
+from appendages.interface import FiniteAppendage
 
 RESULTS = pathlib.Path(__file__).resolve().parent / "results"
 PAPER_FREQUENCIES = (2.8744, 7.9231)
@@ -141,6 +142,25 @@ def main(argv=None) -> dict:
                 verdicts.append({"dof": dof, "versus": other, "criteria": keys,
                                  "fitted_better": better})
 
+    # 4. cost of evaluating chains (medians)
+    costs = []
+    omega = np.geomspace(0.1, 100.0, 2000)
+    for n in (3, 10, 50, 200):
+        chain = HingedChain.rfem(rod, n)
+        _, (w_wall, _) = timed(lambda: chain.W(1j * omega), args.repeats)
+        # the condensation takes about a minute at 200 bodies: one run there
+        _, (lag_wall, _) = timed(lambda: FiniteAppendage.W(chain, 1j * omega),
+                                 args.repeats if n < 200 else 1)
+        _, (p_wall, _) = timed(lambda: (chain.poles(), [chain.zeros(r) for r in (1, 2, 4)]),
+                               args.repeats)
+        lagrangian = FiniteAppendage.W(chain, 1e-6j)[0, 0] * (1e-6j) ** 2
+        recursion = chain.W(1e-6j)[0, 0] * (1e-6j) ** 2
+        rigid = 1.0 / chain.mass + chain.center_of_mass**2 / chain.inertia
+        costs.append({"n_bodies": n, "W_2000_points_s": w_wall,
+                      "W_lagrangian_condensation_s": lag_wall, "poles_and_zeros_s": p_wall,
+                      "rigid_limit_error_recursion": float(abs(recursion / rigid - 1)),
+                      "rigid_limit_error_condensation": float(abs(lagrangian / rigid - 1))})
+
     fitted3 = fitted[3][0]
     out = {
         "rod": {"length": rod.length, "bending_stiffness": rod.bending_stiffness,
@@ -151,6 +171,7 @@ def main(argv=None) -> dict:
         "errors_vs_exact_beam": rows,
         "three_body_zero_errors": zero_rows,
         "verdicts": verdicts,
+        "evaluation_cost": costs,
         "fitted_three_body_chain": {
             "lengths": fitted3.lengths.tolist(), "masses": fitted3.masses.tolist(),
             "inertias": fitted3.inertias.tolist(), "com_offsets": fitted3.com_offsets.tolist(),
@@ -205,6 +226,17 @@ def to_markdown(out: dict) -> str:
     for v in out["verdicts"]:
         lines.append(f"| {v['dof']} | {v['versus']} | {', '.join(v['criteria'])} | "
                      f"{v['fitted_better']} |")
+    lines += ["", "## 5. Cost of a chain's W(s), poles and zeros (median wall time)", "",
+              "W at 2000 frequencies by HingedChain.W (tip-to-root recursion) and by the generic "
+              "condensation FiniteAppendage.W; rigid-limit error: |s^2 W1 / rigid - 1| at "
+              "s = 1e-6j (physical value ~1e-13).", "",
+              "| bodies | W, recursion [s] | W, condensation [s] | poles + zeros [s] | "
+              "rigid-limit error, recursion | condensation |", "|---|---|---|---|---|---|"]
+    for c in out["evaluation_cost"]:
+        lines.append(f"| {c['n_bodies']} | {c['W_2000_points_s']:.4f} | "
+                     f"{c['W_lagrangian_condensation_s']:.4f} | {c['poles_and_zeros_s']:.4f} | "
+                     f"{c['rigid_limit_error_recursion']:.1e} | "
+                     f"{c['rigid_limit_error_condensation']:.1e} |")
     fc = out["fitted_three_body_chain"]
     lines += ["", "## Fitted three-body chain", "",
               "| body | length [m] | mass [kg] | inertia [kg*m^2] | com offset [m] |",
