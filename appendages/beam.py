@@ -471,8 +471,9 @@ class Beam:
         s = as_frequency_array(s)
         if np.any(s == 0):
             raise ValueError("s = 0 is the rigid-body pole of W (W is infinite there) [rad/s]")
-        W = np.empty(s.shape + (2, 2), dtype=np.complex128)
+        W = np.zeros(s.shape + (2, 2), dtype=np.complex128)
         W[..., 0, 0], W[..., 0, 1], W[..., 1, 1] = self._undamped_entries(s)
+        W[..., 1, 0] = W[..., 0, 1]
         if self.damping_ratio > 0.0:
             with np.errstate(divide="ignore", invalid="ignore"):  # undamped poles, repaired below
                 corrections = self._damping_correction(s)

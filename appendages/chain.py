@@ -146,12 +146,6 @@ class HingedChain(FiniteAppendage):
     .. [1] Belonozhko et al. 2009 (see :mod:`appendages.chain`).
     """
 
-    #: Eigenvalues of K - lambda M below this fraction of the largest one count as rigid-body
-    #: ones. The rigid-body eigenvalues come out of the QZ algorithm at ~1e-20 of the largest;
-    #: a chain's first elastic one is ~500/n**4 of it (4e-9 at n = 200, 7e-12 at n = 1000), so
-    #: the base class's 1e-9 would drop real modes beyond ~220 bodies.
-    _rigid_tol = 1e-14
-
     def __init__(self, lengths: Sequence[float], masses: Sequence[float],
                  inertias: Sequence[float], hinge_stiffnesses: Sequence[float], *,
                  hinge_dampings: Sequence[float] | None = None,

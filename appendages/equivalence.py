@@ -681,7 +681,7 @@ def _fast_values(arrays, n_values: int) -> np.ndarray | None:
     E = np.zeros((n + 1, n + 1))
     A[:n, :n], E[:n, :n] = K, M
     A[1, n] = A[n, 0] = 1.0
-    zeros2 = FiniteAppendage._pencil_frequencies(A, E, HingedChain._rigid_tol)
+    zeros2 = FiniteAppendage._pencil_frequencies(A, E, 1)
     out = []
     for values in (poles, zeros1, zeros2, zeros4):
         if values is None or values.size < n_values:

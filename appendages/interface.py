@@ -160,9 +160,6 @@ class FiniteAppendage:
     .. [1] Belonozhko et al. 2009, see :mod:`appendages.interface`.
     """
 
-    #: Relative size below which an eigenvalue of K - lambda M counts as a rigid-body one.
-    _rigid_tol = 1e-9
-
     def _root_model(self) -> RootModel:  # pragma: no cover - abstract
         raise NotImplementedError
 
@@ -194,24 +191,39 @@ class FiniteAppendage:
 
     # -- poles, zeros, gains ------------------------------------------------------------------
     @staticmethod
-    def _pencil_frequencies(K: np.ndarray, M: np.ndarray, rigid_tol: float) -> np.ndarray:
+    def _pencil_frequencies(K: np.ndarray, M: np.ndarray, n_rigid: int) -> np.ndarray:
         """Non-zero undamped frequencies [rad/s] of ``(K - w**2 M) v = 0``, ascending.
 
-        M may be singular and K singular (rigid-body modes); both are symmetric. The eigenvalues
-        are taken from the generalized problem, infinite ones (massless coordinates) and
-        rigid-body ones (|lambda| below ``rigid_tol`` times the largest finite one) dropped.
+        M may be singular (massless coordinates, a Lagrange multiplier row) and K singular
+        (rigid-body modes); both are symmetric. Infinite eigenvalues are recognised in the
+        homogeneous form (alpha, beta) with each part measured against its own matrix norm.
+        The ``n_rigid`` smallest finite eigenvalues are the rigid-body ones (their number is
+        known from the mechanics: 2 for a free appendage, 1 pinned or with the rotation
+        held); they are dropped by count, not by a threshold, so a wide spectrum (a first
+        eigenvalue 1e-12 of the last) keeps its genuine low modes. A "rigid" eigenvalue that
+        is not small (above 1e-6 of the largest) is a model without that rigid-body mode and
+        is kept.
         """
         if K.shape[0] == 0:
             return np.zeros(0)
-        lam = scipy.linalg.eigvals(K, M, homogeneous_eigvals=True)
-        alpha, beta = lam[0], lam[1]
-        finite = np.abs(beta) > 1e-12 * np.abs(alpha).max(initial=1.0)
-        values = (alpha[finite] / beta[finite]).real
+        alpha, beta = scipy.linalg.eigvals(K, M, homogeneous_eigvals=True)
+        k_norm = max(np.abs(K).max(), 1e-300)
+        m_norm = max(np.abs(M).max(), 1e-300)
+        finite = np.abs(beta) / m_norm > 1e-13 * np.abs(alpha) / k_norm
+        values = np.sort((alpha[finite] / beta[finite]).real)
         if values.size == 0:
             return np.zeros(0)
-        scale = max(np.abs(values).max(), 1e-300)
-        values = values[values > rigid_tol * scale]
-        return np.sqrt(np.sort(values))
+        scale = np.abs(values).max()
+        by_size = np.argsort(np.abs(values))
+        rigid = [i for i in by_size[:n_rigid] if abs(values[i]) <= 1e-6 * scale]
+        values = np.delete(values, rigid)
+        if np.any(values <= 0):
+            raise ValueError(
+                "the model has a negative or zero eigenvalue besides its rigid-body modes "
+                f"(smallest {values.min()!r} [rad^2/s^2]): a mechanism or a stiffness range too "
+                "wide for double precision"
+            )
+        return np.sqrt(values)
 
     def poles(self) -> np.ndarray:
         """Undamped natural frequencies w_k of the free appendage [rad/s], ascending.
@@ -221,7 +233,7 @@ class FiniteAppendage:
         rm = self.root_model()
         cached = self.__dict__.get("_poles_cache")
         if cached is None:
-            cached = self._pencil_frequencies(rm.stiffness, rm.mass, self._rigid_tol)
+            cached = self._pencil_frequencies(rm.stiffness, rm.mass, 2)
             self.__dict__["_poles_cache"] = cached
         return cached.copy()
 
@@ -246,7 +258,7 @@ class FiniteAppendage:
         E[:n, :n] = rm.mass
         A[in_index, n] = 1.0
         A[n, out_index] = 1.0
-        return self._pencil_frequencies(A, E, self._rigid_tol)
+        return self._pencil_frequencies(A, E, 1)
 
     def gains(self) -> np.ndarray:
         """High-frequency gains k_r = lim s**2 W_r(s), r = 1..4 [m/(N s^2), 1/(N s^2), ...].
@@ -312,7 +324,8 @@ class FiniteAppendage:
             out_rows = out_rows[:, keep] - out_rows[:, massless] @ Gq
             M, C, K, load = M[np.ix_(keep, keep)], C[np.ix_(keep, keep)], 0.5 * (Kk + Kk.T), load_k
         lam, V = scipy.linalg.eigh(K, M)
-        lam = np.where(np.abs(lam) < self._rigid_tol * np.abs(lam).max(initial=1.0), 0.0, lam)
+        # the two smallest are the free appendage's rigid-body modes (zero up to round-off)
+        lam[:2] = np.where(np.abs(lam[:2]) <= 1e-6 * np.abs(lam).max(initial=0.0), 0.0, lam[:2])
         m = lam.size
         A = np.block([[np.zeros((m, m)), np.eye(m)], [-np.diag(lam), -(V.T @ C @ V)]])
         B = np.vstack([np.zeros((m, 2)), V.T @ load])
