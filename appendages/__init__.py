@@ -2,13 +2,15 @@
 
 from . import equivalence
 from .beam import Beam, characteristic_roots
-from .chain import HingedChain
-from .equivalence import EquivalenceResult, criterion, fit_chain
+from .chain import MOLENAAR_K, HingedChain
+from .equivalence import (EquivalenceResult, FitWarning, ModelQuantities, criterion, fit_chain,
+                          spectral_errors)
 from .interface import (Appendage, ConvergenceError, FiniteAppendage, FlexsatError, RootModel)
 from .modal import ModalBeam
 
 __all__ = [
     "Appendage", "Beam", "ConvergenceError", "EquivalenceResult", "FiniteAppendage",
-    "FlexsatError", "HingedChain", "ModalBeam", "RootModel", "characteristic_roots", "criterion",
-    "equivalence", "fit_chain",
+    "FitWarning", "FlexsatError", "HingedChain", "MOLENAAR_K", "ModalBeam", "ModelQuantities",
+    "RootModel", "characteristic_roots", "criterion", "equivalence", "fit_chain",
+    "spectral_errors",
 ]
