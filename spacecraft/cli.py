@@ -22,7 +22,6 @@ stderr, no traceback); 1 internal error (one line; ``--debug`` shows the traceba
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 import traceback
@@ -139,7 +138,7 @@ def _scene(argument):
 
 
 def _beam_from(args):
-    from .scene import SceneError, _Reader, _read_beam, load_scene
+    from .scene import SceneError, _Reader, _read_beam
 
     given = {option[2:].replace("-", "_"): getattr(args, option[2:].replace("-", "_"))
              for option, _, _ in _BEAM_OPTIONS}

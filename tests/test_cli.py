@@ -1,6 +1,5 @@
 """The flexsat command: exit codes, files written, JSON content, nothing half-written."""
 import json
-import math
 import subprocess
 import sys
 
