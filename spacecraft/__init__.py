@@ -1,6 +1,14 @@
-"""The spacecraft: a rigid hub coupled to appendages through the W-matrix interface."""
+"""The spacecraft: a rigid hub coupled to appendages through the W-matrix interface, scenes,
+the scene runner, its report and the ``flexsat`` command."""
 
 from .coupling import SecondOrderModel, Spacecraft
 from .hub import Hub, Mount
+from .report import output_folder, write_report
+from .runner import RunResult, RunStats, run
+from .scene import Scene, SceneError, default_scene, example_scenes, load_scene, scene_path
 
-__all__ = ["Hub", "Mount", "SecondOrderModel", "Spacecraft"]
+__all__ = [
+    "Hub", "Mount", "RunResult", "RunStats", "Scene", "SceneError", "SecondOrderModel",
+    "Spacecraft", "default_scene", "example_scenes", "load_scene", "output_folder", "run",
+    "scene_path", "write_report",
+]
