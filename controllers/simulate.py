@@ -25,7 +25,9 @@ path) the chunk is long, L proportional to n / sqrt(p m) up to 256, so a
 sample costs O(n sqrt(p m)), i.e. O(n), after an O(n^3) set-up; the states,
 which any method returning n states per sample must write, cost one O(n^2)
 product per sample.  L is chosen from a simple cost model (chunk-start step
-versus fill-in columns; see _best_chunk_length).
+versus fill-in columns; see _best_chunk_length) and cut, down to 1 (plain
+stepping), when a set-up probe finds that formed powers of Ad are less
+accurate than stepping: strongly non-normal systems (see _chunk_maps).
 
 Why not a modal (diagonal) recursion: it is O(n) per sample too, but its
 basis carries the eigenvectors' round-off, eps / gap for nearly equal
@@ -95,6 +97,7 @@ class _ChunkMaps:
     KT: np.ndarray              # K^T, ((L+1) m, n)
     Fy: np.ndarray              # (n + L m, L p)
     Fx: np.ndarray | None       # (n + L m, L n)
+    accurate_length: int        # longest chunk passing the accuracy probe
 
 
 def _chunk_maps(Ad, Bd0, Bd1, C, D, L: int, with_states: bool) -> _ChunkMaps:
@@ -138,8 +141,22 @@ def _chunk_maps(Ad, Bd0, Bd1, C, D, L: int, with_states: bool) -> _ChunkMaps:
         At[:, :n] = np.eye(n)
     S = np.eye(n)                      # S_k = I + Ad + ... + Ad^(k-1)
     Ak = Ad.copy()                     # Ad^k
+    # Accuracy probe.  A formed power Ad^k applied to x carries the
+    # round-off of the product, eps |Ad|^k |x| entrywise, where stepping
+    # carries eps |Ad| |Ad^j x| per step.  For strongly non-normal Ad
+    # (transient growth, ||Ad|| >> spectral radius) the first is far larger,
+    # and outputs that cancel states amplify it.  Two fixed pseudo-random
+    # vectors stepped k times are compared with x - Delta_k x; chunks
+    # longer than the last k agreeing within 10 k eps are refused.
+    # Lightly damped modal loops agree to ~1e-16 k; a random state space
+    # with eigenvector condition 1e6 fails at k = 2.
+    V = np.random.default_rng(20260523).standard_normal((n, 2))
+    W = Ad @ V                         # Ad^k V by steps
+    eps = np.finfo(float).eps
     k = 1
     while k < L:
+        for _ in range(k):
+            W = Ad @ W
         S = S + Ak @ S
         MB[:, 2 * m * k:2 * m * 2 * k] = Ak @ MB[:, :2 * m * k]
         CA[p * k:p * 2 * k] = CA[:p * k] @ Ak
@@ -147,6 +164,14 @@ def _chunk_maps(Ad, Bd0, Bd1, C, D, L: int, with_states: bool) -> _ChunkMaps:
             At[:, n * k:n * 2 * k] = Ak @ At[:, :n * k]
         Ak = Ak @ Ak
         k *= 2
+        if n:
+            SV = S @ V
+            error = np.linalg.norm(V - (SV - Ad @ SV) - W) / max(
+                np.linalg.norm(W), 1e-3 * np.linalg.norm(V))
+            if not (np.isfinite(error) and error <= 3 * k * eps):
+                # Refused: the caller rebuilds with chunks of k / 2.
+                empty = np.zeros((0, 0))
+                return _ChunkMaps(L, empty, empty, empty, None, k // 2)
     Delta = (np.eye(n) - Ad) @ S
     MB[:, 2 * m * L:] = Ak @ MB[:, :2 * m]            # t = L
     MB = MB.reshape(n, L + 1, 2 * m).transpose(1, 0, 2)    # (t, n, 2m)
@@ -183,7 +208,7 @@ def _chunk_maps(Ad, Bd0, Bd1, C, D, L: int, with_states: bool) -> _ChunkMaps:
                 Fx_u[0, :, d, :] = Psi0[d].T
                 Fx_u[j, :, j + d, :] = G[d].T
     return _ChunkMaps(L, np.ascontiguousarray(Delta.T),
-                      np.ascontiguousarray(KT), Fy, Fx)
+                      np.ascontiguousarray(KT), Fy, Fx, L)
 
 
 # Cost model of the chunk length choice (orders of magnitude measured on a
@@ -329,6 +354,10 @@ class Simulator:
                 while True:
                     maps = _chunk_maps(self.Ad, self.Bd0, self.Bd1, self._C,
                                        self._D, L, with_states)
+                    if maps.accurate_length < L:
+                        # Strongly non-normal Ad: shorter chunks.
+                        L = maps.accurate_length
+                        continue
                     if L == 1 or all(np.all(np.isfinite(M)) for M in
                                      (maps.DeltaT, maps.KT, maps.Fy, maps.Fx)
                                      if M is not None):

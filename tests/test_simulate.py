@@ -191,25 +191,55 @@ def test_matches_forced_response_with_rigid_body_modes(seed):
     assert np.max(np.abs(resp.y - ref.y) / scale) < 1e-9
 
 
-def test_matches_forced_response_stiff_and_stable_random():
-    """Stiff modes (|lambda| up to 1e4 rad/s, e^{-100} per step) and rss."""
+def test_matches_forced_response_stiff_modes():
+    """Stiff modes: poles from -0.1 to -1e4 rad/s (e^{-100} per step)."""
     rng = np.random.default_rng(7)
     poles = -np.logspace(-1, 4, 12)
-    A = np.diag(poles)
     Q, _ = np.linalg.qr(rng.standard_normal((12, 12)))
-    stiff = control.ss(Q @ A @ Q.T, rng.standard_normal((12, 1)),
-                       rng.standard_normal((2, 12)), 0)
-    control.config.defaults["statesp.remove_useless_states"] = False
-    random = control.rss(30, 2, 2, strictly_proper=False)
-    for sys in (stiff, random):
-        m = sys.ninputs
-        T = np.arange(1500) * 0.01
-        U = rng.standard_normal((m, T.size))
-        ref = control.forced_response(sys, T, U, 0.0)
-        resp = simulate(sys, T, U, 0.0)
-        scale = signal_range(ref.y)[:, None]
-        # Round-off only.
-        assert np.max(np.abs(resp.y - ref.y) / scale) < 1e-9
+    sys = control.ss(Q @ np.diag(poles) @ Q.T, rng.standard_normal((12, 2)),
+                     rng.standard_normal((2, 12)), 0)
+    T = np.arange(1500) * 0.01
+    U = rng.standard_normal((2, T.size))
+    ref = control.forced_response(sys, T, U, 0.0)
+    resp = simulate(sys, T, U, 0.0)
+    scale = signal_range(ref.y)[:, None]
+    # Round-off only.
+    assert np.max(np.abs(resp.y - ref.y) / scale) < 1e-9
+
+
+def non_normal_system(rng, n, decades):
+    """Stable A = S diag(poles) S^-1 with cond(S) up to 10^(2 decades).
+
+    Strongly non-normal: transient growth, ||Ad|| far above its spectral
+    radius (what control.rss can produce too).
+    """
+    Q1, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    Q2, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    S = Q1 @ np.diag(10.0 ** rng.uniform(-decades, decades, n)) @ Q2
+    A = S @ np.diag(-rng.uniform(0.1, 5.0, n)) @ np.linalg.inv(S)
+    return control.ss(A, rng.standard_normal((n, 1)),
+                      rng.standard_normal((2, n)), 0)
+
+
+@pytest.mark.parametrize("decades, tol", [(2, 1e-9), (3, 1e-6)])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_non_normal_systems_match_forced_response(seed, decades, tol):
+    """Formed powers Ad^L lose accuracy against stepping when Ad is strongly
+    non-normal; the chunk length is then cut (down to 1) by the accuracy
+    probe.  With eigenvector condition up to 1e4 both methods are accurate
+    to ~1e-11 of the range; at 1e6 forced_response itself is off by up to
+    1e-6 against a long-double exact solution (seen in development), so the
+    two can agree only to that level.
+    """
+    rng = np.random.default_rng(seed)
+    sys = non_normal_system(rng, 12, decades)
+    T = np.arange(2000) * 0.01
+    U = np.sin(T) + rng.standard_normal(T.size)
+    ref = control.forced_response(sys, T, U)
+    sim = Simulator(sys, 0.01)
+    scale = signal_range(ref.y)[:, None]
+    assert np.max(np.abs(sim.run(T, U).y - ref.y) / scale) < tol
+    assert np.max(np.abs(sim.outputs(T, U) - ref.y) / scale) < tol
 
 
 def test_zero_order_hold_matches_c2d_zoh():
