@@ -161,11 +161,6 @@ def test_one_body_chains_have_closed_form_W():
     np.testing.assert_allclose(hinged.W(s), expected, rtol=1e-12, atol=0)
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "reported bug: FiniteAppendage._pencil_frequencies drops rigid-body eigenvalues relative to "
-    "the largest finite one; a chain with no elastic mode (one body behind a root hinge) has "
-    "only rigid ones, so round-off (~1e-17) is kept: poles() == [3.1e-09] rad/s instead of []. "
-    "Remove this marker when fixed."))
 def test_one_body_hinged_chain_has_no_elastic_pole():
     """One rigid body behind a spring hinge at a massless mount: the free appendage's motion is
     rigid (the massless mount carries no inertia), so W has no finite pole besides s = 0."""
@@ -192,11 +187,6 @@ def test_rfem_chains_up_to_200_bodies_are_accurate(rod, n_bodies):
         assert error[0] < 40.0 / n_bodies**2     # ~ 0.3/n**2 measured; a generous bound
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "reported bug: HingedChain.W (FiniteAppendage.W -> RootModel.dynamic_stiffness -> inv) "
-    "loses accuracy at small |s|: s**2 W misses the rigid-body flexibility by 9.5e-5 (10 bodies)"
-    " and 3.9e-2 (200 bodies) at s = 1e-6j, where the physical error is 1.4e-13 (the "
-    "Craig-Bampton ModalBeam gets 1.4e-13). Remove this marker when fixed."))
 @pytest.mark.parametrize("n_bodies", [10, 200])
 def test_chain_W_rigid_body_limit_at_small_s(rod, n_bodies):
     """s**2 W(s) -> rigid flexibility with error ~ (|s|/w_1)**2 ~ 1e-13 at |s| = 1e-6 rad/s."""
