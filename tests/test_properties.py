@@ -72,8 +72,7 @@ def test_beam_W_symmetric_conjugate_symmetric_finite(beam, s):
     check_W(beam.W(s), beam.W(np.conj(s)))
 
 
-@pytest.mark.slow  # a damped Craig-Bampton model costs ~10 s to build (reported: leggauss(2000))
-@SLOW
+@FAST
 @given(beam=beams, n_modes=st.integers(1, 30),
        method=st.sampled_from(["craig-bampton", "residual", "free-free"]), s=laplace)
 def test_truncated_beam_W_symmetric_conjugate_symmetric_finite(beam, n_modes, method, s):
