@@ -19,9 +19,11 @@ Methods:
 - ``forced_response``: ``control.forced_response(sys, T, U, X0)``;
 - ``lsim``: ``scipy.signal.lsim((A, B, C, D), U.T, T, X0)``;
 - ``simulate``: ``controllers.simulate.simulate(sys, T, U, X0)``, one shot
-  (set-up included);
+  (set-up included), states read (they are filled in on first use);
 - ``Simulator.run``: ``Simulator(sys, dt).run(T, U, X0)`` with the set-up
-  (``Simulator(...)``, timed separately) paid once, as in a design loop;
+  (``Simulator(...)``, timed separately) paid once, as in a design loop,
+  states read; ``Simulator.run, outputs read``: the same reading only the
+  outputs (the states are then never computed);
 - ``Simulator.outputs``: the same without the state trajectory (its chunk
   maps are built on its first call, outside the timing).
 
@@ -199,11 +201,17 @@ def run_case(name: str, sys_: control.StateSpace, n_samples: int, dt: float,
     def setup():
         Simulator(sys_, dt)
 
+    def with_states(resp):
+        resp.states            # simulate()/run() fill the states on first use
+        return resp
+
     methods = {
         "forced_response": lambda: control.forced_response(sys_, T, U, X0),
         "lsim": lambda: scipy.signal.lsim((A, B, C, D), U.T, T, X0),
-        "simulate": lambda: simulate(sys_, T, U, X0),
-        "Simulator.run": lambda: simulator["sim"].run(T, U, X0),
+        "simulate": lambda: with_states(simulate(sys_, T, U, X0)),
+        "Simulator.run": lambda: with_states(simulator["sim"].run(T, U, X0)),
+        "Simulator.run, outputs read":
+            lambda: simulator["sim"].run(T, U, X0).outputs,
         "Simulator.outputs": lambda: simulator["sim"].outputs(T, U, X0),
         "Simulator(...)": setup,
     }
@@ -252,8 +260,11 @@ def run_case(name: str, sys_: control.StateSpace, n_samples: int, dt: float,
         "speedup_vs_lsim": {
             "simulate": med["lsim"] / med["simulate"],
             "Simulator.run": med["lsim"] / med["Simulator.run"]},
-        "speedup_outputs_only_vs_forced_response":
-            med["forced_response"] / med["Simulator.outputs"],
+        "speedup_outputs_only_vs_forced_response": {
+            "Simulator.run, outputs read":
+                med["forced_response"] / med["Simulator.run, outputs read"],
+            "Simulator.outputs":
+                med["forced_response"] / med["Simulator.outputs"]},
         "max_error_rel_range": errors,
     }
 
@@ -283,19 +294,22 @@ def machine_info() -> dict:
 
 def print_table(cases: list) -> None:
     """Timing table (medians, ms) and accuracy table (relative to range)."""
-    head = (f"{'case':27s} {'n':>4s} {'N':>6s} {'fr':>8s} {'lsim':>8s} "
-            f"{'sim':>7s} {'setup':>6s} {'run':>7s} {'outputs':>7s} "
-            f"{'fr/sim':>6s} {'fr/run':>6s} {'fr/out':>6s} {'lsim/run':>8s}")
+    head = (f"{'case':27s} {'n':>4s} {'N':>6s} {'fr':>7s} {'lsim':>7s} "
+            f"{'sim':>7s} {'setup':>6s} {'run':>7s} {'run-y':>6s} "
+            f"{'outputs':>7s} {'fr/sim':>6s} {'fr/run':>6s} {'fr/run-y':>8s} "
+            f"{'fr/out':>6s} {'lsim/run':>8s}")
     print(head)
     print("-" * len(head))
     for c in cases:
         t = {k: 1e3 * v for k, v in c["median_time_s"].items()}
         fr = t["forced_response"]
         print(f"{c['case']:27s} {c['n_states']:4d} {c['n_samples']:6d} "
-              f"{fr:8.1f} {t['lsim']:8.1f} {t['simulate']:7.1f} "
+              f"{fr:7.1f} {t['lsim']:7.1f} {t['simulate']:7.1f} "
               f"{t['Simulator(...)']:6.1f} {t['Simulator.run']:7.1f} "
+              f"{t['Simulator.run, outputs read']:6.1f} "
               f"{t['Simulator.outputs']:7.1f} {fr / t['simulate']:6.1f} "
               f"{fr / t['Simulator.run']:6.1f} "
+              f"{fr / t['Simulator.run, outputs read']:8.1f} "
               f"{fr / t['Simulator.outputs']:6.1f} "
               f"{t['lsim'] / t['Simulator.run']:8.1f}")
     print()
@@ -363,7 +377,9 @@ def main(argv=None) -> None:
     print("\nTimes [ms]: medians of interleaved runs in one process. fr = "
           "control.forced_response, lsim = scipy.signal.lsim, sim = "
           "simulate() (set-up included), setup = Simulator(...), run = "
-          "Simulator.run, outputs = Simulator.outputs (no states).\n"
+          "Simulator.run; sim and run include reading the states (filled in "
+          "on first use), run-y reads only the outputs; outputs = "
+          "Simulator.outputs (no states, long chunks).\n"
           "Errors: max output difference / output range. ref64 = the "
           "float64 discrete matrices (shared by all) propagated in long "
           "double; exact = the block exponential and the propagation in "

@@ -58,7 +58,6 @@ References
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 
 import control
@@ -266,9 +265,7 @@ class Simulator:
     :meth:`outputs` on its first call (O(n^3 log L)); every run then costs
     O(n^2 / L) per sample for the chunk starts plus one product that fills
     in the chunks (see the module docstring), so design loops that simulate
-    the same system many times pay the set-up once.  A Simulator keeps a
-    per-thread scratch array as large as the longest state trajectory it
-    has computed.
+    the same system many times pay the set-up once.
 
     Parameters
     ----------
@@ -324,7 +321,6 @@ class Simulator:
         self.Ad, self.Bd0, self.Bd1 = _discretise(A, B, dt, hold)
         self._maps: dict[bool, _ChunkMaps] = {}
         self._chunk_maps(True)      # outputs()' map is built on first use
-        self._scratch = threading.local()
 
     @property
     def n_states(self) -> int:
@@ -393,7 +389,10 @@ class Simulator:
         control.TimeResponseData
             ``time`` (n_samples,), ``outputs``, ``states`` (n_states,
             n_samples) and ``inputs`` with the system's signal names; the
-            shapes are those :func:`control.forced_response` returns.
+            shapes are those :func:`control.forced_response` returns.  The
+            states, O(n^2) per sample, are filled in on first use (a
+            subclass of TimeResponseData does it), so a caller that reads
+            only the outputs pays O(n) per sample.
 
         Raises
         ------
@@ -404,11 +403,12 @@ class Simulator:
             The response of an unstable system overflows float64.
         """
         T, U, X0 = self._check_run_arguments(T, U, X0)
-        X, Y = self._propagate(U, X0, with_states=True)
+        fill_states, Y = self._propagate(U, X0, with_states=True)
         sys = self.system
-        return control.TimeResponseData(
-            T, Y, X, U, issiso=sys.issiso(),
-            output_labels=sys.output_labels, state_labels=sys.state_labels,
+        return _SimulatedResponse(
+            fill_states, sys.state_labels,
+            T, Y, None, U, issiso=sys.issiso(),
+            output_labels=sys.output_labels,
             input_labels=sys.input_labels, sysname=sys.name,
             title="Simulated response for " + sys.name,
             trace_types=["forced"], plot_inputs=True,
@@ -448,7 +448,8 @@ class Simulator:
         return T, U, X0
 
     def _propagate(self, U, X0, *, with_states: bool):
-        """States (n, N) or None, and outputs (p, N), from checked U, X0."""
+        """Outputs (p, N) from checked U, X0, and a function that computes
+        the states (n, N) when called (None if with_states is False)."""
         maps = self._chunk_maps(with_states)
         n, m, p = self.n_states, self.n_inputs, self.n_outputs
         L = maps.L
@@ -493,19 +494,53 @@ class Simulator:
             raise FloatingPointError(
                 "simulation overflowed: the outputs of this (unstable) "
                 "system exceed the float64 range on this time grid")
-        X = None
-        if with_states:
-            # Into a per-thread scratch buffer kept between runs: run()
-            # hands X to TimeResponseData, which copies it anyway, and a
-            # fresh multi-megabyte array costs its page faults every time.
-            shape = (n_chunks, L * n)
-            work = getattr(self._scratch, "states", None)
-            if work is None or work.size < n_chunks * L * n:
-                work = self._scratch.states = np.empty(shape)
-            out = work.reshape(-1)[:n_chunks * L * n].reshape(shape)
-            XT = np.matmul(M, maps.Fx[rows], out=out)
-            X = XT.reshape(n_padded, n)[:n_samples].T
-        return X, Y
+        if not with_states:
+            return None, Y
+        Fx = maps.Fx[rows]
+
+        def fill_states():
+            # (n, N), an F-ordered view of the sample-major product.
+            XT = M @ Fx
+            return XT.reshape(n_padded, n)[:n_samples].T
+        return fill_states, Y
+
+
+class _SimulatedResponse(control.TimeResponseData):
+    """TimeResponseData whose state trajectory is filled in on first use.
+
+    The outputs are computed eagerly; the states, an O(n^2)-per-sample
+    product, only when ``states``, ``x``, tuple unpacking with states or
+    any other use reads them, once.  Shapes, labels and values are those
+    an eager computation gives (the chunk-start states are already fixed).
+    """
+
+    _fill_states = None
+    _states = None
+
+    def __init__(self, fill_states, state_labels, *args, **kwargs):
+        super().__init__(*args, **kwargs)       # states=None: set below
+        self._fill_states = fill_states
+        self.nstates = len(state_labels)
+        self.state_labels = list(state_labels)
+
+    @property
+    def x(self):
+        """State trajectory, (n_states, n_samples) (computed on first use)."""
+        if self._states is None and self._fill_states is not None:
+            self._states = self._fill_states()
+            self._fill_states = None
+        return self._states
+
+    @x.setter
+    def x(self, value):
+        self._states = value
+
+    def __getstate__(self):
+        # Pickle the values, not the closure that computes them.
+        self.x
+        state = self.__dict__.copy()
+        state["_fill_states"] = None
+        return state
 
 
 def simulate(system: control.StateSpace, T, U=None, X0=None, *,

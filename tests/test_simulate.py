@@ -414,6 +414,31 @@ def test_shapes_and_names_match_forced_response():
     assert resp.states.dtype == np.float64
 
 
+def test_states_are_filled_in_on_first_use():
+    """run() returns the outputs at once and the states when read; both
+    equal forced_response's; the states are computed once; pickling keeps
+    them."""
+    import pickle
+
+    rng = np.random.default_rng(12)
+    sys = modal_system(rng, 5, n_inputs=2, n_outputs=2)
+    T = np.arange(700) * 0.01
+    U = rng.standard_normal((2, T.size))
+    resp = Simulator(sys, 0.01).run(T, U)
+    assert resp._states is None               # nothing filled in yet
+    assert resp.nstates == sys.nstates
+    assert resp.state_labels == sys.state_labels
+    ref = control.forced_response(sys, T, U)
+    states = resp.states
+    assert states.shape == (sys.nstates, T.size)
+    assert resp.x is resp.x                   # computed once
+    # Round-off only.
+    np.testing.assert_allclose(states, ref.states, rtol=0,
+                               atol=1e-10 * np.abs(ref.x).max())
+    again = pickle.loads(pickle.dumps(Simulator(sys, 0.01).run(T, U)))
+    np.testing.assert_array_equal(again.x, resp.x)
+
+
 def test_siso_squeeze_like_forced_response():
     sys = control.ss([[-1.0]], [[1.0]], [[1.0]], [[0.0]])
     T = np.linspace(0, 1, 5)
