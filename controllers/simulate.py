@@ -551,8 +551,10 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
     A drop-in replacement for :func:`control.forced_response` on
     continuous-time state-space systems: same arguments ``T, U, X0``, same
     interpretation of the input (``hold="linear"``), same returned shapes and
-    signal names, results equal to round-off; much faster for large systems
-    and long grids (``benchmarks/bench_simulate.py``).
+    signal names, results equal to round-off (measured slightly closer to
+    the exact solution); faster, most of all when only the outputs are read
+    (``benchmarks/bench_simulate.py``).  Uses one :class:`Simulator`; build
+    one yourself to simulate the same system repeatedly.
 
     Parameters
     ----------
@@ -581,7 +583,8 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
     -------
     control.TimeResponseData
         ``time``, ``outputs``, ``states``, ``inputs`` with the system's
-        signal names.
+        signal names, shaped as forced_response shapes them; the states are
+        computed when first read (see :meth:`Simulator.run`).
 
     Raises
     ------
