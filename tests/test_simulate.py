@@ -369,7 +369,8 @@ def test_long_undamped_simulation_conserves_energy_and_rigid_motion():
     by round-off: each of the N steps adds p + q dt with a rounding error
     of at most eps |p| / 2, so |p - exact| <= N eps max|p| (~2e-7 here);
     a systematic drift (a wrong discrete rigid-body block) would show as
-    an error growing like t and far larger.
+    an error growing like t and far larger.  Seen: energy 4e-12, rigid body
+    3e-10 (forced_response: 1e-11 and 2e-8).
     """
     w = 1.3
     A = np.zeros((4, 4))
