@@ -7,10 +7,11 @@ from .equivalence import (EquivalenceResult, FitWarning, ModelQuantities, criter
                           spectral_errors)
 from .interface import (Appendage, ConvergenceError, FiniteAppendage, FlexsatError, RootModel)
 from .modal import ModalBeam
+from .selection import ModelChoice, cheapest_model
 
 __all__ = [
     "Appendage", "Beam", "ConvergenceError", "EquivalenceResult", "FiniteAppendage",
-    "FitWarning", "FlexsatError", "HingedChain", "MOLENAAR_K", "ModalBeam", "ModelQuantities",
-    "RootModel", "characteristic_roots", "criterion", "equivalence", "fit_chain",
-    "spectral_errors",
+    "FitWarning", "FlexsatError", "HingedChain", "MOLENAAR_K", "ModalBeam", "ModelChoice",
+    "ModelQuantities", "RootModel", "characteristic_roots", "cheapest_model", "criterion",
+    "equivalence", "fit_chain", "spectral_errors",
 ]
