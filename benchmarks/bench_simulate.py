@@ -20,6 +20,8 @@ Methods:
 - ``lsim``: ``scipy.signal.lsim((A, B, C, D), U.T, T, X0)``;
 - ``simulate``: ``controllers.simulate.simulate(sys, T, U, X0)``, one shot
   (set-up included), states read (they are filled in on first use);
+  ``simulate, outputs read``: the same reading only the outputs (a design
+  loop that builds a new closed loop each time);
 - ``Simulator.run``: ``Simulator(sys, dt).run(T, U, X0)`` with the set-up
   (``Simulator(...)``, timed separately) paid once, as in a design loop,
   states read; ``Simulator.run, outputs read``: the same reading only the
@@ -209,6 +211,7 @@ def run_case(name: str, sys_: control.StateSpace, n_samples: int, dt: float,
         "forced_response": lambda: control.forced_response(sys_, T, U, X0),
         "lsim": lambda: scipy.signal.lsim((A, B, C, D), U.T, T, X0),
         "simulate": lambda: with_states(simulate(sys_, T, U, X0)),
+        "simulate, outputs read": lambda: simulate(sys_, T, U, X0).outputs,
         "Simulator.run": lambda: with_states(simulator["sim"].run(T, U, X0)),
         "Simulator.run, outputs read":
             lambda: simulator["sim"].run(T, U, X0).outputs,
@@ -261,6 +264,8 @@ def run_case(name: str, sys_: control.StateSpace, n_samples: int, dt: float,
             "simulate": med["lsim"] / med["simulate"],
             "Simulator.run": med["lsim"] / med["Simulator.run"]},
         "speedup_outputs_only_vs_forced_response": {
+            "simulate, outputs read":
+                med["forced_response"] / med["simulate, outputs read"],
             "Simulator.run, outputs read":
                 med["forced_response"] / med["Simulator.run, outputs read"],
             "Simulator.outputs":
@@ -295,9 +300,9 @@ def machine_info() -> dict:
 def print_table(cases: list) -> None:
     """Timing table (medians, ms) and accuracy table (relative to range)."""
     head = (f"{'case':27s} {'n':>4s} {'N':>6s} {'fr':>7s} {'lsim':>7s} "
-            f"{'sim':>7s} {'setup':>6s} {'run':>7s} {'run-y':>6s} "
-            f"{'outputs':>7s} {'fr/sim':>6s} {'fr/run':>6s} {'fr/run-y':>8s} "
-            f"{'fr/out':>6s} {'lsim/run':>8s}")
+            f"{'sim':>7s} {'sim-y':>6s} {'setup':>6s} {'run':>7s} "
+            f"{'run-y':>6s} {'outputs':>7s} {'fr/sim':>6s} {'fr/sim-y':>8s} "
+            f"{'fr/run':>6s} {'fr/run-y':>8s} {'fr/out':>6s} {'lsim/run':>8s}")
     print(head)
     print("-" * len(head))
     for c in cases:
@@ -305,9 +310,11 @@ def print_table(cases: list) -> None:
         fr = t["forced_response"]
         print(f"{c['case']:27s} {c['n_states']:4d} {c['n_samples']:6d} "
               f"{fr:7.1f} {t['lsim']:7.1f} {t['simulate']:7.1f} "
+              f"{t['simulate, outputs read']:6.1f} "
               f"{t['Simulator(...)']:6.1f} {t['Simulator.run']:7.1f} "
               f"{t['Simulator.run, outputs read']:6.1f} "
               f"{t['Simulator.outputs']:7.1f} {fr / t['simulate']:6.1f} "
+              f"{fr / t['simulate, outputs read']:8.1f} "
               f"{fr / t['Simulator.run']:6.1f} "
               f"{fr / t['Simulator.run, outputs read']:8.1f} "
               f"{fr / t['Simulator.outputs']:6.1f} "
@@ -378,7 +385,7 @@ def main(argv=None) -> None:
           "control.forced_response, lsim = scipy.signal.lsim, sim = "
           "simulate() (set-up included), setup = Simulator(...), run = "
           "Simulator.run; sim and run include reading the states (filled in "
-          "on first use), run-y reads only the outputs; outputs = "
+          "on first use), sim-y and run-y read only the outputs; outputs = "
           "Simulator.outputs (no states, long chunks).\n"
           "Errors: max output difference / output range. ref64 = the "
           "float64 discrete matrices (shared by all) propagated in long "

@@ -261,7 +261,8 @@ class Simulator:
     """Exact simulator of one continuous-time StateSpace on a fixed step.
 
     The discretisation (one matrix exponential) and the chunk maps of
-    :meth:`run` are computed on construction (O(L n^3)), those of
+    :meth:`run` are computed on construction (O(n^3 log L)), the states'
+    fill-in map when states are first read (O(L n^3)), the maps of
     :meth:`outputs` on its first call (O(n^3 log L)); every run then costs
     O(n^2 / L) per sample for the chunk starts plus one product that fills
     in the chunks (see the module docstring), so design loops that simulate
@@ -320,6 +321,7 @@ class Simulator:
         self._C, self._D = C, D
         self.Ad, self.Bd0, self.Bd1 = _discretise(A, B, dt, hold)
         self._maps: dict[bool, _ChunkMaps] = {}
+        self._Fx: np.ndarray | None = None
         self._chunk_maps(True)      # outputs()' map is built on first use
 
     @property
@@ -344,12 +346,15 @@ class Simulator:
                 else _outputs_chunk_length(n, m, p))
 
     def _chunk_maps(self, with_states: bool) -> _ChunkMaps:
+        """Chunk maps of run() (with_states) or outputs(); the states' fill-in
+        map of run() is built only when states are first read
+        (_state_fill_map)."""
         if with_states not in self._maps:
             L = self.chunk_length(with_states=with_states)
             with np.errstate(over="ignore", invalid="ignore"):
                 while True:
                     maps = _chunk_maps(self.Ad, self.Bd0, self.Bd1, self._C,
-                                       self._D, L, with_states)
+                                       self._D, L, False)
                     if maps.accurate_length < L:
                         # Strongly non-normal Ad: shorter chunks.
                         L = maps.accurate_length
@@ -363,6 +368,20 @@ class Simulator:
                     L //= 2
             self._maps[with_states] = maps
         return self._maps[with_states]
+
+    def _state_fill_map(self) -> np.ndarray:
+        """Fill-in map of the states for run()'s chunks, built once."""
+        if self._Fx is None:
+            L = self._maps[True].L
+            with np.errstate(over="ignore", invalid="ignore"):
+                Fx = _chunk_maps(self.Ad, self.Bd0, self.Bd1, self._C,
+                                 self._D, L, True).Fx
+            if not np.all(np.isfinite(Fx)):
+                raise FloatingPointError(
+                    "simulation overflowed: states of this (unstable) system "
+                    f"grow past the float64 range within {L} samples")
+            self._Fx = Fx
+        return self._Fx
 
     def run(self, T, U=None, X0=None, *, squeeze: bool | None = None
             ) -> control.TimeResponseData:
@@ -496,11 +515,10 @@ class Simulator:
                 "system exceed the float64 range on this time grid")
         if not with_states:
             return None, Y
-        Fx = maps.Fx[rows]
 
         def fill_states():
             # (n, N), an F-ordered view of the sample-major product.
-            XT = M @ Fx
+            XT = M @ self._state_fill_map()[rows]
             return XT.reshape(n_padded, n)[:n_samples].T
         return fill_states, Y
 
