@@ -147,21 +147,113 @@ def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray
     return tips, W
 
 
-def _pbh_defective(A, M, *, side: str, tol: float) -> list[complex]:
-    """Eigenvalues lambda with Re >= -tol for which rank [A - lambda I, M] (or stacked) < n."""
+def _pbh_defective(A, M, *, side: str, tol: float = 1e-12) -> list[complex]:
+    """Eigenvalues lambda of A with Re >= 0 that M does not reach (PBH test, scale-invariant).
+
+    ``side="input"``: lambda is uncontrollable from B = M iff w^H B = 0 for a left eigenvector
+    w^H A = lambda w^H (Hautus); ``side="output"``: unobservable through C = M iff C v = 0 for a
+    right eigenvector, i.e. the input test on (A^T, C^T).
+
+    The test is made in coordinates A_b = D^-1 A D balanced by a diagonal similarity (powers of
+    2, exact), which equilibrates the rows and columns of every coupled block: a modal pair
+    (q, q') with q'' = -w^2 q + b u becomes (w q, q') with entries ~w, so the displacement and
+    rate coordinates are on one scale ("energy" coordinates) and b keeps its size. For a simple
+    eigenvalue with unit left eigenvector w_b, the mode counts as uncontrollable if
+    |w_b^H m_j| <= tol ||m_j|| for every column m_j of M_b = D^-1 M: the input's reach into that
+    mode measured against the input's own size, independent of how far the mode's frequency is
+    from the others (the plain test sigma_min([A - lambda I, B]) <= tol sigma_max compares it
+    with the largest frequency squared and wrongly rejects high, weakly excited beam modes).
+    Measured on hub + free-free rod plants: round-off in a structurally zero participation
+    (symmetric modes of two wings, the mode of a 200-body chain localised at its free tip) is
+    <= 3e-14; genuine modes of a 40-mode beam reach >= 1e-6 (input) and theta alone sees those
+    of a 200-body chain at >= 2e-10 (energy coordinates divide a displacement output by w),
+    hence tol = 1e-12 (also the threshold of ``Spacecraft.plant(prune=True)``).
+
+    Eigenvalues within 1e-8 ||A_b|| of each other (the rigid-body Jordan block at 0, repeated
+    frequencies) are tested together: the left null space U of A_b - lambda I (singular values
+    <= 1e-8 ||A_b||) must be reached in every direction, sigma_min(U^H M_b / ||M_b||) > tol;
+    with more null directions than inputs it cannot be.
+
+    References
+    ----------
+    M. L. J. Hautus, "Controllability and observability conditions of linear autonomous
+    systems", Proc. KNAW A 72, 1969 (eigenvector test); B. N. Parlett, C. Reinsch, "Balancing a
+    matrix for calculation of eigenvalues and eigenvectors", Numer. Math. 13, 1969.
+    """
+    A = np.asarray(A, dtype=float)
+    M = np.asarray(M, dtype=float)
+    if side == "output":
+        A, M = A.T, M.T
     n = A.shape[0]
-    bad = []
-    for lam in np.linalg.eigvals(A):
-        if lam.real < -tol * max(1.0, abs(lam)):
+    if n == 0:
+        return []
+    Ab, (d, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
+    Mb = M / d[:, None]
+    col_norms = np.linalg.norm(Mb, axis=0)
+    live = col_norms > 0
+    Mn = Mb[:, live] / col_norms[live]  # unit columns: invariant to the inputs' scaling
+    lam, W = scipy.linalg.eig(Ab, left=True, right=False)
+    norm_a = max(np.linalg.norm(Ab, 1), np.finfo(float).tiny)
+    close = 1e-8 * norm_a
+    critical = np.nonzero(lam.real >= -1e-9 * np.abs(lam))[0]
+    bad: list[complex] = []
+    done = np.zeros(n, dtype=bool)
+    for i in critical:
+        if done[i]:
             continue
-        E = A - lam * np.eye(n)
-        test = np.hstack([E, M]) if side == "input" else np.vstack([E, M])
-        sv = np.linalg.svd(test, compute_uv=False)
-        # rank n <=> the n-th singular value is non-zero (both shapes have min dimension n)
-        smallest = sv[n - 1]
-        if smallest <= 1e-9 * max(1.0, sv[0]):
-            bad.append(complex(lam))
+        group = np.nonzero(np.abs(lam - lam[i]) <= close)[0]
+        done[group] = True
+        if group.size == 1:
+            w = W[:, i] / np.linalg.norm(W[:, i])
+            reach = np.abs(w.conj() @ Mn).max(initial=0.0)
+        else:
+            center = lam[group].mean()
+            U, s, _ = np.linalg.svd(Ab - center * np.eye(n))
+            null = U[:, s <= close]
+            if null.shape[1] == 0:
+                null = U[:, -1:]
+            if null.shape[1] > Mn.shape[1]:
+                reach = 0.0
+            else:
+                sv = np.linalg.svd(null.conj().T @ Mn, compute_uv=False)
+                reach = sv.min() if sv.size else 0.0
+        if reach <= tol:
+            bad.extend(complex(x) for x in lam[group] if x.real >= -1e-9 * abs(x))
     return bad
+
+
+def _solve_care(A, B, Q, R, N, what: str) -> np.ndarray:
+    """Stabilising solution X of A^T X + X A - (X B + N) R^-1 (B^T X + N^T) + Q = 0.
+
+    scipy's generalized-Schur solver first; if its eigenvalue reordering fails (lightly damped
+    flexible modes whose Hamiltonian eigenvalues lie very close to the imaginary axis), the
+    stable invariant subspace of the balanced Hamiltonian from an ordered complex Schur form
+    (swaps of 1x1 blocks do not fail), X = U_21 U_11^-1.
+
+    References
+    ----------
+    A. J. Laub, "A Schur method for solving algebraic Riccati equations", IEEE TAC 24(6), 1979.
+    """
+    try:
+        return scipy.linalg.solve_continuous_are(A, B, Q, R, s=N)
+    except (np.linalg.LinAlgError, ValueError):
+        pass
+    n = A.shape[0]
+    Ri = np.linalg.inv(R)
+    F = A - B @ Ri @ N.T
+    H = np.block([[F, -B @ Ri @ B.T], [-(Q - N @ Ri @ N.T), -F.T]])
+    Hb, (d, _) = scipy.linalg.matrix_balance(H, permute=False, separate=True)
+    _, U, k = scipy.linalg.schur(Hb.astype(complex), output="complex", sort="lhp")
+    if k != n:
+        raise ValueError(
+            f"{what}: the Riccati equation has no numerically stabilising solution: {k} of the "
+            f"Hamiltonian's {2 * n} eigenvalues are in the open left half-plane, {n} needed. "
+            "Some lightly damped modes are moved by less than round-off by this cost (e.g. "
+            "high modes of a long chain weighted through theta only): add a rate_weight, give "
+            "them damping or leave them out of the design plant")
+    U = U[:, :n] * d[:, None]
+    X = np.linalg.solve(U[:n].T, U[n:].T).T
+    return np.real(0.5 * (X + X.conj().T))
 
 
 def reference_state(plant: control.StateSpace) -> np.ndarray:
@@ -239,16 +331,17 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
     if eig_q.min() < -1e-10 * max(1.0, abs(eig_q).max()):
         raise ValueError(f"state weight Q must be positive semidefinite; got eigenvalue "
                          f"{eig_q.min():.3g}")
-    tol = 1e-9
-    uncontrollable = _pbh_defective(A, B, side="input", tol=tol)
+    uncontrollable = _pbh_defective(A, B, side="input")
     if uncontrollable:
         raise ValueError(
             "uncontrollable design: (A, B) from 'torque' is not stabilisable; modes with "
             f"eigenvalues {np.round(uncontrollable, 6)} (Re >= 0) cannot be moved by the torque "
-            "(remove modes the torque cannot excite, e.g. symmetric modes of symmetric wings, or "
-            "give them damping)")
-    sqrtW = scipy.linalg.sqrtm(W).real
-    undetectable = _pbh_defective(A, sqrtW @ Cw, side="output", tol=tol)
+            "(remove modes the torque cannot excite, e.g. symmetric modes of symmetric wings or a "
+            "chain's tip-localised mode: Spacecraft.plant(prune=True); or give them damping)")
+    # symmetric PSD square root (sqrtm warns on the singular W of a zero rate weight)
+    eig_w, vec_w = np.linalg.eigh(W)
+    sqrtW = (vec_w * np.sqrt(np.clip(eig_w, 0.0, None))) @ vec_w.T
+    undetectable = _pbh_defective(A, sqrtW @ Cw, side="output")
     if undetectable:
         raise ValueError(f"(A, sqrt(Q)) is not detectable: modes with eigenvalues "
                          f"{np.round(undetectable, 6)} (Re >= 0) are not seen by the weighted "
@@ -272,7 +365,7 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
             raise ValueError(f"Luenberger estimator gain must have shape ({n}, 2) (states x "
                              f"[theta, omega]); got {L_given.shape}")
     if noise is not None:
-        unobservable = _pbh_defective(A, Cm, side="output", tol=tol)
+        unobservable = _pbh_defective(A, Cm, side="output")
         if unobservable:
             raise ValueError(f"(A, C) from theta and omega is not detectable: modes with "
                              f"eigenvalues {np.round(unobservable, 6)} are invisible to the "
@@ -280,12 +373,12 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
 
     u_ref = 0.0  # a rigid rotation needs no torque
     if sample_time is None:
-        P = scipy.linalg.solve_continuous_are(A, B, Q, R, s=N)
+        P = _solve_care(A, B, Q, R, N, "regulator")
         K = np.linalg.solve(R, B.T @ P + N.T)
         if noise is not None:
             Wn = noise.torque_noise * (B @ B.T)
             V = np.diag([noise.attitude_noise, noise.rate_noise])
-            S = scipy.linalg.solve_continuous_are(A.T, Cm.T, Wn, V)
+            S = _solve_care(A.T, Cm.T, Wn, V, np.zeros((n, 2)), "Kalman filter")
             L = S @ Cm.T @ np.linalg.inv(V)
         else:
             L = L_given

@@ -203,3 +203,102 @@ def test_errors():
         controllers.lqr(CHAIN, **WEIGHTS, sample_time=1.0)
     with pytest.raises(ValueError, match="attitude_noise must be positive"):
         KalmanNoise(torque_noise=1.0, attitude_noise=0.0, rate_noise=1.0)
+
+
+# --------------------------------------------------------------------------------------------
+# undamped hub + beam plants: scale-invariant stabilisability / detectability tests
+# --------------------------------------------------------------------------------------------
+def _rod():
+    from appendages import Beam
+
+    return Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11)  # the paper's rod, no damping
+
+
+def _craft(*appendages):
+    from spacecraft import Hub, Mount, Spacecraft
+
+    mounts = [Mount(a, (0.5, 0.0), 0.0) if k == 0 else Mount(a, (-0.5, 0.0), math.pi)
+              for k, a in enumerate(appendages)]
+    return Spacecraft(Hub(100.0, 50.0), mounts)
+
+
+@pytest.mark.parametrize("n_modes", [12, 16, 40])
+def test_lqr_on_undamped_beam_with_many_modes(n_modes):
+    """Regression: the PBH test compared sigma_min([A - lambda I, B]) with 1e-9 sigma_max, and
+    sigma_max grows like the highest w^2, so hub + beam plants with >= 12 undamped modes were
+    refused as 'uncontrollable' although every beam mode is excited by the torque (modal input
+    gain >= 2e-3 of ||B|| in energy coordinates for 40 modes). With 40 modes scipy's Riccati
+    reordering also fails and the ordered complex Schur fallback is used."""
+    craft = _craft(_rod().truncated(n_modes))
+    plant = craft.plant()
+    J = craft.inertia
+    design = lqr_design(plant, attitude_weight=(J * 0.01) ** 2, rate_weight=0.0,
+                        torque_weight=1.0)
+    assert design.regulator_poles.real.max() < 0
+    assert design.estimator_poles.real.max() < 0
+    poles = controllers.close_loop(plant, design.controller).poles()
+    # separation: the closed loop is exactly regulator + estimator poles (round-off ~1e-9 |p|)
+    for p in np.concatenate([design.regulator_poles, design.estimator_poles]):
+        assert np.min(np.abs(poles - p)) < 1e-6 * max(1.0, abs(p))
+    assert poles.real.max() < 0
+
+
+def test_pbh_test_invariant_to_state_and_input_scaling():
+    """x = T z with T diagonal (random decades on displacement and rate coordinates alike) and a
+    torque in another unit leave the verdicts unchanged: balancing equilibrates each mode's
+    (q, q') pair and the reach is measured against the input column's own norm."""
+    from controllers.lqr import _pbh_defective
+
+    plant = _craft(_rod().truncated(16)).plant()
+    A, B, C = plant.A, plant.B[:, :1], plant.C[:1]
+    stuck = modal_plant(J, [(2.0, 0.0, 0.04, 0.04), (30.0, 0.0, 0.0, 0.02)])
+    rng = np.random.default_rng(7)
+    T = 10.0 ** rng.uniform(-3, 3, A.shape[0])
+    Az, Bz, Cz = A * T[None, :] / T[:, None], 1e4 * B / T[:, None], C * T[None, :]
+    for a, b, c in ((A, B, C), (Az, Bz, Cz)):
+        assert _pbh_defective(a, b, side="input") == []
+        assert _pbh_defective(a, c, side="output") == []
+    Ts = 10.0 ** rng.uniform(-3, 3, stuck.nstates)
+    for a, b in ((stuck.A, stuck.B[:, :1]),
+                 (stuck.A * Ts[None, :] / Ts[:, None], 1e-4 * stuck.B[:, :1] / Ts[:, None])):
+        bad = _pbh_defective(a, b, side="input")
+        # exactly the 30 rad/s mode with zero input participation
+        np.testing.assert_allclose(sorted(np.imag(bad)), [-30.0, 30.0], rtol=1e-12)
+
+
+def test_symmetric_wings_refused_unless_pruned():
+    """Two identical wings at opposite sides: the symmetric bending modes leave the hub at rest
+    (participation ~1e-14, round-off); undamped they are not stabilisable. Pruned, the design
+    works and the closed loop on the design plant is stable."""
+    rod = _rod()
+    craft = _craft(rod.truncated(8), rod.truncated(8))
+    J = craft.inertia
+    weights = dict(attitude_weight=(J * 0.01) ** 2, rate_weight=0.0, torque_weight=1.0)
+    with pytest.raises(ValueError, match=r"(?s)uncontrollable design: .*prune=True"):
+        controllers.lqr(craft.plant(), **weights)
+    pruned = craft.plant(prune=True)
+    K = controllers.lqr(pruned, **weights)
+    assert controllers.close_loop(pruned, K).poles().real.max() < 0
+
+
+def test_200_body_chain_tip_mode_is_the_only_uncontrollable_one():
+    """HingedChain.rfem(rod, 200): every mode but one is excited by the torque (input reach
+    >= 7e-6 in energy coordinates, up to 35245 rad/s); the top mode at 45118 rad/s is localised
+    at the free tip, its participation decays ~0.5 per link (4e-5 of the hub's at 10 bodies,
+    2e-8 at 20) and is round-off at 200. Exactly that pair must be named; pruning removes it."""
+    from appendages.chain import HingedChain
+
+    craft = _craft(HingedChain.rfem(_rod(), 200))
+    plant = craft.plant()
+    J = craft.inertia
+    with pytest.raises(ValueError, match=r"uncontrollable design") as info:
+        controllers.lqr(plant, attitude_weight=(J * 0.01) ** 2, rate_weight=0.0,
+                        torque_weight=1.0)
+    message = str(info.value)
+    assert "45118.33" in message and message.count("j") == 2  # one conjugate pair only
+    from controllers.lqr import _pbh_defective
+
+    pruned = craft.plant(prune=True)
+    assert pruned.nstates == plant.nstates - 2
+    assert _pbh_defective(pruned.A, pruned.B, side="input") == []
+    assert _pbh_defective(pruned.A, pruned.C, side="output") == []
