@@ -63,6 +63,8 @@ from dataclasses import dataclass
 import control
 import numpy as np
 import scipy.linalg
+import scipy.sparse
+import scipy.sparse.csgraph
 
 __all__ = ["HOLDS", "Simulator", "simulate"]
 
@@ -634,6 +636,61 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
 # --------------------------------------------------------------------------
 
 def _discretise(A, B, dt, hold):
+    """Exact discrete matrices, block by block of A (see _discretise_block).
+
+    When A is block diagonal up to a permutation (decoupled modes in modal
+    coordinates, a free rigid body), its exponential and the input
+    integrals are computed per block: mathematically the same matrices,
+    with smaller norms (fewer scaling-and-squaring steps in expm) and exact
+    zeros between blocks; an undamped 2 x 2 block's exponential is the
+    closed form.  This matters for long undamped runs: expm of the whole
+    A dt of a plant with a 71 rad/s mode at dt = 1 s misses |lambda| = 1 by
+    6e-14 per step (energy drift 2e-9 in 1e5 steps; expm of the 2 x 2 block
+    alone as well), the closed form by ~1e-16.
+    """
+    n, m = B.shape
+    if n <= 2:
+        return _discretise_block(A, B, dt, hold)
+    n_blocks, labels = scipy.sparse.csgraph.connected_components(
+        scipy.sparse.csr_matrix(A != 0.0), directed=True, connection="weak")
+    if n_blocks == 1:
+        return _discretise_block(A, B, dt, hold)
+    Ad, Bd0, Bd1 = np.zeros((n, n)), np.zeros((n, m)), np.zeros((n, m))
+    for block in range(n_blocks):
+        i = np.flatnonzero(labels == block)
+        Ad[np.ix_(i, i)], Bd0[i], Bd1[i] = _discretise_block(
+            A[np.ix_(i, i)], B[i], dt, hold)
+    return Ad, Bd0, Bd1
+
+
+def _expm_2x2(M):
+    """expm of a real 2 x 2 matrix in closed form.
+
+    With M = mu I + N, mu = tr(M)/2, N traceless: N^2 = q2 I with
+    q2 = N00^2 + N01 N10, so expm(M) = e^mu (cosh(q) I + sinh(q)/q N),
+    q = sqrt(q2); for q2 < 0, cos(w) and sin(w)/w with w = sqrt(-q2):
+    the determinant is e^(2 mu) (cos^2 + sin^2) to round-off, whatever w.
+    """
+    mu = 0.5 * (M[0, 0] + M[1, 1])
+    N = M - mu * np.eye(2)
+    q2 = N[0, 0] ** 2 + N[0, 1] * N[1, 0]
+    if q2 < 0.0:
+        w = np.sqrt(-q2)
+        c, s = np.cos(w), np.sin(w) / w
+        return np.exp(mu) * (c * np.eye(2) + s * N)
+    q = np.sqrt(q2)
+    if q < 1e-4:
+        # Series: cosh q = 1 + q2/2 + q2^2/24, sinh(q)/q = 1 + q2/6 + q2^2/120.
+        c = 1.0 + q2 / 2.0 + q2 * q2 / 24.0
+        s = 1.0 + q2 / 6.0 + q2 * q2 / 120.0
+        return np.exp(mu) * (c * np.eye(2) + s * N)
+    # e^mu cosh q and e^mu sinh q from e^(mu +- q): no overflow of cosh
+    # for stiff blocks whose e^mu underflows.
+    ep, em = np.exp(mu + q), np.exp(mu - q)
+    return 0.5 * (ep + em) * np.eye(2) + (0.5 * (ep - em) / q) * N
+
+
+def _discretise_block(A, B, dt, hold):
     """Exact discrete matrices from ONE matrix exponential (Van Loan).
 
     Zero-order hold (u constant on [0, dt]): the augmented state [x; u]
@@ -656,8 +713,9 @@ def _discretise(A, B, dt, hold):
         G2 = int_0^dt e^{A (dt - s)} (s / dt) ds B.
 
     This is the block matrix of control.forced_response and
-    scipy.signal.lsim, so Ad, Bd0 = G1 - G2 and Bd1 = G2 are identical to
-    theirs.
+    scipy.signal.lsim (the same Ad, Bd0 = G1 - G2 and Bd1 = G2 up to
+    round-off).  A 1 x 1 A, or a 2 x 2 A with zero trace, takes Ad from the
+    closed form (exp, _expm_2x2), which keeps |lambda| exact.
     """
     n, m = B.shape
     if hold == "zero":
@@ -665,14 +723,23 @@ def _discretise(A, B, dt, hold):
         M[:n, :n] = A * dt
         M[:n, n:] = B * dt
         E = scipy.linalg.expm(M)
-        return E[:n, :n], E[:n, n:], np.zeros((n, m))
-    M = np.block([[A * dt, B * dt, np.zeros((n, m))],
-                  [np.zeros((m, n + m)), np.identity(m)],
-                  [np.zeros((m, n + 2 * m))]])
-    E = scipy.linalg.expm(M)
-    Ad = E[:n, :n]
-    Bd1 = E[:n, n + m:]
-    Bd0 = E[:n, n:n + m] - Bd1
+        Ad, Bd0, Bd1 = E[:n, :n], E[:n, n:], np.zeros((n, m))
+    else:
+        M = np.block([[A * dt, B * dt, np.zeros((n, m))],
+                      [np.zeros((m, n + m)), np.identity(m)],
+                      [np.zeros((m, n + 2 * m))]])
+        E = scipy.linalg.expm(M)
+        Ad = E[:n, :n]
+        Bd1 = E[:n, n + m:]
+        Bd0 = E[:n, n:n + m] - Bd1
+    if n == 1:
+        Ad = np.exp(A * dt)
+    elif n == 2 and A[0, 0] + A[1, 1] == 0.0:
+        # Undamped oscillator or free rigid body (det Ad = 1 exactly): the
+        # closed form keeps |lambda| = 1 to round-off, where expm's
+        # scaling and squaring of a large-norm block does not.  Damped
+        # blocks keep expm's result, measured the more accurate there.
+        Ad = _expm_2x2(A * dt)
     return Ad, Bd0, Bd1
 
 
