@@ -650,16 +650,23 @@ def _discretise(A, B, dt, hold):
     """
     n, m = B.shape
     if n <= 2:
-        return _discretise_block(A, B, dt, hold)
-    n_blocks, labels = scipy.sparse.csgraph.connected_components(
-        scipy.sparse.csr_matrix(A != 0.0), directed=True, connection="weak")
-    if n_blocks == 1:
-        return _discretise_block(A, B, dt, hold)
-    Ad, Bd0, Bd1 = np.zeros((n, n)), np.zeros((n, m)), np.zeros((n, m))
-    for block in range(n_blocks):
+        labels = np.zeros(n, dtype=int)
+    else:
+        labels = scipy.sparse.csgraph.connected_components(
+            scipy.sparse.csr_matrix(A != 0.0), directed=True,
+            connection="weak")[1]
+    # Blocks of equal size go through one stacked expm call (a modal plant
+    # has dozens of 2 x 2 blocks; one BLAS-heavy call each would add up).
+    by_size: dict[int, list] = {}
+    for block in range(labels.max(initial=-1) + 1):
         i = np.flatnonzero(labels == block)
-        Ad[np.ix_(i, i)], Bd0[i], Bd1[i] = _discretise_block(
-            A[np.ix_(i, i)], B[i], dt, hold)
+        by_size.setdefault(i.size, []).append(i)
+    Ad, Bd0, Bd1 = np.zeros((n, n)), np.zeros((n, m)), np.zeros((n, m))
+    for size, blocks in by_size.items():
+        idx = np.array(blocks)                                  # (K, size)
+        rows, cols = idx[:, :, None], idx[:, None, :]
+        Ad[rows, cols], Bd0[idx], Bd1[idx] = _discretise_block(
+            A[rows, cols], B[idx], dt, hold)
     return Ad, Bd0, Bd1
 
 
@@ -691,7 +698,8 @@ def _expm_2x2(M):
 
 
 def _discretise_block(A, B, dt, hold):
-    """Exact discrete matrices from ONE matrix exponential (Van Loan).
+    """Exact discrete matrices from ONE matrix exponential (Van Loan), for
+    a stack of blocks A (K, n, n), B (K, n, m) at once.
 
     Zero-order hold (u constant on [0, dt]): the augmented state [x; u]
     obeys d/dt [x; u] = [[A, B], [0, 0]] [x; u], hence
@@ -717,31 +725,32 @@ def _discretise_block(A, B, dt, hold):
     round-off).  A 1 x 1 A, or a 2 x 2 A with zero trace, takes Ad from the
     closed form (exp, _expm_2x2), which keeps |lambda| exact.
     """
-    n, m = B.shape
+    K, n, m = B.shape                  # a stack of K blocks
     if hold == "zero":
-        M = np.zeros((n + m, n + m))
-        M[:n, :n] = A * dt
-        M[:n, n:] = B * dt
+        M = np.zeros((K, n + m, n + m))
+        M[:, :n, :n] = A * dt
+        M[:, :n, n:] = B * dt
         E = scipy.linalg.expm(M)
-        Ad, Bd0, Bd1 = E[:n, :n], E[:n, n:], np.zeros((n, m))
+        Ad, Bd0, Bd1 = E[:, :n, :n], E[:, :n, n:], np.zeros((K, n, m))
     else:
-        M = np.block([[A * dt, B * dt, np.zeros((n, m))],
-                      [np.zeros((m, n + m)), np.identity(m)],
-                      [np.zeros((m, n + 2 * m))]])
+        M = np.zeros((K, n + 2 * m, n + 2 * m))
+        M[:, :n, :n] = A * dt
+        M[:, :n, n:n + m] = B * dt
+        M[:, n:n + m, n + m:] = np.identity(m)
         E = scipy.linalg.expm(M)
-        Ad = E[:n, :n]
-        Bd1 = E[:n, n + m:]
-        Bd0 = E[:n, n:n + m] - Bd1
+        Ad = E[:, :n, :n]
+        Bd1 = E[:, :n, n + m:]
+        Bd0 = E[:, :n, n:n + m] - Bd1
     if n == 1:
         Ad = np.exp(A * dt)
-    elif n == 2 and A[0, 0] + A[1, 1] == 0.0:
-        # Undamped oscillator or free rigid body (det Ad = 1 exactly): the
-        # closed form keeps |lambda| = 1 to round-off, where expm's
-        # scaling and squaring of a large-norm block does not.  Damped
-        # blocks keep expm's result, measured the more accurate there.
-        Ad = _expm_2x2(A * dt)
+    elif n == 2:
+        for k in np.flatnonzero(A[:, 0, 0] + A[:, 1, 1] == 0.0):
+            # Undamped oscillator or free rigid body (det Ad = 1 exactly):
+            # the closed form keeps |lambda| = 1 to round-off, where expm's
+            # scaling and squaring of a large-norm block does not.  Damped
+            # blocks keep expm's result, measured the more accurate there.
+            Ad[k] = _expm_2x2(A[k] * dt)
     return Ad, Bd0, Bd1
-
 
 
 # --------------------------------------------------------------------------
