@@ -222,7 +222,7 @@ def _craft(*appendages):
     return Spacecraft(Hub(100.0, 50.0), mounts)
 
 
-@pytest.mark.parametrize("n_modes", [12, 16, 40])
+@pytest.mark.parametrize("n_modes", [12, 16, pytest.param(40, marks=pytest.mark.slow)])
 def test_lqr_on_undamped_beam_with_many_modes(n_modes):
     """Regression: the PBH test compared sigma_min([A - lambda I, B]) with 1e-9 sigma_max, and
     sigma_max grows like the highest w^2, so hub + beam plants with >= 12 undamped modes were
@@ -281,6 +281,7 @@ def test_symmetric_wings_refused_unless_pruned():
     assert controllers.close_loop(pruned, K).poles().real.max() < 0
 
 
+@pytest.mark.slow
 def test_200_body_chain_tip_mode_is_the_only_uncontrollable_one():
     """HingedChain.rfem(rod, 200): every mode but one is excited by the torque (input reach
     >= 7e-6 in energy coordinates, up to 35245 rad/s); the top mode at 45118 rad/s is localised
