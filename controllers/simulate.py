@@ -87,8 +87,9 @@ class _ChunkMaps:
     """Maps of the chunked recursion for chunks of ``L`` samples.
 
     Chunk starts: ``x[s+L] = x[s] - Delta x[s] + K u_plus`` with
-    ``u_plus = [u[s]; ...; u[s+L]]`` and ``Delta = I - Ad^L``.  Inside the chunks, with rows of
-    ``M = [x[s]^T, u[s]^T, ..., u[s+L-1]^T]`` (one per chunk):
+    ``u_plus = [u[s]; ...; u[s+L]]`` and ``Delta = I - Ad^L``.  Inside the
+    chunks, with rows of ``M = [x[s]^T, u[s]^T, ..., u[s+L-1]^T]`` (one per
+    chunk):
     ``M @ Fy`` gives ``y[s+t]^T`` in columns ``t p .. (t+1) p`` and
     ``M @ Fx`` (None if not built) the states.
     """
@@ -342,7 +343,14 @@ class Simulator:
         return self._D.shape[0]
 
     def chunk_length(self, *, with_states: bool = True) -> int:
-        """Samples per chunk for runs with or without the states."""
+        """Samples per chunk of :meth:`run` (with_states) or :meth:`outputs`.
+
+        From the cost model, shortened when the accuracy probe or the
+        float range requires it (see the module docstring).
+        """
+        return self._chunk_maps(with_states).L
+
+    def _planned_chunk_length(self, with_states: bool) -> int:
         n, m, p = self.n_states, self.n_inputs, self.n_outputs
         return (_states_chunk_length(n, m) if with_states
                 else _outputs_chunk_length(n, m, p))
@@ -352,7 +360,7 @@ class Simulator:
         map of run() is built only when states are first read
         (_state_fill_map)."""
         if with_states not in self._maps:
-            L = self.chunk_length(with_states=with_states)
+            L = self._planned_chunk_length(with_states)
             with np.errstate(over="ignore", invalid="ignore"):
                 while True:
                     maps = _chunk_maps(self.Ad, self.Bd0, self.Bd1, self._C,

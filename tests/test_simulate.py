@@ -329,15 +329,32 @@ def test_outputs_only_path_equals_run():
     sim = Simulator(sys, 0.01)
     Y = sim.outputs(T, U, 0.1)
     assert Y.shape == (3, T.size) and Y.dtype == np.float64
-    # Longer chunks than run() uses: other round-off, same exact system.
-    assert (sim.chunk_length(with_states=False)
-            != sim.chunk_length(with_states=True))
+    # outputs() may use other chunks than run(): other round-off, same
+    # exact system.
     np.testing.assert_allclose(Y, sim.run(T, U, 0.1).y, rtol=1e-11,
                                atol=1e-11 * np.abs(Y).max())
     ref = control.forced_response(sys, T, U, 0.1)
     scale = signal_range(ref.y)[:, None]
     # Round-off only.
     assert np.max(np.abs(Y - ref.y) / scale) < 1e-9
+
+
+def test_chunk_lengths():
+    """A lightly damped modal loop keeps long chunks (outputs() longer than
+    run()); a strongly non-normal system is cut to short ones by the
+    accuracy probe."""
+    w = np.geomspace(1.0, 30.0, 10)
+    A = np.zeros((20, 20))
+    for i, wi in enumerate(w):
+        A[2 * i:2 * i + 2, 2 * i:2 * i + 2] = [[0, 1], [-wi ** 2, -0.01 * wi]]
+    modal = Simulator(control.ss(A, np.ones((20, 1)), np.ones((2, 20)), 0),
+                      0.01)
+    assert modal.chunk_length(with_states=True) >= 16
+    assert (modal.chunk_length(with_states=False)
+            > modal.chunk_length(with_states=True))
+    rng = np.random.default_rng(0)
+    nasty = Simulator(non_normal_system(rng, 12, 4), 0.01)
+    assert nasty.chunk_length(with_states=True) <= 2
 
 
 def test_static_gain_and_inputless_system():
