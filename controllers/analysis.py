@@ -200,23 +200,33 @@ class _ModalEvaluator:
             self.lam = np.zeros(0, dtype=complex)
             self.Cm = np.zeros((self.C.shape[0], 0), dtype=complex)
             self.Bm = np.zeros((0, self.B.shape[1]), dtype=complex)
+        if self.modal:
+            # residues R_i = Cm[:, i] Bm[i, :] of the partial fractions, one row per pole:
+            # G(s) = D + C1 (sI - T11)^-1 B1 + sum_i R_i / (s - lam_i) is then one matrix product
+            p, m = self.C.shape[0], self.B.shape[1]
+            self.residues = (self.Cm.T[:, :, None] * self.Bm[:, None, :]).reshape(-1, p * m)
         self.A = A
 
     def __call__(self, s: np.ndarray) -> np.ndarray:
         """Return G(s), shape (len(s), n_outputs, n_inputs), complex128."""
         s = np.asarray(s, dtype=complex).reshape(-1)
         p, m = self.C.shape[0], self.B.shape[1]
-        G = np.broadcast_to(self.D.astype(complex), (s.size, p, m)).copy()
         if self.n == 0:
-            return G
+            return np.broadcast_to(self.D.astype(complex), (s.size, p, m)).copy()
         if not self.modal:
+            G = np.broadcast_to(self.D.astype(complex), (s.size, p, m)).copy()
             M = s[:, None, None] * np.eye(self.n) - self.A
             return G + self.C @ np.linalg.solve(M, np.broadcast_to(self.B, (s.size,) + self.B.shape))
+        G = (1.0 / (s[:, None] - self.lam)) @ self.residues + self.D.reshape(1, p * m)
+        G = G.reshape(s.size, p, m)
         if self.k:
-            M = s[:, None, None] * np.eye(self.k) - self.T11
-            G += self.C1 @ np.linalg.solve(M, np.broadcast_to(self.B1, (s.size,) + self.B1.shape))
-        if self.lam.size:
-            G += np.einsum("pi,fi,im->fpm", self.Cm, 1.0 / (s[:, None] - self.lam), self.Bm)
+            # (sI - T11) X = B1 by back substitution (T11 upper triangular), all s at once
+            T11, k = self.T11, self.k
+            X = np.empty((s.size, k, m), dtype=complex)
+            for i in range(k - 1, -1, -1):
+                rhs = self.B1[i] + np.einsum("j,fjm->fm", T11[i, i + 1:], X[:, i + 1:])
+                X[:, i] = rhs / (s - T11[i, i])[:, None]
+            G += np.einsum("pk,fkm->fpm", self.C1, X)
         return G
 
     def characteristic_frequencies(self) -> np.ndarray:
@@ -723,23 +733,86 @@ class Margins:
                 "modulus_margin": self.modulus_margin}
 
 
-def _crossings(f: Callable[[float], float], omega: np.ndarray, values: np.ndarray) -> list[float]:
-    """Zeros of f: grid points where `values` is 0 and brentq roots where it changes sign."""
-    roots = [float(w) for w in omega[values == 0]]
+def _crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values: np.ndarray
+               ) -> np.ndarray:
+    """Zeros of f: grid points where `values` is 0 and refined roots where it changes sign.
+
+    Every sign-change bracket of the grid is refined at once by the Illinois variant of regula
+    falsi, one vectorised evaluation of f per iteration (with a bisection step when a bracket
+    fails to halve in three iterations), to |b - a| <= 1e-13 b. A sign change may also be a
+    pass through an undamped pole (f -> +-inf): the bracket then closes in on the pole, where f
+    is huge or not finite; such a point is no root and is dropped (|f| must fall below 1e-6
+    of its size at the bracket's ends); its refinement stops once |f| at both ends exceeds
+    1e3 times that size.
+
+    References
+    ----------
+    M. Dowell, P. Jarratt, "A modified regula falsi method for computing the root of an
+    equation", BIT 11, 1971 (the Illinois algorithm).
+    """
+    exact = omega[values == 0]
     sign = np.sign(values)
-    for i in np.nonzero(sign[:-1] * sign[1:] < 0)[0]:
-        # a sign change may also be a pass through an undamped pole (f -> +-inf): brentq
-        # then closes in on the pole, where f is huge or not finite; such a point is no root
-        try:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                w = float(scipy.optimize.brentq(f, omega[i], omega[i + 1],
-                                                xtol=1e-14 * omega[i + 1], rtol=1e-13))
-                at_root = abs(f(w))
-        except ValueError:
-            continue
-        if math.isfinite(at_root) and at_root <= 1e-6 * max(abs(values[i]), abs(values[i + 1])):
-            roots.append(w)
-    return roots
+    i = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
+    if i.size == 0:
+        return exact
+    a, b = omega[i].copy(), omega[i + 1].copy()
+    fa, fb = values[i].copy(), values[i + 1].copy()  # true values at the ends
+    ga, gb = fa.copy(), fb.copy()  # Illinois-scaled values used for the secant
+    scale = np.maximum(np.abs(fa), np.abs(fb))
+    last = np.zeros(i.size, dtype=int)  # -1: a moved last time, +1: b moved
+    width_before = np.full(i.size, np.inf)
+    suspect = np.zeros(i.size, dtype=bool)
+    active = np.ones(i.size, dtype=bool)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for iteration in range(200):
+            active &= (b - a) > 1e-13 * b
+            k = np.nonzero(active)[0]
+            if k.size == 0:
+                break
+            mid = 0.5 * (a[k] + b[k])
+            x = (a[k] * gb[k] - b[k] * ga[k]) / (gb[k] - ga[k])
+            bisect = ~((x > a[k]) & (x < b[k]))
+            if iteration % 3 == 2:
+                bisect |= (b[k] - a[k]) > 0.5 * width_before[k]
+                width_before[k] = b[k] - a[k]
+            elif iteration == 0:
+                width_before[k] = b[k] - a[k]
+            bisect |= suspect[k]
+            x = np.where(bisect, mid, x)
+            fx = np.asarray(f(x), dtype=float)
+            bad = ~np.isfinite(fx)
+            if bad.any():  # on an undamped pole: step to the midpoint instead
+                x[bad] = mid[bad]
+                bisect = bisect | bad
+                fx[bad] = np.asarray(f(x[bad]), dtype=float)
+                lost = ~np.isfinite(fx)
+                active[k[lost]] = False
+                k, x, fx, bisect = k[~lost], x[~lost], fx[~lost], bisect[~lost]
+            zero = fx == 0
+            right = (np.sign(fx) == np.sign(fb[k])) & ~zero
+            left = ~right & ~zero
+            kr, kl, kz = k[right], k[left], k[zero]
+            # Illinois: the end kept twice in a row has its value halved (not after bisection)
+            ga[kr] = np.where((last[kr] == 1) & ~bisect[right], 0.5 * ga[kr], ga[kr])
+            b[kr], fb[kr], gb[kr], last[kr] = x[right], fx[right], fx[right], 1
+            gb[kl] = np.where((last[kl] == -1) & ~bisect[left], 0.5 * gb[kl], gb[kl])
+            a[kl], fa[kl], ga[kl], last[kl] = x[left], fx[left], fx[left], -1
+            # a bisection step restarts regula falsi from the true end values
+            kb = k[bisect]
+            ga[kb], gb[kb], last[kb] = fa[kb], fb[kb], 0
+            a[kz] = b[kz] = x[zero]
+            fa[kz] = fb[kz] = 0.0
+            active[kz] = False
+            # |f| inside above both starting ends: an undamped pole is likely in the bracket,
+            # where regula falsi creeps; bisect it from now on. Both ends 1e3 times larger than
+            # at the start: closing in on a pole, not a root.
+            suspect[kr] |= np.abs(fx[right]) > scale[kr]
+            suspect[kl] |= np.abs(fx[left]) > scale[kl]
+            active[k] &= np.minimum(np.abs(fa[k]), np.abs(fb[k])) <= 1e3 * scale[k]
+        root = np.where(np.abs(fa) <= np.abs(fb), a, b)
+        at_root = np.minimum(np.abs(fa), np.abs(fb))
+        keep = np.isfinite(at_root) & (at_root <= 1e-6 * scale)
+    return np.concatenate([exact, root[keep]])
 
 
 def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
@@ -788,22 +861,29 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     def value(w: float) -> complex:
         return complex(loop(np.array([w]))[0])
 
+    def log_gain(w: np.ndarray) -> np.ndarray:
+        with np.errstate(divide="ignore"):
+            return np.log(np.abs(loop(w)))
+
     # phase crossovers: L real and negative (Im L changes sign where Re L < 0). Crossings where
     # |L| < 1e-9 (a gain margin above 180 dB) are round-off in Im L, not a margin.
     gain_margin, w_pc = math.inf, math.inf
-    for w in _crossings(lambda w: value(w).imag, omega, L.imag):
-        Lw = value(w)
+    w_roots = _crossings(lambda w: loop(w).imag, omega, L.imag)
+    L_roots = loop(w_roots) if w_roots.size else np.zeros(0, dtype=complex)
+    for w, Lw in zip(w_roots, L_roots):
         if Lw.real < 0 and abs(Lw) > 1e-9:
             gm = -20.0 * math.log10(abs(Lw))
             if abs(gm) < abs(gain_margin):
-                gain_margin, w_pc = gm, w
+                gain_margin, w_pc = gm, float(w)
     # gain crossovers: |L| = 1
     phase_margin, w_gc = math.inf, math.inf
-    for w in _crossings(lambda w: math.log(abs(value(w))), omega, np.log(np.abs(L))):
-        pm = 180.0 + math.degrees(cmath.phase(value(w)))  # in (0, 360]
+    w_roots = _crossings(log_gain, omega, np.log(np.abs(L)))
+    L_roots = loop(w_roots) if w_roots.size else np.zeros(0, dtype=complex)
+    for w, Lw in zip(w_roots, L_roots):
+        pm = 180.0 + math.degrees(cmath.phase(Lw))  # in (0, 360]
         pm = pm - 360.0 if pm > 180.0 else pm
         if abs(pm) < abs(phase_margin):
-            phase_margin, w_gc = pm, w
+            phase_margin, w_gc = pm, float(w)
     # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
     dist = np.abs(1.0 + L)
     i = int(np.argmin(dist))
