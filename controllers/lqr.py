@@ -492,7 +492,10 @@ def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float
     ------
     ValueError
         Negative or non-finite weights, R not > 0, Q not PSD, (A, B) not stabilisable (an
-        uncontrollable design), (A, sqrt(Q)) or (A, C_meas) not detectable, a sample time too long.
+        uncontrollable design: an undamped or unstable mode the torque does not reach, tested
+        per mode in balanced coordinates, see ``_pbh_defective``), (A, sqrt(Q)) or (A, C_meas)
+        not detectable, a Riccati equation without a numerically stabilising solution, a sample
+        time too long.
 
     References
     ----------
