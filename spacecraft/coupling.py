@@ -322,6 +322,11 @@ class Spacecraft:
                 raise ValueError(f"n_modes must be a non-negative integer; got {n_modes!r}")
             keep = keep[: 3 + n_modes]
         modal_damping = V.T @ model.damping @ V
+        # damping forces vanish for rigid-body motion (C r = 0 exactly); keep round-off of
+        # ~1e-17 out of the rigid rows, where it would couple the rigid-body Jordan block to
+        # the elastic modes (and defeat balancing-based tests downstream)
+        modal_damping[:3, :] = 0.0
+        modal_damping[:, :3] = 0.0
         if not disturbances:
             # the centre of mass cannot translate without an external force: leave out the two
             # translation modes (zero load from torque, unseen by theta and tip deflections)

@@ -317,11 +317,6 @@ def long_free_run(rod):
     return T, np.asarray(response.states), x0, lam, n, n_rigid
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "reported bug: controllers.Simulator takes the discrete eigenvalues from expm(A dt), whose "
-    "moduli miss 1 by ~eps*|A dt| (5.6e-14 at dt = 1 s, top mode 71 rad/s): the top mode's "
-    "energy decays 2.3e-9 in 2e4 steps and the total energy by 2.2e-9 in 1e5 steps. Fix: "
-    "exp(mu dt) of the continuous eigenvalues mu. Remove this marker when fixed."))
 def test_long_undamped_simulation_conserves_energy(long_free_run):
     """Energy of the free undamped system constant to 1e-9 relative over 1e5 steps."""
     T, X, x0, lam, n, r = long_free_run
