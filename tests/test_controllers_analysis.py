@@ -8,33 +8,8 @@ import numpy as np
 import pytest
 
 import controllers
+from plants import modal_plant
 from controllers.pd import pd_gains
-
-
-def modal_plant(inertia, modes=(), *, disturbance=True):
-    """theta/torque = 1/(J s^2) + sum b_k c_k / (s^2 + 2 zeta_k w_k s + w_k^2), omega = s theta.
-
-    modes = [(w_k [rad/s], zeta_k, b_k, c_k)]; b_k c_k > 0 is a collocated mode, b_k c_k < 0 a
-    non-collocated one (attitude sensor on the other side of a node of the mode).
-    """
-    n = 2 + 2 * len(modes)
-    A = np.zeros((n, n))
-    B = np.zeros((n, 1))
-    C = np.zeros((2, n))
-    A[0, 1] = 1.0
-    B[1, 0] = 1.0 / inertia
-    C[0, 0] = C[1, 1] = 1.0
-    for k, (w, zeta, b, c) in enumerate(modes):
-        i = 2 + 2 * k
-        A[i, i + 1] = 1.0
-        A[i + 1, i] = -w * w
-        A[i + 1, i + 1] = -2.0 * zeta * w
-        B[i + 1, 0] = b
-        C[0, i] = c
-        C[1, i + 1] = c
-    inputs = ["torque", "disturbance_torque"] if disturbance else ["torque"]
-    return control.ss(A, np.hstack([B, B]) if disturbance else B, C, 0.0, inputs=inputs,
-                      outputs=["theta", "omega"])
 
 
 def two_inertia_plant(hub_inertia, appendage_inertia, stiffness, damping):

@@ -6,34 +6,8 @@ import numpy as np
 import pytest
 
 import controllers
+from plants import modal_plant
 from controllers.lqr import KalmanNoise, lqr_design, reference_state
-
-
-def modal_plant(inertia, modes=(), *, tips=()):
-    """theta/torque = 1/(J s^2) + sum b_k c_k / (s^2 + 2 zeta_k w_k s + w_k^2), omega = s theta.
-
-    modes = [(w_k [rad/s], zeta_k, b_k, c_k)]; tips = [(name, [d_k per mode])]: tip deflection
-    outputs sum_k d_k q_k [m].
-    """
-    n = 2 + 2 * len(modes)
-    A = np.zeros((n, n))
-    B = np.zeros((n, 1))
-    C = np.zeros((2 + len(tips), n))
-    A[0, 1] = 1.0
-    B[1, 0] = 1.0 / inertia
-    C[0, 0] = C[1, 1] = 1.0
-    for k, (w, zeta, b, c) in enumerate(modes):
-        i = 2 + 2 * k
-        A[i, i + 1] = 1.0
-        A[i + 1, i] = -w * w
-        A[i + 1, i + 1] = -2.0 * zeta * w
-        B[i + 1, 0] = b
-        C[0, i] = c
-        C[1, i + 1] = c
-        for j, (_, d) in enumerate(tips):
-            C[2 + j, i] = d[k]
-    return control.ss(A, np.hstack([B, B]), C, 0.0, inputs=["torque", "disturbance_torque"],
-                      outputs=["theta", "omega"] + [name for name, _ in tips])
 
 
 J = 250.0  # kg m^2

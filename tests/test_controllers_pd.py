@@ -6,34 +6,9 @@ import numpy as np
 import pytest
 
 import controllers
+from plants import modal_plant
 from controllers.pd import (MIN_SAMPLES_PER_CROSSOVER, NOTCH_POLE_DAMPING, NOTCH_ZERO_DAMPING,
                             natural_frequency_from_bandwidth, pd_gains)
-
-
-def modal_plant(inertia, modes=(), *, disturbance=True):
-    """Hub of total inertia J with flexible modes in modal form.
-
-    theta/torque = 1/(J s^2) + sum_k b_k c_k / (s^2 + 2 zeta_k w_k s + w_k^2), omega = s theta;
-    modes = [(w_k [rad/s], zeta_k, b_k, c_k)]; b_k = c_k is a collocated (hub-measured) mode.
-    """
-    n = 2 + 2 * len(modes)
-    A = np.zeros((n, n))
-    B = np.zeros((n, 1))
-    C = np.zeros((2, n))
-    A[0, 1] = 1.0
-    B[1, 0] = 1.0 / inertia
-    C[0, 0] = C[1, 1] = 1.0
-    for k, (w, zeta, b, c) in enumerate(modes):
-        i = 2 + 2 * k
-        A[i, i + 1] = 1.0
-        A[i + 1, i] = -w * w
-        A[i + 1, i + 1] = -2.0 * zeta * w
-        B[i + 1, 0] = b
-        C[0, i] = c
-        C[1, i + 1] = c
-    inputs = ["torque", "disturbance_torque"] if disturbance else ["torque"]
-    return control.ss(A, np.hstack([B, B]) if disturbance else B, C, 0.0, inputs=inputs,
-                      outputs=["theta", "omega"])
 
 
 J = 250.0  # kg m^2

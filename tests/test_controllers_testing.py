@@ -2,35 +2,17 @@
 import json
 import math
 
-import control
-import numpy as np
 import pytest
 
 import controllers
+from plants import modal_plant
 from controllers.testing import compare_metrics
 
 
-def modal_plant(inertia, modes=()):
-    """theta/torque = 1/(J s^2) + sum c_k^2 / (s^2 + 2 zeta_k w_k s + w_k^2); modes = [(w, zeta, c)]."""
-    n = 2 + 2 * len(modes)
-    A = np.zeros((n, n))
-    B = np.zeros((n, 1))
-    C = np.zeros((2, n))
-    A[0, 1] = 1.0
-    B[1, 0] = 1.0 / inertia
-    C[0, 0] = C[1, 1] = 1.0
-    for k, (w, zeta, c) in enumerate(modes):
-        i = 2 + 2 * k
-        A[i, i + 1] = 1.0
-        A[i + 1, i] = -w * w
-        A[i + 1, i + 1] = -2.0 * zeta * w
-        B[i + 1, 0] = C[0, i] = C[1, i + 1] = c
-    return control.ss(A, B, C, 0.0, inputs=["torque"], outputs=["theta", "omega"])
-
-
 J = 250.0
-CHAIN = modal_plant(J, [(2.0, 0.005, 0.06)])
-BEAM = modal_plant(J, [(2.05, 0.005, 0.061), (12.0, 0.005, 0.02)])
+CHAIN = modal_plant(J, [(2.0, 0.005, 0.06, 0.06)], disturbance=False)
+BEAM = modal_plant(J, [(2.05, 0.005, 0.061, 0.061), (12.0, 0.005, 0.02, 0.02)],
+                    disturbance=False)
 EXPECTED = {"overshoot": 4.0, "settling_time": 30.0, "peak_torque": 0.5, "phase_margin": 45.0}
 
 
