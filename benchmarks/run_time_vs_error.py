@@ -62,7 +62,7 @@ import warnings
 
 import numpy as np
 
-from _common import (RESULTS, SLEW_ANGLE, fmt, machine_info, markdown_table, median_time,
+from _common import (RESULTS, fmt, machine_info, markdown_table, median_time,
                      paper_rod, pd_closed_loop, slew_errors, slew_inputs, slew_response,
                      spacecraft_with, write_json)
 
@@ -168,7 +168,6 @@ def timings(make, *, repeats: int, peers: bool) -> dict:
     out["build"] = median_time(lambda: spacecraft_with(make()).plant(tip_deflection=True),
                                repeats=repeats, min_total=0.05)
     model = make()
-    craft = spacecraft_with(model)
     plant, _, loop = pd_closed_loop(model)
     out["n_states_plant"] = plant.nstates
     out["freq"] = median_time(lambda: spacecraft_with(model).frequency_response(FREQ_POINTS),

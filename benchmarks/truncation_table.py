@@ -27,7 +27,6 @@ from __future__ import annotations
 import _common  # noqa: F401  (first: limits BLAS threads before numpy is imported)
 
 import argparse
-import math
 import sys
 import time
 

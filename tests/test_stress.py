@@ -4,7 +4,6 @@ or must raise a clear error.
 """
 
 import math
-import warnings
 
 import mpmath as mp
 import numpy as np
