@@ -315,6 +315,12 @@ class Beam:
         return (f"Beam(length={self.length!r}, bending_stiffness={self.bending_stiffness!r}, "
                 f"linear_density={self.linear_density!r}, damping_ratio={self.damping_ratio!r})")
 
+    def undamped(self) -> "Beam":
+        """The same beam without damping (itself when already undamped)."""
+        if self.damping_ratio == 0.0:
+            return self
+        return Beam(self.length, self.bending_stiffness, self.linear_density)
+
     # -- rigid properties ---------------------------------------------------------------------
     @property
     def mass(self) -> float:

@@ -467,12 +467,13 @@ def _closure(active: np.ndarray, coupled: np.ndarray) -> np.ndarray:
 
 
 def _W_of(appendage, s: np.ndarray, *, undamped: bool) -> np.ndarray:
-    """W(s) of an appendage, without damping when asked (natural frequencies are undamped)."""
-    if undamped and getattr(appendage, "damping_ratio", 0.0):
-        from appendages import Beam
+    """W(s) of an appendage, without damping when asked (natural frequencies are undamped).
 
-        if isinstance(appendage, Beam):
-            appendage = Beam(appendage.length, appendage.bending_stiffness, appendage.linear_density)
+    Through the interface only: an appendage offering ``undamped()`` (the distributed beam)
+    gives its undamped twin; a finite one its root model with the damping removed.
+    """
+    if undamped and hasattr(appendage, "undamped"):
+        appendage = appendage.undamped()
     if undamped and hasattr(appendage, "root_model"):
         rm = appendage.root_model()
         if np.any(rm.damping):
