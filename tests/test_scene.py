@@ -52,7 +52,7 @@ def test_default_scene_is_the_papers_rod_in_si_units():
     # PAPER.md: m = 6.1261 kg for L = 10 m, d = 0.01 m, rho = 7800 kg/m^3 (printed to 5 digits)
     assert beam.mass == pytest.approx(6.1261, abs=5e-5)
     assert rod.position == (0.5, 0.0) and rod.direction == 0.0
-    assert (scene.hub.mass, scene.hub.inertia) == (100.0, 50.0)
+    assert scene.hub.mass == 100.0 and scene.hub.inertia == 50.0
     # the file's degrees are radians inside: 10 deg exactly
     assert scene.manoeuvre.slew_angle == pytest.approx(math.radians(10.0), rel=1e-15)
     assert scene.manoeuvre.step == 0.1 and scene.manoeuvre.duration == 200.0
