@@ -33,13 +33,34 @@ import time
 
 import numpy as np
 
-from _common import (PD_DAMPING, PD_NATURAL_FREQUENCY, SLEW_ANGLE, SLEW_DURATION, paper_rod,
-                     pd_closed_loop, slew_errors, slew_response, spacecraft_with)
+import controllers
+
+from _common import (SLEW_ANGLE, SLEW_DURATION, paper_rod, pd_closed_loop, slew_errors,
+                     slew_response)
 from peer_basilisk import _pd_gains, panel_chain
 
 __all__ = ["run", "simulate_exudyn", "simulate_exudyn_ancf", "ancf_free_frequencies"]
 
 STEPS_PER_SECOND = 100
+
+
+def _add_hub_pd(exu, mbs, hub_node, hub_marker, Kp, Kd):
+    """The slew PD as a torque load on the hub (Python user function) and a hub sensor."""
+    from exudyn.itemInterface import LoadTorqueVector, SensorNode
+
+    rotation = exu.OutputVariableType.Rotation
+    angular_velocity = exu.OutputVariableType.AngularVelocity
+
+    def pd_torque(mbs, t, load):
+        theta = mbs.GetNodeOutput(hub_node, rotation)[2]
+        omega = mbs.GetNodeOutput(hub_node, angular_velocity)[2]
+        ref = float(controllers.slew_profile(np.array([t]), SLEW_ANGLE, SLEW_DURATION)[0])
+        return [0.0, 0.0, Kp * (ref - theta) - Kd * omega]
+
+    mbs.AddLoad(LoadTorqueVector(markerNumber=hub_marker, loadVector=[0.0, 0.0, 0.0],
+                                 loadVectorUserFunction=pd_torque))
+    return mbs.AddSensor(SensorNode(nodeNumber=hub_node, storeInternal=True,
+                                    outputVariableType=exu.OutputVariableType.Coordinates))
 
 
 def simulate_exudyn(chain, *, t_final: float, record_dt: float):
@@ -48,12 +69,9 @@ def simulate_exudyn(chain, *, t_final: float, record_dt: float):
     Returns (t, theta, tip, build_seconds, simulate_seconds).
     """
     import exudyn as exu
-    from exudyn.itemInterface import (LoadTorqueVector, MarkerBodyRigid, MarkerNodeRigid,
-                                      NodeRigidBody2D, ObjectConnectorTorsionalSpringDamper,
-                                      ObjectJointRevolute2D, ObjectRigidBody2D, SensorBody,
-                                      SensorNode)
-
-    import controllers
+    from exudyn.itemInterface import (MarkerBodyRigid, MarkerNodeRigid, NodeRigidBody2D,
+                                      ObjectConnectorTorsionalSpringDamper,
+                                      ObjectJointRevolute2D, ObjectRigidBody2D, SensorBody)
 
     Kp, Kd = _pd_gains(chain)
     t0 = time.perf_counter()
@@ -78,19 +96,7 @@ def simulate_exudyn(chain, *, t_final: float, record_dt: float):
         previous, joint_position, last = body, [h / 2.0, 0.0, 0.0], body
         x += h
     length = x - 0.5
-    Rotation = exu.OutputVariableType.Rotation
-    AngularVelocity = exu.OutputVariableType.AngularVelocity
-
-    def pd_torque(mbs, t, load):
-        theta = mbs.GetNodeOutput(hub_node, Rotation)[2]
-        omega = mbs.GetNodeOutput(hub_node, AngularVelocity)[2]
-        ref = float(controllers.slew_profile(np.array([t]), SLEW_ANGLE, SLEW_DURATION)[0])
-        return [0.0, 0.0, Kp * (ref - theta) - Kd * omega]
-
-    mbs.AddLoad(LoadTorqueVector(markerNumber=hub_marker, loadVector=[0.0, 0.0, 0.0],
-                                 loadVectorUserFunction=pd_torque))
-    hub_sensor = mbs.AddSensor(SensorNode(nodeNumber=hub_node, storeInternal=True,
-                                          outputVariableType=exu.OutputVariableType.Coordinates))
+    hub_sensor = _add_hub_pd(exu, mbs, hub_node, hub_marker, Kp, Kd)
     tip_sensor = mbs.AddSensor(SensorBody(bodyNumber=last, localPosition=[joint_position[0], 0, 0],
                                           storeInternal=True,
                                           outputVariableType=exu.OutputVariableType.Position))
@@ -150,12 +156,9 @@ def ancf_free_frequencies(beam, n_elements: int, n: int = 2):
 def simulate_exudyn_ancf(beam, n_elements: int, *, t_final: float, record_dt: float):
     """Hub + ANCF cable beam + PD in Exudyn. Returns (t, theta, tip, build_s, simulate_s)."""
     import exudyn as exu
-    from exudyn.itemInterface import (LoadTorqueVector, MarkerBodyRigid, MarkerNodeRigid,
-                                      NodeRigidBody2D, ObjectConnectorTorsionalSpringDamper,
-                                      ObjectJointRevolute2D, ObjectRigidBody2D, SensorBody,
-                                      SensorNode)
-
-    import controllers
+    from exudyn.itemInterface import (MarkerBodyRigid, MarkerNodeRigid, NodeRigidBody2D,
+                                      ObjectConnectorTorsionalSpringDamper,
+                                      ObjectJointRevolute2D, ObjectRigidBody2D, SensorBody)
 
     Kp, Kd = _pd_gains(beam.truncated(8))  # the PD depends only on the total inertia
     t0 = time.perf_counter()
@@ -170,19 +173,7 @@ def simulate_exudyn_ancf(beam, n_elements: int, *, t_final: float, record_dt: fl
     mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[a, b]))
     mbs.AddObject(ObjectConnectorTorsionalSpringDamper(markerNumbers=[a, b], stiffness=1e8,
                                                        damping=0.0))
-    Rotation = exu.OutputVariableType.Rotation
-    AngularVelocity = exu.OutputVariableType.AngularVelocity
-
-    def pd_torque(mbs, t, load):
-        theta = mbs.GetNodeOutput(hub_node, Rotation)[2]
-        omega = mbs.GetNodeOutput(hub_node, AngularVelocity)[2]
-        ref = float(controllers.slew_profile(np.array([t]), SLEW_ANGLE, SLEW_DURATION)[0])
-        return [0.0, 0.0, Kp * (ref - theta) - Kd * omega]
-
-    mbs.AddLoad(LoadTorqueVector(markerNumber=hub_marker, loadVector=[0.0, 0.0, 0.0],
-                                 loadVectorUserFunction=pd_torque))
-    hub_sensor = mbs.AddSensor(SensorNode(nodeNumber=hub_node, storeInternal=True,
-                                          outputVariableType=exu.OutputVariableType.Coordinates))
+    hub_sensor = _add_hub_pd(exu, mbs, hub_node, hub_marker, Kp, Kd)
     tip_sensor = mbs.AddSensor(SensorBody(bodyNumber=elements[-1], localPosition=[h, 0.0, 0.0],
                                           storeInternal=True,
                                           outputVariableType=exu.OutputVariableType.Position))
