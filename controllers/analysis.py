@@ -1140,13 +1140,7 @@ def step_response(closed_loop: control.StateSpace, *, amplitude: float = 1.0,
     dt : float, s, optional
         Default t_final / 2000.
     """
-    _check_closed_loop(closed_loop)
-    _require_signal(closed_loop, THETA_REF, "input", "closed_loop")
-    if not (np.isfinite(amplitude) and amplitude != 0):
-        raise ValueError(f"amplitude must be non-zero and finite [rad]; got {amplitude}")
-    T = _time_grid(closed_loop, t_final, dt, t_final / 2000.0)
-    U = _inputs(closed_loop, T.size, theta_ref=np.full(T.size, float(amplitude)))
-    return _simulate(closed_loop, T, U)
+    return _step_on(closed_loop, THETA_REF, amplitude, "rad", t_final, dt)
 
 
 def disturbance_response(closed_loop: control.StateSpace, input: str = "disturbance_torque", *,
@@ -1165,10 +1159,16 @@ def disturbance_response(closed_loop: control.StateSpace, input: str = "disturba
     dt : float, s, optional
         Default t_final / 2000.
     """
+    return _step_on(closed_loop, input, amplitude, "input's unit", t_final, dt)
+
+
+def _step_on(closed_loop, input: str, amplitude: float, unit: str, t_final: float,
+             dt: float | None) -> control.TimeResponseData:
+    """Step of ``amplitude`` on one closed-loop input at t = 0, every other input zero."""
     _check_closed_loop(closed_loop)
     _require_signal(closed_loop, input, "input", "closed_loop")
     if not (np.isfinite(amplitude) and amplitude != 0):
-        raise ValueError(f"amplitude must be non-zero and finite; got {amplitude}")
+        raise ValueError(f"amplitude must be non-zero and finite [{unit}]; got {amplitude}")
     T = _time_grid(closed_loop, t_final, dt, t_final / 2000.0)
     U = _inputs(closed_loop, T.size, **{input: np.full(T.size, float(amplitude))})
     return _simulate(closed_loop, T, U)
