@@ -20,11 +20,30 @@ section is symmetric (shear centre = centroid), so the four motions decouple in 
 * axial: u(x), stiffness EA.
 
 Bending is Euler-Bernoulli (no shear deformation, no rotary inertia of the section), with the
-Hermite cubic element; the mass per unit length rho*A moves with v and w. Torsion and axial
-motion use C0 rod elements of polynomial order ``rod_order`` (1: the linear element; 2, 3, ...:
-the linear element enriched with integrated-Legendre bubble functions, whose internal degrees of
-freedom are appended after the nodal ones). All mass matrices are consistent (same shape
-functions as the stiffness).
+Hermite cubic element (``bending_order=3``), optionally enriched with C1 bubble functions
+(``bending_order=5``, the default: the nodal values and slopes are still the Hermite ones, the
+bubbles' amplitudes are internal degrees of freedom); the mass per unit length rho*A moves with
+v and w. Torsion and axial motion use C0 rod elements of polynomial order ``rod_order`` (1: the
+linear element; 2, 3, ...: enriched with integrated-Legendre bubbles; 5 by default). Internal
+degrees of freedom come after the nodal ones. All mass matrices are consistent (the stiffness's
+shape functions).
+
+Frequencies converge as h^4 with the Hermite cubic and h^8 with bending_order=5 (measured, see
+tests/test_fe3d_reference.py); 20 elements of the default kind give the first three bending
+modes of each plane to 2e-11 or better, 200 plain Hermite elements to 1e-9.
+
+Numerics
+--------
+A beam's stiffness matrix has a condition number of order N^4, and the plain recipes lose that
+many digits in the low modes: a shift-invert Lanczos on K + tau M formed in double gave the first
+cantilever frequency 5e-8 off with 160 Hermite elements and 5e-6 off with 640 (measured). Here
+(i) every solve is a sparse LU refined with residuals formed in long double from the unshifted
+terms (:class:`_RefinedLU`), (ii) the rigid-body motion of a free structure is removed exactly,
+in closed form at the reference point, and the flexible part solved from a bordered system that
+stays regular at s = 0 (:class:`_FreeStructure`), (iii) eigenvalues come from block subspace
+iteration on K^+ M, which never multiplies a vector by K and finds repeated frequencies
+(:func:`natural_frequencies`). Frequencies are then good to about 1e-13 relative, W6 at any
+|s| > 0 to about 1e-12 (measured against closed forms).
 
 The sign of theta_y
 -------------------
@@ -86,9 +105,9 @@ __all__ = [
     "natural_frequencies",
     "hub_compliance",
     "attitude_compliance",
+    "SingularMatrixError",
 ]
 
-N_NODE_DOFS = 6
 _FIELDS = ("length", "bending_stiffness", "bending_stiffness_y", "torsional_stiffness",
            "torsional_inertia", "axial_stiffness", "linear_density")
 _UNITS = {"length": "m", "bending_stiffness": "N m^2", "bending_stiffness_y": "N m^2",
@@ -458,6 +477,21 @@ def _complex_s(s) -> np.ndarray:
     return s
 
 
+class SingularMatrixError(RuntimeError):
+    """A matrix to be factorised is singular: the structure is a mechanism, or more free than
+    the caller said (more zero-frequency modes than n_rigid), or s sits on a pole."""
+
+
+def _factor(A, **options):
+    try:
+        return scipy.sparse.linalg.splu(scipy.sparse.csc_array(A), **options)
+    except RuntimeError as error:                     # SuperLU: "Factor is exactly singular"
+        raise SingularMatrixError(
+            f"singular matrix ({error}): a mechanism, more zero-frequency modes than n_rigid "
+            f"(the first n_rigid degrees of freedom must carry all rigid motions), or s on a "
+            f"pole") from None
+
+
 class _RefinedLU:
     """Solves of (sum_i c_i A_i) x = b: sparse LU, refined with residuals in extended precision.
 
@@ -491,11 +525,10 @@ class _RefinedLU:
                 scipy.sparse.csr_array(total[:body][:, :body]), symmetric_mode=True)
             self.order = np.concatenate([order, np.arange(body, n)])
             permuted = total[self.order][:, self.order]
-            self.lu = scipy.sparse.linalg.splu(scipy.sparse.csc_array(permuted),
-                                               permc_spec="NATURAL")
+            self.lu = _factor(permuted, permc_spec="NATURAL")
         else:
             self.order = np.arange(n)
-            self.lu = scipy.sparse.linalg.splu(scipy.sparse.csc_array(total))
+            self.lu = _factor(total)
         self.max_steps = max_steps
 
     def _lu_solve(self, b):
@@ -628,8 +661,12 @@ def _free_compliance(K, M, s) -> np.ndarray:
     out = np.empty(s.shape + (6, 6), dtype=complex)
     for index in np.ndindex(s.shape):
         s2 = complex(s[index]) ** 2
-        with np.errstate(all="raise"):
-            y = free.flexible_solver(s2)(relieved)
+        try:
+            with np.errstate(all="raise"):
+                y = free.flexible_solver(s2)(relieved)
+        except FloatingPointError:
+            raise SingularMatrixError(f"s = {_short(complex(s[index]))} [rad/s] is on or too "
+                                      f"near a pole") from None
         out[index] = free.d[r, None] * (free.Phi[r] @ rigid / s2 + y[r])
     return out
 
