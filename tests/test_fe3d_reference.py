@@ -531,6 +531,26 @@ def rigid_mass_by_hand(hub_mass, hub_inertia, mounts):
     return np.block([[m * np.eye(3), -cross(S)], [cross(S), J]])
 
 
+def test_mount_transformation_is_the_small_rotation_of_the_hub():
+    # Independent kinematics: turn the hub by the rotation vector +-eps phi (scipy's exact
+    # rotation) and move it by +-eps u; the central difference of the attachment point's
+    # motion is u + phi x r, of the section's attitude phi, both seen in the beam's axes
+    # through R^T. Truncation O(eps^2 |phi|^3 |r|) ~ 1e-10 and rounding 1e-16/eps ~ 1e-11
+    # with eps = 1e-5: 1e-9.
+    r = np.array([0.4, -0.3, 0.25])
+    R = R1
+    T = fe3d.mount_transformation(r, R)
+    rng = np.random.default_rng(3)
+    eps = 1e-5
+    for _ in range(3):
+        u, phi = rng.standard_normal(3), rng.standard_normal(3)
+        moved = [Rotation.from_rotvec(e * phi).apply(r) + e * u for e in (eps, -eps)]
+        rotation = [Rotation.from_rotvec(e * phi).as_rotvec() for e in (eps, -eps)]
+        expected = np.concatenate([R.T @ (moved[0] - moved[1]),
+                                   R.T @ (rotation[0] - rotation[1])]) / (2 * eps)
+        np.testing.assert_allclose(T @ np.concatenate([u, phi]), expected, rtol=0, atol=1e-9)
+
+
 def test_rigid_body_block_equals_hand_computed_mass_properties():
     N = 10
     K, M = fe3d.spacecraft_matrices(HUB_MASS, HUB_INERTIA, MOUNTS, N)
@@ -545,6 +565,9 @@ def test_rigid_body_block_equals_hand_computed_mass_properties():
     H = fe3d.hub_compliance(K, M, 1e-6j)
     np.testing.assert_allclose((1e-6j) ** 2 * H, np.linalg.inv(G), rtol=0,
                                atol=1e-11 * np.abs(np.linalg.inv(G)).max())
+    # Reciprocity: the hub compliance is symmetric at any s (solves good to ~1e-13).
+    H = fe3d.hub_compliance(K, M, [2.0j, 1.0 + 5.0j])
+    assert np.all(np.abs(H - np.swapaxes(H, -1, -2)) <= 1e-11 * entry_scale(H))
     theta = fe3d.attitude_compliance(K, M, [1e-6j])
     assert theta.shape == (1, 3, 3)
     np.testing.assert_allclose((1e-6j) ** 2 * theta[0], np.linalg.inv(G)[3:, 3:], rtol=0,
