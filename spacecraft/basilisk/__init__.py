@@ -1,0 +1,31 @@
+"""flexsat in Basilisk: a flexsat spacecraft's chains and controller as a Basilisk simulation.
+
+Basilisk (the open-source astrodynamics framework, PyPI package ``bsk``) is optional: install the
+extra ``flexsat[basilisk]``. Importing this package does not import Basilisk; the functions that
+need it raise :class:`BasiliskNotInstalled` (one line: how to install the extra) without it.
+
+- :func:`layout`: the spacecraft as Basilisk parameters (hub with rigidly mounted bodies folded
+  in, one ``spinningBodyNDOFStateEffector`` per chain); no Basilisk needed.
+- :func:`flight_software_law`: any flexsat controller as the digital law Basilisk runs.
+- :func:`simulate_slew`: the scene's slew in Basilisk; theta, omega, tip deflections and torque
+  as flexsat's plant defines them. :func:`linear_slew`: flexsat's prediction of the same
+  sampled-data loop; :func:`compare`: the differences.
+"""
+
+from .flight_software import (SAMPLES_PER_CROSSOVER, FlightSoftwareLaw, default_sample_time,
+                              flight_software_law)
+from .install import (INSTALL_HINT, TESTED_VERSIONS, BasiliskIntegrationError,
+                      BasiliskModelError, BasiliskNotInstalled, BasiliskVersionWarning,
+                      require_basilisk)
+from .layout import AppendageLayout, BodyLayout, HubLayout, SpacecraftLayout, chain_spacecraft, layout
+from .simulation import (BasiliskResult, compare, dynamics_step, linear_slew, simulate,
+                         simulate_slew)
+
+__all__ = [
+    "AppendageLayout", "BasiliskIntegrationError", "BasiliskModelError", "BasiliskNotInstalled",
+    "BasiliskResult", "BasiliskVersionWarning", "BodyLayout", "FlightSoftwareLaw", "HubLayout",
+    "INSTALL_HINT", "SAMPLES_PER_CROSSOVER", "SpacecraftLayout", "TESTED_VERSIONS",
+    "chain_spacecraft", "compare", "default_sample_time", "dynamics_step",
+    "flight_software_law", "layout", "linear_slew", "require_basilisk", "simulate",
+    "simulate_slew",
+]

@@ -1,0 +1,233 @@
+r"""A flexsat controller as Basilisk flight software.
+
+Any flexsat controller (a ``control.StateSpace`` with output ``torque`` and inputs among
+``theta_ref``, ``theta``, ``omega``) runs in Basilisk as a digital law at the flight-software
+sample time T,
+
+    x[k+1] = A x[k] + B u[k],    torque[k] = C x[k] + D u[k],    u[k] = inputs at t_k = k T,
+
+held constant over [t_k, t_(k+1)) (zero-order hold). A digital controller (``dt`` > 0) runs at
+its own ``dt``; a continuous one is discretised exactly with a zero-order hold at T
+(``control.c2d(..., method="zoh")``, what :func:`controllers.pd` does with ``sample_time``).
+flexsat's prediction for the same loop is :func:`controllers.close_loop` of the plant with this
+discrete controller: the exact sampled-data loop.
+
+In Basilisk the law is a Python ``SysModel`` in the flight-software task. At each t_k it reads
+the hub's ``SCStatesMsgPayload`` (written after the dynamics integrated up to t_k: the dynamics
+task has the higher priority), forms flexsat's signals
+
+    theta = 4 atan(sigma_BN[2]), unwrapped across MRP shadow-set switches (+-2 pi),
+    omega = omega_BN_B[2],
+
+(exact for a rotation about z, sigma = tan(theta/4) e_z [1]_), evaluates the law, and writes
+``torqueRequestBody = (0, 0, torque)`` to a ``CmdTorqueBodyMsg``. The ``extForceTorque``
+effector that applies it sits in the same task after the law, so the torque computed at t_k
+drives the integration over [t_k, t_(k+1)) exactly as the sampled-data model assumes.
+
+References
+----------
+.. [1] H. Schaub, J. L. Junkins, "Analytical Mechanics of Space Systems", 4th ed., AIAA 2018,
+   sec. 3.7 (modified Rodrigues parameters and their shadow set).
+.. [2] G. F. Franklin, J. D. Powell, M. L. Workman, "Digital Control of Dynamic Systems", 3rd ed.,
+   Addison-Wesley 1998, sec. 4.3 (zero-order-hold equivalent), sec. 11.2 (sample rate: 10 to 30
+   times the bandwidth).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+
+import control
+import numpy as np
+
+from .install import BasiliskModelError
+
+__all__ = ["FlightSoftwareLaw", "flight_software_law", "default_sample_time",
+           "SIGNALS", "SAMPLES_PER_CROSSOVER", "flight_software_class"]
+
+#: The signals the flight software forms, in flexsat's names.
+SIGNALS = ("theta_ref", "theta", "omega")
+
+#: Default flight-software rate for a continuous controller: this many samples per period of
+#: the highest gain crossover (the top of Franklin, Powell & Workman's 10-30 range [2]_), so the
+#: sampled loop stays close to the continuous loop the user designed.
+SAMPLES_PER_CROSSOVER = 30.0
+
+
+@dataclasses.dataclass(frozen=True)
+class FlightSoftwareLaw:
+    """A controller as the digital law Basilisk runs.
+
+    Attributes
+    ----------
+    A, B, C, D : ndarray
+        ``x[k+1] = A x + B u``, ``torque = C x + D u`` (C, D one row).
+    inputs : tuple of str
+        The meaning of each entry of u (names from :data:`SIGNALS`).
+    sample_time : float, s
+    controller : control.StateSpace
+        The same law as a discrete StateSpace with ``dt = sample_time`` (for
+        :func:`controllers.close_loop`).
+    """
+
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    inputs: tuple
+    sample_time: float
+    controller: control.StateSpace
+
+
+def _sample_time(value, name: str = "sample_time") -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a real number [s]; got {type(value).__name__}")
+    value = float(value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise ValueError(f"{name} must be positive and finite [s]; got {value!r}")
+    return value
+
+
+def flight_software_law(controller: control.StateSpace, sample_time: float | None = None
+                        ) -> FlightSoftwareLaw:
+    """The digital law Basilisk runs for a flexsat controller.
+
+    Parameters
+    ----------
+    controller : control.StateSpace
+        Output ``torque`` [N*m]; inputs among ``theta_ref`` [rad], ``theta`` [rad], ``omega``
+        [rad/s]. Continuous (dt = 0, or None for a static gain) or digital (dt > 0).
+    sample_time : float, s, optional
+        Flight-software sample time. Required for a continuous controller (it is discretised
+        exactly, zero-order hold, at this rate); for a digital one it must equal its dt
+        (default).
+
+    Returns
+    -------
+    FlightSoftwareLaw
+
+    Raises
+    ------
+    BasiliskModelError
+        An input Basilisk's flight software does not form (e.g. a tip-deflection measurement),
+        an output other than the single ``torque``.
+    ValueError
+        A missing or inconsistent sample time.
+    """
+    if not isinstance(controller, control.StateSpace):
+        raise TypeError(f"controller must be a control.StateSpace; got {type(controller).__name__}")
+    outputs = list(controller.output_labels)
+    if outputs != ["torque"]:
+        raise BasiliskModelError(f"controller must have the single output 'torque' [N*m] (the "
+                                 f"hub torque Basilisk applies); got outputs {outputs}")
+    inputs = list(controller.input_labels)
+    unknown = [name for name in inputs if name not in SIGNALS]
+    if unknown:
+        raise BasiliskModelError(
+            f"controller inputs {unknown} are not signals the Basilisk flight software forms: it "
+            f"reads the hub's attitude and rate and the reference, {list(SIGNALS)}")
+    dt = controller.dt
+    if dt is True:
+        raise ValueError("controller has an unspecified sample time (dt=True); give it dt > 0 [s]")
+    if dt is not None and dt > 0:
+        T = float(dt)
+        if sample_time is not None and not math.isclose(_sample_time(sample_time), T,
+                                                        rel_tol=1e-12):
+            raise ValueError(f"sample_time must equal the digital controller's dt = {T!r} [s] "
+                             f"(it runs at its own rate); got {sample_time!r}")
+        digital = controller
+    else:
+        if sample_time is None:
+            raise ValueError("a continuous controller needs sample_time [s], the flight-software "
+                             "rate at which Basilisk runs it (see default_sample_time)")
+        T = _sample_time(sample_time)
+        continuous = control.ss(controller.A, controller.B, controller.C, controller.D, 0)
+        digital = control.c2d(continuous, T, method="zoh")
+    A, B, C, D = (np.asarray(M, dtype=float) for M in (digital.A, digital.B, digital.C, digital.D))
+    n = A.shape[0]
+    A, B, C = A.reshape(n, n), B.reshape(n, len(inputs)), C.reshape(1, n)
+    D = D.reshape(1, len(inputs))
+    system = control.ss(A, B, C, D, T, inputs=inputs, outputs=["torque"],
+                        name=controller.name or "controller")
+    return FlightSoftwareLaw(A, B, C, D, tuple(inputs), T, system)
+
+
+def default_sample_time(plant: control.StateSpace, controller: control.StateSpace) -> float:
+    """Flight-software sample time for a continuous controller [s].
+
+    The largest of 1, 2, 5 x 10**k seconds with at least :data:`SAMPLES_PER_CROSSOVER` samples
+    per period of the loop's highest gain crossover on ``plant`` (the frequency above which
+    |L(j omega)| < 1 for good). A digital controller's own dt is returned as it is.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        The design plant (hub + chain) with input ``torque`` and outputs ``theta``, ``omega``.
+    controller : control.StateSpace
+    """
+    import controllers
+
+    if controller.dt not in (None, 0) and controller.dt is not True:
+        return float(controller.dt)
+    omega, L = controllers.loop_frequency_response(plant, controller)
+    above = np.nonzero(np.abs(L) >= 1.0)[0]
+    if above.size == 0:
+        raise ValueError("the loop has no gain crossover: cannot choose a sample time; give "
+                         "sample_time [s]")
+    limit = 2.0 * math.pi / (SAMPLES_PER_CROSSOVER * float(omega[above[-1]]))
+    decade = 10.0 ** math.floor(math.log10(limit))
+    return max(m * decade for m in (1.0, 2.0, 5.0) if m * decade <= limit * (1.0 + 1e-12))
+
+
+def _unwrap(angle: float, previous: float) -> float:
+    """``angle`` shifted by a multiple of 2 pi to lie within pi of ``previous``."""
+    return angle + 2.0 * math.pi * round((previous - angle) / (2.0 * math.pi))
+
+
+@functools.cache
+def flight_software_class():
+    """The Basilisk ``SysModel`` subclass that runs a :class:`FlightSoftwareLaw` (built once).
+
+    Instances take ``(law, reference_values)``: the law, and theta_ref [rad] at every sample
+    instant k T (evaluated once, before the run). Attributes ``stateInMsg``
+    (``SCStatesMsgReader``) and ``torqueOutMsg`` (``CmdTorqueBodyMsg``) are connected by the
+    caller.
+    """
+    from Basilisk.architecture import messaging, sysModel
+
+    class AttitudeFlightSoftware(sysModel.SysModel):
+        """x[k+1] = A x + B u, torque = C x + D u with u from the hub's state message."""
+
+        def __init__(self, law: FlightSoftwareLaw, reference_values: np.ndarray):
+            super().__init__()
+            self.stateInMsg = messaging.SCStatesMsgReader()
+            self.torqueOutMsg = messaging.CmdTorqueBodyMsg()
+            self.law = law
+            self.reference_values = np.asarray(reference_values, dtype=float)
+            self.period_nanos = round(law.sample_time * 1e9)
+            self.x = np.zeros(law.A.shape[0])
+            self.theta = 0.0
+            self._where = [SIGNALS.index(name) for name in law.inputs]
+
+        def Reset(self, CurrentSimNanos):
+            self.x = np.zeros(self.law.A.shape[0])
+            self.theta = 0.0
+            self.torqueOutMsg.write(messaging.CmdTorqueBodyMsgPayload(), CurrentSimNanos,
+                                    self.moduleID)
+
+        def UpdateState(self, CurrentSimNanos):
+            state = self.stateInMsg()
+            self.theta = _unwrap(4.0 * math.atan(state.sigma_BN[2]), self.theta)
+            k = min(CurrentSimNanos // self.period_nanos, self.reference_values.size - 1)
+            signals = np.array([self.reference_values[k], self.theta, state.omega_BN_B[2]])
+            u = signals[self._where]
+            law = self.law
+            torque = float((law.C @ self.x + law.D @ u)[0])
+            self.x = law.A @ self.x + law.B @ u
+            payload = messaging.CmdTorqueBodyMsgPayload()
+            payload.torqueRequestBody = [0.0, 0.0, torque]
+            self.torqueOutMsg.write(payload, CurrentSimNanos, self.moduleID)
+
+    return AttitudeFlightSoftware

@@ -1,0 +1,574 @@
+r"""Run a flexsat spacecraft and controller in Basilisk, and flexsat's prediction of the same run.
+
+:func:`simulate_slew` is the entry point: it lays the spacecraft out as Basilisk's hub and
+``spinningBodyNDOFStateEffector`` chains (:mod:`.layout`), runs the controller as flight software
+(:mod:`.flight_software`) on the scene's cycloidal slew, and returns theta, omega, every tip
+deflection and the torque as flexsat's plant defines them, at the flight-software sample
+instants. :func:`linear_slew` is flexsat's linear prediction of the same sampled-data loop on the
+same chains, and :func:`compare` the differences.
+
+Tasks and time
+    One Basilisk process with two tasks: ``dynamics`` (priority 100, step dt) holds the spacecraft;
+    ``flight_software`` (priority 50, step T = sample time, dt divides T) holds, in this order, the
+    disturbance schedule, the controller, the ``extForceTorque`` effector that reads its command,
+    and the recorders. At a common instant the higher-priority dynamics task runs first, so the
+    flight software sees the state at t_k and its torque drives [t_k, t_(k+1)): the zero-order
+    hold of :func:`controllers.close_loop` with a digital controller.
+
+Integrator and step
+    Basilisk's fixed-step RK4 (its default). On an undamped mode of frequency w, RK4 is stable for
+    w dt <= 2 sqrt(2) (its stability region on the imaginary axis [1]_); its amplitude error per
+    step is 1 - |R(i w dt)| ~ (w dt)**6 / 144 (a numerical damping ratio (w dt)**5 / 144) and its
+    phase error ~ (w dt)**5 / 120, so the error of a run falls as dt**4. The default dt is the
+    largest T/k with w_max dt <= 1/2 (w_max the chain spacecraft's highest linear mode): a factor
+    5.7 inside the stability limit, room for the stiffening of large motions, and accurate even
+    when a torque step excites every mode (a 1e-3 N*m pulse on a 3-body chain: 7e-5 of the peak
+    tip deflection at w_max dt = 0.54, 4e-6 at 0.27; smooth slews excite the top modes far
+    less, 1e-7). A chain whose w_max dt exceeds 2 sqrt(2) diverges: the NaN of
+    ``benchmarks/peer_basilisk.py`` with 10 equal panels at dt = 0.01 s (see
+    ``benchmarks/basilisk_vs_flexsat.py``).
+
+References
+----------
+.. [1] E. Hairer, G. Wanner, "Solving Ordinary Differential Equations II", 2nd ed., Springer
+   1996, sec. IV.2 (stability function of RK4, R(z) = 1 + z + z^2/2 + z^3/6 + z^4/24).
+.. [2] Basilisk 2.12 documentation: ``spacecraft``, ``extForceTorque``,
+   ``spinningBodyNDOFStateEffector``, "Creating Python Modules" (SysModel subclasses), task
+   priorities (higher value runs first).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import time
+from collections.abc import Callable, Mapping
+
+import control
+import numpy as np
+
+from ..coupling import Spacecraft
+from .flight_software import FlightSoftwareLaw, flight_software_class, flight_software_law
+from .install import BasiliskIntegrationError, BasiliskModelError, require_basilisk
+from .layout import SpacecraftLayout, layout
+
+__all__ = ["BasiliskResult", "simulate", "simulate_slew", "linear_slew", "compare",
+           "dynamics_step", "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR", "DISTURBANCES"]
+
+#: RK4 is stable on the imaginary axis for |w dt| <= 2 sqrt(2) [1]_.
+RK4_STABILITY_LIMIT = 2.0 * math.sqrt(2.0)
+#: Default w_max * dt of the dynamics step (see the module docstring).
+DEFAULT_STEP_FACTOR = 0.5
+#: Disturbance inputs the Basilisk model applies (hub torque; force at the hub's centre of mass).
+DISTURBANCES = ("disturbance_torque", "force_x", "force_y")
+
+_NANO = 1e-9
+
+
+@dataclasses.dataclass
+class BasiliskResult:
+    """A Basilisk run of a flexsat spacecraft.
+
+    Attributes
+    ----------
+    response : control.TimeResponseData
+        At the flight-software sample instants k T: outputs ``theta`` [rad], ``omega`` [rad/s],
+        ``<name>_tip_deflection`` [m] per appendage, ``torque`` [N*m] (the names of flexsat's
+        closed loops); inputs ``theta_ref`` [rad] and any disturbance.
+    sample_time : float, s
+        Flight-software (and output) step.
+    dt : float, s
+        Dynamics (RK4) step.
+    highest_frequency : float, rad/s
+        Highest linear mode of the chain spacecraft (what dt was sized from).
+    layout : SpacecraftLayout
+    law : FlightSoftwareLaw or None
+    bsk_version : str
+    seconds : dict
+        Wall time [s] of ``build`` (Python objects and InitializeSimulation) and ``run``.
+    out_of_plane : float
+        Largest |sigma_BN_x|, |sigma_BN_y|, |omega_BN_B_x|, |omega_BN_B_y| seen (0 for planar
+        motion).
+    conservation : dict or None
+        When asked: ``time`` [s], ``rotational_energy`` [J] (kinetic + hinge springs, Basilisk's
+        ``totRotEnergy``), ``angular_momentum`` [N*m*s] (n, 3), about the system's centre of mass
+        in inertial axes (``totRotAngMomPntC_N``), ``orbital_energy`` [J] (``totOrbEnergy``).
+    """
+
+    response: control.TimeResponseData
+    sample_time: float
+    dt: float
+    highest_frequency: float
+    layout: SpacecraftLayout
+    law: FlightSoftwareLaw | None
+    bsk_version: str
+    seconds: dict
+    out_of_plane: float
+    conservation: dict | None = None
+
+
+def _positive(value, name: str, unit: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
+    value = float(value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise ValueError(f"{name} must be positive and finite [{unit}]; got {value!r}")
+    return value
+
+
+def _nanoseconds(seconds: float, name: str) -> int:
+    """Basilisk's clock is integer nanoseconds: the step in ns, checked to be representable."""
+    nanos = round(seconds * 1e9)
+    if nanos < 1 or abs(nanos * _NANO - seconds) > 1e-9 * seconds:
+        raise ValueError(f"{name} must be a whole number of nanoseconds (Basilisk's clock) [s]; "
+                         f"got {seconds!r}")
+    return nanos
+
+
+def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None = None
+                  ) -> float:
+    """RK4 step [s] for the dynamics: T/k, k integer, sized from the highest mode.
+
+    Parameters
+    ----------
+    highest_frequency : float, rad/s
+        w_max of the linearised spacecraft (0: rigid).
+    sample_time : float, s
+        Flight-software step T; the dynamics step must divide it.
+    dt : float, s, optional
+        Asked step, checked: T/dt an integer, w_max dt <= 2 sqrt(2). Default: the largest T/k
+        with w_max dt <= :data:`DEFAULT_STEP_FACTOR` and k dividing T in whole nanoseconds.
+
+    Raises
+    ------
+    ValueError
+        A step that does not divide T, or one beyond RK4's stability limit for w_max.
+    """
+    T = _positive(sample_time, "sample_time", "s")
+    period = _nanoseconds(T, "sample_time")
+    if dt is not None:
+        dt = _positive(dt, "dt", "s")
+        k = round(T / dt)
+        if k < 1 or period % k or abs(k * dt - T) > 1e-9 * T:
+            raise ValueError(f"dt must divide the flight-software sample time {T!r} s into a whole "
+                             f"number of whole-nanosecond steps [s]; got {dt!r}")
+        if highest_frequency * dt > RK4_STABILITY_LIMIT:
+            raise ValueError(
+                f"dt = {dt!r} s is beyond RK4's stability limit for the chain's highest mode "
+                f"{highest_frequency:.6g} rad/s (w*dt = {highest_frequency * dt:.3g} > 2*sqrt(2) "
+                f"= 2.83); use dt <= {DEFAULT_STEP_FACTOR / highest_frequency:.3g} s (w*dt = "
+                f"{DEFAULT_STEP_FACTOR:g}, the default)")
+        return period // k * _NANO
+    k = max(1, math.ceil(highest_frequency * T / DEFAULT_STEP_FACTOR - 1e-12))
+    for candidate in range(k, 4 * k + 1):
+        if period % candidate == 0:
+            return period // candidate * _NANO
+    raise ValueError(f"no dynamics step divides the sample time {T!r} s into between {k} and "
+                     f"{4 * k} whole-nanosecond steps; choose a rounder sample time [s]")
+
+
+def _initial_angles(lay: SpacecraftLayout, initial_angles: Mapping | None) -> dict:
+    angles = {}
+    initial_angles = {} if initial_angles is None else dict(initial_angles)
+    names = [a.name for a in lay.appendages]
+    unknown = sorted(set(initial_angles) - set(names))
+    if unknown:
+        raise ValueError(f"initial_angles names {unknown} are not mounts; the mounts are {names}")
+    for a in lay.appendages:
+        values = np.asarray(initial_angles.get(a.name, np.zeros(len(a.bodies))), dtype=float)
+        if values.shape != (len(a.bodies),) or not np.all(np.isfinite(values)):
+            raise ValueError(f"initial_angles[{a.name!r}] must be {len(a.bodies)} finite hinge "
+                             f"angles [rad] (one per hinge); got {values!r}"[:200])
+        angles[a.name] = values
+    return angles
+
+
+def _disturbance_values(disturbances: Mapping | None, times: np.ndarray) -> dict:
+    values = {}
+    for name, profile in ({} if disturbances is None else dict(disturbances)).items():
+        if name not in DISTURBANCES:
+            raise BasiliskModelError(
+                f"disturbance {name!r} is not applied by the Basilisk model: it applies "
+                f"{list(DISTURBANCES)} (a tip force would need a force effector on a spinning "
+                "body)")
+        v = np.asarray(profile(times) if callable(profile) else profile, dtype=float)
+        if v.shape != times.shape or not np.all(np.isfinite(v)):
+            raise ValueError(f"disturbance {name!r} must give one finite value per sample "
+                             f"({times.size}); got shape {v.shape}")
+        values[name] = v
+    return values
+
+
+def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = None, *,
+             duration: float, reference: Callable[[np.ndarray], np.ndarray] | None = None,
+             sample_time: float | None = None, dt: float | None = None,
+             chains: Mapping | None = None, disturbances: Mapping | None = None,
+             initial_rate: float = 0.0, initial_angles: Mapping | None = None,
+             conservation: bool = False) -> BasiliskResult:
+    """Simulate a flexsat spacecraft (chains) and controller in Basilisk.
+
+    Parameters
+    ----------
+    spacecraft : Spacecraft
+        Planar hub with appendages that are chains (or replaced through ``chains``).
+    controller : control.StateSpace, optional
+        Any flexsat controller (see :func:`.flight_software_law`); None: no control torque.
+    duration : float, s
+        Simulated time (from 0).
+    reference : callable, optional
+        theta_ref(t) [rad] for an array of times [s]; default 0.
+    sample_time : float, s, optional
+        Flight-software and output step; default the digital controller's dt. Required for a
+        continuous controller and without controller.
+    dt : float, s, optional
+        Dynamics (RK4) step; default from the highest mode (:func:`dynamics_step`).
+    chains : mapping name -> HingedChain, optional
+        Chains replacing non-chain appendages (e.g. the scene's fit of a beam).
+    disturbances : mapping name -> callable or array, optional
+        ``disturbance_torque`` [N*m], ``force_x``, ``force_y`` [N] (hub axes, at the hub's centre
+        of mass) as functions of time, held over each sample (as flexsat's sampled loop holds
+        them).
+    initial_rate : float, rad/s
+        Initial hub rate about z.
+    initial_angles : mapping name -> array, optional
+        Initial hinge angles [rad] of each chain, relative rotation at each hinge from the root.
+    conservation : bool
+        Record Basilisk's energy and angular momentum (:attr:`BasiliskResult.conservation`).
+
+    Returns
+    -------
+    BasiliskResult
+
+    Raises
+    ------
+    BasiliskNotInstalled
+        Without the ``bsk`` package (message: how to install the extra).
+    BasiliskModelError
+        A spacecraft or controller Basilisk cannot represent (the message names it and why).
+    BasiliskIntegrationError
+        Non-finite states during the run.
+    """
+    version = require_basilisk()
+    t_build = time.perf_counter()
+    lay = layout(spacecraft, chains=chains)
+    law = None if controller is None else flight_software_law(controller, sample_time)
+    if law is not None:
+        T = law.sample_time
+    elif sample_time is None:
+        raise ValueError("without a controller, give sample_time [s] (the output step)")
+    else:
+        T = _positive(sample_time, "sample_time", "s")
+    duration = _positive(duration, "duration", "s")
+    n_samples = int(math.floor(duration / T + 1e-9)) + 1
+    if n_samples < 2:
+        raise ValueError(f"duration {duration!r} s must be at least one sample time {T!r} s")
+    frequencies = lay.spacecraft.modes()[0] if lay.n_bodies else np.zeros(1)
+    w_max = float(np.max(frequencies))
+    step = dynamics_step(w_max, T, dt)
+    if not isinstance(initial_rate, (int, float, np.integer, np.floating)) or isinstance(
+            initial_rate, bool) or not math.isfinite(initial_rate):
+        raise ValueError(f"initial_rate must be a finite rate [rad/s]; got {initial_rate!r}")
+    angles = _initial_angles(lay, initial_angles)
+    times = np.arange(n_samples) * (_nanoseconds(T, "sample_time") * _NANO)
+    ref = np.zeros(n_samples) if reference is None else np.asarray(reference(times), dtype=float)
+    if ref.shape != times.shape or not np.all(np.isfinite(ref)):
+        raise ValueError(f"reference must give one finite angle [rad] per sample ({n_samples}); "
+                         f"got shape {ref.shape}")
+    pushes = _disturbance_values(disturbances, times)
+
+    run = _BasiliskRun(lay, law, ref, pushes, T, step, float(initial_rate), angles,
+                       conservation)
+    seconds = {"build": time.perf_counter() - t_build}
+    t_run = time.perf_counter()
+    run.execute(times[-1])
+    seconds["run"] = time.perf_counter() - t_run
+    response, out_of_plane, energy = run.collect(times, ref, pushes)
+    return BasiliskResult(response, T, step, w_max, lay, law, version, seconds, out_of_plane,
+                          energy)
+
+
+class _BasiliskRun:
+    """The Basilisk objects of one run, kept referenced for the run's life (SWIG ownership)."""
+
+    def __init__(self, lay, law, ref, pushes, T, step, initial_rate, angles, conservation):
+        from Basilisk.simulation import extForceTorque, spacecraft, spinningBodyNDOFStateEffector
+        from Basilisk.utilities import SimulationBaseClass
+
+        self.lay, self.law = lay, law
+        period, step_nanos = round(T * 1e9), round(step * 1e9)
+        sim = SimulationBaseClass.SimBaseClass()
+        process = sim.CreateNewProcess("flexsat")
+        process.addTask(sim.CreateNewTask("dynamics", step_nanos), 100)
+        process.addTask(sim.CreateNewTask("flight_software", period), 50)
+        craft = spacecraft.Spacecraft()
+        craft.ModelTag = "flexsat_hub"
+        hub = lay.hub
+        craft.hub.mHub = hub.mHub
+        craft.hub.r_BcB_B = hub.r_BcB_B.reshape(3, 1).tolist()
+        craft.hub.IHubPntBc_B = hub.IHubPntBc_B.tolist()
+        craft.hub.omega_BN_BInit = [[0.0], [0.0], [initial_rate]]
+        self.effectors, self.bodies = [], []
+        for a in lay.appendages:
+            if not a.bodies:
+                self.effectors.append(None)
+                continue
+            effector = spinningBodyNDOFStateEffector.SpinningBodyNDOFStateEffector()
+            effector.ModelTag = f"flexsat_{a.name}"
+            for body, angle in zip(a.bodies, angles[a.name]):
+                b = spinningBodyNDOFStateEffector.SpinningBody()
+                b.setMass(body.mass)
+                b.setISPntSc_S(body.ISPntSc_S.tolist())
+                b.setDCM_S0P(body.dcm_S0P.tolist())
+                b.setR_ScS_S(body.r_ScS_S.reshape(3, 1).tolist())
+                b.setR_SP_P(body.r_SP_P.reshape(3, 1).tolist())
+                b.setSHat_S([[0.0], [0.0], [1.0]])
+                b.setK(body.k)
+                b.setC(body.c)
+                b.setThetaInit(float(angle))
+                effector.addSpinningBody(b)
+                self.bodies.append(b)
+            craft.addStateEffector(effector)
+            self.effectors.append(effector)
+        sim.AddModelToTask("dynamics", craft, 100)
+
+        self.torque = None
+        if law is not None:
+            self.torque = extForceTorque.ExtForceTorque()
+            self.torque.ModelTag = "flexsat_control_torque"
+            craft.addDynamicEffector(self.torque)
+            self.fsw = flight_software_class()(law, ref)
+            self.fsw.ModelTag = "flexsat_flight_software"
+            self.fsw.stateInMsg.subscribeTo(craft.scStateOutMsg)
+            self.torque.cmdTorqueInMsg.subscribeTo(self.fsw.torqueOutMsg)
+            sim.AddModelToTask("flight_software", self.fsw, 30)
+            sim.AddModelToTask("flight_software", self.torque, 20)
+        self.push = None
+        if pushes:
+            self.push = extForceTorque.ExtForceTorque()
+            self.push.ModelTag = "flexsat_disturbance"
+            craft.addDynamicEffector(self.push)
+            self.schedule = _disturbance_class()(self.push, pushes, period)
+            self.schedule.ModelTag = "flexsat_disturbance_schedule"
+            sim.AddModelToTask("flight_software", self.schedule, 40)
+
+        self.recorders = {"state": craft.scStateOutMsg.recorder(period)}
+        if law is not None:
+            self.recorders["torque"] = self.fsw.torqueOutMsg.recorder(period)
+        for a, effector in zip(lay.appendages, self.effectors):
+            if effector is not None:
+                self.recorders[a.name] = [effector.spinningBodyOutMsgs[k].recorder(period)
+                                          for k in range(len(a.bodies))]
+        self.energy = None
+        if conservation:
+            self.energy = craft.logger(["totRotEnergy", "totRotAngMomPntC_N", "totOrbEnergy"],
+                                       period)
+        for value in self.recorders.values():
+            for recorder in (value if isinstance(value, list) else [value]):
+                sim.AddModelToTask("flight_software", recorder, 10)
+        if self.energy is not None:
+            sim.AddModelToTask("flight_software", self.energy, 10)
+        self.sim, self.craft = sim, craft
+        self._call(sim.InitializeSimulation)
+
+    def _call(self, function, *args):
+        """Run a Basilisk call; its BasiliskError (a model it rejects) becomes ours."""
+        try:
+            function(*args)
+        except Exception as exc:
+            if type(exc).__name__ != "BasiliskError":
+                raise
+            raise BasiliskModelError(f"Basilisk rejected the model: {exc}") from None
+
+    def execute(self, t_final: float) -> None:
+        self.sim.ConfigureStopTime(round(t_final * 1e9))
+        self._call(self.sim.ExecuteSimulation)
+
+    def collect(self, times, ref, pushes):
+        state = self.recorders["state"]
+        n = times.size
+        recorded = state.times()
+        if recorded.size != n or np.any(recorded != np.round(times * 1e9).astype(recorded.dtype)):
+            raise RuntimeError(f"Basilisk recorded {recorded.size} samples, expected {n} at the "
+                               "flight-software instants")
+        sigma = np.asarray(state.sigma_BN, dtype=float).reshape(n, 3)
+        rate = np.asarray(state.omega_BN_B, dtype=float).reshape(n, 3)
+        rows, labels = [], []
+        theta = np.unwrap(4.0 * np.arctan(sigma[:, 2]))
+        rows += [theta, rate[:, 2]]
+        labels += ["theta", "omega"]
+        for a in self.lay.appendages:
+            if a.bodies:
+                angles = np.column_stack([np.asarray(r.theta, dtype=float).reshape(n)
+                                          for r in self.recorders[a.name]])
+                rows.append(a.tip_deflection(angles))
+            else:
+                rows.append(np.zeros(n))
+            labels.append(f"{a.name}_tip_deflection")
+        if self.law is not None:
+            torque = np.asarray(self.recorders["torque"].torqueRequestBody, dtype=float)
+            rows.append(torque.reshape(n, 3)[:, 2])
+            labels.append("torque")
+        outputs = np.vstack(rows)
+        bad = ~np.all(np.isfinite(outputs), axis=0)
+        if np.any(bad):
+            k = int(np.flatnonzero(bad)[0])
+            raise BasiliskIntegrationError(
+                f"Basilisk's integration diverged: non-finite states at t = {times[k]:.6g} s "
+                "(an RK4 step too long for the chain's highest mode, or an unstable loop)")
+        out_of_plane = float(max(np.abs(sigma[:, :2]).max(), np.abs(rate[:, :2]).max()))
+        inputs = np.vstack([ref] + [pushes[name] for name in pushes])
+        response = control.TimeResponseData(
+            times, outputs, inputs=inputs, output_labels=labels,
+            input_labels=["theta_ref"] + list(pushes), issiso=False, sysname="basilisk")
+        energy = None
+        if self.energy is not None:
+            energy = {"time": self.energy.times() * _NANO,
+                      "rotational_energy": np.asarray(self.energy.totRotEnergy, dtype=float),
+                      "angular_momentum": np.asarray(self.energy.totRotAngMomPntC_N,
+                                                     dtype=float).reshape(-1, 3),
+                      "orbital_energy": np.asarray(self.energy.totOrbEnergy, dtype=float)}
+        return response, out_of_plane, energy
+
+
+@functools.cache
+def _disturbance_class():
+    """SysModel that sets the disturbance effector's torque and force at each sample."""
+    from Basilisk.architecture import sysModel
+
+    class DisturbanceSchedule(sysModel.SysModel):
+        def __init__(self, effector, values: dict, period: int):
+            super().__init__()
+            self.effector, self.values, self.period = effector, values, period
+
+        def UpdateState(self, CurrentSimNanos):
+            k = CurrentSimNanos // self.period
+            get = {name: float(v[min(k, v.size - 1)]) for name, v in self.values.items()}
+            self.effector.extTorquePntB_B = [[0.0], [0.0], [get.get("disturbance_torque", 0.0)]]
+            self.effector.extForce_B = [[get.get("force_x", 0.0)], [get.get("force_y", 0.0)],
+                                        [0.0]]
+
+    return DisturbanceSchedule
+
+
+def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: float,
+                  slew_time: float, *, duration: float | None = None,
+                  sample_time: float | None = None, dt: float | None = None,
+                  chains: Mapping | None = None, disturbances: Mapping | None = None
+                  ) -> BasiliskResult:
+    """A cycloidal slew (:func:`controllers.slew_profile`) of the spacecraft in Basilisk.
+
+    Parameters
+    ----------
+    spacecraft, controller, sample_time, dt, chains, disturbances
+        As for :func:`simulate`.
+    angle : float, rad
+        Slew angle (non-zero, finite).
+    slew_time : float, s
+        Duration of the reference profile.
+    duration : float, s, optional
+        Simulated time; default 3 * slew_time (as :func:`controllers.slew`).
+
+    Returns
+    -------
+    BasiliskResult
+        ``response`` has the closed-loop signal names of flexsat (``theta``, ``omega``,
+        ``<name>_tip_deflection``, ``torque``) at the flight-software instants.
+    """
+    import controllers
+
+    if isinstance(angle, bool) or not isinstance(angle, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(angle) or angle == 0:
+        raise ValueError(f"angle must be non-zero and finite [rad]; got {angle!r}")
+    slew_time = _positive(slew_time, "slew_time", "s")
+    duration = 3.0 * slew_time if duration is None else duration
+    return simulate(spacecraft, controller, duration=duration, sample_time=sample_time, dt=dt,
+                    chains=chains, disturbances=disturbances,
+                    reference=lambda t: controllers.slew_profile(t, float(angle), slew_time))
+
+
+def linear_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: float,
+                slew_time: float, *, duration: float | None = None,
+                sample_time: float | None = None, chains: Mapping | None = None,
+                disturbances: Mapping | None = None, plant: control.StateSpace | None = None
+                ) -> control.TimeResponseData:
+    """flexsat's linear prediction of :func:`simulate_slew`: the same sampled-data loop.
+
+    The plant is the linear hub + chains (``plant(tip_deflection=True)`` of the same chains, or
+    ``plant``: any flexsat plant, e.g. hub + beam for the beam's prediction), the controller the
+    same digital law (:func:`.flight_software_law`), closed by :func:`controllers.close_loop`
+    (zero-order hold, exact at the sample instants), driven by the same reference and
+    disturbances sampled at k T.
+
+    Returns
+    -------
+    control.TimeResponseData
+        Outputs of the closed loop (plant outputs, then ``torque``) at k T.
+    """
+    import controllers
+
+    from .layout import chain_spacecraft
+
+    law = flight_software_law(controller, sample_time)
+    T = law.sample_time
+    slew_time = _positive(slew_time, "slew_time", "s")
+    duration = _positive(3.0 * slew_time if duration is None else duration, "duration", "s")
+    if plant is None:
+        plant = chain_spacecraft(spacecraft, chains).plant(
+            tip_deflection=True, disturbances=bool(disturbances))
+    loop = controllers.close_loop(plant, law.controller)
+    n = int(math.floor(duration / T + 1e-9)) + 1
+    times = np.arange(n) * (_nanoseconds(T, "sample_time") * _NANO)
+    U = np.zeros((loop.ninputs, n))
+    labels = list(loop.input_labels)
+    U[labels.index("theta_ref")] = controllers.slew_profile(times, float(angle), slew_time)
+    for name, value in _disturbance_values(disturbances, times).items():
+        U[labels.index(name)] = value
+    return control.forced_response(loop, times, U, squeeze=False)
+
+
+def _trace(response, name: str) -> np.ndarray | None:
+    labels = list(response.output_labels)
+    if name not in labels:
+        return None
+    return np.asarray(response.outputs).reshape(len(labels), -1)[labels.index(name)]
+
+
+def compare(response: control.TimeResponseData, reference: control.TimeResponseData,
+            names=None) -> dict:
+    """Peak differences of a response from a reference, signal by signal.
+
+    Parameters
+    ----------
+    response, reference : control.TimeResponseData
+        E.g. Basilisk's (:attr:`BasiliskResult.response`) and flexsat's linear chain or beam
+        loop. Where the time grids differ the reference is interpolated linearly onto the
+        response's times (within the reference's time span).
+    names : sequence of str, optional
+        Signals to compare; default every output the two have in common.
+
+    Returns
+    -------
+    dict
+        name -> ``{"peak": max |reference|, "peak_difference": max |response - reference|,
+        "relative": peak_difference / peak}`` (relative is None where the peak is 0).
+    """
+    t = np.asarray(response.time, dtype=float)
+    t_ref = np.asarray(reference.time, dtype=float)
+    same = t.shape == t_ref.shape and np.allclose(t, t_ref, rtol=0.0, atol=1e-9)
+    keep = np.ones(t.size, dtype=bool) if same else (t >= t_ref[0]) & (t <= t_ref[-1])
+    if names is None:
+        names = [n for n in response.output_labels if n in list(reference.output_labels)]
+    out = {}
+    for name in names:
+        a, b = _trace(response, name), _trace(reference, name)
+        if a is None or b is None:
+            raise ValueError(f"signal {name!r} is not an output of both responses")
+        if not same:
+            b = np.interp(t[keep], t_ref, b)
+        a = a[keep]
+        peak = float(np.max(np.abs(b)))
+        difference = float(np.max(np.abs(a - b)))
+        out[name] = {"peak": peak, "peak_difference": difference,
+                     "relative": difference / peak if peak > 0 else None}
+    return out
