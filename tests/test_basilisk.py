@@ -225,6 +225,11 @@ def test_default_sample_time_gives_thirty_samples_per_crossover():
     assert 2 * math.pi / (2.5 * T) < 30 * crossover  # the next 1-2-5 step up would be too long
     digital = controllers.pd(plant, natural_frequency=0.3, damping=0.7, sample_time=0.1)
     assert sb.default_sample_time(plant, digital) == 0.1
+    # a controller with dynamics (an estimator holding the chain's modes): its fastest pole
+    # counts too
+    lqr = controllers.lqr(plant, attitude_weight=1.0, rate_weight=1.0, torque_weight=1.0)
+    fastest = float(np.max(np.abs(np.linalg.eigvals(lqr.A))))
+    assert 2 * math.pi / sb.default_sample_time(plant, lqr) >= 30 * fastest
 
 
 # -- without Basilisk ---------------------------------------------------------------------------
@@ -345,6 +350,29 @@ def test_large_slew_documents_the_nonlinear_difference():
     assert large["wing_tip_deflection"] / small["wing_tip_deflection"] == pytest.approx(100.0, rel=0.05)
     finer, _ = relative_differences(sc, K, math.radians(10.0), dt=result.dt / 2)
     assert finer["wing_tip_deflection"] == pytest.approx(large["wing_tip_deflection"], rel=1e-3)
+
+
+@needs_bsk
+def test_reaction_wheel_applies_the_commanded_torque():
+    # A balanced wheel about z gives the hub exactly the commanded torque (its gyroscopic term
+    # vanishes for planar motion): the same loop as the external torque; the wheel's state does
+    # not feed back into the hub's, so RK4 gives the same hub trajectory up to round-off
+    # (1e-15 of the peaks measured; 1e-12 allows for ~1e4 steps). Its absolute momentum J_s (Omega + omega) is minus
+    # the impulse the hub received, sum of torque_j T over the held samples: a linear equation
+    # with a constant derivative on each step, which RK4 integrates to round-off.
+    sc = winged(tapered_chain(3))
+    K = digital_pd(sc)
+    wheel = sb.ReactionWheel(spin_inertia=0.05)
+    external = sb.simulate_slew(sc, K, SMALL, SLEW_TIME, duration=DURATION)
+    wheeled = sb.simulate_slew(sc, K, SMALL, SLEW_TIME, duration=DURATION, reaction_wheel=wheel)
+    differences = sb.compare(wheeled.response, external.response)
+    assert max(d["relative"] for d in differences.values()) <= 1e-12
+    y = dict(zip(wheeled.response.output_labels, np.asarray(wheeled.response.outputs)))
+    momentum = wheel.spin_inertia * (y["wheel_speed"] + y["omega"])
+    impulse = np.concatenate([[0.0], np.cumsum(y["torque"][:-1]) * SAMPLE_TIME])
+    np.testing.assert_allclose(momentum, -impulse, rtol=0, atol=1e-12 * np.max(np.abs(impulse)))
+    with pytest.raises(ValueError, match=r"spin_inertia must be positive and finite \[kg\*m\^2\]"):
+        sb.ReactionWheel(spin_inertia=-1.0)
 
 
 # -- conservation ---------------------------------------------------------------------------------

@@ -12,6 +12,7 @@ need it raise :class:`BasiliskNotInstalled` (one line: how to install the extra)
   sampled-data loop; :func:`compare`: the differences.
 """
 
+from .actuators import ReactionWheel
 from .flight_software import (SAMPLES_PER_CROSSOVER, FlightSoftwareLaw, default_sample_time,
                               flight_software_law)
 from .install import (INSTALL_HINT, TESTED_VERSIONS, BasiliskIntegrationError,
@@ -24,7 +25,7 @@ from .simulation import (BasiliskResult, compare, dynamics_step, linear_slew, si
 __all__ = [
     "AppendageLayout", "BasiliskIntegrationError", "BasiliskModelError", "BasiliskNotInstalled",
     "BasiliskResult", "BasiliskVersionWarning", "BodyLayout", "FlightSoftwareLaw", "HubLayout",
-    "INSTALL_HINT", "SAMPLES_PER_CROSSOVER", "SpacecraftLayout", "TESTED_VERSIONS",
+    "INSTALL_HINT", "ReactionWheel", "SAMPLES_PER_CROSSOVER", "SpacecraftLayout", "TESTED_VERSIONS",
     "chain_spacecraft", "compare", "default_sample_time", "dynamics_step",
     "flight_software_law", "layout", "linear_slew", "require_basilisk", "simulate",
     "simulate_slew",

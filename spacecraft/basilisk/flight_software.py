@@ -51,8 +51,8 @@ __all__ = ["FlightSoftwareLaw", "flight_software_law", "default_sample_time",
 SIGNALS = ("theta_ref", "theta", "omega")
 
 #: Default flight-software rate for a continuous controller: this many samples per period of
-#: the highest gain crossover (the top of Franklin, Powell & Workman's 10-30 range [2]_), so the
-#: sampled loop stays close to the continuous loop the user designed.
+#: the highest gain crossover or controller pole (the top of Franklin, Powell & Workman's 10-30
+#: range [2]_), so the sampled loop stays close to the continuous loop the user designed.
 SAMPLES_PER_CROSSOVER = 30.0
 
 
@@ -158,14 +158,20 @@ def default_sample_time(plant: control.StateSpace, controller: control.StateSpac
     """Flight-software sample time for a continuous controller [s].
 
     The largest of 1, 2, 5 x 10**k seconds with at least :data:`SAMPLES_PER_CROSSOVER` samples
-    per period of the loop's highest gain crossover on ``plant`` (the frequency above which
-    |L(j omega)| < 1 for good). A digital controller's own dt is returned as it is.
+    per period of the fastest of (a) the loop's highest gain crossover on ``plant`` (above it
+    |L(j omega)| < 1 for good) and (b) the controller's own fastest pole (an estimator's copy of
+    the chain modes, a roll-off filter): the sampled law then stays close to the continuous one
+    the user designed. A digital controller's own dt is returned as it is.
 
     Parameters
     ----------
     plant : control.StateSpace
         The design plant (hub + chain) with input ``torque`` and outputs ``theta``, ``omega``.
     controller : control.StateSpace
+
+    Returns
+    -------
+    float, s
     """
     import controllers
 
@@ -173,10 +179,14 @@ def default_sample_time(plant: control.StateSpace, controller: control.StateSpac
         return float(controller.dt)
     omega, L = controllers.loop_frequency_response(plant, controller)
     above = np.nonzero(np.abs(L) >= 1.0)[0]
-    if above.size == 0:
-        raise ValueError("the loop has no gain crossover: cannot choose a sample time; give "
-                         "sample_time [s]")
-    limit = 2.0 * math.pi / (SAMPLES_PER_CROSSOVER * float(omega[above[-1]]))
+    fastest = float(omega[above[-1]]) if above.size else 0.0
+    if controller.nstates:
+        fastest = max(fastest, float(np.max(np.abs(np.linalg.eigvals(
+            np.asarray(controller.A, dtype=float))))))
+    if fastest == 0.0:
+        raise ValueError("the loop has no gain crossover and the controller no dynamics: cannot "
+                         "choose a sample time; give sample_time [s]")
+    limit = 2.0 * math.pi / (SAMPLES_PER_CROSSOVER * fastest)
     decade = 10.0 ** math.floor(math.log10(limit))
     return max(m * decade for m in (1.0, 2.0, 5.0) if m * decade <= limit * (1.0 + 1e-12))
 
@@ -192,8 +202,9 @@ def flight_software_class():
 
     Instances take ``(law, reference_values)``: the law, and theta_ref [rad] at every sample
     instant k T (evaluated once, before the run). Attributes ``stateInMsg``
-    (``SCStatesMsgReader``) and ``torqueOutMsg`` (``CmdTorqueBodyMsg``) are connected by the
-    caller.
+    (``SCStatesMsgReader``), ``torqueOutMsg`` (``CmdTorqueBodyMsg``, the hub torque for
+    ``extForceTorque``) and ``motorTorqueOutMsg`` (``ArrayMotorTorqueMsg``, -torque for a
+    reaction wheel) are connected by the caller.
     """
     from Basilisk.architecture import messaging, sysModel
 
@@ -204,6 +215,7 @@ def flight_software_class():
             super().__init__()
             self.stateInMsg = messaging.SCStatesMsgReader()
             self.torqueOutMsg = messaging.CmdTorqueBodyMsg()
+            self.motorTorqueOutMsg = messaging.ArrayMotorTorqueMsg()  # for a reaction wheel
             self.law = law
             self.reference_values = np.asarray(reference_values, dtype=float)
             self.period_nanos = round(law.sample_time * 1e9)
@@ -216,6 +228,8 @@ def flight_software_class():
             self.theta = 0.0
             self.torqueOutMsg.write(messaging.CmdTorqueBodyMsgPayload(), CurrentSimNanos,
                                     self.moduleID)
+            self.motorTorqueOutMsg.write(messaging.ArrayMotorTorqueMsgPayload(), CurrentSimNanos,
+                                         self.moduleID)
 
         def UpdateState(self, CurrentSimNanos):
             state = self.stateInMsg()
@@ -229,5 +243,9 @@ def flight_software_class():
             payload = messaging.CmdTorqueBodyMsgPayload()
             payload.torqueRequestBody = [0.0, 0.0, torque]
             self.torqueOutMsg.write(payload, CurrentSimNanos, self.moduleID)
+            # a wheel's motor torque u_s reacts on the hub as -u_s: command u_s = -torque
+            motor = messaging.ArrayMotorTorqueMsgPayload()
+            motor.motorTorque = [-torque]
+            self.motorTorqueOutMsg.write(motor, CurrentSimNanos, self.moduleID)
 
     return AttitudeFlightSoftware

@@ -49,6 +49,7 @@ import control
 import numpy as np
 
 from ..coupling import Spacecraft
+from .actuators import ReactionWheel, wheel_config
 from .flight_software import FlightSoftwareLaw, flight_software_class, flight_software_law
 from .install import BasiliskIntegrationError, BasiliskModelError, require_basilisk
 from .layout import SpacecraftLayout, layout
@@ -75,7 +76,8 @@ class BasiliskResult:
     response : control.TimeResponseData
         At the flight-software sample instants k T: outputs ``theta`` [rad], ``omega`` [rad/s],
         ``<name>_tip_deflection`` [m] per appendage, ``torque`` [N*m] (the names of flexsat's
-        closed loops); inputs ``theta_ref`` [rad] and any disturbance.
+        closed loops), with a reaction wheel ``wheel_speed`` [rad/s] (relative to the hub);
+        inputs ``theta_ref`` [rad] and any disturbance.
     sample_time : float, s
         Flight-software (and output) step.
     dt : float, s
@@ -205,7 +207,8 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
              sample_time: float | None = None, dt: float | None = None,
              chains: Mapping | None = None, disturbances: Mapping | None = None,
              initial_rate: float = 0.0, initial_angles: Mapping | None = None,
-             conservation: bool = False) -> BasiliskResult:
+             conservation: bool = False, reaction_wheel: ReactionWheel | None = None
+             ) -> BasiliskResult:
     """Simulate a flexsat spacecraft (chains) and controller in Basilisk.
 
     Parameters
@@ -235,6 +238,9 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
         Initial hinge angles [rad] of each chain, relative rotation at each hinge from the root.
     conservation : bool
         Record Basilisk's energy and angular momentum (:attr:`BasiliskResult.conservation`).
+    reaction_wheel : ReactionWheel, optional
+        Apply the torque through a reaction wheel about z instead of an external torque
+        (:mod:`.actuators`); the response gains the output ``wheel_speed`` [rad/s].
 
     Returns
     -------
@@ -276,9 +282,15 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
         raise ValueError(f"reference must give one finite angle [rad] per sample ({n_samples}); "
                          f"got shape {ref.shape}")
     pushes = _disturbance_values(disturbances, times)
+    if reaction_wheel is not None:
+        if not isinstance(reaction_wheel, ReactionWheel):
+            raise TypeError("reaction_wheel must be a spacecraft.basilisk.ReactionWheel; got "
+                            f"{type(reaction_wheel).__name__}")
+        if law is None:
+            raise ValueError("a reaction wheel needs a controller to command it")
 
     run = _BasiliskRun(lay, law, ref, pushes, T, step, float(initial_rate), angles,
-                       conservation)
+                       conservation, reaction_wheel)
     seconds = {"build": time.perf_counter() - t_build}
     t_run = time.perf_counter()
     run.execute(times[-1])
@@ -291,8 +303,10 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
 class _BasiliskRun:
     """The Basilisk objects of one run, kept referenced for the run's life (SWIG ownership)."""
 
-    def __init__(self, lay, law, ref, pushes, T, step, initial_rate, angles, conservation):
-        from Basilisk.simulation import extForceTorque, spacecraft, spinningBodyNDOFStateEffector
+    def __init__(self, lay, law, ref, pushes, T, step, initial_rate, angles, conservation,
+                 wheel):
+        from Basilisk.simulation import (extForceTorque, reactionWheelStateEffector, spacecraft,
+                                         spinningBodyNDOFStateEffector)
         from Basilisk.utilities import SimulationBaseClass
 
         self.lay, self.law = lay, law
@@ -306,7 +320,12 @@ class _BasiliskRun:
         hub = lay.hub
         craft.hub.mHub = hub.mHub
         craft.hub.r_BcB_B = hub.r_BcB_B.reshape(3, 1).tolist()
-        craft.hub.IHubPntBc_B = hub.IHubPntBc_B.tolist()
+        inertia = hub.IHubPntBc_B.copy()
+        if wheel is not None:
+            # Basilisk's balanced wheel expects its rotor's spin inertia inside the hub's and
+            # removes J_s g g^T itself (matrixD -= Js gsHat gsHat^T): add it (see .actuators)
+            inertia[2, 2] += wheel.spin_inertia
+        craft.hub.IHubPntBc_B = inertia.tolist()
         craft.hub.omega_BN_BInit = [[0.0], [0.0], [initial_rate]]
         self.effectors, self.bodies = [], []
         for a in lay.appendages:
@@ -332,17 +351,27 @@ class _BasiliskRun:
             self.effectors.append(effector)
         sim.AddModelToTask("dynamics", craft, 100)
 
-        self.torque = None
+        self.torque = self.wheel = None
         if law is not None:
-            self.torque = extForceTorque.ExtForceTorque()
-            self.torque.ModelTag = "flexsat_control_torque"
-            craft.addDynamicEffector(self.torque)
             self.fsw = flight_software_class()(law, ref)
             self.fsw.ModelTag = "flexsat_flight_software"
             self.fsw.stateInMsg.subscribeTo(craft.scStateOutMsg)
-            self.torque.cmdTorqueInMsg.subscribeTo(self.fsw.torqueOutMsg)
             sim.AddModelToTask("flight_software", self.fsw, 30)
-            sim.AddModelToTask("flight_software", self.torque, 20)
+            # the actuator reads the command in the same task, after the law (see the docstring)
+            if wheel is None:
+                self.torque = extForceTorque.ExtForceTorque()
+                self.torque.ModelTag = "flexsat_control_torque"
+                craft.addDynamicEffector(self.torque)
+                self.torque.cmdTorqueInMsg.subscribeTo(self.fsw.torqueOutMsg)
+                sim.AddModelToTask("flight_software", self.torque, 20)
+            else:
+                self.wheel_config = wheel_config(wheel)
+                self.wheel = reactionWheelStateEffector.ReactionWheelStateEffector()
+                self.wheel.ModelTag = "flexsat_reaction_wheel"
+                self.wheel.addReactionWheel(self.wheel_config)
+                craft.addStateEffector(self.wheel)
+                self.wheel.rwMotorCmdInMsg.subscribeTo(self.fsw.motorTorqueOutMsg)
+                sim.AddModelToTask("flight_software", self.wheel, 20)
         self.push = None
         if pushes:
             self.push = extForceTorque.ExtForceTorque()
@@ -355,6 +384,8 @@ class _BasiliskRun:
         self.recorders = {"state": craft.scStateOutMsg.recorder(period)}
         if law is not None:
             self.recorders["torque"] = self.fsw.torqueOutMsg.recorder(period)
+        if self.wheel is not None:
+            self.recorders["wheel"] = self.wheel.rwSpeedOutMsg.recorder(period)
         for a, effector in zip(lay.appendages, self.effectors):
             if effector is not None:
                 self.recorders[a.name] = [effector.spinningBodyOutMsgs[k].recorder(period)
@@ -409,6 +440,10 @@ class _BasiliskRun:
             torque = np.asarray(self.recorders["torque"].torqueRequestBody, dtype=float)
             rows.append(torque.reshape(n, 3)[:, 2])
             labels.append("torque")
+        if self.wheel is not None:
+            speeds = np.asarray(self.recorders["wheel"].wheelSpeeds, dtype=float)
+            rows.append(speeds.reshape(n, -1)[:, 0])
+            labels.append("wheel_speed")
         outputs = np.vstack(rows)
         bad = ~np.all(np.isfinite(outputs), axis=0)
         if np.any(bad):
@@ -454,13 +489,13 @@ def _disturbance_class():
 def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: float,
                   slew_time: float, *, duration: float | None = None,
                   sample_time: float | None = None, dt: float | None = None,
-                  chains: Mapping | None = None, disturbances: Mapping | None = None
-                  ) -> BasiliskResult:
+                  chains: Mapping | None = None, disturbances: Mapping | None = None,
+                  reaction_wheel: ReactionWheel | None = None) -> BasiliskResult:
     """A cycloidal slew (:func:`controllers.slew_profile`) of the spacecraft in Basilisk.
 
     Parameters
     ----------
-    spacecraft, controller, sample_time, dt, chains, disturbances
+    spacecraft, controller, sample_time, dt, chains, disturbances, reaction_wheel
         As for :func:`simulate`.
     angle : float, rad
         Slew angle (non-zero, finite).
@@ -483,7 +518,7 @@ def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle:
     slew_time = _positive(slew_time, "slew_time", "s")
     duration = 3.0 * slew_time if duration is None else duration
     return simulate(spacecraft, controller, duration=duration, sample_time=sample_time, dt=dt,
-                    chains=chains, disturbances=disturbances,
+                    chains=chains, disturbances=disturbances, reaction_wheel=reaction_wheel,
                     reference=lambda t: controllers.slew_profile(t, float(angle), slew_time))
 
 

@@ -1,0 +1,104 @@
+r"""The actuator that applies the flight software's torque in Basilisk.
+
+Default: an ``extForceTorque`` effector, the torque applied to the hub as commanded. Option: a
+reaction wheel on the hub's z axis (:class:`ReactionWheel`), Basilisk's
+``reactionWheelStateEffector`` with the balanced-wheel model. Its motor torque u_s spins the
+wheel, J_s (Omega' + omega') = u_s, and reacts on the hub with -u_s about the spin axis; the
+flight software commands u_s = -torque, so the hub receives the commanded torque, and for a spin
+axis along z the gyroscopic term omega x (J_s Omega g) vanishes: the planar loop is the one
+flexsat predicts, with the wheel's speed as an extra output.
+
+Inertia bookkeeping: with the rotor spinning freely about g, the hub obeys J_B omega' = -u_s,
+J_B the spacecraft's inertia without the rotor's spin inertia J_s (its mass and transverse
+inertia included). That is flexsat's hub inertia. Basilisk's balanced-wheel model adds no wheel
+mass or inertia to the spacecraft (``updateEffectorMassProps`` does so for the jitter models
+only) and subtracts J_s g g^T in its back-substitution (``matrixD -= Js gsHat gsHat^T``): it
+expects the rotor's spin inertia inside the hub's ``IHubPntBc_B``. The adapter therefore adds
+J_s about z to the hub it gives Basilisk; the hub's equation is then flexsat's. Torque
+(``u_max``) and speed (``Omega_max``) limits are Basilisk's.
+
+References
+----------
+.. [1] H. Schaub, J. L. Junkins, "Analytical Mechanics of Space Systems", 4th ed., AIAA 2018,
+   sec. 4.5 (spacecraft with reaction wheels).
+.. [2] Basilisk documentation, ``reactionWheelStateEffector`` (balanced wheels, u_max,
+   Omega_max).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+__all__ = ["ReactionWheel", "wheel_config"]
+
+
+def _value(value, name: str, unit: str, *, positive: bool = True, optional: bool = False):
+    if optional and value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
+    value = float(value)
+    if not math.isfinite(value) or (positive and value <= 0.0):
+        what = "positive and finite" if positive else "finite"
+        raise ValueError(f"{name} must be {what} [{unit}]; got {value!r}")
+    return value
+
+
+@dataclasses.dataclass(frozen=True)
+class ReactionWheel:
+    """A reaction wheel spinning about the hub's +z axis (Basilisk's balanced-wheel model).
+
+    Parameters
+    ----------
+    spin_inertia : float, kg*m**2
+        Rotor inertia J_s about the spin axis (not part of flexsat's hub inertia).
+    max_torque : float, N*m, optional
+        Motor torque limit (Basilisk's ``u_max``); default unlimited.
+    max_speed : float, rad/s, optional
+        Wheel speed beyond which the motor no longer accelerates it (``Omega_max``); default
+        unlimited.
+    initial_speed : float, rad/s
+        Wheel speed relative to the hub at t = 0.
+    """
+
+    spin_inertia: float
+    max_torque: float | None = None
+    max_speed: float | None = None
+    initial_speed: float = 0.0
+
+    def __post_init__(self):
+        object.__setattr__(self, "spin_inertia",
+                           _value(self.spin_inertia, "spin_inertia", "kg*m^2"))
+        object.__setattr__(self, "max_torque",
+                           _value(self.max_torque, "max_torque", "N*m", optional=True))
+        object.__setattr__(self, "max_speed",
+                           _value(self.max_speed, "max_speed", "rad/s", optional=True))
+        object.__setattr__(self, "initial_speed",
+                           _value(self.initial_speed, "initial_speed", "rad/s", positive=False))
+
+
+def wheel_config(wheel: ReactionWheel):
+    """Basilisk's ``RWConfigPayload`` for the wheel (needs Basilisk)."""
+    from Basilisk.architecture import messaging
+    from Basilisk.simulation import reactionWheelStateEffector
+
+    config = reactionWheelStateEffector.RWConfigPayload()
+    config.RWModel = messaging.BalancedWheels
+    config.gsHat_B = [[0.0], [0.0], [1.0]]
+    config.w2Hat0_B = [[1.0], [0.0], [0.0]]
+    config.w3Hat0_B = [[0.0], [1.0], [0.0]]
+    config.rWB_B = [[0.0], [0.0], [0.0]]
+    config.Js = wheel.spin_inertia
+    config.Jt = config.Jg = 0.5 * wheel.spin_inertia  # unused by the balanced model
+    config.mass = 1.0       # unused by the balanced model; nonzero so Basilisk's d = U_s/mass = 0
+    config.U_s = config.U_d = 0.0
+    config.Omega = wheel.initial_speed
+    config.u_max = -1.0 if wheel.max_torque is None else wheel.max_torque
+    config.u_min = 0.0
+    config.Omega_max = -1.0 if wheel.max_speed is None else wheel.max_speed
+    config.fCoulomb = config.fStatic = config.cViscous = 0.0
+    config.betaStatic = -1.0
+    config.P_max = -1.0
+    config.label = "RW1"
+    return config
