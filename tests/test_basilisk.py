@@ -22,6 +22,7 @@ import importlib.util
 import math
 import subprocess
 import sys
+import warnings
 
 import control
 import numpy as np
@@ -245,6 +246,34 @@ def test_missing_basilisk_is_one_line_with_the_install_hint(monkeypatch):
         sb.simulate_slew(sc, digital_pd(sc), SMALL, SLEW_TIME)
 
 
+def test_an_untested_bsk_version_warns(monkeypatch):
+    import types
+
+    import spacecraft.basilisk.install as install
+
+    monkeypatch.setitem(sys.modules, "Basilisk", types.ModuleType("Basilisk"))
+    monkeypatch.setattr(install.importlib.metadata, "version", lambda name: "2.11.0")
+    with pytest.warns(sb.BasiliskVersionWarning, match=r"bsk 2.11.0 is outside the tested range"):
+        assert sb.require_basilisk() == "2.11.0"
+    monkeypatch.setattr(install.importlib.metadata, "version", lambda name: "2.12.4")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # inside the range: a warning would fail here
+        assert sb.require_basilisk() == "2.12.4"
+
+
+def test_compare_interpolates_a_reference_on_another_grid():
+    # sin on a 0.01 s grid vs the same sin on a 0.1 s grid: linear interpolation error of the
+    # fine reference at the coarse points is at most h^2/8 max|sin''| = 1.25e-5
+    fine_t, coarse_t = np.arange(0, 1001) * 0.01, np.arange(0, 101) * 0.1
+    reference = control.TimeResponseData(fine_t, np.sin(fine_t)[None], output_labels=["theta"],
+                                         issiso=False)
+    response = control.TimeResponseData(coarse_t, np.sin(coarse_t)[None] + 1e-3,
+                                        output_labels=["theta"], issiso=False)
+    d = sb.compare(response, reference)["theta"]
+    assert d["peak"] == pytest.approx(1.0, abs=1e-4)
+    assert d["peak_difference"] == pytest.approx(1e-3, abs=1.25e-5)
+
+
 def test_importing_flexsat_does_not_import_basilisk():
     code = ("import sys, spacecraft, spacecraft.basilisk; "
             "sys.exit(1 if 'Basilisk' in sys.modules else 0)")
@@ -407,6 +436,28 @@ def test_energy_and_momentum_are_conserved_to_rk4_accuracy():
     assert energy_half < duration / result.dt * y**6 / 144
     E_orbit = result.conservation["orbital_energy"]  # translation of the centre of mass
     assert np.max(np.abs(E_orbit - E_orbit[0])) <= 1e-12 * result.conservation["rotational_energy"][0]
+
+
+@needs_bsk
+def test_a_run_too_long_is_refused_before_it_starts():
+    # 40 bodies (39 spinning, the first folded): w_max ~ 3.7e3 rad/s, dt ~ 1.3e-4 s, 1.6e6 RK4
+    # steps of O(39^3): hours
+    sc = winged(tapered_chain(40))
+    pd = control.ss([], [], [], [[1.0, -1.0, -10.0]], 0.01, inputs=["theta_ref", "theta", "omega"],
+                    outputs=["torque"])
+    with pytest.raises(sb.BasiliskModelError, match=r"would take about .* s \(39 spinning bodies"):
+        sb.simulate_slew(sc, pd, SMALL, 60.0, duration=200.0)
+
+
+@needs_bsk
+def test_a_diverging_run_is_an_error_not_nan():
+    # positive feedback torque = -1e6 (theta_ref - theta) grows like exp(sqrt(1e6 / J) t),
+    # J ~ 300 kg*m^2: past 1e308 within a few seconds
+    sc = winged(tapered_chain(3))
+    unstable = control.ss([], [], [], [[-1e6, 1e6, 0.0]], SAMPLE_TIME,
+                          inputs=["theta_ref", "theta", "omega"], outputs=["torque"])
+    with pytest.raises(sb.BasiliskIntegrationError, match=r"non-finite states at t = "):
+        sb.simulate_slew(sc, unstable, SMALL, SLEW_TIME, duration=DURATION)
 
 
 @needs_bsk

@@ -19,14 +19,14 @@ from .install import (INSTALL_HINT, TESTED_VERSIONS, BasiliskIntegrationError,
                       BasiliskModelError, BasiliskNotInstalled, BasiliskVersionWarning,
                       require_basilisk)
 from .layout import AppendageLayout, BodyLayout, HubLayout, SpacecraftLayout, chain_spacecraft, layout
-from .simulation import (BasiliskResult, compare, dynamics_step, linear_slew, simulate,
-                         simulate_slew)
+from .simulation import (MAX_SECONDS, BasiliskResult, compare, dynamics_step, estimated_seconds,
+                         linear_slew, simulate, simulate_slew)
 
 __all__ = [
     "AppendageLayout", "BasiliskIntegrationError", "BasiliskModelError", "BasiliskNotInstalled",
     "BasiliskResult", "BasiliskVersionWarning", "BodyLayout", "FlightSoftwareLaw", "HubLayout",
-    "INSTALL_HINT", "ReactionWheel", "SAMPLES_PER_CROSSOVER", "SpacecraftLayout", "TESTED_VERSIONS",
-    "chain_spacecraft", "compare", "default_sample_time", "dynamics_step",
+    "INSTALL_HINT", "MAX_SECONDS", "ReactionWheel", "SAMPLES_PER_CROSSOVER", "SpacecraftLayout", "TESTED_VERSIONS",
+    "chain_spacecraft", "compare", "default_sample_time", "dynamics_step", "estimated_seconds",
     "flight_software_law", "layout", "linear_slew", "require_basilisk", "simulate",
     "simulate_slew",
 ]

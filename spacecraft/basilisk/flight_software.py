@@ -233,13 +233,19 @@ def flight_software_class():
 
         def UpdateState(self, CurrentSimNanos):
             state = self.stateInMsg()
-            self.theta = _unwrap(4.0 * math.atan(state.sigma_BN[2]), self.theta)
-            k = min(CurrentSimNanos // self.period_nanos, self.reference_values.size - 1)
-            signals = np.array([self.reference_values[k], self.theta, state.omega_BN_B[2]])
-            u = signals[self._where]
-            law = self.law
-            torque = float((law.C @ self.x + law.D @ u)[0])
-            self.x = law.A @ self.x + law.B @ u
+            sigma, rate = state.sigma_BN[2], state.omega_BN_B[2]
+            if math.isfinite(sigma) and math.isfinite(rate):
+                self.theta = _unwrap(4.0 * math.atan(sigma), self.theta)
+                k = min(CurrentSimNanos // self.period_nanos, self.reference_values.size - 1)
+                signals = np.array([self.reference_values[k], self.theta, rate])
+                u = signals[self._where]
+                law = self.law
+                torque = float((law.C @ self.x + law.D @ u)[0])
+                self.x = law.A @ self.x + law.B @ u
+            else:
+                # diverged dynamics: command nothing (an exception here would only print a
+                # traceback from inside Basilisk); the run's collection reports the divergence
+                torque = 0.0
             payload = messaging.CmdTorqueBodyMsgPayload()
             payload.torqueRequestBody = [0.0, 0.0, torque]
             self.torqueOutMsg.write(payload, CurrentSimNanos, self.moduleID)
