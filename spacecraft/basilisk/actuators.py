@@ -30,19 +30,13 @@ from __future__ import annotations
 import dataclasses
 import math
 
+from appendages.interface import check_positive
+
 __all__ = ["ReactionWheel", "wheel_config"]
 
 
-def _value(value, name: str, unit: str, *, positive: bool = True, optional: bool = False):
-    if optional and value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
-    value = float(value)
-    if not math.isfinite(value) or (positive and value <= 0.0):
-        what = "positive and finite" if positive else "finite"
-        raise ValueError(f"{name} must be {what} [{unit}]; got {value!r}")
-    return value
+def _optional(value, name: str, unit: str) -> float | None:
+    return None if value is None else check_positive(name, value, unit)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,14 +62,15 @@ class ReactionWheel:
     initial_speed: float = 0.0
 
     def __post_init__(self):
-        object.__setattr__(self, "spin_inertia",
-                           _value(self.spin_inertia, "spin_inertia", "kg*m^2"))
-        object.__setattr__(self, "max_torque",
-                           _value(self.max_torque, "max_torque", "N*m", optional=True))
-        object.__setattr__(self, "max_speed",
-                           _value(self.max_speed, "max_speed", "rad/s", optional=True))
-        object.__setattr__(self, "initial_speed",
-                           _value(self.initial_speed, "initial_speed", "rad/s", positive=False))
+        speed = self.initial_speed
+        if isinstance(speed, bool) or not isinstance(speed, (int, float)) or not math.isfinite(speed):
+            raise ValueError(f"initial_speed must be a finite speed [rad/s]; got {speed!r}")
+        for name, value in (("spin_inertia", check_positive("spin_inertia", self.spin_inertia,
+                                                            "kg*m^2")),
+                            ("max_torque", _optional(self.max_torque, "max_torque", "N*m")),
+                            ("max_speed", _optional(self.max_speed, "max_speed", "rad/s")),
+                            ("initial_speed", float(speed))):
+            object.__setattr__(self, name, value)
 
 
 def wheel_config(wheel: ReactionWheel):

@@ -42,6 +42,8 @@ import math
 import control
 import numpy as np
 
+from appendages.interface import check_positive
+
 from .install import BasiliskModelError
 
 __all__ = ["FlightSoftwareLaw", "flight_software_law", "default_sample_time",
@@ -79,15 +81,6 @@ class FlightSoftwareLaw:
     inputs: tuple
     sample_time: float
     controller: control.StateSpace
-
-
-def _sample_time(value, name: str = "sample_time") -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a real number [s]; got {type(value).__name__}")
-    value = float(value)
-    if not (math.isfinite(value) and value > 0.0):
-        raise ValueError(f"{name} must be positive and finite [s]; got {value!r}")
-    return value
 
 
 def flight_software_law(controller: control.StateSpace, sample_time: float | None = None
@@ -133,7 +126,7 @@ def flight_software_law(controller: control.StateSpace, sample_time: float | Non
         raise ValueError("controller has an unspecified sample time (dt=True); give it dt > 0 [s]")
     if dt is not None and dt > 0:
         T = float(dt)
-        if sample_time is not None and not math.isclose(_sample_time(sample_time), T,
+        if sample_time is not None and not math.isclose(check_positive("sample_time", sample_time, "s"), T,
                                                         rel_tol=1e-12):
             raise ValueError(f"sample_time must equal the digital controller's dt = {T!r} [s] "
                              f"(it runs at its own rate); got {sample_time!r}")
@@ -142,7 +135,7 @@ def flight_software_law(controller: control.StateSpace, sample_time: float | Non
         if sample_time is None:
             raise ValueError("a continuous controller needs sample_time [s], the flight-software "
                              "rate at which Basilisk runs it (see default_sample_time)")
-        T = _sample_time(sample_time)
+        T = check_positive("sample_time", sample_time, "s")
         continuous = control.ss(controller.A, controller.B, controller.C, controller.D, 0)
         digital = control.c2d(continuous, T, method="zoh")
     A, B, C, D = (np.asarray(M, dtype=float) for M in (digital.A, digital.B, digital.C, digital.D))

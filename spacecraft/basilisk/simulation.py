@@ -48,6 +48,8 @@ from collections.abc import Callable, Mapping
 import control
 import numpy as np
 
+from appendages.interface import check_positive
+
 from ..coupling import Spacecraft
 from .actuators import ReactionWheel, wheel_config
 from .flight_software import FlightSoftwareLaw, flight_software_class, flight_software_law
@@ -118,15 +120,6 @@ class BasiliskResult:
     conservation: dict | None = None
 
 
-def _positive(value, name: str, unit: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
-    value = float(value)
-    if not (math.isfinite(value) and value > 0.0):
-        raise ValueError(f"{name} must be positive and finite [{unit}]; got {value!r}")
-    return value
-
-
 def _nanoseconds(seconds: float, name: str) -> int:
     """Basilisk's clock is integer nanoseconds: the step in ns, checked to be representable."""
     nanos = round(seconds * 1e9)
@@ -155,10 +148,10 @@ def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None
     ValueError
         A step that does not divide T, or one beyond RK4's stability limit for w_max.
     """
-    T = _positive(sample_time, "sample_time", "s")
+    T = check_positive("sample_time", sample_time, "s")
     period = _nanoseconds(T, "sample_time")
     if dt is not None:
-        dt = _positive(dt, "dt", "s")
+        dt = check_positive("dt", dt, "s")
         k = round(T / dt)
         if k < 1 or period % k or abs(k * dt - T) > 1e-9 * T:
             raise ValueError(f"dt must divide the flight-software sample time {T!r} s into a whole "
@@ -291,15 +284,15 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
     elif sample_time is None:
         raise ValueError("without a controller, give sample_time [s] (the output step)")
     else:
-        T = _positive(sample_time, "sample_time", "s")
-    duration = _positive(duration, "duration", "s")
+        T = check_positive("sample_time", sample_time, "s")
+    duration = check_positive("duration", duration, "s")
     n_samples = int(math.floor(duration / T + 1e-9)) + 1
     if n_samples < 2:
         raise ValueError(f"duration {duration!r} s must be at least one sample time {T!r} s")
     frequencies = lay.spacecraft.modes()[0] if lay.n_bodies else np.zeros(1)
     w_max = float(np.max(frequencies))
     step = dynamics_step(w_max, T, dt)
-    max_seconds = _positive(max_seconds, "max_seconds", "s")
+    max_seconds = check_positive("max_seconds", max_seconds, "s")
     estimate = estimated_seconds(lay.n_bodies, duration, step, T)
     if estimate > max_seconds:
         raise BasiliskModelError(
@@ -549,7 +542,7 @@ def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle:
     if isinstance(angle, bool) or not isinstance(angle, (int, float, np.integer, np.floating)) \
             or not math.isfinite(angle) or angle == 0:
         raise ValueError(f"angle must be non-zero and finite [rad]; got {angle!r}")
-    slew_time = _positive(slew_time, "slew_time", "s")
+    slew_time = check_positive("slew_time", slew_time, "s")
     duration = 3.0 * slew_time if duration is None else duration
     return simulate(spacecraft, controller, duration=duration, sample_time=sample_time, dt=dt,
                     chains=chains, disturbances=disturbances, reaction_wheel=reaction_wheel,
@@ -580,8 +573,8 @@ def linear_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: f
 
     law = flight_software_law(controller, sample_time)
     T = law.sample_time
-    slew_time = _positive(slew_time, "slew_time", "s")
-    duration = _positive(3.0 * slew_time if duration is None else duration, "duration", "s")
+    slew_time = check_positive("slew_time", slew_time, "s")
+    duration = check_positive("duration", 3.0 * slew_time if duration is None else duration, "s")
     if plant is None:
         plant = chain_spacecraft(spacecraft, chains).plant(
             tip_deflection=True, disturbances=bool(disturbances))
