@@ -10,8 +10,8 @@ same chains, and :func:`compare` the differences.
 Tasks and time
     One Basilisk process with two tasks: ``dynamics`` (priority 100, step dt) holds the spacecraft;
     ``flight_software`` (priority 50, step T = sample time, dt divides T) holds, in this order, the
-    disturbance schedule, the controller, the ``extForceTorque`` effector that reads its command,
-    and the recorders. At a common instant the higher-priority dynamics task runs first, so the
+    disturbance schedule, the controller, the actuator that reads its command (``extForceTorque``
+    or a reaction wheel, :mod:`.actuators`), and the recorders. At a common instant the higher-priority dynamics task runs first, so the
     flight software sees the state at t_k and its torque drives [t_k, t_(k+1)): the zero-order
     hold of :func:`controllers.close_loop` with a digital controller.
 
@@ -24,9 +24,10 @@ Integrator and step
     5.7 inside the stability limit, room for the stiffening of large motions, and accurate even
     when a torque step excites every mode (a 1e-3 N*m pulse on a 3-body chain: 7e-5 of the peak
     tip deflection at w_max dt = 0.54, 4e-6 at 0.27; smooth slews excite the top modes far
-    less, 1e-7). A chain whose w_max dt exceeds 2 sqrt(2) diverges: the NaN of
-    ``benchmarks/peer_basilisk.py`` with 10 equal panels at dt = 0.01 s (see
-    ``benchmarks/basilisk_vs_flexsat.py``).
+    less, 1e-7). A chain whose w_max dt exceeds 2 sqrt(2) diverges: ``peer_basilisk.py``'s
+    equal-panel chains of the paper's rod at its dt = 0.01 s give NaN from 20 panels (w_max dt =
+    3.5) but run at 10 (0.86) and 16 (2.24) (``benchmarks/basilisk_vs_flexsat.py``); the
+    adapter refuses such a dt before the run.
 
 References
 ----------
