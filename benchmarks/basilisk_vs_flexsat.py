@@ -83,25 +83,25 @@ def one_case(label: str, spacecraft, K, truth_plant, scene, *, repeats: int = 5)
     m = scene.manoeuvre
     T = sb.default_sample_time(spacecraft.plant(), K)
     kwargs = dict(duration=m.duration, sample_time=T)
-    result = sb.simulate_slew(spacecraft, K, m.slew_angle, m.slew_time, **kwargs)
-    chain = sb.linear_slew(spacecraft, K, m.slew_angle, m.slew_time, **kwargs)
-    truth = sb.linear_slew(spacecraft, K, m.slew_angle, m.slew_time, plant=truth_plant, **kwargs)
-    vs_truth = sb.compare(result.response, truth)
-    vs_chain = sb.compare(result.response, chain)
-    chain_truth = sb.compare(chain, truth)
+    comparison = sb.slew_comparison(spacecraft, K, m.slew_angle, m.slew_time,
+                                    truth_plant=truth_plant, **kwargs)
+    result = comparison.basilisk
     tip = _tip_name(result.response)
+
+    def triple(differences):
+        return {"theta": _relative(differences, "theta"), "tip": _relative(differences, tip),
+                "torque": _relative(differences, "torque")}
+
     times = [sb.simulate_slew(spacecraft, K, m.slew_angle, m.slew_time, **kwargs).seconds
              for _ in range(repeats)]
+    d = comparison.differences
     row = {
         "case": label, "sample_time": T, "dt": result.dt,
         "highest_frequency": result.highest_frequency, "n_bodies": result.layout.n_bodies,
-        "basilisk_vs_truth": {"theta": _relative(vs_truth, "theta"),
-                              "tip": _relative(vs_truth, tip), "torque": _relative(vs_truth, "torque")},
-        "basilisk_vs_chain": {"theta": _relative(vs_chain, "theta"),
-                              "tip": _relative(vs_chain, tip), "torque": _relative(vs_chain, "torque")},
-        "chain_vs_truth": {"theta": _relative(chain_truth, "theta"),
-                           "tip": _relative(chain_truth, tip), "torque": _relative(chain_truth, "torque")},
-        "peak_tip_truth": vs_truth[tip]["peak"] if tip else None,
+        "basilisk_vs_truth": triple(d["basilisk_vs_truth"]),
+        "basilisk_vs_chain": triple(d["basilisk_vs_chain"]),
+        "chain_vs_truth": triple(d["chain_vs_truth"]),
+        "peak_tip_truth": d["basilisk_vs_truth"][tip]["peak"] if tip else None,
         "time_basilisk_build": float(np.median([t["build"] for t in times])),
         "time_basilisk_run": float(np.median([t["run"] for t in times])),
         "time_flexsat_sampled_chain": median_time(

@@ -334,6 +334,29 @@ def test_two_chains_and_controller_kinds():
 
 
 @needs_bsk
+def test_slew_comparison_against_a_beam_truth():
+    # The three differences of one call are consistent: per signal, |Basilisk - truth| <=
+    # |Basilisk - chain| + |chain - truth| (triangle inequality of the peaks, with round-off
+    # 1e-15 of the peak), and Basilisk - truth is the chain's cost to within the (tiny)
+    # nonlinearity.
+    beam = Beam(10.0, 100.0, 0.6, damping_ratio=0.005)
+    sc = winged(tapered_chain(5))
+    truth = Spacecraft(Hub(100.0, 50.0), [Mount(beam.truncated(6), (0.3, -0.2), math.radians(30),
+                                                name="wing")]).plant(tip_deflection=True)
+    K = digital_pd(sc)
+    c = sb.slew_comparison(sc, K, SMALL, SLEW_TIME, duration=DURATION, truth_plant=truth)
+    d = c.differences
+    assert set(d) == {"basilisk_vs_chain", "basilisk_vs_truth", "chain_vs_truth"}
+    for name in ("theta", "omega", "wing_tip_deflection", "torque"):
+        total = d["basilisk_vs_truth"][name]["peak_difference"]
+        assert total <= (d["basilisk_vs_chain"][name]["peak_difference"]
+                         + d["chain_vs_truth"][name]["peak_difference"]) * (1 + 1e-12)
+        assert d["basilisk_vs_truth"][name]["relative"] == pytest.approx(
+            d["chain_vs_truth"][name]["relative"], abs=1e-4)
+    np.testing.assert_array_equal(c.truth.time, c.basilisk.response.time)
+
+
+@needs_bsk
 def test_disturbances_are_held_as_in_the_sampled_loop():
     sc = winged(tapered_chain(3))
     # pulses of the size of the slew's own torque (7e-3 N*m peak at 0.1 deg): the terms the

@@ -4,8 +4,8 @@ r"""Run a flexsat spacecraft and controller in Basilisk, and flexsat's predictio
 ``spinningBodyNDOFStateEffector`` chains (:mod:`.layout`), runs the controller as flight software
 (:mod:`.flight_software`) on the scene's cycloidal slew, and returns theta, omega, every tip
 deflection and the torque as flexsat's plant defines them, at the flight-software sample
-instants. :func:`linear_slew` is flexsat's linear prediction of the same sampled-data loop on the
-same chains, and :func:`compare` the differences.
+instants. flexsat's prediction of the same sampled-data loop and the differences are in
+:mod:`.comparison`.
 
 Tasks and time
     One Basilisk process with two tasks: ``dynamics`` (priority 100, step dt) holds the spacecraft;
@@ -57,9 +57,8 @@ from .flight_software import FlightSoftwareLaw, flight_software_class, flight_so
 from .install import BasiliskIntegrationError, BasiliskModelError, require_basilisk
 from .layout import SpacecraftLayout, layout
 
-__all__ = ["BasiliskResult", "simulate", "simulate_slew", "linear_slew", "compare",
-           "dynamics_step", "estimated_seconds", "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR",
-           "DISTURBANCES", "MAX_SECONDS"]
+__all__ = ["BasiliskResult", "simulate", "simulate_slew", "dynamics_step", "estimated_seconds", "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR",
+           "DISTURBANCES", "MAX_SECONDS", "nanoseconds", "disturbance_values"]
 
 #: RK4 is stable on the imaginary axis for |w dt| <= 2 sqrt(2) [1]_.
 RK4_STABILITY_LIMIT = 2.0 * math.sqrt(2.0)
@@ -121,7 +120,7 @@ class BasiliskResult:
     conservation: dict | None = None
 
 
-def _nanoseconds(seconds: float, name: str) -> int:
+def nanoseconds(seconds: float, name: str) -> int:
     """Basilisk's clock is integer nanoseconds: the step in ns, checked to be representable."""
     nanos = round(seconds * 1e9)
     if nanos < 1 or abs(nanos * _NANO - seconds) > 1e-9 * seconds:
@@ -150,7 +149,7 @@ def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None
         A step that does not divide T, or one beyond RK4's stability limit for w_max.
     """
     T = check_positive("sample_time", sample_time, "s")
-    period = _nanoseconds(T, "sample_time")
+    period = nanoseconds(T, "sample_time")
     if dt is not None:
         dt = check_positive("dt", dt, "s")
         k = round(T / dt)
@@ -204,7 +203,7 @@ def _initial_angles(lay: SpacecraftLayout, initial_angles: Mapping | None) -> di
     return angles
 
 
-def _disturbance_values(disturbances: Mapping | None, times: np.ndarray) -> dict:
+def disturbance_values(disturbances: Mapping | None, times: np.ndarray) -> dict:
     values = {}
     for name, profile in ({} if disturbances is None else dict(disturbances)).items():
         if name not in DISTURBANCES:
@@ -303,12 +302,12 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
             "or softer bodies, a shorter duration, or raise max_seconds")
     initial_rate = _finite(initial_rate, "initial_rate", "rad/s")
     angles = _initial_angles(lay, initial_angles)
-    times = np.arange(n_samples) * (_nanoseconds(T, "sample_time") * _NANO)
+    times = np.arange(n_samples) * (nanoseconds(T, "sample_time") * _NANO)
     ref = np.zeros(n_samples) if reference is None else np.asarray(reference(times), dtype=float)
     if ref.shape != times.shape or not np.all(np.isfinite(ref)):
         raise ValueError(f"reference must give one finite angle [rad] per sample ({n_samples}); "
                          f"got shape {ref.shape}")
-    pushes = _disturbance_values(disturbances, times)
+    pushes = disturbance_values(disturbances, times)
     if reaction_wheel is not None:
         if not isinstance(reaction_wheel, ReactionWheel):
             raise TypeError("reaction_wheel must be a spacecraft.basilisk.ReactionWheel; got "
@@ -548,90 +547,3 @@ def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle:
     return simulate(spacecraft, controller, duration=duration, sample_time=sample_time, dt=dt,
                     chains=chains, disturbances=disturbances, reaction_wheel=reaction_wheel,
                     max_seconds=max_seconds, reference=lambda t: controllers.slew_profile(t, float(angle), slew_time))
-
-
-def linear_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: float,
-                slew_time: float, *, duration: float | None = None,
-                sample_time: float | None = None, chains: Mapping | None = None,
-                disturbances: Mapping | None = None, plant: control.StateSpace | None = None
-                ) -> control.TimeResponseData:
-    """flexsat's linear prediction of :func:`simulate_slew`: the same sampled-data loop.
-
-    The plant is the linear hub + chains (``plant(tip_deflection=True)`` of the same chains, or
-    ``plant``: any flexsat plant, e.g. hub + beam for the beam's prediction), the controller the
-    same digital law (:func:`.flight_software_law`), closed by :func:`controllers.close_loop`
-    (zero-order hold, exact at the sample instants), driven by the same reference and
-    disturbances sampled at k T.
-
-    Returns
-    -------
-    control.TimeResponseData
-        Outputs of the closed loop (plant outputs, then ``torque``) at k T.
-    """
-    import controllers
-
-    from .layout import chain_spacecraft
-
-    law = flight_software_law(controller, sample_time)
-    T = law.sample_time
-    slew_time = check_positive("slew_time", slew_time, "s")
-    duration = check_positive("duration", 3.0 * slew_time if duration is None else duration, "s")
-    if plant is None:
-        plant = chain_spacecraft(spacecraft, chains).plant(
-            tip_deflection=True, disturbances=bool(disturbances))
-    loop = controllers.close_loop(plant, law.controller)
-    n = int(math.floor(duration / T + 1e-9)) + 1
-    times = np.arange(n) * (_nanoseconds(T, "sample_time") * _NANO)
-    U = np.zeros((loop.ninputs, n))
-    labels = list(loop.input_labels)
-    U[labels.index("theta_ref")] = controllers.slew_profile(times, float(angle), slew_time)
-    for name, value in _disturbance_values(disturbances, times).items():
-        U[labels.index(name)] = value
-    return control.forced_response(loop, times, U, squeeze=False)
-
-
-def _trace(response, name: str) -> np.ndarray | None:
-    labels = list(response.output_labels)
-    if name not in labels:
-        return None
-    return np.asarray(response.outputs).reshape(len(labels), -1)[labels.index(name)]
-
-
-def compare(response: control.TimeResponseData, reference: control.TimeResponseData,
-            names=None) -> dict:
-    """Peak differences of a response from a reference, signal by signal.
-
-    Parameters
-    ----------
-    response, reference : control.TimeResponseData
-        E.g. Basilisk's (:attr:`BasiliskResult.response`) and flexsat's linear chain or beam
-        loop. Where the time grids differ the reference is interpolated linearly onto the
-        response's times (within the reference's time span).
-    names : sequence of str, optional
-        Signals to compare; default every output the two have in common.
-
-    Returns
-    -------
-    dict
-        name -> ``{"peak": max |reference|, "peak_difference": max |response - reference|,
-        "relative": peak_difference / peak}`` (relative is None where the peak is 0).
-    """
-    t = np.asarray(response.time, dtype=float)
-    t_ref = np.asarray(reference.time, dtype=float)
-    same = t.shape == t_ref.shape and np.allclose(t, t_ref, rtol=0.0, atol=1e-9)
-    keep = np.ones(t.size, dtype=bool) if same else (t >= t_ref[0]) & (t <= t_ref[-1])
-    if names is None:
-        names = [n for n in response.output_labels if n in list(reference.output_labels)]
-    out = {}
-    for name in names:
-        a, b = _trace(response, name), _trace(reference, name)
-        if a is None or b is None:
-            raise ValueError(f"signal {name!r} is not an output of both responses")
-        if not same:
-            b = np.interp(t[keep], t_ref, b)
-        a = a[keep]
-        peak = float(np.max(np.abs(b)))
-        difference = float(np.max(np.abs(a - b)))
-        out[name] = {"peak": peak, "peak_difference": difference,
-                     "relative": difference / peak if peak > 0 else None}
-    return out
