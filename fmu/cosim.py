@@ -16,7 +16,9 @@ from typing import Union
 
 import numpy as np
 
+from .checks import real_number, shorten
 from .errors import CosimulationError
+from .limits import check_cosimulation_steps
 
 __all__ = ["cosimulate", "Signal"]
 
@@ -39,11 +41,12 @@ class _Slave:
         self.unzip_dir = None
         self.fmu = None
         if not self.path.is_file():
-            raise FileNotFoundError(f"{role}_fmu must be an existing .fmu file; got {str(path)!r}")
+            raise FileNotFoundError(f"{role}_fmu must be an existing .fmu file; got {shorten(str(path))}")
         try:
             description = read_model_description(str(self.path))
         except Exception as error:  # fmpy raises plain exceptions for unreadable FMUs
-            raise CosimulationError(f"the {role} FMU {self.path.name} cannot be read: {error}") from error
+            raise CosimulationError(f"the {role} FMU {self.path.name} cannot be read: "
+                                    f"{shorten(str(error), 300)}") from error
         if description.fmiVersion != "2.0" or description.coSimulation is None:
             raise CosimulationError(
                 f"the {role} FMU {self.path.name} must be an FMI 2.0 Co-Simulation FMU; got "
@@ -103,15 +106,19 @@ def _evaluator(name: str, signal: Signal) -> Callable[[float], float]:
     try:
         times, values = (np.asarray(part, dtype=np.float64) for part in signal)
     except (TypeError, ValueError) as error:
-        raise TypeError(f"inputs[{name!r}] must be a number, a function of time f(t) or a table "
-                        f"(times, values); got {type(signal).__name__}") from error
+        raise TypeError(f"inputs[{shorten(name)}] must be a number, a function of time f(t) or "
+                        f"a table (times, values); got {type(signal).__name__} "
+                        f"{shorten(signal)}") from error
     if times.ndim != 1 or times.shape != values.shape or times.size == 0:
-        raise ValueError(f"inputs[{name!r}] table must be two 1-D arrays (times [s], values) of "
+        raise ValueError(f"inputs[{shorten(name)}] table must be two 1-D arrays (times [s], values) of "
                          f"equal non-zero length; got shapes {times.shape} and {values.shape}")
     if not (np.all(np.isfinite(times)) and np.all(np.isfinite(values))):
-        raise ValueError(f"inputs[{name!r}] table must be finite")
+        raise ValueError(f"inputs[{shorten(name)}] table must be finite; got a NaN or an "
+                         "infinity")
     if np.any(np.diff(times) < 0):
-        raise ValueError(f"inputs[{name!r}] table times must be non-decreasing [s]")
+        bad = int(np.flatnonzero(np.diff(times) < 0)[0])
+        raise ValueError(f"inputs[{shorten(name)}] table times must be non-decreasing [s]; got "
+                         f"{times[bad]!r} then {times[bad + 1]!r} at index {bad}")
 
     def table(t: float) -> float:
         # right-continuous linear interpolation: at a repeated time row (a step) the last
@@ -191,7 +198,8 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
         If the FMUs cannot be connected (no connection in one direction, a name that both
         output) or an FMU call fails.
     ValueError, TypeError
-        For bad ``stop_time``, ``step``, ``method``, ``inputs`` or start values.
+        For bad ``stop_time``, ``step``, ``method``, ``inputs`` or start values, or more than
+        :data:`fmu.limits.MAX_COSIMULATION_STEPS` steps (checked before anything is done).
 
     References
     ----------
@@ -199,16 +207,20 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
     in FMI for Model Exchange and Co-Simulation V2.0", Archive of Mechanical Engineering
     60(1), 75-94, 2013 (Jacobi and Gauss-Seidel master algorithms).
     """
-    if method not in _METHODS:
-        raise ValueError(f"method must be one of {_METHODS}; got {method!r}")
+    if not isinstance(method, str) or method not in _METHODS:
+        raise ValueError(f"method must be one of {_METHODS}; got {shorten(method)}")
     for label, value in (("step", step), ("stop_time", stop_time), ("start_time", start_time)):
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-            raise TypeError(f"{label} must be a real number [s]; got {type(value).__name__}")
-        if not math.isfinite(value):
+        if not math.isfinite(real_number(label, value, "s")):
             raise ValueError(f"{label} must be finite [s]; got {value!r}")
     if not step > 0:
         raise ValueError(f"step must be positive [s]; got {step!r}")
+    for label, value in (("inputs", inputs), ("plant_start_values", plant_start_values),
+                         ("controller_start_values", controller_start_values)):
+        if value is not None and not isinstance(value, Mapping):
+            raise TypeError(f"{label} must be a mapping {{name: value}}; got "
+                            f"{type(value).__name__} {shorten(value)}")
     duration = float(stop_time) - float(start_time)
+    check_cosimulation_steps(duration / step, step, duration)
     n_steps = int(round(duration / step))
     if n_steps < 1 or abs(n_steps * step - duration) > 1e-9 * max(duration, step):
         raise ValueError(f"stop_time - start_time must be a positive whole number of steps "
@@ -242,8 +254,8 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
         signals = {}
         for name, signal in (inputs or {}).items():
             if name not in external:
-                raise ValueError(f"inputs names {name!r}, which is not an unconnected input of "
-                                 f"either FMU; unconnected inputs are {sorted(external)}")
+                raise ValueError(f"inputs names {shorten(name)}, which is not an unconnected "
+                                 f"input of either FMU; expected one of {shorten(sorted(external))}")
             signals[name] = _evaluator(name, signal)
 
         t0 = float(start_time)
@@ -254,8 +266,9 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
             slave.call("fmi2SetupExperiment", t0, slave.fmu.setupExperiment, None, t0, t_stop)
             for name, value in (values or {}).items():
                 if name not in slave.variables:
-                    raise ValueError(f"{slave.role}_start_values names {name!r}, which the "
-                                     f"{slave.role} FMU does not have")
+                    raise ValueError(f"{slave.role}_start_values names {shorten(name)}, which "
+                                     f"the {slave.role} FMU does not have; expected one of "
+                                     f"{shorten(sorted(slave.variables))}")
                 slave.set([slave.variables[name].valueReference], [value], t0)
             slave.call("fmi2EnterInitializationMode", t0, slave.fmu.enterInitializationMode)
             slave.call("fmi2ExitInitializationMode", t0, slave.fmu.exitInitializationMode)
@@ -279,7 +292,8 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
                 if name in signals:
                     value = float(signals[name](t))
                     if not math.isfinite(value):
-                        raise ValueError(f"inputs[{name!r}] must be finite; got {value!r} at t = {t!r} s")
+                        raise ValueError(f"inputs[{shorten(name)}] must be finite; got {value!r} "
+                                         f"at t = {t!r} s")
                     for slave in external[name]:
                         slave.set([slave.inputs[name]], [value], t)
                 else:

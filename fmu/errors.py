@@ -16,7 +16,8 @@ class FMUBuildError(FMUError):
 
     Raised for input the FMU cannot represent (a non-LTI or discrete-time system, NaN or
     infinite matrices, duplicate or invalid signal names) and for a failed build (no C
-    compiler, a compiler error). The message says what to do.
+    compiler, a compiler error, a binary that fails the check every FMU undergoes before it
+    is written, see :mod:`fmu.verify`). The message says what to do.
     """
 
 

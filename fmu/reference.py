@@ -28,6 +28,7 @@ import control
 import numpy as np
 
 from .codegen import c_double
+from .files import write_text_atomically
 from .system import LinearModel
 
 __all__ = ["reference_inputs", "reference_response", "write_reference_files"]
@@ -98,7 +99,7 @@ def reference_response(model: LinearModel, step: float, stop_time: float) -> np.
 def _write_csv(path: Path, names: list[str], table: np.ndarray) -> None:
     header = ",".join(f'"{name}"' for name in names)
     body = "\n".join(",".join(c_double(v) for v in row) for row in table.tolist())
-    path.write_text(header + "\n" + body + "\n")
+    write_text_atomically(path, header + "\n" + body + "\n")
 
 
 def write_reference_files(model: LinearModel, model_identifier: str, directory: Path,
@@ -127,6 +128,7 @@ def write_reference_files(model: LinearModel, model_identifier: str, directory: 
     opt_path = directory / f"{model_identifier}_ref.opt"
     _write_csv(in_path, ["time", *model.input_names], inputs)
     _write_csv(ref_path, ["time", *model.output_names], outputs)
-    opt_path.write_text(f"StartTime, 0.0\nStopTime, {c_double(float(_grid(step, stop_time)[-1]))}\n"
-                        f"StepSize, {c_double(step)}\nRelTol, 1e-06\n")
+    write_text_atomically(opt_path, f"StartTime, 0.0\nStopTime, "
+                          f"{c_double(float(_grid(step, stop_time)[-1]))}\n"
+                          f"StepSize, {c_double(step)}\nRelTol, 1e-06\n")
     return [in_path, ref_path, opt_path]

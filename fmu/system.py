@@ -16,20 +16,24 @@ import control
 import numpy as np
 import scipy.linalg
 
+from .checks import shorten
 from .errors import FMUBuildError
+from .limits import check_model_size
 from .units import resolve_units
 
 __all__ = ["LinearModel", "linear_model_from", "zoh_matrices", "is_legal_name"]
 
 # FMI 2.0 "structured" variable names without quoted names (FMI 2.0.1, section 2.2.9):
 # identifiers with optional array subscripts, joined by dots: omega, x[0], wing.tip[2,1].
+# Matched whole (fullmatch): "$" would also accept a trailing newline, which then breaks
+# the C string literals of model.c.
 _BNAME = r"[A-Za-z_][A-Za-z0-9_]*(\[[0-9]+(,[0-9]+)*\])?"
-_STRUCTURED_NAME = re.compile(rf"^{_BNAME}(\.{_BNAME})*$")
+_STRUCTURED_NAME = re.compile(rf"{_BNAME}(\.{_BNAME})*")
 
 
 def is_legal_name(name: object) -> bool:
     """True if ``name`` is a legal FMI 2.0 structured variable name (no quoted parts)."""
-    return isinstance(name, str) and _STRUCTURED_NAME.match(name) is not None
+    return isinstance(name, str) and _STRUCTURED_NAME.fullmatch(name) is not None
 
 
 @dataclass(frozen=True)
@@ -102,7 +106,10 @@ def linear_model_from(system: object, *, x0: object = None,
         For a system that is not a StateSpace, is discrete-time, has non-finite matrices, or
         has missing, illegal or duplicate signal names.
     ValueError
-        For an ``x0`` of the wrong shape or with non-finite entries, or bad ``units``.
+        For an ``x0`` of the wrong shape or with non-finite entries, bad ``units``, or a
+        system beyond the limits of :mod:`fmu.limits` (states, signals).
+    TypeError
+        For an ``x0`` that is not an array of numbers or ``units`` that is not a mapping.
     """
     if isinstance(system, control.TransferFunction):
         raise FMUBuildError(
@@ -116,10 +123,11 @@ def linear_model_from(system: object, *, x0: object = None,
     dt = system.dt
     if dt is not None and dt is not False and dt != 0:
         raise FMUBuildError(
-            f"system must be continuous-time (dt = 0); got a discrete-time system with dt = {dt}. "
+            f"system must be continuous-time (dt = 0); got a discrete-time system with dt = {shorten(dt)}. "
             "Export the continuous-time model (the FMU discretises it exactly for any "
             "communication step), e.g. control.d2c if you only have the sampled one.")
 
+    check_model_size(system.nstates, system.ninputs, system.noutputs)
     matrices = {}
     for label in ("A", "B", "C", "D"):
         value = np.array(getattr(system, label), dtype=np.float64)
@@ -143,25 +151,32 @@ def linear_model_from(system: object, *, x0: object = None,
         for name in names:
             if not is_legal_name(name):
                 raise FMUBuildError(
-                    f"{kind} name {name!r} is not a legal FMI variable name: expected letters, "
-                    "digits and '_' starting with a letter or '_', optionally with [index] and "
-                    "'.'-separated parts (e.g. 'theta', 'x[0]', 'wing.tip'). Rename the "
-                    "signal in the StateSpace (inputs=..., outputs=..., states=...).")
+                    f"{kind} name {shorten(name)} is not a legal FMI variable name: expected "
+                    "letters, digits and '_' starting with a letter or '_', optionally with "
+                    "[index] and '.'-separated parts, and nothing else (e.g. 'theta', 'x[0]', "
+                    "'wing.tip'). Rename the signal in the StateSpace (inputs=..., "
+                    "outputs=..., states=...).")
             if name in seen:
                 raise FMUBuildError(
-                    f"signal name {name!r} is used twice (as {seen[name]} and as {kind}); FMU "
-                    "variable names must be unique. Rename one of them in the StateSpace.")
+                    f"signal name {shorten(name)} is used twice (as {seen[name]} and as {kind}); "
+                    "FMU variable names must be unique. Rename one of them in the StateSpace.")
             seen[name] = kind
 
     if x0 is None:
         x0_array = np.zeros(n, dtype=np.float64)
     else:
-        x0_array = np.array(x0, dtype=np.float64)
+        try:
+            x0_array = np.array(x0, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise TypeError(f"x0 must be an array of {n} real numbers (in the states' units); "
+                            f"got {type(x0).__name__} {shorten(x0)}") from error
         if x0_array.shape != (n,):
             raise ValueError(f"x0 must have shape ({n},) (one value per state, in the states' "
                              f"units); got shape {x0_array.shape}")
         if not np.all(np.isfinite(x0_array)):
-            raise ValueError(f"x0 must be finite (in the states' units); got {x0_array}")
+            bad = int(np.flatnonzero(~np.isfinite(x0_array))[0])
+            raise ValueError(f"x0 must be finite (in the states' units); got {x0_array[bad]} "
+                             f"at index {bad}")
 
     return LinearModel(
         A=matrices["A"], B=matrices["B"], C=matrices["C"], D=matrices["D"],

@@ -15,6 +15,8 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 
+from .checks import shorten
+
 __all__ = ["SI_UNITS", "guess_unit", "derivative_unit", "resolve_units"]
 
 #: Known units and their exponents of the base units (rad counted as a base unit, as FMI
@@ -130,12 +132,14 @@ def resolve_units(names: list[str], overrides: Mapping[str, str | None] | None) 
     if overrides is None:
         return units
     if not isinstance(overrides, Mapping):
-        raise TypeError(f"units must be a mapping {{signal name: unit}}; got {type(overrides).__name__}")
+        raise TypeError(f"units must be a mapping {{signal name: unit}}; got "
+                        f"{type(overrides).__name__} {shorten(overrides)}")
     for name, unit in overrides.items():
-        if name not in units:
-            raise ValueError(f"units names the signal {name!r}, which the system does not have; "
-                             f"signals are {sorted(units)}")
-        if unit is not None and unit not in SI_UNITS:
-            raise ValueError(f"units[{name!r}] must be one of {sorted(SI_UNITS)} or None; got {unit!r}")
+        if not isinstance(name, str) or name not in units:
+            raise ValueError(f"units names the signal {shorten(name)}, which the system does "
+                             f"not have; expected one of {shorten(sorted(units))}")
+        if unit is not None and (not isinstance(unit, str) or unit not in SI_UNITS):
+            raise ValueError(f"units[{shorten(name)}] must be one of {sorted(SI_UNITS)} or None; "
+                             f"got {shorten(unit)}")
         units[name] = unit
     return units

@@ -5,6 +5,18 @@
  * the environment's logger and returns fmi2Error or fmi2Discard instead of crashing.  The
  * arithmetic is in linear_model.c, the system's matrices in the generated model.c.
  *
+ * Which interfaces the library provides is set by the generated flexsat_interfaces.h
+ * (FLEXSAT_MODEL_EXCHANGE, FLEXSAT_CO_SIMULATION, as declared in modelDescription.xml): the
+ * library exports exactly the fmi2 functions of those interfaces.
+ *
+ * Instances: every live instance is on a list guarded by a mutex, and each call first
+ * looks its fmi2Component up there by address, without dereferencing it.  A stale handle -
+ * e.g. a second fmi2FreeInstance, which the standard leaves undefined - is therefore
+ * refused without reading freed memory, unless the allocator has since handed the same
+ * address to a new instance of this FMU (then the handle is that instance: no handle
+ * scheme that returns plain pointers can tell the two apart).  Freed instances are
+ * cleared before their memory is released.
+ *
  * Value references (fixed layout, the same in modelDescription.xml):
  *     inputs       0 .. m-1
  *     outputs      m .. m+p-1
@@ -20,8 +32,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+#if defined(_WIN32)
+#include <windows.h>
+#else
+#include <pthread.h>
+#endif
+
 #include "fmi2Functions.h"
+#include "flexsat_interfaces.h"
 #include "linear_model.h"
+
+#if !FLEXSAT_MODEL_EXCHANGE && !FLEXSAT_CO_SIMULATION
+#error "flexsat_interfaces.h must enable FLEXSAT_MODEL_EXCHANGE or FLEXSAT_CO_SIMULATION"
+#endif
 
 #define INSTANCE_MAGIC 0x464c5853u /* "FLXS": detects stale or foreign handles */
 
@@ -41,8 +64,9 @@ typedef enum {
 #define READABLE (STATE_INITIALIZATION | STATE_EVENT | STATE_CONTINUOUS | STATE_STEP_COMPLETE \
                   | STATE_STEP_FAILED | STATE_TERMINATED | STATE_ERROR)
 
-typedef struct {
+typedef struct Instance {
     unsigned magic;
+    struct Instance *next; /* the list of live instances */
     fmi2Type type;
     char *instance_name;
     fmi2CallbackLogger logger;
@@ -96,9 +120,48 @@ static void log_message(Instance *inst, fmi2Status status, const char *category,
 
 /* ---------------------------------------------------------------- checks */
 
+/* ---------------------------------------------------------------- live instances */
+
+#if defined(_WIN32)
+static SRWLOCK registry_lock = SRWLOCK_INIT;
+static void lock_registry(void) { AcquireSRWLockExclusive(&registry_lock); }
+static void unlock_registry(void) { ReleaseSRWLockExclusive(&registry_lock); }
+#else
+static pthread_mutex_t registry_lock = PTHREAD_MUTEX_INITIALIZER;
+static void lock_registry(void) { pthread_mutex_lock(&registry_lock); }
+static void unlock_registry(void) { pthread_mutex_unlock(&registry_lock); }
+#endif
+
+static Instance *live_instances = NULL;
+
+static void register_instance(Instance *inst)
+{
+    lock_registry();
+    inst->next = live_instances;
+    live_instances = inst;
+    unlock_registry();
+}
+
+/* The live instance at address c, taken off the list when `unlink` is set; NULL if there
+ * is none.  Compares addresses only: a freed or foreign c is never dereferenced. */
+static Instance *find_instance(fmi2Component c, int unlink)
+{
+    Instance *found = NULL;
+    lock_registry();
+    for (Instance **link = &live_instances; *link != NULL; link = &(*link)->next) {
+        if ((void *)*link == c) {
+            found = *link;
+            if (unlink) *link = found->next;
+            break;
+        }
+    }
+    unlock_registry();
+    return found;
+}
+
 static Instance *as_instance(fmi2Component c)
 {
-    Instance *inst = (Instance *)c;
+    Instance *inst = c == NULL ? NULL : find_instance(c, 0);
     if (inst == NULL || inst->magic != INSTANCE_MAGIC) return NULL;
     return inst;
 }
@@ -174,12 +237,13 @@ static void reset_values(Instance *inst)
     inst->time = 0.0;
 }
 
+/* Release an instance that is not (or no longer) on the live list. */
 static void free_instance(Instance *inst)
 {
     fmi2CallbackFreeMemory release = inst->free_memory;
     void *blocks[] = {inst->instance_name, inst->x, inst->u, inst->y, inst->dx,
                       inst->Phi, inst->Gamma, inst->work};
-    inst->magic = 0;
+    memset(inst, 0, sizeof *inst); /* no magic, no pointers left behind */
     for (size_t i = 0; i < sizeof blocks / sizeof blocks[0]; i++) {
         if (blocks[i] != NULL) release(blocks[i]);
     }
@@ -213,6 +277,13 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     }
     if (fmuType != fmi2ModelExchange && fmuType != fmi2CoSimulation) {
         LOG_ERROR(&report, "fmi2Instantiate: unknown fmuType %d.", (int)fmuType);
+        return NULL;
+    }
+    if ((fmuType == fmi2ModelExchange && !FLEXSAT_MODEL_EXCHANGE)
+        || (fmuType == fmi2CoSimulation && !FLEXSAT_CO_SIMULATION)) {
+        LOG_ERROR(&report, "fmi2Instantiate: this FMU does not provide %s (see "
+                  "modelDescription.xml).",
+                  fmuType == fmi2ModelExchange ? "Model Exchange" : "Co-Simulation");
         return NULL;
     }
     if ((functions->allocateMemory == NULL) != (functions->freeMemory == NULL)) {
@@ -259,12 +330,14 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     }
     strcpy(inst->instance_name, instanceName);
     reset_values(inst);
+    register_instance(inst);
     return inst;
 }
 
 FMI2_Export void fmi2FreeInstance(fmi2Component c)
 {
-    Instance *inst = as_instance(c);
+    /* taken off the live list first: a second call with the same handle finds nothing */
+    Instance *inst = c == NULL ? NULL : find_instance(c, 1);
     if (inst != NULL) free_instance(inst);
 }
 
@@ -325,6 +398,18 @@ FMI2_Export fmi2Status fmi2Reset(fmi2Component c)
     return fmi2OK;
 }
 
+/* An output or derivative that is not finite (C x + D u or A x + B u overflowed for finite
+ * x and u): fmi2Discard in Model Exchange, where the integrator can retry with a smaller
+ * step (FMI 2.0.1, section 2.1.3), fmi2Error in Co-Simulation, where fmi2DoStep already
+ * refused to reach such a state and only the inputs set since can have caused it. */
+static fmi2Status overflowed(Instance *inst, const char *function, const char *what,
+                             const char *name)
+{
+    LOG_ERROR(inst, "%s: %s %s is not finite at t = %g s (the linear model overflows for "
+              "these states and inputs).", function, what, name, inst->time);
+    return inst->type == fmi2ModelExchange ? fmi2Discard : fmi2Error;
+}
+
 /* ---------------------------------------------------------------- variable access */
 
 typedef enum { KIND_INPUT, KIND_OUTPUT, KIND_STATE, KIND_DERIVATIVE, KIND_INVALID } Kind;
@@ -365,6 +450,15 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
             LOG_ERROR(inst, "fmi2GetReal: unknown value reference %u.", (unsigned)vr[i]);
             return fmi2Error;
         }
+    }
+    for (size_t i = 0; i < nvr; i++) {
+        size_t k;
+        const Kind kind = kind_of(vr[i], &k);
+        if ((kind == KIND_OUTPUT || kind == KIND_DERIVATIVE) && !isfinite(value[i]))
+            return overflowed(inst, "fmi2GetReal",
+                              kind == KIND_OUTPUT ? "output" : "derivative of state",
+                              kind == KIND_OUTPUT ? model->output_names[k]
+                                                  : model->state_names[k]);
     }
     return fmi2OK;
 }
@@ -544,6 +638,7 @@ FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
 }
 
 /* ---------------------------------------------------------------- Model Exchange */
+#if FLEXSAT_MODEL_EXCHANGE
 
 static Instance *checked_me(fmi2Component c, const char *function, int allowed)
 {
@@ -656,6 +751,11 @@ FMI2_Export fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[
     if (null_array(inst, "fmi2GetDerivatives", "derivatives", derivatives, nx)) return fmi2Error;
     lm_derivatives(model, inst->x, inst->u, inst->dx);
     for (size_t i = 0; i < nx; i++) derivatives[i] = inst->dx[i];
+    for (size_t i = 0; i < nx; i++) {
+        if (!isfinite(derivatives[i]))
+            return overflowed(inst, "fmi2GetDerivatives", "derivative of state",
+                              model->state_names[i]);
+    }
     return fmi2OK;
 }
 
@@ -704,7 +804,10 @@ FMI2_Export fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Re
     return fmi2OK;
 }
 
+#endif /* FLEXSAT_MODEL_EXCHANGE */
+
 /* ---------------------------------------------------------------- Co-Simulation */
+#if FLEXSAT_CO_SIMULATION
 
 static Instance *checked_cs(fmi2Component c, const char *function, int allowed)
 {
@@ -803,6 +906,16 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
                 return fmi2Discard;
             }
         }
+        /* the outputs at the new state must be finite too, with the inputs held */
+        lm_outputs(model, inst->dx, inst->u, inst->y);
+        for (size_t i = 0; i < n_out(); i++) {
+            if (!isfinite(inst->y[i])) {
+                LOG_ERROR(inst, "fmi2DoStep: output %s overflowed at t = %g s; the state was "
+                          "not changed.", model->output_names[i], t + h);
+                inst->state = STATE_STEP_FAILED;
+                return fmi2Discard;
+            }
+        }
         for (size_t i = 0; i < n_st(); i++) inst->x[i] = inst->dx[i];
     }
     inst->time = t + h;
@@ -889,3 +1002,5 @@ FMI2_Export fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind
     LOG_ERROR(inst, "fmi2GetStringStatus: status kind %d is not available.", (int)s);
     return fmi2Discard;
 }
+
+#endif /* FLEXSAT_CO_SIMULATION */

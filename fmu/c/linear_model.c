@@ -83,6 +83,12 @@ static void matmul(size_t N, const double *P, const double *Q, double *R)
     }
 }
 
+static int all_finite(size_t count, const double *P)
+{
+    for (size_t i = 0; i < count; i++) if (!isfinite(P[i])) return 0;
+    return 1;
+}
+
 static double norm_1(size_t N, const double *P)
 {
     double norm = 0.0;
@@ -150,17 +156,25 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
     double *U = A6 + N * N, *V = U + N * N, *T = V + N * N, *P = T + N * N, *Q = P + N * N;
     double *pivot = Q + N * N;
 
-    /* augmented matrix [[A h, B h], [0, 0]] */
+    /* augmented matrix [[A h, B h], [0, 0]]; a step so long that A h or B h overflows has
+     * no finite transition matrix to speak of (and an infinite entry would stall the
+     * balancing below) */
     memset(M, 0, N * N * sizeof(double));
     for (size_t i = 0; i < n; i++) {
         for (size_t j = 0; j < n; j++) M[i * N + j] = model->A[i * n + j] * h;
         for (size_t k = 0; k < m; k++) M[i * N + n + k] = model->B[i * m + k] * h;
     }
+    if (!all_finite(N * N, M)) return -3;
 
     /* Balance: M <- D^-1 M D with D diagonal powers of 2 (exact), so that rows and columns
      * have comparable norms (Parlett & Reinsch 1969, as LAPACK dgebal). A lightly damped
      * mode [[0, 1], [-w^2, -2 z w]] becomes nearly normal, which keeps the number of
-     * squarings - and their error growth - small; expm(M) = D expm(D^-1 M D) D^-1. */
+     * squarings - and their error growth - small; expm(M) = D expm(D^-1 M D) D^-1.
+     * Termination: the sweeps are capped; in a sweep, c and r are finite and positive (a
+     * row whose sums overflow is left alone), so each while loop moves c by a factor 4
+     * towards r and stops after at most ~1100 passes, or sooner at the cap on f (as
+     * dgebal's sfmin/sfmax guards). */
+    const double f_max = 1.3407807929942597e+154; /* 2^512: keeps every product finite */
     double *d = pivot + N; /* balancing scale factors */
     for (size_t i = 0; i < N; i++) d[i] = 1.0;
     for (int sweep = 0, changed = 1; changed && sweep < 100; sweep++) {
@@ -172,11 +186,11 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
                 c += fabs(M[j * N + i]);
                 r += fabs(M[i * N + j]);
             }
-            if (c == 0.0 || r == 0.0) continue;
+            if (c == 0.0 || r == 0.0 || !isfinite(c + r)) continue;
             const double total = c + r;
             double f = 1.0;
-            while (c < r / 2.0) { f *= 2.0; c *= 4.0; }
-            while (c > r * 2.0) { f /= 2.0; c /= 4.0; }
+            while (c < r / 2.0 && f < f_max) { f *= 2.0; c *= 4.0; }
+            while (c > r * 2.0 && f > 1.0 / f_max) { f /= 2.0; c /= 4.0; }
             if ((c + r) / f < 0.95 * total) {
                 changed = 1;
                 d[i] *= f;
@@ -186,6 +200,17 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
                 }
             }
         }
+    }
+
+    /* ||M||_1 <= N max|m_ij|. When that bound passes 2^100, the powers up to M^8 used
+     * below could overflow: scale M down first, by the 1-norm bound as in Higham (2005,
+     * Algorithm 2.3), so that ||M 2^-s||_1 <= theta13. (Ordinary steps never get here.) */
+    double largest = 0.0;
+    for (size_t i = 0; i < N * N; i++) if (fabs(M[i]) > largest) largest = fabs(M[i]);
+    int s = 0;
+    if (largest > 0.0 && log2(largest) + log2((double)N) > 100.0) {
+        s = (int)ceil(log2(largest) + log2((double)N) - log2(theta13));
+        for (size_t i = 0; i < N * N; i++) M[i] = ldexp(M[i], -s);
     }
 
     matmul(N, M, M, A2);
@@ -199,16 +224,16 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
     const double d6 = pow(norm_1(N, A6), 1.0 / 6.0), d8 = pow(norm_1(N, T), 1.0 / 8.0);
     if (!isfinite(d6) || !isfinite(d8)) return -3;
     const double alpha = d6 > d8 ? d6 : d8;
-    int s = 0;
     if (alpha > theta13) {
-        s = (int)ceil(log2(alpha / theta13));
-        if (s < 0) s = 0;
+        int s1 = (int)ceil(log2(alpha / theta13));
+        if (s1 < 0) s1 = 0;
         for (size_t i = 0; i < N * N; i++) {
-            M[i] = ldexp(M[i], -s);
-            A2[i] = ldexp(A2[i], -2 * s);
-            A4[i] = ldexp(A4[i], -4 * s);
-            A6[i] = ldexp(A6[i], -6 * s);
+            M[i] = ldexp(M[i], -s1);
+            A2[i] = ldexp(A2[i], -2 * s1);
+            A4[i] = ldexp(A4[i], -4 * s1);
+            A6[i] = ldexp(A6[i], -6 * s1);
         }
+        s += s1;
     }
 
     /* U = M [A6 (b13 A6 + b11 A4 + b9 A2) + b7 A6 + b5 A4 + b3 A2 + b1 I] */
@@ -232,11 +257,16 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
     int status = lu_solve(N, Q, P, pivot);
     if (status != 0) return status;
 
-    /* undo the scaling: expm(M 2^s) = expm(M)^(2^s) */
+    /* undo the scaling: expm(M 2^s) = expm(M)^(2^s).  s < 1100 for any finite M; the
+     * squarings stop early once the result overflows (nothing finite can follow) or stops
+     * changing (a stable system after many time constants: further squarings are exact
+     * no-ops), so an absurdly long step costs little. */
     double *R = P, *S = T;
     for (int k = 0; k < s; k++) {
         matmul(N, R, R, S);
+        if (!all_finite(N * N, S)) return -3;
         double *tmp = R; R = S; S = tmp;
+        if (memcmp(R, S, N * N * sizeof(double)) == 0) break;
     }
 
     /* undo the balancing: expm(M) = D expm(B) D^-1 */

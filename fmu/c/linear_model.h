@@ -17,6 +17,23 @@
 
 #include <stddef.h>
 
+/* Names with external linkage.  In the shared library they are hidden
+ * (-fvisibility=hidden), so two FMUs loaded into one process never see each other's.  When
+ * the sources of several FMUs are compiled into one program (FMI 2.0.1, section 2.1.1:
+ * define FMI2_FUNCTION_PREFIX, e.g. -DFMI2_FUNCTION_PREFIX=MyModel_ for all three .c files
+ * of an FMU), they take the same prefix as the fmi2 functions; every other symbol of the
+ * FMU is static. */
+#if defined(FMI2_FUNCTION_PREFIX)
+#define LM_PASTE(a, b) a##b
+#define LM_PREFIXED(a, b) LM_PASTE(a, b)
+#define linear_model LM_PREFIXED(FMI2_FUNCTION_PREFIX, linear_model)
+#define lm_derivatives LM_PREFIXED(FMI2_FUNCTION_PREFIX, lm_derivatives)
+#define lm_outputs LM_PREFIXED(FMI2_FUNCTION_PREFIX, lm_outputs)
+#define lm_workspace_size LM_PREFIXED(FMI2_FUNCTION_PREFIX, lm_workspace_size)
+#define lm_discretize LM_PREFIXED(FMI2_FUNCTION_PREFIX, lm_discretize)
+#define lm_step LM_PREFIXED(FMI2_FUNCTION_PREFIX, lm_step)
+#endif
+
 typedef struct {
     const char *guid;
     const char *model_name;
@@ -51,8 +68,9 @@ size_t lm_workspace_size(const LinearModel *model);
 /* Zero-order-hold transition matrices for the step h:
  *     expm([[A, B], [0, 0]] h) = [[Phi, Gamma], [0, I]].
  * Returns 0 on success, -1 if h is not positive and finite, -2 on a singular Pade
- * denominator (cannot happen for finite data, kept as a guard), -3 if the result is not
- * finite. */
+ * denominator (cannot happen for finite data, kept as a guard), -3 if A h or B h or the
+ * result is not finite.  Always returns in bounded time: at most one squaring per binary
+ * order of magnitude of |A h| (fewer than 2100 for any finite h). */
 int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma, double *work);
 
 /* x_next = Phi x + Gamma u (x_next must not alias x). */
