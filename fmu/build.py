@@ -323,11 +323,15 @@ def _stop(process: subprocess.Popen) -> None:
             stream.close()
 
 
+def _tail(text: str, limit: int) -> str:
+    return text if len(text) <= limit else "..." + text[-limit:]
+
+
 def _check(command: list[str], code: int, stderr: str) -> None:
     if code != 0:
         raise FMUBuildError(
             f"compiling the FMU binary failed (exit code {code}):\n{' '.join(command)}\n"
-            f"{stderr.strip()}\nThis is a bug in flexsat.fmu if the compiler itself works; "
+            f"{_tail(stderr.strip(), 4000)}\nThis is a bug in flexsat.fmu if the compiler itself works; "
             "please report it.")
 
 

@@ -71,7 +71,7 @@ class _Slave:
             return function(*args)
         except Exception as error:
             raise CosimulationError(f"{self.role} FMU {self.name}: {what} failed at t = {time!r} s: "
-                                    f"{error}") from error
+                                    f"{shorten(str(error), 300)}") from error
 
     def get(self, vrs: list[int], time: float) -> list[float]:
         if not vrs:
@@ -237,12 +237,13 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
         controller_to_plant = [name for name in controller.outputs if name in plant.inputs]
         if not plant_to_controller or not controller_to_plant:
             raise CosimulationError(
-                "the FMUs must be connected both ways by equal signal names; plant outputs "
-                f"{list(plant.outputs)}, controller inputs {list(controller.inputs)}, controller "
-                f"outputs {list(controller.outputs)}, plant inputs {list(plant.inputs)}")
+                "the FMUs must be connected both ways by equal signal names; got plant outputs "
+                f"{shorten(list(plant.outputs))}, controller inputs {shorten(list(controller.inputs))}, "
+                f"controller outputs {shorten(list(controller.outputs))}, plant inputs "
+                f"{shorten(list(plant.inputs))}")
         both = set(plant.outputs) & set(controller.outputs)
         if both:
-            raise CosimulationError(f"plant and controller both output {sorted(both)}; "
+            raise CosimulationError(f"plant and controller both output {shorten(sorted(both))}; "
                                     "rename one so every signal has one source")
         # external inputs: inputs that no output feeds, by name (one name may be an input
         # of both FMUs: it is then set on both)
