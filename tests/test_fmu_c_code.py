@@ -203,7 +203,7 @@ def test_double_free_reads_no_freed_memory(tmp_path):
 
 HUGE_STEPS = """
 import json, sys
-sys.path.insert(0, {tests!r})
+sys.path[:0] = [{tests!r}, {root!r}]
 from test_fmu_misuse import Binary
 from pathlib import Path
 binary = Binary(Path({fmu!r}), Path({folder!r}))
@@ -221,7 +221,8 @@ STEPS = [1e50, 1e100, 1e150, 1e155, 1e200, 1e300, 1e307, 3e307, 5e307, 1e308, 1.
 
 def run_steps(tmp_path, system, steps, states):
     path = export(system, tmp_path / "plant.fmu")
-    script = HUGE_STEPS.format(tests=str(Path(__file__).parent), fmu=str(path),
+    here = Path(__file__).resolve()
+    script = HUGE_STEPS.format(tests=str(here.parent), root=str(here.parents[1]), fmu=str(path),
                                folder=str(tmp_path / "plant"), steps=steps, states=states)
     # a step that hangs would hang this test: a separate process with a time limit (each
     # step takes microseconds to milliseconds)
