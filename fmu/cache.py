@@ -32,6 +32,8 @@ Concurrency
     writer of that key deletes the leftovers, and so does the first use of the cache in
     every process, for each key whose lock it can take at once (nobody is writing it). Each export copies the objects it uses into
     its own build folder, so a later replacement cannot change an object under its linker.
+    Where file locks do not work (some network file systems), objects are compiled in the
+    build folder and not cached.
 """
 
 from __future__ import annotations
@@ -220,8 +222,18 @@ class ObjectCache:
 
         obj, sidecar, lock_path = self._paths(key)
         with _thread_lock(key):
-            with open(lock_path, "a+b") as lock:
+            lock = None
+            try:
+                lock = open(lock_path, "a+b")
                 fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
+            except OSError:
+                # no working file locks here (e.g. some network file systems): compile
+                # privately and cache nothing rather than risk two writers
+                if lock is not None:
+                    lock.close()
+                build(destination)
+                return False
+            with lock:
                 try:
                     data = self.read(key)  # another thread or process may just have built it
                     if data is not None:
@@ -269,11 +281,15 @@ class ObjectCache:
         removed = []
         keys = {p.name.split(".", 1)[0] for p in self.folder.glob("*.tmp-*")}
         for key in sorted(keys):
-            with open(self._paths(key)[2], "a+b") as lock:
+            try:
+                lock = open(self._paths(key)[2], "a+b")
+            except OSError:
+                continue
+            with lock:
                 try:
                     fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
                 except OSError:
-                    continue  # being written right now
+                    continue  # being written right now (or no working locks)
                 try:
                     for stale in self.folder.glob(f"{key}.*.tmp-*"):
                         try:

@@ -224,6 +224,19 @@ def test_unwritable_cache_falls_back_to_a_process_folder(tmp_path, monkeypatch):
     assert_fmu_works(export(rigid_body(), tmp_path / "a.fmu"), rigid_body())
 
 
+def test_without_working_file_locks_nothing_is_cached(tmp_path, cache_dir, monkeypatch):
+    """flock fails with ENOLCK on some network file systems: compile privately instead."""
+    import errno
+    import fcntl
+
+    def no_locks(descriptor, operation):
+        raise OSError(errno.ENOLCK, "No locks available")
+
+    monkeypatch.setattr(fcntl, "flock", no_locks)
+    assert_fmu_works(export(rigid_body(), tmp_path / "a.fmu"), rigid_body())
+    assert list(cache_dir.glob("*.o")) == []
+
+
 def test_cache_location_follows_the_environment(tmp_path, monkeypatch):
     monkeypatch.delenv("FLEXSAT_CACHE_DIR", raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
