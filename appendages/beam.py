@@ -127,6 +127,49 @@ def _dimensionless_W(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return f1, f2, f4
 
 
+def _dimensionless_D(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """d1, d2, d4 with D = W^-1 = [[EJ/L^3 d1, EJ/L^2 d2], [EJ/L^2 d2, EJ/L d4]], of y = x**4.
+
+    From the module docstring's W, ``det W = L**4/EJ**2 (1 + cos x cosh x)/(x**4 D(x))``
+    (the numerators satisfy ``p1 p4 - p2**2 = (1 - cos x cosh x)(1 + cos x cosh x)``), so the
+    adjugate gives
+
+        d1 = -x**3 (cos x sinh x + sin x cosh x) / (1 + cos x cosh x)
+        d2 = -x**2 sin x sinh x                  / (1 + cos x cosh x)
+        d4 =  x    (cos x sinh x - sin x cosh x) / (1 + cos x cosh x),
+
+    finite at the free-free frequencies (where W has its poles) and infinite at the clamped-free
+    ones (``1 + cos x cosh x = 0``). Evaluated with the same two branches as W: the power series
+    (``x**3 p4 = y P4(y)``, ``1 + cos x cosh x = 2 - y Q(y)``) and the scaled exponentials with
+    ``4 (1 + cos x cosh x)/P = g + (1 + u)(1 + t)``. Near s = 0, D = s**2 [[m, m L/2],
+    [m L/2, m L**2/3]] (the rigid beam's inertia about its root) with full relative accuracy.
+    """
+    d1 = np.empty_like(y)
+    d2 = np.empty_like(y)
+    d4 = np.empty_like(y)
+    small = np.abs(y) < _SERIES_RADIUS**4
+    if np.any(small):
+        ys = y[small]
+        denominator = 2.0 - ys * _polyval(_Q, ys)
+        d1[small] = ys * _polyval(_P4, ys) / denominator
+        d2[small] = -ys * _polyval(_P2, ys) / denominator
+        d4[small] = ys * _polyval(_P1, ys) / denominator
+    large = ~small
+    if np.any(large):
+        x = y[large] ** 0.25
+        sigma = np.where(x.imag >= 0.0, 1.0, -1.0)
+        t = np.exp(-2.0 * x)
+        u = np.exp(2j * sigma * x)
+        g = 4.0 * np.exp(-x + 1j * sigma * x)
+        den = g + (1.0 + u) * (1.0 + t)
+        a = (1.0 + u) * (1.0 - t)
+        b = 1j * sigma * (1.0 - u) * (1.0 + t)
+        d1[large] = -(x**3) * (a + b) / den
+        d2[large] = -(x**2) * 1j * sigma * (1.0 - u) * (1.0 - t) / den
+        d4[large] = x * (a - b) / den
+    return d1, d2, d4
+
+
 def _newton(function, derivative, x0: np.ndarray, n_iter: int = 50) -> np.ndarray:
     """Vectorised Newton iteration, stopped when every step is below 1e-15 relative."""
     x = np.array(x0, dtype=float)
@@ -492,6 +535,45 @@ class Beam:
         W[..., 1, 0] = W[..., 0, 1]
         return W
 
+    def dynamic_stiffness(self, s) -> np.ndarray:
+        """Attachment-end dynamic stiffness D(s) = W(s)^-1 [N/m, N; N, N*m], exact.
+
+        The loads at x = 0 that move the attachment end by (delta, phi) = (1, 0) or (0, 1) at
+        the Laplace variable s. Undamped: the closed form of :func:`_dimensionless_D`, which
+        stays accurate where W is singular or huge (at the clamped-free frequencies D has its
+        poles, at the free-free ones W has them); the hub coupling uses it instead of
+        inverting W. Damped: the 2x2 inverse of the exact damped W by its adjugate.
+
+        Parameters
+        ----------
+        s : complex or array_like of complex, rad/s
+            Laplace variable; s = 0 gives D = 0 (a free beam offers no static stiffness).
+
+        Returns
+        -------
+        ndarray of complex128, shape ``np.shape(s) + (2, 2)``
+            Infinite entries exactly at a clamped-free frequency (undamped).
+        """
+        s = as_frequency_array(s)
+        D = np.zeros(s.shape + (2, 2), dtype=np.complex128)
+        if self.damping_ratio > 0.0:
+            nonzero = s != 0
+            W = self.W(s[nonzero])
+            det = W[..., 0, 0] * W[..., 1, 1] - W[..., 0, 1] ** 2
+            D[nonzero, 0, 0] = W[..., 1, 1] / det
+            D[nonzero, 0, 1] = -W[..., 0, 1] / det
+            D[nonzero, 1, 1] = W[..., 0, 0] / det
+        else:
+            EJ, L = self.bending_stiffness, self.length
+            y = -(s**2) * (self.linear_density * L**4 / EJ)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                d1, d2, d4 = _dimensionless_D(y.ravel())
+            D[..., 0, 0] = d1.reshape(s.shape) * (EJ / L**3)
+            D[..., 0, 1] = d2.reshape(s.shape) * (EJ / L**2)
+            D[..., 1, 1] = d4.reshape(s.shape) * (EJ / L)
+        D[..., 1, 0] = D[..., 0, 1]
+        return D
+
     def _undamped_entries(self, s: np.ndarray):
         """W1, W2, W4 of the undamped closed form (module docstring), each of shape s.shape."""
         EJ, L = self.bending_stiffness, self.length
@@ -585,7 +667,8 @@ class Beam:
         method : {"craig-bampton", "residual", "free-free"}
             ``"free-free"``: the paper's truncation, rigid-body modes plus the first free-free
             bending modes. ``"residual"``: the same plus the static flexibility of the dropped
-            modes at the attachment end (mode acceleration); exact poles, better zeros. ``"craig-bampton"`` (default, the most accurate): attachment-end
+            modes at the attachment end (mode acceleration); exact poles, better zeros.
+            ``"craig-bampton"`` (default, the most accurate): attachment-end
             motion (two constraint modes, exact rigid-body inertia) plus the first cantilever
             modes, i.e. the hybrid coordinates of flexible-spacecraft dynamics; the zeros of W
             and coupled frequencies converge much faster (see benchmarks/truncation_table.py).

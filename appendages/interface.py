@@ -42,9 +42,13 @@ __all__ = [
     "RootModel",
     "as_frequency_array",
     "check_positive",
+    "describe",
     "FlexsatError",
     "ConvergenceError",
 ]
+
+#: Longest text of a value echoed in an error message (characters).
+MESSAGE_VALUE_WIDTH = 100
 
 
 class FlexsatError(Exception):
@@ -53,6 +57,25 @@ class FlexsatError(Exception):
 
 class ConvergenceError(FlexsatError, RuntimeError):
     """A numerical procedure (root search, fit) did not converge."""
+
+
+def describe(value, width: int = MESSAGE_VALUE_WIDTH) -> str:
+    """``repr(value)`` shortened to about ``width`` characters, for error messages.
+
+    A long value (a 200,000-element array, a huge string) is cut in the middle and its length
+    is said, so that a message stays one readable line.
+    """
+    if isinstance(value, np.ndarray) and value.size > 20:
+        text = np.array2string(value.ravel()[:6], separator=", ", threshold=6)[:-1]
+        return f"array of shape {value.shape} ({text}, ...])"
+    try:
+        text = repr(value)
+    except Exception:  # a broken __repr__ must not hide the real error
+        text = f"<{type(value).__name__}>"
+    if len(text) <= width:
+        return text
+    keep = max(width - 30, 10)
+    return f"{text[: keep // 2 + keep % 2]}...{text[-(keep // 2):]} ({len(text):,} characters)"
 
 
 def check_positive(name: str, value, unit: str, *, allow_zero: bool = False) -> float:

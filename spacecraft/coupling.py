@@ -44,6 +44,8 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
+from appendages.interface import describe
+
 from .hub import Hub, Mount
 
 __all__ = ["Spacecraft", "SecondOrderModel"]
@@ -384,15 +386,20 @@ class Spacecraft:
 
     # -- exact frequency-domain reference -------------------------------------------------------
     def _hub_dynamic_stiffness(self, s: np.ndarray, *, undamped: bool = False) -> np.ndarray:
-        """Z(s) of the hub with every appendage eliminated through W_i(s)^-1 (shape s + (3, 3))."""
+        """Z(s) of the hub with every appendage eliminated through D_i(s) = W_i(s)^-1.
+
+        Shape ``s.shape + (3, 3)``. D_i comes from the appendage's own dynamic stiffness when
+        it offers one (exact closed form of a beam, static condensation of a finite model),
+        which stays accurate where W_i is singular (W_i -> 0 at its clamped frequencies) or
+        huge (at its free poles), where inverting W_i loses every digit.
+        """
         s = np.asarray(s, dtype=complex)
         Z = np.zeros(s.shape + (3, 3), dtype=complex)
         M_hub = np.diag([self.hub.mass, self.hub.mass, self.hub.inertia])
         Z += M_hub * (s**2)[..., None, None]
         for mount in self.mounts:
             G = mount.kinematics()
-            W = _W_of(mount.appendage, s, undamped=undamped)
-            D = np.linalg.inv(W)
+            D = _dynamic_stiffness_of(mount.appendage, s, undamped=undamped)
             Z += G[1:].T @ D @ G[1:]
             Z += mount.appendage.mass * np.outer(G[0], G[0]) * (s**2)[..., None, None]
         return Z
@@ -414,44 +421,99 @@ class Spacecraft:
         """
         import control
 
-        omega = np.asarray(omega, dtype=float)
-        if omega.ndim != 1 or omega.size == 0 or not np.all(np.isfinite(omega)) or np.any(omega <= 0):
-            raise ValueError("omega must be a 1-D array of positive finite frequencies [rad/s]")
+        omega = _frequency_vector(omega)
         if output not in ("theta", "omega"):
-            raise ValueError(f"output must be 'theta' or 'omega'; got {output!r}")
+            raise ValueError(f"output must be 'theta' or 'omega'; got {describe(output)}")
         s = 1j * omega
-        Z = self._hub_dynamic_stiffness(s)
-        e_theta = np.broadcast_to(np.array([[0.0], [0.0], [1.0]]), Z.shape[:-1] + (1,))
-        response = np.linalg.solve(Z, e_theta)[..., 2, 0]
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            Z = self._hub_dynamic_stiffness(s)
+            e_theta = np.broadcast_to(np.array([[0.0], [0.0], [1.0]]), Z.shape[:-1] + (1,))
+            try:
+                response = np.linalg.solve(Z, e_theta)[..., 2, 0]
+            except np.linalg.LinAlgError:
+                response = np.full(omega.shape, np.nan, dtype=complex)
+        if not np.all(np.isfinite(response)):
+            bad = omega[~np.isfinite(response)]
+            raise ValueError(
+                "omega hits a natural frequency of the undamped spacecraft, where the response "
+                f"is infinite [rad/s]: {describe(bad)}; give the appendages damping or move "
+                "omega off the resonance")
         if output == "omega":
             response = response * s
         return control.frd(response.reshape(1, 1, -1), omega, inputs=["torque"], outputs=[output])
 
-    def _wittrick_williams(self, n: int) -> np.ndarray:
-        """First n elastic coupled frequencies by the Wittrick-Williams count and bisection."""
-        def count(omega: np.ndarray) -> np.ndarray:
-            Z = self._hub_dynamic_stiffness(1j * omega, undamped=True).real
-            Z = 0.5 * (Z + np.swapaxes(Z, -1, -2))
-            negative = (np.linalg.eigvalsh(Z) < 0).sum(axis=-1)
-            clamped = sum(_clamped_count(m.appendage, omega) for m in self.mounts)
-            return negative + clamped
+    def _count(self, omega: np.ndarray) -> np.ndarray:
+        """Wittrick-Williams count: coupled frequencies (the 3 rigid-body ones included) < omega.
 
+        ``J(w) = sum_i J0_i(w) + s{Z(iw)}`` (module docstring). Exactly at an appendage's clamped
+        frequency D_i is infinite; the count there is its limit from below (a natural frequency
+        is counted only above it), taken by evaluating Z one rounding step lower.
+        """
+        omega = np.asarray(omega, dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            Z = self._hub_dynamic_stiffness(1j * omega, undamped=True).real
+            bad = ~np.all(np.isfinite(Z), axis=(-2, -1))
+            step = 0
+            while np.any(bad) and step < 8:
+                step += 1
+                lower = omega[bad] * (1.0 - 2.0 * step * np.finfo(float).eps)
+                Z[bad] = self._hub_dynamic_stiffness(1j * lower, undamped=True).real
+                bad[bad] = ~np.all(np.isfinite(Z[bad]), axis=(-2, -1))
+        if np.any(bad):  # pragma: no cover - needs a pole on 8 consecutive doubles
+            raise FloatingPointError("the dynamic stiffness of an appendage is not finite near "
+                                     f"omega = {describe(omega[bad])} [rad/s]")
+        Z = 0.5 * (Z + np.swapaxes(Z, -1, -2))
+        # Sylvester's law of inertia: negative eigenvalues of the symmetric 3x3 Z. eigvalsh
+        # is backward stable, so the count is exact unless an eigenvalue is within round-off
+        # of zero, i.e. omega within round-off of a coupled frequency: what bisection needs.
+        negative = (np.linalg.eigvalsh(Z) < 0).sum(axis=-1)
+        top = float(np.max(omega, initial=0.0))
+        clamped = sum(np.searchsorted(self._clamped(k, top), omega)
+                      for k in range(len(self.mounts)))
+        return negative + clamped
+
+    def _clamped(self, k: int, omega_max: float) -> np.ndarray:
+        """Clamped frequencies of appendage k [rad/s], at least up to omega_max (cached)."""
+        cache = self._cache.setdefault("clamped", {})
+        wc = cache.get(k)
+        if wc is None or (wc.size and wc[-1] <= omega_max and
+                          hasattr(self.mounts[k].appendage, "cantilever_frequencies")):
+            wc = _clamped_frequencies(self.mounts[k].appendage, omega_max)
+            cache[k] = wc
+        return wc
+
+    def _wittrick_williams(self, n: int) -> np.ndarray:
+        """First n elastic coupled frequencies by the Wittrick-Williams count and bisection.
+
+        Bracket: with the hub held, the spacecraft falls apart into the clamped appendages; by
+        Rayleigh's interlacing (3 constraints) the k-th elastic coupled frequency is at least
+        the k-th clamped frequency of them all, so half the lowest clamped frequency is below
+        every elastic one. The upper end doubles until the count reaches n + 3.
+        """
         n_total = n + 3  # the three rigid-body modes count as frequencies <= any omega > 0
-        scale = min((_first_frequency(m.appendage) for m in self.mounts), default=1.0)
-        lo = np.full(n, 1e-9 * scale)
-        hi = np.full(n, scale)
-        while count(hi[:1])[0] < n_total:
+        lowest = min((float(wc[0]) if wc.size else np.inf)
+                     for wc in (self._clamped(k, 0.0) for k in range(len(self.mounts))))
+        if not np.isfinite(lowest):
+            raise ValueError("the spacecraft has no elastic mode: no appendage has a clamped "
+                             "natural frequency")
+        lo = np.full(n, 0.5 * lowest)
+        hi = np.full(1, lowest)
+        while self._count(hi)[0] < n_total:
             hi = hi * 2.0
-            if hi[0] > 1e12 * scale:
-                raise RuntimeError("Wittrick-Williams bracket search failed")
-        hi[:] = hi[0]
+            if not np.isfinite(hi[0]) or hi[0] > 1e12 * lowest:
+                raise ValueError(
+                    f"the spacecraft has fewer than n = {n} elastic natural frequencies "
+                    f"below {hi[0]:.3g} rad/s (a finite appendage has a finite number)")
+        hi = np.full(n, hi[0])
         target = np.arange(4, n_total + 1)  # frequency k is where the count reaches k
+        active = np.arange(n)
         for _ in range(200):
-            mid = 0.5 * (lo + hi)
-            above = count(mid) >= target
-            hi = np.where(above, mid, hi)
-            lo = np.where(above, lo, mid)
-            if np.all(hi - lo <= 4e-16 * hi):
+            mid = 0.5 * (lo[active] + hi[active])
+            above = self._count(mid) >= target[active]
+            hi[active] = np.where(above, mid, hi[active])
+            lo[active] = np.where(above, lo[active], mid)
+            active = active[hi[active] - lo[active] > 4e-16 * hi[active]]
+            if active.size == 0:
                 break
         return 0.5 * (lo + hi)
 
@@ -466,41 +528,66 @@ def _closure(active: np.ndarray, coupled: np.ndarray) -> np.ndarray:
         active = grown
 
 
-def _W_of(appendage, s: np.ndarray, *, undamped: bool) -> np.ndarray:
-    """W(s) of an appendage, without damping when asked (natural frequencies are undamped).
+def _frequency_vector(omega) -> np.ndarray:
+    """omega as a 1-D float64 array of positive finite frequencies [rad/s], or an error."""
+    if isinstance(omega, (str, bytes)) or omega is None:
+        raise TypeError(f"omega must be an array of frequencies [rad/s]; got "
+                        f"{type(omega).__name__}")
+    arr = np.asarray(omega)
+    if arr.dtype.kind not in "iuf" or arr.dtype == bool:
+        raise TypeError(f"omega must be real frequencies [rad/s]; got dtype {arr.dtype} "
+                        f"{describe(omega)}")
+    arr = arr.astype(float)
+    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
+        raise ValueError("omega must be a 1-D array of positive finite frequencies [rad/s]; "
+                         f"got {describe(omega)}")
+    return arr
 
-    Through the interface only: an appendage offering ``undamped()`` (the distributed beam)
-    gives its undamped twin; a finite one its root model with the damping removed.
+
+def _dynamic_stiffness_of(appendage, s: np.ndarray, *, undamped: bool) -> np.ndarray:
+    """D(s) = W(s)^-1 of an appendage [N/m, N; N, N*m], shape ``s.shape + (2, 2)``.
+
+    Through the interface only: a finite appendage (``root_model()``) by static condensation
+    of its realisation, damping removed when ``undamped``; an appendage offering
+    ``dynamic_stiffness(s)`` (the distributed beam; ``undamped()`` gives its undamped twin)
+    by it; any other by the 2x2 inverse of its W(s) (adjugate over determinant).
     """
     if undamped and hasattr(appendage, "undamped"):
         appendage = appendage.undamped()
-    if undamped and hasattr(appendage, "root_model"):
+    if hasattr(appendage, "root_model"):
         rm = appendage.root_model()
-        if np.any(rm.damping):
+        if undamped and np.any(rm.damping):
             rm = dataclasses.replace(rm, damping=np.zeros_like(rm.damping))
-        return np.linalg.inv(rm.dynamic_stiffness(s))
-    return appendage.W(s)
+        return rm.dynamic_stiffness(s)
+    if hasattr(appendage, "dynamic_stiffness"):
+        return np.asarray(appendage.dynamic_stiffness(s), dtype=complex)
+    W = np.asarray(appendage.W(s), dtype=complex)
+    det = W[..., 0, 0] * W[..., 1, 1] - W[..., 0, 1] * W[..., 1, 0]
+    D = np.empty_like(W)
+    D[..., 0, 0] = W[..., 1, 1] / det
+    D[..., 1, 1] = W[..., 0, 0] / det
+    D[..., 0, 1] = -W[..., 0, 1] / det
+    D[..., 1, 0] = -W[..., 1, 0] / det
+    return D
 
 
-def _clamped_count(appendage, omega: np.ndarray) -> np.ndarray:
-    """Number of natural frequencies of the appendage with its attachment end clamped, < omega."""
+def _clamped_frequencies(appendage, omega_max: float) -> np.ndarray:
+    """Natural frequencies [rad/s] of the appendage with its attachment end clamped, ascending:
+    at least every one up to omega_max (all of them for a finite model)."""
     if hasattr(appendage, "cantilever_frequencies"):
         n = 8
         while True:
             wc = appendage.cantilever_frequencies(n)
-            if wc[-1] > omega.max():
-                break
+            if wc[-1] > omega_max:
+                return wc
             n *= 2
-        return np.searchsorted(wc, omega)
+    if not hasattr(appendage, "root_model"):
+        raise TypeError(
+            f"exact natural frequencies need each appendage's clamped frequencies "
+            f"(cantilever_frequencies(n) or a finite root_model()); "
+            f"{type(appendage).__name__} offers neither")
     rm = appendage.root_model()
     Kii, Mii = rm.stiffness[2:, 2:], rm.mass[2:, 2:]
     if Kii.shape[0] == 0:
-        return np.zeros(omega.shape, dtype=int)
-    wc = np.sqrt(np.clip(scipy.linalg.eigvalsh(Kii, Mii), 0.0, None))
-    return np.searchsorted(wc, omega)
-
-
-def _first_frequency(appendage) -> float:
-    if hasattr(appendage, "cantilever_frequencies"):
-        return float(appendage.cantilever_frequencies(1)[0])
-    return float(appendage.poles()[0])
+        return np.zeros(0)
+    return np.sqrt(np.clip(scipy.linalg.eigvalsh(Kii, Mii), 0.0, None))

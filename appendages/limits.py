@@ -1,0 +1,150 @@
+"""Limits on the work one call may do, and the one explicit way to raise them.
+
+Every entry point of flexsat that can be asked for an unbounded amount of work estimates it
+before doing any and refuses, at once and by name, a request beyond these limits, with a
+:class:`LimitError` (a ``ValueError``) that names the parameter, the value asked for, the limit
+and how to raise it. The limits are sized so that a request within them finishes in seconds to
+about a minute on a laptop-class machine (2 cores) and needs well under 1 GiB; the measurements
+behind each are given beside it.
+
+=================  =======  ===================================================================
+name               default  what it bounds
+=================  =======  ===================================================================
+``modes``          1000     bending modes of a truncation (``Beam.truncated(n_modes)``), coupled
+                            frequencies asked of ``Spacecraft.natural_frequencies(n)`` and
+                            ``Spacecraft.plant(n_modes=...)``
+``bodies``         500      bodies of a :class:`~appendages.chain.HingedChain` (also through
+                            ``HingedChain.rfem``, ``superelements``: 2 n + 1 bodies)
+``fit_bodies``     12       bodies of ``equivalence.fit_chain`` (its least squares grows like
+                            n_bodies**4: 7 s at 6 bodies, ~75 s at 12, see ``fit_chain``)
+``roots``          100000   frequencies or zeros of a distributed beam asked at once
+                            (``Beam.natural_frequencies(n)`` etc.: O(n) work and memory)
+``coordinates``    3000     generalised coordinates of an assembled hub + appendages model
+                            (its dense eigen-decomposition: O(n**3), ~20 s and 0.3 GiB at 3000)
+``appendages``     100      mounts on one spacecraft
+``elements``       50e6     entries of an array whose size is the product of two requests
+                            (``Beam.mode_shapes(x, n)``: 0.4 GiB of float64)
+=================  =======  ===================================================================
+
+Raising a limit
+---------------
+A user who really wants more says so explicitly, for a block of code::
+
+    from appendages import limits
+    with limits.raised(modes=5000):
+        craft.natural_frequencies(5000)
+
+:func:`raised` works on a :class:`contextvars.ContextVar`, so it applies to the current thread
+(and asyncio task) only and is undone on leaving the block, also on an exception. A keyword on
+every entry point (``max_modes=``) was rejected: it would have to be threaded through every
+layer (scene -> spacecraft -> appendages) and every signature; a mutable module constant was
+rejected: a change made by one part of a program (or by a test) would leak into every other.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import math
+import types
+from collections.abc import Iterator
+
+from .interface import FlexsatError, describe
+
+__all__ = ["DEFAULTS", "LimitError", "check", "current", "raised"]
+
+#: The documented limits (module docstring); read-only.
+DEFAULTS = types.MappingProxyType({
+    "modes": 1000,
+    "bodies": 500,
+    "fit_bodies": 12,
+    "roots": 100_000,
+    "coordinates": 3000,
+    "appendages": 100,
+    "elements": 50_000_000,
+})
+
+_CURRENT: contextvars.ContextVar = contextvars.ContextVar("flexsat_limits", default=DEFAULTS)
+
+
+class LimitError(FlexsatError, ValueError):
+    """A request exceeds a documented work limit (:mod:`appendages.limits`).
+
+    Attributes
+    ----------
+    parameter : str
+        The parameter of the call that asked for the work (e.g. ``"n_modes"``).
+    value : int or float
+        What was asked for.
+    limit_name : str
+        The key of the limit (``"modes"``, ``"bodies"``...), the keyword of :func:`raised`.
+    limit : int or float
+        Its current value.
+    """
+
+    def __init__(self, parameter: str, value, limit_name: str, limit, what: str):
+        self.parameter = parameter
+        self.value = value
+        self.limit_name = limit_name
+        self.limit = limit
+        super().__init__(
+            f"{parameter} = {describe(value)} exceeds the limit of {limit:,} {what} "
+            f"(appendages.limits: '{limit_name}'); ask for less, or raise the limit explicitly "
+            f"with `with appendages.limits.raised({limit_name}=...)`")
+
+
+def current(name: str):
+    """The limit ``name`` in force (a key of :data:`DEFAULTS`)."""
+    return _CURRENT.get()[name]
+
+
+def check(parameter: str, value, limit_name: str, what: str) -> None:
+    """Raise :class:`LimitError` if ``value`` exceeds the limit ``limit_name`` in force.
+
+    Parameters
+    ----------
+    parameter : str
+        The caller's parameter name, for the message.
+    value : int or float
+        The work asked for, in the units of the limit.
+    limit_name : str
+        A key of :data:`DEFAULTS`.
+    what : str
+        What is counted ("bending modes", "bodies"...), for the message.
+    """
+    limit = current(limit_name)
+    if value > limit:
+        raise LimitError(parameter, value, limit_name, limit, what)
+
+
+@contextlib.contextmanager
+def raised(**limits) -> Iterator[None]:
+    """Raise (or lower) limits for the duration of a ``with`` block (module docstring).
+
+    Parameters
+    ----------
+    **limits : int
+        New values by name (keys of :data:`DEFAULTS`), positive integers; ``math.inf`` lifts a
+        limit entirely.
+
+    Raises
+    ------
+    TypeError
+        For an unknown limit name or a value that is not a number.
+    ValueError
+        For a value that is not positive.
+    """
+    for name, value in limits.items():
+        if name not in DEFAULTS:
+            raise TypeError(f"unknown limit {name!r}; the limits are {', '.join(DEFAULTS)}")
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise TypeError(f"limit {name} must be a number; got {type(value).__name__}")
+        if not (value > 0) or (isinstance(value, float) and math.isnan(value)):
+            raise ValueError(f"limit {name} must be positive; got {value!r}")
+    new = dict(_CURRENT.get())
+    new.update(limits)
+    token = _CURRENT.set(types.MappingProxyType(new))
+    try:
+        yield
+    finally:
+        _CURRENT.reset(token)
