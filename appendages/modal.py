@@ -1,6 +1,6 @@
 r"""Finite modal models of the distributed beam (truncations).
 
-Two reductions of the exact beam, both realised in attachment-end coordinates (a
+Three reductions of the exact beam, all realised in attachment-end coordinates (a
 :class:`~appendages.interface.RootModel`, q = [delta, phi, eta_1..eta_n]):
 
 ``"free-free"`` (the paper's)
@@ -12,15 +12,29 @@ Two reductions of the exact beam, both realised in attachment-end coordinates (a
     modes, ``sum_{k>n} b_k b_k^T/w_k**2 ~ n**-3`` for W1.
 
 ``"residual"``
-    The free-free truncation plus the static (inertia-relief) flexibility of every dropped mode,
-    ``R_n = G - sum_{k<=n} b_k b_k^T/w_k**2`` in series at the attachment end, where
-    ``G = sum_{all k} b_k b_k^T/w_k**2`` is the constant term of the Laurent series of the exact
-    W at s = 0 (from the power series of the module :mod:`appendages.beam`):
-    ``G = [[L**3/105, -11 L**2/210], [-11 L**2/210, 13 L/35]]/EJ``. The poles stay exact; W(s)
-    has the constant part R_n (a massless spring at the attachment end), so the error of W
-    near s = 0 drops from ``~ sum_{k>n} b b^T/w**2`` to ``~ s**2 sum_{k>n} b b^T/w**4``.
-    Realised with the attachment end as two massless coordinates joined to the modal body by
-    the spring R_n^-1 (mode-acceleration method).
+    The free-free truncation plus the two *residual attachment modes* of the dropped modes, a
+    Rayleigh-Ritz reduction (Craig & Chang's free-interface method with residual flexibility
+    and its inertia). The residual modes are the static shapes of the dropped modes under a
+    unit root force and moment, ``psi = sum_{k>n} phi_k b_k^T/w_k**2``; they are orthogonal to
+    the kept modes, have stiffness ``R = sum_{k>n} b_k b_k^T/w_k**2`` (the residual
+    flexibility) and mass ``R2 = sum_{k>n} b_k b_k^T/w_k**4``, and move the root by R. In
+    mass-normalised form (``R V = R2 V Lambda``) they are two more modes with root values
+    ``(R V)^T`` and frequencies ``sqrt(Lambda)`` (above w_{n+1}), damped by the beam's damping
+    operator projected on them, ``2 zeta V^T (sum_{k>n} b b^T/w**3) V``. The sums over k > n
+    come from :meth:`Beam._free_free_tail` (Hurwitz zeta tails, no cancellation). Then
+
+        W(s) = rigid/s**2 + sum_{k<=n} b b^T/(s**2 + 2 zeta w s + w**2) + R (s**2 R2 + R)^-1 R,
+
+    with the first n free-free poles exact, the static flexibility exact (W - rigid/s**2 -> G)
+    and the error of W near s = 0 of order ``s**4 sum_{k>n} b b^T/w**6``.
+    The massless form ``W + R`` (MacNeal's mode-acceleration correction, flexsat's up to
+    issue 9) has the same static flexibility but no residual inertia: on a hub of finite mass
+    the hub then oscillates on the massless spring R^-1, a spurious coupled mode that
+    matches no mode of the real spacecraft (32.6 rad/s with 2 modes on the default 100 kg
+    hub, 7.68 rad/s on a 1 kg hub where the exact modes are 6.02 and 11.65 rad/s). As a
+    Rayleigh-Ritz model of the coupled system the residual form cannot have one: every
+    coupled frequency is an upper bound of the exact one of the same rank, and the first
+    n + 1 converge (tests/test_spacecraft.py).
 
 ``"craig-bampton"``
     Attachment-end motion q_r = (delta, phi) carries the beam rigidly (constraint modes
@@ -44,6 +58,10 @@ References
 .. [3] R. R. Craig, A. J. Kurdila, "Fundamentals of Structural Dynamics", 2nd ed., 2006,
    sec. 14.5 (mode-acceleration method, residual flexibility, inertia relief).
 .. [4] Belonozhko et al. 2009 (PAPER.md): the two-mode free-free reference.
+.. [5] R. R. Craig, C.-J. Chang, "On the use of attachment modes in substructure coupling for
+   dynamic analysis", AIAA paper 77-405, 1977 (residual attachment modes, Ritz coupling).
+.. [6] R. H. MacNeal, "A hybrid method of component mode synthesis", Computers & Structures
+   1(4), 1971 (residual flexibility and its inertia).
 """
 
 from __future__ import annotations
@@ -51,6 +69,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.linalg
 
 from .interface import FiniteAppendage, RootModel, as_frequency_array
 
@@ -102,9 +121,9 @@ class ModalBeam(FiniteAppendage):
     def W(self, s) -> np.ndarray:
         """Transfer matrix W(s) of the truncated beam, shape ``np.shape(s) + (2, 2)``.
 
-        Free-free and residual models are summed mode by mode (plus the constant residual
-        flexibility), which avoids the cancellation of the stiff residual spring in the
-        attachment-end dynamic stiffness near s = 0; Craig-Bampton models invert the
+        Free-free and residual models are summed mode by mode (the residual modes' 2x2 block
+        as ``B^T (s**2 I + s C + Lambda)^-1 B``), which keeps the rigid-body term 1/s**2 and
+        the static flexibility apart near s = 0; Craig-Bampton models invert the
         attachment-end dynamic stiffness (see :class:`RootModel`).
         """
         if self.method == "craig-bampton":
@@ -121,17 +140,38 @@ class ModalBeam(FiniteAppendage):
         for i, j in ((0, 0), (0, 1), (1, 1)):
             out[..., i, j] = rigid[i, j] / s**2 + flex @ (b_flex[:, i] * b_flex[:, j])
         if self.method == "residual":
-            out += self._residual_flexibility(w, b_flex)
+            b_res, lam, C_res, _ = self._residual_modes()
+            s2 = s**2
+            h00 = s2 + s * C_res[0, 0] + lam[0]
+            h11 = s2 + s * C_res[1, 1] + lam[1]
+            h01 = s * C_res[0, 1]
+            det = h00 * h11 - h01 * h01
+            inverse = ((h11, -h01), (-h01, h00))
+            for i, j in ((0, 0), (0, 1), (1, 1)):
+                out[..., i, j] += sum(b_res[a, i] * inverse[a][c] * b_res[c, j]
+                                      for a in (0, 1) for c in (0, 1)) / det
         out[..., 1, 0] = out[..., 0, 1]
         return out
 
-    def _residual_flexibility(self, w: np.ndarray, b_flex: np.ndarray) -> np.ndarray:
-        """R_n = G - sum_{k<=n} b_k b_k^T/w_k**2 [m/N, 1/N; 1/N, 1/(N*m)]."""
-        L, EJ = self.beam.length, self.beam.bending_stiffness
-        G = np.array([[L**3 / 105.0, -11.0 * L**2 / 210.0],
-                      [-11.0 * L**2 / 210.0, 13.0 * L / 35.0]]) / EJ
-        R = G - (b_flex.T / w**2) @ b_flex
-        return 0.5 * (R + R.T)
+    def _residual_modes(self):
+        """The two residual modes of the ``"residual"`` truncation (module docstring).
+
+        Returns ``(B, lam, C, tip)``: root values ``B`` (2, 2) (row j: mode j's
+        ``(delta, phi)``), squared frequencies ``lam`` (2,) [rad^2/s^2], damping ``C`` (2, 2)
+        [1/s] and tip values (2,), all for mass-normalised residual modes ``xi = V nu`` with
+        ``R V = R2 V diag(lam)``, ``V^T R2 V = I``.
+        """
+        cached = self.__dict__.get("_residual_cache")
+        if cached is None:
+            beam, n = self.beam, self.n_modes
+            R, tip_R = beam._free_free_tail(n, 2)
+            R3, _ = beam._free_free_tail(n, 3)
+            R2, _ = beam._free_free_tail(n, 4)
+            lam, V = scipy.linalg.eigh(R, R2)
+            C = V.T @ (2.0 * beam.damping_ratio * R3) @ V
+            cached = ((R @ V).T, lam, 0.5 * (C + C.T), tip_R @ V)
+            self.__dict__["_residual_cache"] = cached
+        return cached
 
     def _projected_damping(self, n: int) -> np.ndarray:
         """The beam's damping operator in the cantilever-mode coordinates.
@@ -159,40 +199,35 @@ class ModalBeam(FiniteAppendage):
         names = ("delta", "phi") + tuple(f"eta[{k + 1}]" for k in range(n))
         if self.method in ("free-free", "residual"):
             w = beam.natural_frequencies(n)
-            b_flex, tip_flex = beam._free_free_root_values(n)
+            b_modes, tip_modes = beam._free_free_root_values(n)
+            stiffness_modes = w**2
+            damping_modes = np.diag(2.0 * zeta * w)
+            if self.method == "residual":
+                # two more "modes": the residual attachment modes with their own inertia
+                b_res, lam, C_res, tip_res = self._residual_modes()
+                b_modes = np.vstack([b_modes, b_res])
+                tip_modes = np.concatenate([tip_modes, tip_res])
+                stiffness_modes = np.concatenate([stiffness_modes, lam])
+                damping_modes = scipy.linalg.block_diag(damping_modes, C_res)
+                names = names + ("residual[1]", "residual[2]")
+            N = stiffness_modes.size
             J = beam.inertia
             # rigid modes: translation 1/sqrt(m); rotation about the centre (x - L/2)/sqrt(J)
             b_rigid = np.array([[1.0 / math.sqrt(m), 0.0],
                                 [-0.5 * L / math.sqrt(J), 1.0 / math.sqrt(J)]])
             tip_rigid = np.array([1.0 / math.sqrt(m), 0.5 * L / math.sqrt(J)])
-            if self.method == "free-free":
-                # eta = T q: eta_rigid = B_r^-T (q_r - B_f^T eta_f), eta_f = eta_f
-                Br_inv_T = np.linalg.inv(b_rigid.T)
-                T = np.zeros((n + 2, n + 2))
-                T[:2, :2] = Br_inv_T
-                T[:2, 2:] = -Br_inv_T @ b_flex.T
-                T[2:, 2:] = np.eye(n)
-                mass = T.T @ T
-                stiffness = np.zeros((n + 2, n + 2))
-                stiffness[2:, 2:] = np.diag(w**2)
-                damping = np.zeros((n + 2, n + 2))
-                damping[2:, 2:] = np.diag(2.0 * zeta * w)
-                tip_abs = np.concatenate([tip_rigid, tip_flex]) @ T
-            else:
-                # q = [delta, phi, eta_rigid(2), eta_f(n)]; the attachment end (massless) is
-                # joined to the modal body's end point B^T eta by the residual spring R^-1.
-                spring = np.linalg.inv(self._residual_flexibility(w, b_flex))
-                B = np.vstack([b_rigid, b_flex])          # (n+2, 2): modal root values
-                coupling = np.hstack([np.eye(2), -B.T])   # q_r - B^T eta
-                stiffness = coupling.T @ spring @ coupling
-                stiffness[4:, 4:] += np.diag(w**2)
-                mass = np.zeros((n + 4, n + 4))
-                mass[2:, 2:] = np.eye(n + 2)
-                damping = np.zeros((n + 4, n + 4))
-                damping[4:, 4:] = np.diag(2.0 * zeta * w)
-                # the free end moves with the modal body (the residual spring acts at x = 0)
-                tip_abs = np.concatenate([[0.0, 0.0], tip_rigid, tip_flex])
-                names = ("delta", "phi", "eta_rigid[1]", "eta_rigid[2]") + names[2:]
+            # eta = T q: eta_rigid = B_r^-T (q_r - B_f^T eta_f), eta_f = eta_f
+            Br_inv_T = np.linalg.inv(b_rigid.T)
+            T = np.zeros((N + 2, N + 2))
+            T[:2, :2] = Br_inv_T
+            T[:2, 2:] = -Br_inv_T @ b_modes.T
+            T[2:, 2:] = np.eye(N)
+            mass = T.T @ T
+            stiffness = np.zeros((N + 2, N + 2))
+            stiffness[2:, 2:] = np.diag(stiffness_modes)
+            damping = np.zeros((N + 2, N + 2))
+            damping[2:, 2:] = damping_modes
+            tip_abs = np.concatenate([tip_rigid, tip_modes]) @ T
         else:
             w = beam.cantilever_frequencies(n)
             participation = beam.modal_participation(n)

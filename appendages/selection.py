@@ -58,9 +58,9 @@ SMALLEST_SIZE = {'poles': {'craig-bampton': [(3, 5), (3, 5), (3, 5), (4, 6), (5,
            'free-free': [(2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4),
                          (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4),
                          (2, 4)],
-           'residual': [(2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4),
-                        (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4), (2, 4),
-                        None],
+           'residual': [(2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6),
+                        (2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6),
+                        (2, 6)],
            'rfem': [(5, 6), (5, 6), (5, 6), (5, 6), (8, 9), (11, 12), (14, 15), (18, 19), (24, 25),
                     (32, 33), (42, 43), (55, 56), None, None, None, None, None, None, None],
            'superelements': [(3, 8), (4, 10), (4, 10), (5, 12), (6, 14), (7, 16), (9, 20),
@@ -73,9 +73,9 @@ SMALLEST_SIZE = {'poles': {'craig-bampton': [(3, 5), (3, 5), (3, 5), (4, 6), (5,
                                 None, None, None, None, None, None, None, None, None],
                      'free-free': [(5, 7), (16, 18), (51, 53), None, None, None, None, None, None,
                                    None, None, None, None, None, None, None, None, None, None],
-                     'residual': [(2, 4), (2, 4), (2, 4), (3, 5), (3, 5), (4, 6), (5, 7), (7, 9),
-                                  (9, 11), (11, 13), (14, 16), (18, 20), (23, 25), (29, 31),
-                                  (37, 39), (47, 49), (64, 66), None, None],
+                     'residual': [(2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (2, 6), (3, 7), (3, 7),
+                                  (3, 7), (4, 8), (4, 8), (5, 9), (6, 10), (6, 10), (7, 11),
+                                  (8, 12), (9, 13), None, None],
                      'rfem': [(5, 6), (6, 7), (9, 10), (14, 15), (24, 25), (42, 43), None, None,
                               None, None, None, None, None, None, None, None, None, None, None],
                      'superelements': [(3, 8), (4, 10), (4, 10), (5, 12), (6, 14), (7, 16),
@@ -83,14 +83,14 @@ SMALLEST_SIZE = {'poles': {'craig-bampton': [(3, 5), (3, 5), (3, 5), (4, 6), (5,
                                        None, None, None, None, None, None, None]},
  'zeros': {'craig-bampton': [(3, 5), (3, 5), (3, 5), (4, 6), (4, 6), (5, 7), (6, 8), (8, 10),
                              (10, 12), (12, 14), (16, 18), (19, 21), (24, 26), (30, 32), (38, 40),
-                             (48, 50), (61, 63), None, None],
+                             (48, 50), (60, 62), None, None],
            'fitted': [(3, 4), (3, 4), (4, 5), None, None, None, None, None, None, None, None, None,
                       None, None, None, None, None, None, None],
            'free-free': [(5, 7), (16, 18), (51, 53), None, None, None, None, None, None, None,
                          None, None, None, None, None, None, None, None, None],
-           'residual': [(2, 4), (2, 4), (2, 4), (3, 5), (3, 5), (4, 6), (5, 7), (7, 9), (9, 11),
-                        (11, 13), (14, 16), (18, 20), (23, 25), (29, 31), (37, 39), (47, 49),
-                        (64, 66), None, None],
+           'residual': [(1, 5), (1, 5), (2, 6), (2, 6), (2, 6), (2, 6), (3, 7), (3, 7), (3, 7),
+                        (4, 8), (4, 8), (5, 9), (6, 10), (6, 10), (7, 11), (8, 12), (9, 13), None,
+                        None],
            'rfem': [(4, 5), (6, 7), (9, 10), (14, 15), (24, 25), (42, 43), None, None, None, None,
                     None, None, None, None, None, None, None, None, None],
            'superelements': [(3, 8), (3, 8), (4, 10), (4, 10), (5, 12), (6, 14), (8, 18), (10, 22),
@@ -230,9 +230,9 @@ def cheapest_model(tolerance: float, *, quantity: str = "poles-and-zeros",
     --------
     >>> choice = cheapest_model(1e-3, quantity="zeros")
     >>> choice.family, choice.size, choice.n_dof
-    ('residual', 3, 5)
-    >>> cheapest_model(1e-3, quantity="zeros", families=("craig-bampton", "rfem")).size
-    4
+    ('craig-bampton', 4, 6)
+    >>> cheapest_model(1e-3, quantity="zeros", families=("residual", "rfem")).size
+    2
     """
     found = candidates(tolerance, quantity=quantity, families=families)
     if found:
