@@ -65,7 +65,9 @@ import math
 import numpy as np
 import scipy.special
 
-from .interface import as_frequency_array, check_positive
+from . import limits
+from .interface import (as_frequency_array, check_derived, check_positive, check_range, describe,
+                        inverse_2x2)
 
 __all__ = ["Beam", "characteristic_roots"]
 
@@ -251,6 +253,22 @@ def _shape_terms(kind: str, xk: np.ndarray):
     return num / den, c_plus
 
 
+def _check_damping_ratio(damping_ratio) -> float:
+    """The modal damping ratio as a float in [0, 1), or TypeError/ValueError naming it."""
+    zeta = check_positive("damping_ratio", damping_ratio, "-", allow_zero=True)
+    if zeta >= 1.0:
+        raise ValueError(f"damping_ratio must be below 1 (underdamped modes) [-]; got "
+                         f"{describe(damping_ratio)}")
+    return zeta
+
+
+def _check_section(bending_stiffness: float, linear_density: float, ej_formula: str,
+                   rho_formula: str, ej_given, rho_given) -> None:
+    """Check the beam properties a section constructor derived, blaming its own parameters."""
+    check_derived(bending_stiffness, "bending_stiffness", ej_formula, ej_given)
+    check_derived(linear_density, "linear_density", rho_formula, rho_given)
+
+
 class Beam:
     """Uniform Euler-Bernoulli beam, free at both ends, loaded at its attachment end x = 0.
 
@@ -267,6 +285,17 @@ class Beam:
         The exact W(s) of a damped beam is the undamped closed form plus the exact damping
         correction of each mode, summed until the rest is below round-off.
 
+    Raises
+    ------
+    TypeError
+        A parameter that is not a real number.
+    ValueError
+        A parameter outside its documented range (:data:`appendages.interface.RANGES`):
+        length 1e-6 to 1e6 m, bending_stiffness 1e-15 to 1e15 N*m**2, linear_density 1e-12 to
+        1e6 kg/m, damping_ratio in [0, 1). Within them the frequency scale
+        ``sqrt(EJ/(rho*A L**4))`` lies between 1e-23 and 1e26 rad/s and every derived scale
+        (L**3/EJ, the residual tails ``rho*A L**7/EJ**2``) between 1e-90 and 1e90.
+
     Notes
     -----
     Rotary inertia and shear deformation are neglected (Euler-Bernoulli), so the moment of
@@ -279,12 +308,11 @@ class Beam:
 
     def __init__(self, length: float, bending_stiffness: float, linear_density: float, *,
                  damping_ratio: float = 0.0):
-        self.length = check_positive("length", length, "m")
-        self.bending_stiffness = check_positive("bending_stiffness", bending_stiffness, "N*m^2")
-        self.linear_density = check_positive("linear_density", linear_density, "kg/m")
-        self.damping_ratio = check_positive("damping_ratio", damping_ratio, "-", allow_zero=True)
-        if self.damping_ratio >= 1.0:
-            raise ValueError(f"damping_ratio must be below 1 (underdamped modes) [-]; got {damping_ratio!r}")
+        self.length = check_range("length", length, "length")
+        self.bending_stiffness = check_range("bending_stiffness", bending_stiffness,
+                                             "bending_stiffness")
+        self.linear_density = check_range("linear_density", linear_density, "linear_density")
+        self.damping_ratio = _check_damping_ratio(damping_ratio)
         self._cache: dict = {}
 
     # -- constructors -------------------------------------------------------------------------
@@ -301,11 +329,15 @@ class Beam:
         youngs_modulus : float, Pa
         damping_ratio : float, optional
         """
-        d = check_positive("diameter", diameter, "m")
-        rho = check_positive("density", density, "kg/m^3")
-        E = check_positive("youngs_modulus", youngs_modulus, "Pa")
+        d = check_range("diameter", diameter, "length")
+        rho = check_range("density", density, "density")
+        E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
         area = math.pi * d**2 / 4.0
         second_moment = math.pi * d**4 / 64.0
+        _check_section(E * second_moment, rho * area,
+                       "youngs_modulus*pi*diameter**4/64", "density*pi*diameter**2/4",
+                       [("diameter", diameter, "m"), ("youngs_modulus", youngs_modulus, "Pa")],
+                       [("diameter", diameter, "m"), ("density", density, "kg/m^3")])
         return cls(length, E * second_moment, rho * area, damping_ratio=damping_ratio)
 
     @classmethod
@@ -323,17 +355,26 @@ class Beam:
         youngs_modulus : float, Pa
         damping_ratio : float, optional
         """
-        D = check_positive("outer_diameter", outer_diameter, "m")
-        t = check_positive("wall_thickness", wall_thickness, "m")
+        D = check_range("outer_diameter", outer_diameter, "length")
+        t = check_range("wall_thickness", wall_thickness, "length")
         if t > D / 2.0:
             raise ValueError(
                 f"wall_thickness must be at most outer_diameter/2 = {D / 2.0!r} [m]; got {t!r}"
             )
-        rho = check_positive("density", density, "kg/m^3")
-        E = check_positive("youngs_modulus", youngs_modulus, "Pa")
+        rho = check_range("density", density, "density")
+        E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
         d = D - 2.0 * t
-        area = math.pi * (D**2 - d**2) / 4.0
-        second_moment = math.pi * (D**4 - d**4) / 64.0
+        # D**4 - d**4 and D**2 - d**2 factored: no cancellation for a thin wall (t << D)
+        area = math.pi * t * (D - t)
+        second_moment = math.pi * 2.0 * t * (D - t) * (D * D + d * d) / 32.0
+        _check_section(E * second_moment, rho * area,
+                       "youngs_modulus*pi*(outer_diameter**4 - inner**4)/64",
+                       "density*pi*(outer_diameter**2 - inner**2)/4",
+                       [("outer_diameter", outer_diameter, "m"),
+                        ("wall_thickness", wall_thickness, "m"),
+                        ("youngs_modulus", youngs_modulus, "Pa")],
+                       [("outer_diameter", outer_diameter, "m"),
+                        ("wall_thickness", wall_thickness, "m"), ("density", density, "kg/m^3")])
         return cls(length, E * second_moment, rho * area, damping_ratio=damping_ratio)
 
     @classmethod
@@ -348,10 +389,16 @@ class Beam:
         density : float, kg/m**3
         youngs_modulus : float, Pa
         """
-        b = check_positive("width", width, "m")
-        h = check_positive("thickness", thickness, "m")
-        rho = check_positive("density", density, "kg/m^3")
-        E = check_positive("youngs_modulus", youngs_modulus, "Pa")
+        b = check_range("width", width, "length")
+        h = check_range("thickness", thickness, "length")
+        rho = check_range("density", density, "density")
+        E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
+        _check_section(E * b * h**3 / 12.0, rho * b * h, "youngs_modulus*width*thickness**3/12",
+                       "density*width*thickness",
+                       [("width", width, "m"), ("thickness", thickness, "m"),
+                        ("youngs_modulus", youngs_modulus, "Pa")],
+                       [("width", width, "m"), ("thickness", thickness, "m"),
+                        ("density", density, "kg/m^3")])
         return cls(length, E * b * h**3 / 12.0, rho * b * h, damping_ratio=damping_ratio)
 
     def __repr__(self) -> str:
@@ -382,8 +429,12 @@ class Beam:
 
     # -- frequencies --------------------------------------------------------------------------
     def _roots(self, kind: str, n: int) -> np.ndarray:
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
+            raise TypeError(f"n must be an integer (number of frequencies); got "
+                            f"{type(n).__name__} {describe(n)}")
+        if n < 1:
             raise ValueError(f"n must be a positive integer (number of frequencies); got {n!r}")
+        limits.check("n", int(n), "roots", "frequencies of a beam at once")
         cached = self._cache.get(kind)
         if cached is None or cached.size < n:
             cached = characteristic_roots(kind, max(n, 16))
@@ -425,7 +476,15 @@ class Beam:
         boundary : {"free-free", "clamped-free"}
             Free-free modes, or cantilever modes clamped at the attachment end.
         """
-        xi = np.atleast_1d(np.asarray(x, dtype=float)) / self.length
+        if isinstance(x, (str, bytes)) or x is None:
+            raise TypeError(f"x must be positions along the beam [m]; got {type(x).__name__}")
+        x = np.atleast_1d(np.asarray(x))
+        if x.dtype == bool or x.dtype.kind not in "iuf":
+            raise TypeError(f"x must be real positions along the beam [m]; got dtype {x.dtype}")
+        if isinstance(n, (int, np.integer)) and not isinstance(n, (bool, np.bool_)):
+            limits.check("len(x) * n", x.size * max(int(n), 1), "elements",
+                         "entries of the mode-shape array")
+        xi = x.astype(float) / self.length
         if not np.all(np.isfinite(xi)) or np.any(xi < -1e-12) or np.any(xi > 1 + 1e-12):
             raise ValueError(f"x must lie in [0, length] = [0, {self.length!r}] [m]")
         if boundary not in ("free-free", "clamped-free"):
@@ -599,11 +658,8 @@ class Beam:
         D = np.zeros(s.shape + (2, 2), dtype=np.complex128)
         if self.damping_ratio > 0.0:
             nonzero = s != 0
-            W = self.W(s[nonzero])
-            det = W[..., 0, 0] * W[..., 1, 1] - W[..., 0, 1] ** 2
-            D[nonzero, 0, 0] = W[..., 1, 1] / det
-            D[nonzero, 0, 1] = -W[..., 0, 1] / det
-            D[nonzero, 1, 1] = W[..., 0, 0] / det
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                D[nonzero] = inverse_2x2(self.W(s[nonzero]))
         else:
             EJ, L = self.bending_stiffness, self.length
             y = -(s**2) * (self.linear_density * L**4 / EJ)

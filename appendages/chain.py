@@ -48,13 +48,16 @@ References
 
 from __future__ import annotations
 
+import contextlib
 import numbers
 from collections.abc import Sequence
 
 import numpy as np
 import scipy.linalg
 
-from .interface import FiniteAppendage, RootModel, as_frequency_array, check_positive
+from . import limits
+from .interface import (RANGES, FiniteAppendage, RootModel, as_frequency_array, check_range,
+                        describe, equilibrate, inverse_2x2)
 
 __all__ = ["HingedChain", "MOLENAAR_K"]
 
@@ -64,29 +67,45 @@ MOLENAAR_K: float = 0.5 * (1.0 - 1.0 / np.sqrt(3.0))
 _ROOTS = ("rigid", "hinged")
 
 
-def _as_vector(name: str, values, unit: str, *, size: int | None = None,
+def _as_vector(name: str, values, quantity: str | None, unit: str, *, size: int | None = None,
                allow_zero: bool = False) -> np.ndarray:
-    """Validate a 1-D sequence of non-negative (or positive) finite reals; return float64 copy."""
+    """Validate a 1-D sequence of finite reals, each positive (or zero when ``allow_zero``) and
+    within the documented range of ``quantity`` (:data:`~appendages.interface.RANGES`, None:
+    no range); return a read-only float64 copy."""
     if isinstance(values, (str, bytes)) or values is None:
         raise TypeError(f"{name} must be a sequence of real numbers [{unit}]; "
                         f"got {type(values).__name__}")
     if isinstance(values, numbers.Number) or np.ndim(values) == 0:
         raise TypeError(f"{name} must be a sequence of real numbers [{unit}], one per "
-                        f"{'hinge' if 'hinge' in name else 'body'}; got the scalar {values!r}")
-    arr = np.asarray(values)
+                        f"{'hinge' if 'hinge' in name else 'body'}; got the scalar "
+                        f"{describe(values)}")
+    try:
+        arr = np.asarray(values)
+    except (ValueError, TypeError) as exc:  # ragged nesting
+        raise ValueError(f"{name} must be a flat sequence of real numbers [{unit}]; got "
+                         f"{describe(values)}") from exc
     if arr.dtype == bool or arr.dtype.kind not in "iuf":
         raise TypeError(f"{name} must contain real numbers [{unit}]; got dtype {arr.dtype}")
     if arr.ndim != 1:
         raise ValueError(f"{name} must be one-dimensional [{unit}]; got shape {arr.shape}")
     if size is not None and arr.size != size:
         raise ValueError(f"{name} must have {size} entries [{unit}]; got {arr.size}")
-    arr = arr.astype(np.float64)
-    bad = ~np.isfinite(arr) | ((arr < 0.0) if allow_zero else (arr <= 0.0))
+    with np.errstate(over="ignore"):  # a huge int becomes inf, refused below
+        arr = arr.astype(np.float64)
+    low, high = (RANGES[quantity][:2] if quantity is not None else (0.0, np.inf))
+    positive = (arr >= 0.0) if allow_zero else (arr > 0.0)
+    in_range = (arr >= low) & (arr <= high) | (allow_zero & (arr == 0.0))
+    bad = ~np.isfinite(arr) | ~positive | ~in_range
     if np.any(bad):
-        what = "non-negative" if allow_zero else "positive"
         k = int(np.flatnonzero(bad)[0])
-        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {float(arr[k])!r} "
-                         f"at index {k}")
+        what = "non-negative" if allow_zero else "positive"
+        value = float(arr[k])
+        if np.isfinite(value) and positive[k]:  # finite and positive but out of range
+            bounds = f"at most {high:g}" if low == 0.0 else f"within [{low:g}, {high:g}]"
+            raise ValueError(f"{name} must be {bounds} [{unit}] (the range where flexsat's "
+                             f"numerics are sound, appendages.interface.RANGES); got "
+                             f"{value!r} at index {k}")
+        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {value!r} at index {k}")
     arr.flags.writeable = False
     return arr
 
@@ -153,31 +172,33 @@ class HingedChain(FiniteAppendage):
         if not isinstance(root, str) or root not in _ROOTS:
             raise ValueError(f"root must be 'rigid' or 'hinged'; got {root!r}")
         self.root = root
-        self.lengths = _as_vector("lengths", lengths, "m")
+        self.lengths = _as_vector("lengths", lengths, "length", "m")
         n = self.lengths.size
         if n < 1:
             raise ValueError("lengths must have at least one entry [m]; got an empty sequence")
+        limits.check("lengths (number of bodies)", n, "bodies", "bodies per chain")
         self.n_bodies = n
-        self.masses = _as_vector("masses", masses, "kg", size=n)
-        self.inertias = _as_vector("inertias", inertias, "kg*m^2", size=n, allow_zero=True)
+        self.masses = _as_vector("masses", masses, "mass", "kg", size=n)
+        self.inertias = _as_vector("inertias", inertias, "body_inertia", "kg*m^2", size=n,
+                                   allow_zero=True)
         n_hinges = n - 1 if root == "rigid" else n
         self.hinge_stiffnesses = _as_vector(
-            f"hinge_stiffnesses (root={root!r}: one per hinge)", hinge_stiffnesses, "N*m/rad",
-            size=n_hinges)
+            f"hinge_stiffnesses (root={root!r}: one per hinge)", hinge_stiffnesses,
+            "hinge_stiffness", "N*m/rad", size=n_hinges)
         if hinge_dampings is None:
             dampings = np.zeros(n_hinges)
             dampings.flags.writeable = False
             self.hinge_dampings = dampings
         else:
             self.hinge_dampings = _as_vector(
-                f"hinge_dampings (root={root!r}: one per hinge)", hinge_dampings, "N*m*s/rad",
-                size=n_hinges, allow_zero=True)
+                f"hinge_dampings (root={root!r}: one per hinge)", hinge_dampings,
+                "hinge_damping", "N*m*s/rad", size=n_hinges, allow_zero=True)
         if com_offsets is None:
             offsets = 0.5 * self.lengths
             offsets.flags.writeable = False
             self.com_offsets = offsets
         else:
-            self.com_offsets = _as_vector("com_offsets", com_offsets, "m", size=n,
+            self.com_offsets = _as_vector("com_offsets", com_offsets, None, "m", size=n,
                                           allow_zero=True)
             over = self.com_offsets > self.lengths * (1.0 + 1e-12)
             if np.any(over):
@@ -211,9 +232,9 @@ class HingedChain(FiniteAppendage):
         ----------
         .. [1] Belonozhko et al. 2009, the worked example (see :mod:`appendages.chain`).
         """
-        length = check_positive("length", length, "m")
-        mass = check_positive("mass", mass, "kg")
-        stiffness = check_positive("stiffness", stiffness, "N*m/rad")
+        length = check_range("length", length, "length")
+        mass = check_range("mass", mass, "mass")
+        stiffness = check_range("stiffness", stiffness, "hinge_stiffness")
         if isinstance(k_L, (bool, np.bool_)) or not isinstance(k_L, numbers.Real):
             raise TypeError(f"k_L must be a real number [-]; got {type(k_L).__name__} {k_L!r}")
         k_L = float(k_L)
@@ -221,7 +242,9 @@ class HingedChain(FiniteAppendage):
             raise ValueError(f"k_L must lie in the open interval (0, 1) [-]; got {k_L!r}")
         lengths = np.array([(1.0 - k_L) / 2.0, k_L, (1.0 - k_L) / 2.0]) * length
         masses, inertias = _frozen_pieces(lengths, mass / length)
-        return cls(lengths, masses, inertias, [stiffness, stiffness])
+        with _derived_from(f"HingedChain.three_body(length={length!r}, mass={mass!r}, "
+                           f"k_L={k_L!r})", None):
+            return cls(lengths, masses, inertias, [stiffness, stiffness])
 
     @classmethod
     def rfem(cls, beam, n_bodies: int) -> "HingedChain":
@@ -245,14 +268,16 @@ class HingedChain(FiniteAppendage):
         .. [2] Wittbrodt, Adamiec-Wojcik, Wojciech 2006; rule 1 of Belonozhko et al. 2009.
         """
         n_bodies = _check_count("n_bodies", n_bodies, minimum=2)
+        limits.check("n_bodies", n_bodies, "bodies", "bodies per chain")
         L, EJ, rho = _beam_properties(beam)
         H = L / (n_bodies - 1)
         lengths = np.full(n_bodies, H)
         lengths[0] = lengths[-1] = H / 2.0
         masses, inertias = _frozen_pieces(lengths, rho)
         stiffnesses = np.full(n_bodies - 1, EJ / H)
-        return cls(lengths, masses, inertias, stiffnesses,
-                   hinge_dampings=_proportional_damping(beam, stiffnesses))
+        with _derived_from(f"HingedChain.rfem(beam, n_bodies={n_bodies})", beam):
+            return cls(lengths, masses, inertias, stiffnesses,
+                       hinge_dampings=_proportional_damping(beam, stiffnesses))
 
     @classmethod
     def superelements(cls, beam, n: int) -> "HingedChain":
@@ -276,6 +301,7 @@ class HingedChain(FiniteAppendage):
         .. [3] Molenaar, cited as rule 2 in Belonozhko et al. 2009.
         """
         n = _check_count("n", n, minimum=1)
+        limits.check("n (2 n + 1 bodies)", 2 * n + 1, "bodies", "bodies per chain")
         L, EJ, rho = _beam_properties(beam)
         ell = L / n
         k = MOLENAAR_K
@@ -285,8 +311,9 @@ class HingedChain(FiniteAppendage):
         lengths[2:-1:2] = 2.0 * k * ell
         masses, inertias = _frozen_pieces(lengths, rho)
         stiffnesses = np.full(2 * n, 6.0 * EJ / ell * (1.0 - 2.0 * k) ** 2)
-        return cls(lengths, masses, inertias, stiffnesses,
-                   hinge_dampings=_proportional_damping(beam, stiffnesses))
+        with _derived_from(f"HingedChain.superelements(beam, n={n})", beam):
+            return cls(lengths, masses, inertias, stiffnesses,
+                       hinge_dampings=_proportional_damping(beam, stiffnesses))
 
     # -- rigid properties ---------------------------------------------------------------------
     @property
@@ -410,17 +437,16 @@ class HingedChain(FiniteAppendage):
                 else:
                     kap = kappa[k + 1 if hinged else k]
                     g = 1.0 / (d22 + kap)
-                    e11 = d11 - d12 * d12 * g
-                    e12 = kap * g * d12
-                    e22 = kap * g * d22
+                    e11 = d11 - d12 * (d12 * g)  # grouped: no overflow of d12**2 at large |s|
+                    e12 = (kap * g) * d12
+                    e22 = (kap * g) * d22
                 d11 = m * s2 + e11
                 d12 = m * a * s2 + e12 + l * e11
                 d22 = (J + m * a * a) * s2 + e22 + 2.0 * l * e12 + l * l * e11
-            det = d11 * d22 - d12 * d12
-            W = np.empty(s2.shape + (2, 2), dtype=np.complex128)
-            W[:, 0, 0] = d22 / det
-            W[:, 0, 1] = W[:, 1, 0] = -d12 / det
-            W[:, 1, 1] = d11 / det
+            D = np.empty(s2.shape + (2, 2), dtype=np.complex128)
+            D[:, 0, 0], D[:, 1, 1] = d11, d22
+            D[:, 0, 1] = D[:, 1, 0] = d12
+            W = inverse_2x2(D)
             if hinged:
                 W[:, 1, 1] += 1.0 / kappa[0]
         if not np.all(np.isfinite(W)):
@@ -487,6 +513,21 @@ class HingedChain(FiniteAppendage):
             keep = (np.arange(K.shape[0]) if drive
                     else np.concatenate([[0], np.arange(2, K.shape[0])]))
         return self._elastic(K[np.ix_(keep, keep)], M[np.ix_(keep, keep)], 1)
+
+
+@contextlib.contextmanager
+def _derived_from(call: str, beam):
+    """Re-raise a ValueError of the chain built by a constructor as one about its arguments.
+
+    The bodies' lengths, masses and inertias and the hinge stiffnesses are derived from the
+    constructor's arguments; one out of its documented range is the arguments' fault.
+    """
+    try:
+        yield
+    except ValueError as exc:
+        of = "" if beam is None else f" of {describe(beam)}"
+        raise ValueError(f"{call}{of}: the chain derived from these arguments is outside the "
+                         f"documented ranges: {exc}") from None
 
 
 def _beam_properties(beam) -> tuple[float, float, float]:

@@ -51,8 +51,9 @@ from collections.abc import Sequence
 import numpy as np
 import scipy.optimize
 
+from . import limits
 from .chain import HingedChain, _assemble
-from .interface import ConvergenceError, FiniteAppendage, as_frequency_array
+from .interface import ConvergenceError, FiniteAppendage, as_frequency_array, describe
 
 __all__ = [
     "EquivalenceResult",
@@ -818,9 +819,13 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     if n_bodies < 2:
         raise ValueError(f"n_bodies must be at least 2 (a chain needs a hinge); got {n_bodies}")
     if not isinstance(match, str) or match not in MATCHES:
-        raise ValueError(f"match must be one of {MATCHES}; got {match!r}")
+        raise ValueError(f"match must be one of {MATCHES}; got {describe(match)}")
     _beam_data(beam)
     n = int(n_bodies)
+    if match == "frequencies":
+        limits.check("n_bodies", n, "bodies", "bodies per chain")
+    else:
+        limits.check("n_bodies", n, "fit_bodies", "bodies of a chain fitted to poles and zeros")
     if match == "frequencies":
         return _fit_frequencies(beam, n, frequencies)
     if frequencies is not None:

@@ -31,6 +31,7 @@ References
 from __future__ import annotations
 
 import dataclasses
+import types
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -41,8 +42,14 @@ __all__ = [
     "FiniteAppendage",
     "RootModel",
     "as_frequency_array",
+    "RANGES",
+    "S_RANGE",
+    "check_derived",
     "check_positive",
+    "check_range",
     "describe",
+    "equilibrate",
+    "inverse_2x2",
     "FlexsatError",
     "ConvergenceError",
 ]
@@ -78,6 +85,44 @@ def describe(value, width: int = MESSAGE_VALUE_WIDTH) -> str:
     return f"{text[: keep // 2 + keep % 2]}...{text[-(keep // 2):]} ({len(text):,} characters)"
 
 
+#: Documented ranges of the physical parameters, SI: ``name -> (low, high, unit)``.
+#:
+#: Inside them every quantity that flexsat derives from the parameters (W(s) = L**3/EJ f(y),
+#: the frequency scale ``c = sqrt(EJ/(rho*A L**4))``, the residual tails ``4/(m c**4) =
+#: 4 rho*A L**7/EJ**2``, the mass matrices ``rho*A L**3``, ``m p**2``...) stays between about
+#: 1e-100 and 1e100, far from the overflow and underflow of double precision (1e+-308), and the
+#: eigen-solvers see problems made dimensionless by diagonal scaling (:func:`equilibrate`), so
+#: their accuracy depends on the dimensionless groups only (mass ratios, offsets over lengths,
+#: damping), never on the units. Values beyond are refused by name (:func:`check_range`), not
+#: because nothing could be computed there but because nothing there has been shown sound.
+#: The bounds are wide: lengths from a micrometre to 1000 km, masses from 1e-15 kg (the
+#: "massless hub" of the limiting-case tests) to 1e15 kg.
+RANGES = types.MappingProxyType({
+    "length": (1e-6, 1e6, "m"),                    # beam and body lengths, section sizes, |position|
+    "bending_stiffness": (1e-15, 1e15, "N*m^2"),   # EJ
+    "linear_density": (1e-12, 1e6, "kg/m"),        # rho*A
+    "density": (1e-3, 1e5, "kg/m^3"),
+    "youngs_modulus": (1e3, 1e13, "Pa"),
+    "mass": (1e-15, 1e15, "kg"),                   # hub, rigid bodies
+    "inertia": (1e-20, 1e20, "kg*m^2"),            # hub
+    "body_inertia": (0.0, 1e20, "kg*m^2"),         # a chain's body (0: a point mass)
+    "hinge_stiffness": (1e-15, 1e15, "N*m/rad"),
+    "hinge_damping": (0.0, 1e15, "N*m*s/rad"),
+})
+
+
+def _real(name: str, value, unit: str) -> float:
+    """``value`` as a float; TypeError naming ``name`` and ``unit`` unless it is a real number."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(
+            value, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} "
+                        f"{describe(value)}")
+    try:
+        return float(value)
+    except OverflowError:  # a Python int beyond the double range
+        raise ValueError(f"{name} must be finite [{unit}]; got {describe(value)}") from None
+
+
 def check_positive(name: str, value, unit: str, *, allow_zero: bool = False) -> float:
     """Return ``value`` as float after checking that it is a positive finite real number.
 
@@ -88,18 +133,122 @@ def check_positive(name: str, value, unit: str, *, allow_zero: bool = False) -> 
     ValueError
         If it is not finite or not positive (or negative when ``allow_zero``).
     """
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} {value!r}")
-    value = float(value)
-    ok = np.isfinite(value) and (value >= 0.0 if allow_zero else value > 0.0)
+    value_f = _real(name, value, unit)
+    ok = np.isfinite(value_f) and (value_f >= 0.0 if allow_zero else value_f > 0.0)
     if not ok:
         what = "non-negative" if allow_zero else "positive"
-        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {value!r}")
-    return value
+        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {describe(value)}")
+    return value_f
+
+
+def check_range(name: str, value, quantity: str, *, allow_zero: bool = False) -> float:
+    """Return ``value`` as float after checking it lies in the documented range of ``quantity``.
+
+    Parameters
+    ----------
+    name : str
+        The parameter's name, for the message.
+    value : real
+    quantity : str
+        A key of :data:`RANGES` (gives the bounds and the unit).
+    allow_zero : bool
+        Also accept exactly 0 (a point mass's inertia, an undamped hinge).
+
+    Raises
+    ------
+    TypeError
+        If ``value`` is not a real number.
+    ValueError
+        If it is not finite or lies outside the range (the message gives the range).
+    """
+    low, high, unit = RANGES[quantity]
+    value_f = check_positive(name, value, unit, allow_zero=allow_zero)
+    if (allow_zero and value_f == 0.0) or low <= value_f <= high:
+        return value_f
+    raise ValueError(
+        f"{name} must lie in [{low:g}, {high:g}] [{unit}]{' or be 0' if allow_zero else ''}, "
+        f"the range where flexsat's numerics are sound (appendages.interface.RANGES); "
+        f"got {describe(value)}")
+
+
+def check_derived(value: float, quantity: str, formula: str, given) -> float:
+    """Check a value derived from the user's parameters; blame those parameters if it is out.
+
+    Parameters
+    ----------
+    value : float
+        The derived value (e.g. ``E pi d**4/64``, possibly 0 or inf after underflow/overflow).
+    quantity : str
+        Its key in :data:`RANGES` (e.g. ``"bending_stiffness"``).
+    formula : str
+        How it was derived, for the message (``"youngs_modulus*pi*diameter**4/64"``).
+    given : sequence of (name, value, unit)
+        The parameters it came from, as the user gave them.
+
+    Raises
+    ------
+    ValueError
+        Naming every parameter of ``given`` with its value and unit, the derived value and
+        its range.
+    """
+    low, high, unit = RANGES[quantity]
+    if np.isfinite(value) and low <= value <= high:
+        return float(value)
+    names = " and ".join(f"{name} = {describe(v)} {u}" for name, v, u in given)
+    raise ValueError(
+        f"{names} give {quantity} = {formula} = {value:.3g} {unit}, outside the range "
+        f"[{low:g}, {high:g}] {unit} where flexsat's numerics are sound "
+        f"(appendages.interface.RANGES); change {' or '.join(n for n, _, _ in given)}")
+
+
+def equilibrate(K: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """Diagonal scaling d (K' = d K d, M' = d M d) that makes a pencil independent of units.
+
+    ``d_i = 1/sqrt(M_ii)`` for coordinates with mass; ``sqrt(w**2/K_ii)`` for massless ones
+    (w**2 the largest K_ii/M_ii of the others); for a coordinate with neither (a Lagrange
+    multiplier of a Rosenbrock pencil) the d that brings its row of K' to the size of the rest.
+    The eigenvalues are unchanged; the eigenvectors of (K', M') are those of (K, M) divided by
+    d. LAPACK's generalized eigen-solvers are backward stable in norm, so without it a
+    coordinate in small units (the rotation of a 1 um beam in rad against its translation in
+    m) loses the digits that a change of units would keep.
+    """
+    m = np.diag(M).astype(float).copy()
+    k = np.abs(np.diag(K)).astype(float)
+    has_mass = m > 0.0
+    d = np.ones(m.size)
+    d[has_mass] = 1.0 / np.sqrt(m[has_mass])
+    massless = ~has_mass & (k > 0.0)
+    if np.any(massless):
+        both = has_mass & (k > 0.0)
+        omega2 = np.max(k[both] / m[both]) if np.any(both) else 1.0
+        d[massless] = np.sqrt(omega2 / k[massless])
+    neither = ~has_mass & ~massless
+    if np.any(neither) and np.any(~neither):
+        scaled = np.abs(K[np.ix_(~neither, ~neither)]) * np.outer(d[~neither], d[~neither])
+        size = max(scaled.max(), np.finfo(float).tiny)
+        for j in np.flatnonzero(neither):
+            row = np.abs(K[~neither, j]) * d[~neither]
+            if row.max() > 0.0:
+                d[j] = size / row.max()
+    return d
+
+
+#: Smallest and largest |s| [rad/s] at which W(s) is evaluated (s = 0 aside, the rigid-body
+#: pole). W ~ 1/(m s**2) near 0 and the mass matrices times s**2 grow like s**2: with the
+#: parameters in RANGES, 1e-80 <= |s| <= 1e80 keeps every intermediate below 1e300.
+S_RANGE = (1e-80, 1e80)
 
 
 def as_frequency_array(s) -> np.ndarray:
-    """Return the Laplace variable ``s`` [rad/s] as a complex128 array, checking its type."""
+    """Return the Laplace variable ``s`` [rad/s] as a complex128 array, checking its type.
+
+    Raises
+    ------
+    TypeError
+        Not a number or an array of numbers.
+    ValueError
+        A NaN or infinite value, or a non-zero magnitude outside :data:`S_RANGE`.
+    """
     if isinstance(s, (str, bytes)) or s is None:
         raise TypeError(f"s must be a complex number or array of them [rad/s]; got {type(s).__name__}")
     try:
@@ -111,7 +260,33 @@ def as_frequency_array(s) -> np.ndarray:
     arr = arr.astype(np.complex128)
     if not np.all(np.isfinite(arr)):
         raise ValueError("s must be finite [rad/s]; got a NaN or infinite value")
+    magnitude = np.abs(arr)
+    outside = (magnitude != 0) & ((magnitude < S_RANGE[0]) | (magnitude > S_RANGE[1]))
+    if np.any(outside):
+        raise ValueError(
+            f"s must have a magnitude between {S_RANGE[0]:g} and {S_RANGE[1]:g} [rad/s] "
+            f"(appendages.interface.S_RANGE: beyond, W(s) leaves double precision); got "
+            f"{describe(arr[outside][0])}")
     return arr
+
+
+def inverse_2x2(D: np.ndarray) -> np.ndarray:
+    """Inverse of symmetric 2x2 matrices (stacked in the last two axes), by the adjugate.
+
+    Each matrix is first divided by its largest entry, so that the determinant of matrices
+    with entries up to 1e300 neither overflows nor underflows; the result is exactly
+    symmetric. A singular matrix gives inf or NaN entries (the caller decides).
+    """
+    scale = np.max(np.abs(D), axis=(-2, -1), keepdims=True)
+    scale = np.where(scale > 0, scale, 1.0)
+    A = D / scale
+    off = 0.5 * (A[..., 0, 1] + A[..., 1, 0])
+    det = A[..., 0, 0] * A[..., 1, 1] - off * off
+    W = np.empty_like(A)
+    W[..., 0, 0] = A[..., 1, 1] / det
+    W[..., 1, 1] = A[..., 0, 0] / det
+    W[..., 0, 1] = W[..., 1, 0] = -off / det
+    return W / scale
 
 
 @runtime_checkable
@@ -168,7 +343,20 @@ class RootModel:
         Zrr, Zri, Zir, Zii = Z[..., :2, :2], Z[..., :2, 2:], Z[..., 2:, :2], Z[..., 2:, 2:]
         if self.n == 2:
             return Zrr
-        return Zrr - Zri @ np.linalg.solve(Zii, Zir)
+        try:
+            return Zrr - Zri @ np.linalg.solve(Zii, Zir)
+        except np.linalg.LinAlgError:
+            pass
+        # some s is exactly a natural frequency with the attachment end clamped (Z_ii
+        # singular in floating point): D is infinite there; the others are solved one by one
+        D = np.empty(Zrr.shape, dtype=complex)
+        flat_D, flat = D.reshape(-1, 2, 2), np.broadcast_to(Z, Z.shape).reshape(-1, *Z.shape[-2:])
+        for k, Zk in enumerate(flat):
+            try:
+                flat_D[k] = Zk[:2, :2] - Zk[:2, 2:] @ np.linalg.solve(Zk[2:, 2:], Zk[2:, :2])
+            except np.linalg.LinAlgError:
+                flat_D[k] = np.inf
+        return D
 
 
 class FiniteAppendage:
@@ -208,8 +396,11 @@ class FiniteAppendage:
         ndarray of complex128, shape ``np.shape(s) + (2, 2)``
         """
         s = as_frequency_array(s)
-        W = np.linalg.inv(self.root_model().dynamic_stiffness(s))
-        W[..., 1, 0] = W[..., 0, 1]  # exact reciprocity (inv() leaves round-off asymmetry)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            W = inverse_2x2(self.root_model().dynamic_stiffness(s))
+        if not np.all(np.isfinite(W)):
+            raise ValueError("s is a natural frequency of the undamped model (or the rigid-body "
+                             "pole s = 0): W is infinite there [rad/s]")
         return W
 
     # -- poles, zeros, gains ------------------------------------------------------------------
@@ -229,6 +420,8 @@ class FiniteAppendage:
         """
         if K.shape[0] == 0:
             return np.zeros(0)
+        d = equilibrate(K, M)
+        K, M = K * np.outer(d, d), M * np.outer(d, d)
         alpha, beta = scipy.linalg.eigvals(K, M, homogeneous_eigvals=True)
         k_norm = max(np.abs(K).max(), 1e-300)
         m_norm = max(np.abs(M).max(), 1e-300)
@@ -291,11 +484,14 @@ class FiniteAppendage:
         end (W tends to a constant flexibility, the gains are infinite).
         """
         rm = self.root_model()
+        # scaled to unit diagonal (units do not change the condition that matters)
+        d = equilibrate(rm.stiffness, rm.mass)
+        scaled = rm.mass * np.outer(d, d)
         try:
-            inv = np.linalg.inv(rm.mass)
+            inv = np.linalg.inv(scaled) * np.outer(d, d)
         except np.linalg.LinAlgError:
             inv = None
-        if inv is None or not np.all(np.isfinite(inv)) or np.linalg.cond(rm.mass) > 1e14:
+        if inv is None or not np.all(np.isfinite(inv)) or np.linalg.cond(scaled) > 1e14:
             raise ValueError(
                 "gains are undefined for a model whose attachment end carries no mass "
                 "(W(s) tends to a constant flexibility as s -> infinity)"
@@ -346,7 +542,9 @@ class FiniteAppendage:
             feedthrough = out_rows[:, massless] @ Gf
             out_rows = out_rows[:, keep] - out_rows[:, massless] @ Gq
             M, C, K, load = M[np.ix_(keep, keep)], C[np.ix_(keep, keep)], 0.5 * (Kk + Kk.T), load_k
-        lam, V = scipy.linalg.eigh(K, M)
+        d = equilibrate(K, M)
+        lam, V = scipy.linalg.eigh(K * np.outer(d, d), M * np.outer(d, d))
+        V = V * d[:, None]
         # the two smallest are the free appendage's rigid-body modes (zero up to round-off)
         lam[:2] = np.where(np.abs(lam[:2]) <= 1e-6 * np.abs(lam).max(initial=0.0), 0.0, lam[:2])
         m = lam.size

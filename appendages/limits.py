@@ -10,17 +10,22 @@ behind each are given beside it.
 =================  =======  ===================================================================
 name               default  what it bounds
 =================  =======  ===================================================================
-``modes``          1000     bending modes of a truncation (``Beam.truncated(n_modes)``), coupled
-                            frequencies asked of ``Spacecraft.natural_frequencies(n)`` and
-                            ``Spacecraft.plant(n_modes=...)``
+``modes``          1000     bending modes of a truncation (``Beam.truncated(n_modes)``)
 ``bodies``         500      bodies of a :class:`~appendages.chain.HingedChain` (also through
                             ``HingedChain.rfem``, ``superelements``: 2 n + 1 bodies)
-``fit_bodies``     12       bodies of ``equivalence.fit_chain`` (its least squares grows like
-                            n_bodies**4: 7 s at 6 bodies, ~75 s at 12, see ``fit_chain``)
-``roots``          100000   frequencies or zeros of a distributed beam asked at once
-                            (``Beam.natural_frequencies(n)`` etc.: O(n) work and memory)
-``coordinates``    3000     generalised coordinates of an assembled hub + appendages model
-                            (its dense eigen-decomposition: O(n**3), ~20 s and 0.3 GiB at 3000)
+``fit_bodies``     20       bodies of ``equivalence.fit_chain(match="poles-and-zeros")``: 5 n - 5
+                            parameters, 4 n - 4 residuals, each an eigen-decomposition of size
+                            n: measured 1-23 s for 3-12 bodies, 35 s at 20, 153 s at 24 and
+                            350 s at 32 (2 cores, load average 7-12, issue 9)
+``roots``          1e6      frequencies or zeros of a distributed beam asked at once
+                            (``Beam.natural_frequencies(n)`` etc.: O(n), ~1 s and 40 MB at 1e6)
+``frequencies``    100000   exact coupled frequencies asked of
+                            ``Spacecraft.natural_frequencies(n, exact=True)`` (bisection, O(n)
+                            per appendage and step: 5 s on one rod, 26 s on eight at 1e5)
+``coordinates``    2500     generalised coordinates of an assembled hub + appendages model
+                            (``Spacecraft.plant``, ``modes``: a dense generalized
+                            eigen-decomposition, O(n**3): 6 s at 2000, 30 s at 3000 measured
+                            on 2 loaded cores)
 ``appendages``     100      mounts on one spacecraft
 ``elements``       50e6     entries of an array whose size is the product of two requests
                             (``Beam.mode_shapes(x, n)``: 0.4 GiB of float64)
@@ -32,7 +37,7 @@ A user who really wants more says so explicitly, for a block of code::
 
     from appendages import limits
     with limits.raised(modes=5000):
-        craft.natural_frequencies(5000)
+        model = beam.truncated(5000)
 
 :func:`raised` works on a :class:`contextvars.ContextVar`, so it applies to the current thread
 (and asyncio task) only and is undone on leaving the block, also on an exception. A keyword on
@@ -57,9 +62,10 @@ __all__ = ["DEFAULTS", "LimitError", "check", "current", "raised"]
 DEFAULTS = types.MappingProxyType({
     "modes": 1000,
     "bodies": 500,
-    "fit_bodies": 12,
-    "roots": 100_000,
-    "coordinates": 3000,
+    "fit_bodies": 20,
+    "roots": 1_000_000,
+    "frequencies": 100_000,
+    "coordinates": 2500,
     "appendages": 100,
     "elements": 50_000_000,
 })

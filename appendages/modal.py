@@ -71,7 +71,8 @@ import math
 import numpy as np
 import scipy.linalg
 
-from .interface import FiniteAppendage, RootModel, as_frequency_array
+from . import limits
+from .interface import FiniteAppendage, RootModel, as_frequency_array, describe, inverse_2x2
 
 __all__ = ["ModalBeam", "METHODS"]
 
@@ -92,10 +93,19 @@ class ModalBeam(FiniteAppendage):
     """
 
     def __init__(self, beam, n_modes: int, *, method: str = "craig-bampton"):
-        if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
-            raise ValueError(f"n_modes must be an integer >= 1 (number of bending modes); got {n_modes!r}")
-        if method not in METHODS:
-            raise ValueError(f"method must be one of {METHODS}; got {method!r}")
+        if isinstance(n_modes, (bool, np.bool_)) or not isinstance(n_modes, (int, np.integer)):
+            raise TypeError(f"n_modes must be an integer (number of bending modes); got "
+                            f"{type(n_modes).__name__} {describe(n_modes)}")
+        if n_modes < 1:
+            raise ValueError(f"n_modes must be an integer >= 1 (number of bending modes); got "
+                             f"{n_modes!r}")
+        limits.check("n_modes", int(n_modes), "modes", "bending modes")
+        if not isinstance(method, str) or method not in METHODS:
+            raise ValueError(f"method must be one of {METHODS}; got {describe(method)}")
+        for attribute in ("length", "bending_stiffness", "linear_density", "natural_frequencies"):
+            if not hasattr(beam, attribute):
+                raise TypeError(f"beam must be a uniform Beam; got {type(beam).__name__} "
+                                f"without '{attribute}'")
         self.beam = beam
         self.n_modes = int(n_modes)
         self.method = method
@@ -141,15 +151,10 @@ class ModalBeam(FiniteAppendage):
             out[..., i, j] = rigid[i, j] / s**2 + flex @ (b_flex[:, i] * b_flex[:, j])
         if self.method == "residual":
             b_res, lam, C_res, _ = self._residual_modes()
-            s2 = s**2
-            h00 = s2 + s * C_res[0, 0] + lam[0]
-            h11 = s2 + s * C_res[1, 1] + lam[1]
-            h01 = s * C_res[0, 1]
-            det = h00 * h11 - h01 * h01
-            inverse = ((h11, -h01), (-h01, h00))
+            H = (s**2)[..., None, None] * np.eye(2) + s[..., None, None] * C_res + np.diag(lam)
+            residual = b_res.T @ inverse_2x2(H) @ b_res
             for i, j in ((0, 0), (0, 1), (1, 1)):
-                out[..., i, j] += sum(b_res[a, i] * inverse[a][c] * b_res[c, j]
-                                      for a in (0, 1) for c in (0, 1)) / det
+                out[..., i, j] += residual[..., i, j]
         out[..., 1, 0] = out[..., 0, 1]
         return out
 

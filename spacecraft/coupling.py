@@ -44,7 +44,8 @@ import dataclasses
 import numpy as np
 import scipy.linalg
 
-from appendages.interface import describe
+from appendages import limits
+from appendages.interface import describe, equilibrate
 
 from .hub import Hub, Mount
 
@@ -87,7 +88,18 @@ class Spacecraft:
     def __init__(self, hub: Hub, mounts=()):
         if not isinstance(hub, Hub):
             raise TypeError(f"hub must be a Hub; got {type(hub).__name__}")
+        if isinstance(mounts, Mount):
+            raise TypeError("mounts must be a sequence of Mount; got a single Mount (put it "
+                            "in a list: [mount])")
+        if mounts is None or isinstance(mounts, (str, bytes)) or not hasattr(mounts, "__iter__"):
+            raise TypeError(f"mounts must be a sequence of Mount; got {type(mounts).__name__} "
+                            f"{describe(mounts)}")
+        if hasattr(mounts, "__len__"):
+            limits.check("mounts (number of appendages)", len(mounts), "appendages",
+                         "appendages per spacecraft")
         mounts = list(mounts)
+        limits.check("mounts (number of appendages)", len(mounts), "appendages",
+                     "appendages per spacecraft")
         for k, mount in enumerate(mounts):
             if not isinstance(mount, Mount):
                 raise TypeError(f"mounts[{k}] must be a Mount; got {type(mount).__name__}")
@@ -157,6 +169,8 @@ class Spacecraft:
                 )
             models.append(mount.appendage.root_model())
         n = 3 + sum(rm.n - 2 for rm in models)
+        limits.check("the appendages' coordinates (3 + their internal ones)", n, "coordinates",
+                     "coordinates of the assembled model")
         M = np.zeros((n, n))
         M[:2, :2] = np.eye(2) * self.hub.mass
         M[2, 2] = self.hub.inertia
@@ -198,7 +212,12 @@ class Spacecraft:
         cached = self._cache.get("modes")
         if cached is None:
             model = self.second_order_model()
-            lam, V = scipy.linalg.eigh(model.stiffness, model.mass)
+            # equilibrated (unit-free) pencil: hub coordinates in m and rad, appendage ones in
+            # their own units; eigenvalues unchanged, eigenvectors scaled back by d
+            d = equilibrate(model.stiffness, model.mass)
+            lam, V = scipy.linalg.eigh(model.stiffness * np.outer(d, d),
+                                       model.mass * np.outer(d, d))
+            V = V * d[:, None]
             # A free-floating planar spacecraft has exactly three rigid-body modes; every
             # hinge/bending stiffness is positive, so the rest are elastic.
             lam[:3] = 0.0
@@ -244,16 +263,35 @@ class Spacecraft:
             W(s) (Wittrick-Williams count and bisection); the accuracy reference for truncated
             models of a distributed beam. False: eigenvalues of the assembled finite model.
             Default: exact when some appendage has no finite realisation.
+
+        Raises
+        ------
+        LimitError
+            ``exact`` and n above the ``frequencies`` limit of :mod:`appendages.limits` (100000:
+            the bisection costs O(n) per appendage and step, 5 s for 1e5 on one rod, 26 s on
+            eight; raise it with ``appendages.limits.raised(frequencies=...)``).
+        ValueError
+            n larger than the finite model's number of elastic modes.
         """
-        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
+            raise TypeError(f"n must be an integer (number of frequencies); got "
+                            f"{type(n).__name__} {describe(n)}")
+        if n < 1:
             raise ValueError(f"n must be a positive integer (number of frequencies); got {n!r}")
+        if exact is not None and not isinstance(exact, (bool, np.bool_)):
+            raise TypeError(f"exact must be True, False or None; got {describe(exact)}")
         finite = all(hasattr(m.appendage, "root_model") for m in self.mounts)
         if exact is None:
             exact = not finite
+        if not self.mounts:
+            raise ValueError("a spacecraft without appendages has no elastic natural frequency")
+        if exact:
+            limits.check("n", int(n), "frequencies", "exact coupled frequencies at once")
         if not exact:
             w, _ = self.modes()
             if w.size - 3 < n:
-                raise ValueError(f"the finite model has only {w.size - 3} elastic modes; asked for {n}")
+                raise ValueError(f"n = {n} exceeds the {w.size - 3} elastic modes of the finite "
+                             "model; ask for fewer or use exact=True")
             return w[3:3 + n]
         return self._wittrick_williams(n)
 
@@ -590,4 +628,6 @@ def _clamped_frequencies(appendage, omega_max: float) -> np.ndarray:
     Kii, Mii = rm.stiffness[2:, 2:], rm.mass[2:, 2:]
     if Kii.shape[0] == 0:
         return np.zeros(0)
-    return np.sqrt(np.clip(scipy.linalg.eigvalsh(Kii, Mii), 0.0, None))
+    d = equilibrate(Kii, Mii)
+    lam = scipy.linalg.eigvalsh(Kii * np.outer(d, d), Mii * np.outer(d, d))
+    return np.sqrt(np.clip(lam, 0.0, None))

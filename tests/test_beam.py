@@ -277,6 +277,38 @@ def test_bad_types_and_counts(rod):
         rod.mode_shapes([11.0], 2)
 
 
+def test_section_constructors_blame_their_own_parameters():
+    """Issue 9: Beam.circular_rod(diameter=1e-300) blamed bending_stiffness (E pi d**4/64
+    underflows to 0). Each section checks its own parameters, and a derived property out of
+    its range names the parameters it came from, with their units."""
+    with pytest.raises(ValueError, match=r"^diameter must lie in .*\[m\].*got 1e-300$"):
+        Beam.circular_rod(10.0, 1e-300, 7800.0, 2.06e11)
+    # each in range, the product not: both named, with their units
+    with pytest.raises(ValueError, match=r"diameter = 1e-06 m and youngs_modulus = 1000\.0 Pa "
+                                         r"give bending_stiffness"):
+        Beam.circular_rod(10.0, 1e-6, 7800.0, 1e3)
+    with pytest.raises(ValueError, match=r"outer_diameter = .* m and wall_thickness = .* m and "
+                                         r"density = .* kg/m\^3 give linear_density"):
+        Beam.tube(1.0, 4e-6, 1e-6, 1e-3, 2e11)
+    with pytest.raises(ValueError, match=r"^thickness must lie in"):
+        Beam.rectangular(1.0, 0.1, 1e300, 2700.0, 7e10)
+    with pytest.raises(TypeError, match=r"^youngs_modulus must be a real number \[Pa\]; got complex"):
+        Beam.circular_rod(10.0, 0.01, 7800.0, 2e11 + 0j)
+    with pytest.raises(ValueError, match=r"^length must lie in \[1e-06, 1e\+06\] \[m\].*got 1e-09"):
+        Beam(1e-9, 1.0, 1.0)
+
+
+def test_thin_walled_tube_has_no_cancellation():
+    """EJ of a tube, E pi (D**4 - d**4)/64 with d = D - 2t, cancels for t << D: the rounding
+    of d alone (eps D) moves it by eps D/(2t) relative, 5e-7 at t/D = 1e-10. Factored as
+    E pi 2t (D - t)(D**2 + d**2)/32 it keeps full precision and equals the thin-wall form
+    E pi D**3 t/8 (1 - 3t/D + ...): checked to 1e-8 (3t/D = 3e-10 plus round-off)."""
+    D, t, E, rho = 1e4, 1e-6, 1e9, 2700.0
+    tube = Beam.tube(1.0, D, t, rho, E)
+    np.testing.assert_allclose(tube.bending_stiffness, E * math.pi * D**3 * t / 8, rtol=1e-8)
+    np.testing.assert_allclose(tube.linear_density, rho * math.pi * D * t, rtol=1e-8)
+
+
 def test_damped_W_equals_modal_sum_with_damping():
     # Reference: the undamped closed form plus the damping correction of each of 200000 modes
     # summed explicitly (its own tail after 200000 modes is below 1e-12 here). Tolerance 1e-9
