@@ -205,7 +205,8 @@ def characteristic_roots(kind: str, n: int) -> np.ndarray:
         Frequencies follow as ``x_k**2 sqrt(EJ/(rho*A L**4))``.
     """
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"n must be a positive integer (number of roots); got {n!r}")
+        raise ValueError(f"n must be a positive integer (number of roots); got {describe(n)}")
+    limits.check("n", int(n), "roots", "roots at once")
     k = np.arange(1, n + 1, dtype=float)
     if kind == "free-free":    # cos x = sech x
         return _newton(lambda x: np.cos(x) - _sech(x),
@@ -225,7 +226,7 @@ def characteristic_roots(kind: str, n: int) -> np.ndarray:
         return k * np.pi
     raise ValueError(
         "kind must be 'free-free', 'clamped-free', 'pinned-free', 'sliding-free' or 'w2'; "
-        f"got {kind!r}"
+        f"got {describe(kind)}"
     )
 
 
@@ -433,7 +434,7 @@ class Beam:
             raise TypeError(f"n must be an integer (number of frequencies); got "
                             f"{type(n).__name__} {describe(n)}")
         if n < 1:
-            raise ValueError(f"n must be a positive integer (number of frequencies); got {n!r}")
+            raise ValueError(f"n must be a positive integer (number of frequencies); got {describe(n)}")
         limits.check("n", int(n), "roots", "frequencies of a beam at once")
         cached = self._cache.get(kind)
         if cached is None or cached.size < n:
@@ -456,7 +457,7 @@ class Beam:
         W4: sliding-free frequencies (``tan x = -tanh x``).
         """
         if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r not in (1, 2, 3, 4):
-            raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {r!r}")
+            raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {describe(r)}")
         kind = {1: "pinned-free", 2: "w2", 3: "w2", 4: "sliding-free"}[r]
         return self._roots(kind, n) ** 2 * self.frequency_scale
 
@@ -488,7 +489,7 @@ class Beam:
         if not np.all(np.isfinite(xi)) or np.any(xi < -1e-12) or np.any(xi > 1 + 1e-12):
             raise ValueError(f"x must lie in [0, length] = [0, {self.length!r}] [m]")
         if boundary not in ("free-free", "clamped-free"):
-            raise ValueError(f"boundary must be 'free-free' or 'clamped-free'; got {boundary!r}")
+            raise ValueError(f"boundary must be 'free-free' or 'clamped-free'; got {describe(boundary)}")
         xk = self._roots(boundary, n)
         sigma, c_plus = _shape_terms(boundary, xk)
         arg = np.outer(xi, xk)
@@ -575,6 +576,12 @@ class Beam:
         integrated by Gauss-Legendre quadrature of the stable mode shapes instead.
         """
         L = self.length
+        for name, value in (("n_free", n_free), ("n_cantilever", n_cantilever)):
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
+                    or value < 1:
+                raise ValueError(f"{name} must be a positive integer; got {describe(value)}")
+        limits.check("n_free * n_cantilever", int(n_free) * int(n_cantilever), "elements",
+                     "entries of the overlap matrix")
         xk = self._roots("free-free", n_free)
         xi = self._roots("clamped-free", n_cantilever)
         sk, _ = _shape_terms("free-free", xk)

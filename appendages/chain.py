@@ -105,7 +105,7 @@ def _as_vector(name: str, values, quantity: str | None, unit: str, *, size: int 
             raise ValueError(f"{name} must be {bounds} [{unit}] (the range where flexsat's "
                              f"numerics are sound, appendages.interface.RANGES); got "
                              f"{value!r} at index {k}")
-        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {value!r} at index {k}")
+        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {describe(value)} at index {k}")
     arr.flags.writeable = False
     return arr
 
@@ -170,7 +170,7 @@ class HingedChain(FiniteAppendage):
                  hinge_dampings: Sequence[float] | None = None,
                  com_offsets: Sequence[float] | None = None, root: str = "rigid") -> None:
         if not isinstance(root, str) or root not in _ROOTS:
-            raise ValueError(f"root must be 'rigid' or 'hinged'; got {root!r}")
+            raise ValueError(f"root must be 'rigid' or 'hinged'; got {describe(root)}")
         self.root = root
         self.lengths = _as_vector("lengths", lengths, "length", "m")
         n = self.lengths.size
@@ -236,10 +236,10 @@ class HingedChain(FiniteAppendage):
         mass = check_range("mass", mass, "mass")
         stiffness = check_range("stiffness", stiffness, "hinge_stiffness")
         if isinstance(k_L, (bool, np.bool_)) or not isinstance(k_L, numbers.Real):
-            raise TypeError(f"k_L must be a real number [-]; got {type(k_L).__name__} {k_L!r}")
+            raise TypeError(f"k_L must be a real number [-]; got {type(k_L).__name__} {describe(k_L)}")
         k_L = float(k_L)
         if not (0.0 < k_L < 1.0):
-            raise ValueError(f"k_L must lie in the open interval (0, 1) [-]; got {k_L!r}")
+            raise ValueError(f"k_L must lie in the open interval (0, 1) [-]; got {describe(k_L)}")
         lengths = np.array([(1.0 - k_L) / 2.0, k_L, (1.0 - k_L) / 2.0]) * length
         masses, inertias = _frozen_pieces(lengths, mass / length)
         with _derived_from(f"HingedChain.three_body(length={length!r}, mass={mass!r}, "
@@ -500,7 +500,7 @@ class HingedChain(FiniteAppendage):
         zeros of :meth:`FiniteAppendage.zeros`.
         """
         if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r not in (1, 2, 3, 4):
-            raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {r!r}")
+            raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {describe(r)}")
         if r in (2, 3):
             return super().zeros(r)
         K, M, drive = self._body_pencil()

@@ -324,7 +324,7 @@ def _check_real(name: str, value, unit: str, *, low=None, high=None) -> float:
     if not math.isfinite(value) or (low is not None and value <= low) or \
             (high is not None and value >= high):
         expected = f"in ({low}, {high})" if high is not None else f"greater than {low}"
-        raise ValueError(f"{name} must be finite and {expected} [{unit}]; got {value!r}")
+        raise ValueError(f"{name} must be finite and {expected} [{unit}]; got {describe(value)}")
     return value
 
 
@@ -401,11 +401,12 @@ def criterion(reference, candidate, *, exact=None, band: Sequence[float] | None 
         raise TypeError(f"n_points must be an integer; got {type(n_points).__name__}")
     if n_points < 10:
         raise ValueError(f"n_points must be at least 10; got {n_points}")
+    limits.check("n_points", int(n_points), "points", "points at once")
     zeta = _check_real("evaluation_damping", evaluation_damping, "-", low=0.0, high=1.0)
     if names is None:
         names = (type(reference).__name__, type(candidate).__name__)
     elif isinstance(names, str) or len(names) != 2:
-        raise ValueError(f"names must be two strings (reference, candidate); got {names!r}")
+        raise ValueError(f"names must be two strings (reference, candidate); got {describe(names)}")
     ref_q = ModelQuantities.of(reference, names[0])
     cand_q = ModelQuantities.of(candidate, names[1])
     differences = {label: _relative(c, r) for (label, _), r, c in
@@ -416,7 +417,7 @@ def criterion(reference, candidate, *, exact=None, band: Sequence[float] | None 
     if band is None or band.shape != (2,) or not np.all(np.isfinite(band)) or \
             not 0.0 < band[0] < band[1]:
         raise ValueError(f"band must be (omega_min, omega_max) with 0 < omega_min < omega_max "
-                         f"[rad/s]; got {band!r}")
+                         f"[rad/s]; got {describe(band)}")
     omega = np.geomspace(band[0], band[1], int(n_points))
     s = as_frequency_array(omega * (zeta + 1j))
     W_ref, W_cand = reference.W(s), candidate.W(s)
@@ -465,7 +466,7 @@ def spectral_errors(reference, candidate, n: int | None = None) -> dict:
     if n is None:
         n = _model_frequencies(candidate, 0, 10**6).size
     if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise ValueError(f"n must be a positive integer; got {n!r}")
+        raise ValueError(f"n must be a positive integer; got {describe(n)}")
     out = {}
     for key, what in (("poles", 0), ("W1", 1), ("W2", 2), ("W4", 4)):
         ref = _model_frequencies(reference, what, n)
@@ -516,7 +517,7 @@ def _fit_frequencies(beam, n: int, frequencies) -> HingedChain:
         if target.shape != (n - 1,) or not np.all(np.isfinite(target)) or np.any(target <= 0) \
                 or np.any(np.diff(target) <= 0):
             raise ValueError(f"frequencies must be {n - 1} increasing positive values [rad/s] "
-                             f"(one per hinge); got {frequencies!r}")
+                             f"(one per hinge); got {describe(frequencies)}")
     h = (n + 1) // 2
     # Start: the RFEM chain (end rods half as long as the inner ones, c = EJ/H).
     x0 = np.zeros(h - 1 + n // 2)
@@ -815,7 +816,7 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     .. [2] Blevins 1979, table 8-1 (exact targets).
     """
     if isinstance(n_bodies, (bool, np.bool_)) or not isinstance(n_bodies, (int, np.integer)):
-        raise TypeError(f"n_bodies must be an integer; got {type(n_bodies).__name__} {n_bodies!r}")
+        raise TypeError(f"n_bodies must be an integer; got {type(n_bodies).__name__} {describe(n_bodies)}")
     if n_bodies < 2:
         raise ValueError(f"n_bodies must be at least 2 (a chain needs a hinge); got {n_bodies}")
     if not isinstance(match, str) or match not in MATCHES:
@@ -826,12 +827,22 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         limits.check("n_bodies", n, "bodies", "bodies per chain")
     else:
         limits.check("n_bodies", n, "fit_bodies", "bodies of a chain fitted to poles and zeros")
-    if match == "frequencies":
-        return _fit_frequencies(beam, n, frequencies)
-    if frequencies is not None:
-        raise ValueError("frequencies [rad/s] applies to match='frequencies' only")
-    pole_weight = _check_real("pole_weight", pole_weight, "-", low=0.0)
-    if max_nfev is not None and (isinstance(max_nfev, bool) or not isinstance(max_nfev, int)
-                                 or max_nfev < 1):
-        raise ValueError(f"max_nfev must be a positive integer; got {max_nfev!r}")
-    return _fit_poles_and_zeros(beam, n, max_nfev, pole_weight)
+    if match != "frequencies":
+        if frequencies is not None:
+            raise ValueError("frequencies [rad/s] applies to match='frequencies' only")
+        pole_weight = _check_real("pole_weight", pole_weight, "-", low=0.0)
+        if max_nfev is not None and (isinstance(max_nfev, bool) or not isinstance(max_nfev, int)
+                                     or max_nfev < 1):
+            raise ValueError(f"max_nfev must be a positive integer; got {describe(max_nfev)}")
+    try:
+        if match == "frequencies":
+            return _fit_frequencies(beam, n, frequencies)
+        return _fit_poles_and_zeros(beam, n, max_nfev, pole_weight)
+    except ValueError as exc:
+        if isinstance(exc, limits.LimitError) or str(exc).startswith("frequencies must"):
+            raise
+        # a chain built from the beam (the RFEM start, a trial of the fit) left the documented
+        # ranges: the beam's and n_bodies' fault, said so
+        raise ValueError(f"fit_chain(beam, n_bodies={n}, match={match!r}) of {describe(beam)}: "
+                         f"a chain built from these arguments is outside the documented "
+                         f"ranges: {exc}") from None

@@ -254,9 +254,12 @@ def as_frequency_array(s) -> np.ndarray:
     try:
         arr = np.asarray(s)
     except Exception as exc:  # pragma: no cover - numpy raises many kinds here
-        raise TypeError(f"s must be a complex number or array of them [rad/s]; got {s!r}") from exc
+        raise TypeError(f"s must be a complex number or array of them [rad/s]; got {describe(s)}") from exc
     if arr.dtype.kind not in "biufc":
         raise TypeError(f"s must be a complex number or array of them [rad/s]; got dtype {arr.dtype}")
+    from . import limits  # here: limits imports this module
+
+    limits.check("s (number of points)", arr.size, "points", "points at once")
     arr = arr.astype(np.complex128)
     if not np.all(np.isfinite(arr)):
         raise ValueError("s must be finite [rad/s]; got a NaN or infinite value")
@@ -463,7 +466,7 @@ class FiniteAppendage:
         left out.
         """
         if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r not in (1, 2, 3, 4):
-            raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {r!r}")
+            raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {describe(r)}")
         rm = self.root_model()
         n = rm.n
         out_index, in_index = {1: (0, 0), 2: (0, 1), 3: (1, 0), 4: (1, 1)}[r]

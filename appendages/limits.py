@@ -27,6 +27,8 @@ name               default  what it bounds
                             eigen-decomposition, O(n**3): 6 s at 2000, 30 s at 3000 measured
                             on 2 loaded cores)
 ``appendages``     100      mounts on one spacecraft
+``points``         1e6      Laplace variables (frequencies) at which W(s) or a frequency
+                            response is evaluated at once (~1 GiB of temporaries at 1e6)
 ``elements``       50e6     entries of an array whose size is the product of two requests
                             (``Beam.mode_shapes(x, n)``: 0.4 GiB of float64)
 =================  =======  ===================================================================
@@ -67,6 +69,7 @@ DEFAULTS = types.MappingProxyType({
     "frequencies": 100_000,
     "coordinates": 2500,
     "appendages": 100,
+    "points": 1_000_000,
     "elements": 50_000_000,
 })
 

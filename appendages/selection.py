@@ -35,6 +35,8 @@ import math
 import numbers
 from collections.abc import Sequence
 
+from .interface import describe
+
 __all__ = ["FAMILIES", "QUANTITIES", "ModelChoice", "cheapest_model", "candidates"]
 
 #: Model families of the table, in order of preference when two cost the same.
@@ -151,21 +153,21 @@ class ModelChoice:
 def _check(tolerance, quantity, families) -> tuple[float, tuple]:
     if isinstance(tolerance, bool) or not isinstance(tolerance, numbers.Real):
         raise TypeError(f"tolerance must be a real number (relative error) [-]; got "
-                        f"{type(tolerance).__name__} {tolerance!r}")
+                        f"{type(tolerance).__name__} {describe(tolerance)}")
     tolerance = float(tolerance)
     if not (math.isfinite(tolerance) and 0.0 < tolerance < 1.0):
-        raise ValueError(f"tolerance must lie in (0, 1) (relative error) [-]; got {tolerance!r}")
+        raise ValueError(f"tolerance must lie in (0, 1) (relative error) [-]; got {describe(tolerance)}")
     if quantity not in QUANTITIES:
-        raise ValueError(f"quantity must be one of {QUANTITIES}; got {quantity!r}")
+        raise ValueError(f"quantity must be one of {QUANTITIES}; got {describe(quantity)}")
     if families is None:
         families = FAMILIES
     elif isinstance(families, str) or not isinstance(families, Sequence):
         raise TypeError(f"families must be a sequence of family names from {FAMILIES}; got "
-                        f"{families!r}")
+                        f"{describe(families)}")
     unknown = [f for f in families if f not in FAMILIES]
     if unknown or not families:
         raise ValueError(f"families must be a non-empty selection of {FAMILIES}; got "
-                         f"{list(families)!r}")
+                         f"{describe(list(families))}")
     return tolerance, tuple(families)
 
 

@@ -45,7 +45,7 @@ import numpy as np
 import scipy.linalg
 
 from appendages import limits
-from appendages.interface import describe, equilibrate
+from appendages.interface import S_RANGE, describe, equilibrate
 
 from .hub import Hub, Mount
 
@@ -277,7 +277,7 @@ class Spacecraft:
             raise TypeError(f"n must be an integer (number of frequencies); got "
                             f"{type(n).__name__} {describe(n)}")
         if n < 1:
-            raise ValueError(f"n must be a positive integer (number of frequencies); got {n!r}")
+            raise ValueError(f"n must be a positive integer (number of frequencies); got {describe(n)}")
         if exact is not None and not isinstance(exact, (bool, np.bool_)):
             raise TypeError(f"exact must be True, False or None; got {describe(exact)}")
         finite = all(hasattr(m.appendage, "root_model") for m in self.mounts)
@@ -359,7 +359,7 @@ class Spacecraft:
         keep = np.arange(n)
         if n_modes is not None:
             if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 0:
-                raise ValueError(f"n_modes must be a non-negative integer; got {n_modes!r}")
+                raise ValueError(f"n_modes must be a non-negative integer; got {describe(n_modes)}")
             keep = keep[: 3 + n_modes]
         modal_damping = V.T @ model.damping @ V
         # damping forces vanish for rigid-body motion (C r = 0 exactly); keep round-off of
@@ -575,10 +575,15 @@ def _frequency_vector(omega) -> np.ndarray:
     if arr.dtype.kind not in "iuf" or arr.dtype == bool:
         raise TypeError(f"omega must be real frequencies [rad/s]; got dtype {arr.dtype} "
                         f"{describe(omega)}")
+    limits.check("omega (number of frequencies)", arr.size, "points", "points at once")
     arr = arr.astype(float)
     if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
         raise ValueError("omega must be a 1-D array of positive finite frequencies [rad/s]; "
                          f"got {describe(omega)}")
+    if np.any(arr < S_RANGE[0]) or np.any(arr > S_RANGE[1]):
+        raise ValueError(f"omega must lie between {S_RANGE[0]:g} and {S_RANGE[1]:g} [rad/s] "
+                         "(appendages.interface.S_RANGE); got "
+                         f"{describe(arr[(arr < S_RANGE[0]) | (arr > S_RANGE[1])][0])}")
     return arr
 
 

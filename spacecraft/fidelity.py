@@ -38,6 +38,9 @@ from collections.abc import Callable
 import control
 import numpy as np
 
+from appendages import limits
+from appendages.interface import describe
+
 __all__ = ["FidelityChoice", "choose_n_modes", "low_band", "transfer_theta_torque"]
 
 #: Largest number of modes tried per beam before giving up.
@@ -139,13 +142,30 @@ def choose_n_modes(truncated_plant: Callable[[int], tuple], exact_frequencies: C
 
     Raises
     ------
-    ValueError
-        If no n up to n_max meets the tolerance (names the best error reached).
+    TypeError, ValueError
+        Bad arguments (named); n_max above the ``modes`` limit of :mod:`appendages.limits`
+        (a :class:`~appendages.limits.LimitError`); no n up to n_max meeting the tolerance
+        (the message names the best error reached).
     """
+    for name, value in (("bandwidth", bandwidth), ("tolerance", tolerance),
+                        ("bandwidth_factor", bandwidth_factor)):
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise TypeError(f"{name} must be a real number; got {type(value).__name__} "
+                            f"{describe(value)}")
     if not (math.isfinite(bandwidth) and bandwidth > 0):
-        raise ValueError(f"bandwidth must be positive and finite [rad/s]; got {bandwidth!r}")
+        raise ValueError(f"bandwidth must be positive and finite [rad/s]; got {describe(bandwidth)}")
     if not (0 < tolerance < 1):
-        raise ValueError(f"tolerance must lie in (0, 1) [-]; got {tolerance!r}")
+        raise ValueError(f"tolerance must lie in (0, 1) [-]; got {describe(tolerance)}")
+    if not (math.isfinite(bandwidth_factor) and bandwidth_factor > 0):
+        raise ValueError(f"bandwidth_factor must be positive and finite [-]; got "
+                         f"{describe(bandwidth_factor)}")
+    for name, value in (("n_min", n_min), ("n_max", n_max)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            raise ValueError(f"{name} must be a positive integer (modes per beam); got "
+                             f"{describe(value)}")
+    if n_min > n_max:
+        raise ValueError(f"n_min must not exceed n_max; got {n_min} > {n_max}")
+    limits.check("n_max", int(n_max), "modes", "bending modes per beam")
     w_top = bandwidth_factor * bandwidth
     # exact frequencies up to w_top and the first one above it
     k = 4

@@ -358,3 +358,14 @@ def test_model_quantities_of_hinged_root(rod):
                          np.concatenate([[100.0], rigid.hinge_stiffnesses]), root="hinged")
     q = ModelQuantities.of(hinged, "hinged")
     assert q.gains is None and q.poles[1] is not None
+
+
+def test_fit_of_a_beam_whose_chains_leave_the_ranges_names_the_beam():
+    """A 1 mm beam with EJ = 1e14 N m^2 is in range, but a chain of it needs hinges of
+    EJ/H ~ 2e17 N*m/rad, beyond the documented range: the fit says so, naming fit_chain's
+    arguments (before issue 9 it built the chain whatever the values)."""
+    beam = Beam(1e-3, 1e14, 1e-8)
+    for match in ("frequencies", "poles-and-zeros"):
+        with pytest.raises(ValueError, match=r"fit_chain\(beam, n_bodies=3.*Beam\(length=0\.001.*"
+                                             r"outside the documented ranges.*hinge"):
+            fit_chain(beam, 3, match=match)

@@ -112,3 +112,19 @@ def test_raised_applies_to_the_current_thread_only():
         thread.join()
         assert limits.current("modes") == 10**6
     assert seen["modes"] == limits.DEFAULTS["modes"]
+
+
+def test_evaluation_points_are_bounded():
+    """W(s), frequency responses and the criterion's band: at most 1e6 points at once (a W
+    of 2e7 points would hold ~20 GiB of temporaries)."""
+    from appendages.equivalence import criterion
+
+    s = np.zeros(20_000_000, dtype=complex)  # 320 MB, never processed
+    with refused("points", r"s \(number of points\)"):
+        ROD.W(s)
+    with refused("points", r"s \(number of points\)"):
+        ROD.truncated(3).W(s)
+    with refused("points", r"omega \(number of frequencies\)"):
+        Spacecraft(Hub(100.0, 50.0), [Mount(ROD)]).frequency_response(np.ones(2_000_000))
+    with refused("points", "n_points"):
+        criterion(ROD, HingedChain.rfem(ROD, 3), n_points=10**9)
