@@ -45,7 +45,7 @@ import numpy as np
 import scipy.linalg
 
 from appendages import limits
-from appendages.interface import S_RANGE, describe, equilibrate
+from appendages.interface import S_RANGE, describe, equilibrate, inverse_2x2
 
 from .hub import Hub, Mount
 
@@ -590,28 +590,25 @@ def _frequency_vector(omega) -> np.ndarray:
 def _dynamic_stiffness_of(appendage, s: np.ndarray, *, undamped: bool) -> np.ndarray:
     """D(s) = W(s)^-1 of an appendage [N/m, N; N, N*m], shape ``s.shape + (2, 2)``.
 
-    Through the interface only: a finite appendage (``root_model()``) by static condensation
-    of its realisation, damping removed when ``undamped``; an appendage offering
-    ``dynamic_stiffness(s)`` (the distributed beam; ``undamped()`` gives its undamped twin)
-    by it; any other by the 2x2 inverse of its W(s) (adjugate over determinant).
+    Through the interface only. Undamped (the natural-frequency count): a finite appendage
+    (``root_model()``) by static condensation of its realisation with the damping removed,
+    which carries the poles of D at its clamped frequencies natively (inverting W there,
+    where W is singular, loses every digit); an appendage offering ``undamped()`` (the
+    distributed beam) through its undamped twin. Otherwise an appendage offering
+    ``dynamic_stiffness(s)`` (the beam's closed form) by it, any other by the scaled 2x2
+    inverse of its own W(s), which is the accurate one at small |s| (a chain's recursion, a
+    truncation's modal sum; the condensation subtracts stiffness-sized terms there).
     """
     if undamped and hasattr(appendage, "undamped"):
         appendage = appendage.undamped()
-    if hasattr(appendage, "root_model"):
+    if undamped and hasattr(appendage, "root_model"):
         rm = appendage.root_model()
-        if undamped and np.any(rm.damping):
+        if np.any(rm.damping):
             rm = dataclasses.replace(rm, damping=np.zeros_like(rm.damping))
         return rm.dynamic_stiffness(s)
     if hasattr(appendage, "dynamic_stiffness"):
         return np.asarray(appendage.dynamic_stiffness(s), dtype=complex)
-    W = np.asarray(appendage.W(s), dtype=complex)
-    det = W[..., 0, 0] * W[..., 1, 1] - W[..., 0, 1] * W[..., 1, 0]
-    D = np.empty_like(W)
-    D[..., 0, 0] = W[..., 1, 1] / det
-    D[..., 1, 1] = W[..., 0, 0] / det
-    D[..., 0, 1] = -W[..., 0, 1] / det
-    D[..., 1, 0] = -W[..., 1, 0] / det
-    return D
+    return inverse_2x2(np.asarray(appendage.W(s), dtype=complex))
 
 
 def _clamped_frequencies(appendage, omega_max: float) -> np.ndarray:
