@@ -101,32 +101,49 @@ def _polyval(coefficients: np.ndarray, y: np.ndarray) -> np.ndarray:
     return out
 
 
+def _scaled_terms(y: np.ndarray):
+    """Scaled exponential forms at y = x**4 (|x| >= 2), all of modulus at most 4.
+
+    With the principal root x (Re x >= |Im x|), sigma = sign Im x and the common factor
+    ``P = exp(x - i sigma x)`` divided out (module docstring): returns ``x`` and
+
+        a = 4 cos x sinh x / P,   b = 4 sin x cosh x / P,   c = 4 sin x sinh x / P,
+        p = 4 cos x cosh x / P,   g = 4 / P.
+    """
+    x = y ** 0.25  # principal root: Re x >= |Im x|
+    sigma = np.where(x.imag >= 0.0, 1.0, -1.0)
+    t = np.exp(-2.0 * x)
+    u = np.exp(2j * sigma * x)
+    g = 4.0 * np.exp(-x + 1j * sigma * x)
+    a = (1.0 + u) * (1.0 - t)
+    b = 1j * sigma * (1.0 - u) * (1.0 + t)
+    c = 1j * sigma * (1.0 - u) * (1.0 - t)
+    return x, a, b, c, (1.0 + u) * (1.0 + t), g
+
+
+def _two_branches(y: np.ndarray, series, scaled) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Three functions of y: ``series(y)`` for |x| < 2, ``scaled(*_scaled_terms(y))`` beyond."""
+    out = tuple(np.empty_like(y) for _ in range(3))
+    small = np.abs(y) < _SERIES_RADIUS**4
+    for where, evaluate in ((small, series), (~small, lambda v: scaled(*_scaled_terms(v)))):
+        if np.any(where):
+            for target, value in zip(out, evaluate(y[where])):
+                target[where] = value
+    return out
+
+
 def _dimensionless_W(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """f1, f2, f4 with W1 = L^3/EJ f1, W2 = L^2/EJ f2, W4 = L/EJ f4, as functions of y = x**4."""
-    f1 = np.empty_like(y)
-    f2 = np.empty_like(y)
-    f4 = np.empty_like(y)
-    small = np.abs(y) < _SERIES_RADIUS**4
-    if np.any(small):
-        ys = y[small]
+    def series(ys):
         denominator = ys * _polyval(_Q, ys)
-        f1[small] = _polyval(_P1, ys) / denominator
-        f2[small] = _polyval(_P2, ys) / denominator
-        f4[small] = _polyval(_P4, ys) / denominator
-    large = ~small
-    if np.any(large):
-        x = y[large] ** 0.25  # principal root: Re x >= |Im x|
-        sigma = np.where(x.imag >= 0.0, 1.0, -1.0)
-        t = np.exp(-2.0 * x)
-        u = np.exp(2j * sigma * x)
-        g = 4.0 * np.exp(-x + 1j * sigma * x)
-        den = g - (1.0 + u) * (1.0 + t)
-        a = (1.0 + u) * (1.0 - t)            # 4 cos x sinh x / P
-        b = 1j * sigma * (1.0 - u) * (1.0 + t)  # 4 sin x cosh x / P
-        f1[large] = (a - b) / (x**3 * den)
-        f2[large] = 1j * sigma * (1.0 - u) * (1.0 - t) / (x**2 * den)
-        f4[large] = -(a + b) / (x * den)
-    return f1, f2, f4
+        return (_polyval(_P1, ys) / denominator, _polyval(_P2, ys) / denominator,
+                _polyval(_P4, ys) / denominator)
+
+    def scaled(x, a, b, c, p, g):
+        den = g - p  # 4 (1 - cos x cosh x)/P
+        return (a - b) / (x**3 * den), c / (x**2 * den), -(a + b) / (x * den)
+
+    return _two_branches(y, series, scaled)
 
 
 def _dimensionless_D(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -146,30 +163,16 @@ def _dimensionless_D(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     ``4 (1 + cos x cosh x)/P = g + (1 + u)(1 + t)``. Near s = 0, D = s**2 [[m, m L/2],
     [m L/2, m L**2/3]] (the rigid beam's inertia about its root) with full relative accuracy.
     """
-    d1 = np.empty_like(y)
-    d2 = np.empty_like(y)
-    d4 = np.empty_like(y)
-    small = np.abs(y) < _SERIES_RADIUS**4
-    if np.any(small):
-        ys = y[small]
+    def series(ys):
         denominator = 2.0 - ys * _polyval(_Q, ys)
-        d1[small] = ys * _polyval(_P4, ys) / denominator
-        d2[small] = -ys * _polyval(_P2, ys) / denominator
-        d4[small] = ys * _polyval(_P1, ys) / denominator
-    large = ~small
-    if np.any(large):
-        x = y[large] ** 0.25
-        sigma = np.where(x.imag >= 0.0, 1.0, -1.0)
-        t = np.exp(-2.0 * x)
-        u = np.exp(2j * sigma * x)
-        g = 4.0 * np.exp(-x + 1j * sigma * x)
-        den = g + (1.0 + u) * (1.0 + t)
-        a = (1.0 + u) * (1.0 - t)
-        b = 1j * sigma * (1.0 - u) * (1.0 + t)
-        d1[large] = -(x**3) * (a + b) / den
-        d2[large] = -(x**2) * 1j * sigma * (1.0 - u) * (1.0 - t) / den
-        d4[large] = x * (a - b) / den
-    return d1, d2, d4
+        return (ys * _polyval(_P4, ys) / denominator, -ys * _polyval(_P2, ys) / denominator,
+                ys * _polyval(_P1, ys) / denominator)
+
+    def scaled(x, a, b, c, p, g):
+        den = g + p  # 4 (1 + cos x cosh x)/P
+        return -(x**3) * (a + b) / den, -(x**2) * c / den, x * (a - b) / den
+
+    return _two_branches(y, series, scaled)
 
 
 def _newton(function, derivative, x0: np.ndarray, n_iter: int = 50) -> np.ndarray:

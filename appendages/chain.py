@@ -147,6 +147,17 @@ class HingedChain(FiniteAppendage):
     root : {"rigid", "hinged"}
         How the first body is attached to the mount.
 
+    Raises
+    ------
+    TypeError
+        Parameters that are not sequences of real numbers.
+    ValueError
+        Wrong counts, values outside the documented ranges of
+        :data:`appendages.interface.RANGES` (lengths 1e-6 to 1e6 m, masses 1e-15 to 1e15 kg,
+        inertias up to 1e20 kg*m**2, hinge stiffnesses 1e-15 to 1e15 N*m/rad, dampings up to
+        1e15 N*m*s/rad), a singular mass matrix, or more bodies than the ``bodies`` limit of
+        :mod:`appendages.limits` (500; a :class:`~appendages.limits.LimitError`).
+
     Attributes
     ----------
     lengths, masses, inertias, hinge_stiffnesses, hinge_dampings, com_offsets : ndarray

@@ -90,6 +90,12 @@ class ModalBeam(FiniteAppendage):
         Number of bending modes kept, >= 1.
     method : {"craig-bampton", "residual", "free-free"}
         Reduction method.
+
+    Raises
+    ------
+    LimitError
+        n_modes above the ``modes`` limit of :mod:`appendages.limits` (1000; raise it with
+        ``appendages.limits.raised(modes=...)``).
     """
 
     def __init__(self, beam, n_modes: int, *, method: str = "craig-bampton"):

@@ -221,57 +221,29 @@ def check_mount_value(name, value):
                             Spacecraft(Hub(100.0, 50.0), [truncated]))
 
 
-@pytest.mark.parametrize("name", BEAM_PARAMETERS)
-def test_beam_parameter_edges(name):
-    for value in sweep_values(BEAM_PARAMETERS[name][1]):
-        check_beam_value(name, value)
+# (group, parameter) -> (check of one value, range key of its edges)
+CASES = {
+    **{("beam", name): (check_beam_value, key) for name, (_, key) in BEAM_PARAMETERS.items()},
+    **{("chain", name): (check_chain_value, key) for name, (_, key) in CHAIN_PARAMETERS.items()},
+    **{("hub", name): (check_hub_value, key) for name, (_, key) in HUB_PARAMETERS.items()},
+    **{("mount", name): (check_mount_value, "length") for name in MOUNT_PARAMETERS},
+}
 
 
-@pytest.mark.parametrize("name", CHAIN_PARAMETERS)
-def test_chain_parameter_edges(name):
-    for value in sweep_values(CHAIN_PARAMETERS[name][1]):
-        check_chain_value(name, value)
+@pytest.mark.parametrize("case", CASES, ids="-".join)
+def test_parameter_edges(case):
+    check, key = CASES[case]
+    for value in sweep_values(key):
+        check(case[1], value)
 
 
-@pytest.mark.parametrize("name", HUB_PARAMETERS)
-def test_hub_parameter_edges(name):
-    for value in sweep_values(HUB_PARAMETERS[name][1]):
-        check_hub_value(name, value)
-
-
-@pytest.mark.parametrize("name", MOUNT_PARAMETERS)
-def test_mount_parameter_edges(name):
-    for value in sweep_values("length"):
-        check_mount_value(name, value)
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize("name", BEAM_PARAMETERS)
+@pytest.mark.parametrize("case", CASES, ids="-".join)
 @SWEEP
-@given(value=magnitudes)
-def test_beam_parameter_decades(name, value):
-    check_beam_value(name, value)
-
-
-@pytest.mark.parametrize("name", CHAIN_PARAMETERS)
-@SWEEP
-@given(value=magnitudes)
-def test_chain_parameter_decades(name, value):
-    check_chain_value(name, value)
-
-
-@pytest.mark.parametrize("name", HUB_PARAMETERS)
-@SWEEP
-@given(value=magnitudes)
-def test_hub_parameter_decades(name, value):
-    check_hub_value(name, value)
-
-
-@pytest.mark.parametrize("name", MOUNT_PARAMETERS)
-@SWEEP
-@given(value=st.one_of(magnitudes, magnitudes.map(lambda v: -v)))
-def test_mount_parameter_decades(name, value):
-    check_mount_value(name, value)
+@given(value=magnitudes, negative=st.booleans())
+def test_parameter_decades(case, value, negative):
+    """Negative values only where a sign is meaningful (mount coordinates and angles)."""
+    check, _ = CASES[case]
+    check(case[1], -value if negative and case[0] == "mount" else value)
 
 
 @SWEEP
