@@ -3,29 +3,33 @@
 Every entry point of flexsat that can be asked for an unbounded amount of work estimates it
 before doing any and refuses, at once and by name, a request beyond these limits, with a
 :class:`LimitError` (a ``ValueError``) that names the parameter, the value asked for, the limit
-and how to raise it. The limits are sized so that a request within them finishes in seconds to
-about a minute on a laptop-class machine (2 cores) and needs well under 1 GiB; the measurements
-behind each are given beside it.
+and how to raise it. The limits are sized so that a request at a limit finishes in about a
+minute or less on the project's reference machine (2 cores shared with other jobs, load
+average 7 to 9 during the measurements of issue 9, BLAS threads as a user has them) and needs
+well under 2 GiB; the measurements behind each are given beside it.
 
 =================  =======  ===================================================================
 name               default  what it bounds
 =================  =======  ===================================================================
-``modes``          1000     bending modes of a truncation (``Beam.truncated(n_modes)``)
+``modes``          1000     bending modes of a truncation (``Beam.truncated(n_modes)``): root
+                            model and poles of an undamped 1000-mode beam 25-30 s; a damped
+                            Craig-Bampton one also projects 4400 free-free modes on the
+                            cantilever ones, 100 s (its quadrature is the slow part)
 ``bodies``         500      bodies of a :class:`~appendages.chain.HingedChain` (also through
                             ``HingedChain.rfem``, ``superelements``: 2 n + 1 bodies)
-``fit_bodies``     20       bodies of ``equivalence.fit_chain(match="poles-and-zeros")``: 5 n - 5
+``fit_bodies``     12       bodies of ``fit_chain(match="poles-and-zeros")``: 5 n - 5
                             parameters, 4 n - 4 residuals, each an eigen-decomposition of size
-                            n: measured 1-23 s for 3-12 bodies, 35 s at 20, 153 s at 24 and
-                            350 s at 32 (2 cores, load average 7-12, issue 9)
+                            n. Medians of 5: 1.9 s at 3 bodies, 12 s at 6, 52 s at 10, 107 s
+                            at 16 (single-threaded BLAS: 12 s at 16, 35 s at 20)
 ``roots``          1e6      frequencies or zeros of a distributed beam asked at once
                             (``Beam.natural_frequencies(n)`` etc.: O(n), ~1 s and 40 MB at 1e6)
 ``frequencies``    100000   exact coupled frequencies asked of
                             ``Spacecraft.natural_frequencies(n, exact=True)`` (bisection, O(n)
                             per appendage and step: 5 s on one rod, 26 s on eight at 1e5)
 ``coordinates``    2500     generalised coordinates of an assembled hub + appendages model
-                            (``Spacecraft.plant``, ``modes``: a dense generalized
-                            eigen-decomposition, O(n**3): 6 s at 2000, 30 s at 3000 measured
-                            on 2 loaded cores)
+                            (``Spacecraft.plant``, ``modes``: dense generalized eigen-
+                            decomposition and modal projections, O(n**3); undamped plants:
+                            17 s at 1003 coordinates, 52 s at 2003, 130 s at 3003)
 ``appendages``     100      mounts on one spacecraft
 ``points``         1e6      Laplace variables (frequencies) at which W(s) or a frequency
                             response is evaluated at once (~1 GiB of temporaries at 1e6)
@@ -64,7 +68,7 @@ __all__ = ["DEFAULTS", "LimitError", "check", "current", "raised"]
 DEFAULTS = types.MappingProxyType({
     "modes": 1000,
     "bodies": 500,
-    "fit_bodies": 20,
+    "fit_bodies": 12,
     "roots": 1_000_000,
     "frequencies": 100_000,
     "coordinates": 2500,
