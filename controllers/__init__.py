@@ -3,9 +3,11 @@
 Works on any python-control LTI plant with input ``'torque'`` and outputs ``'theta'``,
 ``'omega'`` (optionally ``'*tip_deflection'``); imports no other flexsat package.
 """
-from .analysis import (FlexibleMode, Margins, METRIC_UNITS, SpilloverVerdict, close_loop,
-                       disturbance_response, flexible_modes, loop_frequency_response, margins,
-                       metrics, rigid_body_inertia, slew, slew_profile, spillover, step_response)
+from .loop import close_loop, loop_frequency_response
+from .margins import Margins, SpilloverVerdict, margins, spillover
+from .modes import FlexibleMode, flexible_modes, rigid_body_inertia
+from .timeresp import (METRIC_UNITS, disturbance_response, metrics, slew, slew_profile,
+                       step_response)
 from .compare import Comparison, compare
 from .lqr import KalmanNoise, LQRDesign, lqr, lqr_design, reference_state
 from .pd import natural_frequency_from_bandwidth, pd, pd_gains

@@ -14,9 +14,10 @@ from typing import Sequence
 import control
 import numpy as np
 
-from .analysis import (METRIC_UNITS, THETA, THETA_REF, TIP_SUFFIX, TORQUE, SpilloverVerdict,
-                       _check_controller, _check_plant, _trace, close_loop,
-                       loop_frequency_response, margins, metrics, slew, spillover)
+from .loop import close_loop, loop_frequency_response
+from .margins import SpilloverVerdict, margins, spillover
+from .signals import THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_controller, _check_plant
+from .timeresp import METRIC_UNITS, _trace, metrics, slew
 
 __all__ = ["Comparison", "compare", "metric_table", "difference_columns"]
 
@@ -59,7 +60,7 @@ class Comparison:
     Attributes
     ----------
     design_metrics, truth_metrics : dict of str to float
-        :func:`controllers.analysis.metrics` of the slew plus the margins (``gain_margin`` [dB],
+        :func:`controllers.metrics` of the slew plus the margins (``gain_margin`` [dB],
         ``phase_margin`` [deg], ``modulus_margin``) of each loop.
     design_response, truth_response : control.TimeResponseData
         Slew responses on the same time grid.
@@ -177,13 +178,13 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
         Plant the controller was tuned on (e.g. hub + chain).
     truth_plant : control.StateSpace
         High-fidelity plant (e.g. hub + beam with many modes). Both plants need the signals of
-        :mod:`controllers.analysis`.
+        :mod:`controllers.signals`.
     controller : control.StateSpace
         Continuous or digital controller (output ``'torque'``).
     angle : float, rad
         Slew angle.
     duration : float, s
-        Slew duration (cycloidal profile, :func:`controllers.analysis.slew_profile`).
+        Slew duration (cycloidal profile, :func:`controllers.slew_profile`).
     t_final : float, s, optional
         Simulation length; default 3 * duration.
     dt : float, s, optional

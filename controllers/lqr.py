@@ -16,8 +16,8 @@ import control
 import numpy as np
 import scipy.linalg
 
-from .analysis import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant,
-                       rigid_body_inertia)
+from .modes import rigid_body_inertia
+from .signals import OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant
 from .pd import _positive, check_sample_time
 
 __all__ = ["lqr", "KalmanNoise", "LQRDesign", "lqr_design", "reference_state"]

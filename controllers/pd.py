@@ -11,8 +11,9 @@ import math
 import control
 import numpy as np
 
-from .analysis import (OMEGA, THETA, THETA_REF, TORQUE, _check_plant, flexible_modes,
-                       loop_frequency_response, rigid_body_inertia)
+from .loop import loop_frequency_response
+from .modes import flexible_modes, rigid_body_inertia
+from .signals import OMEGA, THETA, THETA_REF, TORQUE, _check_plant
 
 __all__ = [
     "pd",
@@ -117,7 +118,7 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
 
     The control law is torque = F(s) N(s) [Kp (theta_ref - theta) - Kd omega] with
     Kp = J wn^2, Kd = 2 zeta wn J, J the plant's total inertia from its rigid-body low-frequency
-    gain (lim s^2 theta/torque = 1/J, :func:`controllers.analysis.rigid_body_inertia`); the
+    gain (lim s^2 theta/torque = 1/J, :func:`controllers.rigid_body_inertia`); the
     rigid-body closed loop is then J s^2 + Kd s + Kp = 0, natural frequency wn and damping zeta.
     The rate is measured (omega), so no derivative filter is needed.
 
@@ -145,7 +146,7 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
     sample_time : float, s, optional
         Digital implementation: the continuous controller is discretised with a zero-order hold
         (``control.c2d(..., method="zoh")``) and returned with ``dt = sample_time``;
-        :func:`controllers.analysis.close_loop` closes it on the ZOH-discretised plant (the
+        :func:`controllers.close_loop` closes it on the ZOH-discretised plant (the
         sampled-data loop). The sampling frequency must be at least MIN_SAMPLES_PER_CROSSOVER times
         the continuous design loop's highest gain crossover.
 

@@ -21,7 +21,7 @@ from typing import Mapping, Sequence
 
 import control
 
-from .analysis import METRIC_UNITS, metrics as _metrics, slew
+from .timeresp import METRIC_UNITS, metrics as _metrics, slew
 from .compare import difference_columns, metric_table
 
 __all__ = ["assert_closed_loops_close", "compare_metrics", "DEFAULT_RTOL", "DEFAULT_ATOL"]

@@ -402,7 +402,7 @@ def test_crossings_refines_all_brackets_together_and_drops_pole_passes():
     sign change at 2 that is no root. All brackets share one vectorised evaluation per
     iteration: the old scalar brentq loop made ~10 calls per bracket (~670 single-frequency
     evaluations per margins call, the bottleneck)."""
-    from controllers.analysis import _crossings
+    from controllers.margins import _crossings
 
     calls = []
 
@@ -418,7 +418,7 @@ def test_crossings_refines_all_brackets_together_and_drops_pole_passes():
 
 
 def test_crossings_exact_grid_zero_and_no_sign_change():
-    from controllers.analysis import _crossings
+    from controllers.margins import _crossings
 
     grid = np.array([0.5, 1.0, 1.5])
     values = np.array([-1.0, 0.0, 2.0])
@@ -430,7 +430,7 @@ def test_modal_evaluator_matches_resolvent():
     """G(s) = C (sI - A)^-1 B + D from the residues and the triangular rigid block equals a
     direct solve on a free-floating plant (rigid Jordan block) with two outputs, round-off
     only (1e-12 relative to |G|)."""
-    from controllers.analysis import _evaluator
+    from controllers.frequency import _evaluator
 
     plant = modal_plant(J, [(2.0, 0.01, 0.05, 0.05), (9.0, 0.0, 0.02, -0.01)])
     ev = _evaluator(plant, ["torque", "disturbance_torque"], ["theta", "omega"])
@@ -447,22 +447,22 @@ def test_margins_evaluation_count_on_flexible_loop():
     """Regression for the cost of margins: the loop is evaluated in a few dozen vectorised calls
     (grid, one per refinement iteration, the modulus search), not once per brentq step; the
     margins themselves agree with python-control (see the test above)."""
-    from controllers import analysis
+    from controllers import loop as loop_module
 
     plant = modal_plant(J, [(2.0, 0.002, 1.0, 0.004), (7.0, 0.0, 1.0, 0.002),
                             (15.0, 0.0, 1.0, -0.001)])
     K = controllers.pd(plant, natural_frequency=0.5, roll_off=4.0)
     counted = []
-    original = analysis._Loop.__call__
+    original = loop_module._Loop.__call__
 
     def counting(self, omega):
         counted.append(np.size(omega))
         return original(self, omega)
 
-    analysis._Loop.__call__ = counting
+    loop_module._Loop.__call__ = counting
     try:
         m = controllers.margins(plant, K)
     finally:
-        analysis._Loop.__call__ = original
+        loop_module._Loop.__call__ = original
     assert len(counted) < 80  # was ~10 per sign-change bracket plus ~25 for the modulus search
     assert math.isfinite(m.phase_margin) and m.modulus_margin > 0

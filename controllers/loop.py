@@ -1,0 +1,334 @@
+"""Closing the attitude loop by signal names, and the loop transfer function.
+
+The loop transfer function is taken with the loop broken at the plant's torque input and the
+negative-feedback convention, L(s) = -sum_i K_i(s) P_i(s), where P_i is the transfer from torque to
+the i-th measured plant output and K_i the controller's transfer from that measurement to torque.
+For a PD controller on a rigid hub, L(s) = (Kp + Kd s) / (J s^2).
+"""
+from __future__ import annotations
+
+import math
+
+import control
+import numpy as np
+import scipy.linalg
+
+from .frequency import _evaluator, _poles_of
+from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_plant, _is_digital,
+                      _labels, _measurements, _reference_inputs)
+
+__all__ = ["close_loop", "loop_frequency_response"]
+
+
+def close_loop(plant, controller: control.StateSpace):
+    """Close the attitude loop by signal names.
+
+    Parameters
+    ----------
+    plant : control.StateSpace or control.FrequencyResponseData
+        Continuous-time plant (input ``'torque'``, outputs ``'theta'``, ``'omega'``, ...). An FRD
+        plant (e.g. the exact distributed model) gives the closed loop's frequency response on
+        its grid; it needs ``'theta'`` or ``'omega'`` (the other is j w times / divided by it).
+    controller : control.StateSpace
+        Controller with output ``'torque'``; its inputs are plant outputs (measurements) and
+        reference inputs (names containing ``'ref'``). If the controller is discrete-time
+        (``dt`` > 0), the plant is discretised with a zero-order hold at that ``dt`` and the
+        result is the exact sampled-data loop at the sampling instants (every plant input,
+        including disturbances, is then held constant over a sample). FRD plants need a
+        continuous controller.
+
+    Returns
+    -------
+    control.StateSpace or control.FrequencyResponseData
+        Inputs: the controller's reference inputs, then the plant's inputs other than torque.
+        Outputs: every plant output, then ``'torque'``. States: plant states, controller states.
+        With u = torque, y_m the measurements and d the other plant inputs:
+        torque = (K_r r + K_y (C_m x + D_md d)) / (1 - K_y D_mt), the algebraic loop through the
+        feedthroughs solved exactly (an error if 1 - K_y D_mt = 0).
+    """
+    if isinstance(plant, control.FrequencyResponseData):
+        return _close_loop_frd(plant, controller)
+    _check_plant(plant)
+    _check_controller(controller)
+    measured = _measurements(plant, controller)
+    refs = _reference_inputs(controller, _labels(plant, "output"))
+    p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
+    c_in = list(controller.input_labels)
+    disturbances = [n for n in p_in if n != TORQUE]
+    if _is_digital(controller):
+        plant = control.c2d(plant, controller.dt, method="zoh")
+    Ap, Bp, Cp, Dp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))
+    Ac, Bc, Cc, Dc = (np.asarray(M, dtype=float)
+                      for M in (controller.A, controller.B, controller.C, controller.D))
+    i_t = p_in.index(TORQUE)
+    i_d = [p_in.index(n) for n in disturbances]
+    i_m = [p_out.index(n) for n in measured]
+    j_m = [c_in.index(n) for n in measured]
+    j_r = [c_in.index(n) for n in refs]
+    # torque = Cc xc + Dr r + Dy y_m,  y_m = Cm xp + Dmt torque + Dmd d: solve the (scalar)
+    # algebraic loop torque (1 - Dy Dmt) = Cc xc + Dr r + Dy (Cm xp + Dmd d)
+    Dy = Dc[:, j_m]
+    gain = 1.0 - float((Dy @ Dp[i_m, i_t])[0])
+    if abs(gain) < 1e-12:
+        raise ValueError("algebraic loop: the controller's direct feedthrough times the plant's "
+                         "feedthrough from torque to the measurements is 1")
+    # torque = F [xp; xc; r; d]
+    F = np.hstack([Dy @ Cp[i_m], Cc, Dc[:, j_r], Dy @ Dp[np.ix_(i_m, i_d)]]) / gain
+    n_p, n_c = Ap.shape[0], Ac.shape[0]
+    n_r = len(j_r)
+    # the plant with the torque substituted, then the controller driven by r and y_m
+    Fx, Fr, Fd = F[:, : n_p + n_c], F[:, n_p + n_c: n_p + n_c + n_r], F[:, n_p + n_c + n_r:]
+    bt = Bp[:, [i_t]]
+    A_top = np.hstack([Ap, np.zeros((n_p, n_c))]) + bt @ Fx
+    ym_x = np.hstack([Cp[i_m], np.zeros((len(i_m), n_c))]) + Dp[np.ix_(i_m, [i_t])] @ Fx
+    A_bot = np.hstack([np.zeros((n_c, n_p)), Ac]) + Bc[:, j_m] @ ym_x
+    B_top = np.hstack([bt @ Fr, Bp[:, i_d] + bt @ Fd])
+    ym_r = Dp[np.ix_(i_m, [i_t])] @ Fr
+    ym_d = Dp[np.ix_(i_m, i_d)] + Dp[np.ix_(i_m, [i_t])] @ Fd
+    B_bot = np.hstack([Bc[:, j_r] + Bc[:, j_m] @ ym_r, Bc[:, j_m] @ ym_d])
+    C = np.vstack([np.hstack([Cp, np.zeros((Cp.shape[0], n_c))]) + Dp[:, [i_t]] @ Fx, Fx])
+    D = np.vstack([np.hstack([Dp[:, [i_t]] @ Fr, Dp[:, i_d] + Dp[:, [i_t]] @ Fd]),
+                   np.hstack([Fr, Fd])])
+    inputs = refs + disturbances
+    outputs = p_out + [TORQUE]
+    states = [f"plant_x{i}" for i in range(n_p)] + [f"controller_x{i}" for i in range(n_c)]
+    return control.ss(np.vstack([A_top, A_bot]), np.vstack([B_top, B_bot]), C, D, plant.dt,
+                      inputs=inputs, outputs=outputs, states=states, name="closed_loop")
+
+
+def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.StateSpace
+                    ) -> control.FrequencyResponseData:
+    """Closed-loop frequency response on an FRD plant's grid (see :func:`close_loop`)."""
+    _check_plant(plant, allow_frd=True)
+    _check_controller(controller)
+    if _is_digital(controller):
+        raise ValueError("close_loop on a FrequencyResponseData plant needs a continuous "
+                         f"controller; got dt={controller.dt}")
+    loop = _Loop(plant, controller)  # measured rows of the plant (theta/omega derived)
+    p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
+    refs = _reference_inputs(controller, sorted(set(p_out) | set(loop.measured)))
+    disturbances = [n for n in p_in if n != TORQUE]
+    omega = loop.omega
+    jw = 1j * omega
+    data = np.asarray(plant.frdata)[:, :, : omega.size]  # (p, m, f)
+    K = _evaluator(controller, list(controller.input_labels), [TORQUE])(jw)[:, 0, :]  # (f, c)
+    c_in = list(controller.input_labels)
+    Ky = K[:, [c_in.index(n) for n in loop.measured]]  # (f, n_meas)
+    Kr = K[:, [c_in.index(n) for n in refs]]  # (f, n_ref)
+
+    def measured_rows(column: int) -> np.ndarray:  # (f, n_meas) response of y_m to one input
+        rows = []
+        for name in loop.measured:
+            if name in p_out:
+                rows.append(data[p_out.index(name), column])
+            elif name == OMEGA:
+                rows.append(jw * data[p_out.index(THETA), column])
+            else:
+                rows.append(data[p_out.index(OMEGA), column] / jw)
+        return np.array(rows).T
+
+    i_t = p_in.index(TORQUE)
+    denominator = 1.0 - np.sum(Ky * measured_rows(i_t), axis=1)  # (f,)
+    torque_r = Kr / denominator[:, None]  # (f, n_ref)
+    torque_d = np.stack([np.sum(Ky * measured_rows(p_in.index(n)), axis=1) for n in disturbances],
+                        axis=1).reshape(omega.size, len(disturbances)) / denominator[:, None]
+    Pt = data[:, i_t, :].T  # (f, p)
+    Pd = np.stack([data[:, p_in.index(n), :].T for n in disturbances], axis=2).reshape(
+        omega.size, len(p_out), len(disturbances))
+    y_r = Pt[:, :, None] * torque_r[:, None, :]
+    y_d = Pt[:, :, None] * torque_d[:, None, :] + Pd
+    response = np.concatenate([np.concatenate([y_r, y_d], axis=2),
+                               np.concatenate([torque_r, torque_d], axis=1)[:, None, :]], axis=1)
+    return control.frd(np.moveaxis(response, 0, 2), omega, inputs=refs + disturbances,
+                       outputs=p_out + [TORQUE], name="closed_loop")
+
+
+class _Loop:
+    """L(omega) = -sum_i K_i P_i at real frequencies omega [rad/s] (see module docstring)."""
+
+    def __init__(self, plant, controller):
+        _check_plant(plant, allow_frd=True)
+        _check_controller(controller)
+        self.digital = _is_digital(controller)
+        self.dt = float(controller.dt) if self.digital else 0.0
+        self.frd = isinstance(plant, control.FrequencyResponseData)
+        if self.frd:
+            outputs = list(plant.output_labels)
+            # theta or omega alone is enough: omega(jw) = jw theta(jw)
+            derivable = {THETA, OMEGA} if (THETA in outputs or OMEGA in outputs) else set()
+            self.measured = [n for n in controller.input_labels
+                             if n in outputs or n in derivable]
+            if not self.measured:
+                raise ValueError(f"controller inputs {list(controller.input_labels)} contain none "
+                                 f"of the plant outputs {outputs}: nothing is fed back")
+            i_t = list(plant.input_labels).index(TORQUE)
+            self.omega = np.asarray(plant.omega, dtype=float)
+            if self.digital:
+                self.omega = self.omega[self.omega < math.pi / self.dt]
+            data = np.asarray(plant.frdata)[:, i_t, : self.omega.size]
+            jw = 1j * self.omega
+            rows = []
+            for name in self.measured:
+                if name in outputs:
+                    rows.append(data[outputs.index(name)])
+                elif name == OMEGA:
+                    rows.append(jw * data[outputs.index(THETA)])
+                else:
+                    rows.append(data[outputs.index(OMEGA)] / jw)
+            self.plant_data = np.array(rows, dtype=complex).reshape(len(rows), self.omega.size)
+        else:
+            self.measured = _measurements(plant, controller)
+        self.controller_ev = _evaluator(controller, self.measured, [TORQUE])
+        if not self.frd:
+            p = control.c2d(plant, self.dt, method="zoh") if self.digital else plant
+            self.plant_ev = _evaluator(p, [TORQUE], self.measured)
+            self._plant_discretised = p
+        self.plant = plant
+        self.controller = controller
+
+    def _point(self, omega: np.ndarray) -> np.ndarray:
+        omega = np.asarray(omega, dtype=float)
+        if self.digital:
+            return np.exp(1j * omega * self.dt)
+        return 1j * omega
+
+    def __call__(self, omega) -> np.ndarray:
+        omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        z = self._point(omega)
+        K = self.controller_ev(z)[:, 0, :]  # (f, n_meas)
+        if self.frd:
+            P = self._interpolated_plant(omega)  # (f, n_meas)
+            if self.digital:
+                # zero-order hold seen from continuous time, aliasing neglected:
+                # H(jw) = (1 - exp(-jwT)) / (jwT) (Franklin, Powell & Workman, sec. 6.3)
+                wT = omega * self.dt
+                P = P * ((1 - np.exp(-1j * wT)) / (1j * wT))[:, None]
+        else:
+            P = self.plant_ev(z)[:, :, 0]
+        return -np.sum(K * P, axis=1)
+
+    def _interpolated_plant(self, omega: np.ndarray) -> np.ndarray:
+        """FRD plant rows at omega: exact on its grid, in between linear in log frequency for
+        log|P| and arg P (P_i (P_i+1 / P_i)^t), so the grid must resolve the plant's resonances;
+        the controller is always evaluated exactly."""
+        grid = self.omega
+        lo, hi = grid[0] * (1 - 1e-12), grid[-1] * (1 + 1e-12)
+        if np.any(omega < lo) or np.any(omega > hi):
+            raise ValueError(f"frequencies must lie within the FrequencyResponseData grid "
+                             f"[{grid[0]:.4g}, {grid[-1]:.4g}] rad/s; got [{omega.min():.4g}, "
+                             f"{omega.max():.4g}]")
+        i = np.clip(np.searchsorted(grid, omega), 1, grid.size - 1)
+        t = (np.log(omega) - np.log(grid[i - 1])) / (np.log(grid[i]) - np.log(grid[i - 1]))
+        P0, P1 = self.plant_data[:, i - 1], self.plant_data[:, i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            P = P0 * (P1 / P0) ** t
+        exact = np.isclose(t, 1.0, rtol=0, atol=1e-15)
+        P[:, exact] = P1[:, exact]
+        return P.T
+
+    def _controller_roots(self) -> np.ndarray:
+        """Poles of the controller and zeros of each of its measurement channels."""
+        c = self.controller
+        roots = [_poles_of(self.controller_ev)]
+        n = c.nstates
+        for name in self.measured:
+            j = list(c.input_labels).index(name)
+            M = np.block([[c.A, c.B[:, [j]]], [c.C, c.D[:, [j]]]])
+            N = scipy.linalg.block_diag(np.eye(n), np.zeros((1, 1)))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z = scipy.linalg.eigvals(M, N)
+            roots.append(z[np.isfinite(z) & (np.abs(z) < 1e12)])
+        return np.concatenate(roots).astype(complex)
+
+    def zeros(self) -> np.ndarray:
+        """Invariant zeros of L (z-plane for a digital loop): finite generalized eigenvalues of
+        ([[A, B], [C, D]], [[I, 0], [0, 0]]) for the series connection plant -> controller."""
+        p, c = self._plant_discretised, self.controller
+        i_t = list(p.input_labels).index(TORQUE)
+        i_m = [list(p.output_labels).index(n) for n in self.measured]
+        j_m = [list(c.input_labels).index(n) for n in self.measured]
+        Ap, Bt, Cm, Dmt = p.A, p.B[:, [i_t]], p.C[i_m], p.D[np.ix_(i_m, [i_t])]
+        Ac, Bcm, Cc, Dcm = c.A, c.B[:, j_m], c.C, c.D[:, j_m]
+        n_p, n_c = Ap.shape[0], Ac.shape[0]
+        A = np.block([[Ap, np.zeros((n_p, n_c))], [Bcm @ Cm, Ac]])
+        B = np.vstack([Bt, Bcm @ Dmt])
+        C = -np.hstack([Dcm @ Cm, Cc])
+        D = -Dcm @ Dmt
+        n = n_p + n_c
+        M = np.block([[A, B], [C, D]])
+        N = scipy.linalg.block_diag(np.eye(n), np.zeros((1, 1)))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = scipy.linalg.eigvals(M, N)
+        return z[np.isfinite(z) & (np.abs(z) < 1e12)]
+
+    def grid(self, n_points: int = 600) -> np.ndarray:
+        """Frequency grid [rad/s] refined around every lightly damped pole and zero of L."""
+        if self.frd:
+            # the FRD's own grid (it must resolve the plant) plus the controller's resonances
+            roots = self._controller_roots()
+        else:
+            roots = np.concatenate([_poles_of(self.plant_ev), _poles_of(self.controller_ev),
+                                    self.zeros()]).astype(complex)
+        if self.digital:
+            # z-plane roots: map back with s = log(z) / T (z = 0 is infinitely fast: drop it)
+            roots = np.log(roots[np.abs(roots) > 1e-12]) / self.dt
+        w_all = np.abs(roots)
+        w_all = w_all[w_all > 1e-5 * max(w_all.max(initial=0.0), 1e-300)]
+        if w_all.size == 0:
+            w_all = np.array([1.0])
+        w_lo, w_hi = 1e-3 * w_all.min(), 1e3 * w_all.max()
+        if self.digital:
+            w_hi = min(w_hi, math.pi / self.dt * (1 - 1e-9))
+            w_lo = min(w_lo, 1e-3 * math.pi / self.dt)
+        grid = [np.logspace(math.log10(w_lo), math.log10(w_hi), n_points)]
+        # points concentrated in the half-power band of each lightly damped root: a pole
+        # -zeta w + j w sqrt(1-zeta^2) has |response| falling to 1/sqrt(2) at about w(1 +/- zeta),
+        # so steps of a fraction of zeta w resolve its peak and its 180 deg phase swing (the
+        # same for the notch of a lightly damped zero, an antiresonance).
+        # an even count: no point falls on the peak itself, where an undamped pole (zeta = 0,
+        # a free beam mode) makes L infinite
+        theta = np.linspace(-1.45, 1.45, 40)
+        for lam in roots:
+            w = abs(lam)
+            if lam.imag <= 0 or w <= 0:
+                continue
+            zeta = max(abs(lam.real) / w, 1e-7)
+            if zeta > 0.3:
+                continue
+            pts = lam.imag + zeta * w * np.tan(theta)
+            grid.append(pts[(pts > w_lo) & (pts < w_hi)])
+        if self.frd:
+            inside = [g[(g >= self.omega[0]) & (g <= self.omega[-1])] for g in grid[1:]]
+            return np.unique(np.concatenate([self.omega] + inside))
+        return np.unique(np.concatenate(grid))
+
+
+def loop_frequency_response(plant, controller, omega: np.ndarray | None = None
+                            ) -> tuple[np.ndarray, np.ndarray]:
+    """Open-loop transfer L(j omega) with the loop broken at the torque input.
+
+    Parameters
+    ----------
+    plant : control.StateSpace or control.FrequencyResponseData
+        Plant with named signals (FRD: frequencies within its grid, interpolated as in
+        :func:`margins`).
+    controller : control.StateSpace
+        Continuous or digital controller.
+    omega : array of float, rad/s, optional
+        Frequencies; default a logarithmic grid refined around the lightly damped poles and
+        zeros (for an FRD plant its own grid plus the controller's resonances).
+
+    Returns
+    -------
+    omega : ndarray, shape (n,), rad/s
+    L : ndarray, shape (n,), complex128
+        L = -sum_i K_i P_i (negative-feedback convention: the loop is unstable at L = -1).
+    """
+    loop = _Loop(plant, controller)
+    if omega is None:
+        omega = loop.grid()
+    omega = np.asarray(omega, dtype=float).reshape(-1)
+    if omega.size == 0 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
+        raise ValueError("omega must be positive finite frequencies [rad/s]; got "
+                         f"{omega[:5]}...")
+    return omega, loop(omega)
