@@ -5,17 +5,22 @@ Works on any python-control LTI plant with input ``'torque'`` and outputs ``'the
 """
 from .loop import close_loop, loop_frequency_response
 from .margins import Margins, SpilloverVerdict, margins, spillover
-from .modes import FlexibleMode, flexible_modes, rigid_body_inertia
+from .modes import INFLUENCE_TOL, FlexibleMode, flexible_modes, rigid_body_inertia
 from .timeresp import (METRIC_UNITS, disturbance_response, metrics, slew, slew_profile,
                        step_response)
 from .compare import Comparison, compare
 from .lqr import KalmanNoise, LQRDesign, lqr, lqr_design, reference_state
 from .pd import natural_frequency_from_bandwidth, pd, pd_gains
 from .simulate import Simulator, simulate
+from .stability import MARGIN, RemovedMode, RemovedModesWarning
 from .testing import assert_closed_loops_close, compare_metrics
 
 __all__ = [
     "Comparison",
+    "INFLUENCE_TOL",
+    "MARGIN",
+    "RemovedMode",
+    "RemovedModesWarning",
     "FlexibleMode",
     "KalmanNoise",
     "LQRDesign",

@@ -1,26 +1,42 @@
 """LQR attitude controller with an estimator: an implementable output-feedback controller.
 
 The regulator minimises J = integral (y_w^T W y_w + r torque^2) dt with y_w the weighted outputs
-(theta, omega, optionally tip deflections) of the design plant, i.e. Q = C_w^T W C_w,
-N = C_w^T W D_w, R = r + D_w^T W D_w on the design plant's states. The states are not measured:
+(theta, omega, optionally tip deflections) of the design model, i.e. Q = C_w^T W C_w,
+N = C_w^T W D_w, R = r + D_w^T W D_w on the design model's states. The states are not measured:
 a Kalman filter (or a user-given Luenberger gain) built on the same design model estimates them
 from the measured theta and omega. The controller handed to the spacecraft has inputs
 ['theta_ref', 'theta', 'omega'] and output ['torque'] only.
+
+The design model is the plant without the modes the loop cannot influence
+(:mod:`controllers.modes`), and both Riccati equations are solved with a prescribed degree of
+stability sigma = 4 alpha (Anderson & Moore, sec. 3.5: the LQR of A + sigma I places every
+closed-loop pole at Re(s) < -sigma), alpha the stability margin of :mod:`controllers.stability`,
+so the guarantee holds by construction and is checked on the computed poles with room for
+round-off (Re <= -alpha).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Mapping
+
+import math
 
 import control
 import numpy as np
 import scipy.linalg
 
-from .modes import rigid_body_inertia
-from .signals import OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant
-from .pd import _positive, check_sample_time
+from .modes import _design_model, _verify_loop, rigid_body_inertia
+from .pd import _check_sampling, _positive, _rigid_crossover
+from .signals import OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant, _short
+from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _warn_removed
 
-__all__ = ["lqr", "KalmanNoise", "LQRDesign", "lqr_design", "reference_state"]
+__all__ = ["lqr", "KalmanNoise", "LQRDesign", "lqr_design", "reference_state",
+           "PRESCRIBED_STABILITY"]
+
+#: The Riccati equations are solved for A + sigma I with sigma = PRESCRIBED_STABILITY * alpha
+#: (alpha the stability margin): every designed pole lies at Re(s) < -4 alpha, so the computed
+#: ones meet Re(s) <= -alpha with 3 alpha of room for round-off (a condition number up to ~1e3).
+PRESCRIBED_STABILITY = 4.0
 
 
 @dataclass(frozen=True)
@@ -94,7 +110,16 @@ class LQRDesign:
     x_ref : ndarray, shape (n_states,)
         Equilibrium state of a unit rigid rotation (A x_ref = 0, theta = 1, omega = 0).
     regulator_poles, estimator_poles : ndarray, complex128
-        Eigenvalues of A - B K and A - L C_m (z-plane for a digital design).
+        Eigenvalues of A - B K and A - L C_m (z-plane for a digital design), A, B, C_m those
+        of the design model.
+    design_plant : control.StateSpace
+        The design model: the plant without ``removed_modes`` (the plant itself if none).
+    removed_modes : tuple of RemovedMode
+        Modes left out of the design model because the loop cannot influence them
+        (:mod:`controllers.modes`); they keep their open-loop eigenvalues in the closed loop.
+    margin : float, 1/s
+        The stability margin alpha: every closed-loop pole of the controller on the design
+        plant, other than the removed modes, has Re(s) <= -margin (|z| <= exp(-margin T)).
     """
 
     controller: control.StateSpace
@@ -106,6 +131,9 @@ class LQRDesign:
     x_ref: np.ndarray
     regulator_poles: np.ndarray
     estimator_poles: np.ndarray
+    design_plant: control.StateSpace = field(repr=False, default=None)
+    removed_modes: tuple[RemovedMode, ...] = ()
+    margin: float = 0.0
 
 
 def _nonneg(value, name: str, unit: str) -> float:
@@ -147,81 +175,6 @@ def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray
     return tips, W
 
 
-def _pbh_defective(A, M, *, side: str, tol: float = 1e-12) -> list[complex]:
-    """Eigenvalues lambda of A with Re >= 0 that M does not reach (PBH test, scale-invariant).
-
-    ``side="input"``: lambda is uncontrollable from B = M iff w^H B = 0 for a left eigenvector
-    w^H A = lambda w^H (Hautus); ``side="output"``: unobservable through C = M iff C v = 0 for a
-    right eigenvector, i.e. the input test on (A^T, C^T).
-
-    The test is made in coordinates A_b = D^-1 A D balanced by a diagonal similarity (powers of
-    2, exact), which equilibrates the rows and columns of every coupled block: a modal pair
-    (q, q') with q'' = -w^2 q + b u becomes (w q, q') with entries ~w, so the displacement and
-    rate coordinates are on one scale ("energy" coordinates) and b keeps its size. For a simple
-    eigenvalue with unit left eigenvector w_b, the mode counts as uncontrollable if
-    |w_b^H m_j| <= tol ||m_j|| for every column m_j of M_b = D^-1 M: the input's reach into that
-    mode measured against the input's own size, independent of how far the mode's frequency is
-    from the others (the plain test sigma_min([A - lambda I, B]) <= tol sigma_max compares it
-    with the largest frequency squared and wrongly rejects high, weakly excited beam modes).
-    Measured on hub + free-free rod plants: round-off in a structurally zero participation
-    (symmetric modes of two wings, the mode of a 200-body chain localised at its free tip) is
-    <= 3e-14; genuine modes of a 40-mode beam reach >= 1e-6 (input) and theta alone sees those
-    of a 200-body chain at >= 2e-10 (energy coordinates divide a displacement output by w),
-    hence tol = 1e-12 (also the threshold of ``Spacecraft.plant(prune=True)``).
-
-    Eigenvalues within 1e-8 ||A_b|| of each other (the rigid-body Jordan block at 0, repeated
-    frequencies) are tested together: the left null space U of A_b - lambda I (singular values
-    <= 1e-8 ||A_b||) must be reached in every direction, sigma_min(U^H M_b / ||M_b||) > tol;
-    with more null directions than inputs it cannot be.
-
-    References
-    ----------
-    M. L. J. Hautus, "Controllability and observability conditions of linear autonomous
-    systems", Proc. KNAW A 72, 1969 (eigenvector test); B. N. Parlett, C. Reinsch, "Balancing a
-    matrix for calculation of eigenvalues and eigenvectors", Numer. Math. 13, 1969.
-    """
-    A = np.asarray(A, dtype=float)
-    M = np.asarray(M, dtype=float)
-    if side == "output":
-        A, M = A.T, M.T
-    n = A.shape[0]
-    if n == 0:
-        return []
-    Ab, (d, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
-    Mb = M / d[:, None]
-    col_norms = np.linalg.norm(Mb, axis=0)
-    live = col_norms > 0
-    Mn = Mb[:, live] / col_norms[live]  # unit columns: invariant to the inputs' scaling
-    lam, W = scipy.linalg.eig(Ab, left=True, right=False)
-    norm_a = max(np.linalg.norm(Ab, 1), np.finfo(float).tiny)
-    close = 1e-8 * norm_a
-    critical = np.nonzero(lam.real >= -1e-9 * np.abs(lam))[0]
-    bad: list[complex] = []
-    done = np.zeros(n, dtype=bool)
-    for i in critical:
-        if done[i]:
-            continue
-        group = np.nonzero(np.abs(lam - lam[i]) <= close)[0]
-        done[group] = True
-        if group.size == 1:
-            w = W[:, i] / np.linalg.norm(W[:, i])
-            reach = np.abs(w.conj() @ Mn).max(initial=0.0)
-        else:
-            center = lam[group].mean()
-            U, s, _ = np.linalg.svd(Ab - center * np.eye(n))
-            null = U[:, s <= close]
-            if null.shape[1] == 0:
-                null = U[:, -1:]
-            if null.shape[1] > Mn.shape[1]:
-                reach = 0.0
-            else:
-                sv = np.linalg.svd(null.conj().T @ Mn, compute_uv=False)
-                reach = sv.min() if sv.size else 0.0
-        if reach <= tol:
-            bad.extend(complex(x) for x in lam[group] if x.real >= -1e-9 * abs(x))
-    return bad
-
-
 def _solve_care(A, B, Q, R, N, what: str) -> np.ndarray:
     """Stabilising solution X of A^T X + X A - (X B + N) R^-1 (B^T X + N^T) + Q = 0.
 
@@ -237,7 +190,9 @@ def _solve_care(A, B, Q, R, N, what: str) -> np.ndarray:
     A. J. Laub, "A Schur method for solving algebraic Riccati equations", IEEE TAC 24(6), 1979.
     """
     try:
-        return scipy.linalg.solve_continuous_are(A, B, Q, R, s=N)
+        X = scipy.linalg.solve_continuous_are(A, B, Q, R, s=N)
+        if np.all(np.isfinite(X)):
+            return X
     except (np.linalg.LinAlgError, ValueError):
         pass
     n = A.shape[0]
@@ -317,6 +272,26 @@ def _check_weights(attitude_weight, rate_weight, torque_weight):
     return q_theta, q_omega, r
 
 
+def _weights_text(q_theta, q_omega, r, W_tip) -> str:
+    text = f"attitude_weight={q_theta:.3g}, rate_weight={q_omega:.3g}, torque_weight={r:.3g}"
+    return text + (f", deflection_weight={_short(np.diag(W_tip))}" if W_tip.size else "")
+
+
+def _rigid_bandwidths(q_theta, r, J, speed, weights) -> tuple[float, float]:
+    """Rigid-body bandwidths of regulator and estimator, (q/(r J^2))^(1/4) and k times it
+    [rad/s], computed in logarithms (the ratio q/r of extreme weights overflows)."""
+    log_wr = 0.25 * (math.log(q_theta) - math.log(r) - 2.0 * math.log(J))
+    log_we = log_wr + math.log(speed)
+    # the Riccati equations hold w^4 (the scaled attitude weight q / (r J^2)): keep it, and its
+    # inverse, well inside float64 (1e+-308): |ln w| <= 150, w within 7e-66 .. 1.4e65 rad/s
+    if max(abs(log_wr), abs(log_we)) > 150.0:
+        raise ValueError(f"lqr: the weights set a rigid-body bandwidth (attitude_weight / "
+                         f"(torque_weight J^2))^(1/4) = 1e{log_wr / math.log(10):.1f} rad/s "
+                         f"(estimator 1e{log_we / math.log(10):.1f} rad/s), whose 4th power "
+                         f"leaves the floating-point range; got {weights}")
+    return math.exp(log_wr), math.exp(log_we)
+
+
 def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float,
                torque_weight: float, deflection_weight=None,
                estimator: str | KalmanNoise | np.ndarray = "kalman",
@@ -326,123 +301,283 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
     if sample_time is not None and not isinstance(estimator, (str, KalmanNoise)):
         raise ValueError("a Luenberger gain array is a continuous-time estimator; with sample_time "
                          "use estimator='kalman' or a KalmanNoise")
+    if isinstance(estimator, str) and estimator != "kalman":
+        raise ValueError(f"estimator must be 'kalman', a KalmanNoise or a Luenberger gain array "
+                         f"of shape (n_states, 2); got {_short(estimator)}")
     q_theta, q_omega, r = _check_weights(attitude_weight, rate_weight, torque_weight)
+    speed = _positive(estimator_speed, "estimator_speed", "1")
     tip_names, W_tip = _deflection_weights(plant, deflection_weight)
+    weights = _weights_text(q_theta, q_omega, r, W_tip)
+    T = None if sample_time is None else _positive(sample_time, "sample_time", "s")
+    J = rigid_body_inertia(plant)
+    w_r, w_e = _rigid_bandwidths(q_theta, r, J, speed, weights)
+    A = np.asarray(plant.A, dtype=float)
+    with np.errstate(all="ignore"):
+        w_modes = np.abs(np.linalg.eigvals(A)) if A.size else np.zeros(0)
+    w_plant = float(w_modes.max(initial=0.0))
+    # the lowest flexible mode (the rigid-body eigenvalues are ~sqrt(eps ||A||) from 0)
+    w_low = float(w_modes[w_modes > 1e-6 * math.sqrt(max(w_plant, 1.0))].min(initial=np.inf))
+    # a dominant rate weight sets its own rigid-body pole, at about sqrt(q_omega / r) / J
+    w_rate = math.exp(0.5 * (math.log(q_omega) - math.log(r)) - math.log(J)) if q_omega else 0.0
+    scale = max(w_plant, w_r, w_e, w_rate)
+    alpha = MARGIN * scale
+    sigma = PRESCRIBED_STABILITY * alpha
+    if scale > MAX_SCALE_RATIO * min(w_r, w_e):
+        # sigma > 4e-3 w_r: the prescribed stability would move the rigid-body poles by ~1 %
+        raise ValueError(
+            f"lqr: the rigid-body bandwidth (attitude_weight / (torque_weight J^2))^(1/4) = "
+            f"{w_r:.3g} rad/s (estimator {w_e:.3g} rad/s) is too low for this plant, whose modes "
+            f"reach {w_plant:.4g} rad/s: the stability margin would move the rigid-body poles; "
+            "raise attitude_weight (or lower torque_weight), raise estimator_speed or leave the "
+            f"highest modes out of the plant; got {weights}")
+    if scale > MAX_SCALE_RATIO * w_low or w_rate > 1e65:
+        raise ValueError(
+            f"lqr: the rigid-body bandwidths set by the weights, (attitude_weight / "
+            f"(torque_weight J^2))^(1/4) = {w_r:.3g} rad/s, estimator {w_e:.3g} rad/s and "
+            f"sqrt(rate_weight / torque_weight) / J = {w_rate:.3g} rad/s, reach more than "
+            f"{MAX_SCALE_RATIO:g} times the plant's lowest flexible mode {w_low:.4g} rad/s, "
+            "whose poles the stability margin then cannot resolve; lower attitude_weight and "
+            f"rate_weight (or raise torque_weight); got {weights}")
+    design_plant, removed, removed_eigs = _design_model(plant, critical=sigma, J=J, what="lqr")
+    noise = None
+    if isinstance(estimator, KalmanNoise):
+        noise = estimator
+    elif isinstance(estimator, str):
+        with np.errstate(all="ignore"):
+            noise_values = (speed ** 4 / r, 1.0 / q_theta,
+                            (1.0 / q_theta) * (speed * w_r) ** 2)
+        if not all(np.isfinite(v) and v > 0 for v in noise_values):
+            raise ValueError("lqr: the default Kalman noises (estimator_speed^4 / torque_weight, "
+                             "1 / attitude_weight, ...) leave the floating-point range for these "
+                             f"weights; give a KalmanNoise or moderate weights; got {weights}")
+        noise = KalmanNoise.default(J, q_theta, r, speed)
+    else:
+        L_given = np.asarray(estimator, dtype=float)
+        n_d = design_plant.nstates
+        if L_given.shape != (n_d, 2):
+            detail = (f" (the design model: the plant without the {len(removed)} mode(s) the "
+                      "loop cannot influence, see LQRDesign.removed_modes)" if removed else "")
+            raise ValueError(f"Luenberger estimator gain must have shape ({n_d}, 2) (states x "
+                             f"[theta, omega]){detail}; got {L_given.shape}")
+    Q, N, R = _cost(design_plant, q_theta, q_omega, r, tip_names, W_tip)
+    x_ref = reference_state(design_plant)
+    L_fixed = None if noise is not None else L_given
+    for digital in ([False, True] if T is not None else [False]):
+        try:
+            with np.errstate(all="ignore"):
+                design = _design(design_plant, Q, N, R, r, J, x_ref, noise, L_fixed, sigma,
+                                 T if digital else None)
+        except (np.linalg.LinAlgError, ValueError, FloatingPointError, ZeroDivisionError) as exc:
+            raise ValueError(
+                f"lqr: the {'digital ' if digital else ''}design failed numerically for these "
+                f"weights ({_short(str(exc))}); the rigid-body bandwidth is {w_r:.3g} rad/s "
+                f"against plant modes up to {w_plant:.4g} rad/s: choose weights that put it "
+                f"within a few decades of the modes; got {weights}") from None
+        if T is not None and not digital:
+            # the sampling rule on the continuous design loop's rigid-body crossover
+            _check_sampling(T, _rigid_crossover(design_plant, design.controller), "lqr")
+    design = _checked(design, alpha, T, weights, estimator)
+    if removed:
+        # the removed modes must keep their places in the loop on the whole plant
+        _verify_loop(plant, design.controller, J=J, what="lqr", removed_eigs=removed_eigs,
+                     scale_floor=scale, advise=lambda *_: (
+                         "a mode left out of the design model is moved by the loop after all; "
+                         "prune it from the plant (Spacecraft.plant(prune=True)) or damp it"))
+        _warn_removed("lqr", removed, "(left out of the design model; they keep their "
+                      "open-loop eigenvalues in the closed loop)")
+    return LQRDesign(design.controller, design.K, design.L, design.Q, design.R, design.N,
+                     design.x_ref, design.regulator_poles, design.estimator_poles,
+                     design_plant, tuple(removed), alpha)
+
+
+def _cost(plant, q_theta, q_omega, r, tip_names, W_tip):
+    """Q, N, R of the cost on the design model's states, divided by r.
+
+    The LQR gain does not change when Q, N, R are scaled together; dividing by r keeps extreme
+    but valid weights (r = 1e-300) away from the floating-point limits.
+    """
+    labels = list(plant.output_labels)
+    i_t = list(plant.input_labels).index(TORQUE)
+    rows = [labels.index(name) for name in [THETA, OMEGA] + tip_names]
+    Cw = plant.C[rows]
+    Dw = plant.D[np.ix_(rows, [i_t])]
+    W = scipy.linalg.block_diag(np.diag([q_theta, q_omega]), W_tip)
+    with np.errstate(over="ignore", invalid="ignore"):
+        Q = Cw.T @ (W / r) @ Cw
+        N = Cw.T @ (W / r) @ Dw
+        R = np.array([[1.0]]) + Dw.T @ (W / r) @ Dw
+    if not (np.all(np.isfinite(Q)) and np.all(np.isfinite(N)) and np.all(np.isfinite(R))):
+        raise ValueError("lqr: the weights divided by torque_weight overflow; got "
+                         f"{_weights_text(q_theta, q_omega, r, W_tip)}")
+    Q = 0.5 * (Q + Q.T)
+    Qc = Q - N @ np.linalg.solve(R, N.T)
+    eig_q = np.linalg.eigvalsh(0.5 * (Qc + Qc.T))
+    if eig_q.min() < -1e-10 * max(1.0, abs(eig_q).max()):
+        raise ValueError(f"state weight Q must be positive semidefinite; got eigenvalue "
+                         f"{eig_q.min() * r:.3g}")
+    return Q, N, R
+
+
+def _design(plant, Q, N, R, r, J, x_ref, noise, L_given, sigma, T) -> LQRDesign:
+    """The LQR + estimator on the design model with prescribed degree of stability sigma
+    (cost Q, N, R divided by r); digital (ZOH, predictor estimator) if T is given."""
     labels = list(plant.output_labels)
     i_t = list(plant.input_labels).index(TORQUE)
     A = np.asarray(plant.A, dtype=float)
     B = np.asarray(plant.B[:, [i_t]], dtype=float)
     n = A.shape[0]
-    weighted = [THETA, OMEGA] + tip_names
-    rows = [labels.index(name) for name in weighted]
-    Cw = plant.C[rows]
-    Dw = plant.D[np.ix_(rows, [i_t])]
-    W = scipy.linalg.block_diag(np.diag([q_theta, q_omega]), W_tip)
-    Q = Cw.T @ W @ Cw
-    Q = 0.5 * (Q + Q.T)
-    N = Cw.T @ W @ Dw
-    R = np.array([[r]]) + Dw.T @ W @ Dw
-    # checks: Q - N R^-1 N^T >= 0 (cost PSD), (A, B) stabilisable, (A, sqrt Q) detectable
-    Qc = Q - N @ np.linalg.solve(R, N.T)
-    eig_q = np.linalg.eigvalsh(0.5 * (Qc + Qc.T))
-    if eig_q.min() < -1e-10 * max(1.0, abs(eig_q).max()):
-        raise ValueError(f"state weight Q must be positive semidefinite; got eigenvalue "
-                         f"{eig_q.min():.3g}")
-    uncontrollable = _pbh_defective(A, B, side="input")
-    if uncontrollable:
-        raise ValueError(
-            "uncontrollable design: (A, B) from 'torque' is not stabilisable; modes with "
-            f"eigenvalues {np.round(uncontrollable, 6)} (Re >= 0) cannot be moved by the torque "
-            "(remove modes the torque cannot excite, e.g. symmetric modes of symmetric wings or a "
-            "chain's tip-localised mode: Spacecraft.plant(prune=True); or give them damping)")
-    # symmetric PSD square root (sqrtm warns on the singular W of a zero rate weight)
-    eig_w, vec_w = np.linalg.eigh(W)
-    sqrtW = (vec_w * np.sqrt(np.clip(eig_w, 0.0, None))) @ vec_w.T
-    undetectable = _pbh_defective(A, sqrtW @ Cw, side="output")
-    if undetectable:
-        raise ValueError(f"(A, sqrt(Q)) is not detectable: modes with eigenvalues "
-                         f"{np.round(undetectable, 6)} (Re >= 0) are not seen by the weighted "
-                         f"outputs {weighted}; weight them or remove them from the design plant")
-    x_ref = reference_state(plant)
     meas_rows = [labels.index(THETA), labels.index(OMEGA)]
     Cm = plant.C[meas_rows]
     Dm = plant.D[np.ix_(meas_rows, [i_t])]
-    J = rigid_body_inertia(plant)
-    if isinstance(estimator, str):
-        if estimator != "kalman":
-            raise ValueError(f"estimator must be 'kalman', a KalmanNoise or a Luenberger gain "
-                             f"array of shape ({n}, 2); got {estimator!r}")
-        noise = KalmanNoise.default(J, q_theta, r, estimator_speed)
-    elif isinstance(estimator, KalmanNoise):
-        noise = estimator
-    else:
-        noise = None
-        L_given = np.asarray(estimator, dtype=float)
-        if L_given.shape != (n, 2):
-            raise ValueError(f"Luenberger estimator gain must have shape ({n}, 2) (states x "
-                             f"[theta, omega]); got {L_given.shape}")
+    I = np.eye(n)
+    # Scaling: torque in units of J rad/s^2 (B_s = J B) and the cost divided by J^2, the noises
+    # divided by the attitude noise. Neither changes the gains (K = J K_s) but both bring the
+    # Hamiltonians' entries to the plant's own scale (omega^2, omega_r^4): with hub and weights
+    # in SI units they span 1e-16 (B B^T of a 5e7 kg m^2 hub) to 1e11 (q), and the Schur
+    # vectors lose the weakly excited modes (Re = -3e-16 instead of < -sigma, measured).
+    Bs, Qs, Ns = J * B, Q / J ** 2, N / J
     if noise is not None:
-        unobservable = _pbh_defective(A, Cm, side="output")
-        if unobservable:
-            raise ValueError(f"(A, C) from theta and omega is not detectable: modes with "
-                             f"eigenvalues {np.round(unobservable, 6)} are invisible to the "
-                             "sensors; remove them from the design plant")
-
-    u_ref = 0.0  # a rigid rotation needs no torque
-    if sample_time is None:
-        P = _solve_care(A, B, Q, R, N, "regulator")
-        K = np.linalg.solve(R, B.T @ P + N.T)
-        if noise is not None:
-            Wn = noise.torque_noise * (B @ B.T)
-            V = np.diag([noise.attitude_noise, noise.rate_noise])
-            S = _solve_care(A.T, Cm.T, Wn, V, np.zeros((n, 2)), "Kalman filter")
-            L = S @ Cm.T @ np.linalg.inv(V)
+        Ws = noise.torque_noise / (J ** 2 * noise.attitude_noise) * (Bs @ Bs.T)
+        Vs = np.diag([1.0, noise.rate_noise / noise.attitude_noise])
+    if T is None:
+        P = _solve_care(A + sigma * I, Bs, Qs, R, Ns, "regulator")
+        K = J * np.linalg.solve(R, Bs.T @ P + Ns.T)
+        if L_given is None:
+            S = _solve_care(A.T + sigma * I, Cm.T, Ws, Vs, np.zeros((n, 2)), "Kalman filter")
+            L = S @ Cm.T @ np.linalg.inv(Vs)
         else:
             L = L_given
-        Bm = B - L @ Dm
-        Ac = A - L @ Cm - Bm @ K
-        g = K @ x_ref + u_ref  # torque per rad of reference
-        Bc = np.hstack([Bm * g, L])
-        Cc = -K
-        Dc = np.array([[g[0], 0.0, 0.0]])
-        controller = control.ss(Ac, Bc, Cc, Dc, inputs=[THETA_REF, THETA, OMEGA],
-                                outputs=[TORQUE], name="lqr")
-        reg_poles = np.linalg.eigvals(A - B @ K)
-        est_poles = np.linalg.eigvals(A - L @ Cm)
-        if est_poles.real.max() >= 0:
-            raise ValueError(f"estimator is not stable: A - L C has eigenvalue "
-                             f"{est_poles[np.argmax(est_poles.real)]:.4g}")
-        design = LQRDesign(controller, K, L, Q, R, N, x_ref, reg_poles, est_poles)
-        return design
-    # digital design on the zero-order-hold plant (Phi, Gamma); the continuous cost sampled at T
-    # to first order: Q_d = Q T, N_d = N T, R_d = R T (valid for T well below the closed-loop time
-    # constants, which check_sample_time enforces); noises W_d = B W B^T T, V_d = V / T.
-    # Predictor estimator: x_hat[k+1] = Phi x_hat + Gamma u + L (y[k] - C x_hat - D u), so the
-    # torque at k uses measurements up to k-1 (one sample for computation).
-    continuous = lqr_design(plant, attitude_weight=attitude_weight, rate_weight=rate_weight,
-                            torque_weight=torque_weight, deflection_weight=deflection_weight,
-                            estimator=estimator, estimator_speed=estimator_speed)
-    T = _positive(sample_time, "sample_time", "s")
-    check_sample_time(T, plant, continuous.controller)
-    Phi = scipy.linalg.expm(A * T)
-    # Gamma = integral_0^T e^{A t} dt B via the block exponential of [[A, B], [0, 0]] T
-    E = scipy.linalg.expm(np.block([[A, B], [np.zeros((1, n + 1))]]) * T)
-    Gamma = E[:n, n:]
-    P = scipy.linalg.solve_discrete_are(Phi, Gamma, Q * T, R * T, s=N * T)
-    K = np.linalg.solve(R * T + Gamma.T @ P @ Gamma, Gamma.T @ P @ Phi + (N * T).T)
-    # (noise is set: a Luenberger gain array with sample_time was rejected at the top)
-    Wd = noise.torque_noise * T * (B @ B.T)
-    Vd = np.diag([noise.attitude_noise, noise.rate_noise]) / T
-    S = scipy.linalg.solve_discrete_are(Phi.T, Cm.T, Wd, Vd)
-    L = Phi @ S @ Cm.T @ np.linalg.inv(Cm @ S @ Cm.T + Vd)
+        Phi, Gamma = A, B
+    else:
+        # digital design on the zero-order-hold model (Phi, Gamma); the continuous cost sampled
+        # at T to first order: Q_d = Q T, N_d = N T, R_d = R T (valid for T well below the
+        # closed-loop time constants, which check_sample_time enforces); noises
+        # W_d = B W B^T T, V_d = V / T. Prescribed degree of stability: the DAREs of
+        # Phi / rho, Gamma / rho with rho = exp(-sigma T) put every closed-loop |z| < rho.
+        # Predictor estimator: x_hat[k+1] = Phi x_hat + Gamma u + L (y[k] - C x_hat - D u).
+        E = scipy.linalg.expm(np.block([[A, B], [np.zeros((1, n + 1))]]) * T)
+        Phi, Gamma = E[:n, :n], E[:n, n:]
+        rho = math.exp(-sigma * T)
+        Pt, Gt = Phi / rho, J * Gamma / rho
+        P = scipy.linalg.solve_discrete_are(Pt, Gt, Qs * T, R * T, s=Ns * T)
+        K = J * np.linalg.solve(R * T + Gt.T @ P @ Gt, Gt.T @ P @ Pt + (Ns * T).T)
+        Wd, Vd = Ws * T, Vs / T
+        S = scipy.linalg.solve_discrete_are(Pt.T, Cm.T, Wd, Vd)
+        L = rho * (Pt @ S @ Cm.T @ np.linalg.inv(Cm @ S @ Cm.T + Vd))
+    # poles the Riccati solution could not resolve (below): moved by a modal correction
+    if T is None:
+        def flagged(x):
+            return x.real > -0.5 * sigma
+
+        def target(x):
+            return complex(-sigma, x.imag)
+    else:
+        limit, rho = math.exp(-0.5 * sigma * T), math.exp(-sigma * T)
+
+        def flagged(x):
+            return abs(x) > limit
+
+        def target(x):
+            return rho * x / abs(x) if abs(x) > 0 else complex(0.0)
+    K = K + _modal_correction(Phi - Gamma @ K, Gamma, flagged, target)
+    L = L + _modal_correction((Phi - L @ Cm).T, Cm.T, flagged, target).T
     Bm = Gamma - L @ Dm
     Ac = Phi - L @ Cm - Bm @ K
-    g = K @ x_ref + u_ref
+    g = K @ x_ref  # torque per rad of reference (a rigid rotation needs no torque)
     Bc = np.hstack([Bm * g, L])
-    controller = control.ss(Ac, Bc, -K, np.array([[g[0], 0.0, 0.0]]), T,
+    controller = control.ss(Ac, Bc, -K, np.array([[g[0], 0.0, 0.0]]), 0 if T is None else T,
                             inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="lqr")
-    return LQRDesign(controller, K, L, Q, R, N, x_ref, np.linalg.eigvals(Phi - Gamma @ K),
-                     np.linalg.eigvals(Phi - L @ Cm))
+    return LQRDesign(controller, K, L, Q * r, R * r, N * r, x_ref,
+                     np.linalg.eigvals(Phi - Gamma @ K), np.linalg.eigvals(Phi - L @ Cm))
+
+
+def _modal_correction(M, G, flagged, target) -> np.ndarray:
+    """Gain dK that moves each flagged eigenvalue of M to target(eigenvalue) in M - G dK and
+    leaves every other eigenvalue exactly where it is (modal control).
+
+    The Riccati equations cannot resolve a mode whose Hamiltonian eigenvalue pair lies within
+    round-off of each other (a high beam mode the cost barely sees, measured at Re = -2e-15
+    instead of < -sigma on a hub 1e6 times the beam's inertia): its pole is left where the
+    Riccati solution put it. Such a pole lambda = a + j b with left eigenvector x + j y spans
+    the left invariant subspace W2 = [x, y], W2^T M = Lambda2 W2^T, Lambda2 = [[a, b], [-b, a]].
+    A feedback on that mode's own coordinates, dK = F W2^T, keeps the subspace:
+    W2^T (M - G dK) = (Lambda2 - g F) W2^T with g = W2^T G u (u the input direction reaching
+    the mode best), so the pair moves to the roots placed by F (Ackermann's formula,
+    F = [0, 1] [g, Lambda2 g]^-1 p(Lambda2)), while the right eigenvectors of the other
+    eigenvalues, orthogonal to W2, stay eigenvectors with their eigenvalues. Real eigenvalues
+    are moved alike with a one-dimensional W2. The correction costs gains of about
+    |lambda - target| / |g|, the least that moves the mode.
+
+    References
+    ----------
+    B. Porter, T. R. Crossley, Modal Control: Theory and Applications, Taylor & Francis, 1972;
+    J. Ackermann, "Der Entwurf linearer Regelungssysteme im Zustandsraum", Regelungstechnik 20,
+    1972 (pole placement formula).
+    """
+    n, m = G.shape
+    dK = np.zeros((m, n))
+    done: list[complex] = []
+    for _ in range(n):
+        Mk = M - G @ dK
+        lam, Wl = scipy.linalg.eig(Mk, left=True, right=False)
+        todo = [i for i in range(n) if flagged(lam[i]) and lam[i].imag >= 0
+                and all(abs(lam[i] - x) > 1e-12 * max(1.0, abs(x)) for x in done)]
+        if not todo:
+            break
+        i = max(todo, key=lambda k: lam[k].real)
+        a, b = lam[i].real, lam[i].imag
+        w = Wl[:, i]
+        new = target(lam[i])
+        if abs(b) <= 1e-14 * max(1.0, abs(lam[i])):
+            W2 = np.real(w)[:, None] / np.linalg.norm(np.real(w))
+            g_all = W2.T @ G
+            u = g_all[0] / max(np.linalg.norm(g_all[0]), np.finfo(float).tiny)
+            g = float(g_all[0] @ u)
+            if g == 0.0:
+                done.append(lam[i])
+                continue
+            F = np.array([[(a - new.real) / g]])
+        else:
+            W2 = np.column_stack([np.real(w), np.imag(w)])
+            W2 /= np.linalg.norm(W2)
+            Lam2 = np.array([[a, b], [-b, a]])
+            g_all = W2.T @ G                                    # (2, m)
+            _, _, vh = np.linalg.svd(g_all)
+            u = vh[0]
+            g = g_all @ u                                       # (2,)
+            ctrb = np.column_stack([g, Lam2 @ g])
+            if abs(np.linalg.det(ctrb)) <= 1e-300:
+                done.append(lam[i])
+                continue
+            c1, c0 = -2.0 * new.real, abs(new) ** 2             # s^2 + c1 s + c0
+            p = Lam2 @ Lam2 + c1 * Lam2 + c0 * np.eye(2)
+            F = (np.array([0.0, 1.0]) @ np.linalg.solve(ctrb, p))[None, :]
+        dK = dK + np.outer(u, F @ W2.T)
+        done.append(new)
+    return dK
+
+
+def _checked(design: LQRDesign, alpha: float, T, weights: str, estimator) -> LQRDesign:
+    """Check the guarantee on the computed poles: Re(s) <= -alpha (|z| <= exp(-alpha T))."""
+    for name, poles in (("regulator", design.regulator_poles),
+                        ("estimator", design.estimator_poles)):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = poles.astype(complex) if T is None else np.log(poles.astype(complex)) / T
+        finite = np.all(np.isfinite(design.K)) and np.all(np.isfinite(design.L))
+        worst = s[np.argmax(s.real)] if s.size else -np.inf
+        if finite and (not s.size or worst.real <= -alpha):
+            continue
+        where = (f"{worst.real:.3g} {'+' if worst.imag >= 0 else '-'} {abs(worst.imag):.6g}j "
+                 f"({abs(worst):.6g} rad/s)") if finite and s.size else "non-finite gains"
+        if name == "estimator" and not isinstance(estimator, (str, KalmanNoise)):
+            raise ValueError(f"estimator: the Luenberger gain L leaves the estimator A - L C "
+                             f"with an eigenvalue at {where}, Re > -{alpha:.2g} 1/s (the "
+                             "stability margin): the estimator is not stable; give a gain that "
+                             "places every eigenvalue of A - L C in the left half-plane")
+        raise ValueError(f"lqr: the {name} is not stable to the margin {alpha:.2g} 1/s: "
+                         f"eigenvalue {where}; the Riccati equation cannot be solved accurately "
+                         f"for these weights; moderate them; got {weights}")
+    return design
 
 
 def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float,
@@ -469,40 +604,57 @@ def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float
         :meth:`KalmanNoise.default` (torque disturbance entering with the torque, attitude and rate
         sensor noise; filter about ``estimator_speed`` times faster than the regulator's rigid-body
         poles). A KalmanNoise: a Kalman filter with those intensities. An array: a Luenberger gain
-        L on the innovations [theta - theta_hat, omega - omega_hat] (continuous designs only).
+        L on the innovations [theta - theta_hat, omega - omega_hat] (continuous designs only),
+        for the states of the design model (the plant's, when no mode is removed).
     estimator_speed : float
         Ratio of estimator to regulator bandwidth for the default Kalman noises (default 3).
     sample_time : float, s, optional
         Digital design at this sample time: discrete LQR and discrete (predictor) Kalman filter
-        on the zero-order-hold discretisation of the plant; the controller has ``dt =
-        sample_time``. The sampling frequency must be at least 10 times the continuous design's
-        highest gain crossover (:func:`controllers.pd.check_sample_time`).
+        on the zero-order-hold discretisation of the design model; the controller has ``dt =
+        sample_time``. The sampling frequency must be at least 10 times the continuous design
+        loop's rigid-body gain crossover (:func:`controllers.pd.check_sample_time`).
 
     Returns
     -------
     control.StateSpace
         Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']``, states = the estimate
-        x_hat of the design plant's states:
+        x_hat of the design model's states:
         x_hat' = A x_hat + B torque + L (y - C x_hat - D torque),
         torque = -K (x_hat - x_ref theta_ref), with x_ref from :func:`reference_state`. On a
         free-floating truth plant the steady state is theta = theta_ref exactly (a rigid
         rotation is an equilibrium of plant and estimator, and K x_ref != 0).
 
+    Notes
+    -----
+    Guarantee: on the design plant every closed-loop pole has Re(s) <= -alpha (|z| <=
+    exp(-alpha T) for a digital design), alpha = MARGIN x the spectral scale (the largest of
+    the plant's |eigenvalues| and the regulator's and estimator's rigid-body bandwidths; see
+    :mod:`controllers.stability`), except the modes the loop cannot influence, which keep their
+    open-loop eigenvalues. Those (undamped or nearly so, with a participation <= INFLUENCE_TOL:
+    the symmetric bending of symmetric wings, the free-tip mode of a long hinged chain, a hub
+    translation) are left out of the design model before the Riccati equations are solved,
+    listed in :attr:`LQRDesign.removed_modes` (see :func:`lqr_design`) and announced by a
+    :class:`~controllers.RemovedModesWarning`. The margin is reached by design: both Riccati
+    equations are solved for A + sigma I, sigma = PRESCRIBED_STABILITY alpha (prescribed degree
+    of stability), which moves a pole the cost barely sees (a high, weakly excited beam mode,
+    left by the plain LQR at Re ~ -1e-10 or, in round-off, +3e-13) to Re < -sigma at a cost of
+    gains O(sigma / participation); the rigid-body poles move by O(sigma / w_r), ~1e-12.
+
     Raises
     ------
     ValueError
-        Negative or non-finite weights, R not > 0, Q not PSD, (A, B) not stabilisable (an
-        uncontrollable design: an undamped or unstable mode the torque does not reach, tested
-        per mode in balanced coordinates, see ``_pbh_defective``), (A, sqrt(Q)) or (A, C_meas)
-        not detectable, a Riccati equation without a numerically stabilising solution, a sample
-        time too long.
+        Negative or non-finite weights, R not > 0, Q not PSD, a design whose rigid-body
+        bandwidth is too low or too high for the plant (the message names the weights), nearly
+        repeated undamped modes that one torque cannot all reach, a Luenberger gain that does not
+        stabilise the estimator (names ``estimator``), a sample time too long.
 
     References
     ----------
     B. D. O. Anderson, J. B. Moore, Optimal Control: Linear Quadratic Methods, Prentice Hall 1990
-    (LQR with cross term N, stabilisability/detectability conditions); Franklin, Powell &
-    Workman, Digital Control of Dynamic Systems, 3rd ed., ch. 9 (discrete LQR, predictor
-    estimator); M. J. Balas, IEEE TAC 23(4), 1978 (observer-based control of flexible structures).
+    (LQR with cross term N, stabilisability/detectability conditions; sec. 3.5, prescribed degree
+    of stability); Franklin, Powell & Workman, Digital Control of Dynamic Systems, 3rd ed., ch. 9
+    (discrete LQR, predictor estimator); M. J. Balas, IEEE TAC 23(4), 1978 (observer-based
+    control of flexible structures).
     """
     return lqr_design(plant, attitude_weight=attitude_weight, rate_weight=rate_weight,
                       torque_weight=torque_weight, deflection_weight=deflection_weight,

@@ -12,6 +12,7 @@ import scipy.optimize
 
 from .loop import _Loop, close_loop, loop_frequency_response
 from .signals import _check_controller, _check_plant, _is_digital
+from .stability import _continuous_poles
 
 __all__ = ["Margins", "SpilloverVerdict", "margins", "spillover"]
 
@@ -253,16 +254,6 @@ class SpilloverVerdict:
         lines.append(f"  gain margin {m.gain_margin:.4g} dB, phase margin {m.phase_margin:.4g} deg,"
                      f" modulus margin {m.modulus_margin:.4g}")
         return "\n".join(lines)
-
-
-def _continuous_poles(system) -> np.ndarray:
-    """Poles in the s-plane; a digital system's z-plane poles mapped by s = log(z) / T
-    (poles at z = 0, infinitely fast and deadbeat, are left out)."""
-    lam = np.linalg.eigvals(system.A) if system.nstates else np.zeros(0, dtype=complex)
-    lam = lam.astype(complex)
-    if system.isdtime(strict=True):
-        lam = np.log(lam[np.abs(lam) > 1e-300]) / float(system.dt)
-    return lam
 
 
 def spillover(truth_plant, controller) -> SpilloverVerdict:

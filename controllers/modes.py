@@ -1,4 +1,29 @@
-"""Modal properties of a plant: rigid-body inertia and flexible modes of a channel."""
+"""Modal properties of a plant: rigid-body inertia, flexible modes, and the modes a loop can
+influence (the design model of :func:`controllers.lqr`).
+
+Modes the loop cannot influence
+    The first-order shift of a simple mode lambda under any feedback torque = K(s) y is
+    delta lambda = K(lambda) r, r the residue of the channel y/torque at lambda: the loop reaches
+    a mode only through its participation p = 2 |r| |lambda| J (the fraction of the inertia
+    taking part in it, see :class:`FlexibleMode`; independent of the state coordinates). A
+    loop whose gains are of the order of the plant's own (|K| ~ J omega_s^2) moves it by about
+    p omega_s, less than the margin alpha when p <= INFLUENCE_TOL = MARGIN: such a mode is out
+    of the loop's reach (MARGIN, alpha: :mod:`controllers.stability`). When it has no damping to speak of (Re lambda >= -alpha, e.g. the
+    symmetric bending of two symmetric wings, p ~ 1e-29, or the free-tip mode of a hinged chain
+    of 25 bodies, p ~ 1e-16) it stays at its open-loop place on the imaginary axis in any closed
+    loop, neither stabilised nor destabilised. :func:`controllers.lqr` leaves such modes out of
+    its design model (the Riccati equations could not stabilise them) and lists them in
+    :attr:`LQRDesign.removed_modes <controllers.LQRDesign>`; both designs warn
+    (:class:`RemovedModesWarning`) and make their guarantee about the other modes.
+
+References
+----------
+M. L. J. Hautus, "Controllability and observability conditions of linear autonomous systems",
+Proc. KNAW A 72, 1969 (modal test); T. Kato, Perturbation Theory for Linear Operators, 1966,
+ch. 2 (first-order eigenvalue shift); B. N. Parlett, C. Reinsch, Numer. Math. 13, 1969
+(balancing); G. H. Golub, C. F. Van Loan, Matrix Computations, 4th ed., 2013, sec. 7.6.3
+(block diagonalisation by a Sylvester equation).
+"""
 from __future__ import annotations
 
 import math
@@ -6,12 +31,21 @@ from dataclasses import dataclass
 
 import control
 import numpy as np
+import scipy.linalg
+import scipy.sparse
+import scipy.sparse.csgraph
 
 from .frequency import _ModalEvaluator, _evaluator
-from .signals import THETA, TORQUE, _check_plant, _require_signal
+from .loop import close_loop
+from .signals import OMEGA, THETA, TORQUE, _check_plant, _is_digital, _require_signal
+from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _continuous_poles
 
-__all__ = ["FlexibleMode", "rigid_body_inertia", "flexible_modes"]
+__all__ = ["FlexibleMode", "INFLUENCE_TOL", "rigid_body_inertia", "flexible_modes"]
 
+#: Participation at or below which a loop cannot influence a mode (module docstring).
+INFLUENCE_TOL = MARGIN
+# Eigenvalues closer than this (relative to the balanced ||A||_1) form one cluster.
+_CLUSTER_RTOL = 1e-8
 
 @dataclass(frozen=True)
 class FlexibleMode:
@@ -132,3 +166,272 @@ def flexible_modes(plant: control.StateSpace, *, input: str = TORQUE, output: st
             continue
         modes.append(FlexibleMode(float(w), float(-lam.real / w), r, float(participation)))
     return sorted(modes, key=lambda m: m.frequency)
+
+
+# --------------------------------------------------------------------------------------------
+# the modes a loop can influence: the design model
+# --------------------------------------------------------------------------------------------
+def _channel_rows(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Input column of 'torque' and output rows of 'theta', 'omega' (float64)."""
+    inputs, outputs = list(plant.input_labels), list(plant.output_labels)
+    b = np.asarray(plant.B, dtype=float)[:, inputs.index(TORQUE)]
+    C = np.asarray(plant.C, dtype=float)
+    return b, C[outputs.index(THETA)], C[outputs.index(OMEGA)]
+
+
+def _cluster_participation(A, lam, Wl, Vr, group, b, c_theta, c_omega, J, tol) -> float:
+    """Participation max(2 |r_theta| |lambda| J, 2 |r_omega| J) of a cluster of eigenvalues.
+
+    A simple eigenvalue's residue is r = (c v)(w^H b) / (w^H v) with right and left
+    eigenvectors v, w (any scaling). A cluster's is c P b with the spectral projector
+    P = V (U^H V)^-1 U^H on its right and left null spaces V, U (the SVD of A - mu I).
+    Both are invariant under a change of state coordinates.
+    """
+    if len(group) == 1:
+        i = group[0]
+        v, w = Vr[:, i], Wl[:, i]
+        wb = np.vdot(w, b) / np.vdot(w, v)
+        r_theta, r_omega, mu = (c_theta @ v) * wb, (c_omega @ v) * wb, lam[i]
+    else:
+        mu = lam[group].mean()
+        U, s, Vh = np.linalg.svd(A - mu * np.eye(A.shape[0]))
+        null = s <= tol
+        if not null.any():
+            null[-len(group):] = True
+        Un, Vn = U[:, null], Vh[null].conj().T
+        Pb = Vn @ np.linalg.lstsq(Un.conj().T @ Vn, Un.conj().T @ b, rcond=None)[0]
+        r_theta, r_omega = c_theta @ Pb, c_omega @ Pb
+    return float(max(2.0 * abs(r_theta) * abs(mu) * J, 2.0 * abs(r_omega) * J))
+
+
+def _clusters(lam: np.ndarray, mask: np.ndarray, tol: float) -> list[list[int]]:
+    """Groups of the eigenvalues lam[mask] closer than tol to one another (chained)."""
+    left = [int(i) for i in np.nonzero(mask)[0]]
+    groups = []
+    while left:
+        group = [left.pop(0)]
+        grown = True
+        while grown:
+            near = [j for j in left if np.min(np.abs(lam[group] - lam[j])) <= tol]
+            grown = bool(near)
+            group += near
+            left = [j for j in left if j not in near]
+        groups.append(group)
+    return groups
+
+
+def _design_model(plant: control.StateSpace, *, critical: float, J: float, what: str
+                  ) -> tuple[control.StateSpace, list[RemovedMode], np.ndarray]:
+    """The plant without the modes a loop cannot influence (see the module docstring).
+
+    A mode is left out when Re(lambda) >= -critical [1/s] (no damping to speak of) and its
+    participation is <= INFLUENCE_TOL; so is rigid-body motion (eigenvalue 0) that carries no
+    part of theta/torque = 1/(J s^2) (a hub translation). The plant's decoupled parts (connected
+    components of A's sparsity graph: the modes of a modal realisation) are kept or dropped
+    whole, exactly; a part holding both kinds is split along its invariant subspaces (ordered
+    real Schur form, Sylvester equation), the kept spectrum first.
+
+    Returns
+    -------
+    (control.StateSpace, list of RemovedMode, ndarray of complex)
+        The design plant (the plant itself when nothing is removed; same signals), the
+        removed modes sorted by frequency and their eigenvalues (every one, conjugates too).
+
+    Raises
+    ------
+    ValueError
+        Repeated (within 1e-8 of ||A||) critical modes of which the torque reaches one
+        combination only: a single torque cannot control them all.
+    """
+    A = np.asarray(plant.A, dtype=float)
+    n = A.shape[0]
+    if n == 0:
+        return plant, [], np.zeros(0, dtype=complex)
+    b, c_theta, c_omega = _channel_rows(plant)
+    Ab, (d, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
+    norm = max(np.linalg.norm(Ab, 1), np.finfo(float).tiny)
+    rigid_tol = 1e-6 * math.sqrt(max(norm, 1.0))  # as _ModalEvaluator: sqrt(eps)-perturbed
+    cluster_tol = _CLUSTER_RTOL * norm            # Jordan blocks and repeated frequencies
+    n_parts, part_of = scipy.sparse.csgraph.connected_components(
+        scipy.sparse.csr_matrix(A != 0.0), directed=True, connection="weak")
+    keep_whole: list[np.ndarray] = []
+    split: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+    removed: list[RemovedMode] = []
+    removed_eigs: list[np.ndarray] = []
+    for part in range(n_parts):
+        idx = np.flatnonzero(part_of == part)
+        Ap = Ab[np.ix_(idx, idx)]
+        bp, ctp, cop = b[idx] / d[idx], c_theta[idx] * d[idx], c_omega[idx] * d[idx]
+        lam, Wl, Vr = scipy.linalg.eig(Ap, left=True, right=True)
+        rigid = np.abs(lam) <= rigid_tol
+        if rigid.all():
+            # nilpotent part: its share of the rigid-body response 1/(J s^2) (theta: the
+            # 1/s^2 coefficient C A B; omega: the 1/s coefficient C B)
+            share = J * max(abs(ctp @ Ap @ bp), abs(cop @ bp))
+            if share <= INFLUENCE_TOL:
+                removed.append(RemovedMode(0.0, 0.0, float(share), idx.size,
+                                           "rigid-body motion that carries no part of "
+                                           "theta/torque (e.g. a translation)"))
+                removed_eigs.append(lam)
+            else:
+                keep_whole.append(idx)
+            continue
+        removable = np.zeros(lam.size, dtype=bool)
+        for group in _clusters(lam, (~rigid) & (lam.real >= -critical), cluster_tol):
+            p = _cluster_participation(Ap, lam, Wl, Vr, group, bp, ctp, cop, J, cluster_tol)
+            mu = lam[group].mean()
+            if p <= INFLUENCE_TOL:
+                removable[group] = True
+                removed_eigs.append(lam[group])
+                if mu.imag >= 0:
+                    w = abs(mu)
+                    removed.append(RemovedMode(float(w), float(-mu.real / w) if w else 0.0, p,
+                                               len(group), "participation <= INFLUENCE_TOL"))
+            elif len(group) > 1:
+                raise ValueError(
+                    f"{what}: {len(group)} modes at {abs(mu):.6g} rad/s are (nearly) repeated "
+                    "and undamped: a single torque reaches only one combination of them, the "
+                    "others stay undamped; give them damping or remove all but one from the "
+                    "design plant")
+        if not removable.any():
+            keep_whole.append(idx)
+        elif not removable.all():
+            dropped = lam[removable]
+
+            def kept(re, im):
+                return np.min(np.abs(re + 1j * im - dropped)) > cluster_tol
+
+            T, Z, k = scipy.linalg.schur(Ap, output="real", sort=kept)
+            if k != int((~removable).sum()):
+                raise ValueError(f"{what}: could not separate the modes to remove from the "
+                                 "others (eigenvalues too close)")
+            X = scipy.linalg.solve_sylvester(T[:k, :k], -T[k:, k:], -T[:k, k:])
+            # x_b = Z [[I, X], [0, I]] xi: the kept coordinates xi_1 = (Z^T x_b)_1 - X (Z^T x_b)_2
+            V = d[idx, None] * Z[:, :k]
+            W = (Z[:, :k].T - X @ Z[:, k:].T) / d[idx][None, :]
+            split.append((idx, V, W, T[:k, :k]))
+    if not removed:
+        return plant, [], np.zeros(0, dtype=complex)
+    B = np.asarray(plant.B, dtype=float)
+    C = np.asarray(plant.C, dtype=float)
+    whole = np.sort(np.concatenate(keep_whole)) if keep_whole else np.zeros(0, dtype=int)
+    labels = list(plant.state_labels)
+    A_blocks = [A[np.ix_(whole, whole)]] + [Tk for _, _, _, Tk in split]
+    Bd = np.vstack([B[whole]] + [W @ B[idx] for idx, _, W, _ in split])
+    Cd = np.hstack([C[:, whole]] + [C[:, idx] @ V for idx, V, _, _ in split])
+    states = [labels[i] for i in whole]
+    for j, (_, V, _, _) in enumerate(split):
+        states += [f"design_part{j}_x{i}" for i in range(V.shape[1])]
+    design = control.ss(scipy.linalg.block_diag(*A_blocks), Bd, Cd, plant.D, 0,
+                        inputs=list(plant.input_labels), outputs=list(plant.output_labels),
+                        states=states, name=plant.name)
+    return design, sorted(removed, key=lambda m: m.frequency), np.concatenate(removed_eigs)
+
+
+def _mode_participation(plant, J: float, eigenvalue: complex) -> float:
+    """Participation (see the module docstring) of the plant's mode nearest ``eigenvalue``."""
+    b, c_theta, c_omega = _channel_rows(plant)
+    Ab, (d, _) = scipy.linalg.matrix_balance(np.asarray(plant.A, dtype=float), permute=False,
+                                             separate=True)
+    lam, Wl, Vr = scipy.linalg.eig(Ab, left=True, right=True)
+    i = int(np.argmin(np.abs(lam - eigenvalue)))
+    return _cluster_participation(Ab, lam, Wl, Vr, [i], b / d, c_theta * d, c_omega * d, J,
+                                  0.0)
+
+
+def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J: float,
+                 what: str, advise, removed_eigs: np.ndarray | None = None,
+                 scale_floor: float = 0.0) -> tuple[float, list[RemovedMode]]:
+    """Check the stability guarantee of a designed loop on its design plant.
+
+    Every pole s of ``close_loop(plant, controller)`` (s = log(z) / T for a digital loop) must
+    have Re(s) <= -alpha, alpha = MARGIN * omega_s, omega_s the largest of |s|, |lambda| over
+    the plant's eigenvalues and ``scale_floor`` [rad/s]. A pole with Re(s) > -alpha is excused
+    only as a mode the loop leaves where it was: within alpha of a plant eigenvalue lambda with
+    Re(lambda) >= -alpha (aliased to the sampling band for a digital loop) that is in
+    ``removed_eigs`` (the modes left out of a design model) or, when ``removed_eigs`` is None,
+    any flexible mode (this loop moves it by less than the margin) and rigid-body motion that
+    carries no part of theta/torque (a translation).
+
+    Parameters
+    ----------
+    advise : callable (pole: complex, alpha: float, scale: float) -> str
+        The message's second half: which parameter to change and how.
+
+    Returns
+    -------
+    (float, list of RemovedMode)
+        alpha [1/s] and the excused modes.
+
+    Raises
+    ------
+    ValueError
+        A pole violates the guarantee (the message names the mode, its frequency and the
+        advice).
+    """
+    loop = close_loop(plant, controller)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        poles = _continuous_poles(loop)
+        A = np.asarray(plant.A, dtype=float)
+        lam = np.linalg.eigvals(A).astype(complex) if A.size else np.zeros(0, dtype=complex)
+        T = float(controller.dt) if _is_digital(controller) else 0.0
+        if T:
+            lam = np.log(np.exp(lam * T)) / T  # the sampled plant's modes, aliased
+    if not np.all(np.isfinite(poles)):
+        raise ValueError(f"{what}: the closed loop on the design plant has non-finite poles; "
+                         f"{advise(complex(np.inf), np.inf, np.inf)}")
+    scale = max(np.abs(poles).max(initial=0.0), np.abs(lam).max(initial=0.0), scale_floor,
+                np.finfo(float).tiny)
+    alpha = MARGIN * scale
+    norm = np.linalg.norm(scipy.linalg.matrix_balance(A, permute=False)[0], 1) if A.size else 0.0
+    rigid = np.abs(lam) <= 1e-6 * math.sqrt(max(norm, 1.0))
+    w_low = np.abs(lam[~rigid]).min(initial=np.inf)
+    if scale > MAX_SCALE_RATIO * w_low:
+        raise ValueError(
+            f"{what}: the loop's spectral scale {scale:.4g} rad/s is more than "
+            f"{MAX_SCALE_RATIO:g} times the plant's lowest flexible mode {w_low:.4g} rad/s: its "
+            f"stability margin {alpha:.2g} 1/s cannot resolve that mode's poles; "
+            f"{advise(0j, alpha, scale)}")
+    bad = sorted(np.nonzero(poles.real > -alpha)[0], key=lambda i: -poles[i].real)
+    if not bad:
+        return alpha, []
+    allowed = (np.zeros(lam.size, dtype=bool) if removed_eigs is None else
+               np.array([np.min(np.abs(removed_eigs - x), initial=np.inf)
+                         <= _CLUSTER_RTOL * max(norm, 1.0) for x in lam], dtype=bool))
+    if removed_eigs is None:
+        allowed = ~rigid
+        if rigid.any():
+            # rigid-body motion the loop cannot move (translations): from the design model
+            _, removed, _ = _design_model(plant, critical=alpha, J=J, what=what)
+            n_free = sum(m.multiplicity for m in removed if m.frequency == 0.0)
+            allowed[np.nonzero(rigid)[0][:n_free]] = True
+    allowed &= lam.real >= -alpha
+    used = np.zeros(lam.size, dtype=bool)
+    for i in bad:
+        distance = np.where(allowed & ~used, np.abs(lam - poles[i]), np.inf)
+        j = int(np.argmin(distance)) if lam.size else -1
+        if j < 0 or distance[j] > alpha:
+            raise ValueError(
+                f"{what}: the closed loop on the design plant has a pole at "
+                f"{_pole_text(poles[i])}, Re(s) > -{alpha:.2g} 1/s (the stability margin, "
+                f"{MARGIN:g} x the loop's spectral scale {scale:.4g} rad/s); "
+                f"{advise(complex(poles[i]), alpha, scale)}")
+        used[j] = True
+    excused: list[RemovedMode] = []
+    for j in np.nonzero(used & ~rigid & (lam.imag >= 0))[0]:
+        w = abs(lam[j])
+        p = _mode_participation(plant, J, lam[j])
+        excused.append(RemovedMode(
+            float(w), 0.0 + float(-lam[j].real / w) if w else 0.0, p, 1,
+            "participation <= INFLUENCE_TOL" if p <= INFLUENCE_TOL else
+            "this loop moves it by less than the margin"))
+    if (used & rigid).any():
+        excused.append(RemovedMode(0.0, 0.0, 0.0, int((used & rigid).sum()),
+                                   "rigid-body motion that carries no part of theta/torque "
+                                   "(e.g. a translation)"))
+    return alpha, sorted(excused, key=lambda m: m.frequency)
+
+
+def _pole_text(s: complex) -> str:
+    """'-1.2e-13 + 656.3j (656.3 rad/s)' for a message."""
+    return f"{s.real:.3g} {'+' if s.imag >= 0 else '-'} {abs(s.imag):.6g}j ({abs(s):.6g} rad/s)"

@@ -11,9 +11,11 @@ import math
 import control
 import numpy as np
 
-from .loop import loop_frequency_response
-from .modes import flexible_modes, rigid_body_inertia
-from .signals import OMEGA, THETA, THETA_REF, TORQUE, _check_plant
+from .frequency import _evaluator
+from .margins import _crossings
+from .modes import _verify_loop, flexible_modes, rigid_body_inertia
+from .signals import OMEGA, THETA, THETA_REF, TORQUE, _check_plant, _short
+from .stability import _warn_removed
 
 __all__ = [
     "pd",
@@ -34,9 +36,9 @@ NOTCH_ZERO_DAMPING = 0.02
 #: wide enough to cover the usual mismatch between a chain model's and the beam's first mode.
 NOTCH_POLE_DAMPING = 0.5
 #: A digital controller needs a sampling frequency 2 pi / T at least this many times the
-#: highest gain-crossover frequency of its continuous design loop (Franklin, Powell & Workman,
-#: Digital Control of Dynamic Systems, 3rd ed., sec. 11.2: 10 to 30 times the bandwidth; below 10
-#: the hold's phase lag omega T / 2 at crossover exceeds 18 deg).
+#: rigid-body gain-crossover frequency of its continuous design loop (Franklin, Powell &
+#: Workman, Digital Control of Dynamic Systems, 3rd ed., sec. 11.2: 10 to 30 times the bandwidth;
+#: below 10 the hold's phase lag omega T / 2 at crossover exceeds 18 deg).
 MIN_SAMPLES_PER_CROSSOVER = 10.0
 
 
@@ -47,6 +49,14 @@ def _positive(value, name: str, unit: str) -> float:
     if not (np.isfinite(value) and value > 0):
         raise ValueError(f"{name} must be positive and finite [{unit}]; got {value}")
     return value
+
+
+def _real_number(value, name: str, unit: str) -> float:
+    """A real number (not a bool, not a string) as float, or TypeError naming it."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} "
+                        f"{_short(value)}")
+    return float(value)
 
 
 def natural_frequency_from_bandwidth(bandwidth: float, damping: float) -> float:
@@ -76,15 +86,78 @@ def natural_frequency_from_bandwidth(bandwidth: float, damping: float) -> float:
 
 
 def pd_gains(inertia: float, natural_frequency: float, damping: float) -> tuple[float, float]:
-    """Kp [N*m/rad] = J wn^2 and Kd [N*m*s/rad] = 2 zeta wn J (closed loop J s^2 + Kd s + Kp)."""
-    return inertia * natural_frequency ** 2, 2.0 * damping * natural_frequency * inertia
+    """Kp [N*m/rad] = J wn^2 and Kd [N*m*s/rad] = 2 zeta wn J (closed loop J s^2 + Kd s + Kp).
+
+    Computed in IEEE arithmetic: a gain beyond the float64 range is inf (0 below it), never an
+    OverflowError.
+    """
+    J, wn, zeta = (np.float64(x) for x in (inertia, natural_frequency, damping))
+    with np.errstate(over="ignore", under="ignore"):
+        return float(J * wn * wn), float(2.0 * zeta * wn * J)
+
+
+def _rigid_crossover(plant, controller) -> float:
+    """Gain-crossover frequency [rad/s] of a continuous controller on the plant's rigid body.
+
+    The loop is taken on the rigid-body part of the plant alone, theta/torque = 1/(J s^2) and
+    omega/torque = 1/(J s), J from :func:`~controllers.rigid_body_inertia`:
+    L_r(j w) = -(K_theta(j w) / (J (j w)^2) + K_omega(j w) / (J j w)). Its crossover is the
+    lowest frequency where |L_r| falls through 1: the loop's bandwidth, which flexible
+    resonances (crossings of |L| = 1 at undamped modes) do not move.
+    """
+    J = rigid_body_inertia(plant)
+    inputs = [name for name in (THETA, OMEGA) if name in controller.input_labels]
+    if not inputs:
+        return 0.0
+    ev = _evaluator(controller, inputs, [TORQUE])
+    powers = np.array([2.0 if name == THETA else 1.0 for name in inputs])
+
+    def gain(w):
+        w = np.asarray(w, dtype=float)
+        with np.errstate(all="ignore"):
+            K = ev(1j * w)[:, 0, :]
+            return np.abs(np.sum(K / (J * (1j * w[:, None]) ** powers), axis=1))
+
+    with np.errstate(all="ignore"):
+        K0 = np.abs(ev(np.array([0.0]))[0, 0, :])
+    w0 = max(math.sqrt(K0[i] / J) if name == THETA else K0[i] / J
+             for i, name in enumerate(inputs))
+    if not (math.isfinite(w0) and w0 > 0):
+        return 0.0
+    omega = w0 * np.logspace(-4.0, 4.0, 801)
+    with np.errstate(divide="ignore"):
+        log_gain = np.log(gain(omega))
+    down = np.nonzero((log_gain[:-1] >= 0) & (log_gain[1:] < 0))[0]
+    if down.size == 0:
+        return float(omega[-1]) if log_gain[-1] >= 0 else 0.0
+    i = down[0]
+    with np.errstate(divide="ignore"):
+        roots = _crossings(lambda w: np.log(gain(w)), omega[i:i + 2], log_gain[i:i + 2])
+    return float(roots[0]) if roots.size else float(omega[i])
+
+
+def _check_sampling(sample_time: float, omega_c: float, what: str) -> None:
+    """ValueError unless 2 pi / sample_time >= MIN_SAMPLES_PER_CROSSOVER * omega_c."""
+    omega_s = 2.0 * math.pi / sample_time
+    if omega_s < MIN_SAMPLES_PER_CROSSOVER * omega_c:
+        raise ValueError(
+            f"{what}: sample_time {sample_time:.4g} s is too long for the loop bandwidth: the "
+            f"sampling frequency 2*pi/T = {omega_s:.4g} rad/s must be at least "
+            f"{MIN_SAMPLES_PER_CROSSOVER:g} x the loop's rigid-body gain-crossover frequency "
+            f"{omega_c:.4g} rad/s (the zero-order hold's lag omega T / 2 there would exceed "
+            f"18 deg), i.e. sample_time <= "
+            f"{2 * math.pi / (MIN_SAMPLES_PER_CROSSOVER * omega_c):.4g} s")
 
 
 def check_sample_time(sample_time: float, plant, continuous_controller) -> float:
-    """Validate a sample time against the continuous design loop's highest crossover.
+    """Validate a sample time against the continuous design loop's rigid-body crossover.
 
     Raises ValueError if 2 pi / sample_time < MIN_SAMPLES_PER_CROSSOVER * omega_c, with omega_c
-    the highest frequency at which |L(j omega)| = 1 on the design plant.
+    the gain crossover of the controller's loop on the plant's rigid-body part
+    (``_rigid_crossover``): the loop's bandwidth, not a crossing of |L| = 1 at a flexible
+    resonance. Whether the sampled loop is stable is a separate check on its poles (the exact
+    zero-order-hold discretisation of plant and controller), made by :func:`pd` and
+    :func:`controllers.lqr`.
 
     Returns
     -------
@@ -92,16 +165,8 @@ def check_sample_time(sample_time: float, plant, continuous_controller) -> float
         omega_c [rad/s].
     """
     sample_time = _positive(sample_time, "sample_time", "s")
-    omega, L = loop_frequency_response(plant, continuous_controller)
-    above = np.nonzero(np.abs(L) >= 1.0)[0]
-    omega_c = float(omega[above[-1]]) if above.size else 0.0
-    omega_s = 2.0 * math.pi / sample_time
-    if omega_s < MIN_SAMPLES_PER_CROSSOVER * omega_c:
-        raise ValueError(
-            f"sample_time {sample_time:.4g} s is too long for the loop bandwidth: the sampling "
-            f"frequency 2*pi/T = {omega_s:.4g} rad/s must be at least "
-            f"{MIN_SAMPLES_PER_CROSSOVER:g} x the gain-crossover frequency {omega_c:.4g} rad/s, "
-            f"i.e. sample_time <= {2 * math.pi / (MIN_SAMPLES_PER_CROSSOVER * omega_c):.4g} s")
+    omega_c = _rigid_crossover(plant, continuous_controller)
+    _check_sampling(sample_time, omega_c, "sample time")
     return omega_c
 
 
@@ -173,42 +238,101 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
     _check_plant(plant)
     if (natural_frequency is None) == (bandwidth is None):
         raise ValueError("give exactly one of natural_frequency [rad/s] or bandwidth [rad/s]; got "
-                         f"natural_frequency={natural_frequency}, bandwidth={bandwidth}")
+                         f"natural_frequency={_short(natural_frequency)}, "
+                         f"bandwidth={_short(bandwidth)}")
     damping = _positive(damping, "damping", "1")
     if natural_frequency is not None:
+        spec = "natural_frequency"
         wn = _positive(natural_frequency, "natural_frequency", "rad/s")
     else:
+        spec = "bandwidth"
         wn = natural_frequency_from_bandwidth(bandwidth, damping)
+    spec_text = f"{spec} = {natural_frequency if bandwidth is None else bandwidth:.4g} rad/s"
     J = rigid_body_inertia(plant)
-    Kp, Kd = pd_gains(J, wn, damping)
+    with np.errstate(over="ignore", under="ignore"):
+        Kp, Kd = pd_gains(J, wn, damping)
+    if not (math.isfinite(Kp) and math.isfinite(Kd) and Kp > 0 and Kd > 0):
+        raise ValueError(f"pd: {spec_text} with damping {damping:.4g} and the plant's inertia "
+                         f"J = {J:.4g} kg*m^2 gives gains Kp = J wn^2 = {Kp:.3g} N*m/rad, "
+                         f"Kd = 2 zeta wn J = {Kd:.3g} N*m*s/rad outside the floating-point "
+                         f"range; choose a {spec} within a few decades of the plant's modes")
     controller = control.ss([], [], [], [[Kp, -Kp, -Kd]])
+    filters = []
     if notch is not None:
         if isinstance(notch, str):
             if notch != "first_mode":
-                raise ValueError(f"notch must be a frequency [rad/s] or 'first_mode'; got {notch!r}")
+                raise ValueError(f"notch must be a frequency [rad/s] or 'first_mode'; got "
+                                 f"{_short(notch)}")
             modes = flexible_modes(plant)
             if not modes:
                 raise ValueError("notch='first_mode' but the plant has no flexible mode visible "
                                  "from torque to theta")
             wz = modes[0].frequency
         else:
-            wz = _positive(notch, "notch", "rad/s")
+            wz = _positive(_real_number(notch, "notch", "rad/s"), "notch", "rad/s")
         if wz <= 2.0 * wn:
             raise ValueError(f"notch frequency must exceed 2 x natural frequency = {2 * wn:.4g} "
                              f"rad/s (it would cut into the rigid-body loop); got {wz:.4g} rad/s")
         controller = _second_order((1.0, 2.0 * NOTCH_ZERO_DAMPING * wz, wz * wz), wz,
                                    NOTCH_POLE_DAMPING) * controller
+        filters.append(f"notch = {wz:.4g} rad/s")
     if roll_off is not None:
         wr = _positive(roll_off, "roll_off", "rad/s")
         if wr <= 2.0 * wn:
             raise ValueError(f"roll_off corner must exceed 2 x natural frequency = {2 * wn:.4g} "
                              f"rad/s; got {wr:.4g} rad/s")
         controller = _second_order((0.0, 0.0, wr * wr), wr, ROLL_OFF_DAMPING) * controller
+        filters.append(f"roll_off = {wr:.4g} rad/s")
     controller = control.ss(controller.A, controller.B, controller.C, controller.D, 0,
                             inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="pd")
+    T = None
     if sample_time is not None:
-        check_sample_time(sample_time, plant, controller)
-        digital = control.c2d(controller, float(sample_time), method="zoh")
-        controller = control.ss(digital.A, digital.B, digital.C, digital.D, float(sample_time),
+        T = _positive(_real_number(sample_time, "sample_time", "s"), "sample_time", "s")
+        check_sample_time(T, plant, controller)
+        digital = control.c2d(controller, T, method="zoh")
+        controller = control.ss(digital.A, digital.B, digital.C, digital.D, T,
                                 inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="pd")
+    rigid_poles = np.roots([1.0, 2.0 * damping * wn, wn * wn]).astype(complex)
+
+    def advise(pole: complex, alpha: float, scale: float) -> str:
+        w = abs(pole)
+        if not math.isfinite(w):
+            return f"choose a {spec} within a few decades of the plant's modes; got {spec_text}"
+        if w == 0.0:  # the loop's scale cannot resolve the plant's modes
+            return f"lower {spec} toward the plant's modes; got {spec_text}"
+        rigid = np.min(np.abs(rigid_poles - pole) / np.abs(rigid_poles)) <= 0.5
+        if rigid and pole.real > 0 and (filters or T is not None):
+            lag = f"the filter ({', '.join(filters)})" if filters else "the zero-order hold"
+            return (f"the phase lag of {lag} destabilises the rigid-body loop ({spec_text}, "
+                    f"damping {damping:.4g}): raise damping, or move the filter up / shorten "
+                    "sample_time")
+        if rigid:
+            return (f"{spec_text} with damping {damping:.4g} puts the rigid-body poles inside "
+                    f"the margin: raise {spec} or damping (the margin scales with the loop's "
+                    f"fastest pole or mode, {scale:.4g} rad/s)")
+        if T is not None:
+            alias = (" and aliases (it lies above the Nyquist frequency)"
+                     if any(m.frequency > math.pi / T for m in _safe_modes(plant)) else "")
+            return (f"the sampled loop at sample_time = {T:.4g} s (Nyquist frequency "
+                    f"pi/T = {math.pi / T:.4g} rad/s) does not damp this mode{alias}: shorten "
+                    "sample_time, or roll it off / notch it")
+        if filters:
+            return (f"the phase lag of the filter ({', '.join(filters)}) at {w:.4g} rad/s does "
+                    "not let the loop damp this mode: move the filter, or give the mode damping")
+        return (f"{spec_text} with damping {damping:.4g} is too high for this plant: the loop "
+                "cannot damp this pole (a flexible mode pushed toward a zero of theta/torque, or "
+                f"round-off of a loop {scale / max(w, 1e-300):.1e} times faster than it); "
+                f"lower {spec}")
+
+    _, excused = _verify_loop(plant, controller, J=J, what="pd", advise=advise, scale_floor=wn)
+    _warn_removed("pd", excused, "(the loop moves them by less than the stability margin; they "
+                  "keep their open-loop eigenvalues)")
     return controller
+
+
+def _safe_modes(plant):
+    """flexible_modes of the plant, or none if they cannot be listed."""
+    try:
+        return flexible_modes(plant)
+    except ValueError:
+        return []

@@ -14,14 +14,32 @@ from __future__ import annotations
 from typing import Sequence
 
 import control
+import numpy as np
 
 __all__ = ["TORQUE", "THETA", "OMEGA", "THETA_REF", "TIP_SUFFIX"]
+
+#: Longest echo of a user's value in an error message [characters].
+MESSAGE_VALUE_CHARS = 100
 
 TORQUE = "torque"
 THETA = "theta"
 OMEGA = "omega"
 THETA_REF = "theta_ref"
 TIP_SUFFIX = "tip_deflection"
+
+
+def _short(value, limit: int = MESSAGE_VALUE_CHARS) -> str:
+    """repr of a value for an error message, cut to about ``limit`` characters."""
+    if isinstance(value, float):
+        text = f"{value:.6g}"
+    else:
+        try:
+            with np.printoptions(threshold=20, edgeitems=3, precision=6):
+                text = repr(value)
+        except Exception:  # noqa: BLE001 - a repr that fails must not hide the real error
+            text = f"<{type(value).__name__}>"
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
 def _labels(system, kind: str) -> list[str]:

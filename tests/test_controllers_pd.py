@@ -148,3 +148,83 @@ def test_errors_name_the_parameter():
                         outputs=["theta", "omega"])
     with pytest.raises(ValueError, match="free-floating"):
         controllers.pd(sprung, natural_frequency=1.0)
+
+
+# --------------------------------------------------------------------------------------------
+# the stability guarantee on the design plant (issue 9)
+# --------------------------------------------------------------------------------------------
+def _spacecraft(*appendages):
+    from spacecraft import Hub, Mount, Spacecraft
+
+    mounts = [Mount(a, (0.5, 0.0), 0.0) if k == 0 else Mount(a, (-0.5, 0.0), math.pi)
+              for k, a in enumerate(appendages)]
+    return Spacecraft(Hub(100.0, 50.0), mounts)
+
+
+def _rod():
+    from appendages import Beam
+
+    return Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11)  # the paper's rod, undamped
+
+
+def _assert_margin(plant, K, left_out=()):
+    """Every pole at Re <= -alpha = -MARGIN x the loop's spectral scale, except the modes
+    left out (undamped: within alpha of +-j w)."""
+    poles = controllers.close_loop(plant, K).poles()
+    lam = np.linalg.eigvals(plant.A)
+    alpha = controllers.MARGIN * max(np.abs(poles).max(), np.abs(lam).max())
+    # the open-loop eigenvalues of the left-out modes (frequencies given to 1e-4)
+    kept = lam[[any(abs(abs(x) - w) <= 1e-4 * w for w in left_out) for x in lam]]
+    for p in poles[poles.real > -alpha]:
+        assert np.min(np.abs(kept - p), initial=np.inf) <= alpha, p
+
+
+def test_pd_refuses_a_loop_unstable_on_its_design_plant():
+    """A roll-off at 4 rad/s lags the 7 rad/s mode of this collocated plant by ~120 deg: the loop
+    has a pole at +0.026 + 7.04j. pd() used to return that controller; now it refuses it and
+    names the filter and the mode."""
+    plant = modal_plant(J, [(2.0, 0.002, 1.0, 0.004), (7.0, 0.002, 1.0, 0.002)])
+    with pytest.raises(ValueError, match=r"pd: .*7\.03\d* rad/s.*roll_off = 4 rad/s"):
+        controllers.pd(plant, natural_frequency=0.5, roll_off=4.0)
+    K = controllers.pd(plant, natural_frequency=0.5)  # without the filter: passive, stable
+    _assert_margin(plant, K)
+
+
+def test_pd_on_unpruned_symmetric_wings_names_the_modes_it_cannot_move():
+    """The symmetric bending of two identical wings leaves theta/torque (participation
+    ~1e-26): the loop leaves those 8 undamped modes where they are; pd() says so and
+    guarantees the margin for every other pole."""
+    rod = _rod()
+    craft = _spacecraft(rod.truncated(8), rod.truncated(8))
+    plant = craft.plant()
+    with pytest.warns(controllers.RemovedModesWarning, match="pd: 8 mode") as record:
+        K = controllers.pd(plant, natural_frequency=0.1)
+    text = str(record[0].message)
+    pruned = craft.plant(prune=True)
+    symmetric = sorted(set(np.round(np.abs(np.linalg.eigvals(plant.A)), 4))
+                       - set(np.round(np.abs(np.linalg.eigvals(pruned.A)), 4)))
+    for w in symmetric[:6]:  # the message lists six, then 'and 2 more'
+        assert f"{w:.4f}"[:5] in text
+    _assert_margin(plant, K, symmetric)
+
+
+def test_pd_on_25_body_chain_names_its_free_tip_mode():
+    from appendages import HingedChain
+
+    plant = _spacecraft(HingedChain.rfem(_rod(), 25)).plant()
+    with pytest.warns(controllers.RemovedModesWarning, match=r"pd: 1 mode.*656\.25 rad/s"):
+        K = controllers.pd(plant, natural_frequency=0.1)
+    _assert_margin(plant, K, [656.25])
+
+
+@pytest.mark.parametrize("wn, what", [(1e-300, "gives gains"), (1e-12, "rigid-body poles"),
+                                      (1e9, "too high"), (1e100, "spectral scale"),
+                                      (1e200, "gives gains")])
+def test_pd_extreme_natural_frequency_is_refused_by_name(wn, what):
+    """natural_frequency = 1e9 ended in LinAlgError, 1e200 in OverflowError: now a ValueError
+    naming natural_frequency (gains outside float64, rigid-body poles inside the margin, a
+    loop too stiff to damp the flexible modes, or a loop 1e10 times faster than them)."""
+    flexible = modal_plant(J, [(2.0, 0.0, 0.04, 0.04), (11.0, 0.0, 0.02, 0.02)])
+    with pytest.raises(ValueError, match=rf"natural_frequency.*|{what}") as info:
+        controllers.pd(flexible, natural_frequency=wn)
+    assert "natural_frequency" in str(info.value) and what in str(info.value)
