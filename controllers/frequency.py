@@ -23,10 +23,14 @@ class _ModalEvaluator:
     ----------
     G. H. Golub and C. F. Van Loan, Matrix Computations, 4th ed., 2013, sec. 7.6.3
     (block diagonalisation by a Sylvester equation).
+
+    A discrete-time system is evaluated at z with ``center=1``: its rigid-body block sits at
+    z = 1, so A - I takes the place of A and z - 1 that of s (the same partial fractions).
     """
 
-    def __init__(self, A, B, C, D):
-        A = np.asarray(A, dtype=float)
+    def __init__(self, A, B, C, D, *, center: float = 0.0):
+        self.center = float(center)
+        A = np.asarray(A, dtype=float) - self.center * np.eye(np.shape(A)[0])
         self.B = np.asarray(B, dtype=float)
         self.C = np.asarray(C, dtype=float)
         self.D = np.asarray(D, dtype=float)
@@ -82,15 +86,26 @@ class _ModalEvaluator:
         self.A = A
 
     def __call__(self, s: np.ndarray) -> np.ndarray:
-        """Return G(s), shape (len(s), n_outputs, n_inputs), complex128."""
-        s = np.asarray(s, dtype=complex).reshape(-1)
+        """Return G(s), shape (len(s), n_outputs, n_inputs), complex128; inf at a pole."""
+        s = np.asarray(s, dtype=complex).reshape(-1) - self.center
         p, m = self.C.shape[0], self.B.shape[1]
         if self.n == 0:
             return np.broadcast_to(self.D.astype(complex), (s.size, p, m)).copy()
         if not self.modal:
             G = np.broadcast_to(self.D.astype(complex), (s.size, p, m)).copy()
             M = s[:, None, None] * np.eye(self.n) - self.A
-            return G + self.C @ np.linalg.solve(M, np.broadcast_to(self.B, (s.size,) + self.B.shape))
+            try:
+                return G + self.C @ np.linalg.solve(M, np.broadcast_to(self.B, (s.size,)
+                                                                       + self.B.shape))
+            except np.linalg.LinAlgError:
+                # a point exactly on a pole (an undamped mode of a sampled plant on the unit
+                # circle): G is infinite there, the other points are solved one by one
+                for f in range(s.size):
+                    try:
+                        G[f] += self.C @ np.linalg.solve(M[f], self.B)
+                    except np.linalg.LinAlgError:
+                        G[f] = complex(np.inf)
+                return G
         G = (1.0 / (s[:, None] - self.lam)) @ self.residues + self.D.reshape(1, p * m)
         G = G.reshape(s.size, p, m)
         if self.k:
@@ -107,21 +122,24 @@ class _ModalEvaluator:
         """Undamped natural frequencies |lambda| of the non-rigid eigenvalues [rad/s]."""
         if self.n == 0:
             return np.zeros(0)
-        lam = self.lam if self.modal else np.linalg.eigvals(self.A)
+        lam = (self.lam if self.modal else np.linalg.eigvals(self.A)) + self.center
         w = np.abs(lam)
         return w[w > self.rigid_tol]
 
 
 def _evaluator(system, inputs: Sequence[str], outputs: Sequence[str]) -> _ModalEvaluator:
+    """Evaluator of one block of a system's transfer matrix (at s, or at z if discrete)."""
     i_in = [list(system.input_labels).index(n) for n in inputs]
     i_out = [list(system.output_labels).index(n) for n in outputs]
     return _ModalEvaluator(system.A, system.B[:, i_in], system.C[i_out, :],
-                           system.D[np.ix_(i_out, i_in)])
+                           system.D[np.ix_(i_out, i_in)],
+                           center=1.0 if system.isdtime(strict=True) else 0.0)
 
 
 def _poles_of(ev: _ModalEvaluator) -> np.ndarray:
+    """Poles of an evaluator's system (s-plane, or z-plane for a discrete one)."""
     if ev.n == 0:
         return np.zeros(0, dtype=complex)
     if ev.modal:
-        return np.concatenate([np.diag(ev.T11), ev.lam])
-    return np.linalg.eigvals(ev.A).astype(complex)
+        return np.concatenate([np.diag(ev.T11), ev.lam]) + ev.center
+    return np.linalg.eigvals(ev.A).astype(complex) + ev.center

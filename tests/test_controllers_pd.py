@@ -8,7 +8,7 @@ import pytest
 import controllers
 from plants import modal_plant
 from controllers.pd import (MIN_SAMPLES_PER_CROSSOVER, NOTCH_POLE_DAMPING, NOTCH_ZERO_DAMPING,
-                            natural_frequency_from_bandwidth, pd_gains)
+                            check_sample_time, natural_frequency_from_bandwidth, pd_gains)
 
 
 J = 250.0  # kg m^2
@@ -228,3 +228,63 @@ def test_pd_extreme_natural_frequency_is_refused_by_name(wn, what):
     with pytest.raises(ValueError, match=rf"natural_frequency.*|{what}") as info:
         controllers.pd(flexible, natural_frequency=wn)
     assert "natural_frequency" in str(info.value) and what in str(info.value)
+
+
+# --------------------------------------------------------------------------------------------
+# sample rate: judged on the rigid-body crossover and on the sampled loop itself (issue 9)
+# --------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def default_scene_design_plant():
+    """The default scene's design plant: hub 100 kg / 50 kg m^2, the paper's rod (0.5 %
+    damping) fitted by a 3-body chain (flexsat's fit; its modes are undamped, at 0.985 and
+    3.204 rad/s coupled to the hub), pruned."""
+    from appendages import Beam, fit_chain
+    from spacecraft import Hub, Mount, Spacecraft
+
+    rod = Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11, damping_ratio=0.005)
+    chain = fit_chain(rod, 3)
+    return Spacecraft(Hub(100.0, 50.0), [Mount(chain, (0.5, 0.0), 0.0)]).plant(prune=True)
+
+
+def test_sample_rate_judged_on_the_rigid_body_crossover(default_scene_design_plant):
+    """Finding of issue 9: the check took the highest |L| = 1 crossing (the chain's undamped
+    3.2 rad/s resonance) as the crossover and refused 5 Hz for a 0.2 rad/s PD. The loop's
+    crossover is the rigid-body one: for L = (Kp + Kd s)/(J s^2),
+    w_c = wn sqrt(2 zeta^2 + sqrt(4 zeta^4 + 1)) = 0.30856 rad/s (zeta = 0.7), so any rate
+    above 10 w_c / (2 pi) = 0.49 Hz passes that rule; 5 and 20 Hz give stable sampled loops."""
+    plant = default_scene_design_plant
+    wn, zeta = 0.2, 0.7
+    continuous = controllers.pd(plant, natural_frequency=wn, damping=zeta)
+    w_c = wn * math.sqrt(2 * zeta ** 2 + math.sqrt(4 * zeta ** 4 + 1))
+    # crossings refined to 1e-13 relative; the plant's rigid gain 1/J from a Schur form ~1e-12
+    assert check_sample_time(0.2, plant, continuous) == pytest.approx(w_c, rel=1e-9)
+    for rate in (5.0, 20.0):
+        K = controllers.pd(plant, natural_frequency=wn, damping=zeta, sample_time=1.0 / rate)
+        assert controllers.spillover(plant, K).stable
+        _assert_margin_digital(plant, K)
+
+
+def test_sample_rate_that_destabilises_the_sampled_loop_is_refused_with_the_reason(
+        default_scene_design_plant):
+    """At 1 Hz the chain's 3.204 rad/s mode lies above the Nyquist frequency pi rad/s: the
+    exact sampled loop (ZOH plant and controller) has a pole at +0.022 + 2.985j (aliased), a
+    real instability of the design loop; pd() refuses 1 Hz and says why."""
+    plant = default_scene_design_plant
+    with pytest.raises(ValueError, match=r"pd: .*0\.022.*sample_time = 1 s.*Nyquist.*aliases"):
+        controllers.pd(plant, natural_frequency=0.2, sample_time=1.0)
+    # the same sampled loop, built by hand, is analysed, not crashed on (it raised
+    # LinAlgError: a refinement point fell on the unit-circle pole of the sampled chain mode)
+    Kc = controllers.pd(plant, natural_frequency=0.2)
+    Kd = control.c2d(Kc, 1.0, method="zoh")
+    Kd = control.ss(Kd.A, Kd.B, Kd.C, Kd.D, 1.0, inputs=list(Kc.input_labels),
+                    outputs=["torque"])
+    m = controllers.margins(plant, Kd)
+    assert math.isfinite(m.phase_margin) and m.modulus_margin < 0.2  # near -1 at 2.98 rad/s
+    assert not controllers.spillover(plant, Kd).stable
+
+
+def _assert_margin_digital(plant, K):
+    z = controllers.close_loop(plant, K).poles()
+    s = np.log(z) / K.dt
+    alpha = controllers.MARGIN * np.abs(s).max()
+    assert s.real.max() <= -alpha
