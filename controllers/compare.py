@@ -17,17 +17,21 @@ import numpy as np
 from .loop import close_loop, loop_frequency_response
 from .margins import SpilloverVerdict, margins, spillover
 from .signals import THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_controller, _check_plant
-from .timeresp import METRIC_UNITS, _trace, metrics, slew
+from .timeresp import METRIC_UNITS, _check_slew, _time_grid, _trace, metrics, slew
 
 __all__ = ["Comparison", "compare", "metric_table", "difference_columns"]
 
 
-def difference_columns(actual: float, expected: float) -> tuple[float, float]:
+def difference_columns(actual, expected) -> tuple[float | None, float | None]:
     """(|actual - expected|, |actual - expected| / |expected|) with inf handled, never NaN.
 
     Equal values (including equal infinities) differ by 0; a finite value against an infinite
     one differs by inf; the relative difference against expected = 0 is inf unless both are 0.
+    A flag (bool) or a missing value (None, e.g. the metrics of a diverged response) has no
+    difference: (None, None).
     """
+    if any(v is None or isinstance(v, bool) for v in (actual, expected)):
+        return None, None
     if actual == expected:
         return 0.0, 0.0
     if not (math.isfinite(actual) and math.isfinite(expected)):
@@ -39,6 +43,8 @@ def difference_columns(actual: float, expected: float) -> tuple[float, float]:
 def _fmt(value) -> str:
     if value is None:
         return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
     if isinstance(value, str):
         return value
     return f"{value:.6g}"
@@ -59,13 +65,16 @@ class Comparison:
 
     Attributes
     ----------
-    design_metrics, truth_metrics : dict of str to float
+    design_metrics, truth_metrics : dict of str to float, bool or None
         :func:`controllers.metrics` of the slew plus the margins (``gain_margin`` [dB],
-        ``phase_margin`` [deg], ``modulus_margin``) of each loop.
+        ``phase_margin`` [deg], ``modulus_margin``) of each loop. A loop whose response left
+        the float64 range has ``diverged`` True, ``diverged_at`` [s] and None for the time
+        metrics (:func:`controllers.metrics`).
     design_response, truth_response : control.TimeResponseData
-        Slew responses on the same time grid.
+        Slew responses on the same time grid; a diverged one stops at ``diverged_at``.
     difference : dict of str to ndarray
-        truth - design for every output both loops have (theta, omega, torque, tip deflections).
+        truth - design for every output both loops have (theta, omega, torque, tip
+        deflections), over the time both responses cover.
     verdict : SpilloverVerdict
         Stability of the controller on the truth plant.
     design_plant, truth_plant, controller
@@ -84,8 +93,14 @@ class Comparison:
 
     @property
     def t(self) -> np.ndarray:
-        """Time grid of both responses [s]."""
-        return np.asarray(self.design_response.t, dtype=float)
+        """Time grid of ``difference`` [s] (both responses; a diverged one ends earlier)."""
+        t = np.asarray(self.design_response.t, dtype=float).reshape(-1)
+        return t[: len(next(iter(self.difference.values()), t))]
+
+    @property
+    def diverged(self) -> bool:
+        """True if either loop's response left the float64 range (see ``diverged_at``)."""
+        return bool(self.design_metrics.get("diverged") or self.truth_metrics.get("diverged"))
 
     @property
     def rows(self) -> list[tuple[str, str, float, float, float, float]]:
@@ -100,7 +115,7 @@ class Comparison:
 
     @property
     def peak_difference(self) -> dict[str, float]:
-        """max |truth - design| of each common output over the response."""
+        """max |truth - design| of each common output over the time both responses cover."""
         return {name: float(np.max(np.abs(v))) for name, v in self.difference.items()}
 
     def table(self) -> str:
@@ -110,7 +125,12 @@ class Comparison:
 
     def __str__(self) -> str:
         peaks = ", ".join(f"{k} {v:.3g}" for k, v in self.peak_difference.items())
-        return f"{self.table()}\npeak |truth - design|: {peaks}\n{self.verdict}"
+        lines = [self.table(), f"peak |truth - design|: {peaks}"]
+        for which, m in (("design", self.design_metrics), ("truth", self.truth_metrics)):
+            if m.get("diverged"):
+                lines.append(f"the {which} loop's response DIVERGED at {m['diverged_at']:.6g} s "
+                             "(left the float64 range; its time metrics are not given)")
+        return "\n".join(lines + [str(self.verdict)])
 
     def plot(self):
         """Figure of both slew responses, their difference and both open-loop responses.
@@ -136,11 +156,15 @@ class Comparison:
                                        ("truth", self.truth_response, "--")):
                 y = _trace(resp, name)
                 if y is not None:
-                    ax.plot(t, y, style, label=f"{name} ({label})")
+                    stop = getattr(resp, "diverged_at", None)
+                    ax.plot(np.asarray(resp.t).reshape(-1), y, style,
+                            label=f"{name} ({label})" + (f", diverged at {stop:.4g} s"
+                                                         if stop is not None else ""))
             if name == THETA:
                 ref = _trace(self.design_response, THETA_REF, "input")
                 if ref is not None:
-                    ax.plot(t, ref, ":", color="gray", label="theta_ref")
+                    ax.plot(np.asarray(self.design_response.t).reshape(-1), ref, ":",
+                            color="gray", label="theta_ref")
             ax.set_ylabel(f"{name} [{units.get(name, 'm')}]")
             ax.legend(loc="best", fontsize="small")
             ax.grid(True)
@@ -169,7 +193,8 @@ class Comparison:
 
 def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
             controller: control.StateSpace, *, angle: float, duration: float,
-            t_final: float | None = None, dt: float | None = None) -> Comparison:
+            t_final: float | None = None, dt: float | None = None,
+            max_samples: int | None = None) -> Comparison:
     """Close one controller around a design plant and a truth plant and compare.
 
     Parameters
@@ -190,11 +215,16 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
     dt : float, s, optional
         Output step; default duration / 500 (the controller's dt if digital).
 
+    max_samples : int, optional
+        Most samples per response (default :data:`controllers.timeresp.MAX_SAMPLES`); more
+        are refused by name before any work.
+
     Returns
     -------
     Comparison
-        An unstable truth loop is reported (``verdict.stable`` False, diverging metrics may be
-        inf), not raised.
+        An unstable truth loop is reported, not raised: ``verdict.stable`` False and, if its
+        response leaves the float64 range within t_final, ``truth_metrics["diverged"]`` True
+        with ``truth_metrics["diverged_at"]`` [s] and None for its time metrics.
     """
     _check_plant(design_plant, "design_plant")
     if isinstance(truth_plant, control.FrequencyResponseData):
@@ -202,10 +232,16 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
                         "FrequencyResponseData truth use controllers.spillover / margins")
     _check_plant(truth_plant, "truth_plant")
     _check_controller(controller)
+    angle, duration = _check_slew(angle, duration)
     design_loop = close_loop(design_plant, controller)
     truth_loop = close_loop(truth_plant, controller)
-    design_response = slew(design_loop, angle, duration, t_final=t_final, dt=dt)
-    truth_response = slew(truth_loop, angle, duration, t_final=t_final, dt=dt)
+    # the time grid (and its size limit) first: refuse before any simulation
+    _time_grid(design_loop, 3.0 * duration if t_final is None else t_final, dt,
+               duration / 500.0, max_samples)
+    design_response = slew(design_loop, angle, duration, t_final=t_final, dt=dt,
+                           max_samples=max_samples)
+    truth_response = slew(truth_loop, angle, duration, t_final=t_final, dt=dt,
+                          max_samples=max_samples)
     verdict = spillover(truth_plant, controller)
     design_metrics = metrics(design_response) | margins(design_plant, controller).as_dict()
     truth_metrics = metrics(truth_response) | verdict.margins.as_dict()
@@ -213,6 +249,7 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
     for name in design_response.output_labels:
         a, b = _trace(truth_response, name), _trace(design_response, name)
         if a is not None and b is not None:
-            difference[name] = a - b
+            n = min(a.size, b.size)  # a diverged response ends early
+            difference[name] = a[:n] - b[:n]
     return Comparison(design_metrics, truth_metrics, design_response, truth_response,
                       difference, verdict, design_plant, truth_plant, controller)

@@ -15,7 +15,7 @@ import scipy.linalg
 
 from .frequency import _evaluator, _poles_of
 from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_plant, _is_digital,
-                      _labels, _measurements, _reference_inputs)
+                      _labels, _measurements, _reference_inputs, _short)
 
 __all__ = ["close_loop", "loop_frequency_response"]
 
@@ -159,8 +159,9 @@ class _Loop:
             self.measured = [n for n in controller.input_labels
                              if n in outputs or n in derivable]
             if not self.measured:
-                raise ValueError(f"controller inputs {list(controller.input_labels)} contain none "
-                                 f"of the plant outputs {outputs}: nothing is fed back")
+                raise ValueError(f"controller inputs {_short(list(controller.input_labels))} "
+                                 f"contain none of the plant outputs {_short(outputs)}: nothing "
+                                 "is fed back")
             i_t = list(plant.input_labels).index(TORQUE)
             self.omega = np.asarray(plant.omega, dtype=float)
             if self.digital:

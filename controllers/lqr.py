@@ -151,12 +151,12 @@ def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray
         return [], np.zeros((0, 0))
     if not tips:
         raise ValueError("deflection_weight given but the plant has no '*tip_deflection' output; "
-                         f"outputs are {list(plant.output_labels)}")
+                         f"outputs are {_short(list(plant.output_labels))}")
     if isinstance(deflection_weight, Mapping):
         unknown = [k for k in deflection_weight if k not in tips]
         if unknown:
-            raise ValueError(f"deflection_weight names {unknown} are not tip-deflection outputs "
-                             f"{tips}")
+            raise ValueError(f"deflection_weight names {_short(unknown)} are not tip-deflection "
+                             f"outputs {_short(tips)}")
         names = list(deflection_weight)
         W = np.diag([_nonneg(deflection_weight[n], f"deflection_weight[{n!r}]", "1/m^2")
                      for n in names])
@@ -167,11 +167,11 @@ def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray
     W = np.asarray(deflection_weight, dtype=float)
     if W.shape != (len(tips), len(tips)):
         raise ValueError(f"deflection_weight matrix must have shape ({len(tips)}, {len(tips)}) "
-                         f"for the outputs {tips}; got {W.shape}")
+                         f"for the outputs {_short(tips)}; got {W.shape}")
     if not np.allclose(W, W.T, rtol=1e-12, atol=0) or np.min(np.linalg.eigvalsh(W)) < -1e-12 * max(
             1.0, np.abs(W).max()):
         raise ValueError("deflection_weight must be symmetric positive semidefinite [1/m^2]; got "
-                         f"eigenvalues {np.linalg.eigvalsh((W + W.T) / 2)}")
+                         f"eigenvalues {_short(np.linalg.eigvalsh((W + W.T) / 2))}")
     return tips, W
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from .frequency import _evaluator
 from .margins import _crossings
 from .modes import _verify_loop, flexible_modes, rigid_body_inertia
-from .signals import OMEGA, THETA, THETA_REF, TORQUE, _check_plant, _short
+from .signals import OMEGA, THETA, THETA_REF, TORQUE, _check_plant, _real_number, _short
 from .stability import _warn_removed
 
 __all__ = [
@@ -49,14 +49,6 @@ def _positive(value, name: str, unit: str) -> float:
     if not (np.isfinite(value) and value > 0):
         raise ValueError(f"{name} must be positive and finite [{unit}]; got {value}")
     return value
-
-
-def _real_number(value, name: str, unit: str) -> float:
-    """A real number (not a bool, not a string) as float, or TypeError naming it."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} "
-                        f"{_short(value)}")
-    return float(value)
 
 
 def natural_frequency_from_bandwidth(bandwidth: float, damping: float) -> float:

@@ -42,6 +42,14 @@ def _short(value, limit: int = MESSAGE_VALUE_CHARS) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+def _real_number(value, name: str, unit: str) -> float:
+    """A real number (not a bool, not a string) as float, or TypeError naming it."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} "
+                        f"{_short(value)}")
+    return float(value)
+
+
 def _labels(system, kind: str) -> list[str]:
     return list(system.input_labels if kind == "input" else system.output_labels)
 
@@ -49,7 +57,8 @@ def _labels(system, kind: str) -> list[str]:
 def _require_signal(system, name: str, kind: str, what: str) -> int:
     labels = _labels(system, kind)
     if name not in labels:
-        raise ValueError(f"{what} must have an {kind} named {name!r}; got {kind}s {labels}")
+        raise ValueError(f"{what} must have an {kind} named {name!r}; got {kind}s "
+                         f"{_short(labels)}")
     return labels.index(name)
 
 
@@ -66,7 +75,7 @@ def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> None
         # an FRD needs one of theta, omega: the other follows from omega = j w theta
         if THETA not in plant.output_labels and OMEGA not in plant.output_labels:
             raise ValueError(f"{what} must have an output named 'theta' or 'omega'; got outputs "
-                             f"{list(plant.output_labels)}")
+                             f"{_short(list(plant.output_labels))}")
         return
     _require_signal(plant, THETA, "output", what)
     _require_signal(plant, OMEGA, "output", what)
@@ -77,7 +86,7 @@ def _check_controller(controller, what: str = "controller") -> None:
         raise TypeError(f"{what} must be a control.StateSpace; got {type(controller).__name__}")
     if controller.noutputs != 1 or controller.output_labels[0] != TORQUE:
         raise ValueError(f"{what} must have exactly one output named 'torque'; got outputs "
-                         f"{list(controller.output_labels)}")
+                         f"{_short(list(controller.output_labels))}")
     if controller.dt is True:  # None: a static gain, usable in either time base
         raise ValueError(f"{what} must be continuous (dt=0) or have a sample time dt > 0 [s]; "
                          f"got dt={controller.dt}")
@@ -88,8 +97,8 @@ def _measurements(plant, controller) -> list[str]:
     outputs = _labels(plant, "output")
     measured = [name for name in controller.input_labels if name in outputs]
     if not measured:
-        raise ValueError(f"controller inputs {list(controller.input_labels)} contain none of the "
-                         f"plant outputs {outputs}: nothing is fed back")
+        raise ValueError(f"controller inputs {_short(list(controller.input_labels))} contain "
+                         f"none of the plant outputs {_short(outputs)}: nothing is fed back")
     return measured
 
 
@@ -97,8 +106,8 @@ def _reference_inputs(controller, plant_outputs: Sequence[str]) -> list[str]:
     others = [n for n in controller.input_labels if n not in plant_outputs]
     bad = [n for n in others if "ref" not in n]
     if bad:
-        raise ValueError(f"controller inputs {bad} are neither plant outputs nor reference inputs "
-                         "(names containing 'ref')")
+        raise ValueError(f"controller inputs {_short(bad)} are neither plant outputs nor "
+                         "reference inputs (names containing 'ref')")
     return others
 
 

@@ -66,10 +66,12 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.csgraph
 
-__all__ = ["HOLDS", "Simulator", "simulate"]
+__all__ = ["HOLDS", "OVERFLOW_ACTIONS", "Simulator", "simulate"]
 
 #: Accepted input interpolations between samples.
 HOLDS = ("linear", "zero")
+#: What a response that leaves the float64 range does (see Simulator.run).
+OVERFLOW_ACTIONS = ("raise", "stop")
 
 # Relative tolerance on the spacing of the time vector.
 _SPACING_RTOL = 1e-6
@@ -393,8 +395,8 @@ class Simulator:
             self._Fx = Fx
         return self._Fx
 
-    def run(self, T, U=None, X0=None, *, squeeze: bool | None = None
-            ) -> control.TimeResponseData:
+    def run(self, T, U=None, X0=None, *, squeeze: bool | None = None,
+            on_overflow: str = "raise") -> control.TimeResponseData:
         """Simulate on the time grid ``T`` (step ``self.dt``).
 
         Parameters
@@ -412,6 +414,11 @@ class Simulator:
         squeeze : bool, optional
             As in :func:`control.forced_response` (default: 1-D outputs for
             a SISO system, 2-D otherwise).
+        on_overflow : {"raise", "stop"}
+            What a response that leaves the float64 range (an unstable
+            system, |state| or |output| beyond 1e250) does: ``"raise"``
+            (default) a FloatingPointError; ``"stop"`` end the response at
+            the last sample before it, with ``diverged_at`` set.
 
         Returns
         -------
@@ -421,21 +428,32 @@ class Simulator:
             shapes are those :func:`control.forced_response` returns.  The
             states, O(n^2) per sample, are filled in on first use (a
             subclass of TimeResponseData does it), so a caller that reads
-            only the outputs pays O(n) per sample.
+            only the outputs pays O(n) per sample.  Attribute
+            ``diverged_at`` [s]: None, or (with ``on_overflow="stop"``) the
+            time of the first sample that left the float range; the
+            response then holds the samples before it only.
 
         Raises
         ------
         ValueError
-            Bad ``T``, ``U`` or ``X0`` (see :func:`simulate`), or a step
-            other than ``self.dt``.
+            Bad ``T``, ``U`` or ``X0`` (see :func:`simulate`), a step other
+            than ``self.dt``, an unknown ``on_overflow``.
         FloatingPointError
-            The response of an unstable system overflows float64.
+            The response of an unstable system overflows float64 (with
+            ``on_overflow="raise"``, or at the very first sample).
         """
+        if on_overflow not in OVERFLOW_ACTIONS:
+            raise ValueError(f"on_overflow must be one of {OVERFLOW_ACTIONS}; got "
+                             f"{on_overflow!r:.100}")
         T, U, X0 = self._check_run_arguments(T, U, X0)
-        fill_states, Y = self._propagate(U, X0, with_states=True)
+        fill_states, Y = self._propagate(U, X0, with_states=True,
+                                         stop=on_overflow == "stop")
+        n_kept = Y.shape[1]
+        diverged_at = float(T[n_kept]) if n_kept < T.size else None
+        T, U = T[:n_kept], U[:, :n_kept]
         sys = self.system
         return _SimulatedResponse(
-            fill_states, sys.state_labels,
+            fill_states, sys.state_labels, diverged_at,
             T, Y, None, U, issiso=sys.issiso(),
             output_labels=sys.output_labels,
             input_labels=sys.input_labels, sysname=sys.name,
@@ -476,9 +494,15 @@ class Simulator:
         X0 = _check_initial_state(X0, self.n_states)
         return T, U, X0
 
-    def _propagate(self, U, X0, *, with_states: bool):
+    def _propagate(self, U, X0, *, with_states: bool, stop: bool = False):
         """Outputs (p, N) from checked U, X0, and a function that computes
-        the states (n, N) when called (None if with_states is False)."""
+        the states (n, N) when called (None if with_states is False).
+
+        With ``stop`` a response that leaves the float range (|x| or |y| >=
+        1e250, or not finite) ends at the last sample before (N is then
+        smaller than the number of inputs' samples); without, that raises
+        FloatingPointError.
+        """
         maps = self._chunk_maps(with_states)
         n, m, p = self.n_states, self.n_inputs, self.n_outputs
         L = maps.L
@@ -510,26 +534,39 @@ class Simulator:
                     np.subtract(XsT[c], XsT[c] @ maps.DeltaT, out=XsT[c + 1])
         # The fill-in maps are bounded (Ad^t, t < L), so finite chunk starts
         # well inside the float range give finite states and outputs.
-        if not (np.all(np.isfinite(XsT))
-                and np.abs(XsT).max(initial=0.0) < _OVERFLOW):
+        with np.errstate(invalid="ignore"):
+            bad_start = ~(np.isfinite(XsT).all(axis=1)
+                          & (np.abs(XsT).max(axis=1, initial=0.0) < _OVERFLOW))
+        n_good = int(np.argmax(bad_start)) if bad_start.any() else n_chunks
+        if n_good < n_chunks and not stop:
             raise FloatingPointError(
                 "simulation overflowed: the response of this (unstable) "
                 "system exceeds the float64 range on this time grid")
-        M = np.hstack([XsT, U_chunks]) if with_input else XsT
+        n_kept = min(n_samples, n_good * L)
+        M = np.hstack([XsT[:n_good], U_chunks[:n_good]]) if with_input else XsT[:n_good]
         rows = slice(None) if with_input else slice(0, n)
-        YT = M @ maps.Fy[rows]
-        Y = np.ascontiguousarray(YT.reshape(n_padded, p)[:n_samples].T)
-        if not np.all(np.isfinite(Y)):
-            raise FloatingPointError(
-                "simulation overflowed: the outputs of this (unstable) "
-                "system exceed the float64 range on this time grid")
+        with np.errstate(over="ignore", invalid="ignore"):
+            YT = M @ maps.Fy[rows]
+        Y = np.ascontiguousarray(YT.reshape(n_good * L, p)[:n_kept].T)
+        with np.errstate(invalid="ignore"):
+            bad_y = ~(np.isfinite(Y).all(axis=0) & (np.abs(Y).max(axis=0, initial=0.0) < _OVERFLOW))
+        if bad_y.any():
+            if not stop:
+                raise FloatingPointError(
+                    "simulation overflowed: the outputs of this (unstable) "
+                    "system exceed the float64 range on this time grid")
+            n_kept = int(np.argmax(bad_y))
+            Y = Y[:, :n_kept]
+        if n_kept == 0:
+            raise FloatingPointError("simulation overflowed at the first sample: the "
+                                     "initial state or input exceeds the float64 range")
         if not with_states:
             return None, Y
 
         def fill_states():
             # (n, N), an F-ordered view of the sample-major product.
             XT = M @ self._state_fill_map()[rows]
-            return XT.reshape(n_padded, n)[:n_samples].T
+            return XT.reshape(n_good * L, n)[:n_kept].T
         return fill_states, Y
 
 
@@ -544,9 +581,12 @@ class _SimulatedResponse(control.TimeResponseData):
 
     _fill_states = None
     _states = None
+    #: Time [s] of the first sample that left the float range, or None.
+    diverged_at = None
 
-    def __init__(self, fill_states, state_labels, *args, **kwargs):
+    def __init__(self, fill_states, state_labels, diverged_at, *args, **kwargs):
         super().__init__(*args, **kwargs)       # states=None: set below
+        self.diverged_at = diverged_at
         self._fill_states = fill_states
         self.nstates = len(state_labels)
         self.state_labels = list(state_labels)
@@ -572,8 +612,8 @@ class _SimulatedResponse(control.TimeResponseData):
 
 
 def simulate(system: control.StateSpace, T, U=None, X0=None, *,
-             hold: str = "linear", squeeze: bool | None = None
-             ) -> control.TimeResponseData:
+             hold: str = "linear", squeeze: bool | None = None,
+             on_overflow: str = "raise") -> control.TimeResponseData:
     """Exact time response of a continuous-time StateSpace.
 
     A drop-in replacement for :func:`control.forced_response` on
@@ -606,6 +646,11 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
     squeeze : bool, optional
         As in :func:`control.forced_response` (default: 1-D outputs for a
         SISO system, 2-D otherwise).
+    on_overflow : {"raise", "stop"}
+        A response that leaves the float64 range (an unstable system):
+        FloatingPointError (default), or ``"stop"``: the response ends at
+        the last sample before, ``response.diverged_at`` [s] the time of
+        the first sample past it (see :meth:`Simulator.run`).
 
     Returns
     -------
@@ -622,7 +667,8 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
         Discrete-time system, non-finite or badly shaped ``T``, ``U`` or
         ``X0``, uneven ``T``, unknown ``hold``.
     FloatingPointError
-        The response of an unstable system overflows float64.
+        The response of an unstable system overflows float64 (with
+        ``on_overflow="raise"``).
 
     See Also
     --------
@@ -636,7 +682,8 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
     _check_system(system)
     T = _check_time(T)
     dt = (T[-1] - T[0]) / (T.size - 1)
-    return Simulator(system, dt, hold=hold).run(T, U, X0, squeeze=squeeze)
+    return Simulator(system, dt, hold=hold).run(T, U, X0, squeeze=squeeze,
+                                                on_overflow=on_overflow)
 
 
 # --------------------------------------------------------------------------

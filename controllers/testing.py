@@ -48,8 +48,12 @@ def _as_metrics(item, what: str, angle, duration, t_final) -> dict[str, float]:
     if isinstance(item, Mapping):
         out = {}
         for key, value in item.items():
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise TypeError(f"{what}[{key!r}] must be a number; got {type(value).__name__}")
+            if value is None or isinstance(value, bool):
+                out[str(key)] = value  # a flag, or a metric of a diverged response
+                continue
+            if not isinstance(value, (int, float)):
+                raise TypeError(f"{what}[{key!r}] must be a number, a bool or None; got "
+                                f"{type(value).__name__}")
             out[str(key)] = float(value)
         return out
     if isinstance(item, control.StateSpace):
@@ -68,8 +72,9 @@ def compare_metrics(actual: Mapping[str, float], expected: Mapping[str, float], 
     """Compare metric dicts; return (all within tolerance, readable table).
 
     A metric passes if |actual - expected| <= atol + rtol |expected| (as numpy.isclose), or both
-    are the same infinity; a metric missing on either side fails. ``metrics`` defaults to every
-    key of ``expected``.
+    are the same infinity; a flag (``diverged``) or a None (a metric of a diverged response, a
+    loop that did not settle) passes only if equal on both sides; a metric missing on either side
+    fails. ``metrics`` defaults to every key of ``expected``.
     """
     names = list(expected) if metrics is None else list(metrics)
     if not names:
@@ -78,11 +83,17 @@ def compare_metrics(actual: Mapping[str, float], expected: Mapping[str, float], 
     for name in names:
         r = _tolerance(rtol, name, "rtol", DEFAULT_RTOL)
         a_tol = _tolerance(atol, name, "atol", DEFAULT_ATOL)
-        a, e = actual.get(name), expected.get(name)
-        if a is None or e is None:
-            rows.append((name, METRIC_UNITS.get(name, ""), a if a is not None else "missing",
-                         e if e is not None else "missing", None, None, None, "FAIL"))
+        if name not in actual or name not in expected:
+            rows.append((name, METRIC_UNITS.get(name, ""), actual.get(name, "missing"),
+                         expected.get(name, "missing"), None, None, None, "FAIL"))
             ok = False
+            continue
+        a, e = actual[name], expected[name]
+        if any(v is None or isinstance(v, bool) for v in (a, e)):
+            passed = a == e and type(a) is type(e)
+            ok &= passed
+            rows.append((name, METRIC_UNITS.get(name, ""), a, e, None, None, None,
+                         "PASS" if passed else "FAIL"))
             continue
         diff, rel = difference_columns(a, e)
         tol = a_tol + r * abs(e) if math.isfinite(e) else 0.0

@@ -1,4 +1,15 @@
-"""Closed-loop time responses (slew, step, disturbance) and their metrics."""
+"""Closed-loop time responses (slew, step, disturbance) and their metrics.
+
+Bounded work: a response has t_final / dt + 1 samples, each holding every output and input of
+the loop; more than ``max_samples`` (default MAX_SAMPLES) are refused before anything is
+allocated, with the estimate in the message.
+
+Divergence is a result: a loop that is unstable (on a truth model, say) leaves the float64
+range in a long enough run. Its response then stops at the last sample before (the
+simulation is not continued into inf and NaN), and ``response.diverged_at`` [s] is the time of
+the first sample past the range (None for a response that did not diverge). Its metrics are
+None, with ``diverged`` True and ``diverged_at`` set (see :func:`metrics`).
+"""
 from __future__ import annotations
 
 import math
@@ -6,11 +17,12 @@ import math
 import control
 import numpy as np
 
-from .signals import THETA, THETA_REF, TIP_SUFFIX, TORQUE, _require_signal
-from .simulate import simulate
+from .signals import (THETA, THETA_REF, TIP_SUFFIX, TORQUE, _real_number, _require_signal,
+                      _short)
+from .simulate import _OVERFLOW, simulate
 
-__all__ = ["METRIC_UNITS", "slew_profile", "slew", "step_response", "disturbance_response",
-           "metrics"]
+__all__ = ["METRIC_UNITS", "MAX_SAMPLES", "slew_profile", "slew", "step_response",
+           "disturbance_response", "metrics"]
 
 #: Units of the metrics returned by :func:`metrics` and :func:`margins` (for tables).
 METRIC_UNITS: dict[str, str] = {
@@ -20,33 +32,79 @@ METRIC_UNITS: dict[str, str] = {
     "peak_tip_deflection": "m",
     "peak_attitude_error": "rad",
     "final_attitude_error": "rad",
+    "diverged": "-",
+    "diverged_at": "s",
     "gain_margin": "dB",
     "phase_margin": "deg",
     "modulus_margin": "1",
 }
 
+#: Most samples a time response may have unless the caller raises ``max_samples``: 1e7
+#: samples of a loop with 10 outputs and inputs hold 0.8 GB of float64.
+MAX_SAMPLES = 10_000_000
+
 
 def _simulate(system, T, U):
-    """Time response: controllers.simulate (exact, continuous) or forced_response (digital)."""
-    if system.isdtime(strict=True):
-        return control.forced_response(system, T, U, squeeze=False)
-    return simulate(system, T, U)
+    """Time response that stops where it leaves the float range (``diverged_at`` set):
+    controllers.simulate (exact, continuous) or forced_response (digital)."""
+    if not system.isdtime(strict=True):
+        return simulate(system, T, U, on_overflow="stop")
+    with np.errstate(over="ignore", invalid="ignore"):
+        response = control.forced_response(system, T, U, squeeze=False)
+    n_out, n_states = system.noutputs, system.nstates
+    y = np.asarray(response.y, dtype=float).reshape(n_out, -1)
+    x = np.asarray(response.x, dtype=float).reshape(n_states, -1)
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.isfinite(y).all(axis=0) & (np.abs(y).max(axis=0, initial=0.0) < _OVERFLOW)
+                & np.isfinite(x).all(axis=0) & (np.abs(x).max(axis=0, initial=0.0) < _OVERFLOW))
+    if not bad.any():
+        response.diverged_at = None
+        return response
+    k = int(np.argmax(bad))
+    if k == 0:
+        raise FloatingPointError("simulation overflowed at the first sample: the initial state "
+                                 "or input exceeds the float64 range")
+    t = np.asarray(response.t, dtype=float)
+    u = np.asarray(response.u, dtype=float).reshape(system.ninputs, -1)
+    stopped = control.TimeResponseData(
+        t[:k], y[:, :k], x[:, :k], u[:, :k], issiso=system.issiso(),
+        output_labels=list(system.output_labels), state_labels=list(system.state_labels),
+        input_labels=list(system.input_labels), sysname=system.name,
+        title="Simulated response for " + system.name, trace_types=["forced"],
+        plot_inputs=True, squeeze=False)
+    stopped.diverged_at = float(t[k])
+    return stopped
 
 
-def _time_grid(system, t_final: float, dt: float | None, default_dt: float) -> np.ndarray:
+def _time_grid(system, t_final, dt, default_dt: float, max_samples) -> np.ndarray:
+    """Sample times 0, dt, ..., <= t_final, refused beyond max_samples before allocation."""
+    t_final = _real_number(t_final, "t_final", "s")
     if not (np.isfinite(t_final) and t_final > 0):
-        raise ValueError(f"t_final must be positive and finite [s]; got {t_final}")
+        raise ValueError(f"t_final must be positive and finite [s]; got {t_final:.6g}")
+    limit = MAX_SAMPLES if max_samples is None else _real_number(max_samples, "max_samples",
+                                                                 "1")
+    if not limit >= 2:
+        raise ValueError(f"max_samples must be at least 2; got {limit:.6g}")
     if system.isdtime(strict=True):
         step = float(system.dt)
-        if dt is not None and not math.isclose(dt, step, rel_tol=1e-9):
-            raise ValueError(f"dt must equal the digital loop's sample time {step} [s]; got {dt}")
+        if dt is not None and not math.isclose(_real_number(dt, "dt", "s"), step, rel_tol=1e-9):
+            raise ValueError(f"dt must equal the digital loop's sample time {step} [s]; got "
+                             f"{float(dt):.6g}")
     else:
-        step = default_dt if dt is None else float(dt)
+        step = default_dt if dt is None else _real_number(dt, "dt", "s")
         if not (np.isfinite(step) and step > 0):
-            raise ValueError(f"dt must be positive and finite [s]; got {dt}")
+            raise ValueError(f"dt must be positive and finite [s]; got {step:.6g}")
+    n_float = t_final / step + 1.0
+    if n_float > limit:
+        signals = system.noutputs + system.ninputs
+        raise ValueError(
+            f"t_final / dt = {t_final:.4g} s / {step:.4g} s gives {n_float:.4g} samples "
+            f"(~{n_float * signals * 8 / 1e9:.3g} GB for {signals} signals), more than "
+            f"max_samples = {limit:.4g} (controllers.timeresp.MAX_SAMPLES by default): use a "
+            "larger dt or a shorter t_final, or raise max_samples explicitly")
     n = int(math.floor(t_final / step + 1e-9)) + 1
     if n < 2:
-        raise ValueError(f"t_final {t_final} [s] must exceed one time step {step} [s]")
+        raise ValueError(f"t_final {t_final:.6g} [s] must exceed one time step {step:.6g} [s]")
     return np.arange(n, dtype=float) * step
 
 
@@ -56,6 +114,16 @@ def _check_closed_loop(closed_loop) -> None:
                         f"{type(closed_loop).__name__}")
     for name in (THETA, TORQUE):
         _require_signal(closed_loop, name, "output", "closed_loop")
+
+
+def _check_slew(angle, duration) -> tuple[float, float]:
+    angle = _real_number(angle, "angle", "rad")
+    duration = _real_number(duration, "duration", "s")
+    if not (np.isfinite(angle) and angle != 0):
+        raise ValueError(f"angle must be non-zero and finite [rad]; got {angle:.6g}")
+    if not (np.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be positive and finite [s]; got {duration:.6g}")
+    return angle, duration
 
 
 def slew_profile(t: np.ndarray, angle: float, duration: float) -> np.ndarray:
@@ -94,7 +162,8 @@ def _inputs(closed_loop, n_t: int, **rows: np.ndarray) -> np.ndarray:
 
 
 def slew(closed_loop: control.StateSpace, angle: float, duration: float, *,
-         t_final: float | None = None, dt: float | None = None) -> control.TimeResponseData:
+         t_final: float | None = None, dt: float | None = None,
+         max_samples: int | None = None) -> control.TimeResponseData:
     """Response of a closed loop to a cycloidal slew of ``angle`` in ``duration``.
 
     Parameters
@@ -112,27 +181,29 @@ def slew(closed_loop: control.StateSpace, angle: float, duration: float, *,
         The continuous simulation is exact for the piecewise-linear reference between samples,
         but peaks between samples are not seen: to resolve the peak tip deflection of a mode at
         w rad/s take dt well below pi / w.
+    max_samples : int, optional
+        Most samples allowed (default MAX_SAMPLES); more raise ValueError before any work.
 
     Returns
     -------
     control.TimeResponseData
         Outputs of the closed loop (``theta``, ``omega``, ``torque``, tip deflections, ...),
-        inputs (``theta_ref`` profile, zero disturbances).
+        inputs (``theta_ref`` profile, zero disturbances). ``diverged_at`` [s]: None, or the
+        time at which an unstable loop left the float64 range; the response then ends at the
+        sample before (see the module docstring).
     """
     _check_closed_loop(closed_loop)
     _require_signal(closed_loop, THETA_REF, "input", "closed_loop")
-    if not (np.isfinite(angle) and angle != 0):
-        raise ValueError(f"angle must be non-zero and finite [rad]; got {angle}")
-    if not (np.isfinite(duration) and duration > 0):
-        raise ValueError(f"duration must be positive and finite [s]; got {duration}")
-    t_final = 3.0 * duration if t_final is None else float(t_final)
-    T = _time_grid(closed_loop, t_final, dt, duration / 500.0)
+    angle, duration = _check_slew(angle, duration)
+    t_final = 3.0 * duration if t_final is None else t_final
+    T = _time_grid(closed_loop, t_final, dt, duration / 500.0, max_samples)
     U = _inputs(closed_loop, T.size, theta_ref=slew_profile(T, angle, duration))
     return _simulate(closed_loop, T, U)
 
 
 def step_response(closed_loop: control.StateSpace, *, amplitude: float = 1.0,
-                  t_final: float = 10.0, dt: float | None = None) -> control.TimeResponseData:
+                  t_final: float = 10.0, dt: float | None = None,
+                  max_samples: int | None = None) -> control.TimeResponseData:
     """Response to a step of ``amplitude`` [rad] in theta_ref at t = 0.
 
     Parameters
@@ -142,13 +213,20 @@ def step_response(closed_loop: control.StateSpace, *, amplitude: float = 1.0,
     t_final : float, s
     dt : float, s, optional
         Default t_final / 2000.
+    max_samples : int, optional
+        Most samples allowed (default MAX_SAMPLES).
+
+    Returns
+    -------
+    control.TimeResponseData
+        With ``diverged_at`` as for :func:`slew`.
     """
-    return _step_on(closed_loop, THETA_REF, amplitude, "rad", t_final, dt)
+    return _step_on(closed_loop, THETA_REF, amplitude, "rad", t_final, dt, max_samples)
 
 
 def disturbance_response(closed_loop: control.StateSpace, input: str = "disturbance_torque", *,
-                         amplitude: float = 1.0, t_final: float = 10.0, dt: float | None = None
-                         ) -> control.TimeResponseData:
+                         amplitude: float = 1.0, t_final: float = 10.0, dt: float | None = None,
+                         max_samples: int | None = None) -> control.TimeResponseData:
     """Response to a step of ``amplitude`` on a disturbance input (theta_ref = 0).
 
     Parameters
@@ -161,19 +239,28 @@ def disturbance_response(closed_loop: control.StateSpace, input: str = "disturba
     t_final : float, s
     dt : float, s, optional
         Default t_final / 2000.
+    max_samples : int, optional
+        Most samples allowed (default MAX_SAMPLES).
+
+    Returns
+    -------
+    control.TimeResponseData
+        With ``diverged_at`` as for :func:`slew`.
     """
-    return _step_on(closed_loop, input, amplitude, "input's unit", t_final, dt)
+    return _step_on(closed_loop, input, amplitude, "input's unit", t_final, dt, max_samples)
 
 
-def _step_on(closed_loop, input: str, amplitude: float, unit: str, t_final: float,
-             dt: float | None) -> control.TimeResponseData:
+def _step_on(closed_loop, input: str, amplitude, unit: str, t_final, dt, max_samples
+             ) -> control.TimeResponseData:
     """Step of ``amplitude`` on one closed-loop input at t = 0, every other input zero."""
     _check_closed_loop(closed_loop)
     _require_signal(closed_loop, input, "input", "closed_loop")
+    amplitude = _real_number(amplitude, "amplitude", unit)
     if not (np.isfinite(amplitude) and amplitude != 0):
-        raise ValueError(f"amplitude must be non-zero and finite [{unit}]; got {amplitude}")
-    T = _time_grid(closed_loop, t_final, dt, t_final / 2000.0)
-    U = _inputs(closed_loop, T.size, **{input: np.full(T.size, float(amplitude))})
+        raise ValueError(f"amplitude must be non-zero and finite [{unit}]; got {amplitude:.6g}")
+    t_final = _real_number(t_final, "t_final", "s")
+    T = _time_grid(closed_loop, t_final, dt, t_final / 2000.0, max_samples)
+    U = _inputs(closed_loop, T.size, **{input: np.full(T.size, amplitude)})
     return _simulate(closed_loop, T, U)
 
 
@@ -186,14 +273,19 @@ def _trace(response, name: str, kind: str = "output") -> np.ndarray | None:
     return data[labels.index(name)]
 
 
-def _peak(x: np.ndarray) -> float:
-    """max |x|, +inf if any sample is not finite (a diverged response)."""
-    x = np.asarray(x, dtype=float)
-    return float(np.max(np.abs(x))) if np.all(np.isfinite(x)) else math.inf
+def _divergence(response, t: np.ndarray, traces) -> float | None:
+    """The response's diverged_at, or the time of its first non-finite sample, or None."""
+    diverged_at = getattr(response, "diverged_at", None)
+    if diverged_at is not None:
+        return float(diverged_at)
+    finite = np.ones(t.size, dtype=bool)
+    for x in traces:
+        finite &= np.isfinite(x)
+    return None if finite.all() else float(t[int(np.argmin(finite))])
 
 
 def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
-            ) -> dict[str, float]:
+            ) -> dict[str, float | bool | None]:
     """Time-domain metrics of a closed-loop response.
 
     Parameters
@@ -206,15 +298,18 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
 
     Returns
     -------
-    dict of str to float
+    dict of str to float, bool or None
         ``peak_torque`` [N*m] max |torque|; ``peak_attitude_error`` [rad] max |theta - theta_ref|;
         ``final_attitude_error`` [rad] |theta - theta_ref| at the last sample;
         ``peak_tip_deflection`` [m] max |tip deflection| over every ``*tip_deflection`` output
         (only if there is one). If the final reference r_f is non-zero also
         ``overshoot`` [%] = 100 max(0, max(theta/r_f) - 1), and ``settling_time`` [s], the first
         time after which |theta - r_f| <= settling_band |r_f| up to the end of the response
-        (+inf if the last sample is still outside the band: simulate longer).
-        A metric is +inf if the response diverged (non-finite samples); never NaN.
+        (None if the last sample is still outside the band: simulate longer).
+        Always ``diverged`` (bool) and ``diverged_at`` [s]: a response that left the float64
+        range (``response.diverged_at`` set, or non-finite samples) has ``diverged`` True,
+        ``diverged_at`` the time it did, and None for every other metric: the numbers of its
+        finite part would read as those of a loop that settles. Never NaN or inf.
 
     References
     ----------
@@ -223,35 +318,44 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
     """
     if not isinstance(response, control.TimeResponseData):
         raise TypeError(f"response must be a control.TimeResponseData; got {type(response).__name__}")
+    settling_band = _real_number(settling_band, "settling_band", "1")
     if not (0 < settling_band < 1):
         raise ValueError(f"settling_band must be in (0, 1) [fraction of the reference]; "
-                         f"got {settling_band}")
+                         f"got {settling_band:.6g}")
     t = np.asarray(response.t, dtype=float).reshape(-1)
     theta = _trace(response, THETA)
     torque = _trace(response, TORQUE)
     if theta is None or torque is None:
         raise ValueError("response must have outputs 'theta' and 'torque'; got "
-                         f"{list(response.output_labels)}")
+                         f"{_short(list(response.output_labels))}")
     ref = _trace(response, THETA_REF, "input")
     ref = np.zeros_like(theta) if ref is None else ref
-    with np.errstate(invalid="ignore", over="ignore"):
-        error = theta - ref
-        out = {"peak_torque": _peak(torque),
-               "peak_attitude_error": _peak(error),
-               "final_attitude_error": _peak(error[-1:])}
-        tips = [n for n in response.output_labels if n.endswith(TIP_SUFFIX)]
-        if tips:
-            out["peak_tip_deflection"] = max(_peak(_trace(response, n)) for n in tips)
-        r_f = float(ref[-1])
-        if r_f != 0.0:
-            ratio = theta / r_f
-            out["overshoot"] = (math.inf if not np.all(np.isfinite(ratio))
-                                else float(100.0 * max(0.0, np.max(ratio) - 1.0)))
-            outside = np.nonzero(~(np.abs(theta - r_f) <= settling_band * abs(r_f)))[0]
-            if outside.size == 0:
-                out["settling_time"] = float(t[0])
-            elif outside[-1] == t.size - 1:
-                out["settling_time"] = math.inf
-            else:
-                out["settling_time"] = float(t[outside[-1] + 1])
+    tips = [n for n in response.output_labels if n.endswith(TIP_SUFFIX)]
+    r_f = float(ref[-1]) if ref.size else 0.0
+    names = ["peak_torque", "peak_attitude_error", "final_attitude_error"]
+    names += ["peak_tip_deflection"] if tips else []
+    names += ["overshoot", "settling_time"] if r_f != 0.0 else []
+    diverged_at = _divergence(response, t, [theta, torque, ref] + [_trace(response, n)
+                                                                  for n in tips])
+    if diverged_at is not None:
+        return {**{name: None for name in names}, "diverged": True, "diverged_at": diverged_at}
+    error = theta - ref
+    out: dict[str, float | bool | None] = {
+        "peak_torque": float(np.max(np.abs(torque))),
+        "peak_attitude_error": float(np.max(np.abs(error))),
+        "final_attitude_error": float(abs(error[-1]))}
+    if tips:
+        out["peak_tip_deflection"] = max(float(np.max(np.abs(_trace(response, n))))
+                                         for n in tips)
+    if r_f != 0.0:
+        out["overshoot"] = float(100.0 * max(0.0, np.max(theta / r_f) - 1.0))
+        outside = np.nonzero(np.abs(theta - r_f) > settling_band * abs(r_f))[0]
+        if outside.size == 0:
+            out["settling_time"] = float(t[0])
+        elif outside[-1] == t.size - 1:
+            out["settling_time"] = None
+        else:
+            out["settling_time"] = float(t[outside[-1] + 1])
+    out["diverged"] = False
+    out["diverged_at"] = None
     return out

@@ -169,7 +169,8 @@ def test_slew_reaches_angle_and_metrics_keys():
     response = controllers.slew(controllers.close_loop(COLLOCATED, K), 0.2, 20.0, t_final=100.0)
     m = controllers.metrics(response)
     assert set(m) == {"peak_torque", "peak_attitude_error", "final_attitude_error", "overshoot",
-                      "settling_time"}
+                      "settling_time", "diverged", "diverged_at"}
+    assert m["diverged"] is False and m["diverged_at"] is None
     assert m["final_attitude_error"] < 1e-8  # 80 s after the slew, slowest decay e^-0.35 t
     assert 10.0 < m["settling_time"] < 100.0  # may settle before the end of the profile
     assert response.t[-1] == pytest.approx(100.0)
@@ -192,11 +193,18 @@ def test_metrics_on_hand_made_response():
     unsettled = control.TimeResponseData(t, np.vstack([theta[::-1], torque]), inputs=np.ones((1, 6)),
                                          input_labels=["theta_ref"],
                                          output_labels=["theta", "torque"])
-    assert controllers.metrics(unsettled)["settling_time"] == math.inf
+    # not settled by the end: None (no inf in a table), and the loop did not diverge
+    assert controllers.metrics(unsettled)["settling_time"] is None
+    assert controllers.metrics(unsettled)["diverged"] is False
+    # non-finite samples: diverged at the first of them, every other metric None
     diverged = control.TimeResponseData(t, np.vstack([theta, np.where(t > 2, np.inf, torque)]),
                                         inputs=np.ones((1, 6)), input_labels=["theta_ref"],
                                         output_labels=["theta", "torque"])
-    assert controllers.metrics(diverged)["peak_torque"] == math.inf
+    m = controllers.metrics(diverged)
+    assert m["diverged"] is True and m["diverged_at"] == 3.0
+    assert all(m[name] is None for name in ("peak_torque", "peak_attitude_error",
+                                            "final_attitude_error", "overshoot",
+                                            "settling_time"))
     with pytest.raises(ValueError, match="settling_band must be in"):
         controllers.metrics(response, settling_band=2.0)
 

@@ -585,3 +585,27 @@ def test_unstable_overflow_is_an_error_not_inf():
     sys = control.ss([[50.0]], [[1.0]], [[1.0]], [[0.0]])
     with pytest.raises(FloatingPointError, match="overflowed"):
         simulate(sys, np.linspace(0, 100, 1001), X0=[1.0])
+
+
+@pytest.mark.parametrize("n_states", [1, 20])
+def test_overflow_stops_the_response_at_the_last_sample_in_range(n_states):
+    """on_overflow="stop": x' = x from x(0) = 1 is e^t, which passes 1e250 (the overflow
+    threshold) at t = 250 ln 10 = 575.646 s: with a 1 s step the response keeps t = 0..575 and
+    diverged_at = 576 s; the samples kept are the exact ones (e^t to round-off, ~1e-13
+    relative after 575 steps of eps). Chunk lengths differ with n (1 and 20 states)."""
+    A = np.eye(n_states)
+    sys = control.ss(A, np.ones((n_states, 1)), np.eye(n_states)[:1], 0.0)
+    T = np.arange(1001.0)
+    response = simulate(sys, T, X0=np.ones(n_states), on_overflow="stop")
+    assert response.diverged_at == 576.0
+    t = np.asarray(response.t)
+    np.testing.assert_array_equal(t, np.arange(576.0))
+    y = np.asarray(response.y).reshape(-1)
+    np.testing.assert_allclose(y, np.exp(t), rtol=1e-12)
+    assert np.asarray(response.u).shape[-1] == 576
+    assert np.asarray(response.x).shape == (n_states, 576)
+    # a response inside the range is whole, with diverged_at None
+    assert simulate(sys, np.arange(100.0), X0=np.ones(n_states),
+                    on_overflow="stop").diverged_at is None
+    with pytest.raises(ValueError, match="on_overflow must be one of"):
+        simulate(sys, T, on_overflow="ignore")
