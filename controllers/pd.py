@@ -204,8 +204,10 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
         Digital implementation: the continuous controller is discretised with a zero-order hold
         (``control.c2d(..., method="zoh")``) and returned with ``dt = sample_time``;
         :func:`controllers.close_loop` closes it on the ZOH-discretised plant (the
-        sampled-data loop). The sampling frequency must be at least MIN_SAMPLES_PER_CROSSOVER times
-        the continuous design loop's highest gain crossover.
+        sampled-data loop). The sampling frequency must be at least MIN_SAMPLES_PER_CROSSOVER
+        times the continuous loop's rigid-body gain crossover (:func:`check_sample_time`), and
+        the exact sampled loop on the design plant must meet the guarantee below (a flexible
+        mode above the Nyquist frequency can alias into instability).
 
     Returns
     -------
@@ -213,12 +215,31 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
         Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']``; continuous, or discrete
         with ``dt = sample_time``. The gains themselves are given by :func:`pd_gains`.
 
+    Notes
+    -----
+    Guarantee: every pole of the loop on the design plant has Re(s) <= -alpha (s = log(z) / T
+    for the sampled loop), alpha = MARGIN x the loop's spectral scale (its fastest pole or the
+    plant's highest mode, whichever is larger; :mod:`controllers.stability`), except the modes
+    the loop cannot move: undamped (Re >= -alpha) modes whose closed-loop pole stays within
+    alpha of their open-loop eigenvalue, such as the symmetric bending of symmetric wings or
+    the free-tip mode of a long chain. Those are announced by a
+    :class:`~controllers.RemovedModesWarning` (frequency, damping, participation). A PD on
+    collocated theta and omega damps every flexible mode by about zeta wn p, p the mode's
+    participation (:class:`~controllers.FlexibleMode`); a filter's lag, a sampled loop or an
+    extreme natural frequency may not, and the design is then refused with the mode and the
+    parameter to change. The margin is numerical (450 eps relative): it makes the verdict
+    independent of round-off, while the damping the loop adds is set by the specification.
+
     Raises
     ------
     ValueError
         Bad specification (names the parameter and unit), a plant without a rigid-body mode, a
-        roll-off or notch too close to wn, a plant without flexible modes for "first_mode", or a
-        sample time too long for the bandwidth.
+        roll-off or notch too close to wn, a plant without flexible modes for "first_mode", a
+        sample time too long for the bandwidth, a natural frequency whose gains leave float64,
+        or a loop that misses the guarantee on the design plant (names the pole, its frequency
+        and what to change).
+    TypeError
+        A parameter that is not a real number.
 
     References
     ----------
