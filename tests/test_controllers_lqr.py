@@ -199,6 +199,15 @@ def _craft(*appendages):
     return Spacecraft(Hub(100.0, 50.0), mounts)
 
 
+def _design_at_0p1(craft):
+    """The craft's plant and its LQR design with q = (0.01 J)^2, r = 1: rigid-body bandwidth
+    (q / (r J^2))^(1/4) = 0.1 rad/s."""
+    plant = craft.plant()
+    J = craft.inertia
+    return plant, lqr_design(plant, attitude_weight=(J * 0.01) ** 2, rate_weight=0.0,
+                             torque_weight=1.0)
+
+
 def _loop_poles_outside_removed(plant, design):
     """Closed-loop poles of the design's controller on the whole plant, without those that
     stay within the margin of a removed mode's open-loop eigenvalue (+-j w, undamped)."""
@@ -229,10 +238,7 @@ def test_lqr_on_undamped_beam_with_many_modes(n_modes):
     +2.9e-13: the prescribed degree of stability puts every pole at Re <= -margin (2e-10 1/s
     here, 1e-13 x the highest mode 1978 rad/s), whatever the thread count."""
     craft = _craft(_rod().truncated(n_modes))
-    plant = craft.plant()
-    J = craft.inertia
-    design = lqr_design(plant, attitude_weight=(J * 0.01) ** 2, rate_weight=0.0,
-                        torque_weight=1.0)
+    plant, design = _design_at_0p1(craft)
     assert design.removed_modes == ()
     _assert_guarantee(plant, design)
     poles = controllers.close_loop(plant, design.controller).poles()
@@ -251,11 +257,8 @@ def test_lqr_on_25_body_chain_leaves_its_free_tip_mode_out():
     from appendages import HingedChain
 
     craft = _craft(HingedChain.rfem(_rod(), 25))
-    plant = craft.plant()
-    J = craft.inertia
     with pytest.warns(controllers.RemovedModesWarning, match=r"lqr: 1 mode.* 656\.25 rad/s"):
-        design = lqr_design(plant, attitude_weight=(J * 0.01) ** 2, rate_weight=0.0,
-                            torque_weight=1.0)
+        plant, design = _design_at_0p1(craft)
     (mode,) = design.removed_modes
     assert mode.frequency == pytest.approx(656.25, abs=0.01) and mode.damping_ratio == 0.0
     assert mode.participation < controllers.INFLUENCE_TOL
@@ -278,10 +281,7 @@ def test_lqr_on_undamped_plants_with_large_hub_ratios(ratio):
     rod = _rod()
     craft = Spacecraft(Hub(100.0 * ratio, ratio * rod.inertia),
                        [Mount(rod.truncated(8), (0.5, 0.0), 0.0)])
-    plant = craft.plant()
-    J = craft.inertia
-    design = lqr_design(plant, attitude_weight=(J * 0.01) ** 2, rate_weight=0.0,
-                        torque_weight=1.0)
+    plant, design = _design_at_0p1(craft)
     assert design.removed_modes == ()
     _assert_guarantee(plant, design)
 
@@ -363,11 +363,8 @@ def test_200_body_chain_tip_mode_is_the_only_removed_one():
     from appendages.chain import HingedChain
 
     craft = _craft(HingedChain.rfem(_rod(), 200))
-    plant = craft.plant()
-    J = craft.inertia
     with pytest.warns(controllers.RemovedModesWarning):
-        design = lqr_design(plant, attitude_weight=(J * 0.01) ** 2, rate_weight=0.0,
-                            torque_weight=1.0)
+        plant, design = _design_at_0p1(craft)
     (mode,) = design.removed_modes
     assert mode.frequency == pytest.approx(45118.33, abs=0.01)
     assert design.design_plant.nstates == plant.nstates - 2
