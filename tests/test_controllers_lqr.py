@@ -289,7 +289,7 @@ def test_lqr_on_undamped_plants_with_large_hub_ratios(ratio):
 def test_modal_correction_moves_one_mode_and_no_other():
     """M - G dK: the flagged pair moves to the target exactly (to round-off of the 2 x 2
     placement, 1e-12 relative), the other eigenvalues stay (left invariant subspace)."""
-    from controllers.lqr import _modal_correction
+    from controllers.riccati import _modal_correction
 
     rng = np.random.default_rng(11)
     lam = [complex(-1.0, 2.0), complex(1e-14, 7.0), complex(-3.0, 0.5)]
