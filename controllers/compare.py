@@ -104,12 +104,17 @@ class Comparison:
 
     @property
     def rows(self) -> list[tuple[str, str, float, float, float, float]]:
-        """(metric, unit, design, truth, |truth - design|, relative difference) per metric."""
+        """(metric, unit, design, truth, |truth - design|, relative difference) per metric.
+
+        Every metric of either loop, in the design loop's order (``diverged_at`` exists only for
+        a loop that diverged; the other side shows None there)."""
+        names = list(self.design_metrics) + [n for n in self.truth_metrics
+                                             if n not in self.design_metrics]
+        names = [n for n in names if n != "diverged_at"] + (
+            ["diverged_at"] if self.diverged else [])
         out = []
-        for name in self.design_metrics:
-            if name not in self.truth_metrics:
-                continue
-            d, t = self.design_metrics[name], self.truth_metrics[name]
+        for name in names:
+            d, t = self.design_metrics.get(name), self.truth_metrics.get(name)
             out.append((name, METRIC_UNITS.get(name, ""), d, t, *difference_columns(t, d)))
         return out
 

@@ -306,10 +306,10 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
         ``overshoot`` [%] = 100 max(0, max(theta/r_f) - 1), and ``settling_time`` [s], the first
         time after which |theta - r_f| <= settling_band |r_f| up to the end of the response
         (None if the last sample is still outside the band: simulate longer).
-        Always ``diverged`` (bool) and ``diverged_at`` [s]: a response that left the float64
-        range (``response.diverged_at`` set, or non-finite samples) has ``diverged`` True,
-        ``diverged_at`` the time it did, and None for every other metric: the numbers of its
-        finite part would read as those of a loop that settles. Never NaN or inf.
+        Always ``diverged`` (bool). A response that left the float64 range
+        (``response.diverged_at`` set, or non-finite samples) has ``diverged`` True, also
+        ``diverged_at`` [s], the time it did, and None for every other metric: the numbers of
+        its finite part would read as those of a loop that settles. Never NaN or inf.
 
     References
     ----------
@@ -357,5 +357,4 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
         else:
             out["settling_time"] = float(t[outside[-1] + 1])
     out["diverged"] = False
-    out["diverged_at"] = None
     return out

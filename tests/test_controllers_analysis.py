@@ -169,8 +169,8 @@ def test_slew_reaches_angle_and_metrics_keys():
     response = controllers.slew(controllers.close_loop(COLLOCATED, K), 0.2, 20.0, t_final=100.0)
     m = controllers.metrics(response)
     assert set(m) == {"peak_torque", "peak_attitude_error", "final_attitude_error", "overshoot",
-                      "settling_time", "diverged", "diverged_at"}
-    assert m["diverged"] is False and m["diverged_at"] is None
+                      "settling_time", "diverged"}
+    assert m["diverged"] is False  # 'diverged_at' only when it did
     assert m["final_attitude_error"] < 1e-8  # 80 s after the slew, slowest decay e^-0.35 t
     assert 10.0 < m["settling_time"] < 100.0  # may settle before the end of the profile
     assert response.t[-1] == pytest.approx(100.0)
