@@ -328,15 +328,15 @@ def _design_model(plant: control.StateSpace, *, critical: float, J: float, what:
     return design, sorted(removed, key=lambda m: m.frequency), np.concatenate(removed_eigs)
 
 
-def _mode_participation(plant, J: float, eigenvalue: complex) -> float:
-    """Participation (see the module docstring) of the plant's mode nearest ``eigenvalue``."""
+def _mode_participations(plant, J: float, eigenvalues) -> list[float]:
+    """Participation (see the module docstring) of the plant's modes nearest ``eigenvalues``
+    (one eigendecomposition for all)."""
     b, c_theta, c_omega = _channel_rows(plant)
     Ab, (d, _) = scipy.linalg.matrix_balance(np.asarray(plant.A, dtype=float), permute=False,
                                              separate=True)
     lam, Wl, Vr = scipy.linalg.eig(Ab, left=True, right=True)
-    i = int(np.argmin(np.abs(lam - eigenvalue)))
-    return _cluster_participation(Ab, lam, Wl, Vr, [i], b / d, c_theta * d, c_omega * d, J,
-                                  0.0)
+    return [_cluster_participation(Ab, lam, Wl, Vr, [int(np.argmin(np.abs(lam - x)))], b / d,
+                                   c_theta * d, c_omega * d, J, 0.0) for x in eigenvalues]
 
 
 def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J: float,
@@ -418,9 +418,10 @@ def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J
                 f"{advise(complex(poles[i]), alpha, scale)}")
         used[j] = True
     excused: list[RemovedMode] = []
-    for j in np.nonzero(used & ~rigid & (lam.imag >= 0))[0]:
+    flexible = np.nonzero(used & ~rigid & (lam.imag >= 0))[0]
+    shares = _mode_participations(plant, J, lam[flexible]) if flexible.size else []
+    for j, p in zip(flexible, shares):
         w = abs(lam[j])
-        p = _mode_participation(plant, J, lam[j])
         excused.append(RemovedMode(
             float(w), 0.0 + float(-lam[j].real / w) if w else 0.0, p, 1,
             "participation <= INFLUENCE_TOL" if p <= INFLUENCE_TOL else

@@ -59,12 +59,24 @@ def _laub(A, B, Q, R, N) -> np.ndarray:
     select = (ev.real < 0).astype(np.int32)
     near = np.nonzero(np.abs(ev.real) <= 1e-9 * max(np.abs(ev).max(), 1.0))[0]
     select[near] = 0
-    free = list(near)
-    while len(free) > 1:
-        i = free.pop(0)
-        j = min(free, key=lambda k: abs(ev[k] + np.conj(ev[i])))
-        free.remove(j)
-        select[i if ev[i].real <= ev[j].real else j] = 1
+    # a pair (x + j y, -x + j y) shares its imaginary part: sorted by it, partners are
+    # neighbours (distinct modes have distinct frequencies); else match greedily
+    order = near[np.argsort(ev[near].imag, kind="stable")]
+    pairs = order[: order.size // 2 * 2].reshape(-1, 2)
+    spread = np.abs(ev[pairs[:, 0]] + np.conj(ev[pairs[:, 1]]))
+    gaps = np.diff(ev[order].imag)
+    if order.size % 2 == 0 and (pairs.size == 0 or np.all(
+            spread < 0.5 * np.concatenate([gaps[1::2], [np.inf]]))):
+        for i, j in pairs:
+            select[i if ev[i].real <= ev[j].real else j] = 1
+        free = []
+    else:
+        free = list(near)
+        while len(free) > 1:
+            i = free.pop(0)
+            j = min(free, key=lambda k: abs(ev[k] + np.conj(ev[i])))
+            free.remove(j)
+            select[i if ev[i].real <= ev[j].real else j] = 1
     if free or select.sum() != n:
         raise ValueError(f"the Hamiltonian has {int(np.sum(ev.real < 0))} of {2 * n} "
                          f"eigenvalues in the open left half-plane, {n} needed")
