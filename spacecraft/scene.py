@@ -4,21 +4,26 @@ A scene names the hub, the appendages (their truth model and their design model)
 fidelity of the truth model, the controllers to tune, the manoeuvre, the outputs wanted, the FMUs
 to export and the report to write. :func:`load_scene` reads a TOML file (or a dict, or a path)
 into a :class:`Scene`, checking every key once, at the boundary: unknown keys, wrong types,
-missing required values, non-positive or NaN physical values and outputs the scene cannot produce
-raise :class:`SceneError` naming the file, the key path (``appendages[1].beam.diameter``) and the
-problem. Inside a Scene every value is in SI units (angles in rad); the file uses degrees for
-angles and Hz for the sample rate, as engineers write them.
+missing required values, values outside their documented range (table "Ranges"), outputs the
+scene cannot produce, and work beyond the documented limits (table "Limits") raise
+:class:`SceneError`, one line naming the file, the key path (``appendages[1].beam.diameter``),
+the unit, the value (shortened to about 100 characters) and what to do. Inside a Scene every
+value is in SI units (angles in rad); the file uses degrees for angles and Hz for the sample
+rate, as engineers write them.
 
 Keys (units in the file; ``*`` required)
 
 =====================================  =========  ==============================================
 key                                    unit       meaning
 =====================================  =========  ==============================================
-``title``                              -          free text shown in the report
+``title``                              -          free text shown in the report (one line,
+                                                  at most limits.string_length characters)
 ``hub.mass`` *                         kg         hub mass
 ``hub.inertia`` *                      kg m^2     hub inertia about its centre of mass
 ``appendages`` *                       -          array of tables, one per appendage (>= 1)
-``appendages[i].name``                 -          identifier; default ``appendage<i+1>``
+``appendages[i].name``                 -          ASCII identifier (``[A-Za-z_][A-Za-z0-9_]*``,
+                                                  at most 64 characters: it names FMU
+                                                  variables); default ``appendage<i+1>``
 ``appendages[i].position``             m          ``[x, y]`` of the attachment point in hub
                                                   axes, from the hub's centre of mass; [0, 0]
 ``appendages[i].direction``            deg        angle of the appendage's axis from hub +x, or
@@ -113,7 +118,75 @@ key                                    unit       meaning
                                                   ``"bode"``, ``"pole_zero"``; default false
 ``report.equivalence``                 -          equivalence table of fitted chains; default
                                                   true when a chain is fitted
+``limits.<name>``                      -          raise (or lower) a work limit (table "Limits")
 =====================================  =========  ==============================================
+
+Ranges (SI units, the file's deg and Hz where it uses them; ``|x|``: either sign)
+
+====================================================  ===================  ==================
+keys                                                  accepted             unit
+====================================================  ===================  ==================
+``hub.mass``                                          1e-3 .. 1e7          kg
+``hub.inertia``                                       1e-6 .. 1e10         kg m^2
+``appendages[i].position``                            |x| <= 1e3           m
+``appendages[i].direction`` (an angle)               |x| <= 360           deg
+``appendages[i].direction`` (a vector)               |x| <= 1e6           -
+``beam.length``                                       1e-2 .. 1e3          m
+``beam.diameter``, ``outer_diameter``, ``width``,     1e-5 .. 10, and at   m
+``thickness``                                         most the length
+                                                      (except width)
+``beam.wall_thickness``                               1e-6 .. outer/2      m
+``beam.density``                                      1 .. 1e5             kg/m^3
+``beam.youngs_modulus``                               1e5 .. 1e13          Pa
+``beam.bending_stiffness``                            1e-6 .. 1e12         N m^2
+``beam.linear_density``                               1e-6 .. 1e5          kg/m
+``beam.damping_ratio``                                0 .. < 1             -
+first bending frequency of a beam (derived)           1e-4 .. 1e5          rad/s
+``chain.lengths``                                     1e-3 .. 1e3          m
+``chain.masses``                                      1e-6 .. 1e7          kg
+``chain.inertias``                                    0 or 1e-12 .. 1e10   kg m^2
+``chain.hinge_stiffnesses``, ``root_stiffness``       1e-6 .. 1e12         N m/rad
+``chain.hinge_dampings``, ``root_damping``            0 or 1e-12 .. 1e12   N m s/rad
+``chain.com_offsets``                                 0 .. body length     m
+``fidelity.tolerance``                                1e-12 .. 0.5         -
+``fidelity.bandwidth_factor``                         1 .. 1e3             -
+``controller.sample_rate``                            1e-3 .. 1e6          Hz
+``controller.pd.natural_frequency``, ``bandwidth``    1e-5 .. 1e3          rad/s
+``controller.pd.damping``                             1e-3 .. 10           -
+``controller.pd.roll_off``, ``notch``                 1e-5 .. 1e6          rad/s
+``controller.lqr.attitude_weight``                    1e-12 .. 1e12        1/rad^2
+``controller.lqr.torque_weight``                      1e-12 .. 1e12        1/(N m)^2
+``controller.lqr.rate_weight``                        0 or 1e-12 .. 1e12   s^2/rad^2
+``controller.lqr.deflection_weight``                  0 or 1e-12 .. 1e12   1/m^2
+``controller.lqr.estimator_speed``                    0.1 .. 100           -
+rigid-body LQR frequency (q / (r J^2))^(1/4), derived 1e-5 .. 1e3          rad/s
+``manoeuvre.slew_angle``                              1e-6 <= |x| <= 360   deg
+``manoeuvre.slew_time``                               1e-3 .. 1e8          s
+``manoeuvre.duration``                                1e-3 .. 1e10         s
+``manoeuvre.step``, ``export.step``                   1e-9 .. 1e6          s
+``manoeuvre.disturbance.amplitude``                   1e-12 <= |x| <= 1e9  N, N m
+``manoeuvre.disturbance.start``                       0 .. < duration      s
+``manoeuvre.disturbance.length``                      1e-9 .. 1e10         s
+====================================================  ===================  ==================
+
+Limits (work a scene may ask for; :mod:`spacecraft.limits` has the measurements behind them).
+Raise one explicitly where you really want more: a ``[limits]`` table in the scene
+(``[limits]`` / ``modes = 800``) or ``--limit modes=800`` on the command line (which wins).
+
+==============  ===========  ==================================================================
+limit           default      bounds
+==============  ===========  ==================================================================
+modes           500          ``fidelity.n_modes``; the search from ``fidelity.tolerance``
+bodies          500          bodies per chain (arrays, ``chain.n_bodies``)
+fit_bodies      12           ``fit.n_bodies`` (a fit is an optimisation: 15 bodies take ~40 s)
+appendages      64           ``appendages`` entries
+states          1200         states of the largest closed loop (estimated upper bound)
+samples         1e7          samples per simulation, ``duration / step + 1`` (and of FMU
+                             reference files)
+memory          2 GiB        bytes held by the time responses (estimated upper bound)
+string_length   4096         characters of ``title``
+file_size       1 MiB        bytes of a scene file (``--limit`` only)
+==============  ===========  ==================================================================
 
 References
 ----------
@@ -126,13 +199,20 @@ from __future__ import annotations
 import dataclasses
 import importlib.resources
 import math
+import numbers
 import os
+import re
 import tomllib
+import unicodedata
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from appendages.interface import FlexsatError
+
+from .limits import LIMIT_UNITS, Limits, estimate_cost
 
 __all__ = [
     "SceneError",
@@ -155,6 +235,10 @@ __all__ = [
     "default_scene",
     "example_scenes",
     "scene_path",
+    "read_limits",
+    "RANGES",
+    "BEAM_FREQUENCY_RANGE",
+    "NAME_LENGTH",
 ]
 
 PLOTS = ("slew", "bode", "pole_zero")
@@ -354,6 +438,7 @@ class Scene:
     outputs: OutputsSpec
     export: ExportSpec
     report: ReportSpec
+    limits: Limits = Limits()
 
     def replace(self, **changes) -> "Scene":
         """A copy with some top-level parts replaced (e.g. ``export=ExportSpec(fmu=False)``)."""
@@ -377,16 +462,118 @@ class Scene:
 
 
 # ---------------------------------------------------------------------------------------------
+# ranges of the values (SI units inside; the file's units where they differ)
+# ---------------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class _Range:
+    """Accepted values of one kind of key: ``lo <= |value| <= hi`` in ``unit``.
+
+    sign: ``"positive"`` (value > 0), ``"non-negative"`` (0 allowed besides the range),
+    ``"signed"`` (either sign, 0 allowed), ``"non-zero"`` (either sign, not 0).
+    ``below``: the upper end is excluded.
+    """
+
+    unit: str
+    lo: float
+    hi: float
+    sign: str = "positive"
+    below: bool = False
+
+
+#: Accepted values per key (without the appendage index). Values outside are refused by name:
+#: they are outside what flexsat's models and numerics are verified for (see the module table).
+RANGES = {
+    "hub.mass": _Range("kg", 1e-3, 1e7),
+    "hub.inertia": _Range("kg*m^2", 1e-6, 1e10),
+    "position": _Range("m", 0.0, 1e3, "signed"),
+    "direction": _Range("deg", 0.0, 360.0, "signed"),
+    "direction vector": _Range("-", 0.0, 1e6, "signed"),
+    "beam.length": _Range("m", 1e-2, 1e3),
+    "beam.section": _Range("m", 1e-5, 10.0),
+    "beam.wall_thickness": _Range("m", 1e-6, 5.0),
+    "beam.density": _Range("kg/m^3", 1.0, 1e5),
+    "beam.youngs_modulus": _Range("Pa", 1e5, 1e13),
+    "beam.bending_stiffness": _Range("N*m^2", 1e-6, 1e12),
+    "beam.linear_density": _Range("kg/m", 1e-6, 1e5),
+    "beam.damping_ratio": _Range("-", 0.0, 1.0, "non-negative", below=True),
+    "chain.lengths": _Range("m", 1e-3, 1e3),
+    "chain.masses": _Range("kg", 1e-6, 1e7),
+    "chain.inertias": _Range("kg*m^2", 1e-12, 1e10, "non-negative"),
+    "chain.hinge_stiffnesses": _Range("N*m/rad", 1e-6, 1e12),
+    "chain.hinge_dampings": _Range("N*m*s/rad", 1e-12, 1e12, "non-negative"),
+    "chain.com_offsets": _Range("m", 1e-12, 1e3, "non-negative"),
+    "chain.root_stiffness": _Range("N*m/rad", 1e-6, 1e12),
+    "chain.root_damping": _Range("N*m*s/rad", 1e-12, 1e12, "non-negative"),
+    "fidelity.tolerance": _Range("-", 1e-12, 0.5),
+    "fidelity.bandwidth_factor": _Range("-", 1.0, 1e3),
+    "controller.sample_rate": _Range("Hz", 1e-3, 1e6),
+    "pd.frequency": _Range("rad/s", 1e-5, 1e3),
+    "pd.damping": _Range("-", 1e-3, 10.0),
+    "pd.filter": _Range("rad/s", 1e-5, 1e6),
+    "lqr.attitude_weight": _Range("1/rad^2", 1e-12, 1e12),
+    "lqr.rate_weight": _Range("s^2/rad^2", 1e-12, 1e12, "non-negative"),
+    "lqr.torque_weight": _Range("1/(N*m)^2", 1e-12, 1e12),
+    "lqr.deflection_weight": _Range("1/m^2", 1e-12, 1e12, "non-negative"),
+    "lqr.estimator_speed": _Range("-", 0.1, 100.0),
+    "manoeuvre.slew_angle": _Range("deg", 1e-6, 360.0, "non-zero"),
+    "manoeuvre.slew_time": _Range("s", 1e-3, 1e8),
+    "manoeuvre.duration": _Range("s", 1e-3, 1e10),
+    "manoeuvre.step": _Range("s", 1e-9, 1e6),
+    "disturbance.amplitude": _Range("N, N*m", 1e-12, 1e9, "non-zero"),
+    "disturbance.start": _Range("s", 1e-12, 1e10, "non-negative"),
+    "disturbance.length": _Range("s", 1e-9, 1e10),
+    "export.step": _Range("s", 1e-9, 1e6),
+}
+
+#: First free-free bending frequency of a beam [rad/s]: a beam outside is refused (its
+#: frequencies would be far from any attitude-control band and the coupled plant ill-scaled).
+BEAM_FREQUENCY_RANGE = (1e-4, 1e5)
+# beta_1 L of the first free-free bending mode (Blevins, Formulas for Natural Frequency and
+# Mode Shape, table 8-1): omega_1 = (beta_1 L)^2 sqrt(EJ / (rho A L^4))
+_BETA1_L = 4.730040745
+
+#: Longest appendage name [characters]: names become FMI variable names and C identifiers.
+NAME_LENGTH = 64
+_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+#: Longest value shown in a message [characters].
+_SHOWN = 100
+
+
+# ---------------------------------------------------------------------------------------------
 # the reader
 # ---------------------------------------------------------------------------------------------
 _MISSING = object()
 
 
-class _Reader:
-    """Pops keys off a table, checking types, and reports problems with file and key path."""
+def _short(text: str, limit: int = _SHOWN) -> str:
+    """``text`` cut to ``limit`` characters, saying how long it was."""
+    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
-    def __init__(self, source: str):
+
+def _shown(value) -> str:
+    """A value for a message: repr (control characters escaped), at most about 100 characters."""
+    try:
+        text = repr(value)
+    except Exception:  # a foreign object whose repr fails: its type is enough
+        text = f"<{type(value).__name__}>"
+    return _short(text)
+
+
+def _key(key) -> str:
+    """A key of the user's file for a key path: as is if plain, else quoted and shortened."""
+    if isinstance(key, str) and re.fullmatch(r"[A-Za-z0-9_-]{1,100}", key):
+        return key
+    return _shown(key)
+
+
+class _Reader:
+    """Pops keys off a table, checking types and ranges, and reports problems with file and key
+    path; ``limits`` bound the sizes (modes, bodies, appendages, strings)."""
+
+    def __init__(self, source: str, limits: Limits | None = None):
         self.source = source
+        self.limits = Limits() if limits is None else limits
 
     def error(self, path: str, problem: str) -> SceneError:
         where = f"{self.source}: " if self.source else ""
@@ -399,7 +586,7 @@ class _Reader:
 
     def done(self, table: dict, path: str, allowed) -> None:
         if table:
-            key = sorted(table)[0]
+            key = _key(sorted(table, key=str)[0])
             full = f"{path}.{key}" if path else key
             raise self.error(full, "unknown key; expected one of " + ", ".join(sorted(allowed)))
 
@@ -411,46 +598,88 @@ class _Reader:
             return default, full
         return table.pop(key), full
 
-    def number(self, table: dict, key: str, path: str, unit: str, *, default=_MISSING,
-               positive: bool = True, allow_zero: bool = False, upper: float | None = None,
-               nonzero: bool = False):
+    def number(self, table: dict, key: str, path: str, kind: str, *, default=_MISSING):
+        """A number of the range ``RANGES[kind]`` (or ``default`` when absent)."""
         value, full = self.take(table, key, path, default)
         if value is default and default is not _MISSING:
             return value
-        return self.check_number(value, full, unit, positive=positive, allow_zero=allow_zero,
-                                 upper=upper, nonzero=nonzero)
+        return self.check_number(value, full, kind)
 
-    def check_number(self, value, full: str, unit: str, *, positive: bool = True,
-                     allow_zero: bool = False, upper: float | None = None,
-                     nonzero: bool = False) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+    def check_number(self, value, full: str, kind: str) -> float:
+        rng = RANGES[kind]
+        unit = rng.unit
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
             raise self.error(full, f"must be a number [{unit}]; got {_kind(value)}")
-        value = float(value)
+        try:
+            value = float(value)
+        except (OverflowError, ValueError):  # an integer beyond the float range
+            raise self.error(full, f"must be finite [{unit}]; got {_shown(value)}") from None
         if not math.isfinite(value):
             raise self.error(full, f"must be finite [{unit}]; got {value!r}")
-        if positive and (value < 0 or (value == 0 and not allow_zero)):
-            what = "non-negative" if allow_zero else "positive"
+        size = abs(value)
+        if rng.sign in ("positive", "non-negative") and value < 0:
+            what = "positive" if rng.sign == "positive" else "non-negative"
             raise self.error(full, f"must be {what} [{unit}]; got {value!r}")
-        if nonzero and value == 0:
-            raise self.error(full, f"must be non-zero [{unit}]; got 0")
-        if upper is not None and value >= upper:
-            raise self.error(full, f"must be below {upper:g} [{unit}]; got {value!r}")
+        if value == 0 and rng.sign in ("positive", "non-zero"):
+            what = "positive" if rng.sign == "positive" else "non-zero"
+            raise self.error(full, f"must be {what} [{unit}]; got 0")
+        if value == 0:
+            return 0.0
+        too_big = size >= rng.hi if rng.below else size > rng.hi
+        if too_big or size < rng.lo:
+            magnitude = "" if rng.sign in ("positive", "non-negative") else " in magnitude"
+            if rng.below and rng.lo == 0:
+                limit = f"must be below {rng.hi:g}{magnitude}"
+            elif rng.lo == 0:
+                limit = f"must be at most {rng.hi:g}{magnitude}"
+            else:
+                limit = f"must lie between {rng.lo:g} and {rng.hi:g}{magnitude}"
+            zero = " (or be 0)" if rng.sign in ("non-negative", "signed") and rng.lo > 0 else ""
+            raise self.error(full, f"{limit} [{unit}]{zero}; got {value!r}")
         return value
 
-    def integer(self, table: dict, key: str, path: str, *, minimum: int, default=_MISSING):
+    def integer(self, table: dict, key: str, path: str, *, minimum: int, limit: str | None = None,
+                default=_MISSING):
+        """An integer >= minimum, at most the limit ``limit`` (a :class:`Limits` field)."""
         value, full = self.take(table, key, path, default)
         if value is default and default is not _MISSING:
+            if limit is not None and value is not None:
+                self.check_limit(full, value, limit)   # a lowered limit applies to defaults
             return value
-        if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
             raise self.error(full, f"must be an integer; got {_kind(value)}")
+        value = int(value)
         if value < minimum:
             raise self.error(full, f"must be at least {minimum}; got {value}")
+        if limit is not None:
+            self.check_limit(full, value, limit)
         return value
+
+    def check_limit(self, full: str, value: int, limit: str, what: str = "") -> None:
+        """Refuse ``value`` above the work limit ``limit``, saying how to raise it."""
+        bound = getattr(self.limits, limit)
+        if value > bound:
+            raise self.error(full, f"{what or _shown(value)}: over the limit {bound:g} "
+                             f"(limits.{limit}, {LIMIT_UNITS[limit][1]}); ask for less, or if "
+                             f"you really want more raise it: [limits] {limit} = N in the "
+                             f"scene, or --limit {limit}=N")
 
     def boolean(self, table: dict, key: str, path: str, default: bool) -> bool:
         value, full = self.take(table, key, path, default)
         if not isinstance(value, bool):
             raise self.error(full, f"must be true or false; got {_kind(value)}")
+        return value
+
+    def text(self, table: dict, key: str, path: str, default: str) -> str:
+        """A free-text string: at most limits.string_length characters, one line."""
+        value, full = self.take(table, key, path, default)
+        if not isinstance(value, str):
+            raise self.error(full, f"must be a string; got {_kind(value)}")
+        self.check_limit(full, len(value), "string_length", f"a text of {len(value)} characters")
+        bad = [c for c in value if unicodedata.category(c) in ("Cc", "Cs", "Zl", "Zp")]
+        if bad:
+            raise self.error(full, f"must be one line of text without control characters; got "
+                             f"{_shown(bad[0])} in {_shown(value)}")
         return value
 
     def choice(self, table: dict, key: str, path: str, choices, default=_MISSING):
@@ -460,7 +689,7 @@ class _Reader:
         if not isinstance(value, str):
             raise self.error(full, f"must be a string, one of {_quoted(choices)}; got {_kind(value)}")
         if value not in choices:
-            raise self.error(full, f"must be one of {_quoted(choices)}; got {value!r}")
+            raise self.error(full, f"must be one of {_quoted(choices)}; got {_shown(value)}")
         return value
 
     def choices(self, table: dict, key: str, path: str, choices, default) -> tuple:
@@ -471,42 +700,51 @@ class _Reader:
         if not isinstance(value, (list, tuple)):
             raise self.error(full, f"must be a string or a list of strings from "
                                    f"{_quoted(choices)}; got {_kind(value)}")
+        if len(value) > len(choices):
+            raise self.error(full, f"must list each of {_quoted(choices)} at most once; got "
+                             f"{len(value)} entries")
         out = []
         for k, item in enumerate(value):
             if not isinstance(item, str) or item not in choices:
-                raise self.error(f"{full}[{k}]", f"must be one of {_quoted(choices)}; got {item!r}")
+                raise self.error(f"{full}[{k}]", f"must be one of {_quoted(choices)}; got "
+                                 f"{_shown(item)}")
             if item in out:
                 raise self.error(f"{full}[{k}]", f"{item!r} is listed twice")
             out.append(item)
         return tuple(out)
 
-    def vector(self, table: dict, key: str, path: str, unit: str, *, default=_MISSING,
-               size: int | None = None, positive: bool = True, allow_zero: bool = False):
+    def vector(self, table: dict, key: str, path: str, kind: str, *, default=_MISSING,
+               size: int | None = None, limit: str | None = None):
+        """An array of numbers of the range ``RANGES[kind]``; its length at most ``limit``."""
         value, full = self.take(table, key, path, default)
         if value is default and default is not _MISSING:
             return value
+        unit = RANGES[kind].unit
         if not isinstance(value, (list, tuple)):
             raise self.error(full, f"must be an array of numbers [{unit}]; got {_kind(value)}")
         if size is not None and len(value) != size:
             raise self.error(full, f"must have {size} entries [{unit}]; got {len(value)}")
         if not value:
             raise self.error(full, f"must not be empty [{unit}]")
-        return tuple(self.check_number(v, f"{full}[{k}]", unit, positive=positive,
-                                       allow_zero=allow_zero) for k, v in enumerate(value))
+        if limit is not None:
+            self.check_limit(full, len(value), limit, f"an array of {len(value)} entries")
+        return tuple(self.check_number(v, f"{full}[{k}]", kind) for k, v in enumerate(value))
 
 
 def _kind(value) -> str:
-    if isinstance(value, bool):
-        return f"boolean {str(value).lower()}"
-    if isinstance(value, (int, float)):
-        return f"number {value!r}"
+    if isinstance(value, (bool, np.bool_)):
+        return f"boolean {str(bool(value)).lower()}"
+    if isinstance(value, numbers.Real):
+        return f"number {_shown(value)}"
+    if isinstance(value, numbers.Number):
+        return f"{_short(type(value).__name__)} {_shown(value)}"
     if isinstance(value, str):
-        return f"string {value!r}"
+        return f"string {_shown(value)}"
     if isinstance(value, Mapping):
         return "a table"
     if isinstance(value, (list, tuple)):
         return f"an array of {len(value)}"
-    return type(value).__name__
+    return _short(type(value).__name__)
 
 
 def _quoted(choices) -> str:
@@ -519,37 +757,68 @@ _SECTION_KEYS = {
     "rectangular": ("width", "thickness"),
     "uniform": ("bending_stiffness", "linear_density"),
 }
-_SECTION_UNITS = {"diameter": "m", "outer_diameter": "m", "wall_thickness": "m", "width": "m",
-                  "thickness": "m", "bending_stiffness": "N*m^2", "linear_density": "kg/m"}
+_SECTION_RANGES = {"diameter": "beam.section", "outer_diameter": "beam.section",
+                   "wall_thickness": "beam.wall_thickness", "width": "beam.section",
+                   "thickness": "beam.section", "bending_stiffness": "beam.bending_stiffness",
+                   "linear_density": "beam.linear_density"}
+# section dimensions in the bending plane: a beam is longer than it is deep
+_IN_PLANE = ("diameter", "outer_diameter", "thickness")
+
+
+def _section_properties(section: str, d: dict, density, youngs) -> tuple[float, float]:
+    """EJ [N m^2] and rho A [kg/m] of a section (the formulas of appendages.Beam's
+    constructors)."""
+    if section == "uniform":
+        return d["bending_stiffness"], d["linear_density"]
+    if section == "rod":
+        area, second_moment = math.pi * d["diameter"]**2 / 4, math.pi * d["diameter"]**4 / 64
+    elif section == "tube":
+        outer, inner = d["outer_diameter"], d["outer_diameter"] - 2 * d["wall_thickness"]
+        area = math.pi * (outer**2 - inner**2) / 4
+        second_moment = math.pi * (outer**4 - inner**4) / 64
+    else:
+        area, second_moment = d["width"] * d["thickness"], d["width"] * d["thickness"]**3 / 12
+    return youngs * second_moment, density * area
 
 
 def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
     t = r.table(data, path)
     section = r.choice(t, "section", path, SECTIONS)
-    length = r.number(t, "length", path, "m")
-    dims = {key: r.number(t, key, path, _SECTION_UNITS[key]) for key in _SECTION_KEYS[section]}
+    length = r.number(t, "length", path, "beam.length")
+    dims = {key: r.number(t, key, path, _SECTION_RANGES[key]) for key in _SECTION_KEYS[section]}
     density = youngs = None
     if section != "uniform":
-        density = r.number(t, "density", path, "kg/m^3")
-        youngs = r.number(t, "youngs_modulus", path, "Pa")
-    damping = r.number(t, "damping_ratio", path, "-", default=0.0, allow_zero=True, upper=1.0)
+        density = r.number(t, "density", path, "beam.density")
+        youngs = r.number(t, "youngs_modulus", path, "beam.youngs_modulus")
+    damping = r.number(t, "damping_ratio", path, "beam.damping_ratio", default=0.0)
     allowed = {"section", "length", "damping_ratio", *_SECTION_KEYS[section]}
     if section != "uniform":
         allowed |= {"density", "youngs_modulus"}
     for key in list(t):
-        if key in _SECTION_UNITS or key in ("density", "youngs_modulus"):
+        if key in _SECTION_RANGES or key in ("density", "youngs_modulus"):
             raise r.error(f"{path}.{key}", f"does not apply to section {section!r}; it needs "
                           + ", ".join(sorted(allowed - {'section'})))
     r.done(t, path, allowed)
     if section == "tube" and dims["wall_thickness"] > dims["outer_diameter"] / 2:
         raise r.error(f"{path}.wall_thickness", "must be at most outer_diameter/2 = "
                       f"{dims['outer_diameter'] / 2:g} [m]; got {dims['wall_thickness']:g}")
+    for key in _IN_PLANE:
+        if key in dims and dims[key] > length:
+            raise r.error(f"{path}.{key}", f"must not exceed the beam's length {length:g} [m] "
+                          f"(a beam is slender); got {dims[key]:g}")
+    bending_stiffness, linear_density = _section_properties(section, dims, density, youngs)
+    omega_1 = _BETA1_L**2 * math.sqrt(bending_stiffness / linear_density) / length**2
+    lo, hi = BEAM_FREQUENCY_RANGE
+    if not lo <= omega_1 <= hi:
+        raise r.error(path, f"first bending frequency {omega_1:.3g} rad/s (from length, section "
+                      f"and material) lies outside [{lo:g}, {hi:g}] rad/s, the range flexsat's "
+                      "models are verified for; check the units of length, section and material")
     return BeamSpec(section, length, tuple(dims.items()), density, youngs, damping)
 
 
-_CHAIN_ARRAYS = {"lengths": "m", "masses": "kg", "inertias": "kg*m^2",
-                 "hinge_stiffnesses": "N*m/rad", "hinge_dampings": "N*m*s/rad",
-                 "com_offsets": "m"}
+_CHAIN_ARRAYS = {"lengths": "chain.lengths", "masses": "chain.masses",
+                 "inertias": "chain.inertias", "hinge_stiffnesses": "chain.hinge_stiffnesses",
+                 "hinge_dampings": "chain.hinge_dampings", "com_offsets": "chain.com_offsets"}
 
 
 def _read_chain(r: _Reader, data, path: str, has_beam: bool) -> ChainSpec:
@@ -559,24 +828,26 @@ def _read_chain(r: _Reader, data, path: str, has_beam: bool) -> ChainSpec:
         from_beam = r.choice(t, "from_beam", path, ("rfem",))
         if not has_beam:
             raise r.error(f"{path}.from_beam", "needs a beam table in the same appendage")
-        n_bodies = r.integer(t, "n_bodies", path, minimum=2)
+        n_bodies = r.integer(t, "n_bodies", path, minimum=2, limit="bodies")
         root_stiffness = None
         root_damping = 0.0
         if root == "hinged":
-            root_stiffness = r.number(t, "root_stiffness", path, "N*m/rad")
-            root_damping = r.number(t, "root_damping", path, "N*m*s/rad", default=0.0,
-                                    allow_zero=True)
+            root_stiffness = r.number(t, "root_stiffness", path, "chain.root_stiffness")
+            root_damping = r.number(t, "root_damping", path, "chain.root_damping", default=0.0)
         r.done(t, path, {"root", "from_beam", "n_bodies"}
                | ({"root_stiffness", "root_damping"} if root == "hinged" else set()))
         return ChainSpec(root=root, from_beam=from_beam, n_bodies=n_bodies,
                          root_stiffness=root_stiffness, root_damping=root_damping)
     values = {}
     for key in ("lengths", "masses", "inertias", "hinge_stiffnesses"):
-        values[key] = r.vector(t, key, path, _CHAIN_ARRAYS[key], allow_zero=key == "inertias")
+        values[key] = r.vector(t, key, path, _CHAIN_ARRAYS[key], limit="bodies")
     for key in ("hinge_dampings", "com_offsets"):
-        values[key] = r.vector(t, key, path, _CHAIN_ARRAYS[key], default=None, allow_zero=True)
+        values[key] = r.vector(t, key, path, _CHAIN_ARRAYS[key], default=None, limit="bodies")
     n = len(values["lengths"])
     n_hinges = n - 1 if root == "rigid" else n
+    if n_hinges < 1:
+        raise r.error(f"{path}.lengths", "must have at least 2 entries (bodies) for root = "
+                      "'rigid', or 1 with root = 'hinged'")
     for key, size in (("masses", n), ("inertias", n), ("hinge_stiffnesses", n_hinges),
                       ("hinge_dampings", n_hinges), ("com_offsets", n)):
         if values[key] is not None and len(values[key]) != size:
@@ -584,6 +855,11 @@ def _read_chain(r: _Reader, data, path: str, has_beam: bool) -> ChainSpec:
                 else f"hinge (root = {root!r})"
             raise r.error(f"{path}.{key}", f"must have {size} entries, one per {what}; got "
                           f"{len(values[key])}")
+    if values["com_offsets"] is not None:
+        for k, (offset, length) in enumerate(zip(values["com_offsets"], values["lengths"])):
+            if offset > length:
+                raise r.error(f"{path}.com_offsets[{k}]", f"must lie on the body, at most its "
+                              f"length {length:g} [m]; got {offset:g}")
     r.done(t, path, {"root", *_CHAIN_ARRAYS, "from_beam"})
     return ChainSpec(root=root, **values)
 
@@ -591,18 +867,20 @@ def _read_chain(r: _Reader, data, path: str, has_beam: bool) -> ChainSpec:
 def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
     t = r.table(data, path)
     name, full = r.take(t, "name", path, f"appendage{index + 1}")
-    if not isinstance(name, str) or not name.isidentifier():
-        raise r.error(full, f"must be an identifier (letters, digits, '_'); got {_kind(name)}")
-    position = r.vector(t, "position", path, "m", default=(0.0, 0.0), size=2, positive=False)
+    if not isinstance(name, str) or not _NAME.fullmatch(name) or len(name) > NAME_LENGTH:
+        raise r.error(full, f"must be an ASCII identifier of at most {NAME_LENGTH} characters "
+                      "(a letter or '_', then letters, digits or '_': it names FMU variables); "
+                      f"got {_kind(name)}")
+    position = r.vector(t, "position", path, "position", default=(0.0, 0.0), size=2)
     direction_value, full = r.take(t, "direction", path, 0.0)
     if isinstance(direction_value, (list, tuple)):
-        vec = r.vector({"direction": direction_value}, "direction", path, "-", size=2,
-                       positive=False)
+        vec = r.vector({"direction": direction_value}, "direction", path, "direction vector",
+                       size=2)
         if vec[0] == 0 and vec[1] == 0:
             raise r.error(full, "must be a non-zero vector")
         direction = math.atan2(vec[1], vec[0])
     else:
-        direction = math.radians(r.check_number(direction_value, full, "deg", positive=False))
+        direction = math.radians(r.check_number(direction_value, full, "direction"))
     beam = _read_beam(r, t.pop("beam"), f"{path}.beam") if "beam" in t else None
     chain = (_read_chain(r, t.pop("chain"), f"{path}.chain", beam is not None)
              if "chain" in t else None)
@@ -626,7 +904,8 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
         if beam is None:
             raise r.error(f"{path}.design", "is 'fit' but there is no beam table to fit")
         ft = r.table(t.pop("fit", {}), f"{path}.fit")
-        n_bodies = r.integer(ft, "n_bodies", f"{path}.fit", minimum=2, default=3)
+        n_bodies = r.integer(ft, "n_bodies", f"{path}.fit", minimum=2, limit="fit_bodies",
+                             default=3)
         match = r.choices(ft, "match", f"{path}.fit", MATCHES, default=list(MATCHES))
         if not match:
             raise r.error(f"{path}.fit.match", "must name at least one criterion")
@@ -647,20 +926,20 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
     types = r.choices(t, "types", path, CONTROLLERS, default=list(present or ("pd",)))
     if not types:
         raise r.error(f"{path}.types", "must name at least one controller")
-    rate = r.number(t, "sample_rate", path, "Hz", default=None)
+    rate = r.number(t, "sample_rate", path, "controller.sample_rate", default=None)
     pd_spec = lqr_spec = None
     if "pd" in types:
         p = f"{path}.pd"
         pt = r.table(t.pop("pd", {}), p)
-        wn = r.number(pt, "natural_frequency", p, "rad/s", default=None)
-        wb = r.number(pt, "bandwidth", p, "rad/s", default=None)
+        wn = r.number(pt, "natural_frequency", p, "pd.frequency", default=None)
+        wb = r.number(pt, "bandwidth", p, "pd.frequency", default=None)
         if (wn is None) == (wb is None):
             raise r.error(p, "give exactly one of natural_frequency [rad/s] or bandwidth [rad/s]")
-        damping = r.number(pt, "damping", p, "-", default=0.7)
-        roll_off = r.number(pt, "roll_off", p, "rad/s", default=None)
+        damping = r.number(pt, "damping", p, "pd.damping", default=0.7)
+        roll_off = r.number(pt, "roll_off", p, "pd.filter", default=None)
         notch_value, full = r.take(pt, "notch", p, None)
         if notch_value is not None and notch_value != "first_mode":
-            notch_value = r.check_number(notch_value, full, "rad/s")
+            notch_value = r.check_number(notch_value, full, "pd.filter")
         r.done(pt, p, {"natural_frequency", "bandwidth", "damping", "roll_off", "notch"})
         pd_spec = PDSpec(wn, wb, damping, roll_off, notch_value)
     elif "pd" in t:
@@ -671,12 +950,13 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
             raise r.error(p, "missing: controller.types lists 'lqr' but there are no weights")
         lt = r.table(t.pop("lqr"), p)
         lqr_spec = LQRSpec(
-            attitude_weight=r.number(lt, "attitude_weight", p, "1/rad^2"),
-            torque_weight=r.number(lt, "torque_weight", p, "1/(N*m)^2"),
-            rate_weight=r.number(lt, "rate_weight", p, "s^2/rad^2", default=0.0, allow_zero=True),
-            deflection_weight=r.number(lt, "deflection_weight", p, "1/m^2", default=None,
-                                       allow_zero=True),
-            estimator_speed=r.number(lt, "estimator_speed", p, "-", default=3.0))
+            attitude_weight=r.number(lt, "attitude_weight", p, "lqr.attitude_weight"),
+            torque_weight=r.number(lt, "torque_weight", p, "lqr.torque_weight"),
+            rate_weight=r.number(lt, "rate_weight", p, "lqr.rate_weight", default=0.0),
+            deflection_weight=r.number(lt, "deflection_weight", p, "lqr.deflection_weight",
+                                       default=None),
+            estimator_speed=r.number(lt, "estimator_speed", p, "lqr.estimator_speed",
+                                     default=3.0))
         r.done(lt, p, {"attitude_weight", "torque_weight", "rate_weight", "deflection_weight",
                        "estimator_speed"})
     elif "lqr" in t:
@@ -687,11 +967,13 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
 
 def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> ManoeuvreSpec:
     t = r.table(data, path)
-    angle = math.radians(r.number(t, "slew_angle", path, "deg", positive=False, nonzero=True))
-    slew_time = r.number(t, "slew_time", path, "s")
-    duration = r.number(t, "duration", path, "s", default=3.0 * slew_time)
+    angle = math.radians(r.number(t, "slew_angle", path, "manoeuvre.slew_angle"))
+    slew_time = r.number(t, "slew_time", path, "manoeuvre.slew_time")
+    duration = r.number(t, "duration", path, "manoeuvre.duration", default=None)
+    duration = 3.0 * slew_time if duration is None else duration
     default_step = sample_time if sample_time is not None else slew_time / 500.0
-    step = r.number(t, "step", path, "s", default=default_step)
+    step = r.number(t, "step", path, "manoeuvre.step", default=None)
+    step = default_step if step is None else step
     if sample_time is not None and not math.isclose(step, sample_time, rel_tol=1e-9):
         raise r.error(f"{path}.step", f"must equal the controller's sample time "
                       f"1/sample_rate = {sample_time:g} s for a digital controller; got {step:g}")
@@ -705,36 +987,110 @@ def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> Manoeuvr
         inputs = ("disturbance_torque", "force_x", "force_y", *(f"{n}_tip_force" for n in names))
         disturbance = DisturbanceSpec(
             input=r.choice(dt_, "input", p, inputs),
-            amplitude=r.number(dt_, "amplitude", p, "N", positive=False, nonzero=True),
-            start=r.number(dt_, "start", p, "s", default=0.0, allow_zero=True),
-            length=r.number(dt_, "length", p, "s", default=None))
+            amplitude=r.number(dt_, "amplitude", p, "disturbance.amplitude"),
+            start=r.number(dt_, "start", p, "disturbance.start", default=0.0),
+            length=r.number(dt_, "length", p, "disturbance.length", default=None))
         r.done(dt_, p, {"input", "amplitude", "start", "length"})
+        if disturbance.start >= duration:
+            raise r.error(f"{p}.start", f"must fall inside the simulated time, before "
+                          f"manoeuvre.duration = {duration:g} [s]; got {disturbance.start:g}")
     r.done(t, path, {"slew_angle", "slew_time", "duration", "step", "disturbance"})
     return ManoeuvreSpec(angle, slew_time, duration, step, disturbance)
 
 
-def _read_scene(data: Mapping, source: str) -> Scene:
+def _limit_value(r: _Reader, value, full: str, name: str):
+    """A limit: a positive integer (``memory``: a positive number of bytes)."""
+    unit = LIMIT_UNITS[name][0]
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise r.error(full, f"must be a positive number [{unit}]; got {_kind(value)}")
+    try:
+        number = float(value)
+    except (OverflowError, ValueError):
+        raise r.error(full, f"must be finite [{unit}]; got {_shown(value)}") from None
+    if not (math.isfinite(number) and number >= 1):
+        raise r.error(full, f"must be a finite number >= 1 [{unit}]; got {_shown(value)}")
+    if name == "memory":
+        return number
+    if number != math.floor(number):
+        raise r.error(full, f"must be a whole number [{unit}]; got {_shown(value)}")
+    return int(number)
+
+
+def read_limits(data: Mapping, source: str = "") -> dict:
+    """Check a mapping of limit overrides (a scene's ``[limits]`` table, ``--limit`` options).
+
+    Returns
+    -------
+    dict
+        ``name -> value`` (int, or float bytes for ``memory``), for :class:`Limits`.
+
+    Raises
+    ------
+    SceneError
+        An unknown limit or a value that is not a positive whole number.
+    """
+    r = _Reader(source)
+    t = r.table(data, "limits")
+    values = {name: _limit_value(r, t.pop(name), f"limits.{name}", name)
+              for name in Limits.names() if name in t}
+    r.done(t, "limits", Limits.names())
+    return values
+
+
+def _check_cost(r: _Reader, scene: Scene) -> None:
+    """Refuse a scene whose estimated work exceeds the limits, naming the key to change."""
+    cost = estimate_cost(scene)
+    limits = r.limits
+    m = scene.manoeuvre
+    if cost.loop_states > limits.states:
+        r.check_limit(cost.loop_key, cost.loop_states, "states",
+                      f"the largest closed loop would have up to {cost.loop_states} states")
+    if m is not None:
+        r.check_limit("manoeuvre.step", cost.samples, "samples",
+                      f"{cost.samples:.4g} samples per simulation (duration {m.duration:g} s / "
+                      f"step {m.step:g} s)")
+        if cost.memory > limits.memory:
+            raise r.error("manoeuvre.step", f"the time responses would take up to "
+                          f"{cost.memory / 2**30:.3g} GiB ({cost.simulations} simulations of "
+                          f"{cost.samples} samples), over limits.memory = "
+                          f"{limits.memory / 2**30:.3g} GiB; lengthen manoeuvre.step, shorten "
+                          "manoeuvre.duration or ask for fewer controllers or fits; or raise "
+                          "limits.memory [bytes] if you really want more")
+    if scene.export.fmu and scene.export.reference_files:
+        step = scene.export.step or m.step
+        stop = m.duration if m is not None else 100.0 * step
+        r.check_limit("export.step", int(stop / step + 1e-9) + 1, "samples",
+                      f"{stop / step:.4g} samples of the FMU reference files (stop {stop:g} s "
+                      f"/ step {step:g} s)")
+
+
+def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) -> Scene:
     r = _Reader(source)
     t = r.table(data, "")
-    title, full = r.take(t, "title", "", "")
-    if not isinstance(title, str):
-        raise r.error(full, f"must be a string; got {_kind(title)}")
+    # the limits first: they bound what the rest may ask for
+    limits = dict(read_limits(t.pop("limits", {}), source)) if "limits" in t else {}
+    limits.update(overrides or {})
+    r.limits = Limits(**limits)
+    title = r.text(t, "title", "", "")
     ht = r.table(r.take(t, "hub", "")[0], "hub")
-    hub = HubSpec(r.number(ht, "mass", "hub", "kg"), r.number(ht, "inertia", "hub", "kg*m^2"))
+    hub = HubSpec(r.number(ht, "mass", "hub", "hub.mass"),
+                  r.number(ht, "inertia", "hub", "hub.inertia"))
     r.done(ht, "hub", {"mass", "inertia"})
     items, full = r.take(t, "appendages", "")
     if not isinstance(items, (list, tuple)) or not items:
         raise r.error(full, "must be a non-empty array of tables ([[appendages]])")
+    r.check_limit(full, len(items), "appendages", f"{len(items)} appendages")
     appendages = tuple(_read_appendage(r, item, f"appendages[{k}]", k)
                        for k, item in enumerate(items))
-    names = [a.name for a in appendages]
-    for k, name in enumerate(names):
-        if name in names[:k]:
-            raise r.error(f"appendages[{k}].name", f"{name!r} is used twice")
+    seen: set = set()
+    for k, a in enumerate(appendages):
+        if a.name in seen:
+            raise r.error(f"appendages[{k}].name", f"{a.name!r} is used twice")
+        seen.add(a.name)
 
     ft = r.table(t.pop("fidelity", {}), "fidelity")
-    n_modes = r.integer(ft, "n_modes", "fidelity", minimum=1, default=None)
-    tolerance = r.number(ft, "tolerance", "fidelity", "-", default=None, upper=1.0)
+    n_modes = r.integer(ft, "n_modes", "fidelity", minimum=1, limit="modes", default=None)
+    tolerance = r.number(ft, "tolerance", "fidelity", "fidelity.tolerance", default=None)
     if n_modes is not None and tolerance is not None:
         raise r.error("fidelity", "give n_modes or tolerance, not both")
     if n_modes is None and tolerance is None:
@@ -742,14 +1098,16 @@ def _read_scene(data: Mapping, source: str) -> Scene:
     fidelity = FidelitySpec(
         n_modes=n_modes, tolerance=tolerance,
         method=r.choice(ft, "method", "fidelity", METHODS, default="craig-bampton"),
-        bandwidth_factor=r.number(ft, "bandwidth_factor", "fidelity", "-", default=5.0),
+        bandwidth_factor=r.number(ft, "bandwidth_factor", "fidelity",
+                                  "fidelity.bandwidth_factor", default=5.0),
         prune=r.boolean(ft, "prune", "fidelity", True))
     r.done(ft, "fidelity", {"n_modes", "tolerance", "method", "bandwidth_factor", "prune"})
 
     controller = _read_controller(r, r.take(t, "controller", "")[0], "controller")
     manoeuvre = None
     if "manoeuvre" in t:
-        manoeuvre = _read_manoeuvre(r, t.pop("manoeuvre"), "manoeuvre", names,
+        manoeuvre = _read_manoeuvre(r, t.pop("manoeuvre"), "manoeuvre", [a.name for a in
+                                                                           appendages],
                                     controller.sample_time)
 
     ot = r.table(t.pop("outputs", {}), "outputs")
@@ -763,7 +1121,7 @@ def _read_scene(data: Mapping, source: str) -> Scene:
                         systems=r.choices(et, "systems", "export", EXPORTABLE,
                                           default=list(EXPORTABLE)),
                         reference_files=r.boolean(et, "reference_files", "export", True),
-                        step=r.number(et, "step", "export", "s", default=None))
+                        step=r.number(et, "step", "export", "export.step", default=None))
     r.done(et, "export", {"fmu", "systems", "reference_files", "step"})
 
     rt = r.table(t.pop("report", {}), "report")
@@ -775,7 +1133,7 @@ def _read_scene(data: Mapping, source: str) -> Scene:
     equivalence = r.boolean(rt, "equivalence", "report", True)
     r.done(rt, "report", {"plots", "equivalence"})
     r.done(t, "", {"title", "hub", "appendages", "fidelity", "controller", "manoeuvre",
-                   "outputs", "export", "report"})
+                   "outputs", "export", "report", "limits"})
 
     # outputs the scene cannot produce
     if outputs.exact_reference and not any(a.truth == "beam" for a in appendages):
@@ -797,13 +1155,16 @@ def _read_scene(data: Mapping, source: str) -> Scene:
     if export.fmu and manoeuvre is None and export.step is None:
         raise r.error("export.step", "missing: without a manoeuvre table the FMU step must be "
                       "given [s]")
-    return Scene(title=title, source=source or "<dict>", hub=hub, appendages=appendages,
-                 fidelity=fidelity, controller=controller, manoeuvre=manoeuvre, outputs=outputs,
-                 export=export, report=ReportSpec(plots, equivalence))
+    scene = Scene(title=title, source=source or "<dict>", hub=hub, appendages=appendages,
+                  fidelity=fidelity, controller=controller, manoeuvre=manoeuvre,
+                  outputs=outputs, export=export, report=ReportSpec(plots, equivalence),
+                  limits=r.limits)
+    _check_cost(r, scene)
+    return scene
 
 
 def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = None, *,
-               source: str | None = None) -> Scene:
+               source: str | None = None, limits: Mapping[str, Any] | None = None) -> Scene:
     """Read and validate a scene.
 
     Parameters
@@ -813,6 +1174,9 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         validated Scene (returned as is) or None for the embedded default scene.
     source : str, optional
         Name used in error messages for a dict (default ``"<dict>"``).
+    limits : mapping, optional
+        Work limits that override the defaults and the scene's own ``[limits]`` table
+        (names of :class:`~spacecraft.limits.Limits`; the command line's ``--limit``).
 
     Returns
     -------
@@ -821,31 +1185,58 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
     Raises
     ------
     SceneError
-        Naming the file, the key path and the problem (also for a missing file or bad TOML).
+        Naming the file, the key path and the problem (also for a missing, unreadable, too
+        large or deeply nested file, or bad TOML), or the work limit a scene exceeds.
     """
+    overrides = read_limits(limits, "--limit") if limits else {}
     if isinstance(scene, Scene):
         return scene
     if scene is None:
-        return default_scene()
+        return default_scene(limits=overrides)
     if isinstance(scene, Mapping):
-        return _read_scene(scene, source or "<dict>")
+        name = source or "<dict>"
+        return _guarded(lambda: _read_scene(scene, name, overrides), name)
     if not isinstance(scene, (str, os.PathLike)):
         raise SceneError(f"scene must be a TOML file path, a dict or a Scene; got "
-                         f"{type(scene).__name__}")
+                         f"{_short(type(scene).__name__)}")
     path = Path(scene)
+    shown = _short(str(path)) if str(path).isprintable() else _shown(str(path))
+    file_size = overrides.get("file_size", Limits().file_size)
     try:
-        text = path.read_bytes()
+        with open(path, "rb") as stream:
+            text = stream.read(file_size + 1)
     except FileNotFoundError:
-        raise SceneError(f"{path}: no such scene file") from None
+        raise SceneError(f"{shown}: no such scene file") from None
+    except IsADirectoryError:
+        raise SceneError(f"{shown}: is a folder, not a scene file") from None
     except OSError as exc:
-        raise SceneError(f"{path}: cannot read the scene file ({exc.strerror})") from None
+        raise SceneError(f"{shown}: cannot read the scene file ({exc.strerror})") from None
+    if len(text) > file_size:
+        raise SceneError(f"{shown}: the scene file is larger than the limit {file_size} bytes "
+                         "(limits.file_size); raise it with --limit file_size=N if you really "
+                         "want more")
     try:
-        data = tomllib.loads(text.decode("utf-8"))
+        decoded = text.decode("utf-8")
     except UnicodeDecodeError:
-        raise SceneError(f"{path}: not a UTF-8 text file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"{path}: invalid TOML ({exc})") from None
-    return _read_scene(data, source or str(path))
+        raise SceneError(f"{shown}: not a UTF-8 text file") from None
+    name = source or shown
+
+    def parse():
+        try:
+            data = tomllib.loads(decoded)
+        except tomllib.TOMLDecodeError as exc:
+            raise SceneError(f"{name}: invalid TOML ({_short(str(exc), 200)})") from None
+        return _read_scene(data, name, overrides)
+    return _guarded(parse, name)
+
+
+def _guarded(read, name: str) -> Scene:
+    """Run a reader; nesting deeper than Python's recursion limit is a scene error."""
+    try:
+        return read()
+    except RecursionError:
+        raise SceneError(f"{name}: tables or arrays nested too deeply; a scene needs at most "
+                         "four levels") from None
 
 
 def scene_path(name: str) -> Path:
@@ -853,7 +1244,7 @@ def scene_path(name: str) -> Path:
     resource = importlib.resources.files("spacecraft").joinpath("scenes", f"{name}.toml")
     path = Path(str(resource))
     if not path.is_file():
-        raise SceneError(f"no embedded scene {name!r}; available: "
+        raise SceneError(f"no embedded scene {_shown(name)}; available: "
                          + ", ".join(example_scenes()))
     return path
 
@@ -864,7 +1255,7 @@ def example_scenes() -> list[str]:
     return sorted(p.stem for p in folder.glob("*.toml"))
 
 
-def default_scene() -> Scene:
+def default_scene(*, limits: Mapping[str, Any] | None = None) -> Scene:
     """The embedded default scene: the paper's steel rod on a 100 kg, 50 kg m^2 hub."""
     path = scene_path("default")
-    return load_scene(path, source="default scene")
+    return load_scene(path, source="default scene", limits=limits)

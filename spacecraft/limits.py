@@ -1,0 +1,214 @@
+"""Work limits of a scene: its cost is estimated before anything is built, and refused by name.
+
+A scene can ask for minutes of computing and gigabytes of memory with one number
+(``fidelity.n_modes = 5000``, ``manoeuvre.step = 1e-6``). :func:`estimate_cost` bounds, from the
+validated scene alone, the sizes that drive the cost of a run: states of the largest plant and
+closed loop, samples per simulation, number of simulations and the memory their responses
+take. The scene reader (:mod:`spacecraft.scene`) compares them and the scene's counts (modes,
+bodies, appendages, string lengths) with :class:`Limits` and refuses, naming the scene key and
+the limit, whatever exceeds one. A user who really wants more raises the limit explicitly: a
+``[limits]`` table in the scene or ``--limit NAME=VALUE`` on the command line.
+
+Defaults (the table of ``spacecraft/scene.py`` and the README), measured on the development
+machine (2 cores, load average 2-3; medians of single runs, noisy):
+
+============== ============ ============================================================
+limit          default      what it bounds, and the cost at the limit
+============== ============ ============================================================
+modes          500          ``fidelity.n_modes`` (bending modes per truncated beam); also
+                            the cap of the search from ``fidelity.tolerance``
+bodies         500          bodies of an explicit or ``from_beam`` chain (a 500-body
+                            truth chain: 998 states, 7 s, 1.4 GB)
+fit_bodies     12           ``fit.n_bodies``: a "poles-and-zeros" fit is an optimisation
+                            whose time grows fast and irregularly with the bodies (5: 1 s,
+                            10: 17 s, 12: 4 s, 15: 41 s, 20: 81 s)
+appendages     64           mounted appendages
+states         1200         states of the largest closed loop (upper bound: truth plant
+                            plus controller). A 1202-state loop (600 modes, PD) took 20 s
+                            and 2.0 GB; an LQR on a 502-state design model 27 s, 0.9 GB
+samples        10,000,000   samples of one simulation (duration / step + 1)
+memory         2 GiB        bytes held by the time responses (upper bound: every response
+                            kept, plus one simulation's work arrays)
+string_length  4096         characters of a free-text value (``title``)
+file_size      1 MiB        bytes of a scene file (``--limit file_size=...`` only: the
+                            file's own [limits] table is read after the file)
+============== ============ ============================================================
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+__all__ = ["Limits", "LIMIT_UNITS", "SceneCost", "estimate_cost", "appendage_dof"]
+
+#: Unit and meaning of each limit (for messages and ``--help``).
+LIMIT_UNITS = {
+    "modes": ("-", "bending modes per truncated beam"),
+    "bodies": ("-", "bodies per chain"),
+    "fit_bodies": ("-", "bodies of a fitted chain"),
+    "appendages": ("-", "appendages per scene"),
+    "states": ("-", "states of the largest closed loop"),
+    "samples": ("-", "samples per simulation"),
+    "memory": ("bytes", "memory of the time responses"),
+    "string_length": ("characters", "length of a free-text value"),
+    "file_size": ("bytes", "size of a scene file"),
+}
+
+# Bytes per float64.
+_FLOAT = 8
+
+
+@dataclasses.dataclass(frozen=True)
+class Limits:
+    """Documented bounds on the work of one scene run (see the module table).
+
+    Every field is a positive number; ``memory`` and ``file_size`` are in bytes.
+    """
+
+    modes: int = 500
+    bodies: int = 500
+    fit_bodies: int = 12
+    appendages: int = 64
+    states: int = 1200
+    samples: int = 10_000_000
+    memory: float = 2.0 * 1024**3
+    string_length: int = 4096
+    file_size: int = 1024**2
+
+    def replace(self, **changes) -> "Limits":
+        """A copy with some limits changed."""
+        return dataclasses.replace(self, **changes)
+
+    @staticmethod
+    def names() -> tuple:
+        """Names of the limits (the keys of a scene's ``[limits]`` table)."""
+        return tuple(f.name for f in dataclasses.fields(Limits))
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneCost:
+    """Upper bounds of the sizes that drive the cost of running a scene.
+
+    Attributes
+    ----------
+    samples : int
+        Samples per simulation (0 without a manoeuvre).
+    simulations : int
+        Time responses computed (design and truth loop per design variant and controller).
+    plant_states : int
+        States of the largest plant (truth or design), before pruning.
+    loop_states : int
+        States of the largest closed loop (plant plus controller).
+    loop_key : str
+        The scene key that contributes most to ``loop_states`` (named in a refusal).
+    memory : float, bytes
+        Memory held by the time responses, plus one simulation's work arrays.
+    """
+
+    samples: int
+    simulations: int
+    plant_states: int
+    loop_states: int
+    loop_key: str
+    memory: float
+
+    def as_dict(self) -> dict:
+        """JSON-ready copy."""
+        return dataclasses.asdict(self)
+
+
+def _chain_bodies(chain) -> int:
+    return chain.n_bodies if chain.from_beam is not None else len(chain.lengths)
+
+
+def appendage_dof(spec, which: str, n_modes: int | None) -> tuple[int, str]:
+    """Elastic degrees of freedom of an appendage's truth or design model, and the key behind.
+
+    Parameters
+    ----------
+    spec : spacecraft.scene.AppendageSpec
+    which : {"truth", "design"}
+    n_modes : int or None
+        Bending modes of a truncated beam (None: the smallest, 1, as a tolerance search starts).
+
+    Returns
+    -------
+    (int, str)
+        Degrees of freedom (bending modes, or hinges of a chain) and the key path that sets them
+        (relative to the appendage: ``"fit.n_bodies"``, ``"chain"``...; ``"fidelity.n_modes"``
+        is absolute).
+    """
+    kind = spec.truth if which == "truth" else spec.design
+    if which == "design" and kind == "truth":
+        return appendage_dof(spec, "truth", n_modes)
+    if kind == "beam":
+        return (1 if n_modes is None else n_modes), "fidelity.n_modes"
+    if kind == "fit":
+        return spec.fit.n_bodies - 1, "fit.n_bodies"
+    chain, key = ((spec.truth_chain, "truth_chain") if which == "truth" and spec.truth_chain
+                  else (spec.chain, "chain"))
+    n = _chain_bodies(chain)
+    return (n if chain.root == "hinged" else n - 1), key
+
+
+def _controller_states(scene, design_states: int) -> int:
+    """Upper bound of the controller's states: PD with filters, or LQR with its estimator."""
+    c = scene.controller
+    states = 0
+    if c.pd is not None:
+        # PD with a derivative filter, a roll-off and a notch (second order each, at most)
+        states = max(states, 2 + 2 * (c.pd.roll_off is not None) + 2 * (c.pd.notch is not None))
+    if c.lqr is not None:
+        # an observer of the design model plus the reference model
+        states = max(states, design_states + 2)
+    return states
+
+
+def estimate_cost(scene) -> SceneCost:
+    """Upper bounds of a scene's plant and loop sizes, samples and response memory.
+
+    Parameters
+    ----------
+    scene : spacecraft.scene.Scene
+        A validated scene (its limits are not consulted here).
+
+    Returns
+    -------
+    SceneCost
+
+    Notes
+    -----
+    A plant of N elastic degrees of freedom on the hub has at most 2 (3 + N) states (hub
+    translation and rotation plus the appendages' modes or hinges; pruning only removes).
+    A truth beam chosen from ``fidelity.tolerance`` is counted with one mode: the search stops
+    at the smallest sufficient number, and the runner caps it by the limits.
+    Memory: a response keeps time, inputs and outputs (8 bytes per sample each); one simulation
+    needs in addition its chunked work arrays, at most about (states + 4 inputs + 2 outputs)
+    values per sample.
+    """
+    apps = scene.appendages
+    n_modes = scene.fidelity.n_modes
+    truth = [appendage_dof(a, "truth", n_modes) for a in apps]
+    design = [appendage_dof(a, "design", n_modes) for a in apps]
+    # every design variant (one per fit criterion) has fits of the same size
+    truth_states = 2 * (3 + sum(d for d, _ in truth))
+    design_states = 2 * (3 + sum(d for d, _ in design))
+    plant_states = max(truth_states, design_states)
+    loop_states = plant_states + _controller_states(scene, design_states)
+    # the key behind the largest contribution
+    contributions = [(d, key if key == "fidelity.n_modes" else f"appendages[{k}].{key}")
+                     for dofs in (truth, design) for k, (d, key) in enumerate(dofs)]
+    loop_key = max(contributions)[1]
+
+    m = scene.manoeuvre
+    if m is None:
+        return SceneCost(0, 0, plant_states, loop_states, loop_key, 0.0)
+    samples = int(m.duration / m.step + 1e-9) + 1
+    simulations = 2 * len(scene.design_variants) * len(scene.controller.types)
+    n_app = len(apps)
+    inputs = 1 + ((3 + n_app) if m.disturbance is not None else 0)
+    outputs = (3 + n_app * scene.outputs.tip_deflection + 2 * n_app * scene.outputs.root_loads)
+    kept = simulations * (1 + inputs + outputs)
+    work = loop_states + 4 * inputs + 2 * outputs
+    memory = float(_FLOAT) * samples * (kept + work)
+    return SceneCost(samples, simulations, plant_states, loop_states, loop_key, memory)
