@@ -15,21 +15,42 @@ set, one simulator (matrix exponential) per closed loop.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 import time
 import warnings
 from collections.abc import Callable
+from pathlib import Path
 
 import control
 import numpy as np
 
-from .fidelity import FidelityChoice, choose_n_modes
+import appendages
+import controllers
+import fmu
+from appendages.interface import FlexsatError
+
+from .fidelity import MAX_MODES, FidelityChoice, choose_n_modes
 from .hub import Hub, Mount
 from .coupling import Spacecraft
+from .limits import estimate_cost
 from .scene import AppendageSpec, ChainSpec, Scene, SceneError, load_scene
 
-__all__ = ["RunStats", "RunResult", "run", "ProgressCallback", "equivalence_table", "FIT_LABELS"]
+__all__ = ["RunStats", "RunResult", "run", "ProgressCallback", "equivalence_table", "FIT_LABELS",
+           "raised_by_flexsat", "LQR_FREQUENCY_RANGE", "diverged_at", "warning_lines"]
+
+#: Range of the rigid-body LQR natural frequency (q / (r J^2))^(1/4) [rad/s]: that of a PD's
+#: natural frequency in a scene (spacecraft.scene.RANGES["pd.frequency"]).
+LQR_FREQUENCY_RANGE = (1e-5, 1e3)
+
+# Folders of flexsat's packages: an exception raised by code in them is a checked condition of
+# our API (its message names the parameter), one raised deeper (numpy, scipy) is not.
+_OUR_FOLDERS = tuple(Path(p.__file__).resolve().parent
+                     for p in (appendages, controllers, fmu)) + (Path(__file__).resolve().parent,)
+
+# Most distinct warnings kept in a run's results.
+_MAX_WARNINGS = 20
 
 ProgressCallback = Callable[[str], None]
 
@@ -130,6 +151,21 @@ class RunResult:
     exact_frd: object = None
 
 
+def raised_by_flexsat(exc: BaseException) -> bool:
+    """True if ``exc`` was raised by code of flexsat's packages (a checked condition), not
+    inside numpy, scipy or python-control."""
+    tb = exc.__traceback__
+    if tb is None:
+        return False
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    try:
+        path = Path(tb.tb_frame.f_code.co_filename).resolve()
+    except (OSError, ValueError):
+        return False
+    return any(path.is_relative_to(folder) for folder in _OUR_FOLDERS)
+
+
 class _Runner:
     def __init__(self, scene: Scene, progress: ProgressCallback | None, stats: RunStats,
                  time_responses: bool = True):
@@ -137,9 +173,29 @@ class _Runner:
         self.scene = scene
         self.progress = progress or (lambda message: None)
         self.stats = stats
-        self.hub = Hub(scene.hub.mass, scene.hub.inertia)
+        self._index = {a.name: k for k, a in enumerate(scene.appendages)}
+        with self.scene_values("hub"):
+            self.hub = Hub(scene.hub.mass, scene.hub.inertia)
         self._cache: dict = {}
         self._modal_spacecraft: set = set()
+
+    # -- errors --------------------------------------------------------------------------------
+    @contextlib.contextmanager
+    def scene_values(self, key: str, what: str = ""):
+        """Report an error of our API, raised by a call made with the scene's values at ``key``,
+        as a SceneError naming that key (a user error); anything else passes unchanged."""
+        try:
+            yield
+        except SceneError:
+            raise
+        except (ValueError, TypeError, FlexsatError) as exc:
+            if not (isinstance(exc, FlexsatError) or raised_by_flexsat(exc)):
+                raise  # numpy/scipy trouble with accepted values: a bug of ours
+            raise SceneError(f"{self.scene.source}: {key}: {what}{exc}") from exc
+
+    def key(self, spec: AppendageSpec, rest: str) -> str:
+        """Key path of an appendage's sub-key: ``appendages[1].beam``."""
+        return f"appendages[{self._index[spec.name]}].{rest}"
 
     # -- caching -------------------------------------------------------------------------------
     def cached(self, key, build):
@@ -165,12 +221,21 @@ class _Runner:
 
     # -- appendage models ----------------------------------------------------------------------
     def beam(self, spec: AppendageSpec):
-        return self.cached(("beam", spec.beam), spec.beam.build)
+        def build():
+            with self.scene_values(self.key(spec, "beam")):
+                return spec.beam.build()
+        return self.cached(("beam", spec.beam), build)
 
     def chain(self, spec: AppendageSpec, chain: ChainSpec):
         from appendages.chain import HingedChain
 
+        which = "truth_chain" if chain is spec.truth_chain else "chain"
+
         def build():
+            with self.scene_values(self.key(spec, which)):
+                return built()
+
+        def built():
             if chain.from_beam is None:
                 return HingedChain(chain.lengths, chain.masses, chain.inertias,
                                    chain.hinge_stiffnesses, hinge_dampings=chain.hinge_dampings,
@@ -194,7 +259,8 @@ class _Runner:
 
             beam = self.beam(spec)
             self.stats.chain_fits += 1
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), self.scene_values(
+                    self.key(spec, "fit"), f"cannot fit a chain (match = {match!r}): "):
                 warnings.simplefilter("ignore", RuntimeWarning)
                 chain = fit_chain(beam, spec.fit.n_bodies, match=match)
             zeta = beam.damping_ratio
@@ -223,9 +289,11 @@ class _Runner:
 
     def truth_model(self, spec: AppendageSpec, n_modes: int | None):
         if spec.truth == "beam":
+            def build():
+                with self.scene_values("fidelity"):
+                    return self.beam(spec).truncated(n_modes, method=self.scene.fidelity.method)
             return self.cached(("truncated", spec.name, n_modes, self.scene.fidelity.method),
-                               lambda: self.beam(spec).truncated(
-                                   n_modes, method=self.scene.fidelity.method))
+                               build)
         return self.chain(spec, spec.truth_chain or spec.chain)
 
     def design_model(self, spec: AppendageSpec, variant: str, n_modes: int | None):
@@ -238,8 +306,11 @@ class _Runner:
 
     def spacecraft(self, key, models) -> Spacecraft:
         def build():
-            mounts = [Mount(model, a.position, a.direction, name=a.name)
-                      for a, model in zip(self.scene.appendages, models)]
+            mounts = []
+            for a, model in zip(self.scene.appendages, models):
+                with self.scene_values(f"appendages[{self._index[a.name]}]",
+                                       "cannot mount it: "):
+                    mounts.append(Mount(model, a.position, a.direction, name=a.name))
             return Spacecraft(self.hub, mounts)
         return self.cached(("spacecraft", key), build)
 
@@ -291,9 +362,23 @@ class _Runner:
             values.append(c.pd.natural_frequency if c.pd.natural_frequency is not None
                           else natural_frequency_from_bandwidth(c.pd.bandwidth, c.pd.damping))
         if c.lqr is not None:
-            # rigid-body LQR poles: w = (q / (r J^2))^(1/4) (Anderson & Moore, sec. 5.2)
-            values.append((c.lqr.attitude_weight / (c.lqr.torque_weight * inertia**2)) ** 0.25)
+            values.append(self.lqr_frequency(inertia))
         return max(values)
+
+    def lqr_frequency(self, inertia: float) -> float:
+        """Rigid-body LQR natural frequency [rad/s], refused outside LQR_FREQUENCY_RANGE."""
+        lqr = self.scene.controller.lqr
+        # rigid-body LQR poles: w = (q / (r J^2))^(1/4) (Anderson & Moore, sec. 5.2), formed
+        # as (q/r)^(1/4) / sqrt(J): no overflow of J^2
+        w = (lqr.attitude_weight / lqr.torque_weight) ** 0.25 / math.sqrt(inertia)
+        lo, hi = LQR_FREQUENCY_RANGE
+        if not lo <= w <= hi:
+            raise SceneError(
+                f"{self.scene.source}: controller.lqr: the weights give a rigid-body "
+                f"closed-loop frequency (attitude_weight / (torque_weight J^2))^(1/4) = {w:.3g} "
+                f"rad/s with J = {inertia:.4g} kg m^2, outside [{lo:g}, {hi:g}] rad/s; change "
+                "attitude_weight or torque_weight")
+        return w
 
     def choose_fidelity(self) -> tuple[int | None, FidelityChoice | None]:
         scene = self.scene
@@ -325,12 +410,26 @@ class _Runner:
                 frd = self.spacecraft("undamped exact", models).frequency_response(omega)
                 return np.asarray(frd.frdata).reshape(-1)
 
-            choice = choose_n_modes(truncated, self.exact_frequencies, exact_response,
-                                    bandwidth=bandwidth, tolerance=scene.fidelity.tolerance,
-                                    bandwidth_factor=scene.fidelity.bandwidth_factor,
-                                    method=scene.fidelity.method,
-                                    first_zero=self.first_clamped_frequency())
+            with self.scene_values("fidelity.tolerance"):
+                choice = choose_n_modes(truncated, self.exact_frequencies, exact_response,
+                                        bandwidth=bandwidth, tolerance=scene.fidelity.tolerance,
+                                        bandwidth_factor=scene.fidelity.bandwidth_factor,
+                                        method=scene.fidelity.method,
+                                        first_zero=self.first_clamped_frequency(),
+                                        n_max=self.max_modes())
         return choice.n_modes, choice
+
+    def max_modes(self) -> int:
+        """Most modes per beam the search from a tolerance may try: fidelity.MAX_MODES, within
+        limits.modes and the loop size limits.states allows."""
+        scene = self.scene
+        cap = min(MAX_MODES, scene.limits.modes)
+        while cap > 1:
+            trial = scene.replace(fidelity=dataclasses.replace(scene.fidelity, n_modes=cap))
+            if estimate_cost(trial).loop_states <= scene.limits.states:
+                break
+            cap -= 1
+        return cap
 
     def first_clamped_frequency(self) -> float:
         """Lowest clamped-root frequency of the appendages [rad/s] (first zero of theta/torque)."""
@@ -341,8 +440,6 @@ class _Runner:
         return min(values, default=math.inf)
 
     def run(self) -> RunResult:
-        import controllers
-
         scene = self.scene
         stats = self.stats
         outputs = scene.outputs
@@ -350,6 +447,8 @@ class _Runner:
         data: dict = {"title": scene.title, "scene": scene.source}
 
         with self.stage("building models"):
+            if scene.controller.lqr is not None:
+                self.lqr_frequency(self.exact_spacecraft().inertia)
             for a in scene.appendages:
                 if a.design == "fit":
                     for match in a.fit.match:
@@ -409,7 +508,8 @@ class _Runner:
             c = scene.controller
             for variant, d in designs.items():
                 for kind in c.types:
-                    try:
+                    with self.scene_values(f"controller.{kind}", f"cannot tune on the design "
+                                                                 f"model ({variant}): "):
                         if kind == "pd":
                             stats.pd_designs += 1
                             K = controllers.pd(d["plant"], natural_frequency=c.pd.natural_frequency,
@@ -427,9 +527,6 @@ class _Runner:
                                     deflection_weight=c.lqr.deflection_weight,
                                     estimator_speed=c.lqr.estimator_speed,
                                     sample_time=c.sample_time)
-                    except ValueError as exc:
-                        raise SceneError(f"{scene.source}: controller.{kind}: cannot tune on the "
-                                         f"design model ({variant}): {exc}") from None
                     if K.dt is None:
                         # a static-gain StateSpace gets dt=None from python-control; it is a
                         # continuous-time controller
@@ -460,15 +557,16 @@ class _Runner:
                             loop = controllers.close_loop(plant, K)
                             loops[(variant, kind, which)] = loop
                             responses[(variant, kind, which)] = self.simulate(loop)
-                        m_design = controllers.metrics(responses[(variant, kind, "design")])
-                        m_truth = controllers.metrics(responses[(variant, kind, "truth")])
-                        row["metrics"] = {"design": m_design, "truth": m_truth}
+                        pair = {w: responses[(variant, kind, w)] for w in ("design", "truth")}
+                        row["metrics"] = {w: _metrics(r) for w, r in pair.items()}
+                        row["diverged"] = {w: diverged_at(r) for w, r in pair.items()}
+                        diverging = any(t is not None for t in row["diverged"].values())
                         diff = {}
-                        for name in responses[(variant, kind, "design")].output_labels:
-                            a = _trace(responses[(variant, kind, "truth")], name)
-                            b = _trace(responses[(variant, kind, "design")], name)
+                        for name in pair["design"].output_labels:
+                            a, b = _trace(pair["truth"], name), _trace(pair["design"], name)
                             if a is not None and b is not None:
-                                diff[name] = float(np.max(np.abs(a - b)))
+                                diff[name] = (math.inf if diverging
+                                              else float(np.max(np.abs(a - b))))
                         row["peak_difference"] = diff
                     else:
                         loops[(variant, kind, "truth")] = controllers.close_loop(truth_sim, K)
@@ -492,9 +590,13 @@ class _Runner:
         truth = {"spacecraft": truth_sc, "verdict": truth_verdict, "sim": truth_sim}
         return RunResult(scene, data, stats, truth, designs, responses, loops, models, exact_frd)
 
-    def simulate(self, loop):
-        import controllers
+    def simulate(self, loop) -> control.TimeResponseData:
+        """The manoeuvre's response of a closed loop (outputs only, no state trajectory).
 
+        A loop whose response leaves the float64 range is a result, not an error: the response
+        stops at the last sample that could be computed, with the attributes ``diverged``
+        (True) and ``diverged_at`` [s] (see :func:`diverged_at`).
+        """
         m = self.scene.manoeuvre
         n = int(math.floor(m.duration / m.step + 1e-9)) + 1
         T = np.arange(n) * m.step
@@ -507,9 +609,27 @@ class _Runner:
             U[labels.index(d.input)] = np.where((T >= d.start) & (T < end), d.amplitude, 0.0)
         self.stats.simulations += 1
         if loop.isdtime(strict=True):
-            return control.forced_response(loop, T, U, squeeze=False)
-        self.stats.simulator_setups += 1
-        return controllers.Simulator(loop, m.step).run(T, U, squeeze=False)
+            with np.errstate(over="ignore", invalid="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                response = control.forced_response(loop, T, U, squeeze=False)
+            Y = np.asarray(response.y).reshape(loop.noutputs, -1)
+        else:
+            self.stats.simulator_setups += 1
+            with self.scene_values("manoeuvre.step"):
+                simulator = controllers.Simulator(loop, m.step)
+            Y = _outputs_until_overflow(simulator, T, U)
+        # the response ends before its first sample outside the float range
+        finite = np.all(np.isfinite(Y), axis=0)
+        k = Y.shape[1] if finite.all() else int(np.argmin(finite))
+        k = max(k, 1)
+        out = control.TimeResponseData(
+            T[:k], Y[:, :k], None, U[:, :k], issiso=loop.issiso(),
+            output_labels=list(loop.output_labels), input_labels=list(loop.input_labels),
+            sysname=loop.name, title="Manoeuvre of " + loop.name, trace_types=["forced"],
+            plot_inputs=True, squeeze=False)
+        out.diverged = k < n
+        out.diverged_at = float(T[k - 1]) if k < n else None
+        return out
 
     def exact_reference_frd(self):
         """Exact theta and omega per torque of hub + distributed beams, as an FRD."""
@@ -602,6 +722,68 @@ def equivalence_table(beam, fits: dict, *, stats: RunStats | None = None) -> dic
             "exact": reference, "columns": columns}
 
 
+def _outputs_until_overflow(simulator, T: np.ndarray, U: np.ndarray) -> np.ndarray:
+    """Outputs on ``T``; where the response overflows float64, those of the longest prefix of
+    ``T`` that does not (found by bisection; the simulator's set-up is reused), padded with inf.
+
+    ``controllers.Simulator`` raises FloatingPointError when an unstable loop's response leaves
+    the float64 range; the prefix shows how it diverged up to then.
+    """
+    n = T.size
+    try:
+        return simulator.outputs(T, U)
+    except FloatingPointError:
+        pass
+    good, bad, Y = 1, n, None       # prefixes of `good` samples compute, of `bad` overflow
+    while bad - good > 1:
+        mid = (good + bad) // 2
+        try:
+            Y = simulator.outputs(T[:mid], U[:, :mid])
+            good = mid
+        except FloatingPointError:
+            bad = mid
+    out = np.full((simulator.n_outputs, n), np.inf)
+    if good >= 2:
+        out[:, :good] = Y if Y is not None and Y.shape[1] == good else \
+            simulator.outputs(T[:good], U[:, :good])
+    else:
+        # X0 = 0: the first output is the feedthrough
+        D = np.asarray(simulator.system.D, dtype=float)
+        out[:, 0] = D @ U[:, 0]
+    return out
+
+
+def diverged_at(response) -> float | None:
+    """Time [s] at which a response's simulation stopped because it diverged, or None.
+
+    Reads the attributes ``diverged`` and ``diverged_at`` that :meth:`_Runner.simulate` (and
+    controllers' responses, where they provide them) set; a response without them diverged if
+    it has a non-finite output sample (at the last finite sample before it).
+    """
+    if hasattr(response, "diverged"):
+        if not response.diverged:
+            return None
+        at = getattr(response, "diverged_at", None)
+        return float(at) if at is not None else float(np.asarray(response.t).reshape(-1)[-1])
+    y = np.asarray(response.y)
+    y = y.reshape(-1, y.shape[-1])
+    finite = np.all(np.isfinite(y), axis=0)
+    if finite.all():
+        return None
+    k = int(np.argmin(finite))
+    t = np.asarray(response.t).reshape(-1)
+    return float(t[max(k - 1, 0)])
+
+
+def _metrics(response) -> dict:
+    """controllers.metrics, every metric +inf for a response that diverged (its convention)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        values = controllers.metrics(response)
+    if diverged_at(response) is not None:
+        values = {name: math.inf for name in values}
+    return values
+
+
 def _trace(response, name):
     labels = list(response.output_labels)
     if name not in labels:
@@ -665,4 +847,26 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     """
     scene = load_scene(scene)
     stats = RunStats() if stats is None else stats
-    return _Runner(scene, progress, stats, time_responses).run()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")
+        result = _Runner(scene, progress, stats, time_responses).run()
+    result.data["warnings"] = warning_lines(caught)
+    return result
+
+
+def warning_lines(caught) -> list[str]:
+    """Distinct warnings as one line each (``Category: message (module:line)``), at most 20,
+    each at most about 300 characters: what the report and the command line show instead of
+    numpy's or scipy's multi-line output."""
+    seen: dict = {}
+    for w in caught:
+        message = " ".join(str(w.message).split())
+        if len(message) > 250:
+            message = message[:250] + "..."
+        key = (w.category.__name__, message)
+        seen.setdefault(key, f"{Path(w.filename).name}:{w.lineno}")
+    lines = [f"{category}: {message} ({where})"
+             for (category, message), where in list(seen.items())[:_MAX_WARNINGS]]
+    if len(seen) > _MAX_WARNINGS:
+        lines.append(f"... and {len(seen) - _MAX_WARNINGS} more distinct warnings")
+    return lines
