@@ -22,69 +22,21 @@ Files
 from __future__ import annotations
 
 import concurrent.futures
-import contextlib
 import datetime
 import html
 import json
 import math
 import os
-import shutil
-import tempfile
+import re
 from pathlib import Path
 
 import numpy as np
 
-from .scene import SceneError
+from .output import MARKER, default_output_folder, output_folder
 
 __all__ = ["write_report", "output_folder", "default_output_folder", "to_json", "markdown",
-           "render_html", "equivalence_markdown", "metric_rows", "summary_lines"]
-
-MARKER = ".flexsat-complete"
-
-
-# ---------------------------------------------------------------------------------------------
-# output folder
-# ---------------------------------------------------------------------------------------------
-def default_output_folder(cwd: Path | None = None) -> Path:
-    """A new folder ``flexsat-YYYYmmdd-HHMMSS`` (suffixed if taken) in the working directory."""
-    cwd = Path.cwd() if cwd is None else Path(cwd)
-    stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    path = cwd / f"flexsat-{stamp}"
-    k = 1
-    while path.exists():
-        k += 1
-        path = cwd / f"flexsat-{stamp}-{k}"
-    return path
-
-
-@contextlib.contextmanager
-def output_folder(path: str | os.PathLike):
-    """Yield a temporary folder that becomes ``path`` only if the block completes.
-
-    ``path`` must not exist, or be an empty folder. The files are written into a hidden sibling
-    ``.<name>.partial-*``; on success it gets a completion marker (``.flexsat-complete``) and is
-    renamed to ``path``; on any exception it is removed and ``path`` is left as it was.
-
-    Raises
-    ------
-    SceneError
-        If ``path`` exists and is not an empty folder (a user error: choose another --out).
-    """
-    path = Path(path)
-    if path.exists() and (not path.is_dir() or any(path.iterdir())):
-        raise SceneError(f"{path}: output folder exists and is not empty; choose another --out "
-                         "or remove it")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
-    try:
-        yield temporary
-        (temporary / MARKER).write_text("flexsat run completed\n")
-        if path.exists():
-            path.rmdir()
-        os.replace(temporary, path)
-    except BaseException:
-        shutil.rmtree(temporary, ignore_errors=True)
-        raise
+           "render_html", "equivalence_markdown", "metric_rows", "summary_lines", "MARKER",
+           "markdown_text"]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -145,26 +97,59 @@ def _percent(value) -> str:
     return f"{100.0 * value:+.2f} %"
 
 
+# Inline Markdown markup (CommonMark + GFM): code, emphasis, links and images, tables,
+# strikethrough; each is a literal character when backslash-escaped (CommonMark 0.31, sec. 2.4).
+_MD_INLINE = re.compile(r"([\\`*\[\]|~])")
+# "_" opens or closes emphasis only at a word boundary (left/right-flanking delimiter runs)
+_MD_UNDERSCORE = re.compile(r"(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])")
+# what turns the start of a line into a block (heading, quote, list, thematic break)
+_MD_BLOCK_START = re.compile(r"^([#>+=-])|^(\d+)([.)])")
+
+
+def markdown_text(text, *, line_start: bool = False) -> str:
+    """Plain text as Markdown that renders as exactly that text.
+
+    ``&``, ``<`` and ``>`` become HTML entities (no raw HTML: a title cannot inject a
+    ``<script>``); inline markup characters are backslash-escaped; line breaks become spaces.
+    ``line_start``: the text begins a line (a paragraph or list item), so block markers
+    (``#``, ``>``, ``-``, ``1.``) at its start are escaped too.
+    """
+    text = str(text).replace("\r", " ").replace("\n", " ")
+    text = html.escape(text, quote=False)
+    text = _MD_INLINE.sub(r"\\\1", text)
+    text = _MD_UNDERSCORE.sub(r"\\_", text)
+    if line_start:
+        text = _MD_BLOCK_START.sub(lambda m: ("\\" + m.group(1)) if m.group(1)
+                                   else f"{m.group(2)}\\{m.group(3)}", text, count=1)
+    return text
+
+
 def markdown(blocks: list) -> str:
-    """Render blocks as Markdown."""
+    """Render blocks as Markdown; every text is escaped (:func:`markdown_text`)."""
+    md = markdown_text
     out = []
     for block in blocks:
         kind = block[0]
         if kind in ("h1", "h2", "h3"):
-            out.append("#" * int(kind[1]) + " " + block[1])
+            text = md(block[1])
+            # a heading's closing #s would be dropped: escape a final one
+            text = text[:-1] + "\\#" if text.endswith("#") else text
+            out.append("#" * int(kind[1]) + " " + text)
         elif kind == "p":
-            out.append(block[1])
+            out.append(md(block[1], line_start=True))
         elif kind == "ul":
-            out.append("\n".join(f"- {item}" for item in block[1]))
+            out.append("\n".join(f"- {md(item, line_start=True)}" for item in block[1]))
         elif kind == "table":
             header, rows = block[1], block[2]
-            lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
-            lines += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+            lines = ["| " + " | ".join(md(h) for h in header) + " |", "|" + "---|" * len(header)]
+            lines += ["| " + " | ".join(md(c) for c in row) + " |" for row in rows]
             out.append("\n".join(lines))
         elif kind == "img":
-            out.append(f"![{block[2]}]({block[1]})")
+            out.append(f"![{md(block[2])}](<{block[1]}>)")
         elif kind == "pre":
-            out.append("```\n" + block[1] + "\n```")
+            fence = "`" * max(3, 1 + max((len(r) for r in re.findall("`+", block[1])),
+                                         default=0))
+            out.append(f"{fence}\n{block[1]}\n{fence}")
     return "\n\n".join(out) + "\n"
 
 
@@ -247,7 +232,10 @@ def metric_rows(rows: list, controller: str) -> tuple[list, list]:
         for r in mine:
             d, t = r["metrics"]["design"].get(name), r["metrics"]["truth"].get(name)
             diff = None if d is None or t is None else t - d
-            row += [_fmt(d), _fmt(t), _fmt(diff, 3)]
+            gone = {w: _diverged(r, w) is not None for w in ("design", "truth")}
+            row += ["diverged" if gone["design"] else _fmt(d),
+                    "diverged" if gone["truth"] else _fmt(t),
+                    "-" if any(gone.values()) else _fmt(diff, 3)]
         out.append(row)
     for name, label in MARGIN_LABELS.items():
         row = [label]
@@ -258,6 +246,23 @@ def metric_rows(rows: list, controller: str) -> tuple[list, list]:
             row += [_fmt(d, 4), _fmt(t, 4), _fmt(diff, 3)]
         out.append(row)
     return header, out
+
+
+def _diverged(row: dict, which: str) -> float | None:
+    """Time [s] at which the ``which`` ("design"/"truth") response of a closed-loop row
+    stopped because it diverged, or None."""
+    return (row.get("diverged") or {}).get(which)
+
+
+def _divergence(row: dict) -> str:
+    """``"diverges, simulation stopped at t = ... s"`` for a row whose truth (or design)
+    response diverged, else ''."""
+    for which in ("truth", "design"):
+        at = _diverged(row, which)
+        if at is not None:
+            where = "" if which == "truth" else " (on the design model)"
+            return f"diverges{where}, simulation stopped at t = {_fmt(at, 6)} s"
+    return ""
 
 
 def _label(variant: str) -> str:
@@ -277,6 +282,8 @@ def _verdict_rows(rows: list) -> tuple[list, list]:
     for r in rows:
         v = r["verdict"]
         state = "stable" if v["stable"] else f"UNSTABLE ({v['n_unstable_poles']} poles)"
+        if _divergence(r):
+            state = f"UNSTABLE: {_divergence(r)}"
         row = [_label(r["design"]), r["controller"].upper(), state, _fmt(v["least_damping_ratio"], 3),
                _fmt(v["least_damped_frequency"], 4), _fmt(v["gain_margin"], 4),
                _fmt(v["phase_margin"], 4), _fmt(v["modulus_margin"], 3)]
@@ -307,6 +314,10 @@ def summary_lines(data: dict) -> list[str]:
         state = "stable" if v["stable"] else "UNSTABLE"
         text = (f"{r['controller'].upper()} tuned on {_label(r['design'])}: {state} on truth, phase "
                 f"margin {_fmt(v['phase_margin'], 3)} deg")
+        if _divergence(r):
+            lines.append(f"{r['controller'].upper()} tuned on {_label(r['design'])}: UNSTABLE: "
+                         f"{_divergence(r)}; phase margin {_fmt(v['phase_margin'], 3)} deg")
+            continue
         if "metrics" in r:
             m = r["metrics"]["truth"]
             if "overshoot" in m:
@@ -385,6 +396,10 @@ def _blocks(data: dict, images: list) -> list:
     if files:
         b.append(("h2", "FMUs"))
         b.append(("ul", [f"{f['path']}: {f['description']}" for f in files]))
+    if data.get("warnings"):
+        b.append(("h2", "Warnings"))
+        b.append(("p", "Numerical warnings raised while running the scene (each once):"))
+        b.append(("ul", list(data["warnings"])))
     stats = data.get("stats", {})
     b.append(("h2", "Work done"))
     b.append(("p", ", ".join(f"{k} {v}" for k, v in stats.items() if k != "seconds")))
@@ -412,7 +427,29 @@ def _trace(response, name):
     return np.asarray(response.y).reshape(len(labels), -1)[labels.index(name)]
 
 
+#: Points drawn per curve: a longer response is drawn as its min/max envelope (peaks kept).
+_PLOT_POINTS = 4000
+
+
+def _envelope(t: np.ndarray, y: np.ndarray, points: int = _PLOT_POINTS):
+    """``(t, y)`` to draw: all samples when few, else the min and max of each of ``points / 2``
+    buckets in time order, so that a plot of 10^7 samples costs what one of 10^4 does."""
+    per = t.size // (points // 2)
+    if per < 2:
+        return t, y
+    m = (t.size // per) * per
+    tb, yb = t[:m].reshape(-1, per), y[:m].reshape(-1, per)
+    lo, hi = np.argmin(yb, axis=1), np.argmax(yb, axis=1)
+    first, second = np.minimum(lo, hi), np.maximum(lo, hi)
+    rows = np.arange(tb.shape[0])
+    tt = np.stack([tb[rows, first], tb[rows, second]], axis=1).reshape(-1)
+    yy = np.stack([yb[rows, first], yb[rows, second]], axis=1).reshape(-1)
+    return np.concatenate([tt, t[m:]]), np.concatenate([yy, y[m:]])
+
+
 def _plot_slews(result, folder: Path) -> list:
+    from .runner import diverged_at
+
     out = []
     kinds = list(dict.fromkeys(k[1] for k in result.responses))
     for kind in kinds:
@@ -422,15 +459,36 @@ def _plot_slews(result, folder: Path) -> list:
         signals = [("theta", "deg"), ("torque", "N m")] + [(n, "m") for n in tips[:2]]
         fig, axes = _figure(len(signals), 1, (9, 2.4 * len(signals)))
         for ax, (name, unit) in zip(axes[:, 0], signals):
+            curves = []
             for variant, _, which in keys:
                 resp = result.responses[(variant, kind, which)]
                 y = _trace(resp, name)
                 if y is None:
                     continue
-                if name == "theta":
-                    y = np.degrees(y)
-                ax.plot(np.asarray(resp.t).reshape(-1), y, "-" if which == "truth" else "--",
-                        label=f"{_label(variant)}: {which}")
+                with np.errstate(over="ignore", invalid="ignore"):
+                    y = np.degrees(y) if name == "theta" else np.asarray(y, dtype=float)
+                label = f"{_label(variant)}: {which}"
+                at = diverged_at(resp)
+                if at is not None:
+                    label += f" (diverges, stopped at t = {_fmt(at, 4)} s)"
+                curves.append((np.asarray(resp.t, dtype=float).reshape(-1), y, which, label,
+                               at is not None))
+            # a diverging response would squash the others to a line: the axis shows the
+            # range of the bounded ones, and the diverging one is clipped just outside it
+            bounded = [y for _, y, _, _, gone in curves if not gone and y.size]
+            if bounded and any(gone for *_, gone in curves):
+                lo = min(float(np.min(y)) for y in bounded)
+                hi = max(float(np.max(y)) for y in bounded)
+                pad = 0.2 * (hi - lo) or 1.0
+                lo, hi = lo - pad, hi + pad
+            else:
+                lo = hi = None
+            for t, y, which, label, gone in curves:
+                if gone and lo is not None:
+                    y = np.clip(y, lo - (hi - lo), hi + (hi - lo))
+                ax.plot(*_envelope(t, y), "-" if which == "truth" else "--", label=label)
+            if lo is not None:
+                ax.set_ylim(lo, hi)
             ax.set_ylabel(f"{name} [{unit}]")
             ax.grid(True)
             ax.legend(fontsize="small", loc="best")
@@ -607,7 +665,8 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
     files: dict = {"fmu": [], "plots": []}
     # The C compiler runs in subprocesses: the FMU builds (two at a time, both cores) proceed
     # while the plots are drawn.
-    with concurrent.futures.ThreadPoolExecutor(max_workers=2) as pool:
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=2)
+    try:
         started = []
         if do_fmus:
             (folder / "fmu").mkdir(exist_ok=True)
@@ -617,6 +676,10 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
         if started:
             progress("waiting for the FMU builds")
         files["fmu"] = _finish_fmu_exports(started, stats)
+    finally:
+        # on an error or a signal the builds not yet started are dropped; running ones (a few
+        # tenths of a second of gcc) finish before the folder is removed
+        pool.shutdown(wait=True, cancel_futures=True)
     images = [(f"plots/{Path(p).name}", caption) for p, caption in images]
     files["plots"] = [p for p, _ in images]
     data["files"] = files
