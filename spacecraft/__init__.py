@@ -3,12 +3,14 @@ the scene runner, its report and the ``flexsat`` command."""
 
 from .coupling import SecondOrderModel, Spacecraft
 from .hub import Hub, Mount
+from .limits import Limits
+from .output import OutputError, OutputFolder
 from .report import output_folder, write_report
 from .runner import RunResult, RunStats, run
 from .scene import Scene, SceneError, default_scene, example_scenes, load_scene, scene_path
 
 __all__ = [
-    "Hub", "Mount", "RunResult", "RunStats", "Scene", "SceneError", "SecondOrderModel",
-    "Spacecraft", "default_scene", "example_scenes", "load_scene", "output_folder", "run",
-    "scene_path", "write_report",
+    "Hub", "Limits", "Mount", "OutputError", "OutputFolder", "RunResult", "RunStats", "Scene",
+    "SceneError", "SecondOrderModel", "Spacecraft", "default_scene", "example_scenes",
+    "load_scene", "output_folder", "run", "scene_path", "write_report",
 ]

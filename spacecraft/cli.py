@@ -15,19 +15,52 @@ Subcommands
 ``flexsat scenes``
     List the embedded scenes.
 
-Exit codes: 0 success; 2 user error (bad scene, bad option, output folder taken: one line on
-stderr, no traceback); 1 internal error (one line; ``--debug`` shows the traceback).
+``--limit NAME=VALUE`` (run, export, table, fit; repeatable) raises or lowers a work limit of
+:mod:`spacecraft.limits` (``modes``, ``bodies``, ``fit_bodies``, ``appendages``, ``states``,
+``samples``, ``memory``, ``string_length``, ``file_size``) over the scene's own ``[limits]``.
+
+Exit codes
+----------
+0
+    Success (also when stdout is closed early, e.g. piped into ``head``: the report folder is
+    complete; ``flexsat run --json | head`` is not an error of flexsat).
+1
+    A bug in flexsat: one line ``flexsat: internal error: ...``; ``--debug`` shows the
+    traceback. Please report it.
+2
+    A user or environment error, one line ``flexsat: error: ...`` on stderr naming the file,
+    key, value, unit and what to do: a bad option or scene, a value outside its range, work
+    beyond a limit, a fidelity tolerance no truncation meets, an output folder that is taken,
+    not writable, on a full disk or being written by another run, an FMU that cannot be built
+    on this machine (no C compiler), too little memory.
+130
+    Interrupted by SIGINT (Ctrl-C); nothing half-written is left.
+128 + n
+    Terminated by signal n: 143 for SIGTERM, 129 for SIGHUP; cleaned up as for SIGINT.
+
+Warnings of numpy or scipy never reach the terminal as they come: a run collects them into
+its report (section "Warnings", ``results.json``) and the command prints each once, on one line
+``flexsat: warning: ...``.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import errno
+import os
+import signal
 import sys
+import threading
 import time
 import traceback
+import warnings
 from pathlib import Path
 
-__all__ = ["main", "build_parser"]
+__all__ = ["main", "build_parser", "Terminated"]
+
+#: Longest error line printed [characters].
+_LINE = 1000
 
 #: The paper's rod (PAPER.md): the default beam of ``flexsat table`` and ``flexsat fit``.
 PAPER_ROD = {"section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
@@ -58,12 +91,71 @@ class _Progress:
 
     def __call__(self, message: str) -> None:
         if not self.quiet:
-            print(f"[{time.perf_counter() - self.t0:6.1f} s] {message}...", file=sys.stderr,
-                  flush=True)
+            try:
+                print(f"[{time.perf_counter() - self.t0:6.1f} s] {message}...",
+                      file=sys.stderr, flush=True)
+            except (BrokenPipeError, ValueError):
+                # stderr closed (piped into head, or a closed file): the run goes on silently
+                self.quiet = True
 
 
 class _UserError(Exception):
     """A command-line mistake (exit code 2)."""
+
+
+class Terminated(BaseException):
+    """Raised in the main thread by SIGTERM or SIGHUP, so that ``with`` blocks and ``finally``
+    clauses clean up as for SIGINT's KeyboardInterrupt (a BaseException: ``except Exception``
+    does not swallow it)."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+def _raise_terminated(signum, frame):
+    # the first signal interrupts; further ones are ignored while the run cleans up
+    for other in _SIGNALS:
+        signal.signal(other, signal.SIG_IGN)
+    raise Terminated(signum)
+
+
+@contextlib.contextmanager
+def _terminate_by_exception():
+    """Within the block, SIGTERM and SIGHUP raise :class:`Terminated` (main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {number: signal.signal(number, _raise_terminated) for number in _SIGNALS}
+    try:
+        yield
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
+
+
+def _limit_option(text: str) -> tuple[str, float]:
+    """``NAME=VALUE`` of --limit."""
+    name, sep, value = text.partition("=")
+    if not sep or not name.strip():
+        raise argparse.ArgumentTypeError(f"expected NAME=VALUE (e.g. modes=800); got {text!r}")
+    try:
+        number = int(value)
+    except ValueError:
+        try:
+            number = float(value)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name}: expected a number; got {value!r}") from None
+    return name.strip(), number
+
+
+def _one_line(text: str) -> str:
+    """A message on one line, at most about 1000 characters."""
+    text = " ".join(str(text).split())
+    return text if len(text) <= _LINE else text[:_LINE] + "..."
 
 
 class _Parser(argparse.ArgumentParser):
@@ -93,6 +185,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--no-fmu", action="store_true", help="skip FMU export")
     run.add_argument("--no-plots", action="store_true", help="skip plots")
     run.add_argument("--quiet", action="store_true", help="no progress display")
+    _add_limit(run)
 
     export = sub.add_parser("export", help="export FMUs only",
                             description="Tune the scene's controllers and export the FMUs of "
@@ -101,6 +194,7 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("scene", nargs="?", help="scene file or embedded scene name")
     export.add_argument("--out", type=Path, help="output folder (default: a new folder here)")
     export.add_argument("--quiet", action="store_true", help="no progress display")
+    _add_limit(export)
 
     for name, helptext, description in (
             ("table", "the paper's equivalence table for a beam",
@@ -120,21 +214,35 @@ def build_parser() -> argparse.ArgumentParser:
                            default="poles-and-zeros",
                            help="flexsat's fit (default) or the paper's")
         p.add_argument("--json", action="store_true", help="JSON on stdout")
+        _add_limit(p)
 
     sub.add_parser("scenes", help="list the embedded scenes",
                    description="List the embedded scenes (usable as 'flexsat run NAME').")
     return parser
 
 
-def _scene(argument):
+def _add_limit(parser) -> None:
+    parser.add_argument("--limit", type=_limit_option, action="append", default=[],
+                        metavar="NAME=VALUE",
+                        help="raise (or lower) a work limit, e.g. --limit modes=800 (names: "
+                             "modes, bodies, fit_bodies, appendages, states, samples, memory "
+                             "[bytes], string_length, file_size [bytes]); repeatable")
+
+
+def _limits(args) -> dict:
+    return dict(getattr(args, "limit", []) or [])
+
+
+def _scene(argument, limits=None):
     from .scene import example_scenes, load_scene, scene_path
 
     if argument is None:
-        return load_scene(None)
+        return load_scene(None, limits=limits)
     path = Path(argument)
     if not path.exists() and argument in example_scenes():
-        return load_scene(scene_path(argument), source=f"{argument} (embedded scene)")
-    return load_scene(path)
+        return load_scene(scene_path(argument), source=f"{argument} (embedded scene)",
+                          limits=limits)
+    return load_scene(path, limits=limits)
 
 
 def _beam_from(args):
@@ -146,7 +254,7 @@ def _beam_from(args):
     if args.scene is not None:
         if given:
             raise _UserError("give either --scene or beam options, not both")
-        scene = _scene(args.scene)
+        scene = _scene(args.scene, _limits(args))
         for a in scene.appendages:
             if a.beam is not None:
                 return a.beam.build(), f"{scene.source}: {a.name}"
@@ -163,19 +271,21 @@ def _beam_from(args):
 
 
 def _cmd_run(args, *, export_only: bool = False) -> int:
-    from .report import default_output_folder, output_folder, summary_lines, to_json, write_report
+    from .output import OutputFolder
+    from .report import summary_lines, to_json, write_report
     from .runner import run
 
     progress = _Progress(args.quiet)
-    scene = _scene(args.scene)
-    out = args.out if args.out is not None else default_output_folder()
+    scene = _scene(args.scene, _limits(args))
     if export_only and not scene.export.fmu:
         import dataclasses
 
         scene = scene.replace(export=dataclasses.replace(scene.export, fmu=True))
         if scene.manoeuvre is None and scene.export.step is None:
             raise _UserError(f"{scene.source}: export.step [s] is needed without a manoeuvre")
-    with output_folder(out) as folder:
+    # the output folder is checked and claimed before anything is computed
+    target = OutputFolder(args.out)
+    with target as folder:
         result = run(scene, progress=progress, time_responses=not export_only)
         if export_only:
             data = write_report(result, folder, fmus=True, plots=False, pages=False,
@@ -183,7 +293,10 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
         else:
             data = write_report(result, folder, fmus=not args.no_fmu,
                                 plots=not args.no_plots, progress=progress)
+    out = target.path
     progress(f"done in {time.perf_counter() - progress.t0:.1f} s")
+    for line in data.get("warnings", []):
+        print(f"flexsat: warning: {_one_line(line)}", file=sys.stderr)
     if getattr(args, "json", False):
         print(to_json(data))
         return 0
@@ -201,6 +314,20 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
         what.append(f"{len(fmus)} FMUs")
     print(f"wrote {', '.join(what)} to {out}")
     return 0
+
+
+def _check_n_bodies(args) -> None:
+    """--n-bodies of table and fit: at least 2, at most limits.fit_bodies."""
+    from .limits import Limits
+    from .scene import read_limits
+
+    if args.n_bodies < 2:
+        raise _UserError(f"--n-bodies must be at least 2; got {args.n_bodies}")
+    bound = Limits(**read_limits(_limits(args), "--limit")).fit_bodies
+    if args.n_bodies > bound:
+        raise _UserError(f"--n-bodies {args.n_bodies}: over the limit {bound} (limits."
+                         f"fit_bodies: a fit is an optimisation whose time grows fast with the "
+                         f"bodies); ask for fewer, or raise it with --limit fit_bodies=N")
 
 
 def _equivalence(args):
@@ -221,8 +348,7 @@ def _equivalence(args):
 def _cmd_table(args) -> int:
     from .report import equivalence_markdown, to_json
 
-    if args.n_bodies < 2:
-        raise _UserError(f"--n-bodies must be at least 2; got {args.n_bodies}")
+    _check_n_bodies(args)
     beam, source, table = _equivalence(args)
     if args.json:
         print(to_json({"beam": _beam_dict(beam), "source": source, **table}))
@@ -254,8 +380,7 @@ def _cmd_fit(args) -> int:
     from .report import to_json
     from .runner import _describe
 
-    if args.n_bodies < 2:
-        raise _UserError(f"--n-bodies must be at least 2; got {args.n_bodies}")
+    _check_n_bodies(args)
     beam, source = _beam_from(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -289,56 +414,83 @@ def _cmd_scenes(args) -> int:
     return 0
 
 
-def _fmu_error():
+def _dispatch(args) -> int:
+    if args.command == "run":
+        return _cmd_run(args)
+    if args.command == "export":
+        return _cmd_run(args, export_only=True)
+    if args.command == "table":
+        return _cmd_table(args)
+    if args.command == "fit":
+        return _cmd_fit(args)
+    return _cmd_scenes(args)
+
+
+def _classify(exc: BaseException) -> tuple[int, str]:
+    """Exit code and message line of an exception: 2 for user and environment errors, 1 for
+    a bug of flexsat."""
+    from appendages.interface import FlexsatError
     from fmu import FMUError
 
-    return FMUError
+    from .output import is_environment_error
+
+    if isinstance(exc, (FlexsatError, _UserError)):
+        return 2, f"flexsat: error: {exc}"
+    if isinstance(exc, FMUError):
+        # the fmu package's messages say what to do; one that declares itself a bug of ours
+        # (a compiler error on code we generated) is one
+        if "bug" in str(exc).lower():
+            return 1, f"flexsat: internal error: FMU export failed: {exc}"
+        return 2, f"flexsat: error: FMU export failed: {exc}"
+    if is_environment_error(exc):
+        where = f": {exc.filename}" if getattr(exc, "filename", None) else ""
+        return 2, (f"flexsat: error: {exc.strerror}{where} ({errno.errorcode.get(exc.errno, '')}"
+                   "); free some space, check the permissions or choose another --out")
+    if isinstance(exc, MemoryError):
+        return 2, ("flexsat: error: out of memory: this machine has less memory than the scene "
+                   "needs; ask for less (fewer modes, bodies, samples or controllers) or lower "
+                   "--limit memory=BYTES to what the machine has")
+    return 1, (f"flexsat: internal error: {type(exc).__name__}: {exc} (a bug in flexsat; run "
+               "with --debug for the traceback and please report it)")
 
 
 def main(argv=None) -> int:
-    """Entry point of the ``flexsat`` console script; returns the exit code."""
-    from appendages.interface import FlexsatError
-
+    """Entry point of the ``flexsat`` console script; returns the exit code (see the module
+    docstring for each)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help(sys.stderr)
         return 2
-    try:
-        if args.command == "run":
-            return _cmd_run(args)
-        if args.command == "export":
-            return _cmd_run(args, export_only=True)
-        if args.command == "table":
-            return _cmd_table(args)
-        if args.command == "fit":
-            return _cmd_fit(args)
-        return _cmd_scenes(args)
-    except (FlexsatError, _UserError) as exc:
-        if args.debug:
-            traceback.print_exc()
-        print(f"flexsat: error: {exc}", file=sys.stderr)
-        return 2
-    except _fmu_error() as exc:
-        if args.debug:
-            traceback.print_exc()
-        print(f"flexsat: FMU export failed: {exc}", file=sys.stderr)
-        return 1
-    except BrokenPipeError:
-        # stdout closed early (e.g. piped into head): not an error of flexsat
-        import os
+    debug = args.debug
+    with _terminate_by_exception(), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")
+        try:
+            code = _dispatch(args)
+        except BrokenPipeError:
+            # stdout closed early (e.g. piped into head): not an error of flexsat
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
+        except KeyboardInterrupt:
+            print("flexsat: interrupted; nothing half-written was kept", file=sys.stderr)
+            return 130
+        except Terminated as exc:
+            name = signal.Signals(exc.signum).name
+            print(f"flexsat: terminated by {name}; nothing half-written was kept",
+                  file=sys.stderr)
+            return 128 + exc.signum
+        except Exception as exc:
+            if debug:
+                traceback.print_exc()
+            code, line = _classify(exc)
+            print(_one_line(line), file=sys.stderr)
+            return code
+    # warnings outside a scene run (those of a run are in its report and printed with it)
+    from .runner import warning_lines
 
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
-    except KeyboardInterrupt:
-        print("flexsat: interrupted", file=sys.stderr)
-        return 130
-    except Exception as exc:  # an internal error: one line, traceback on --debug
-        if args.debug:
-            traceback.print_exc()
-        print(f"flexsat: internal error: {type(exc).__name__}: {exc} (run with --debug for the "
-              "traceback)", file=sys.stderr)
-        return 1
+    for line in warning_lines(caught):
+        print(f"flexsat: warning: {_one_line(line)}", file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -134,7 +134,7 @@ def test_user_errors_exit_2_with_one_line(scene_file, tmp_path, capsys, edit, me
     import re
     assert re.search(message, err)
     assert not out.exists()
-    assert not list(tmp_path.glob(".o.partial-*"))
+    assert not list(tmp_path.glob(".o.partial*"))
 
 
 def test_missing_scene_file_and_bad_option(tmp_path, capsys):
