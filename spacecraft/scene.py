@@ -182,7 +182,7 @@ fit_bodies      12           ``fit.n_bodies`` (a fit is an optimisation: 15 bodi
 appendages      64           ``appendages`` entries
 states          1200         states of the largest closed loop (estimated upper bound)
 samples         1e7          samples per simulation, ``duration / step + 1`` (and of FMU
-                             reference files)
+                             reference files); a digital loop's count 20 each
 memory          2 GiB        bytes held by the time responses (estimated upper bound)
 string_length   4096         characters of ``title``
 file_size       1 MiB        bytes of a scene file (``--limit`` only)
@@ -212,7 +212,7 @@ import numpy as np
 
 from appendages.interface import FlexsatError
 
-from .limits import LIMIT_UNITS, Limits, estimate_cost
+from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, Limits, estimate_cost
 
 __all__ = [
     "SceneError",
@@ -1046,9 +1046,15 @@ def _check_cost(r: _Reader, scene: Scene) -> None:
         r.check_limit(cost.loop_key, cost.loop_states, "states",
                       f"the largest closed loop would have up to {cost.loop_states} states")
     if m is not None:
-        r.check_limit("manoeuvre.step", cost.samples, "samples",
-                      f"{cost.samples:.4g} samples per simulation (duration {m.duration:g} s / "
-                      f"step {m.step:g} s)")
+        if scene.controller.sample_time is None:
+            r.check_limit("manoeuvre.step", cost.samples, "samples",
+                          f"{cost.samples:.4g} samples per simulation (duration {m.duration:g} s"
+                          f" / step {m.step:g} s)")
+        else:
+            r.check_limit("manoeuvre.step", cost.samples * DIGITAL_SAMPLE_COST, "samples",
+                          f"{cost.samples:.4g} samples per simulation of a digital loop "
+                          f"(duration {m.duration:g} s / step {m.step:g} s), each counting "
+                          f"{DIGITAL_SAMPLE_COST}")
         if cost.memory > limits.memory:
             raise r.error("manoeuvre.step", f"the time responses would take up to "
                           f"{cost.memory / 2**30:.3g} GiB ({cost.simulations} simulations of "

@@ -22,23 +22,11 @@ import pytest
 
 import spacecraft.report
 import spacecraft.runner
-from spacecraft import cli
 from spacecraft.output import OWNER
 
-from test_cli import SCENE
+from test_cli import SCENE, flexsat, scene_file  # noqa: F401 (scene_file: a fixture)
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-@pytest.fixture
-def scene_file(tmp_path):
-    path = tmp_path / "boom.toml"
-    path.write_text(SCENE)
-    return path
-
-
-def flexsat(*args):
-    return cli.main([str(a) for a in args])
 
 
 def one_line(capsys) -> str:

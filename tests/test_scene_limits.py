@@ -35,6 +35,9 @@ def refused(data, match, **kwargs):
       "appendages.0.chain": {"from_beam": "rfem", "n_bodies": 100000}},
      r"appendages\[0\]\.chain\.n_bodies", "bodies"),
     ({"manoeuvre.duration": 1e9, "manoeuvre.step": 0.1}, r"manoeuvre\.step", "samples"),
+    # a digital loop: 1e6 samples count 2e7
+    ({"manoeuvre.duration": 1e5, "manoeuvre.step": 0.1, "controller.sample_rate": 10.0},
+     r"manoeuvre\.step: 1e\+06 samples per simulation of a digital loop.*", "samples"),
     ({"title": "x" * 100_000}, r"title", "string_length"),
 ])
 def test_work_beyond_a_limit_is_refused_by_key_and_limit(changes, key, limit):
