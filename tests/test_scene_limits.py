@@ -105,7 +105,7 @@ def test_estimated_sizes_bound_the_sizes_a_run_builds():
     (a bound that is not one would let a scene past its limits)."""
     data = scene_with(**{"controller.types": ["pd", "lqr"],
                          "controller.lqr": {"attitude_weight": 7.6, "torque_weight": 1.0},
-                         "controller.pd.roll_off": 1.0, "outputs.tip_deflection": True,
+                         "controller.pd.roll_off": 50.0, "outputs.tip_deflection": True,
                          "appendages.0.fit.match": ["poles-and-zeros", "frequencies"],
                          "manoeuvre.disturbance": {"input": "rod_tip_force", "amplitude": 1.0},
                          "report.equivalence": False})
