@@ -58,8 +58,11 @@ _swept = False
 _sweep_guard = threading.Lock()
 
 
-def platform_folder() -> tuple[str, str]:
-    """FMI 2.0 platform folder under ``binaries/`` and the library suffix for this machine.
+def platform_folder(fmi_version: str = "2.0") -> tuple[str, str]:
+    """Platform folder under ``binaries/`` and the library suffix for this machine.
+
+    FMI 2.0 names it ``linux64``, ``darwin64``...; FMI 3.0 by the platform tuple
+    ``<arch>-<sys>`` (``x86_64-linux``, ``aarch64-darwin``...; FMI 3.0.2, section 2.5.1.5).
 
     Raises
     ------
@@ -68,13 +71,22 @@ def platform_folder() -> tuple[str, str]:
     """
     bits = 64 if sys.maxsize > 2**32 else 32
     system = platform.system()
-    if system == "Linux":
-        return f"linux{bits}", ".so"
-    if system == "Darwin":
-        return f"darwin{bits}", ".dylib"
-    raise FMUBuildError(
-        f"building FMU binaries on {system} is not supported; export on Linux or macOS, or "
-        "compile the sources/ folder of the FMU with your own tool chain.")
+    if system not in ("Linux", "Darwin"):
+        raise FMUBuildError(
+            f"building FMU binaries on {system} is not supported; export on Linux or macOS, or "
+            "export with sources_only=True and compile the sources/ folder of the FMU with "
+            "your own tool chain.")
+    suffix = ".so" if system == "Linux" else ".dylib"
+    if fmi_version == "2.0":
+        return f"{system.lower()}{bits}", suffix
+    machine = platform.machine().lower()
+    arch = {"x86_64": "x86_64", "amd64": "x86_64", "i386": "x86", "i686": "x86",
+            "aarch64": "aarch64", "arm64": "aarch64", "armv7l": "aarch32"}.get(machine)
+    if arch is None:
+        raise FMUBuildError(f"the FMI 3.0 platform tuple of the machine {machine!r} is not "
+                            "known; export with sources_only=True and compile the sources/ "
+                            "folder of the FMU with your own tool chain.")
+    return f"{arch}-{system.lower()}", suffix
 
 
 def find_compiler(compiler: str | os.PathLike | None = None) -> str:

@@ -12,7 +12,9 @@ Next to ``<Model>.fmu`` the exporter can write
 The inputs are piecewise constant between grid points, so the zero-order-hold
 discretisation ``control.c2d(sys, h, "zoh")`` gives the exact continuous response at the
 grid points: the same file checks Model Exchange (to the solver's tolerance) and
-Co-Simulation (to round-off).
+Co-Simulation (to round-off).  A sampled system (sample period h) is simulated as it is;
+at a sample instant its output is ``C x_k + D u`` with the input before (left row) and
+after (right row) the step, as the FMU shows it.
 
 References
 ----------
@@ -82,7 +84,9 @@ def reference_response(model: LinearModel, step: float, stop_time: float) -> np.
     # u_k = u(t_k+), held over [t_k, t_k+1): right-continuous steps
     U = (np.arange(t.size)[None, :] >= step_indices[:, None]).astype(np.float64)
     U_left = (np.arange(t.size)[None, :] > step_indices[:, None]).astype(np.float64)
-    sampled = control.c2d(model.statespace(), step, method="zoh")
+    # a sampled system is its own discretisation (export checks step == its period)
+    sampled = model.statespace() if model.discrete else control.c2d(model.statespace(), step,
+                                                                       method="zoh")
     response = control.forced_response(sampled, T=t, U=U, X0=model.x0)
     X = np.asarray(response.states, dtype=np.float64).reshape(model.n_states, t.size)
     Y = np.asarray(response.outputs, dtype=np.float64).reshape(model.n_outputs, t.size)

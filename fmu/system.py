@@ -1,8 +1,9 @@
-"""The exported system: a validated continuous-time LTI model with named signals.
+"""The exported system: a validated LTI model with named signals.
 
 :class:`LinearModel` is what the rest of the package works from: float64 matrices of fixed
-shapes, signal names that are legal FMI variable names, units and the initial state.  It is
-built once, at the public boundary, by :func:`linear_model_from`, which raises
+shapes, signal names that are legal FMI variable names, units, the initial state, the
+states' nominal magnitudes and, for a discrete-time (sampled) system, its sample period.
+It is built once, at the public boundary, by :func:`linear_model_from`, which raises
 :class:`~fmu.errors.FMUBuildError` for anything an FMU cannot represent.
 """
 
@@ -21,7 +22,11 @@ from .errors import FMUBuildError
 from .limits import check_model_size
 from .units import resolve_units
 
-__all__ = ["LinearModel", "linear_model_from", "zoh_matrices", "is_legal_name"]
+__all__ = ["LinearModel", "linear_model_from", "zoh_matrices", "is_legal_name",
+           "state_nominals", "NOMINAL_POINTS"]
+
+#: Points of the default experiment at which :func:`state_nominals` looks at the states.
+NOMINAL_POINTS = 200
 
 # FMI 2.0 "structured" variable names without quoted names (FMI 2.0.1, section 2.2.9):
 # identifiers with optional array subscripts, joined by dots: omega, x[0], wing.tip[2,1].
@@ -38,7 +43,9 @@ def is_legal_name(name: object) -> bool:
 
 @dataclass(frozen=True)
 class LinearModel:
-    """A continuous-time LTI system ``dx/dt = A x + B u, y = C x + D u`` ready for export.
+    """An LTI system ready for export: continuous time ``dx/dt = A x + B u, y = C x + D u``
+    or, with ``sample_period`` T > 0, discrete time ``x[k+1] = A x[k] + B u[k], y[k] = C
+    x[k] + D u[k]`` sampled at ``t_k = t_0 + k T``.
 
     Attributes
     ----------
@@ -52,6 +59,11 @@ class LinearModel:
         Unit of every signal (see :mod:`fmu.units`).
     name : str
         The StateSpace's name, used in descriptions.
+    sample_period : float, s
+        0.0 for continuous time, else the sample period T.
+    nominals : numpy.ndarray of float64, shape (n,), optional
+        Positive nominal magnitude of each state, in its unit (None until
+        :func:`state_nominals` or the user fills it in).
     """
 
     A: np.ndarray
@@ -64,6 +76,13 @@ class LinearModel:
     x0: np.ndarray
     units: dict[str, str | None] = field(default_factory=dict)
     name: str = ""
+    sample_period: float = 0.0
+    nominals: np.ndarray | None = None
+
+    @property
+    def discrete(self) -> bool:
+        """True for a discrete-time (sampled) system."""
+        return self.sample_period > 0.0
 
     @property
     def n_states(self) -> int:
@@ -78,23 +97,29 @@ class LinearModel:
         return self.C.shape[0]
 
     def statespace(self) -> control.StateSpace:
-        """The model as a named python-control StateSpace."""
-        return control.ss(self.A, self.B, self.C, self.D, inputs=list(self.input_names),
-                          outputs=list(self.output_names), states=list(self.state_names))
+        """The model as a named python-control StateSpace (discrete with dt = T if sampled)."""
+        return control.ss(self.A, self.B, self.C, self.D, self.sample_period,
+                          inputs=list(self.input_names), outputs=list(self.output_names),
+                          states=list(self.state_names))
 
 
 def linear_model_from(system: object, *, x0: object = None,
-                      units: Mapping[str, str | None] | None = None) -> LinearModel:
+                      units: Mapping[str, str | None] | None = None,
+                      nominals: object = None) -> LinearModel:
     """Validate a python-control system and turn it into a :class:`LinearModel`.
 
     Parameters
     ----------
     system : control.StateSpace
-        Continuous-time (``dt == 0``), finite matrices, legal and distinct signal names.
+        Continuous-time (``dt == 0``) or discrete-time with a sample period (``dt > 0``),
+        finite matrices, legal and distinct signal names.
     x0 : array_like of float, shape (n_states,), optional
         Initial state in the units of the states; zeros by default.
     units : mapping of str to str or None, optional
         Unit overrides, see :func:`fmu.units.resolve_units`.
+    nominals : array_like of float, shape (n_states,), optional
+        Positive finite nominal magnitude of each state; left None otherwise (see
+        :func:`state_nominals`).
 
     Returns
     -------
@@ -103,13 +128,14 @@ def linear_model_from(system: object, *, x0: object = None,
     Raises
     ------
     FMUBuildError
-        For a system that is not a StateSpace, is discrete-time, has non-finite matrices, or
-        has missing, illegal or duplicate signal names.
+        For a system that is not a StateSpace, is discrete-time without a sample period,
+        has non-finite matrices, or has missing, illegal or duplicate signal names.
     ValueError
-        For an ``x0`` of the wrong shape or with non-finite entries, bad ``units``, or a
-        system beyond the limits of :mod:`fmu.limits` (states, signals).
+        For an ``x0`` or ``nominals`` of the wrong shape or with bad entries, bad
+        ``units``, or a system beyond the limits of :mod:`fmu.limits` (states, signals).
     TypeError
-        For an ``x0`` that is not an array of numbers or ``units`` that is not a mapping.
+        For an ``x0`` or ``nominals`` that is not an array of numbers or ``units`` that is
+        not a mapping.
     """
     if isinstance(system, control.TransferFunction):
         raise FMUBuildError(
@@ -121,11 +147,17 @@ def linear_model_from(system: object, *, x0: object = None,
             f"{type(system).__name__}. Nonlinear or time-varying systems cannot be exported: "
             "linearise them first (e.g. control.linearize).")
     dt = system.dt
-    if dt is not None and dt is not False and dt != 0:
+    sample_period = 0.0
+    if dt is True:
         raise FMUBuildError(
-            f"system must be continuous-time (dt = 0); got a discrete-time system with dt = {shorten(dt)}. "
-            "Export the continuous-time model (the FMU discretises it exactly for any "
-            "communication step), e.g. control.d2c if you only have the sampled one.")
+            "system is discrete-time without a sample period (dt = True); a sampled FMU "
+            "needs it: build the StateSpace with dt = <sample period in s>.")
+    if dt is not None and dt is not False and dt != 0:
+        if isinstance(dt, (bool, np.bool_)) or not isinstance(dt, (int, float, np.integer, np.floating)) \
+                or not (np.isfinite(dt) and dt > 0):
+            raise FMUBuildError(f"system.dt must be 0 (continuous time) or a positive finite "
+                                f"sample period [s]; got {shorten(dt)}")
+        sample_period = float(dt)
 
     check_model_size(system.nstates, system.ninputs, system.noutputs)
     matrices = {}
@@ -178,10 +210,26 @@ def linear_model_from(system: object, *, x0: object = None,
             raise ValueError(f"x0 must be finite (in the states' units); got {x0_array[bad]} "
                              f"at index {bad}")
 
+    nominal_array = None
+    if nominals is not None:
+        try:
+            nominal_array = np.array(nominals, dtype=np.float64)
+        except (TypeError, ValueError) as error:
+            raise TypeError(f"nominals must be an array of {n} positive numbers (in the states' "
+                            f"units); got {type(nominals).__name__} {shorten(nominals)}") from error
+        if nominal_array.shape != (n,):
+            raise ValueError(f"nominals must have shape ({n},) (one value per state, in the "
+                             f"states' units); got shape {nominal_array.shape}")
+        bad = np.flatnonzero(~(np.isfinite(nominal_array) & (nominal_array > 0)))
+        if bad.size:
+            raise ValueError(f"nominals must be positive and finite (in the states' units); got "
+                             f"{nominal_array[bad[0]]} at index {int(bad[0])}")
+
     return LinearModel(
         A=matrices["A"], B=matrices["B"], C=matrices["C"], D=matrices["D"],
         input_names=inputs, output_names=outputs, state_names=states, x0=x0_array,
-        units=resolve_units(list(inputs + outputs + states), units), name=str(system.name))
+        units=resolve_units(list(inputs + outputs + states), units), name=str(system.name),
+        sample_period=sample_period, nominals=nominal_array)
 
 
 def zoh_matrices(A: np.ndarray, B: np.ndarray, step: float) -> tuple[np.ndarray, np.ndarray]:
@@ -227,3 +275,62 @@ def zoh_matrices(A: np.ndarray, B: np.ndarray, step: float) -> tuple[np.ndarray,
     # expm(M) = D expm(D^-1 M D) D^-1 with D = diag(factors), powers of 2 (exact)
     exponential = scipy.linalg.expm(balanced) * factors[:, None] / factors[None, :]
     return exponential[:n, :n].copy(), exponential[:n, n:].copy()
+
+
+def _round_nominal(value: float) -> float:
+    """Two significant digits: a nominal is a scale, not a measurement."""
+    return float(f"{value:.1e}")
+
+
+def state_nominals(model: LinearModel, stop_time: float) -> np.ndarray:
+    """Nominal magnitude of each state from the model's own scaling.
+
+    The nominal of state i is the largest ``|x_i(t)|`` over the default experiment
+    ``[0, stop_time]`` of (a) the free response from ``x0`` and (b) the responses to a unit
+    step of each input (1 in the input's unit) from rest, looked at on
+    :data:`NOMINAL_POINTS` equally spaced instants, rounded to two significant digits; 1.0
+    for a state that none of them moves (or that overflows). A deflection state that a
+    unit torque moves by millimetres thus gets a nominal of about 1e-3 m, and an
+    integrator that tolerances are applied to relative to its nominal (FMI 2.0.1, section
+    3.2.2; FMI 3.0, ``nominal``) is neither over- nor under-resolved.
+
+    The responses are exact at the sampled instants: zero-order-hold transition matrices
+    (:func:`zoh_matrices`) for a continuous-time model, powers of ``[[A, B], [0, I]]`` for
+    a discrete-time one.
+
+    Parameters
+    ----------
+    model : LinearModel
+    stop_time : float, s
+        Positive and finite.
+
+    Returns
+    -------
+    numpy.ndarray of float64, shape (n_states,)
+    """
+    n, m = model.n_states, model.n_inputs
+    if n == 0:
+        return np.zeros(0)
+    if model.discrete:
+        samples = max(1, int(min(stop_time / model.sample_period, 2.0**52)))
+        stride = max(1, samples // NOMINAL_POINTS)
+        augmented = np.zeros((n + m, n + m))
+        augmented[:n, :n], augmented[:n, n:] = model.A, model.B
+        augmented[n:, n:] = np.eye(m)
+        points = min(NOMINAL_POINTS, samples)
+        with np.errstate(all="ignore"):
+            transition = np.linalg.matrix_power(augmented, stride)
+    else:
+        points = NOMINAL_POINTS
+        Phi, Gamma = zoh_matrices(model.A, model.B, stop_time / points)
+        transition = np.block([[Phi, Gamma], [np.zeros((m, n)), np.eye(m)]])
+    # columns: [x; u] of the free response and of each unit input step
+    columns = np.zeros((n + m, 1 + m))
+    columns[:n, 0] = model.x0
+    columns[n:, 1:] = np.eye(m)
+    peak = np.abs(columns[:n]).max(axis=1)
+    with np.errstate(all="ignore"):
+        for _ in range(points):
+            columns = transition @ columns
+            peak = np.fmax(peak, np.abs(columns[:n]).max(axis=1))
+    return np.array([_round_nominal(v) if np.isfinite(v) and v > 0 else 1.0 for v in peak])

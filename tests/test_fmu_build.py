@@ -28,11 +28,14 @@ from fmpy import simulate_fmu
 import fmu
 import fmu.build
 from fmu import FMUBuildError, export
+from fmu.codegen import template_sources
 from fmu.cache import ObjectCache, compiler_identity, object_cache_dir
 from fmu.verify import FMI2_COMMON, FMI2_CO_SIMULATION, elf_exported_symbols
 
 ROOT = Path(__file__).resolve().parents[1]
 J = 10.0  # hub inertia [kg m^2]
+#: Fixed C templates of an FMI 2.0 FMU, each one cache entry
+N_TEMPLATES = len(template_sources("2.0"))
 
 SLOW_COMPILER = """#!/bin/sh
 # A slow C compiler: waits {delay} s, then runs gcc. It fails if another compiler process
@@ -132,7 +135,8 @@ def test_threads_exporting_at_once_share_the_cache_safely(tmp_path, cache_dir):
         for k in range(per_thread):
             assert_fmu_works(results[f"m{worker}_{k}"], rigid_body(1.0 + worker + k / 10))
     # each template compiled once: two objects with their sidecars and locks, no leftovers
-    assert sorted(p.suffix for p in cache_dir.iterdir()) == [".json"] * 2 + [".lock"] * 2 + [".o"] * 2
+    assert sorted(p.suffix for p in cache_dir.iterdir()) == ([".json"] * N_TEMPLATES + [".lock"] * N_TEMPLATES
+                                                             + [".o"] * N_TEMPLATES)
 
 
 WORKER = """
@@ -164,7 +168,7 @@ def test_processes_and_threads_exporting_at_once(tmp_path, cache_dir):
     for i in range(3):
         for k in range(2):
             assert_fmu_works(tmp_path / f"p{i}_{k}.fmu", rigid_body(1.0 + i + k / 10))
-    assert len(list(cache_dir.glob("*.o"))) == 2 and not list(cache_dir.glob("*.tmp-*"))
+    assert len(list(cache_dir.glob("*.o"))) == N_TEMPLATES and not list(cache_dir.glob("*.tmp-*"))
 
 
 # ---------------------------------------------------------------- the persistent cache
@@ -175,7 +179,7 @@ def test_cold_cache_is_created_and_then_reused(tmp_path, cache_dir):
     assert not cache_dir.exists()
     export(rigid_body(), tmp_path / "a.fmu")
     objects = {p.name: p.stat().st_mtime_ns for p in cache_dir.glob("*.o")}
-    assert len(objects) == 2  # fmi2Functions.o, linear_model.o
+    assert len(objects) == N_TEMPLATES  # fmi2Functions.o, lti_instance.o, linear_model.o
     calls = []
     original = fmu.build.SharedLibraryBuild._compile_now
     with pytest.MonkeyPatch.context() as patch:
@@ -207,7 +211,7 @@ def test_entry_that_passes_its_checks_but_does_not_link_is_rebuilt(tmp_path, cac
     """An object with a matching sidecar but wrong content (an object of another source)
     makes the link fail once; the entry is evicted, rebuilt, and the export succeeds."""
     export(rigid_body(), tmp_path / "a.fmu")
-    first, second = sorted(cache_dir.glob("*.o"))
+    first, second, *_ = sorted(cache_dir.glob("*.o"))
     first.write_bytes(second.read_bytes())  # duplicate symbols at link time
     first.with_suffix(".json").write_bytes(second.with_suffix(".json").read_bytes())
     path = export(rigid_body(4.0), tmp_path / "b.fmu")
@@ -252,13 +256,13 @@ def test_another_compiler_version_gets_its_own_objects(tmp_path, cache_dir):
     """The key holds the compiler's --version output: a wrapper that reports another
     version compiles its own templates instead of using gcc's."""
     export(rigid_body(), tmp_path / "a.fmu")
-    assert len(list(cache_dir.glob("*.o"))) == 2
+    assert len(list(cache_dir.glob("*.o"))) == N_TEMPLATES
     other = tmp_path / "other"
     other.mkdir()
     cc = slow_compiler(other, delay=0.0, version_note="gcc (patched) 99.1")
     assert "99.1" in compiler_identity(str(cc))
     assert_fmu_works(export(rigid_body(), tmp_path / "b.fmu", compiler=cc), rigid_body())
-    assert len(list(cache_dir.glob("*.o"))) == 4
+    assert len(list(cache_dir.glob("*.o"))) == 2 * N_TEMPLATES
 
 
 # ---------------------------------------------------------------- verification

@@ -138,7 +138,7 @@ def test_two_fmus_sources_link_into_one_program(tmp_path):
     for name, system in (("body", body()), ("pd", pd_controller())):
         sources, guid = unpack(export(system, tmp_path / f"{name}.fmu"), tmp_path / name)
         defines.append(f'-D{name.upper()}_GUID="{guid}"')
-        for source in ("model.c", "fmi2Functions.c", "linear_model.c"):
+        for source in ("model.c", "fmi2Functions.c", "lti_instance.c", "linear_model.c"):
             obj = tmp_path / f"{name}_{source}.o"
             subprocess.run(["gcc", "-c", "-std=c99", "-O2", "-pthread", f"-DFMI2_FUNCTION_PREFIX={name}_",
                             f"-I{sources}", "-o", str(obj), str(sources / source)], check=True)
@@ -190,7 +190,7 @@ def test_double_free_reads_no_freed_memory(tmp_path):
     neither read nor free freed memory, and the other instance is unharmed."""
     sources, guid = unpack(export(body(), tmp_path / "body.fmu"), tmp_path / "body")
     (tmp_path / "main.c").write_text(HARNESS_DOUBLE_FREE)
-    files = [str(sources / f) for f in ("model.c", "fmi2Functions.c", "linear_model.c")]
+    files = [str(sources / f) for f in ("model.c", "fmi2Functions.c", "lti_instance.c", "linear_model.c")]
     result = compile_and_run(["gcc", "-std=c99", "-g", "-fsanitize=address", "-fno-omit-frame-pointer",
                               f'-DGUID="{guid}"', f"-I{sources}", str(tmp_path / "main.c"), *files],
                              tmp_path / "double_free")

@@ -245,9 +245,16 @@ def test_errors_share_a_base_class():
     assert issubclass(FMUBuildError, FMUError) and issubclass(fmu.CosimulationError, FMUError)
 
 
-def test_discrete_time_system_is_refused(tmp_path):
-    with pytest.raises(FMUBuildError, match=r"continuous-time.*dt = 0.1"):
-        export(control.c2d(rigid_body(), 0.1), tmp_path / "d.fmu")
+def test_discrete_time_system_needs_a_sample_period_and_co_simulation(tmp_path):
+    """A sampled system is exported (tests/test_fmu3_sampled.py), but only with a sample
+    period (dt = True has none) and as Co-Simulation."""
+    sampled = control.c2d(rigid_body(), 0.1)
+    unspecified = control.ss(sampled.A, sampled.B, sampled.C, sampled.D, True)
+    with pytest.raises(FMUBuildError, match=r"discrete-time without a sample period \(dt = True\)"):
+        export(unspecified, tmp_path / "d.fmu")
+    with pytest.raises(ValueError, match=r"interfaces must be 'cs' for a discrete-time system "
+                                         r"\(sampled every 0.1 s"):
+        export(sampled, tmp_path / "d.fmu", interfaces=("me", "cs"))
 
 
 def test_non_lti_system_is_refused(tmp_path):

@@ -267,12 +267,9 @@ def test_bad_steps(body):
         body.FreeInstance(c)
 
 
-def test_unsupported_capabilities_are_errors(body):
+def test_unknown_log_category_is_an_error(body):
     c = body.initialised()
     try:
-        state = c_void_p()
-        assert body.GetFMUstate(c, byref(state)) == ERROR
-        assert "canGetAndSetFMUstate" in body.last_message()
         categories = (c_char_p * 1)(b"logEverything")
         assert body.SetDebugLogging(c, 1, 1, categories) == ERROR
         assert 'unknown log category "logEverything"' in body.last_message()

@@ -3,25 +3,30 @@
  * One binary serves both interfaces.  This file checks every call (instance pointer, state
  * machine, value references, null arrays, non-finite numbers), logs what went wrong through
  * the environment's logger and returns fmi2Error or fmi2Discard instead of crashing.  The
- * arithmetic is in linear_model.c, the system's matrices in the generated model.c.
+ * values, stepping, FMU states and partial derivatives are in lti_instance.c (shared with
+ * the FMI 3.0 layer), the arithmetic in linear_model.c, the system's matrices in the
+ * generated model.c.
  *
  * Which interfaces the library provides is set by the generated flexsat_interfaces.h
  * (FLEXSAT_MODEL_EXCHANGE, FLEXSAT_CO_SIMULATION, as declared in modelDescription.xml): the
  * library exports exactly the fmi2 functions of those interfaces.
  *
- * Instances: every live instance is on a list guarded by a mutex, and each call first
- * looks its fmi2Component up there by address, without dereferencing it.  A stale handle -
+ * Instances: every live instance is on a list guarded by a mutex (lti_instance.c), and each
+ * call first looks its fmi2Component up there by address, without dereferencing it.  A stale handle -
  * e.g. a second fmi2FreeInstance, which the standard leaves undefined - is therefore
  * refused without reading freed memory, unless the allocator has since handed the same
  * address to a new instance of this FMU (then the handle is that instance: no handle
  * scheme that returns plain pointers can tell the two apart).  Freed instances are
  * cleared before their memory is released.
  *
- * Value references (fixed layout, the same in modelDescription.xml):
- *     inputs       0 .. m-1
- *     outputs      m .. m+p-1
- *     states       m+p .. m+p+n-1
- *     derivatives  m+p+n .. m+p+2n-1
+ * Value references: see lti_instance.h (inputs, outputs, states, derivatives).
+ *
+ * FMU states (canGetAndSetFMUstate, canSerializeFMUstate) hold the time, the states, the
+ * inputs and, for a sampled model, the sample index and the held outputs: restoring one
+ * and stepping again repeats the same computation, bit for bit.  Directional derivatives
+ * (providesDirectionalDerivative) are the entries of A, B, C, D.  A discrete-time model
+ * (Co-Simulation only) samples every T whatever the communication step, holding its
+ * outputs between samples (lti_instance.h).
  *
  * Reference: FMI 2.0.1 standard (Modelica Association, 2019), section 2.1 (common API and
  * state machine), 3.2 (Model Exchange), 4.2 (Co-Simulation).
@@ -32,15 +37,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(_WIN32)
-#include <windows.h>
-#else
-#include <pthread.h>
-#endif
-
 #include "fmi2Functions.h"
 #include "flexsat_interfaces.h"
 #include "linear_model.h"
+#include "lti_instance.h"
 
 #if !FLEXSAT_MODEL_EXCHANGE && !FLEXSAT_CO_SIMULATION
 #error "flexsat_interfaces.h must enable FLEXSAT_MODEL_EXCHANGE or FLEXSAT_CO_SIMULATION"
@@ -65,8 +65,8 @@ typedef enum {
                   | STATE_STEP_FAILED | STATE_TERMINATED | STATE_ERROR)
 
 typedef struct Instance {
+    LiNode node; /* first member: the list of live instances */
     unsigned magic;
-    struct Instance *next; /* the list of live instances */
     fmi2Type type;
     char *instance_name;
     fmi2CallbackLogger logger;
@@ -74,23 +74,12 @@ typedef struct Instance {
     fmi2ComponentEnvironment environment;
     int logging_on;
     ModelState state;
-    double time;
-    double *x;          /* states, size max(n, 1) */
-    double *u;          /* inputs, size max(m, 1) */
-    double *y;          /* outputs, size max(p, 1) */
-    double *dx;         /* derivatives / next state, size max(n, 1) */
-    double *Phi;        /* transition matrices for cached_step */
-    double *Gamma;
-    double cached_step; /* step of Phi, Gamma; 0 if none */
-    double *work;       /* workspace of lm_discretize */
+    LiValues values;
 } Instance;
 
 static const LinearModel *const model = &linear_model;
 
 static size_t n_st(void) { return model->n_states; }
-static size_t n_in(void) { return model->n_inputs; }
-static size_t n_out(void) { return model->n_outputs; }
-static size_t at_least_one(size_t k) { return k > 0 ? k : 1; }
 
 /* ---------------------------------------------------------------- logging */
 
@@ -120,48 +109,10 @@ static void log_message(Instance *inst, fmi2Status status, const char *category,
 
 /* ---------------------------------------------------------------- checks */
 
-/* ---------------------------------------------------------------- live instances */
-
-#if defined(_WIN32)
-static SRWLOCK registry_lock = SRWLOCK_INIT;
-static void lock_registry(void) { AcquireSRWLockExclusive(&registry_lock); }
-static void unlock_registry(void) { ReleaseSRWLockExclusive(&registry_lock); }
-#else
-static pthread_mutex_t registry_lock = PTHREAD_MUTEX_INITIALIZER;
-static void lock_registry(void) { pthread_mutex_lock(&registry_lock); }
-static void unlock_registry(void) { pthread_mutex_unlock(&registry_lock); }
-#endif
-
-static Instance *live_instances = NULL;
-
-static void register_instance(Instance *inst)
-{
-    lock_registry();
-    inst->next = live_instances;
-    live_instances = inst;
-    unlock_registry();
-}
-
-/* The live instance at address c, taken off the list when `unlink` is set; NULL if there
- * is none.  Compares addresses only: a freed or foreign c is never dereferenced. */
-static Instance *find_instance(fmi2Component c, int unlink)
-{
-    Instance *found = NULL;
-    lock_registry();
-    for (Instance **link = &live_instances; *link != NULL; link = &(*link)->next) {
-        if ((void *)*link == c) {
-            found = *link;
-            if (unlink) *link = found->next;
-            break;
-        }
-    }
-    unlock_registry();
-    return found;
-}
-
 static Instance *as_instance(fmi2Component c)
 {
-    Instance *inst = c == NULL ? NULL : find_instance(c, 0);
+    /* node is the first member: the node's address is the instance's */
+    Instance *inst = (Instance *)li_find(c, 0);
     if (inst == NULL || inst->magic != INSTANCE_MAGIC) return NULL;
     return inst;
 }
@@ -230,23 +181,14 @@ FMI2_Export fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingO
     return fmi2OK;
 }
 
-static void reset_values(Instance *inst)
-{
-    for (size_t i = 0; i < n_st(); i++) inst->x[i] = model->x0[i];
-    for (size_t k = 0; k < n_in(); k++) inst->u[k] = 0.0;
-    inst->time = 0.0;
-}
-
 /* Release an instance that is not (or no longer) on the live list. */
 static void free_instance(Instance *inst)
 {
     fmi2CallbackFreeMemory release = inst->free_memory;
-    void *blocks[] = {inst->instance_name, inst->x, inst->u, inst->y, inst->dx,
-                      inst->Phi, inst->Gamma, inst->work};
+    char *name = inst->instance_name;
+    li_free(&inst->values);
     memset(inst, 0, sizeof *inst); /* no magic, no pointers left behind */
-    for (size_t i = 0; i < sizeof blocks / sizeof blocks[0]; i++) {
-        if (blocks[i] != NULL) release(blocks[i]);
-    }
+    if (name != NULL) release(name);
     release(inst);
 }
 
@@ -279,7 +221,7 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
         LOG_ERROR(&report, "fmi2Instantiate: unknown fmuType %d.", (int)fmuType);
         return NULL;
     }
-    if ((fmuType == fmi2ModelExchange && !FLEXSAT_MODEL_EXCHANGE)
+    if ((fmuType == fmi2ModelExchange && (!FLEXSAT_MODEL_EXCHANGE || li_discrete()))
         || (fmuType == fmi2CoSimulation && !FLEXSAT_CO_SIMULATION)) {
         LOG_ERROR(&report, "fmi2Instantiate: this FMU does not provide %s (see "
                   "modelDescription.xml).",
@@ -310,34 +252,22 @@ FMI2_Export fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuT
     inst->logging_on = loggingOn ? 1 : 0;
     inst->state = STATE_INSTANTIATED;
 
-    const size_t n = at_least_one(n_st()), m = at_least_one(n_in()), p = at_least_one(n_out());
     inst->instance_name = (char *)allocate(strlen(instanceName) + 1, 1);
-    inst->x = (double *)allocate(n, sizeof(double));
-    inst->u = (double *)allocate(m, sizeof(double));
-    inst->y = (double *)allocate(p, sizeof(double));
-    inst->dx = (double *)allocate(n, sizeof(double));
-    int ok = inst->instance_name && inst->x && inst->u && inst->y && inst->dx;
-    if (ok && fmuType == fmi2CoSimulation) {
-        inst->Phi = (double *)allocate(n * n, sizeof(double));
-        inst->Gamma = (double *)allocate(n * m, sizeof(double));
-        inst->work = (double *)allocate(lm_workspace_size(model), sizeof(double));
-        ok = inst->Phi && inst->Gamma && inst->work;
-    }
-    if (!ok) {
+    if (inst->instance_name == NULL
+        || li_allocate(&inst->values, allocate, release, fmuType == fmi2CoSimulation) != 0) {
         LOG_ERROR(&report, "fmi2Instantiate: out of memory.");
         free_instance(inst);
         return NULL;
     }
     strcpy(inst->instance_name, instanceName);
-    reset_values(inst);
-    register_instance(inst);
+    li_register(&inst->node);
     return inst;
 }
 
 FMI2_Export void fmi2FreeInstance(fmi2Component c)
 {
     /* taken off the live list first: a second call with the same handle finds nothing */
-    Instance *inst = c == NULL ? NULL : find_instance(c, 1);
+    Instance *inst = (Instance *)li_find(c, 1);
     if (inst != NULL) free_instance(inst);
 }
 
@@ -358,7 +288,7 @@ FMI2_Export fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranc
                   stopTime, startTime);
         return fmi2Error;
     }
-    inst->time = startTime;
+    li_start(&inst->values, startTime);
     return fmi2OK;
 }
 
@@ -392,8 +322,7 @@ FMI2_Export fmi2Status fmi2Reset(fmi2Component c)
 {
     Instance *inst = checked(c, "fmi2Reset", ANY_STATE);
     if (inst == NULL) return fmi2Error;
-    reset_values(inst);
-    inst->cached_step = 0.0;
+    li_reset(&inst->values);
     inst->state = STATE_INSTANTIATED;
     return fmi2OK;
 }
@@ -406,26 +335,17 @@ static fmi2Status overflowed(Instance *inst, const char *function, const char *w
                              const char *name)
 {
     LOG_ERROR(inst, "%s: %s %s is not finite at t = %g s (the linear model overflows for "
-              "these states and inputs).", function, what, name, inst->time);
+              "these states and inputs).", function, what, name, inst->values.time);
     return inst->type == fmi2ModelExchange ? fmi2Discard : fmi2Error;
 }
 
 /* ---------------------------------------------------------------- variable access */
 
-typedef enum { KIND_INPUT, KIND_OUTPUT, KIND_STATE, KIND_DERIVATIVE, KIND_INVALID } Kind;
-
-static Kind kind_of(fmi2ValueReference vr, size_t *index)
+/* The variables of FMI 2.0: inputs, outputs, states, derivatives (the time is not one). */
+static LiKind kind_of(fmi2ValueReference vr, size_t *index)
 {
-    const size_t m = n_in(), p = n_out(), n = n_st();
-    size_t r = vr;
-    if (r < m) { *index = r; return KIND_INPUT; }
-    r -= m;
-    if (r < p) { *index = r; return KIND_OUTPUT; }
-    r -= p;
-    if (r < n) { *index = r; return KIND_STATE; }
-    r -= n;
-    if (r < n) { *index = r; return KIND_DERIVATIVE; }
-    return KIND_INVALID;
+    const LiKind kind = li_kind((unsigned long)vr, index);
+    return kind == LI_TIME || kind == LI_CLOCK ? LI_INVALID : kind;
 }
 
 FMI2_Export fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
@@ -437,15 +357,16 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
         || null_array(inst, "fmi2GetReal", "value", value, nvr))
         return fmi2Error;
     /* outputs and derivatives from the current inputs: direct feedthrough is never stale */
-    lm_outputs(model, inst->x, inst->u, inst->y);
-    lm_derivatives(model, inst->x, inst->u, inst->dx);
+    LiValues *v = &inst->values;
+    li_update_outputs(v);
+    if (!li_discrete()) li_update_derivatives(v);
     for (size_t i = 0; i < nvr; i++) {
         size_t k;
         switch (kind_of(vr[i], &k)) {
-        case KIND_INPUT: value[i] = inst->u[k]; break;
-        case KIND_OUTPUT: value[i] = inst->y[k]; break;
-        case KIND_STATE: value[i] = inst->x[k]; break;
-        case KIND_DERIVATIVE: value[i] = inst->dx[k]; break;
+        case LI_INPUT: value[i] = v->u[k]; break;
+        case LI_OUTPUT: value[i] = v->y[k]; break;
+        case LI_STATE: value[i] = v->x[k]; break;
+        case LI_DERIVATIVE: value[i] = v->dx[k]; break;
         default:
             LOG_ERROR(inst, "fmi2GetReal: unknown value reference %u.", (unsigned)vr[i]);
             return fmi2Error;
@@ -453,12 +374,12 @@ FMI2_Export fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[
     }
     for (size_t i = 0; i < nvr; i++) {
         size_t k;
-        const Kind kind = kind_of(vr[i], &k);
-        if ((kind == KIND_OUTPUT || kind == KIND_DERIVATIVE) && !isfinite(value[i]))
+        const LiKind kind = kind_of(vr[i], &k);
+        if ((kind == LI_OUTPUT || kind == LI_DERIVATIVE) && !isfinite(value[i]))
             return overflowed(inst, "fmi2GetReal",
-                              kind == KIND_OUTPUT ? "output" : "derivative of state",
-                              kind == KIND_OUTPUT ? model->output_names[k]
-                                                  : model->state_names[k]);
+                              kind == LI_OUTPUT ? "output" : "derivative of state",
+                              kind == LI_OUTPUT ? model->output_names[k]
+                                                : model->state_names[k]);
     }
     return fmi2OK;
 }
@@ -476,17 +397,17 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[
     /* check everything first so that a rejected call changes nothing */
     for (size_t i = 0; i < nvr; i++) {
         size_t k;
-        const Kind kind = kind_of(vr[i], &k);
-        if (kind == KIND_INVALID) {
+        const LiKind kind = kind_of(vr[i], &k);
+        if (kind == LI_INVALID) {
             LOG_ERROR(inst, "fmi2SetReal: unknown value reference %u.", (unsigned)vr[i]);
             return fmi2Error;
         }
-        if (kind == KIND_OUTPUT || kind == KIND_DERIVATIVE) {
+        if (kind == LI_OUTPUT || kind == LI_DERIVATIVE) {
             LOG_ERROR(inst, "fmi2SetReal: %s is calculated and cannot be set.",
-                      kind == KIND_OUTPUT ? model->output_names[k] : "a state derivative");
+                      kind == LI_OUTPUT ? model->output_names[k] : "a state derivative");
             return fmi2Error;
         }
-        if (kind == KIND_STATE && !before_init) {
+        if (kind == LI_STATE && !before_init) {
             LOG_ERROR(inst, "fmi2SetReal: state %s can only be set before initialisation "
                       "is finished (use fmi2SetContinuousStates in Model Exchange).",
                       model->state_names[k]);
@@ -494,16 +415,16 @@ FMI2_Export fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[
         }
         if (!isfinite(value[i])) {
             LOG_ERROR(inst, "fmi2SetReal: %s %s must be finite; got %g. The value was not set.",
-                      kind == KIND_INPUT ? "input" : "state",
-                      kind == KIND_INPUT ? model->input_names[k] : model->state_names[k],
+                      kind == LI_INPUT ? "input" : "state",
+                      kind == LI_INPUT ? model->input_names[k] : model->state_names[k],
                       value[i]);
             return fmi2Error;
         }
     }
     for (size_t i = 0; i < nvr; i++) {
         size_t k = 0;
-        if (kind_of(vr[i], &k) == KIND_INPUT) inst->u[k] = value[i];
-        else inst->x[k] = value[i];
+        if (kind_of(vr[i], &k) == LI_INPUT) inst->values.u[k] = value[i];
+        else inst->values.x[k] = value[i];
     }
     return fmi2OK;
 }
@@ -576,50 +497,129 @@ static fmi2Status unsupported(fmi2Component c, const char *function, const char 
     return fmi2Error;
 }
 
+/* ---------------------------------------------------------------- FMU states */
+
+/* The FMU state functions are allowed in every state of the instance. */
+static LiSnapshot *our_state(Instance *inst, const char *function, fmi2FMUstate FMUstate)
+{
+    LiSnapshot *state = li_find_snapshot(&inst->values, FMUstate);
+    if (state == NULL)
+        LOG_ERROR(inst, "%s: FMUstate is not a state of this instance (NULL, freed, or "
+                  "another instance's).", function);
+    return state;
+}
+
 FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(c, "fmi2GetFMUstate", "canGetAndSetFMUstate");
+    Instance *inst = checked(c, "fmi2GetFMUstate", ANY_STATE);
+    if (inst == NULL) return fmi2Error;
+    if (FMUstate == NULL) {
+        LOG_ERROR(inst, "fmi2GetFMUstate: argument FMUstate is NULL.");
+        return fmi2Error;
+    }
+    LiSnapshot *state = (LiSnapshot *)*FMUstate;
+    const int status = li_save(&inst->values, &state);
+    if (status == -2) {
+        LOG_ERROR(inst, "fmi2GetFMUstate: *FMUstate must be NULL (a new state) or a state of "
+                  "this instance to overwrite; got another pointer.");
+        return fmi2Error;
+    }
+    if (status != 0) {
+        LOG_ERROR(inst, "fmi2GetFMUstate: out of memory.");
+        return fmi2Error;
+    }
+    *FMUstate = state;
+    return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(c, "fmi2SetFMUstate", "canGetAndSetFMUstate");
+    Instance *inst = checked(c, "fmi2SetFMUstate", ANY_STATE);
+    if (inst == NULL) return fmi2Error;
+    LiSnapshot *state = our_state(inst, "fmi2SetFMUstate", FMUstate);
+    if (state == NULL) return fmi2Error;
+    li_restore(&inst->values, state);
+    /* a rollback after a discarded step: stepping may go on */
+    if (inst->state == STATE_STEP_FAILED) inst->state = STATE_STEP_COMPLETE;
+    return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
 {
-    (void)FMUstate;
-    return unsupported(c, "fmi2FreeFMUstate", "canGetAndSetFMUstate");
+    Instance *inst = checked(c, "fmi2FreeFMUstate", ANY_STATE);
+    if (inst == NULL) return fmi2Error;
+    if (FMUstate == NULL) {
+        LOG_ERROR(inst, "fmi2FreeFMUstate: argument FMUstate is NULL.");
+        return fmi2Error;
+    }
+    if (*FMUstate == NULL) return fmi2OK; /* nothing to free */
+    if (li_discard(&inst->values, (LiSnapshot *)*FMUstate) != 0) {
+        LOG_ERROR(inst, "fmi2FreeFMUstate: *FMUstate is not a state of this instance (freed "
+                  "already, or another instance's).");
+        return fmi2Error;
+    }
+    *FMUstate = NULL;
+    return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate,
                                                   size_t *size)
 {
-    (void)FMUstate;
-    (void)size;
-    return unsupported(c, "fmi2SerializedFMUstateSize", "canSerializeFMUstate");
+    Instance *inst = checked(c, "fmi2SerializedFMUstateSize", ANY_STATE);
+    if (inst == NULL) return fmi2Error;
+    if (our_state(inst, "fmi2SerializedFMUstateSize", FMUstate) == NULL) return fmi2Error;
+    if (size == NULL) {
+        LOG_ERROR(inst, "fmi2SerializedFMUstateSize: argument size is NULL.");
+        return fmi2Error;
+    }
+    *size = li_serialized_size();
+    return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate,
                                              fmi2Byte serializedState[], size_t size)
 {
-    (void)FMUstate;
-    (void)serializedState;
-    (void)size;
-    return unsupported(c, "fmi2SerializeFMUstate", "canSerializeFMUstate");
+    Instance *inst = checked(c, "fmi2SerializeFMUstate", ANY_STATE);
+    if (inst == NULL) return fmi2Error;
+    LiSnapshot *state = our_state(inst, "fmi2SerializeFMUstate", FMUstate);
+    if (state == NULL) return fmi2Error;
+    if (null_array(inst, "fmi2SerializeFMUstate", "serializedState", serializedState, size))
+        return fmi2Error;
+    if (size < li_serialized_size()) {
+        LOG_ERROR(inst, "fmi2SerializeFMUstate: size must be at least %lu bytes (see "
+                  "fmi2SerializedFMUstateSize); got %lu.", (unsigned long)li_serialized_size(),
+                  (unsigned long)size);
+        return fmi2Error;
+    }
+    li_serialize(state, (unsigned char *)serializedState);
+    return fmi2OK;
 }
 
 FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component c,
                                                const fmi2Byte serializedState[], size_t size,
                                                fmi2FMUstate *FMUstate)
 {
-    (void)serializedState;
-    (void)size;
-    (void)FMUstate;
-    return unsupported(c, "fmi2DeSerializeFMUstate", "canSerializeFMUstate");
+    Instance *inst = checked(c, "fmi2DeSerializeFMUstate", ANY_STATE);
+    if (inst == NULL) return fmi2Error;
+    if (FMUstate == NULL || null_array(inst, "fmi2DeSerializeFMUstate", "serializedState",
+                                       serializedState, size)) {
+        if (FMUstate == NULL) LOG_ERROR(inst, "fmi2DeSerializeFMUstate: argument FMUstate is NULL.");
+        return fmi2Error;
+    }
+    LiSnapshot *state = (LiSnapshot *)*FMUstate;
+    const char *why = NULL;
+    const int status = li_deserialize(&inst->values, (const unsigned char *)serializedState,
+                                      size, &state, &why);
+    if (status != 0) {
+        LOG_ERROR(inst, "fmi2DeSerializeFMUstate: the %lu bytes are not a serialized state of "
+                  "this model: %s.", (unsigned long)size, why != NULL ? why : "out of memory");
+        return fmi2Error;
+    }
+    *FMUstate = state;
+    return fmi2OK;
 }
+
+/* ---------------------------------------------------------------- partial derivatives */
 
 FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
                                                     const fmi2ValueReference vUnknown_ref[],
@@ -628,13 +628,52 @@ FMI2_Export fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
                                                     size_t nKnown, const fmi2Real dvKnown[],
                                                     fmi2Real dvUnknown[])
 {
-    (void)vUnknown_ref;
-    (void)nUnknown;
-    (void)vKnown_ref;
-    (void)nKnown;
-    (void)dvKnown;
-    (void)dvUnknown;
-    return unsupported(c, "fmi2GetDirectionalDerivative", "providesDirectionalDerivative");
+    static const char *const function = "fmi2GetDirectionalDerivative";
+    Instance *inst = checked(c, function, READABLE);
+    if (inst == NULL) return fmi2Error;
+    if (null_array(inst, function, "vUnknown_ref", vUnknown_ref, nUnknown)
+        || null_array(inst, function, "vKnown_ref", vKnown_ref, nKnown)
+        || null_array(inst, function, "dvKnown", dvKnown, nKnown)
+        || null_array(inst, function, "dvUnknown", dvUnknown, nUnknown))
+        return fmi2Error;
+    for (size_t k = 0; k < nKnown; k++) {
+        if (!isfinite(dvKnown[k])) {
+            LOG_ERROR(inst, "%s: dvKnown[%lu] must be finite; got %g.", function,
+                      (unsigned long)k, dvKnown[k]);
+            return fmi2Error;
+        }
+    }
+    /* check every reference first: a refused call writes nothing */
+    for (size_t i = 0; i < nUnknown; i++) {
+        size_t row;
+        if (!li_is_unknown(kind_of(vUnknown_ref[i], &row))) {
+            LOG_ERROR(inst, "%s: value reference %u is not an unknown of this model (%s).",
+                      function, (unsigned)vUnknown_ref[i],
+                      li_discrete() ? "an output" : "an output or a state derivative");
+            return fmi2Error;
+        }
+    }
+    for (size_t k = 0; k < nKnown; k++) {
+        size_t column;
+        if (!li_is_known(kind_of(vKnown_ref[k], &column))) {
+            LOG_ERROR(inst, "%s: value reference %u is not a known of this model (%s).",
+                      function, (unsigned)vKnown_ref[k],
+                      li_discrete() ? "an input" : "an input or a state");
+            return fmi2Error;
+        }
+    }
+    /* dvUnknown = J dvKnown, J the block of [[A, B], [C, D]] (lti_instance.h) */
+    for (size_t i = 0; i < nUnknown; i++) {
+        size_t row, column;
+        const LiKind unknown = kind_of(vUnknown_ref[i], &row);
+        double sum = 0.0;
+        for (size_t k = 0; k < nKnown; k++) {
+            const LiKind known = kind_of(vKnown_ref[k], &column);
+            sum += li_partial(&inst->values, unknown, row, known, column) * dvKnown[k];
+        }
+        dvUnknown[i] = sum;
+    }
+    return fmi2OK;
 }
 
 /* ---------------------------------------------------------------- Model Exchange */
@@ -711,7 +750,7 @@ FMI2_Export fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time)
         LOG_ERROR(inst, "fmi2SetTime: time must be finite [s]; got %g.", time);
         return fmi2Error;
     }
-    inst->time = time;
+    inst->values.time = time;
     return fmi2OK;
 }
 
@@ -732,7 +771,7 @@ FMI2_Export fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x
             return fmi2Error;
         }
     }
-    for (size_t i = 0; i < nx; i++) inst->x[i] = x[i];
+    for (size_t i = 0; i < nx; i++) inst->values.x[i] = x[i];
     return fmi2OK;
 }
 
@@ -749,8 +788,8 @@ FMI2_Export fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[
         return fmi2Error;
     }
     if (null_array(inst, "fmi2GetDerivatives", "derivatives", derivatives, nx)) return fmi2Error;
-    lm_derivatives(model, inst->x, inst->u, inst->dx);
-    for (size_t i = 0; i < nx; i++) derivatives[i] = inst->dx[i];
+    li_update_derivatives(&inst->values);
+    for (size_t i = 0; i < nx; i++) derivatives[i] = inst->values.dx[i];
     for (size_t i = 0; i < nx; i++) {
         if (!isfinite(derivatives[i]))
             return overflowed(inst, "fmi2GetDerivatives", "derivative of state",
@@ -783,7 +822,7 @@ FMI2_Export fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], si
         return fmi2Error;
     }
     if (null_array(inst, "fmi2GetContinuousStates", "x", x, nx)) return fmi2Error;
-    for (size_t i = 0; i < nx; i++) x[i] = inst->x[i];
+    for (size_t i = 0; i < nx; i++) x[i] = inst->values.x[i];
     return fmi2OK;
 }
 
@@ -800,7 +839,7 @@ FMI2_Export fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Re
     }
     if (null_array(inst, "fmi2GetNominalsOfContinuousStates", "x_nominal", x_nominal, nx))
         return fmi2Error;
-    for (size_t i = 0; i < nx; i++) x_nominal[i] = 1.0;
+    for (size_t i = 0; i < nx; i++) x_nominal[i] = model->nominals[i];
     return fmi2OK;
 }
 
@@ -844,32 +883,6 @@ FMI2_Export fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c,
     return unsupported(c, "fmi2GetRealOutputDerivatives", "maxOutputDerivativeOrder > 0");
 }
 
-/* Phi, Gamma for the step h: the precomputed default step when h equals it up to the
- * round-off of the master's time arithmetic, else the last step computed here, else a
- * fresh exponential (exact to round-off for any h). */
-static int transition_matrices(Instance *inst, double t, double h, const double **Phi,
-                               const double **Gamma)
-{
-    const double tolerance = 16.0 * 2.220446049250313e-16 * (fabs(t) + h);
-    if (fabs(h - model->default_step) <= tolerance) {
-        *Phi = model->Phi0;
-        *Gamma = model->Gamma0;
-        return 0;
-    }
-    if (inst->cached_step > 0.0 && fabs(h - inst->cached_step) <= tolerance) {
-        *Phi = inst->Phi;
-        *Gamma = inst->Gamma;
-        return 0;
-    }
-    inst->cached_step = 0.0;
-    const int status = lm_discretize(model, h, inst->Phi, inst->Gamma, inst->work);
-    if (status != 0) return status;
-    inst->cached_step = h;
-    *Phi = inst->Phi;
-    *Gamma = inst->Gamma;
-    return 0;
-}
-
 FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint,
                                   fmi2Real communicationStepSize,
                                   fmi2Boolean noSetFMUStatePriorToCurrentPoint)
@@ -878,48 +891,41 @@ FMI2_Export fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunication
     Instance *inst = checked_cs(c, "fmi2DoStep", STATE_STEP_COMPLETE);
     if (inst == NULL) return fmi2Error;
     const double t = currentCommunicationPoint, h = communicationStepSize;
+    const double reached = inst->values.time;
     if (!(h > 0.0) || !isfinite(h)) {
         LOG_ERROR(inst, "fmi2DoStep: communicationStepSize must be positive and finite [s]; "
                   "got %g.", h);
         return fmi2Error;
     }
-    if (!isfinite(t) || fabs(t - inst->time) > 1e-9 * (1.0 + fabs(inst->time))) {
+    if (!isfinite(t) || fabs(t - reached) > 1e-9 * (1.0 + fabs(reached))) {
         LOG_ERROR(inst, "fmi2DoStep: currentCommunicationPoint must equal the time reached "
-                  "so far, %.17g s; got %.17g s.", inst->time, t);
+                  "so far, %.17g s; got %.17g s.", reached, t);
         return fmi2Error;
     }
-    if (n_st() > 0) {
-        const double *Phi, *Gamma;
-        const int status = transition_matrices(inst, t, h, &Phi, &Gamma);
-        if (status != 0) {
-            LOG_ERROR(inst, "fmi2DoStep: the transition matrix for the step %g s is not "
-                      "finite (code %d); the state was not changed.", h, status);
-            inst->state = STATE_STEP_FAILED;
-            return fmi2Discard;
-        }
-        lm_step(model, Phi, Gamma, inst->x, inst->u, inst->dx);
-        for (size_t i = 0; i < n_st(); i++) {
-            if (!isfinite(inst->dx[i])) {
-                LOG_ERROR(inst, "fmi2DoStep: state %s overflowed at t = %g s; the state was "
-                          "not changed.", model->state_names[i], t + h);
-                inst->state = STATE_STEP_FAILED;
-                return fmi2Discard;
-            }
-        }
-        /* the outputs at the new state must be finite too, with the inputs held */
-        lm_outputs(model, inst->dx, inst->u, inst->y);
-        for (size_t i = 0; i < n_out(); i++) {
-            if (!isfinite(inst->y[i])) {
-                LOG_ERROR(inst, "fmi2DoStep: output %s overflowed at t = %g s; the state was "
-                          "not changed.", model->output_names[i], t + h);
-                inst->state = STATE_STEP_FAILED;
-                return fmi2Discard;
-            }
-        }
-        for (size_t i = 0; i < n_st(); i++) inst->x[i] = inst->dx[i];
+    size_t index;
+    int detail;
+    switch (li_do_step(&inst->values, t, h, &index, &detail)) {
+    case LI_OK:
+        return fmi2OK;
+    case LI_NO_TRANSITION:
+        LOG_ERROR(inst, "fmi2DoStep: the transition matrix for the step %g s is not "
+                  "finite (code %d); the state was not changed.", h, detail);
+        break;
+    case LI_STATE_OVERFLOW:
+        LOG_ERROR(inst, "fmi2DoStep: state %s overflowed at t = %g s; the state was "
+                  "not changed.", model->state_names[index], t + h);
+        break;
+    case LI_OUTPUT_OVERFLOW:
+        LOG_ERROR(inst, "fmi2DoStep: output %s overflowed at t = %g s; the state was "
+                  "not changed.", model->output_names[index], t + h);
+        break;
+    default:
+        LOG_ERROR(inst, "fmi2DoStep: the step of %g s spans 2^53 or more samples of the "
+                  "sample period %g s; the state was not changed.", h, model->sample_period);
+        break;
     }
-    inst->time = t + h;
-    return fmi2OK;
+    inst->state = STATE_STEP_FAILED;
+    return fmi2Discard;
 }
 
 FMI2_Export fmi2Status fmi2CancelStep(fmi2Component c)
@@ -962,7 +968,7 @@ FMI2_Export fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s
         LOG_ERROR(inst, "fmi2GetRealStatus: status kind %d is not available.", (int)s);
         return fmi2Discard;
     }
-    *value = inst->time;
+    *value = inst->values.time;
     return fmi2OK;
 }
 

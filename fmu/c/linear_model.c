@@ -204,13 +204,20 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
 
     /* ||M||_1 <= N max|m_ij|. When that bound passes 2^100, the powers up to M^8 used
      * below could overflow: scale M down first, by the 1-norm bound as in Higham (2005,
-     * Algorithm 2.3), so that ||M 2^-s||_1 <= theta13. (Ordinary steps never get here.) */
+     * Algorithm 2.3), so that ||M 2^-s||_1 <= 4 < theta13. (Ordinary steps never get here.)
+     * Binary exponents come from frexp, exactly: no log2 or pow, whose glibc 2.29 symbol
+     * versions would keep the library from loading on older systems. */
     double largest = 0.0;
     for (size_t i = 0; i < N * N; i++) if (fabs(M[i]) > largest) largest = fabs(M[i]);
     int s = 0;
-    if (largest > 0.0 && log2(largest) + log2((double)N) > 100.0) {
-        s = (int)ceil(log2(largest) + log2((double)N) - log2(theta13));
-        for (size_t i = 0; i < N * N; i++) M[i] = ldexp(M[i], -s);
+    if (largest > 0.0) {
+        int e_largest, e_order;
+        (void)frexp(largest, &e_largest);      /* largest < 2^e_largest */
+        (void)frexp((double)N, &e_order);      /* N <= 2^e_order */
+        if (e_largest + e_order > 101) {
+            s = e_largest + e_order - 2;        /* N max|m| 2^-s < 2^2 <= theta13 */
+            for (size_t i = 0; i < N * N; i++) M[i] = ldexp(M[i], -s);
+        }
     }
 
     matmul(N, M, M, A2);
@@ -219,14 +226,18 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
 
     /* Scaling s from alpha = max(||M^6||^(1/6), ||M^8||^(1/8)) rather than ||M||: the
      * exact powers are at hand, and for non-normal M they give far fewer squarings
-     * (Al-Mohy & Higham 2009, eq. (3.10) and Algorithm 5.1 with eta_3). */
+     * (Al-Mohy & Higham 2009, eq. (3.10) and Algorithm 5.1 with eta_3).  The smallest
+     * s1 >= 0 with alpha 2^-s1 <= theta13 is the smallest with ||M^6|| 2^(-6 s1) <=
+     * theta13^6 and ||M^8|| 2^(-8 s1) <= theta13^8: found by exact ldexp comparisons, at
+     * most 172 of them for any finite norm (2^1024 / 2^(6*171) < 1). */
     matmul(N, A4, A4, T);
-    const double d6 = pow(norm_1(N, A6), 1.0 / 6.0), d8 = pow(norm_1(N, T), 1.0 / 8.0);
-    if (!isfinite(d6) || !isfinite(d8)) return -3;
-    const double alpha = d6 > d8 ? d6 : d8;
-    if (alpha > theta13) {
-        int s1 = (int)ceil(log2(alpha / theta13));
-        if (s1 < 0) s1 = 0;
+    const double norm6 = norm_1(N, A6), norm8 = norm_1(N, T);
+    if (!isfinite(norm6) || !isfinite(norm8)) return -3;
+    const double theta6 = theta13 * theta13 * theta13 * theta13 * theta13 * theta13;
+    const double theta8 = theta6 * theta13 * theta13;
+    int s1 = 0;
+    while (ldexp(norm6, -6 * s1) > theta6 || ldexp(norm8, -8 * s1) > theta8) s1++;
+    if (s1 > 0) {
         for (size_t i = 0; i < N * N; i++) {
             M[i] = ldexp(M[i], -s1);
             A2[i] = ldexp(A2[i], -2 * s1);
@@ -277,4 +288,45 @@ int lm_discretize(const LinearModel *model, double h, double *Phi, double *Gamma
     for (size_t i = 0; i < n * n; i++) if (!isfinite(Phi[i])) return -3;
     for (size_t i = 0; i < n * m; i++) if (!isfinite(Gamma[i])) return -3;
     return 0;
+}
+
+int lm_sample_power(const LinearModel *model, double count, const double *x, const double *u,
+                    double *z_out, double *work)
+{
+    const size_t n = model->n_states, m = model->n_inputs, N = n + m;
+    if (n == 0) return 0;
+    /* z_count = first n rows of [[A, B], [0, I]]^count [x; u] */
+    double *R = work, *P = R + N * N, *S = P + N * N, *v = S + N * N;
+    memset(R, 0, N * N * sizeof(double));
+    memset(P, 0, N * N * sizeof(double));
+    for (size_t i = 0; i < N; i++) R[i * N + i] = 1.0;
+    for (size_t i = 0; i < n; i++) {
+        for (size_t j = 0; j < n; j++) P[i * N + j] = model->A[i * n + j];
+        for (size_t k = 0; k < m; k++) P[i * N + n + k] = model->B[i * m + k];
+    }
+    for (size_t k = 0; k < m; k++) P[(n + k) * N + n + k] = 1.0;
+    /* binary powering: count = sum of bits; halving a whole double below 2^53 is exact */
+    double e = count;
+    while (e > 0.0) {
+        const double half = floor(e / 2.0);
+        if (e - 2.0 * half == 1.0) {
+            matmul(N, R, P, S);
+            memcpy(R, S, N * N * sizeof(double));
+            if (!all_finite(N * N, R)) return -3;
+        }
+        e = half;
+        if (e > 0.0) {
+            matmul(N, P, P, S);
+            memcpy(P, S, N * N * sizeof(double));
+            if (!all_finite(N * N, P)) return -3;
+        }
+    }
+    for (size_t j = 0; j < n; j++) v[j] = x[j];
+    for (size_t k = 0; k < m; k++) v[n + k] = u[k];
+    for (size_t i = 0; i < n; i++) {
+        double sum = 0.0;
+        for (size_t j = 0; j < N; j++) sum += R[i * N + j] * v[j];
+        z_out[i] = sum;
+    }
+    return all_finite(n, z_out) ? 0 : -3;
 }
