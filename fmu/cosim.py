@@ -1,9 +1,20 @@
-"""Fixed-step co-simulation of a plant FMU with a controller FMU (FMI 2.0 Co-Simulation).
+"""Fixed-step co-simulation of a plant FMU with a controller FMU (FMI 2.0 or 3.0
+Co-Simulation, in any combination).
 
-A small master over fmpy's :class:`fmpy.fmi2.FMU2Slave`: it connects outputs to inputs of
-the same name, feeds the remaining inputs from user signals, and advances both FMUs with the
-same communication step. Every FMU call goes through one choke point that turns a failed
-status into a :class:`~fmu.errors.CosimulationError` naming the FMU, the call and the time.
+A small master over fmpy's :class:`fmpy.fmi2.FMU2Slave` and :class:`fmpy.fmi3.FMU3Slave`:
+it connects outputs to inputs of the same name, feeds the remaining inputs from user
+signals, and advances both FMUs with the same communication step. Every FMU call goes
+through one choke point that turns a failed status into a
+:class:`~fmu.errors.CosimulationError` naming the FMU, the call and the time.
+
+An FMI 3.0 FMU with a periodic time-based input Clock (a sampled controller exported by
+:func:`fmu.export`) is instantiated with Event Mode, and at every communication point that
+is one of its clock's ticks the master activates the clock: ``fmi3EnterEventMode``,
+``fmi3SetClock``, ``fmi3UpdateDiscreteStates``, ``fmi3EnterStepMode``, after setting the
+FMU's inputs of that instant (FMI 3.0.2, sections 2.2.10 and 4.2). Ticks between
+communication points (a clock faster than the communication step, or not aligned with it)
+are left to the FMU, which takes them in ``fmi3DoStep`` with the inputs held, as flexsat's
+sampled FMUs do.
 """
 
 from __future__ import annotations
@@ -30,16 +41,19 @@ _METHODS = ("gauss-seidel", "jacobi")
 
 
 class _Slave:
-    """One Co-Simulation FMU instance, with its Real inputs and outputs by name."""
+    """One Co-Simulation FMU instance (FMI 2.0 or 3.0), with its real inputs and outputs
+    by name and, for FMI 3.0, its periodic input clock if it has one."""
 
     def __init__(self, path: str | Path, role: str):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
+        from fmpy.fmi3 import FMU3Slave
 
         self.role = role
         self.path = Path(path)
         self.unzip_dir = None
         self.fmu = None
+        self.instantiated = False
         if not self.path.is_file():
             raise FileNotFoundError(f"{role}_fmu must be an existing .fmu file; got {shorten(str(path))}")
         try:
@@ -47,40 +61,118 @@ class _Slave:
         except Exception as error:  # fmpy raises plain exceptions for unreadable FMUs
             raise CosimulationError(f"the {role} FMU {self.path.name} cannot be read: "
                                     f"{shorten(str(error), 300)}") from error
-        if description.fmiVersion != "2.0" or description.coSimulation is None:
-            raise CosimulationError(
-                f"the {role} FMU {self.path.name} must be an FMI 2.0 Co-Simulation FMU; got "
-                f"FMI {description.fmiVersion} without a CoSimulation interface"
-                if description.coSimulation is None else
-                f"the {role} FMU {self.path.name} must be FMI 2.0; got FMI {description.fmiVersion}")
+        version = description.fmiVersion
+        if version not in ("2.0",) and not version.startswith("3."):
+            raise CosimulationError(f"the {role} FMU {self.path.name} must be FMI 2.0 or 3.0; "
+                                    f"got FMI {version}")
+        if description.coSimulation is None:
+            raise CosimulationError(f"the {role} FMU {self.path.name} must provide "
+                                    f"Co-Simulation; got FMI {version} without a CoSimulation "
+                                    "interface")
+        self.fmi3 = version.startswith("3.")
         self.name = description.modelName
+        real = "Float64" if self.fmi3 else "Real"
         self.variables = {v.name: v for v in description.modelVariables}
         self.inputs = {v.name: v.valueReference for v in description.modelVariables
-                       if v.causality == "input" and v.type == "Real"}
+                       if v.causality == "input" and v.type == real}
         self.outputs = {v.name: v.valueReference for v in description.modelVariables
-                        if v.causality == "output" and v.type == "Real"}
+                        if v.causality == "output" and v.type == real}
+        clocks = [v for v in description.modelVariables
+                  if v.type == "Clock" and v.causality == "input"]
+        self.clock = None  # (value reference, interval [s], shift [s])
+        if clocks:
+            clock = clocks[0]
+            if len(clocks) > 1 or clock.intervalVariability != "constant" or not clock.intervalDecimal:
+                raise CosimulationError(
+                    f"the {role} FMU {self.path.name} has clocks this master cannot drive (it "
+                    "drives one periodic input clock with a constant intervalDecimal)")
+            self.clock = (clock.valueReference, float(clock.intervalDecimal),
+                          float(clock.shiftDecimal or 0.0))
         self.unzip_dir = extract(str(self.path))
-        self.fmu = FMU2Slave(guid=description.guid, unzipDirectory=self.unzip_dir,
-                             modelIdentifier=description.coSimulation.modelIdentifier,
-                             instanceName=role)
-        self.instantiated = False
+        kind = FMU3Slave if self.fmi3 else FMU2Slave
+        self.fmu = kind(guid=description.guid, unzipDirectory=self.unzip_dir,
+                        modelIdentifier=description.coSimulation.modelIdentifier,
+                        instanceName=role)
+        self.start_time = 0.0
 
-    def call(self, what: str, time: float, function: Callable, *args: object) -> object:
+    def call(self, what: str, time: float, function: Callable, *args: object, **kwargs) -> object:
         """The choke point: run one FMU call, raise CosimulationError if it fails."""
         try:
-            return function(*args)
+            return function(*args, **kwargs)
         except Exception as error:
             raise CosimulationError(f"{self.role} FMU {self.name}: {what} failed at t = {time!r} s: "
                                     f"{shorten(str(error), 300)}") from error
 
+    def _prefix(self) -> str:
+        return "fmi3" if self.fmi3 else "fmi2"
+
+    def initialise(self, start_time: float, stop_time: float,
+                   start_values: Mapping[str, float] | None) -> None:
+        """Instantiate, set start values, initialise; leaves the FMU ready to step."""
+        t0 = start_time
+        self.start_time = t0
+        p = self._prefix()
+        if self.fmi3:
+            self.call(f"{p}InstantiateCoSimulation", t0, self.fmu.instantiate,
+                      eventModeUsed=self.clock is not None)
+        else:
+            self.call(f"{p}Instantiate", t0, self.fmu.instantiate)
+        self.instantiated = True
+        if not self.fmi3:
+            self.call("fmi2SetupExperiment", t0, self.fmu.setupExperiment, None, t0, stop_time)
+        for name, value in (start_values or {}).items():
+            if name not in self.variables:
+                raise ValueError(f"{self.role}_start_values names {shorten(name)}, which "
+                                 f"the {self.role} FMU does not have; expected one of "
+                                 f"{shorten(sorted(self.variables))}")
+            self.set([self.variables[name].valueReference], [value], t0)
+        if self.fmi3:
+            self.call(f"{p}EnterInitializationMode", t0, self.fmu.enterInitializationMode,
+                      startTime=t0, stopTime=stop_time)
+        else:
+            self.call(f"{p}EnterInitializationMode", t0, self.fmu.enterInitializationMode)
+        self.call(f"{p}ExitInitializationMode", t0, self.fmu.exitInitializationMode)
+        if self.fmi3 and self.clock is not None:
+            # Event Mode after initialisation: nothing to update yet (the tick at the start
+            # time comes with the inputs of that instant, in the loop)
+            self.call("fmi3UpdateDiscreteStates", t0, self.fmu.updateDiscreteStates)
+            self.call("fmi3EnterStepMode", t0, self.fmu.enterStepMode)
+
+    def ticks_at(self, time: float) -> bool:
+        """True if the FMU's clock ticks at this communication point."""
+        if self.clock is None:
+            return False
+        _, interval, shift = self.clock
+        ticks = (time - self.start_time - shift) / interval
+        return ticks > -1e-9 and abs(ticks - round(ticks)) <= 1e-9 * max(1.0, abs(ticks))
+
+    def tick(self, time: float) -> None:
+        """Activate the clock in Event Mode if it ticks now (its inputs already set)."""
+        if not self.ticks_at(time):
+            return
+        self.call("fmi3EnterEventMode", time, self.fmu.enterEventMode)
+        self.call("fmi3SetClock", time, self.fmu.setClock, [self.clock[0]], [True])
+        self.call("fmi3UpdateDiscreteStates", time, self.fmu.updateDiscreteStates)
+        self.call("fmi3EnterStepMode", time, self.fmu.enterStepMode)
+
     def get(self, vrs: list[int], time: float) -> list[float]:
         if not vrs:
             return []
+        if self.fmi3:
+            return self.call("fmi3GetFloat64", time, self.fmu.getFloat64, vrs)
         return self.call("fmi2GetReal", time, self.fmu.getReal, vrs)
 
     def set(self, vrs: list[int], values: list[float], time: float) -> None:
-        if vrs:
-            self.call("fmi2SetReal", time, self.fmu.setReal, vrs, [float(v) for v in values])
+        if not vrs:
+            return
+        values = [float(v) for v in values]
+        if self.fmi3:
+            self.call("fmi3SetFloat64", time, self.fmu.setFloat64, vrs, values)
+        else:
+            self.call("fmi2SetReal", time, self.fmu.setReal, vrs, values)
+
+    def do_step(self, time: float, step: float) -> None:
+        self.call(f"{self._prefix()}DoStep", time, self.fmu.doStep, time, step)
 
     def close(self) -> None:
         if self.fmu is not None and self.instantiated:
@@ -171,7 +263,8 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
     Parameters
     ----------
     plant_fmu, controller_fmu : str or pathlib.Path
-        FMI 2.0 Co-Simulation FMUs.
+        FMI 2.0 or FMI 3.0 Co-Simulation FMUs (a sampled FMI 3.0 controller's clock is
+        activated at its ticks, see the module docstring).
     stop_time : float, s
         Final time; ``stop_time - start_time`` must be a whole number of steps (to 1e-9
         relative).
@@ -262,17 +355,7 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
         t0 = float(start_time)
         t_stop = t0 + n_steps * step
         for slave, values in ((plant, plant_start_values), (controller, controller_start_values)):
-            slave.call("fmi2Instantiate", t0, slave.fmu.instantiate)
-            slave.instantiated = True
-            slave.call("fmi2SetupExperiment", t0, slave.fmu.setupExperiment, None, t0, t_stop)
-            for name, value in (values or {}).items():
-                if name not in slave.variables:
-                    raise ValueError(f"{slave.role}_start_values names {shorten(name)}, which "
-                                     f"the {slave.role} FMU does not have; expected one of "
-                                     f"{shorten(sorted(slave.variables))}")
-                slave.set([slave.variables[name].valueReference], [value], t0)
-            slave.call("fmi2EnterInitializationMode", t0, slave.fmu.enterInitializationMode)
-            slave.call("fmi2ExitInitializationMode", t0, slave.fmu.exitInitializationMode)
+            slave.initialise(t0, t_stop, values)
 
         plant_out_names = list(plant.outputs)
         controller_out_names = list(controller.outputs)
@@ -307,10 +390,14 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
                          + len(recorded_external)), dtype=np.float64)
         for k in range(n_steps + 1):
             t = t0 + k * step
+            # a clocked FMU ticks once its inputs of this instant are set: before its
+            # outputs are read (Gauss-Seidel), or before it steps (Jacobi)
             if method == "gauss-seidel":
                 r = apply_external(t)
+                plant.tick(t)
                 y = plant.get(plant_out_vrs, t)
                 controller.set(p2c_in, [y[i] for i in p2c_from], t)
+                controller.tick(t)
                 u = controller.get(controller_out_vrs, t)
                 plant.set(c2p_in, [u[i] for i in c2p_from], t)
             else:
@@ -319,10 +406,12 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
                 r = apply_external(t)
                 controller.set(p2c_in, [y[i] for i in p2c_from], t)
                 plant.set(c2p_in, [u[i] for i in c2p_from], t)
+                plant.tick(t)
+                controller.tick(t)
             rows[k] = [t, *y, *u, *r]
             if k < n_steps:
                 for slave in slaves:
-                    slave.call("fmi2DoStep", t, slave.fmu.doStep, t, step)
+                    slave.do_step(t, step)
     finally:
         for slave in slaves:
             slave.close()
