@@ -31,7 +31,7 @@ from .checks import real_number, shorten
 from .errors import CosimulationError
 from .limits import check_cosimulation_steps
 
-__all__ = ["cosimulate", "Signal"]
+__all__ = ["cosimulate", "run_loop", "Signal"]
 
 #: An external input: a constant, a function of time ``f(t) -> float`` (t in s), or a table
 #: ``(times, values)`` (see :func:`cosimulate`).
@@ -82,12 +82,13 @@ class _Slave:
         self.clock = None  # (value reference, interval [s], shift [s])
         if clocks:
             clock = clocks[0]
-            if len(clocks) > 1 or clock.intervalVariability != "constant" or not clock.intervalDecimal:
+            # fmpy does not read intervalDecimal and shiftDecimal: read them here
+            interval, shift = _clock_timing(self.path, clock.valueReference)
+            if len(clocks) > 1 or clock.intervalVariability != "constant" or interval is None:
                 raise CosimulationError(
                     f"the {role} FMU {self.path.name} has clocks this master cannot drive (it "
                     "drives one periodic input clock with a constant intervalDecimal)")
-            self.clock = (clock.valueReference, float(clock.intervalDecimal),
-                          float(clock.shiftDecimal or 0.0))
+            self.clock = (clock.valueReference, interval, shift)
         self.unzip_dir = extract(str(self.path))
         kind = FMU3Slave if self.fmi3 else FMU2Slave
         self.fmu = kind(guid=description.guid, unzipDirectory=self.unzip_dir,
@@ -186,6 +187,26 @@ class _Slave:
                 pass
         if self.unzip_dir is not None:
             shutil.rmtree(self.unzip_dir, ignore_errors=True)
+
+
+def _clock_timing(path: Path, value_reference: int) -> tuple[float | None, float]:
+    """intervalDecimal (None if absent or not positive and finite) and shiftDecimal of an
+    FMI 3.0 Clock, read from the FMU's modelDescription.xml."""
+    import zipfile
+    from xml.etree import ElementTree
+
+    with zipfile.ZipFile(path) as archive:
+        root = ElementTree.fromstring(archive.read("modelDescription.xml"))
+    for element in root.iter("Clock"):
+        if element.get("valueReference") == str(value_reference):
+            try:
+                interval = float(element.get("intervalDecimal", "nan"))
+                shift = float(element.get("shiftDecimal", "0"))
+            except ValueError:
+                return None, 0.0
+            valid = math.isfinite(interval) and interval > 0 and math.isfinite(shift)
+            return (interval, shift) if valid else (None, 0.0)
+    return None, 0.0
 
 
 def _evaluator(name: str, signal: Signal) -> Callable[[float], float]:
@@ -300,25 +321,9 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
     in FMI for Model Exchange and Co-Simulation V2.0", Archive of Mechanical Engineering
     60(1), 75-94, 2013 (Jacobi and Gauss-Seidel master algorithms).
     """
-    if not isinstance(method, str) or method not in _METHODS:
-        raise ValueError(f"method must be one of {_METHODS}; got {shorten(method)}")
-    for label, value in (("step", step), ("stop_time", stop_time), ("start_time", start_time)):
-        if not math.isfinite(real_number(label, value, "s")):
-            raise ValueError(f"{label} must be finite [s]; got {value!r}")
-    if not step > 0:
-        raise ValueError(f"step must be positive [s]; got {step!r}")
-    for label, value in (("inputs", inputs), ("plant_start_values", plant_start_values),
-                         ("controller_start_values", controller_start_values)):
-        if value is not None and not isinstance(value, Mapping):
-            raise TypeError(f"{label} must be a mapping {{name: value}}; got "
-                            f"{type(value).__name__} {shorten(value)}")
-    duration = float(stop_time) - float(start_time)
-    check_cosimulation_steps(duration / step, step, duration)
-    n_steps = int(round(duration / step))
-    if n_steps < 1 or abs(n_steps * step - duration) > 1e-9 * max(duration, step):
-        raise ValueError(f"stop_time - start_time must be a positive whole number of steps "
-                         f"({step!r} s) [s]; got {duration!r} s")
-
+    n_steps = _check_run(method, step, stop_time, start_time, inputs,
+                         (("plant_start_values", plant_start_values),
+                          ("controller_start_values", controller_start_values)))
     slaves: list[_Slave] = []
     try:
         plant = _Slave(plant_fmu, "plant")
@@ -326,8 +331,8 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
         controller = _Slave(controller_fmu, "controller")
         slaves.append(controller)
 
-        plant_to_controller = [name for name in plant.outputs if name in controller.inputs]
-        controller_to_plant = [name for name in controller.outputs if name in plant.inputs]
+        plant_to_controller = [(name, name) for name in plant.outputs if name in controller.inputs]
+        controller_to_plant = [(name, name) for name in controller.outputs if name in plant.inputs]
         if not plant_to_controller or not controller_to_plant:
             raise CosimulationError(
                 "the FMUs must be connected both ways by equal signal names; got plant outputs "
@@ -340,81 +345,136 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
                                     "rename one so every signal has one source")
         # external inputs: inputs that no output feeds, by name (one name may be an input
         # of both FMUs: it is then set on both)
-        external: dict[str, list[_Slave]] = {}
+        external: dict[str, list[tuple[_Slave, str]]] = {}
         for slave, connected in ((controller, plant_to_controller), (plant, controller_to_plant)):
+            fed = {end for _, end in connected}
             for name in slave.inputs:
-                if name not in connected:
-                    external.setdefault(name, []).append(slave)
-        signals = {}
-        for name, signal in (inputs or {}).items():
-            if name not in external:
-                raise ValueError(f"inputs names {shorten(name)}, which is not an unconnected "
-                                 f"input of either FMU; expected one of {shorten(sorted(external))}")
-            signals[name] = _evaluator(name, signal)
-
-        t0 = float(start_time)
-        t_stop = t0 + n_steps * step
-        for slave, values in ((plant, plant_start_values), (controller, controller_start_values)):
-            slave.initialise(t0, t_stop, values)
-
-        plant_out_names = list(plant.outputs)
-        controller_out_names = list(controller.outputs)
-        plant_out_vrs = [plant.outputs[n] for n in plant_out_names]
-        controller_out_vrs = [controller.outputs[n] for n in controller_out_names]
-        # connections as (position in the source's output list, input value reference)
-        p2c_from = [plant_out_names.index(n) for n in plant_to_controller]
-        p2c_in = [controller.inputs[n] for n in plant_to_controller]
-        c2p_from = [controller_out_names.index(n) for n in controller_to_plant]
-        c2p_in = [plant.inputs[n] for n in controller_to_plant]
-        # a name that is also an output (of the same FMU, which cannot feed itself) would
-        # clash in the result: such an input keeps its value and is not recorded
-        recorded_external = [n for n in external if n not in plant.outputs and n not in controller.outputs]
-
-        def apply_external(t: float) -> list[float]:
-            values = []
-            for name in recorded_external:
-                if name in signals:
-                    value = float(signals[name](t))
-                    if not math.isfinite(value):
-                        raise ValueError(f"inputs[{shorten(name)}] must be finite; got {value!r} "
-                                         f"at t = {t!r} s")
-                    for slave in external[name]:
-                        slave.set([slave.inputs[name]], [value], t)
-                else:
-                    slave = external[name][0]
-                    value = slave.get([slave.inputs[name]], t)[0]
-                values.append(value)
-            return values
-
-        rows = np.empty((n_steps + 1, 1 + len(plant_out_names) + len(controller_out_names)
-                         + len(recorded_external)), dtype=np.float64)
-        for k in range(n_steps + 1):
-            t = t0 + k * step
-            # a clocked FMU ticks once its inputs of this instant are set: before its
-            # outputs are read (Gauss-Seidel), or before it steps (Jacobi)
-            if method == "gauss-seidel":
-                r = apply_external(t)
-                plant.tick(t)
-                y = plant.get(plant_out_vrs, t)
-                controller.set(p2c_in, [y[i] for i in p2c_from], t)
-                controller.tick(t)
-                u = controller.get(controller_out_vrs, t)
-                plant.set(c2p_in, [u[i] for i in c2p_from], t)
-            else:
-                y = plant.get(plant_out_vrs, t)
-                u = controller.get(controller_out_vrs, t)
-                r = apply_external(t)
-                controller.set(p2c_in, [y[i] for i in p2c_from], t)
-                plant.set(c2p_in, [u[i] for i in c2p_from], t)
-                plant.tick(t)
-                controller.tick(t)
-            rows[k] = [t, *y, *u, *r]
-            if k < n_steps:
-                for slave in slaves:
-                    slave.do_step(t, step)
+                if name not in fed:
+                    external.setdefault(name, []).append((slave, name))
+        return run_loop(plant, controller, plant_to_controller, controller_to_plant, external,
+                        inputs, method=method, start_time=float(start_time), n_steps=n_steps,
+                        step=step, plant_start_values=plant_start_values,
+                        controller_start_values=controller_start_values)
     finally:
         for slave in slaves:
             slave.close()
+
+
+def _check_run(method: object, step: object, stop_time: object, start_time: object,
+               inputs: object, start_values: tuple) -> int:
+    """Check the arguments of a co-simulation run; returns the number of steps."""
+    if not isinstance(method, str) or method not in _METHODS:
+        raise ValueError(f"method must be one of {_METHODS}; got {shorten(method)}")
+    for label, value in (("step", step), ("stop_time", stop_time), ("start_time", start_time)):
+        if not math.isfinite(real_number(label, value, "s")):
+            raise ValueError(f"{label} must be finite [s]; got {value!r}")
+    if not step > 0:
+        raise ValueError(f"step must be positive [s]; got {step!r}")
+    for label, value in (("inputs", inputs), *start_values):
+        if value is not None and not isinstance(value, Mapping):
+            raise TypeError(f"{label} must be a mapping {{name: value}}; got "
+                            f"{type(value).__name__} {shorten(value)}")
+    duration = float(stop_time) - float(start_time)
+    check_cosimulation_steps(duration / step, step, duration)
+    n_steps = int(round(duration / step))
+    if n_steps < 1 or abs(n_steps * step - duration) > 1e-9 * max(duration, step):
+        raise ValueError(f"stop_time - start_time must be a positive whole number of steps "
+                         f"({step!r} s) [s]; got {duration!r} s")
+    return n_steps
+
+
+def run_loop(plant: _Slave, controller: _Slave, plant_to_controller: list[tuple[str, str]],
+             controller_to_plant: list[tuple[str, str]],
+             external: Mapping[str, list[tuple[_Slave, str]]],
+             inputs: Mapping[str, Signal] | None, *, method: str, start_time: float,
+             n_steps: int, step: float, plant_start_values: Mapping[str, float] | None = None,
+             controller_start_values: Mapping[str, float] | None = None) -> np.ndarray:
+    """The master loop of :func:`cosimulate` over two open FMUs and explicit connections.
+
+    Parameters
+    ----------
+    plant, controller : _Slave
+        Not yet initialised; the caller closes them.
+    plant_to_controller, controller_to_plant : list of (output name, input name)
+    external : mapping of str to list of (_Slave, input name)
+        Unconnected inputs by external name.
+    inputs : mapping of str to signal, optional
+        Values of external inputs by external name.
+    method, start_time, n_steps, step, plant_start_values, controller_start_values
+        As :func:`cosimulate` (already checked).
+
+    Returns
+    -------
+    numpy.ndarray
+        As :func:`cosimulate`.
+    """
+    signals = {}
+    for name, signal in (inputs or {}).items():
+        if name not in external:
+            raise ValueError(f"inputs names {shorten(name)}, which is not an unconnected "
+                             f"input of either FMU; expected one of {shorten(sorted(external))}")
+        signals[name] = _evaluator(name, signal)
+
+    t0 = start_time
+    t_stop = t0 + n_steps * step
+    for slave, values in ((plant, plant_start_values), (controller, controller_start_values)):
+        slave.initialise(t0, t_stop, values)
+
+    plant_out_names = list(plant.outputs)
+    controller_out_names = list(controller.outputs)
+    plant_out_vrs = [plant.outputs[n] for n in plant_out_names]
+    controller_out_vrs = [controller.outputs[n] for n in controller_out_names]
+    # connections as (position in the source's output list, input value reference)
+    p2c_from = [plant_out_names.index(start) for start, _ in plant_to_controller]
+    p2c_in = [controller.inputs[end] for _, end in plant_to_controller]
+    c2p_from = [controller_out_names.index(start) for start, _ in controller_to_plant]
+    c2p_in = [plant.inputs[end] for _, end in controller_to_plant]
+    # a name that is also an output (of the same FMU, which cannot feed itself) would
+    # clash in the result: such an input keeps its value and is not recorded
+    recorded_external = [n for n in external if n not in plant.outputs and n not in controller.outputs]
+
+    def apply_external(t: float) -> list[float]:
+        values = []
+        for name in recorded_external:
+            if name in signals:
+                value = float(signals[name](t))
+                if not math.isfinite(value):
+                    raise ValueError(f"inputs[{shorten(name)}] must be finite; got {value!r} "
+                                     f"at t = {t!r} s")
+                for slave, end in external[name]:
+                    slave.set([slave.inputs[end]], [value], t)
+            else:
+                slave, end = external[name][0]
+                value = slave.get([slave.inputs[end]], t)[0]
+            values.append(value)
+        return values
+
+    rows = np.empty((n_steps + 1, 1 + len(plant_out_names) + len(controller_out_names)
+                     + len(recorded_external)), dtype=np.float64)
+    for k in range(n_steps + 1):
+        t = t0 + k * step
+        # a clocked FMU ticks once its inputs of this instant are set: before its
+        # outputs are read (Gauss-Seidel), or before it steps (Jacobi)
+        if method == "gauss-seidel":
+            r = apply_external(t)
+            plant.tick(t)
+            y = plant.get(plant_out_vrs, t)
+            controller.set(p2c_in, [y[i] for i in p2c_from], t)
+            controller.tick(t)
+            u = controller.get(controller_out_vrs, t)
+            plant.set(c2p_in, [u[i] for i in c2p_from], t)
+        else:
+            y = plant.get(plant_out_vrs, t)
+            u = controller.get(controller_out_vrs, t)
+            r = apply_external(t)
+            controller.set(p2c_in, [y[i] for i in p2c_from], t)
+            plant.set(c2p_in, [u[i] for i in c2p_from], t)
+            plant.tick(t)
+            controller.tick(t)
+        rows[k] = [t, *y, *u, *r]
+        if k < n_steps:
+            plant.do_step(t, step)
+            controller.do_step(t, step)
 
     names = ["time", *plant_out_names, *controller_out_names, *recorded_external]
     result = np.empty(n_steps + 1, dtype=[(name, np.float64) for name in names])
