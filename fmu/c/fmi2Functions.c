@@ -499,7 +499,18 @@ static fmi2Status unsupported(fmi2Component c, const char *function, const char 
 
 /* ---------------------------------------------------------------- FMU states */
 
-/* The FMU state functions are allowed in every state of the instance. */
+/* The FMU state functions are allowed in every state of the instance.  An FMU state holds
+ * the mode too (lti_instance.c), for the kind of instance it was saved by. */
+static unsigned kind_code(const Instance *inst) { return inst->type == fmi2CoSimulation ? 1u : 0u; }
+
+static unsigned valid_modes(const Instance *inst)
+{
+    const unsigned common = STATE_INSTANTIATED | STATE_INITIALIZATION | STATE_TERMINATED
+                            | STATE_ERROR;
+    return inst->type == fmi2CoSimulation ? common | STATE_STEP_COMPLETE | STATE_STEP_FAILED
+                                          : common | STATE_EVENT | STATE_CONTINUOUS;
+}
+
 static LiSnapshot *our_state(Instance *inst, const char *function, fmi2FMUstate FMUstate)
 {
     LiSnapshot *state = li_find_snapshot(&inst->values, FMUstate);
@@ -518,7 +529,7 @@ FMI2_Export fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate)
         return fmi2Error;
     }
     LiSnapshot *state = (LiSnapshot *)*FMUstate;
-    const int status = li_save(&inst->values, &state);
+    const int status = li_save(&inst->values, &state, (unsigned)inst->state, kind_code(inst));
     if (status == -2) {
         LOG_ERROR(inst, "fmi2GetFMUstate: *FMUstate must be NULL (a new state) or a state of "
                   "this instance to overwrite; got another pointer.");
@@ -539,8 +550,8 @@ FMI2_Export fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate)
     LiSnapshot *state = our_state(inst, "fmi2SetFMUstate", FMUstate);
     if (state == NULL) return fmi2Error;
     li_restore(&inst->values, state);
-    /* a rollback after a discarded step: stepping may go on */
-    if (inst->state == STATE_STEP_FAILED) inst->state = STATE_STEP_COMPLETE;
+    /* the mode is part of the state (a rollback after a discarded step may step on) */
+    inst->state = (ModelState)li_snapshot_mode(state);
     return fmi2OK;
 }
 
@@ -609,7 +620,7 @@ FMI2_Export fmi2Status fmi2DeSerializeFMUstate(fmi2Component c,
     LiSnapshot *state = (LiSnapshot *)*FMUstate;
     const char *why = NULL;
     const int status = li_deserialize(&inst->values, (const unsigned char *)serializedState,
-                                      size, &state, &why);
+                                      size, kind_code(inst), valid_modes(inst), &state, &why);
     if (status != 0) {
         LOG_ERROR(inst, "fmi2DeSerializeFMUstate: the %lu bytes are not a serialized state of "
                   "this model: %s.", (unsigned long)size, why != NULL ? why : "out of memory");

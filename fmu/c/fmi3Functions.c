@@ -908,6 +908,17 @@ FMI3_Export fmi3Status fmi3GetVariableDependencies(fmi3Instance instance,
 
 /* ---------------------------------------------------------------- FMU states */
 
+/* An FMU state holds the mode too (lti_instance.c), for the kind of instance it was saved
+ * by. */
+static unsigned kind_code(const Instance *inst) { return inst->kind == KIND_CO_SIMULATION ? 1u : 0u; }
+
+static unsigned valid_modes(const Instance *inst)
+{
+    const unsigned common = STATE_INSTANTIATED | STATE_INITIALIZATION | STATE_TERMINATED;
+    if (inst->kind == KIND_MODEL_EXCHANGE) return common | STATE_EVENT | STATE_CONTINUOUS;
+    return common | STATE_STEP | (inst->event_mode_used ? STATE_EVENT : 0u);
+}
+
 static LiSnapshot *our_state(Instance *inst, const char *function, fmi3FMUState FMUState)
 {
     LiSnapshot *state = li_find_snapshot(&inst->values, FMUState);
@@ -923,7 +934,7 @@ FMI3_Export fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUS
     if (inst == NULL || null_pointer(inst, "fmi3GetFMUState", "FMUState", FMUState))
         return fmi3Error;
     LiSnapshot *state = (LiSnapshot *)*FMUState;
-    const int status = li_save(&inst->values, &state);
+    const int status = li_save(&inst->values, &state, (unsigned)inst->state, kind_code(inst));
     if (status == -2) {
         LOG_ERROR(inst, "fmi3GetFMUState: *FMUState must be NULL (a new state) or a state of "
                   "this instance to overwrite; got another pointer.");
@@ -944,6 +955,7 @@ FMI3_Export fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUSt
     LiSnapshot *state = our_state(inst, "fmi3SetFMUState", FMUState);
     if (state == NULL) return fmi3Error;
     li_restore(&inst->values, state);
+    inst->state = (ModelState)li_snapshot_mode(state); /* the mode is part of the state */
     inst->clock_active = 0;
     return fmi3OK;
 }
@@ -1003,7 +1015,8 @@ FMI3_Export fmi3Status fmi3DeserializeFMUState(fmi3Instance instance,
         return fmi3Error;
     LiSnapshot *state = (LiSnapshot *)*FMUState;
     const char *why = NULL;
-    if (li_deserialize(&inst->values, serializedState, size, &state, &why) != 0) {
+    if (li_deserialize(&inst->values, serializedState, size, kind_code(inst), valid_modes(inst),
+                       &state, &why) != 0) {
         LOG_ERROR(inst, "%s: the %lu bytes are not a serialized state of this model: %s.",
                   function, (unsigned long)size, why != NULL ? why : "out of memory");
         return fmi3Error;

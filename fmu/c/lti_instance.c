@@ -11,7 +11,13 @@
  *         16    24       n_states, n_inputs, n_outputs (uint64 each)
  *         40    48       the model's GUID / instantiation token, NUL-padded
  *         88    24       time, start_time, next_sample (double each)
- *        112  8(n+m+p)   x, u, y_hold (double each)
+ *        112     4       mode of the API layer's state machine (uint32)
+ *        116     4       kind of instance, 0 Model Exchange, 1 Co-Simulation (uint32)
+ *        120  8(n+m+p)   x, u, y_hold (double each)
+ *
+ * The mode is part of the FMU state, as in the Reference-FMUs: an importer may restore a
+ * state saved after initialisation into a freshly instantiated instance (fmusim's
+ * --initial-fmu-state-file does) and go on stepping.
  */
 #include <math.h>
 #include <stdint.h>
@@ -28,7 +34,7 @@
 static const LinearModel *const model = &linear_model;
 
 #define SNAPSHOT_MAGIC 0x464c5354u /* "FLST" */
-#define SERIAL_HEADER 112
+#define SERIAL_HEADER 120
 #define SERIAL_VERSION 1u
 #define GUID_BYTES 48
 /* Co-simulation steps up to this many samples are taken one by one (exactly as the
@@ -41,6 +47,8 @@ struct LiSnapshot {
     double time;
     double start_time;
     double next_sample;
+    unsigned mode;  /* the API layer's state machine state */
+    unsigned kind;  /* 0 Model Exchange, 1 Co-Simulation */
     double *values; /* x[n], u[m], y_hold[p] */
 };
 
@@ -397,7 +405,7 @@ static void copy_values_into(const LiValues *v, LiSnapshot *s)
     memcpy(s->values + n + m, v->y_hold, p * sizeof(double));
 }
 
-int li_save(LiValues *v, LiSnapshot **state)
+int li_save(LiValues *v, LiSnapshot **state, unsigned mode, unsigned kind)
 {
     LiSnapshot *s = *state;
     if (s != NULL) {
@@ -407,9 +415,13 @@ int li_save(LiValues *v, LiSnapshot **state)
         if (s == NULL) return -1;
     }
     copy_values_into(v, s);
+    s->mode = mode;
+    s->kind = kind;
     *state = s;
     return 0;
 }
+
+unsigned li_snapshot_mode(const LiSnapshot *state) { return state->mode; }
 
 void li_restore(LiValues *v, const LiSnapshot *s)
 {
@@ -465,11 +477,13 @@ void li_serialize(const LiSnapshot *s, unsigned char *buffer)
     memcpy(buffer + 40, model->guid, guid_length < GUID_BYTES ? guid_length : GUID_BYTES);
     const double times[3] = {s->time, s->start_time, s->next_sample};
     memcpy(buffer + 88, times, sizeof times);
+    put_u32(buffer + 112, (uint32_t)s->mode);
+    put_u32(buffer + 116, (uint32_t)s->kind);
     memcpy(buffer + SERIAL_HEADER, s->values, n_values() * sizeof(double));
 }
 
-int li_deserialize(LiValues *v, const unsigned char *data, size_t size, LiSnapshot **state,
-                   const char **why)
+int li_deserialize(LiValues *v, const unsigned char *data, size_t size, unsigned kind,
+                   unsigned valid_modes, LiSnapshot **state, const char **why)
 {
     char guid[GUID_BYTES];
     const size_t guid_length = strlen(model->guid);
@@ -486,6 +500,14 @@ int li_deserialize(LiValues *v, const unsigned char *data, size_t size, LiSnapsh
              || get_u64(data + 32) != (uint64_t)model->n_outputs
              || memcmp(data + 40, guid, GUID_BYTES) != 0)
         *why = "it was saved by another model (GUID or sizes differ)";
+    else if (get_u32(data + 116) != (uint32_t)kind)
+        *why = kind == 1 ? "it was saved by a Model Exchange instance; this one is Co-Simulation"
+                         : "it was saved by a Co-Simulation instance; this one is Model Exchange";
+    else {
+        const uint32_t mode = get_u32(data + 112);
+        if (mode == 0 || (mode & (mode - 1)) != 0 || (mode & valid_modes) != mode)
+            *why = "its mode is not one this instance can be in";
+    }
     if (*why != NULL) return -3;
     double times[3];
     memcpy(times, data + 88, sizeof times);
@@ -515,6 +537,8 @@ int li_deserialize(LiValues *v, const unsigned char *data, size_t size, LiSnapsh
     s->time = times[0];
     s->start_time = times[1];
     s->next_sample = times[2];
+    s->mode = get_u32(data + 112);
+    s->kind = kind;
     memcpy(s->values, data + SERIAL_HEADER, n_values() * sizeof(double));
     *state = s;
     return 0;

@@ -56,6 +56,7 @@
 #define li_find_snapshot LM_PREFIXED(LM_PREFIX, li_find_snapshot)
 #define li_save LM_PREFIXED(LM_PREFIX, li_save)
 #define li_restore LM_PREFIXED(LM_PREFIX, li_restore)
+#define li_snapshot_mode LM_PREFIXED(LM_PREFIX, li_snapshot_mode)
 #define li_discard LM_PREFIXED(LM_PREFIX, li_discard)
 #define li_serialized_size LM_PREFIXED(LM_PREFIX, li_serialized_size)
 #define li_serialize LM_PREFIXED(LM_PREFIX, li_serialize)
@@ -177,11 +178,15 @@ double li_partial(const LiValues *v, LiKind unknown, size_t i, LiKind known, siz
  * is not one of its states). */
 LiSnapshot *li_find_snapshot(const LiValues *v, const void *address);
 
-/* Save the values into *state: a new state if *state is NULL, else the given one, which
- * must be a state of this instance.  Returns 0, -1 out of memory, -2 not our state. */
-int li_save(LiValues *v, LiSnapshot **state);
+/* Save the values, with the API layer's mode (its state machine state) and the kind of
+ * instance (0 Model Exchange, 1 Co-Simulation), into *state: a new state if *state is
+ * NULL, else the given one, which must be a state of this instance.  Returns 0, -1 out of
+ * memory, -2 not our state. */
+int li_save(LiValues *v, LiSnapshot **state, unsigned mode, unsigned kind);
 
+/* Restore the values; the API layer restores its mode from li_snapshot_mode. */
 void li_restore(LiValues *v, const LiSnapshot *state);
+unsigned li_snapshot_mode(const LiSnapshot *state);
 
 /* Free a state of this instance.  Returns 0, or -2 if it is not one. */
 int li_discard(LiValues *v, LiSnapshot *state);
@@ -190,9 +195,11 @@ int li_discard(LiValues *v, LiSnapshot *state);
 size_t li_serialized_size(void);
 void li_serialize(const LiSnapshot *state, unsigned char *buffer);
 
-/* Read a serialised state into a new state of this instance.  Returns 0, -1 out of memory,
- * -3 if the bytes are not a state of this model (*why says what does not match). */
-int li_deserialize(LiValues *v, const unsigned char *data, size_t size, LiSnapshot **state,
-                   const char **why);
+/* Read a serialised state into a new state of this instance (or into *state, if it is one
+ * of its states), of this kind of instance, whose mode must be one bit of valid_modes.
+ * Returns 0, -1 out of memory, -2 *state is not ours, -3 if the bytes are not a state of
+ * this model and kind (*why says why). */
+int li_deserialize(LiValues *v, const unsigned char *data, size_t size, unsigned kind,
+                   unsigned valid_modes, LiSnapshot **state, const char **why);
 
 #endif
