@@ -335,3 +335,99 @@ def test_direct_feedthrough_in_model_exchange(binaries, tmp_path):
         model.terminate()
     finally:
         model.freeInstance()
+
+
+# ---------------------------------------------------------------- FMU states, derivatives
+
+
+def bind(binary, name, restype, argtypes):
+    function = getattr(binary.lib, name)
+    function.restype, function.argtypes = restype, argtypes
+    return function
+
+
+def test_fmu_state_misuse(binaries):
+    """fmi2 FMU state functions with null pointers, another instance's state, a freed
+    state, a short buffer and foreign bytes: fmi2Error with a message, nothing crashes."""
+    body = binaries["body"]
+    body.messages.clear()
+    set_state = bind(body, "fmi2SetFMUstate", c_int, [c_void_p, c_void_p])
+    free_state = bind(body, "fmi2FreeFMUstate", c_int, [c_void_p, POINTER(c_void_p)])
+    size_of = bind(body, "fmi2SerializedFMUstateSize", c_int, [c_void_p, c_void_p, POINTER(c_size_t)])
+    serialize = bind(body, "fmi2SerializeFMUstate", c_int, [c_void_p, c_void_p, c_char_p, c_size_t])
+    deserialize = bind(body, "fmi2DeSerializeFMUstate", c_int,
+                       [c_void_p, c_char_p, c_size_t, POINTER(c_void_p)])
+    first, second = body.initialised(), body.initialised()
+    try:
+        state = c_void_p()
+        assert body.GetFMUstate(first, None) == ERROR
+        assert "argument FMUstate is NULL" in body.last_message()
+        assert body.GetFMUstate(first, byref(state)) == OK
+        assert set_state(second, state) == ERROR
+        assert "FMUstate is not a state of this instance" in body.last_message()
+        size = c_size_t()
+        assert size_of(first, state, byref(size)) == OK
+        buffer = ctypes.create_string_buffer(size.value)
+        assert serialize(first, state, buffer, size.value - 1) == ERROR
+        assert f"size must be at least {size.value} bytes" in body.last_message()
+        assert serialize(first, state, buffer, size.value) == OK
+        copy = c_void_p()
+        assert deserialize(second, buffer.raw[:-1], size.value - 1, byref(copy)) == ERROR
+        assert "its size is not that of a state of this model" in body.last_message()
+        assert deserialize(second, buffer.raw, size.value, byref(copy)) == OK  # same model
+        assert free_state(first, byref(state)) == OK and state.value is None
+        assert free_state(first, byref(copy)) == ERROR  # second's state, not first's
+        assert "not a state of this instance" in body.last_message()
+        assert free_state(second, byref(copy)) == OK
+        assert free_state(second, byref(copy)) == OK  # NULL now: nothing to free
+    finally:
+        body.FreeInstance(first)
+        body.FreeInstance(second)
+
+
+def test_rollback_after_a_discarded_step(binaries):
+    """The mode is part of the FMU state: a state saved in StepComplete restores an
+    instance that a discarded step left in StepFailed, and stepping goes on."""
+    binary = binaries["unstable"]
+    set_state = bind(binary, "fmi2SetFMUstate", c_int, [c_void_p, c_void_p])
+    c = binary.instantiate()
+    try:
+        assert binary.set(c, x=1.0) == OK
+        assert binary.SetupExperiment(c, 0, 0.0, 0.0, 0, 0.0) == OK
+        assert binary.EnterInitializationMode(c) == OK
+        assert binary.ExitInitializationMode(c) == OK
+        state = c_void_p()
+        assert binary.GetFMUstate(c, byref(state)) == OK
+        assert binary.DoStep(c, 0.0, 10.0, 1) == DISCARD
+        assert binary.DoStep(c, 0.0, 0.01, 1) == ERROR  # StepFailed
+        assert set_state(c, state) == OK
+        assert binary.DoStep(c, 0.0, 0.01, 1) == OK
+        assert binary.get(c, "x")[1][0] == pytest.approx(np.exp(1.0), rel=1e-14)
+    finally:
+        binary.FreeInstance(c)
+
+
+def test_directional_derivative_misuse(binaries):
+    body = binaries["body"]
+    body.messages.clear()
+    directional = bind(body, "fmi2GetDirectionalDerivative", c_int,
+                       [c_void_p, POINTER(c_uint), c_size_t, POINTER(c_uint), c_size_t,
+                        POINTER(c_double), POINTER(c_double)])
+    c = body.initialised()
+    out = (c_double * 1)()
+    try:
+        theta, torque = (c_uint * 1)(body.vr["theta"]), (c_uint * 1)(body.vr["torque"])
+        one = (c_double * 1)(1.0)
+        assert directional(c, torque, 1, theta, 1, one, out) == ERROR
+        assert f"value reference {body.vr['torque']} is not an unknown of this model" in body.last_message()
+        assert directional(c, theta, 1, theta, 1, one, out) == ERROR
+        assert f"value reference {body.vr['theta']} is not a known of this model (an input " \
+               "or a state)" in body.last_message()
+        assert directional(c, theta, 1, torque, 1, None, out) == ERROR
+        assert "argument dvKnown is NULL" in body.last_message()
+        assert directional(c, theta, 1, torque, 1, (c_double * 1)(float("inf")), out) == ERROR
+        assert "dvKnown[0] must be finite; got inf" in body.last_message()
+        angle = (c_uint * 1)(body.vr["angle"])
+        assert directional(c, theta, 1, angle, 1, one, out) == OK and out[0] == 1.0  # C[0, 0]
+    finally:
+        body.FreeInstance(c)
