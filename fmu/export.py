@@ -186,8 +186,8 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         Also write FMI cross-check files ``<model_name>_in.csv``, ``_ref.csv`` and
         ``_ref.opt`` next to the FMU (see :mod:`fmu.reference`). Their cost is estimated
         first: at most ``max_reference_samples`` samples (stop_time / step) and
-        :data:`fmu.limits.MAX_REFERENCE_MEMORY` of memory. For a sampled system ``step``
-        must equal its sample period.
+        :data:`fmu.limits.MAX_REFERENCE_MEMORY` of memory (for a sampled system the samples
+        of the model count too, if more).
     compiler : str or os.PathLike, optional
         C compiler to use; default ``$CC``, else gcc or cc on PATH.
     description : str, optional
@@ -265,20 +265,19 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         step = model.sample_period if model.discrete else DEFAULT_STEP
     if stop_time < step:
         raise ValueError(f"stop_time must be at least one step ({step!r} s) [s]; got {stop_time!r}")
-    if reference and model.discrete and abs(step - model.sample_period) > 1e-12 * step:
-        raise ValueError(f"step must equal the sample period {model.sample_period!r} s of a "
-                         f"discrete-time system when reference=True [s]; got {step!r}")
     if fmi_version == "3.0":
         for name in (*model.input_names, *model.output_names, *model.state_names):
             if name in RESERVED_NAMES:
                 raise FMUBuildError(
                     f"signal name {name!r} is used by the FMI 3.0 FMU itself (its variables "
                     f"{' and '.join(RESERVED_NAMES)}); rename the signal in the StateSpace.")
+    if reference:
+        # a sampled system is simulated on its own sample grid: the finer grid counts
+        grid = min(step, model.sample_period) if model.discrete else step
+        cost = reference_cost(model.n_states, model.n_inputs, model.n_outputs, grid, stop_time)
+        check_reference_cost(cost, step, stop_time, float(max_reference_samples))
     if model.nominals is None:
         model = dataclasses.replace(model, nominals=state_nominals(model, stop_time))
-    if reference:
-        cost = reference_cost(model.n_states, model.n_inputs, model.n_outputs, step, stop_time)
-        check_reference_cost(cost, step, stop_time, float(max_reference_samples))
     target = Path(path)
     if target.is_dir():
         identifier = model_name if model_name is not None else _sanitise_identifier(model.name or "model")

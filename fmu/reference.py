@@ -84,9 +84,9 @@ def reference_response(model: LinearModel, step: float, stop_time: float) -> np.
     # u_k = u(t_k+), held over [t_k, t_k+1): right-continuous steps
     U = (np.arange(t.size)[None, :] >= step_indices[:, None]).astype(np.float64)
     U_left = (np.arange(t.size)[None, :] > step_indices[:, None]).astype(np.float64)
-    # a sampled system is its own discretisation (export checks step == its period)
-    sampled = model.statespace() if model.discrete else control.c2d(model.statespace(), step,
-                                                                       method="zoh")
+    if model.discrete:
+        return _sampled_response(model, t, step, step_indices, U, U_left)
+    sampled = control.c2d(model.statespace(), step, method="zoh")
     response = control.forced_response(sampled, T=t, U=U, X0=model.x0)
     X = np.asarray(response.states, dtype=np.float64).reshape(model.n_states, t.size)
     Y = np.asarray(response.outputs, dtype=np.float64).reshape(model.n_outputs, t.size)
@@ -97,6 +97,43 @@ def reference_response(model: LinearModel, step: float, stop_time: float) -> np.
             left = model.C @ X[:, k] + model.D @ U_left[:, k]
             rows.append(np.concatenate(([t[k]], left)))
         rows.append(np.concatenate(([t[k]], Y[:, k])))
+    return np.array(rows, dtype=np.float64)
+
+
+#: Sample instants this close to a communication point, relative to the sample period,
+#: count as at it (LI_SAMPLE_TOLERANCE of fmu/c/lti_instance.h).
+SAMPLE_TOLERANCE = 1e-6
+
+
+def _sampled_response(model: LinearModel, t: np.ndarray, h: float, step_indices: np.ndarray,
+                      U: np.ndarray, U_left: np.ndarray) -> np.ndarray:
+    """Outputs of a sampled system on the communication grid t, as its FMU shows them.
+
+    The FMU samples at s_j = j T with the inputs the master set at the last communication
+    point at or before s_j (it holds them over the step): u_k(j) with k(j) the grid index of
+    that point. Sample j gives y_j = C x_j + D u_k(j) and x_j+1 = A x_j + B u_k(j). At a grid
+    point t_k the output is the last sample's y_j, except where a sample instant falls on
+    t_k: there the sample is still to be taken and the output is C x_j + D u with the input
+    before (left row) and after (right row) the input step at t_k.
+    """
+    T = model.sample_period
+    tolerance = SAMPLE_TOLERANCE * T
+    n_samples = int(np.floor((t[-1] + tolerance) / T)) + 1
+    s = np.arange(n_samples) * T
+    k_of_sample = np.minimum(np.floor((s + tolerance) / h).astype(int), t.size - 1)
+    response = control.forced_response(model.statespace(), T=s, U=U[:, k_of_sample], X0=model.x0)
+    X = np.asarray(response.states, dtype=np.float64).reshape(model.n_states, n_samples)
+    Y = np.asarray(response.outputs, dtype=np.float64).reshape(model.n_outputs, n_samples)
+    rows = []
+    events = set(step_indices.tolist())
+    for k in range(t.size):
+        j = min(int(np.floor((t[k] + tolerance) / T)), n_samples - 1)
+        pending = abs(s[j] - t[k]) <= tolerance
+        if k in events:  # the row before the input step: held, or C x + D u(t-) if pending
+            left = model.C @ X[:, j] + model.D @ U_left[:, k] if pending else Y[:, j]
+            rows.append(np.concatenate(([t[k]], left)))
+        right = model.C @ X[:, j] + model.D @ U[:, k] if pending else Y[:, j]
+        rows.append(np.concatenate(([t[k]], right)))
     return np.array(rows, dtype=np.float64)
 
 

@@ -220,3 +220,29 @@ def test_sampled_loop_fmu(version, tmp_path):
     for name in ("theta", "omega"):
         np.testing.assert_allclose(result[name], expected[name], rtol=0,
                                    atol=1e-12 * np.max(np.abs(expected[name])))
+
+
+@pytest.mark.parametrize("version", VERSIONS)
+@pytest.mark.parametrize("h", [T, 0.02, 2 * T])
+def test_reference_files_of_a_sampled_fmu(version, h, tmp_path):
+    """The cross-check files of a sampled FMU for communication steps equal to, finer and
+    coarser than its period (fmu.reference simulates it on its own sample grid with the
+    inputs the master holds): fmpy, fed with <Model>_in.csv, reproduces <Model>_ref.csv
+    to round-off. fmpy records the outputs at the end of each step, before it sets the inputs
+    of that instant: at an input step it shows the left limit (the first of the two rows)."""
+    from fmpy.util import read_csv
+
+    path = export(sampled(), tmp_path / "s.fmu", fmi_version=version, step=h, stop_time=2.0,
+                  reference=True)
+    result = simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=2.0, output_interval=h,
+                          input=read_csv(str(tmp_path / "s_in.csv")))
+    reference = read_csv(str(tmp_path / "s_ref.csv"))
+    first = np.r_[True, np.diff(reference["time"]) > 0]
+    np.testing.assert_allclose(result["time"], reference["time"][first], rtol=0, atol=1e-12)
+    for name in ("theta", "omega"):
+        expected = reference[name][first]
+        np.testing.assert_allclose(result[name], expected, rtol=0, atol=1e-12 * np.max(np.abs(expected)))
+    # the input step falls on a sample instant in every case here (0.5 s, 0.5 s, 0.4 s): the
+    # sample is still to be taken, so the two rows differ by the feedthrough D = 0.5
+    steps = np.flatnonzero(np.diff(reference["time"]) == 0)
+    assert reference["theta"][steps[0] + 1] - reference["theta"][steps[0]] == pytest.approx(0.5)
