@@ -24,6 +24,7 @@ from __future__ import annotations
 import _common  # noqa: F401  (first: limits BLAS threads, puts the worktree on sys.path)
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -41,7 +42,7 @@ from fmpy.fmi2 import FMU2Slave
 import fmu
 from fmu.codegen import model_c_source
 from fmu.description import model_description_xml
-from fmu.system import linear_model_from, zoh_matrices
+from fmu.system import linear_model_from, state_nominals, zoh_matrices
 
 
 def modal_plant(n_states: int, seed: int = 0) -> control.StateSpace:
@@ -87,6 +88,7 @@ def bench_export(n_states: int, runs: int, folder: Path) -> dict:
 
     def generate_only():
         model = linear_model_from(system)
+        model = dataclasses.replace(model, nominals=state_nominals(model, 10.0))
         Phi, Gamma = zoh_matrices(model.A, model.B, fmu.DEFAULT_STEP)
         model_c_source(model, "m", "{0}", fmu.DEFAULT_STEP, Phi, Gamma)
         model_description_xml(model, model_identifier="m", guid="{0}", interfaces=("me", "cs"),
