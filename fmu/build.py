@@ -1,9 +1,10 @@
 """Compiling the FMU's shared library with the system C compiler, in a private build folder.
 
-One direct compiler call per C file, no build system: the three C files and the FMI headers
+One direct compiler call per C file, no build system: the four C files and the FMI headers
 compile to a shared library that needs only libc and libm (and pthread, in libc on current
-systems), with every symbol hidden except the FMI 2.0 functions (``-fvisibility=hidden``
-plus ``FMI2_Export`` on the API functions).
+systems; no symbol newer than glibc 2.17, see :mod:`fmu.verify`), with every symbol hidden
+except the FMI functions (``-fvisibility=hidden`` plus ``FMI2_Export`` / ``FMI3_Export``
+on the API functions).
 
 The fixed templates come from the persistent object cache (:mod:`fmu.cache`): compiled once
 per machine and compiler, written atomically under a cross-process lock, checked against a

@@ -1,7 +1,8 @@
 """The persistent cache of compiled C templates, safe across threads and processes.
 
-The FMI API layer (``fmi2Functions.c``) and the arithmetic (``linear_model.c``) are the same
-in every FMU, up to the generated ``flexsat_interfaces.h`` (three variants). Their object
+The FMI API layers (``fmi2Functions.c``, ``fmi3Functions.c``), the instance code
+(``lti_instance.c``) and the arithmetic (``linear_model.c``) are the same in every FMU of an
+FMI version, up to the generated ``flexsat_interfaces.h`` (three variants). Their object
 files are kept in a folder on disk, so that they compile once per machine and compiler,
 not once per export or per process; each export then compiles only its generated
 ``model.c``.
