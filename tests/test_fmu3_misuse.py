@@ -429,3 +429,42 @@ def test_double_free_reads_no_freed_memory(tmp_path):
                             timeout=60)
     assert "AddressSanitizer" not in result.stderr, result.stderr[:2000]
     assert result.returncode == 0 and result.stdout == "done\n", result.stdout + result.stderr
+
+
+def test_variable_dependencies_match_the_model_structure(hub, lqr):
+    """fmi3GetNumberOfVariableDependencies / fmi3GetVariableDependencies: the same
+    dependencies as ModelStructure (for the sampled controller, the inputs through D, without
+    the clock, which is not a Float64 variable); an input is not a dependent."""
+    for binary, name in ((hub, "hub"), (lqr, "lqr")):
+        count_of = bind3(binary, "fmi3GetNumberOfVariableDependencies",
+                         [c_void_p, c_uint, POINTER(c_size_t)])
+        list_of = bind3(binary, "fmi3GetVariableDependencies",
+                        [c_void_p, c_uint, POINTER(c_size_t), POINTER(c_uint), POINTER(c_size_t),
+                         POINTER(c_int), c_size_t])
+        description = read_model_description(str(exported(name, "3.0")))
+        c = binary.instantiate()
+        try:
+            for unknown in description.outputs + description.derivatives:
+                vr = unknown.variable.valueReference
+                count = c_size_t()
+                assert count_of(c, vr, byref(count)) == OK
+                expected = sorted(d.valueReference for d in unknown.dependencies
+                                  if d.type == "Float64")
+                n = count.value
+                assert n == len(expected)
+                independents, kinds = (c_uint * max(n, 1))(), (c_int * max(n, 1))()
+                elements, elements2 = (c_size_t * max(n, 1))(), (c_size_t * max(n, 1))()
+                assert list_of(c, vr, elements, independents, elements2, kinds, n) == OK
+                assert sorted(independents[:n]) == expected
+                assert set(kinds[:n]) <= {1}  # fmi3Constant
+            input_vr = binary.vr["torque" if name == "hub" else "theta_ref"]
+            assert count_of(c, input_vr, byref(c_size_t())) == ERROR
+            assert "is not an output" in binary.last_message()
+        finally:
+            binary.FreeInstance(c)
+
+
+def bind3(binary, name, argtypes):
+    function = getattr(binary.lib, name)
+    function.restype, function.argtypes = c_int, argtypes
+    return function
