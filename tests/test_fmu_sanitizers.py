@@ -1,4 +1,5 @@
-"""The FMU sources of both FMI versions under AddressSanitizer and UndefinedBehaviorSanitizer.
+"""The FMU sources of both FMI versions under AddressSanitizer and UndefinedBehaviorSanitizer,
+and the FMI 3.0 sources under ThreadSanitizer (instances of one FMU in four threads).
 
 A C harness per version, compiled with an FMU's sources (as a source-code importer would),
 drives every new code path - steps of the default size, of other sizes, long sampled steps
@@ -221,3 +222,66 @@ def test_sources_are_clean_under_address_and_undefined_behaviour_sanitizers(name
     result = subprocess.run([str(tmp_path / "harness")], capture_output=True, text=True, timeout=120)
     assert "Sanitizer" not in result.stderr and "runtime error" not in result.stderr, result.stderr[:3000]
     assert result.returncode == 0 and result.stdout.endswith("done\n"), result.stdout + result.stderr
+
+
+HARNESS_THREADS = r"""
+#include <pthread.h>
+#include <stdio.h>
+#include "fmi3Functions.h"
+
+/* Threads create, step, save and restore and free instances of one FMU at the same time:
+ * they share only the list of live instances. */
+static void *work(void *arg)
+{
+    (void)arg;
+    for (int round = 0; round < 50; round++) {
+        fmi3Instance fmu = fmi3InstantiateCoSimulation("t", TOKEN, NULL, fmi3False, fmi3False,
+                                                       fmi3False, fmi3False, NULL, 0, NULL, NULL, NULL);
+        if (!fmu) return (void *)1;
+        fmi3FMUState state = NULL;
+        fmi3Boolean a, b, c;
+        fmi3Float64 last;
+        if (fmi3EnterInitializationMode(fmu, fmi3False, 0.0, 0.0, fmi3False, 0.0) != fmi3OK
+            || fmi3ExitInitializationMode(fmu) != fmi3OK
+            || fmi3GetFMUState(fmu, &state) != fmi3OK
+            || fmi3DoStep(fmu, 0.0, 0.037, fmi3True, &a, &b, &c, &last) != fmi3OK
+            || fmi3SetFMUState(fmu, state) != fmi3OK) return (void *)2;
+        fmi3FreeInstance(fmu);
+    }
+    return NULL;
+}
+
+int main(void)
+{
+    pthread_t threads[4];
+    for (int i = 0; i < 4; i++) pthread_create(&threads[i], NULL, work, NULL);
+    int bad = 0;
+    for (int i = 0; i < 4; i++) {
+        void *result;
+        pthread_join(threads[i], &result);
+        bad |= result != NULL;
+    }
+    printf(bad ? "failed\n" : "done\n");
+    return bad;
+}
+"""
+
+
+@pytest.mark.slow
+def test_instances_in_threads_under_thread_sanitizer(tmp_path):
+    """Four threads, 50 instances each, under ThreadSanitizer: no data race."""
+    folder = tmp_path / "fmu"
+    with zipfile.ZipFile(exported("hub", "3.0")) as archive:
+        archive.extractall(folder)
+    sources = folder / "sources"
+    token = read_model_description(str(exported("hub", "3.0"))).guid
+    headers = Path(fmpy.__file__).parent / "c-code"
+    files = [str(sources / f) for f in ("model.c", "fmi3Functions.c", "lti_instance.c", "linear_model.c")]
+    (tmp_path / "main.c").write_text(HARNESS_THREADS)
+    subprocess.run(["gcc", "-std=c99", "-g", "-O1", "-fsanitize=thread", f'-DTOKEN="{token}"',
+                    f"-I{sources}", f"-I{headers}", str(tmp_path / "main.c"), *files,
+                    "-o", str(tmp_path / "threads"), "-lm", "-pthread"], check=True,
+                   capture_output=True, text=True)
+    result = subprocess.run([str(tmp_path / "threads")], capture_output=True, text=True, timeout=300)
+    assert "ThreadSanitizer" not in result.stderr, result.stderr[:3000]
+    assert result.returncode == 0 and result.stdout == "done\n", result.stdout + result.stderr
