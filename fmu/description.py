@@ -33,7 +33,7 @@ from .system import LinearModel
 from .units import SI_UNITS, derivative_unit
 
 __all__ = ["model_description_xml", "value_references", "variable_units", "dependency_indices",
-           "GENERATION_TOOL"]
+           "unit_definitions", "GENERATION_TOOL"]
 
 GENERATION_TOOL = "flexsat.fmu"
 
@@ -53,6 +53,16 @@ def variable_units(model: LinearModel) -> dict[str, str | None]:
         for state in model.state_names:
             units[f"der({state})"] = derivative_unit(model.units.get(state))
     return units
+
+
+def unit_definitions(units: list[str]) -> list[str]:
+    """Lines of ``<UnitDefinitions>`` (the same in FMI 2.0 and 3.0) for the named units."""
+    lines = ["  <UnitDefinitions>"]
+    for unit in units:
+        exponents = " ".join(f'{k}="{v}"' for k, v in SI_UNITS[unit].items())
+        lines.append(f'    <Unit name="{unit}"><BaseUnit {exponents}/></Unit>')
+    lines.append("  </UnitDefinitions>")
+    return lines
 
 
 def dependency_indices(row_states: np.ndarray | None, row_inputs: np.ndarray,
@@ -126,11 +136,7 @@ def model_description_xml(model: LinearModel, *, model_identifier: str, guid: st
         lines.append(f"    <SourceFiles>\n{files}    </SourceFiles>")
         lines.append("  </CoSimulation>")
     if used_units:
-        lines.append("  <UnitDefinitions>")
-        for unit in used_units:
-            exponents = " ".join(f'{k}="{v}"' for k, v in SI_UNITS[unit].items())
-            lines.append(f'    <Unit name="{unit}"><BaseUnit {exponents}/></Unit>')
-        lines.append("  </UnitDefinitions>")
+        lines += unit_definitions(used_units)
     lines.append("  <LogCategories>")
     lines.append('    <Category name="logStatusError" description="Errors (always logged)"/>')
     lines.append('    <Category name="logStatusWarning" description="Warnings"/>')

@@ -22,9 +22,8 @@ from __future__ import annotations
 from xml.sax.saxutils import quoteattr
 
 from .codegen import c_double
-from .description import GENERATION_TOOL, dependency_indices, variable_units
+from .description import GENERATION_TOOL, dependency_indices, unit_definitions, variable_units
 from .system import LinearModel
-from .units import SI_UNITS
 
 __all__ = ["model_description3_xml", "TIME_NAME", "CLOCK_NAME", "RESERVED_NAMES"]
 
@@ -87,11 +86,7 @@ def model_description3_xml(model: LinearModel, *, model_identifier: str, guid: s
                    if discrete else ' hasEventMode="false"')
         lines.append(f'  <CoSimulation modelIdentifier="{model_identifier}"{capabilities}'
                      f' canHandleVariableCommunicationStepSize="true"{sampled}/>')
-    lines.append("  <UnitDefinitions>")
-    for unit in used_units:
-        exponents = " ".join(f'{k}="{v}"' for k, v in SI_UNITS[unit].items())
-        lines.append(f'    <Unit name="{unit}"><BaseUnit {exponents}/></Unit>')
-    lines.append("  </UnitDefinitions>")
+    lines += unit_definitions(used_units)  # never empty: the time is in s
     lines.append("  <LogCategories>")
     lines.append('    <Category name="logStatusError" description="Errors"/>')
     lines.append('    <Category name="logStatusWarning" description="Warnings"/>')

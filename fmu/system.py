@@ -194,36 +194,8 @@ def linear_model_from(system: object, *, x0: object = None,
                     "FMU variable names must be unique. Rename one of them in the StateSpace.")
             seen[name] = kind
 
-    if x0 is None:
-        x0_array = np.zeros(n, dtype=np.float64)
-    else:
-        try:
-            x0_array = np.array(x0, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise TypeError(f"x0 must be an array of {n} real numbers (in the states' units); "
-                            f"got {type(x0).__name__} {shorten(x0)}") from error
-        if x0_array.shape != (n,):
-            raise ValueError(f"x0 must have shape ({n},) (one value per state, in the states' "
-                             f"units); got shape {x0_array.shape}")
-        if not np.all(np.isfinite(x0_array)):
-            bad = int(np.flatnonzero(~np.isfinite(x0_array))[0])
-            raise ValueError(f"x0 must be finite (in the states' units); got {x0_array[bad]} "
-                             f"at index {bad}")
-
-    nominal_array = None
-    if nominals is not None:
-        try:
-            nominal_array = np.array(nominals, dtype=np.float64)
-        except (TypeError, ValueError) as error:
-            raise TypeError(f"nominals must be an array of {n} positive numbers (in the states' "
-                            f"units); got {type(nominals).__name__} {shorten(nominals)}") from error
-        if nominal_array.shape != (n,):
-            raise ValueError(f"nominals must have shape ({n},) (one value per state, in the "
-                             f"states' units); got shape {nominal_array.shape}")
-        bad = np.flatnonzero(~(np.isfinite(nominal_array) & (nominal_array > 0)))
-        if bad.size:
-            raise ValueError(f"nominals must be positive and finite (in the states' units); got "
-                             f"{nominal_array[bad[0]]} at index {int(bad[0])}")
+    x0_array = np.zeros(n) if x0 is None else _state_vector("x0", x0, n, positive=False)
+    nominal_array = None if nominals is None else _state_vector("nominals", nominals, n, positive=True)
 
     return LinearModel(
         A=matrices["A"], B=matrices["B"], C=matrices["C"], D=matrices["D"],
@@ -275,6 +247,25 @@ def zoh_matrices(A: np.ndarray, B: np.ndarray, step: float) -> tuple[np.ndarray,
     # expm(M) = D expm(D^-1 M D) D^-1 with D = diag(factors), powers of 2 (exact)
     exponential = scipy.linalg.expm(balanced) * factors[:, None] / factors[None, :]
     return exponential[:n, :n].copy(), exponential[:n, n:].copy()
+
+
+def _state_vector(label: str, value: object, n: int, *, positive: bool) -> np.ndarray:
+    """``value`` as a float64 vector of one finite (and if asked, positive) number per state."""
+    what = "positive numbers" if positive else "real numbers"
+    try:
+        array = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError) as error:
+        raise TypeError(f"{label} must be an array of {n} {what} (in the states' units); got "
+                        f"{type(value).__name__} {shorten(value)}") from error
+    if array.shape != (n,):
+        raise ValueError(f"{label} must have shape ({n},) (one value per state, in the states' "
+                         f"units); got shape {array.shape}")
+    good = np.isfinite(array) & (array > 0 if positive else True)
+    if not np.all(good):
+        bad = int(np.flatnonzero(~good)[0])
+        raise ValueError(f"{label} must be {'positive and ' if positive else ''}finite (in the "
+                         f"states' units); got {array[bad]} at index {bad}")
+    return array
 
 
 def _round_nominal(value: float) -> float:

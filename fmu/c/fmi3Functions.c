@@ -1073,6 +1073,27 @@ static int check_partials(Instance *inst, const char *function,
     return 1;
 }
 
+/* sensitivity = J seed (directional) or J^T seed (adjoint), J the block of
+ * [[A, B], [C, D]] (lti_instance.h).  One loop for both: each sensitivity accumulates its
+ * terms in the order of the seed's entries. */
+static void partials(Instance *inst, const fmi3ValueReference unknowns[], size_t nUnknowns,
+                     const fmi3ValueReference knowns[], size_t nKnowns, const fmi3Float64 seed[],
+                     fmi3Float64 sensitivity[], int adjoint)
+{
+    const size_t n_sensitivity = adjoint ? nKnowns : nUnknowns;
+    for (size_t o = 0; o < n_sensitivity; o++) sensitivity[o] = 0.0;
+    for (size_t i = 0; i < nUnknowns; i++) {
+        size_t row, column;
+        const LiKind unknown = li_kind(unknowns[i], &row);
+        for (size_t k = 0; k < nKnowns; k++) {
+            const LiKind known = li_kind(knowns[k], &column);
+            const double entry = li_partial(&inst->values, unknown, row, known, column);
+            if (adjoint) sensitivity[k] += entry * seed[i];
+            else sensitivity[i] += entry * seed[k];
+        }
+    }
+}
+
 FMI3_Export fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance,
                                                     const fmi3ValueReference unknowns[],
                                                     size_t nUnknowns,
@@ -1087,17 +1108,7 @@ FMI3_Export fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance,
         || !check_partials(inst, function, unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
                            sensitivity, nSensitivity, nKnowns, nUnknowns))
         return fmi3Error;
-    /* sensitivity = J seed, J the block of [[A, B], [C, D]] (lti_instance.h) */
-    for (size_t i = 0; i < nUnknowns; i++) {
-        size_t row, column;
-        const LiKind unknown = li_kind(unknowns[i], &row);
-        double sum = 0.0;
-        for (size_t k = 0; k < nKnowns; k++) {
-            const LiKind known = li_kind(knowns[k], &column);
-            sum += li_partial(&inst->values, unknown, row, known, column) * seed[k];
-        }
-        sensitivity[i] = sum;
-    }
+    partials(inst, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity, 0);
     return fmi3OK;
 }
 
@@ -1115,17 +1126,7 @@ FMI3_Export fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance,
         || !check_partials(inst, function, unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
                            sensitivity, nSensitivity, nUnknowns, nKnowns))
         return fmi3Error;
-    /* sensitivity = J^T seed */
-    for (size_t k = 0; k < nKnowns; k++) {
-        size_t row, column;
-        const LiKind known = li_kind(knowns[k], &column);
-        double sum = 0.0;
-        for (size_t i = 0; i < nUnknowns; i++) {
-            const LiKind unknown = li_kind(unknowns[i], &row);
-            sum += li_partial(&inst->values, unknown, row, known, column) * seed[i];
-        }
-        sensitivity[k] = sum;
-    }
+    partials(inst, unknowns, nUnknowns, knowns, nKnowns, seed, sensitivity, 1);
     return fmi3OK;
 }
 
