@@ -49,11 +49,11 @@ import warnings
 from collections.abc import Sequence
 
 import numpy as np
-import scipy.optimize
 
-from . import limits
-from .chain import HingedChain, _assemble
-from .interface import ConvergenceError, FiniteAppendage, as_frequency_array, describe
+from . import fitting, limits
+from .chain import HingedChain
+from .fitting import FitWarning
+from .interface import FiniteAppendage, as_frequency_array, describe
 
 __all__ = [
     "EquivalenceResult",
@@ -64,9 +64,6 @@ __all__ = [
     "spectral_errors",
 ]
 
-# ftol = xtol = gtol of the two fit stages (equal weights; poles weighted): a finer first stage
-# only polishes a flat valley that the second leaves anyway.
-_FIT_TOL = (1e-5, 1e-7)
 MATCHES = ("poles-and-zeros", "frequencies")
 
 # (label, unit) of the rows of the paper's table, in the paper's order.
@@ -86,10 +83,6 @@ _ROWS = (
     ("w1", "rad/s"),
     ("w2", "rad/s"),
 )
-
-
-class FitWarning(RuntimeWarning):
-    """A chain fit stopped at its evaluation budget; the chain returned is the best found."""
 
 
 # ---------------------------------------------------------------------------------------------
@@ -490,272 +483,6 @@ def _beam_data(beam):
     return L, EJ, rho
 
 
-def _symmetric(half: np.ndarray, n: int) -> np.ndarray:
-    """Full symmetric profile of n entries from its first ceil(n/2)."""
-    return np.concatenate([half, half[: n // 2][::-1]])
-
-
-def _frequencies_chain(x: np.ndarray, n: int, L: float, EJ: float, rho: float) -> HingedChain:
-    """Symmetric frozen-piece chain from x = [log length weights (ceil(n/2) - 1),
-    log stiffness factors (ceil((n-1)/2))]."""
-    h = (n + 1) // 2
-    weights = _symmetric(np.exp(np.concatenate([x[: h - 1], [0.0]])), n)
-    lengths = L * weights / weights.sum()
-    masses = rho * lengths
-    factors = _symmetric(np.exp(x[h - 1:]), n - 1) if n > 1 else np.zeros(0)
-    return HingedChain(lengths, masses, masses * lengths**2 / 12.0,
-                       factors * EJ * (n - 1) / L)
-
-
-def _fit_frequencies(beam, n: int, frequencies) -> HingedChain:
-    """The paper's fit generalised: a symmetric frozen-piece chain matching n - 1 frequencies."""
-    L, EJ, rho = _beam_data(beam)
-    if frequencies is None:
-        target = np.asarray(beam.natural_frequencies(n - 1), dtype=np.float64)
-    else:
-        target = np.asarray(frequencies, dtype=np.float64)
-        if target.shape != (n - 1,) or not np.all(np.isfinite(target)) or np.any(target <= 0) \
-                or np.any(np.diff(target) <= 0):
-            raise ValueError(f"frequencies must be {n - 1} increasing positive values [rad/s] "
-                             f"(one per hinge); got {describe(frequencies)}")
-    h = (n + 1) // 2
-    # Start: the RFEM chain (end rods half as long as the inner ones, c = EJ/H).
-    x0 = np.zeros(h - 1 + n // 2)
-    if h > 1:
-        x0[0] = math.log(0.5)
-
-    def residual(x):
-        poles = _frequencies_chain(x, n, L, EJ, rho).poles()
-        return np.log(poles[: n - 1] / target) if poles.size >= n - 1 else np.full(n - 1, 10.0)
-
-    bounds = (np.full(x0.size, -8.0), np.full(x0.size, 8.0))
-    result = scipy.optimize.least_squares(residual, x0, bounds=bounds, xtol=1e-15, ftol=1e-15,
-                                          gtol=1e-15, max_nfev=200 * (x0.size + 1))
-    worst = float(np.max(np.abs(result.fun)))
-    if worst > 1e-9:
-        raise ConvergenceError(
-            f"fit_chain(match='frequencies', n_bodies={n}) did not match the frequencies: "
-            f"largest relative mismatch {worst:.2e} after {result.nfev} evaluations "
-            f"({result.message})")
-    return _frequencies_chain(result.x, n, L, EJ, rho)
-
-
-class _MassLayout:
-    """Parametrisation of a general chain with exact m, L, J and centre of mass at L/2.
-
-    x = [u (n-1), s (n), v (n-2), g (n-1), c (n-1)]:
-
-    * lengths ``l = L e^u / sum e^u`` (u_n = 0);
-    * centre-of-mass fractions ``a_i = s_i l_i``, s_i in [0, 1];
-    * masses: frozen pieces ``rho l_i`` times ``e^v`` (v_1 = v_n = 0), then *tilted*,
-      ``m_i ~ e^(v_i + tau d_i)`` with d_i the distance of body i's centre of mass from L/2 and
-      tau the root of ``sum m_i d_i = 0`` (a monotone equation: its derivative is a variance),
-      scaled to the total mass: this keeps m and the centre of mass exact;
-    * inertias: frozen ``m_i l_i**2/12`` times ``e^g`` (g_n = 0), scaled by the one factor that
-      makes ``sum J_i + m_i d_i**2 = J`` (parallel-axis theorem): J exact;
-    * stiffnesses ``e^c EJ/H``, H = L/(n - 1).
-    """
-
-    def __init__(self, n: int, L: float, EJ: float, rho: float):
-        self.n, self.L, self.EJ, self.rho = n, L, EJ, rho
-        self.mass = rho * L
-        self.inertia = self.mass * L**2 / 12.0
-        self.sizes = (n - 1, n, n - 2, n - 1, n - 1)
-        self.size = sum(self.sizes)
-
-    def split(self, x):
-        out, i = [], 0
-        for k in self.sizes:
-            out.append(x[i:i + k])
-            i += k
-        return out
-
-    def bounds(self):
-        lo = np.concatenate([np.full(self.n - 1, -4.0), np.zeros(self.n), np.full(self.n - 2, -4.0),
-                             np.full(self.n - 1, -8.0), np.full(self.n - 1, -6.0)])
-        hi = np.concatenate([np.full(self.n - 1, 4.0), np.ones(self.n), np.full(self.n - 2, 4.0),
-                             np.full(self.n - 1, 4.0), np.full(self.n - 1, 6.0)])
-        return lo, hi
-
-    def from_chain(self, chain: HingedChain) -> np.ndarray:
-        """Parameters of a frozen-piece chain (approximately; used as a starting point)."""
-        n = self.n
-        u = np.log(chain.lengths[:-1] / chain.lengths[-1])
-        s = chain.com_offsets / chain.lengths
-        frozen = chain.lengths * self.rho
-        v = np.log(chain.masses[1:-1] / frozen[1:-1])
-        g_all = np.log(chain.inertias / (chain.masses * chain.lengths**2 / 12.0))
-        g = g_all[:-1] - g_all[-1]
-        c = np.log(chain.hinge_stiffnesses * self.L / (self.EJ * (n - 1)))
-        lo, hi = self.bounds()
-        return np.clip(np.concatenate([u, s, v, g, c]), lo + 1e-9, hi - 1e-9)
-
-    def arrays(self, x):
-        """(lengths, masses, inertias, com_offsets, stiffnesses, penalty) of parameters x;
-        penalty > 0 when the layout cannot hold J (mass too far out) or the centre of mass."""
-        n, L = self.n, self.L
-        u, s, v, g, c = self.split(x)
-        weights = np.exp(np.concatenate([u, [0.0]]))
-        lengths = L * weights / weights.sum()
-        offsets = s * lengths
-        centres = np.concatenate([[0.0], np.cumsum(lengths)[:-1]]) + offsets
-        d = (centres - 0.5 * L) / L
-        logm = np.log(self.rho * lengths) + np.concatenate([[0.0], v, [0.0]])
-        penalty = 0.0
-        if d.min() < 0.0 < d.max():
-            tau = _tilt(logm, d)
-        else:  # every centre on one side of L/2: keep the masses, penalise the offset
-            tau = 0.0
-            penalty += abs(float(np.mean(d)))
-        e = np.exp(logm + tau * d - np.max(logm + tau * d))
-        masses = self.mass * e / e.sum()
-        rest = self.inertia - np.dot(masses, (d * L) ** 2)
-        raw = np.exp(np.concatenate([g, [0.0]])) * masses * lengths**2 / 12.0
-        if rest <= 1e-6 * self.inertia:
-            penalty += (1e-6 * self.inertia - rest) / self.inertia
-            rest = 1e-6 * self.inertia
-        inertias = raw * (rest / raw.sum())
-        stiffnesses = np.exp(c) * self.EJ * (n - 1) / L
-        return lengths, masses, inertias, np.minimum(offsets, lengths), stiffnesses, penalty
-
-    def build(self, x):
-        """(HingedChain, penalty) of parameters x (see :meth:`arrays`)."""
-        lengths, masses, inertias, offsets, stiffnesses, penalty = self.arrays(x)
-        return HingedChain(lengths, masses, inertias, stiffnesses, com_offsets=offsets), penalty
-
-
-def _tilt(logm: np.ndarray, d: np.ndarray) -> float:
-    """tau with sum_i exp(logm_i + tau d_i) d_i = 0 (min d < 0 < max d).
-
-    The weighted mean of d is increasing in tau (its derivative is the weighted variance), so
-    Newton's method from 0 is safeguarded by a bracket that it keeps shrinking.
-    """
-    lo, hi, tau = -np.inf, np.inf, 0.0
-    for _ in range(100):
-        z = logm + tau * d
-        e = np.exp(z - z.max())
-        e /= e.sum()
-        mean = np.dot(e, d)
-        if mean > 0.0:
-            hi = tau
-        else:
-            lo = tau
-        variance = np.dot(e, (d - mean) ** 2)
-        if abs(mean) < 1e-15 * max(1.0, np.abs(d).max()):
-            return tau
-        step = tau - mean / variance if variance > 0.0 else np.nan
-        if not (lo < step < hi):  # outside the bracket: bisect (or expand a half-open one)
-            if np.isfinite(lo) and np.isfinite(hi):
-                step = 0.5 * (lo + hi)
-            else:
-                step = (tau - 1.0) * 2.0 if np.isfinite(hi) else (tau + 1.0) * 2.0
-        tau = step
-    return tau
-
-
-def _pinned_frequencies(K: np.ndarray, M: np.ndarray, n_rigid: int) -> np.ndarray | None:
-    """Frequencies [rad/s] of the symmetric definite pencil (K, M), the n_rigid lowest
-    (rigid-body) ones dropped; None if M is not positive definite."""
-    try:
-        lam = scipy.linalg.eigh(K, M, eigvals_only=True)
-    except np.linalg.LinAlgError:
-        return None
-    return np.sqrt(np.maximum(lam[n_rigid:], 0.0))
-
-
-def _fast_values(arrays, n_values: int) -> np.ndarray | None:
-    """First n_values poles and zeros of W1, W2, W4 [rad/s] of a rigid-root chain.
-
-    The same quantities as HingedChain.poles()/zeros(), computed for the fit without building
-    the object: poles from (K, M) less two rigid-body modes, W1 zeros with delta = 0 (pinned:
-    one rigid mode), W4 zeros with phi = 0 (one rigid mode), all symmetric definite; W2 zeros
-    from the Rosenbrock pencil as in FiniteAppendage.zeros.
-    """
-    lengths, masses, inertias, offsets, stiffnesses = arrays[:5]
-    M, _, K, _ = _assemble(lengths, masses, inertias, offsets, stiffnesses, None, False)
-    n = K.shape[0]
-    poles = _pinned_frequencies(K, M, 2)
-    keep1 = np.arange(1, n)
-    keep4 = np.concatenate([[0], np.arange(2, n)])
-    zeros1 = _pinned_frequencies(K[np.ix_(keep1, keep1)], M[np.ix_(keep1, keep1)], 1)
-    zeros4 = _pinned_frequencies(K[np.ix_(keep4, keep4)], M[np.ix_(keep4, keep4)], 1)
-    A = np.zeros((n + 1, n + 1))
-    E = np.zeros((n + 1, n + 1))
-    A[:n, :n], E[:n, :n] = K, M
-    A[1, n] = A[n, 0] = 1.0
-    zeros2 = FiniteAppendage._pencil_frequencies(A, E, 1)
-    out = []
-    for values in (poles, zeros1, zeros2, zeros4):
-        if values is None or values.size < n_values:
-            return None
-        out.append(values[:n_values])
-    return np.concatenate(out)
-
-
-def _targets(beam, n_values: int) -> np.ndarray:
-    return np.concatenate([np.asarray(beam.natural_frequencies(n_values), dtype=np.float64)]
-                          + [np.asarray(beam.zeros(r, n_values), dtype=np.float64)
-                             for r in (1, 2, 4)])
-
-
-def _fit_poles_and_zeros(beam, n: int, max_nfev: int | None, pole_weight: float) -> HingedChain:
-    """Least squares in log-frequency over a :class:`_MassLayout`, see :func:`fit_chain`.
-
-    Two stages: all targets weighted equally (a well-conditioned problem that converges in a
-    few dozen iterations), then the poles weighted by ``pole_weight`` from there (the stiffer
-    problem starts close to its solution). Each stage from each start has ``max_nfev``
-    evaluations.
-    """
-    L, EJ, rho = _beam_data(beam)
-    k = n - 1
-    log_target = np.log(_targets(beam, k))
-    layout = _MassLayout(n, L, EJ, rho)
-    lo, hi = layout.bounds()
-    if max_nfev is None:
-        max_nfev = 60 * layout.size
-
-    def make_residual(weight):
-        weights = np.concatenate([np.full(k, weight), np.ones(3 * k)])
-
-        def residual(x):
-            arrays = layout.arrays(x)
-            values = _fast_values(arrays, k)
-            if values is None:
-                return np.full(4 * k + 1, 10.0)
-            return np.concatenate([weights * (np.log(values) - log_target), [10.0 * arrays[5]]])
-        return residual
-
-    def solve(residual, x0, tol):
-        return scipy.optimize.least_squares(residual, x0, bounds=(lo, hi), x_scale="jac",
-                                            xtol=tol, ftol=tol, gtol=tol, max_nfev=max_nfev)
-
-    # One start: the RFEM chain. (For three bodies the paper's chain as a second start reached
-    # the same minimum, cost 3.600042e-4, at twice the time; with equal weights 30 random
-    # starts all reached one minimum too.)
-    starts = [HingedChain.rfem(beam, n)]
-    flat, weighted = make_residual(1.0), make_residual(pole_weight)
-    best, stopped = None, False
-    for start in starts:
-        first = solve(flat, layout.from_chain(start), _FIT_TOL[0])
-        result = solve(weighted, first.x, _FIT_TOL[1]) if pole_weight != 1.0 else first
-        stopped = stopped or first.status == 0 or result.status == 0
-        if best is None or result.cost < best.cost:
-            best = result
-    chain, penalty = layout.build(best.x)
-    start_cost = 0.5 * float(np.sum(weighted(layout.from_chain(starts[0])) ** 2))
-    if penalty > 0.0 or not np.isfinite(best.cost) or best.cost >= start_cost:
-        raise ConvergenceError(
-            f"fit_chain(match='poles-and-zeros', n_bodies={n}) did not converge to a physical "
-            f"chain better than the RFEM start (cost {best.cost:.3e} vs {start_cost:.3e}, "
-            f"layout penalty {penalty:.2e}; {best.message})")
-    if stopped:
-        warnings.warn(
-            f"fit_chain(match='poles-and-zeros', n_bodies={n}) stopped at max_nfev={max_nfev} "
-            f"evaluations before its tolerances were met; returning the best chain found "
-            f"(cost {best.cost:.3e}, RFEM start {start_cost:.3e})", FitWarning, stacklevel=3)
-    return chain
-
-
 def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
               frequencies: Sequence[float] | None = None, pole_weight: float = 10.0,
               max_nfev: int | None = None) -> HingedChain:
@@ -764,8 +491,8 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     Parameters
     ----------
     beam : Beam
-        The distributed beam (``length``, ``bending_stiffness``, ``linear_density``,
-        ``natural_frequencies(n)``, ``zeros(r, n)``).
+        The uniform beam (``length``, ``bending_stiffness``, ``linear_density``, and
+        optionally ``damping_ratio``).
     n_bodies : int
         Number of rigid bodies (>= 2); the chain has n_bodies - 1 hinges and
         n_bodies + 1 degrees of freedom.
@@ -776,12 +503,12 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         unknowns) are solved so that its n - 1 natural frequencies equal the beam's first n - 1.
         For n_bodies = 3 the unknowns are the paper's k_L (middle rod ``k_L L``) and c.
         ``"poles-and-zeros"`` (default): flexsat's fit. Any body lengths, masses, centre-of-mass
-        offsets, inertias and hinge stiffnesses (5 n - 5 parameters, :class:`_MassLayout`) with
-        m, J, L and the centre of mass (L/2) kept exactly equal to the beam's; least squares in
-        log-frequency of the first n - 1 natural frequencies and the first n - 1 zeros of W1,
-        W2 (= W3) and W4 against the *exact* distributed beam (4 n - 4 targets, the poles
-        weighted by ``pole_weight``), from the RFEM chain, within bounds that keep the chain
-        physical.
+        offsets, inertias and hinge stiffnesses (5 n - 5 parameters) with m, J, L and the
+        centre of mass (L/2) kept exactly equal to the beam's; least squares in log-frequency
+        of the first n - 1 natural frequencies and the first n - 1 zeros of W1, W2 (= W3) and
+        W4 against the *exact* distributed beam (4 n - 4 targets, the poles weighted by
+        ``pole_weight``), from the RFEM chain, within bounds that keep the chain physical
+        (:func:`appendages.fitting.fit_poles_and_zeros`: exact Jacobian, two stages).
     frequencies : sequence of float, rad/s, optional
         ``match="frequencies"`` only: the n - 1 target frequencies instead of the beam's exact
         ones (e.g. the paper's printed 2.8744, 7.9231, which give its k_L = 0.26989 and
@@ -792,12 +519,15 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         zeros lose almost nothing (three bodies: poles 6e-5, zeros 1.7 %; with weight 1:
         0.56 % and 1.6 %).
     max_nfev : int, optional
-        ``match="poles-and-zeros"`` only: budget of residual evaluations per start (default
-        60 times the number of parameters).
+        ``match="poles-and-zeros"`` only: budget of residual evaluations of each of the fit's
+        two stages (default 60 and 10 times the number of parameters).
 
     Returns
     -------
     HingedChain
+        With hinge dampings ``2 zeta c_h / w_1`` (damping ratio zeta at the first mode, as
+        :meth:`HingedChain.rfem <appendages.chain.HingedChain.rfem>`) if the beam has a modal
+        damping ratio zeta > 0.
 
     Raises
     ------
@@ -810,6 +540,14 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     FitWarning
         If the poles-and-zeros fit stops at its evaluation budget (the chain is returned).
 
+    Notes
+    -----
+    The fit of a uniform beam depends on its size and material only through units
+    (:mod:`appendages.fitting`): it is solved once per ``(n_bodies, match, pole_weight,
+    max_nfev)`` for L = EJ = rho = 1, memoised in the process, and scaled to each beam; a
+    second fit with the same options, of any beam, costs a scaling (about 0.1 ms).
+    :func:`appendages.fitting.clear_memo` forgets the memo.
+
     References
     ----------
     .. [1] Belonozhko et al. 2009 (the frequency fit; the suggestion to redistribute mass).
@@ -821,28 +559,39 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         raise ValueError(f"n_bodies must be at least 2 (a chain needs a hinge); got {n_bodies}")
     if not isinstance(match, str) or match not in MATCHES:
         raise ValueError(f"match must be one of {MATCHES}; got {describe(match)}")
-    _beam_data(beam)
+    L, EJ, rho = _beam_data(beam)
     n = int(n_bodies)
     if match == "frequencies":
         limits.check("n_bodies", n, "bodies", "bodies per chain")
+        targets = None
+        if frequencies is not None:
+            targets = np.asarray(frequencies, dtype=np.float64)
+            if targets.shape != (n - 1,) or not np.all(np.isfinite(targets)) or \
+                    np.any(targets <= 0) or np.any(np.diff(targets) <= 0):
+                raise ValueError(f"frequencies must be {n - 1} increasing positive values "
+                                 f"[rad/s] (one per hinge); got {describe(frequencies)}")
+            targets = targets / math.sqrt(EJ / (rho * L**4))  # in the beam's frequency unit
+        fit = fitting.fit_frequencies(n, targets)
     else:
         limits.check("n_bodies", n, "fit_bodies", "bodies of a chain fitted to poles and zeros")
-    if match != "frequencies":
         if frequencies is not None:
             raise ValueError("frequencies [rad/s] applies to match='frequencies' only")
         pole_weight = _check_real("pole_weight", pole_weight, "-", low=0.0)
         if max_nfev is not None and (isinstance(max_nfev, bool) or not isinstance(max_nfev, int)
                                      or max_nfev < 1):
             raise ValueError(f"max_nfev must be a positive integer; got {describe(max_nfev)}")
+        fit = fitting.fit_poles_and_zeros(n, pole_weight=pole_weight, max_nfev=max_nfev)
+        if fit.stopped:
+            warnings.warn(
+                f"fit_chain(match='poles-and-zeros', n_bodies={n}) stopped at max_nfev="
+                f"{max_nfev if max_nfev is not None else 'default'} evaluations before its "
+                f"tolerances were met; returning the best chain found (cost {fit.cost:.3e}, "
+                f"RFEM start {fit.start_cost:.3e})", FitWarning, stacklevel=2)
     try:
-        if match == "frequencies":
-            return _fit_frequencies(beam, n, frequencies)
-        return _fit_poles_and_zeros(beam, n, max_nfev, pole_weight)
+        return fit.to_chain(beam)
     except ValueError as exc:
-        if isinstance(exc, limits.LimitError) or str(exc).startswith("frequencies must"):
-            raise
-        # a chain built from the beam (the RFEM start, a trial of the fit) left the documented
-        # ranges: the beam's and n_bodies' fault, said so
+        # the fitted chain, scaled to the beam, left the documented ranges: the beam's and
+        # n_bodies' fault, said so
         raise ValueError(f"fit_chain(beam, n_bodies={n}, match={match!r}) of {describe(beam)}: "
                          f"a chain built from these arguments is outside the documented "
                          f"ranges: {exc}") from None

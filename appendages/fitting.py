@@ -1,0 +1,605 @@
+r"""Hinged chains fitted to a uniform beam: the dimensionless problem, its exact Jacobian, a memo.
+
+:func:`appendages.equivalence.fit_chain` validates its arguments and scales; this module does
+the work.
+
+Scale invariance
+----------------
+A uniform beam is fixed by its length L, bending stiffness EJ and linear density rho; each of its
+natural frequencies and zeros is ``x**2 s0`` with ``s0 = sqrt(EJ/(rho L**4))`` and x a root of a
+dimensionless characteristic equation (Blevins [2]_; :func:`~appendages.beam.characteristic_roots`).
+A chain with lengths ``l_i = L l'_i``, centre-of-mass offsets ``a_i = L a'_i``, masses
+``m_i = rho L m'_i``, inertias ``J_i = rho L**3 J'_i`` and hinge stiffnesses ``c_h = (EJ/L) c'_h``
+has, in the coordinates ``(delta/L, theta_1, ..., theta_n)``, the mass matrix ``rho L**3 M'`` and
+the stiffness matrix ``(EJ/L) K'`` (the kinetic energy is quadratic in ``y_i = L y'_i`` and the
+angles are dimensionless), so every pole and zero is ``s0`` times the primed chain's. The fit's
+residuals are log-frequency *ratios*, in which s0 cancels: the least-squares problem, hence the
+fitted chain in primed form, depends only on the number of bodies and the fit's options, never on
+the beam's size or material. It is solved once for ``L = EJ = rho = 1`` (targets ``x**2``
+exactly), kept in an in-process memo, and scaled to each beam (one multiplication per value:
+2 ulp). Hinge dampings ``2 zeta c_h / w_1`` (stiffness-proportional, damping ratio zeta at the
+first mode, as :meth:`HingedChain.rfem <appendages.chain.HingedChain.rfem>`) scale with
+``(EJ/L)/s0`` and are added after scaling.
+
+Jacobian
+--------
+Every pole and zero is ``sqrt(lambda)`` of a small pencil ``(K - lambda M) v = 0`` of the chain's
+matrices (:mod:`appendages.chain`, eq. (1), (2)): the free chain (poles), the chain with
+``delta = 0`` (zeros of W1) or ``phi = 0`` (zeros of W4), symmetric definite, and for W2 = W3
+the square minor of ``K - lambda M`` without the rotation equation and the translation
+coordinate (a vector v with ``v_delta = 0`` that satisfies every equation but the moment's:
+the transmission zeros of moment to translation), not symmetric. For a simple eigenvalue with
+right vector v and left vector u (u = v for the symmetric ones) the first-order perturbation is
+
+    d lambda = u^T (dK - lambda dM) v / (u^T M v),                                       (1)
+
+and both forms are sums over bodies and hinges (:mod:`appendages.chain`, eq. (1)):
+``u^T M v = sum_i m_i y_i(u) y_i(v) + J_i theta_i(u) theta_i(v)`` with
+``y_i(v) = v_delta + sum_(j<i) l_j theta_j(v) + a_i theta_i(v)`` the motion of body i's centre of
+mass, and ``u^T K v = sum_h c_h dtheta_h(u) dtheta_h(v)``. Their derivatives with respect to
+m_i, J_i, a_i, l_j and c_h are products of these (:func:`_spectrum`); with the exact derivative
+of the parametrisation (:class:`_Layout`) the least-squares Jacobian costs one set of
+eigenvectors, against 5 n - 5 extra residual evaluations by finite differences, and is exact to
+round-off (the eigenvalues are simple: a chain's frequencies of one boundary condition are
+distinct [3]_).
+
+References
+----------
+.. [1] P. A. Belonozhko, P. P. Belonozhko, A. A. Fokov et al., "On the equivalence of mechanical
+   design schemes with distributed and lumped parameters for spatially developed peripheral
+   elements of spacecraft", 2009 (the fit's criterion).
+.. [2] R. D. Blevins, "Formulas for Natural Frequency and Mode Shape", Van Nostrand, 1979,
+   table 8-1 (the exact targets).
+.. [3] F. R. Gantmacher, M. G. Krein, "Oscillation Matrices and Kernels and Small Vibrations of
+   Mechanical Systems", AMS Chelsea, 2002, ch. II-III (simple spectra of chain-like systems);
+   J. H. Wilkinson, "The Algebraic Eigenvalue Problem", Oxford, 1965, ch. 2 (eq. (1)).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import functools
+import math
+import threading
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+from .beam import characteristic_roots
+from .chain import HingedChain, _assemble, _proportional_damping
+from .interface import ConvergenceError
+
+__all__ = ["DimensionlessChain", "FitWarning", "clear_memo", "fit_frequencies",
+           "fit_poles_and_zeros"]
+
+#: Changes whenever a change of the algorithm may change a fitted chain (part of the memo key).
+FIT_VERSION = 2
+
+# Stage 1 (equal weights): x_scale="jac", tolerance 1e-5, budget 60 evaluations per parameter.
+# Stage 2 (poles weighted): x_scale=1, tolerance 1e-8, budget 10 per parameter (module docstring).
+_STAGES = (("jac", 1e-5, 60), (1.0, 1e-8, 10))
+
+
+class FitWarning(RuntimeWarning):
+    """A chain fit stopped at its evaluation budget; the chain returned is the best found."""
+
+
+# ---------------------------------------------------------------------------------------------
+# the parametrisation
+# ---------------------------------------------------------------------------------------------
+class _Layout:
+    """Parametrisation of a dimensionless chain (L = EJ = rho = 1) with exact m, J, L and
+    centre of mass at L/2.
+
+    x = [u (n-1), s (n), v (n-2), g (n-1), c (n-1)]:
+
+    * lengths ``l = e^u / sum e^u`` (u_n = 0);
+    * centre-of-mass fractions ``a_i = s_i l_i``, s_i in [0, 1];
+    * masses: frozen pieces ``l_i`` times ``e^v`` (v_1 = v_n = 0), then *tilted*,
+      ``m_i ~ e^(v_i + tau d_i)`` with d_i the distance of body i's centre of mass from 1/2 and
+      tau the root of ``sum m_i d_i = 0`` (a monotone equation: its derivative is a variance),
+      scaled to the total mass 1: this keeps m and the centre of mass exact;
+    * inertias: frozen ``m_i l_i**2/12`` times ``e^g`` (g_n = 0), scaled by the one factor that
+      makes ``sum J_i + m_i d_i**2 = 1/12`` (parallel-axis theorem): J exact;
+    * stiffnesses ``e^c (n - 1)`` (``e^c EJ/H``, H = L/(n - 1)).
+
+    :meth:`arrays` also gives the exact derivative of the chain's arrays with respect to x
+    (forward mode through each step above; tau by the implicit function theorem).
+    """
+
+    def __init__(self, n: int):
+        self.n = n
+        self.mass = 1.0
+        self.inertia = 1.0 / 12.0
+        self.sizes = (n - 1, n, n - 2, n - 1, n - 1)
+        self.size = sum(self.sizes)
+        self.offsets = np.cumsum((0,) + self.sizes)
+
+    def block(self, k: int) -> slice:
+        return slice(self.offsets[k], self.offsets[k + 1])
+
+    def bounds(self):
+        n = self.n
+        lo = np.concatenate([np.full(n - 1, -4.0), np.zeros(n), np.full(n - 2, -4.0),
+                             np.full(n - 1, -8.0), np.full(n - 1, -6.0)])
+        hi = np.concatenate([np.full(n - 1, 4.0), np.ones(n), np.full(n - 2, 4.0),
+                             np.full(n - 1, 4.0), np.full(n - 1, 6.0)])
+        return lo, hi
+
+    def from_arrays(self, lengths, masses, inertias, com_offsets, stiffnesses) -> np.ndarray:
+        """Parameters of a dimensionless chain (approximately; used as a starting point)."""
+        n = self.n
+        u = np.log(lengths[:-1] / lengths[-1])
+        s = com_offsets / lengths
+        v = np.log(masses[1:-1] / lengths[1:-1])
+        g_all = np.log(inertias / (masses * lengths**2 / 12.0))
+        g = g_all[:-1] - g_all[-1]
+        c = np.log(stiffnesses / (n - 1))
+        lo, hi = self.bounds()
+        return np.clip(np.concatenate([u, s, v, g, c]), lo + 1e-9, hi - 1e-9)
+
+    def arrays(self, x, jacobian: bool = False):
+        """(lengths, masses, inertias, com_offsets, stiffnesses, penalty) of parameters x, and
+        with ``jacobian`` their derivatives (arrays of shape (size, len(x))) as a second tuple.
+
+        penalty > 0 when the layout cannot hold J (mass too far out) or the centre of mass.
+        """
+        n = self.n
+        u, s, v, g, c = (x[self.block(k)] for k in range(5))
+        weights = np.exp(np.concatenate([u, [0.0]]))
+        lengths = weights / weights.sum()
+        offsets = s * lengths
+        starts = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
+        d = starts + offsets - 0.5
+        logm = np.log(lengths) + np.concatenate([[0.0], v, [0.0]])
+        penalty = 0.0
+        spans = d.min() < 0.0 < d.max()
+        if spans:
+            tau = _tilt(logm, d)
+        else:  # every centre on one side of L/2: keep the masses, penalise the offset
+            tau = 0.0
+            penalty += abs(float(np.mean(d)))
+        z = logm + tau * d
+        p = np.exp(z - z.max())
+        p /= p.sum()
+        masses = self.mass * p
+        rest = self.inertia - np.dot(masses, d**2)
+        raw = np.exp(np.concatenate([g, [0.0]])) * masses * lengths**2 / 12.0
+        clipped = rest <= 1e-6 * self.inertia
+        if clipped:
+            penalty += (1e-6 * self.inertia - rest) / self.inertia
+            rest = 1e-6 * self.inertia
+        inertias = raw * (rest / raw.sum())
+        stiffnesses = np.exp(c) * (n - 1)
+        values = (lengths, masses, inertias, np.minimum(offsets, lengths), stiffnesses, penalty)
+        if not jacobian:
+            return values
+
+        # forward mode: dX[i, j] = d X_i / d x_j
+        nx = x.size
+        eye = np.eye(nx)
+        dlengths = np.zeros((n, nx))
+        dlengths[:, self.block(0)] = (np.diag(lengths) - np.outer(lengths, lengths))[:, :n - 1]
+        doffsets = s[:, None] * dlengths
+        doffsets[:, self.block(1)] += np.diag(lengths)
+        dstarts = np.concatenate([np.zeros((1, nx)), np.cumsum(dlengths, axis=0)[:-1]])
+        dd = dstarts + doffsets
+        dlogm = dlengths / lengths[:, None]
+        dlogm[1:-1] += eye[self.block(2)]
+        dpenalty = np.zeros(nx)
+        if spans:
+            # sum_i p_i d_i = 0 with p = softmax(logm + tau d), differentiated:
+            # Var_p(d) dtau + Cov_p(d, dlogm + tau dd) + E_p(dd) = 0
+            centred = d - np.dot(p, d)
+            variance = np.dot(p, centred**2)
+            dtau = -(centred * p) @ (dlogm + tau * dd) / variance - p @ dd / variance
+            dz = dlogm + tau * dd + np.outer(d, dtau)
+        else:
+            dpenalty += np.sign(np.mean(d)) * dd.mean(axis=0)
+            dz = dlogm
+        dlogp = dz - p @ dz
+        dmasses = masses[:, None] * dlogp
+        if clipped:
+            drest = np.zeros(nx)
+            dpenalty += (dmasses.T @ d**2 + 2.0 * (masses * d) @ dd) / self.inertia
+        else:
+            drest = -(dmasses.T @ d**2) - 2.0 * (masses * d) @ dd
+        dlograw = dlogp + 2.0 * dlengths / lengths[:, None]
+        dlograw[:-1] += eye[self.block(3)]
+        dlogsum = (raw / raw.sum()) @ dlograw
+        dinertias = inertias[:, None] * (dlograw - dlogsum + drest / rest)
+        dstiffnesses = np.zeros((n - 1, nx))
+        dstiffnesses[:, self.block(4)] = np.diag(stiffnesses)
+        return values, (dlengths, dmasses, dinertias, doffsets, dstiffnesses, dpenalty)
+
+
+def _tilt(logm: np.ndarray, d: np.ndarray) -> float:
+    """tau with sum_i exp(logm_i + tau d_i) d_i = 0 (min d < 0 < max d).
+
+    The weighted mean of d is increasing in tau (its derivative is the weighted variance), so
+    Newton's method from 0 is safeguarded by a bracket that it keeps shrinking.
+    """
+    lo, hi, tau = -np.inf, np.inf, 0.0
+    for _ in range(100):
+        z = logm + tau * d
+        e = np.exp(z - z.max())
+        e /= e.sum()
+        mean = np.dot(e, d)
+        if mean > 0.0:
+            hi = tau
+        else:
+            lo = tau
+        variance = np.dot(e, (d - mean) ** 2)
+        if abs(mean) < 1e-15 * max(1.0, np.abs(d).max()):
+            return tau
+        step = tau - mean / variance if variance > 0.0 else np.nan
+        if not (lo < step < hi):  # outside the bracket: bisect (or expand a half-open one)
+            if np.isfinite(lo) and np.isfinite(hi):
+                step = 0.5 * (lo + hi)
+            else:
+                step = (tau - 1.0) * 2.0 if np.isfinite(hi) else (tau + 1.0) * 2.0
+        tau = step
+    return tau
+
+
+# ---------------------------------------------------------------------------------------------
+# poles and zeros with their derivatives
+# ---------------------------------------------------------------------------------------------
+def _body_motions(V: np.ndarray, lengths: np.ndarray, offsets: np.ndarray):
+    """(theta, y) of coordinate vectors V (columns; rigid root: [delta, theta_1..theta_n]):
+    body rotations and centre-of-mass motions y_i = delta + sum_(j<i) l_j theta_j + a_i theta_i,
+    each of shape (n, columns)."""
+    theta = V[1:]
+    reach = np.cumsum(lengths[:, None] * theta, axis=0)
+    y = V[0] + offsets[:, None] * theta
+    y[1:] += reach[:-1]
+    return theta, y
+
+
+def _spectrum(arrays, n_values: int, jacobian: bool = False):
+    """First n_values poles and zeros of W1, W2, W4 [rad/s] of a rigid-root chain, concatenated
+    (None if a pencil is singular or a value is missing, not positive or not real), and with
+    ``jacobian`` the derivatives of their logarithms with respect to (lengths, masses,
+    inertias, com_offsets, stiffnesses), shape (4 n_values, 5n - 1).
+
+    The same quantities as HingedChain.poles()/zeros() (pencils and eq. (1): module docstring).
+    """
+    lengths, masses, inertias, offsets, stiffnesses = arrays[:5]
+    M, _, K, _ = _assemble(lengths, masses, inertias, offsets, stiffnesses, None, False)
+    size = K.shape[0]
+    keep = slice(1, 1 + n_values)
+    no_phi = np.delete(np.arange(size), 1)
+    values, left, right = [], [], []
+    with np.errstate(all="ignore"):
+        try:
+            # symmetric definite: the free chain (two rigid-body modes), delta = 0 and phi = 0
+            # (one each); eigenvectors M-normalised
+            for index, n_rigid in ((slice(None), 2), (slice(1, None), 1), (no_phi, 1)):
+                Kp, Mp = K[index][:, index], M[index][:, index]
+                lam, vectors = scipy.linalg.eigh(Kp, Mp, check_finite=False)
+                lam, vectors = lam[n_rigid:n_rigid + n_values], vectors[:, n_rigid:n_rigid + n_values]
+                values.append(lam)
+                full = np.zeros((size, lam.size))
+                full[index] = vectors
+                left.append(full)
+                right.append(full)
+            # W2: rows without the moment equation, columns without delta
+            Mp, Kp = M[no_phi, 1:], K[no_phi, 1:]
+            lam, vectors = np.linalg.eig(np.linalg.solve(Mp, Kp))
+        except (np.linalg.LinAlgError, ValueError):
+            return (None, None) if jacobian else None
+        order = np.argsort(lam.real)[keep]
+        all_vectors = vectors
+        lam, vectors = lam[order], vectors[:, order]
+        if np.any(np.abs(lam.imag) > 1e-9 * np.abs(lam.real)):
+            return (None, None) if jacobian else None
+        lam, vectors = lam.real, vectors.real
+        values.insert(2, lam)
+        out = np.concatenate(values)
+        if out.size < 4 * n_values or not np.all(np.isfinite(out)) or not np.all(out > 0.0):
+            return (None, None) if jacobian else None
+        if not jacobian:
+            return np.sqrt(out)
+        # left vectors of the pencil (Kp, Mp): rows of inv(vectors) inv(Mp), so u^T Mp v = 1
+        try:
+            u = np.linalg.solve(Mp.T, np.linalg.inv(all_vectors)[order].T).real
+        except np.linalg.LinAlgError:
+            return None, None
+    full_u, full_v = np.zeros((size, n_values)), np.zeros((size, n_values))
+    full_u[no_phi], full_v[1:] = u, vectors
+    left.insert(2, full_u)
+    right.insert(2, full_v)
+    return np.sqrt(out), _log_frequency_derivatives(np.hstack(left), np.hstack(right), out,
+                                                    arrays)
+
+
+def _log_frequency_derivatives(U, V, lam, arrays) -> np.ndarray:
+    """d ln(sqrt(lambda_k)) / d(lengths, masses, inertias, com_offsets, stiffnesses) from the
+    left and right vectors U, V (columns, full coordinates) by eq. (1), shape (k, 5n - 1)."""
+    lengths, masses, inertias, offsets, stiffnesses = arrays[:5]
+    tu, yu = _body_motions(U, lengths, offsets)
+    tv, yv = _body_motions(V, lengths, offsets)
+    my_u, my_v = masses[:, None] * yu, masses[:, None] * yv
+    # d(u^T M v): masses, inertias, offsets; lengths through y_i of the bodies beyond j
+    d_m = yu * yv
+    d_J = tu * tv
+    d_a = tu * my_v + my_u * tv
+    beyond_u = np.cumsum(my_u[::-1], axis=0)[::-1]
+    beyond_v = np.cumsum(my_v[::-1], axis=0)[::-1]
+    d_l = np.zeros_like(d_m)
+    d_l[:-1] = tu[:-1] * beyond_v[1:] + beyond_u[1:] * tv[:-1]
+    d_c = np.diff(tu, axis=0) * np.diff(tv, axis=0)
+    norm = np.sum(my_u * yv + inertias[:, None] * tu * tv, axis=0)  # u^T M v
+    scale = -lam / norm
+    rows = np.concatenate([d_l * scale, d_m * scale, d_J * scale, d_a * scale, d_c / norm])
+    return (rows / (2.0 * lam)).T
+
+
+# ---------------------------------------------------------------------------------------------
+# the least-squares problem
+# ---------------------------------------------------------------------------------------------
+_KINDS = ("free-free", "pinned-free", "w2", "sliding-free")  # poles, zeros of W1, W2, W4
+
+
+def _targets(n_values: int) -> np.ndarray:
+    """The exact beam's first n_values poles and zeros of W1, W2, W4 for L = EJ = rho = 1."""
+    return np.concatenate([characteristic_roots(kind, n_values) ** 2 for kind in _KINDS])
+
+
+class _Problem:
+    """Residuals ``weights * ln(values/targets)`` and the layout penalty, with their Jacobian."""
+
+    def __init__(self, layout: _Layout, weights: np.ndarray):
+        self.layout = layout
+        self.k = layout.n - 1
+        self.log_target = np.log(_targets(self.k))
+        self.weights = weights
+        self._cache = (None, None)
+
+    def _evaluate(self, x):
+        if self._cache[0] is not None and np.array_equal(self._cache[0], x):
+            return self._cache[1]
+        values, dvalues = self.layout.arrays(x, jacobian=True)
+        spectrum, dspectrum = _spectrum(values, self.k, jacobian=True)
+        size = 4 * self.k + 1
+        if spectrum is None:
+            out = (np.full(size, 10.0), np.zeros((size, x.size)))
+        else:
+            residual = np.concatenate([self.weights * (np.log(spectrum) - self.log_target),
+                                       [10.0 * values[5]]])
+            jac = np.empty((size, x.size))
+            jac[:-1] = self.weights[:, None] * (dspectrum @ np.concatenate(dvalues[:5]))
+            jac[-1] = 10.0 * dvalues[5]
+            out = (residual, jac)
+        self._cache = (x.copy(), out)
+        return out
+
+    def residual(self, x):
+        return self._evaluate(x)[0]
+
+    def jacobian(self, x):
+        return self._evaluate(x)[1]
+
+    def cost(self, x) -> float:
+        return 0.5 * float(np.sum(self.residual(x) ** 2))
+
+
+# ---------------------------------------------------------------------------------------------
+# results, threads, memo
+# ---------------------------------------------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class DimensionlessChain:
+    """A chain fitted to the beam with L = EJ = rho = 1 (module docstring), and how its fit ended.
+
+    Attributes
+    ----------
+    lengths, masses, inertias, com_offsets, hinge_stiffnesses : ndarray
+        Read-only; in units of L, rho L, rho L**3, L and EJ/L.
+    cost : float
+        Final least-squares cost ``sum(residuals**2)/2`` of the fit [-].
+    start_cost : float
+        Cost of the fit's start (the RFEM chain) [-]; nan for the frequency fit.
+    stopped : bool
+        Whether a stage stopped at its evaluation budget before its tolerances were met.
+    max_nfev : int or None
+        The budget per stage asked for (None: the defaults).
+    """
+
+    lengths: np.ndarray
+    masses: np.ndarray
+    inertias: np.ndarray
+    com_offsets: np.ndarray
+    hinge_stiffnesses: np.ndarray
+    cost: float
+    start_cost: float
+    stopped: bool
+    max_nfev: int | None = None
+
+    def __post_init__(self):
+        for name in ("lengths", "masses", "inertias", "com_offsets", "hinge_stiffnesses"):
+            values = np.array(getattr(self, name), dtype=np.float64)
+            values.flags.writeable = False
+            object.__setattr__(self, name, values)
+
+    def to_chain(self, beam) -> HingedChain:
+        """The chain of ``beam`` (``length``, ``bending_stiffness``, ``linear_density``, and
+        optionally ``damping_ratio``): each array times its unit (one rounding each), hinge
+        dampings ``2 zeta c_h / w_1`` as :meth:`HingedChain.rfem` when zeta > 0.
+
+        Raises ValueError (from :class:`HingedChain`) when a scaled value leaves the documented
+        ranges.
+        """
+        L, EJ, rho = (float(beam.length), float(beam.bending_stiffness),
+                      float(beam.linear_density))
+        stiffnesses = self.hinge_stiffnesses * (EJ / L)
+        return HingedChain(self.lengths * L, self.masses * (rho * L),
+                           self.inertias * (rho * L**3), stiffnesses,
+                           com_offsets=self.com_offsets * L,
+                           hinge_dampings=_proportional_damping(beam, stiffnesses))
+
+
+_CONTROLLER = None
+_CONTROLLER_LOCK = threading.Lock()
+
+
+@contextlib.contextmanager
+def _one_blas_thread():
+    """Run the block with one BLAS thread (threadpoolctl).
+
+    The fit's matrices are small (at most 5 n parameters): with threads, OpenBLAS spends more
+    time waking and synchronising them than computing, much more on a busy machine (measured
+    in benchmarks/results/fit.md), and its summation order, hence the last bits of each step
+    and, through the optimiser's path, the fitted chain, would depend on the thread count.
+    """
+    global _CONTROLLER
+    with _CONTROLLER_LOCK:
+        if _CONTROLLER is None:
+            import threadpoolctl  # imported here: 20-100 ms, paid by the first cold fit only
+
+            _CONTROLLER = threadpoolctl.ThreadpoolController()
+    with _CONTROLLER.limit(limits=1, user_api="blas"):
+        yield
+
+
+def clear_memo() -> None:
+    """Forget every memoised fit (the next fits are computed afresh)."""
+    _fit_poles_and_zeros.cache_clear()
+    _fit_frequencies.cache_clear()
+
+
+# ---------------------------------------------------------------------------------------------
+# flexsat's fit: poles and zeros
+# ---------------------------------------------------------------------------------------------
+def _rfem_arrays(n: int):
+    """The RFEM chain (end rods H/2, inner rods H = 1/(n - 1), c = 1/H) for L = EJ = rho = 1."""
+    lengths = np.full(n, 1.0 / (n - 1))
+    lengths[0] = lengths[-1] = 0.5 / (n - 1)
+    return lengths, lengths.copy(), lengths**3 / 12.0, 0.5 * lengths, np.full(n - 1, n - 1.0)
+
+
+def fit_poles_and_zeros(n_bodies: int, *, pole_weight: float = 10.0,
+                        max_nfev: int | None = None) -> DimensionlessChain:
+    """flexsat's chain fit (:func:`appendages.equivalence.fit_chain`) in dimensionless form.
+
+    Least squares in log-frequency over a :class:`_Layout`: the first n - 1 natural frequencies
+    and zeros of W1, W2 (= W3) and W4 against the exact beam's, the poles weighted by
+    ``pole_weight``, from the RFEM chain, with the exact Jacobian (module docstring). Memoised
+    by its arguments (and :data:`FIT_VERSION`); the result is immutable.
+
+    Two stages. Stage 1 weights all targets equally, with the parameters scaled by the
+    Jacobian's column norms (``x_scale="jac"``) and tolerance 1e-5: this is the well-conditioned
+    problem, and from the RFEM start it reaches, for every n measured (3 to 14), a basin at
+    least as good as the single-stage alternatives. Stage 2 weights the poles and polishes
+    with unscaled parameters (``x_scale=1``) to tolerance 1e-8 or 10 evaluations per parameter:
+    the least-squares problem is rank-deficient (a chain's W(s), hence every pole and zero,
+    depends on only 3 (n - 1) of its 5 n - 5 parameters) and, beyond six bodies, its minimum
+    lies along a long curved valley in which column scaling zigzags (measured: 140 iterations
+    against 13 for three bodies) and every method creeps; the budget ends the creep where the
+    cost still falls by less than about 1e-4 of itself per ten iterations.
+
+    Raises
+    ------
+    ConvergenceError
+        If the fit ends outside the physical layout or no better than its start.
+    """
+    return _fit_poles_and_zeros(int(n_bodies), float(pole_weight),
+                                None if max_nfev is None else int(max_nfev), FIT_VERSION)
+
+
+@functools.lru_cache(maxsize=256)
+def _fit_poles_and_zeros(n: int, pole_weight: float, max_nfev, version: int):
+    del version  # part of the memo key only
+    layout = _Layout(n)
+    k = n - 1
+    lo, hi = layout.bounds()
+    start = layout.from_arrays(*_rfem_arrays(n))
+    flat = _Problem(layout, np.ones(4 * k))
+    weighted = _Problem(layout, np.concatenate([np.full(k, pole_weight), np.ones(3 * k)]))
+    x, stopped = start, False
+    with _one_blas_thread():
+        for problem, (x_scale, tol, per_parameter) in zip((flat, weighted), _STAGES):
+            if problem is weighted and pole_weight == 1.0:
+                break
+            budget = max_nfev if max_nfev is not None else per_parameter * layout.size
+            result = scipy.optimize.least_squares(
+                problem.residual, x, jac=problem.jacobian, bounds=(lo, hi), x_scale=x_scale,
+                xtol=tol, ftol=tol, gtol=tol, max_nfev=budget)
+            x = result.x
+            # the default budget of stage 2 is its designed end (see above), not a failure
+            stopped = stopped or (result.status == 0 and (problem is flat or max_nfev is not None))
+        cost, start_cost = weighted.cost(x), weighted.cost(start)
+        arrays = layout.arrays(x)
+    penalty = arrays[5]
+    if penalty > 0.0 or not math.isfinite(cost) or cost >= start_cost:
+        raise ConvergenceError(
+            f"fit_chain(match='poles-and-zeros', n_bodies={n}) did not converge to a physical "
+            f"chain better than the RFEM start (cost {cost:.3e} vs {start_cost:.3e}, layout "
+            f"penalty {penalty:.2e})")
+    return DimensionlessChain(*arrays[:5], cost=cost, start_cost=start_cost, stopped=stopped,
+                              max_nfev=max_nfev)
+
+
+# ---------------------------------------------------------------------------------------------
+# the paper's fit: frequencies
+# ---------------------------------------------------------------------------------------------
+def _symmetric(half: np.ndarray, n: int) -> np.ndarray:
+    """Full symmetric profile of n entries from its first ceil(n/2)."""
+    return np.concatenate([half, half[: n // 2][::-1]])
+
+
+def _frequencies_arrays(x: np.ndarray, n: int):
+    """Symmetric frozen-piece chain (L = EJ = rho = 1) from x = [log length weights
+    (ceil(n/2) - 1), log stiffness factors (ceil((n-1)/2))]."""
+    h = (n + 1) // 2
+    weights = _symmetric(np.exp(np.concatenate([x[: h - 1], [0.0]])), n)
+    lengths = weights / weights.sum()
+    factors = _symmetric(np.exp(x[h - 1:]), n - 1) if n > 1 else np.zeros(0)
+    return lengths, lengths.copy(), lengths**3 / 12.0, 0.5 * lengths, factors * (n - 1)
+
+
+def fit_frequencies(n_bodies: int, targets=None) -> DimensionlessChain:
+    """The paper's fit (:func:`appendages.equivalence.fit_chain`, ``match="frequencies"``) in
+    dimensionless form: a symmetric chain of frozen pieces whose n - 1 natural frequencies
+    equal ``targets`` (in units of sqrt(EJ/(rho L**4)); default the exact beam's, then
+    memoised).
+
+    Raises
+    ------
+    ConvergenceError
+        If the frequencies cannot be matched to 1e-9.
+    """
+    if targets is None:
+        return _fit_frequencies(int(n_bodies), None, FIT_VERSION)
+    return _fit_frequencies.__wrapped__(int(n_bodies), tuple(map(float, targets)), FIT_VERSION)
+
+
+@functools.lru_cache(maxsize=256)
+def _fit_frequencies(n: int, targets, version: int):
+    del version  # part of the memo key only
+    target = (characteristic_roots("free-free", n - 1) ** 2 if targets is None
+              else np.asarray(targets, dtype=np.float64))
+    h = (n + 1) // 2
+    # Start: the RFEM chain (end rods half as long as the inner ones, c = EJ/H).
+    x0 = np.zeros(h - 1 + n // 2)
+    if h > 1:
+        x0[0] = math.log(0.5)
+
+    def residual(x):
+        lengths, masses, inertias, _, stiffnesses = _frequencies_arrays(x, n)
+        poles = HingedChain(lengths, masses, inertias, stiffnesses).poles()
+        return np.log(poles[: n - 1] / target) if poles.size >= n - 1 else np.full(n - 1, 10.0)
+
+    bounds = (np.full(x0.size, -8.0), np.full(x0.size, 8.0))
+    with _one_blas_thread():
+        result = scipy.optimize.least_squares(residual, x0, bounds=bounds, xtol=1e-15,
+                                              ftol=1e-15, gtol=1e-15, max_nfev=200 * (x0.size + 1))
+    worst = float(np.max(np.abs(result.fun)))
+    if worst > 1e-9:
+        raise ConvergenceError(
+            f"fit_chain(match='frequencies', n_bodies={n}) did not match the frequencies: "
+            f"largest relative mismatch {worst:.2e} after {result.nfev} evaluations "
+            f"({result.message})")
+    return DimensionlessChain(*_frequencies_arrays(result.x, n), cost=float(result.cost),
+                              start_cost=math.nan, stopped=False)
