@@ -37,11 +37,39 @@ and both forms are sums over bodies and hinges (:mod:`appendages.chain`, eq. (1)
 ``u^T M v = sum_i m_i y_i(u) y_i(v) + J_i theta_i(u) theta_i(v)`` with
 ``y_i(v) = v_delta + sum_(j<i) l_j theta_j(v) + a_i theta_i(v)`` the motion of body i's centre of
 mass, and ``u^T K v = sum_h c_h dtheta_h(u) dtheta_h(v)``. Their derivatives with respect to
-m_i, J_i, a_i, l_j and c_h are products of these (:func:`_spectrum`); with the exact derivative
-of the parametrisation (:class:`_Layout`) the least-squares Jacobian costs one set of
-eigenvectors, against 5 n - 5 extra residual evaluations by finite differences, and is exact to
-round-off (the eigenvalues are simple: a chain's frequencies of one boundary condition are
-distinct [3]_).
+m_i, J_i, a_i, l_j and c_h are products of these (:func:`_log_frequency_derivatives`); with the
+exact derivative of the parametrisation (:class:`_Layout`) the least-squares Jacobian costs one
+set of vectors, against 5 n - 5 more residual evaluations by finite differences, and is exact to
+round-off. Eq. (1) needs simple eigenvalues: the targets of one kind are at least 15 % apart
+(the ratio of consecutive beam roots squared), and so are the chains' near them.
+
+The optimisation
+----------------
+A chain's W(s) is its rigid part (fixed by m, J and the centre of mass) plus one rank-one term
+per mode: n - 1 frequencies and n - 1 root participation vectors of 2 entries, 3 (n - 1)
+numbers, on which every pole and zero depends. The 5 n - 5 layout parameters therefore move the
+4 (n - 1) residuals in only 3 (n - 1) directions: the Jacobian has exactly 2 n - 2 zero singular
+values (measured: 1e-16 of the largest), a family of chains with the same W lies behind every
+fit, and which member is returned depends on the path. :func:`fit_poles_and_zeros` goes in two
+stages (measured on 3 to 14 bodies, benchmarks/results/fit.md):
+
+1. all targets weighted equally, parameters scaled by the Jacobian's column norms
+   (``x_scale="jac"``), tolerance 1e-5, from the RFEM chain: this reaches the basins that the
+   fit always reached;
+2. the poles weighted, unscaled parameters (``x_scale=1``), tolerance 1e-8 or 5 evaluations per
+   parameter: column scaling zigzags in the rank-deficient valley (three bodies: 140 iterations
+   against 13) and beyond six bodies every method creeps along it; the budget ends the creep
+   (5 more evaluations per parameter would lower the cost by 0.01 % at 10 bodies, 2.4 % at 12).
+
+Up to six bodies the fit reaches the lowest cost that a least-squares fit over the 3 (n - 1)
+modal numbers themselves finds (a well-conditioned problem; the same cost to 7 digits). From 7
+to 14 bodies it ends 0.05 % to 41 % above that bound (largest at 12 bodies), where today's fit
+also ended (0 % to 11 % on the paper's rod); which minimum of the valley a run reaches is
+sensitive to round-off, as it was before (today's fit gave other chains for the rod and for the
+unit beam). Here the result is deterministic: the same chain for every beam and every BLAS
+thread count. From 15 bodies on, the RFEM start leads stage 1 into a poor basin (costs 1.5e-4
+to 8e-3 against 2.6e-5 at 14 bodies): the ``fit_bodies`` limit of :mod:`appendages.limits`
+stops at 14. Measured numbers: benchmarks/results/fit.md.
 
 References
 ----------
@@ -50,9 +78,8 @@ References
    elements of spacecraft", 2009 (the fit's criterion).
 .. [2] R. D. Blevins, "Formulas for Natural Frequency and Mode Shape", Van Nostrand, 1979,
    table 8-1 (the exact targets).
-.. [3] F. R. Gantmacher, M. G. Krein, "Oscillation Matrices and Kernels and Small Vibrations of
-   Mechanical Systems", AMS Chelsea, 2002, ch. II-III (simple spectra of chain-like systems);
-   J. H. Wilkinson, "The Algebraic Eigenvalue Problem", Oxford, 1965, ch. 2 (eq. (1)).
+.. [3] J. H. Wilkinson, "The Algebraic Eigenvalue Problem", Oxford, 1965, ch. 2 (first-order
+   perturbation of a simple eigenvalue, eq. (1)).
 """
 
 from __future__ import annotations
@@ -78,8 +105,8 @@ __all__ = ["DimensionlessChain", "FitWarning", "clear_memo", "fit_frequencies",
 FIT_VERSION = 2
 
 # Stage 1 (equal weights): x_scale="jac", tolerance 1e-5, budget 60 evaluations per parameter.
-# Stage 2 (poles weighted): x_scale=1, tolerance 1e-8, budget 10 per parameter (module docstring).
-_STAGES = (("jac", 1e-5, 60), (1.0, 1e-8, 10))
+# Stage 2 (poles weighted): x_scale=1, tolerance 1e-8, budget 5 per parameter (module docstring).
+_STAGES = (("jac", 1e-5, 60), (1.0, 1e-8, 5))
 
 
 class FitWarning(RuntimeWarning):
@@ -258,61 +285,76 @@ def _body_motions(V: np.ndarray, lengths: np.ndarray, offsets: np.ndarray):
     return theta, y
 
 
+def _pinned(index: np.ndarray, held: int) -> np.ndarray:
+    """The coordinates of a pencil with coordinate ``held`` removed."""
+    return index[index != held]
+
+
 def _spectrum(arrays, n_values: int, jacobian: bool = False):
     """First n_values poles and zeros of W1, W2, W4 [rad/s] of a rigid-root chain, concatenated
-    (None if a pencil is singular or a value is missing, not positive or not real), and with
+    (None if a pencil fails or a value is missing, not positive or not real), and with
     ``jacobian`` the derivatives of their logarithms with respect to (lengths, masses,
     inertias, com_offsets, stiffnesses), shape (4 n_values, 5n - 1).
 
-    The same quantities as HingedChain.poles()/zeros() (pencils and eq. (1): module docstring).
+    The same quantities as HingedChain.poles()/zeros() (module docstring: pencils, eq. (1)),
+    from LAPACK directly (dsygv, dggev: the scipy.linalg wrappers cost ten times the solve at
+    these sizes). The vectors of the zeros come from the free chain's modes: the response
+    ``u = (K - lambda M)^-1 e_j = sum_k v_k v_k[j] / (lambda_k - lambda)`` to a unit force
+    (j = delta) or moment (j = phi) satisfies every equation but the loaded one, so at a zero
+    of W1 (u_delta = W11 = 0), of W4 (phi, u_phi = W22 = 0) and of W2 (left: force, u_phi =
+    W21 = 0; right: moment, v_delta = W12 = 0) it is the vector of eq. (1); the entry that
+    vanishes is set to 0.
     """
     lengths, masses, inertias, offsets, stiffnesses = arrays[:5]
     M, _, K, _ = _assemble(lengths, masses, inertias, offsets, stiffnesses, None, False)
     size = K.shape[0]
-    keep = slice(1, 1 + n_values)
-    no_phi = np.delete(np.arange(size), 1)
-    values, left, right = [], [], []
+    index = np.arange(size)
+    no_delta, no_phi = _pinned(index, 0), _pinned(index, 1)
     with np.errstate(all="ignore"):
-        try:
-            # symmetric definite: the free chain (two rigid-body modes), delta = 0 and phi = 0
-            # (one each); eigenvectors M-normalised
-            for index, n_rigid in ((slice(None), 2), (slice(1, None), 1), (no_phi, 1)):
-                Kp, Mp = K[index][:, index], M[index][:, index]
-                lam, vectors = scipy.linalg.eigh(Kp, Mp, check_finite=False)
-                lam, vectors = lam[n_rigid:n_rigid + n_values], vectors[:, n_rigid:n_rigid + n_values]
-                values.append(lam)
-                full = np.zeros((size, lam.size))
-                full[index] = vectors
-                left.append(full)
-                right.append(full)
-            # W2: rows without the moment equation, columns without delta
-            Mp, Kp = M[no_phi, 1:], K[no_phi, 1:]
-            lam, vectors = np.linalg.eig(np.linalg.solve(Mp, Kp))
-        except (np.linalg.LinAlgError, ValueError):
+        # free chain (two rigid-body modes), delta = 0 and phi = 0 (one each): symmetric definite
+        lam, modes, info = _sygv(K, M, "V")
+        lam1, _, info1 = _sygv(K[np.ix_(no_delta, no_delta)], M[np.ix_(no_delta, no_delta)], "N")
+        lam4, _, info4 = _sygv(K[np.ix_(no_phi, no_phi)], M[np.ix_(no_phi, no_phi)], "N")
+        # W2: the minor without the moment equation (rows) and delta (columns)
+        rows, columns = np.ix_(no_phi, no_delta)
+        alphar, alphai, beta, _, _, _, info2 = _ggev(K[rows, columns], M[rows, columns],
+                                                     compute_vl=0, compute_vr=0)
+        if info or info1 or info4 or info2:
             return (None, None) if jacobian else None
-        order = np.argsort(lam.real)[keep]
-        all_vectors = vectors
-        lam, vectors = lam[order], vectors[:, order]
-        if np.any(np.abs(lam.imag) > 1e-9 * np.abs(lam.real)):
+        finite = beta != 0.0
+        if np.any(np.abs(alphai[finite]) > 1e-9 * np.abs(alphar[finite])):
             return (None, None) if jacobian else None
-        lam, vectors = lam.real, vectors.real
-        values.insert(2, lam)
-        out = np.concatenate(values)
+        lam2 = np.sort(alphar[finite] / beta[finite])
+        out = np.concatenate([lam[2:2 + n_values], lam1[1:1 + n_values], lam2[1:1 + n_values],
+                              lam4[1:1 + n_values]])
         if out.size < 4 * n_values or not np.all(np.isfinite(out)) or not np.all(out > 0.0):
             return (None, None) if jacobian else None
         if not jacobian:
             return np.sqrt(out)
-        # left vectors of the pencil (Kp, Mp): rows of inv(vectors) inv(Mp), so u^T Mp v = 1
-        try:
-            u = np.linalg.solve(Mp.T, np.linalg.inv(all_vectors)[order].T).real
-        except np.linalg.LinAlgError:
-            return None, None
-    full_u, full_v = np.zeros((size, n_values)), np.zeros((size, n_values))
-    full_u[no_phi], full_v[1:] = u, vectors
-    left.insert(2, full_u)
-    right.insert(2, full_v)
-    return np.sqrt(out), _log_frequency_derivatives(np.hstack(left), np.hstack(right), out,
-                                                    arrays)
+        zeros = out[n_values:].reshape(3, n_values)
+        # responses to a unit force (row 0 of the modes) and moment (row 1) at each zero
+        force = modes @ (modes[0][:, None] / (lam[:, None] - zeros[None, [0, 1]].reshape(1, -1)))
+        moment = modes @ (modes[1][:, None] / (lam[:, None] - zeros[None, [2, 1]].reshape(1, -1)))
+    force = force.reshape(size, 2, n_values)
+    moment = moment.reshape(size, 2, n_values)
+    w1, w2_left = force[:, 0], force[:, 1]
+    w4, w2_right = moment[:, 0], moment[:, 1]
+    w1[0] = w2_right[0] = 0.0
+    w4[1] = w2_left[1] = 0.0
+    free = modes[:, 2:2 + n_values]
+    left = np.hstack([free, w1, w2_left, w4])
+    right = np.hstack([free, w1, w2_right, w4])
+    if not np.all(np.isfinite(left)) or not np.all(np.isfinite(right)):
+        return None, None
+    return np.sqrt(out), _log_frequency_derivatives(left, right, out, arrays)
+
+
+def _sygv(K, M, jobz):
+    """(eigenvalues ascending, M-normalised vectors, info) of the pencil (K, M) (dsygv)."""
+    return scipy.linalg.lapack.dsygv(K, M, itype=1, jobz=jobz)
+
+
+_ggev = scipy.linalg.lapack.dggev
 
 
 def _log_frequency_derivatives(U, V, lam, arrays) -> np.ndarray:
@@ -361,18 +403,19 @@ class _Problem:
     def _evaluate(self, x):
         if self._cache[0] is not None and np.array_equal(self._cache[0], x):
             return self._cache[1]
-        values, dvalues = self.layout.arrays(x, jacobian=True)
-        spectrum, dspectrum = _spectrum(values, self.k, jacobian=True)
         size = 4 * self.k + 1
-        if spectrum is None:
-            out = (np.full(size, 10.0), np.zeros((size, x.size)))
-        else:
-            residual = np.concatenate([self.weights * (np.log(spectrum) - self.log_target),
-                                       [10.0 * values[5]]])
-            jac = np.empty((size, x.size))
-            jac[:-1] = self.weights[:, None] * (dspectrum @ np.concatenate(dvalues[:5]))
-            jac[-1] = 10.0 * dvalues[5]
-            out = (residual, jac)
+        out = (np.full(size, 10.0), np.zeros((size, x.size)))  # a trial chain that fails
+        with np.errstate(all="ignore"):  # extreme trial layouts: caught as non-finite below
+            values, dvalues = self.layout.arrays(x, jacobian=True)
+            spectrum, dspectrum = _spectrum(values, self.k, jacobian=True)
+            if spectrum is not None:
+                residual = np.concatenate([self.weights * (np.log(spectrum) - self.log_target),
+                                           [10.0 * values[5]]])
+                jac = np.empty((size, x.size))
+                jac[:-1] = self.weights[:, None] * (dspectrum @ np.concatenate(dvalues[:5]))
+                jac[-1] = 10.0 * dvalues[5]
+                if np.all(np.isfinite(residual)) and np.all(np.isfinite(jac)):
+                    out = (residual, jac)
         self._cache = (x.copy(), out)
         return out
 
@@ -389,7 +432,7 @@ class _Problem:
 # ---------------------------------------------------------------------------------------------
 # results, threads, memo
 # ---------------------------------------------------------------------------------------------
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, eq=False)
 class DimensionlessChain:
     """A chain fitted to the beam with L = EJ = rho = 1 (module docstring), and how its fit ended.
 
@@ -440,8 +483,8 @@ class DimensionlessChain:
                            hinge_dampings=_proportional_damping(beam, stiffnesses))
 
 
-_CONTROLLER = None
-_CONTROLLER_LOCK = threading.Lock()
+_THREADS_LOCK = threading.Lock()
+_THREADS = {"controller": None, "limiter": None, "depth": 0}
 
 
 @contextlib.contextmanager
@@ -449,18 +492,29 @@ def _one_blas_thread():
     """Run the block with one BLAS thread (threadpoolctl).
 
     The fit's matrices are small (at most 5 n parameters): with threads, OpenBLAS spends more
-    time waking and synchronising them than computing, much more on a busy machine (measured
-    in benchmarks/results/fit.md), and its summation order, hence the last bits of each step
-    and, through the optimiser's path, the fitted chain, would depend on the thread count.
+    time waking and synchronising them than computing, much more on a busy machine (a 10-body
+    fit: 15.7 s of CPU against 0.8 s, benchmarks/results/fit.md), and its summation order,
+    hence the last bits of each step and, through the optimiser's path, the fitted chain,
+    depended on the thread count. The limit is process-wide (BLAS has one thread pool): the
+    first of concurrent fits sets it, the last restores it; meanwhile other threads' BLAS
+    calls run on one thread too.
     """
-    global _CONTROLLER
-    with _CONTROLLER_LOCK:
-        if _CONTROLLER is None:
-            import threadpoolctl  # imported here: 20-100 ms, paid by the first cold fit only
+    with _THREADS_LOCK:
+        if _THREADS["controller"] is None:
+            import threadpoolctl  # here: 20-100 ms, paid by the first cold fit only
 
-            _CONTROLLER = threadpoolctl.ThreadpoolController()
-    with _CONTROLLER.limit(limits=1, user_api="blas"):
+            _THREADS["controller"] = threadpoolctl.ThreadpoolController()
+        if _THREADS["depth"] == 0:
+            _THREADS["limiter"] = _THREADS["controller"].limit(limits=1, user_api="blas")
+        _THREADS["depth"] += 1
+    try:
         yield
+    finally:
+        with _THREADS_LOCK:
+            _THREADS["depth"] -= 1
+            if _THREADS["depth"] == 0:
+                _THREADS["limiter"].restore_original_limits()
+                _THREADS["limiter"] = None
 
 
 def clear_memo() -> None:
