@@ -62,14 +62,14 @@ stages (measured on 3 to 14 bodies, benchmarks/results/fit.md):
    (5 more evaluations per parameter would lower the cost by 0.01 % at 10 bodies, 2.4 % at 12).
 
 Up to six bodies the fit reaches the lowest cost that a least-squares fit over the 3 (n - 1)
-modal numbers themselves finds (a well-conditioned problem; the same cost to 7 digits). From 7
-to 14 bodies it ends 0.05 % to 41 % above that bound (largest at 12 bodies), where today's fit
-also ended (0 % to 11 % on the paper's rod); which minimum of the valley a run reaches is
-sensitive to round-off, as it was before (today's fit gave other chains for the rod and for the
-unit beam). Here the result is deterministic: the same chain for every beam and every BLAS
-thread count. From 15 bodies on, the RFEM start leads stage 1 into a poor basin (costs 1.5e-4
-to 8e-3 against 2.6e-5 at 14 bodies): the ``fit_bodies`` limit of :mod:`appendages.limits`
-stops at 14. Measured numbers: benchmarks/results/fit.md.
+modal numbers themselves finds (a well-conditioned problem; the same cost to 6 digits). From 7
+to 14 bodies it ends 0.01 % to 11 % above that bound, and 42 % at 12 bodies. Which point of the
+valley a run reaches is sensitive to round-off, and was before: the fit of commit f575039 ended
+0.02 % to 11 % above the bound on the paper's rod (0.05 % at 12 bodies), but 49 % above it at 12
+bodies on the unit beam (L = EJ = rho = 1). Here the result is deterministic: the
+same chain for every beam and every BLAS thread count. From 15 bodies on, the RFEM start leads
+stage 1 into poor basins (6.7 and 390 times the bound at 15 and 16 bodies): the ``fit_bodies``
+limit of :mod:`appendages.limits` stops at 14. Measured numbers: benchmarks/results/fit.md.
 
 References
 ----------

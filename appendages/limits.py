@@ -17,10 +17,12 @@ name               default  what it bounds
                             cantilever ones, 100 s (its quadrature is the slow part)
 ``bodies``         500      bodies of a :class:`~appendages.chain.HingedChain` (also through
                             ``HingedChain.rfem``, ``superelements``: 2 n + 1 bodies)
-``fit_bodies``     12       bodies of ``fit_chain(match="poles-and-zeros")``: 5 n - 5
-                            parameters, 4 n - 4 residuals, each an eigen-decomposition of size
-                            n. Medians of 5: 1.9 s at 3 bodies, 12 s at 6, 52 s at 10, 107 s
-                            at 16 (single-threaded BLAS: 12 s at 16, 35 s at 20)
+``fit_bodies``     14       bodies of ``fit_chain(match="poles-and-zeros")``, set by the fit's
+                            quality, not its time: from 15 bodies its start leads it to poor
+                            minima (cost 6.7 and 390 times the modal bound at 15 and 16,
+                            appendages.fitting). Cold fits, medians of 5 at load 14-15:
+                            0.14 s (0.06 s CPU) at 3 bodies, 2.0 s (0.7 s) at 10, 3.7 s
+                            (1.2 s) at 14; memoised 0.2 ms (benchmarks/results/fit.md)
 ``roots``          1e6      frequencies or zeros of a distributed beam asked at once
                             (``Beam.natural_frequencies(n)`` etc.: O(n), ~1 s and 40 MB at 1e6)
 ``frequencies``    100000   exact coupled frequencies asked of
@@ -68,7 +70,7 @@ __all__ = ["DEFAULTS", "LimitError", "check", "current", "raised"]
 DEFAULTS = types.MappingProxyType({
     "modes": 1000,
     "bodies": 500,
-    "fit_bodies": 12,
+    "fit_bodies": 14,
     "roots": 1_000_000,
     "frequencies": 100_000,
     "coordinates": 2500,

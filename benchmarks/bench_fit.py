@@ -52,19 +52,29 @@ from appendages.equivalence import criterion, fit_chain, spectral_errors  # noqa
 THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 
 # Today's fit (commit f575039, appendages.equivalence.fit_chain) on the paper's rod, measured
-# with --today on 2026-11-22 (OPENBLAS_NUM_THREADS=1, load average 9-12): cost of the fit's
-# objective and the error measures of this script, and the CPU time of one fit [s].
+# with --today on 2026-11-22 10:52 UTC (OPENBLAS_NUM_THREADS=1, load average 14-15): the cost of
+# the fit's objective, the error measures of this script, and the CPU time of one fit [s].
 TODAY = {
-    3: {"cost": 3.600042e-04, "p2": 5.726e-05, "z2": 1.708e-02, "all": 1.708e-02, "band": 1.566e+00, "cpu_s": 0.70},
-    4: {"cost": 2.268441e-04, "p2": 1.852e-07, "z2": 7.096e-03, "all": 1.270e-02, "band": 3.581e-01, "cpu_s": 1.91},
-    5: {"cost": 1.567917e-04, "p2": 4.057e-07, "z2": 3.891e-03, "all": 1.062e-02, "band": 1.960e-01, "cpu_s": 1.17},
-    6: {"cost": 1.153188e-04, "p2": 1.098e-07, "z2": 2.435e-03, "all": 9.154e-03, "band": 1.224e-01, "cpu_s": 3.06},
-    7: {"cost": 9.040029e-05, "p2": 2.094e-06, "z2": 1.653e-03, "all": 7.840e-03, "band": 8.304e-02, "cpu_s": 2.16},
-    8: {"cost": 7.434134e-05, "p2": 3.481e-06, "z2": 1.179e-03, "all": 6.761e-03, "band": 5.917e-02, "cpu_s": 1.87},
-    9: {"cost": 6.351099e-05, "p2": 6.556e-06, "z2": 8.863e-04, "all": 5.792e-03, "band": 4.446e-02, "cpu_s": 2.01},
-    10: {"cost": 4.770060e-05, "p2": 1.004e-07, "z2": 6.873e-04, "all": 5.977e-03, "band": 3.446e-02, "cpu_s": 7.66},
-    11: {"cost": 4.033787e-05, "p2": 1.113e-07, "z2": 5.452e-04, "all": 5.510e-03, "band": 2.733e-02, "cpu_s": 9.93},
-    12: {"cost": 3.459191e-05, "p2": 6.865e-08, "z2": 4.418e-04, "all": 5.114e-03, "band": 2.214e-02, "cpu_s": 13.51},
+    3: {"cost": 3.600042e-04, "p2": 5.726e-05, "z2": 1.708e-02, "all": 1.708e-02,
+        "band": 1.566e+00, "cpu_s": 1.25},
+    4: {"cost": 2.268441e-04, "p2": 1.852e-07, "z2": 7.096e-03, "all": 1.270e-02,
+        "band": 3.581e-01, "cpu_s": 3.74},
+    5: {"cost": 1.567917e-04, "p2": 4.057e-07, "z2": 3.891e-03, "all": 1.062e-02,
+        "band": 1.960e-01, "cpu_s": 2.22},
+    6: {"cost": 1.153188e-04, "p2": 1.098e-07, "z2": 2.435e-03, "all": 9.154e-03,
+        "band": 1.224e-01, "cpu_s": 5.36},
+    7: {"cost": 9.040029e-05, "p2": 2.094e-06, "z2": 1.653e-03, "all": 7.840e-03,
+        "band": 8.304e-02, "cpu_s": 2.30},
+    8: {"cost": 7.434134e-05, "p2": 3.481e-06, "z2": 1.179e-03, "all": 6.761e-03,
+        "band": 5.917e-02, "cpu_s": 2.16},
+    9: {"cost": 6.351099e-05, "p2": 6.556e-06, "z2": 8.863e-04, "all": 5.792e-03,
+        "band": 4.446e-02, "cpu_s": 2.63},
+    10: {"cost": 4.770060e-05, "p2": 1.004e-07, "z2": 6.873e-04, "all": 5.977e-03,
+        "band": 3.446e-02, "cpu_s": 12.27},
+    11: {"cost": 4.033787e-05, "p2": 1.113e-07, "z2": 5.452e-04, "all": 5.510e-03,
+        "band": 2.733e-02, "cpu_s": 13.23},
+    12: {"cost": 3.459191e-05, "p2": 6.865e-08, "z2": 4.418e-04, "all": 5.114e-03,
+        "band": 2.214e-02, "cpu_s": 17.96},
 }
 
 _WORKER = r"""
@@ -100,6 +110,16 @@ with limits.raised(fit_bodies=max({bodies})):
             "load_before": load_before, "load_after": os.getloadavg()[0]}})
 print(json.dumps(out))
 """
+
+
+def _today_literal(today: dict) -> str:
+    """``today`` as the literal of TODAY (to paste above)."""
+    lines = ["TODAY = {"]
+    for n, row in sorted(today.items()):
+        lines.append(f'    {n}: {{"cost": {row["cost"]:.6e}, "p2": {row["p2"]:.3e}, '
+                     f'"z2": {row["z2"]:.3e}, "all": {row["all"]:.3e},')
+        lines.append(f'        "band": {row["band"]:.3e}, "cpu_s": {row["cpu_s"]:.2f}}},')
+    return "\n".join(lines) + "\n}"
 
 
 def run_worker(bodies: list[int], repeats: int, threads: str | None) -> dict:
@@ -226,11 +246,7 @@ def main(argv=None) -> dict:
     today = TODAY
     if args.today is not None:
         today = measure_today(args.today, [n for n in bodies if n <= 12])
-        print("TODAY = {\n" + "".join(
-            f"    {n}: {{" + ", ".join(f'"{k}": {v:.6e}' if k == "cost" else
-                                      f'"{k}": {v:.3e}' if k != "cpu_s" else f'"{k}": {v:.2f}'
-                                      for k, v in row.items()) + "},\n"
-            for n, row in sorted(today.items())) + "}")
+        print(_today_literal(today))
 
     timings = {}
     for label, threads in (("threads unset", None), ("OPENBLAS_NUM_THREADS=1", "1")):
@@ -300,11 +316,11 @@ def to_markdown(out: dict) -> str:
               "cost: the fit's objective (weighted least squares in log-frequency, the same for "
               "every beam); bound: the same objective minimised over modal models (the "
               "3 (n - 1) numbers a chain's W(s) depends on, `modal_bound`), and how far each "
-              "fit's cost lies above it; p2, z2: largest relative error of the first two poles, of the first "
-              "two zeros of W1, W2, W4; all: of every pole and zero of the chain; band: max "
-              "|ln(W_r^chain / W_r^beam)| on the criterion's default band. Today: commit "
-              "f575039 on the same rod (CPU time of one fit there, single-threaded BLAS). "
-              "A star: not worse than today.", ""]
+              "fit's cost lies above it; p2, z2: largest relative error of the first two "
+              "poles, of the first two zeros of W1, W2, W4; all: of every pole and zero of the "
+              "chain; band: max |ln(W_r^chain / W_r^beam)| on the criterion's default band. "
+              "Today: commit f575039 on the same rod (CPU time of one fit there, "
+              "single-threaded BLAS). A star: not worse than today.", ""]
     header = ["bodies", "cost", "today", "bound", "above bound: new / today", "p2", "today",
               "z2", "today", "all", "today", "band", "today", "one fit CPU [s]", "today"]
     body = []
