@@ -492,10 +492,11 @@ def _one_blas_thread():
     """Run the block with one BLAS thread (threadpoolctl).
 
     The fit's matrices are small (at most 5 n parameters): with threads, OpenBLAS spends more
-    time waking and synchronising them than computing, much more on a busy machine (a 10-body
-    fit: 15.7 s of CPU against 0.8 s, benchmarks/results/fit.md), and its summation order,
-    hence the last bits of each step and, through the optimiser's path, the fitted chain,
-    depended on the thread count. The limit is process-wide (BLAS has one thread pool): the
+    time waking and synchronising them than computing, much more on a busy machine, and its
+    summation order, hence the last bits of each step and, through the optimiser's path, the
+    fitted chain, depended on the thread count (measured without this limit, 2 cores at load
+    10: a 10-body fit with the thread variables unset took 15.7 s of CPU against 0.8 s with
+    one thread, and ended at another chain). The limit is process-wide (BLAS has one thread pool): the
     first of concurrent fits sets it, the last restores it; meanwhile other threads' BLAS
     calls run on one thread too.
     """
@@ -542,16 +543,25 @@ def fit_poles_and_zeros(n_bodies: int, *, pole_weight: float = 10.0,
     ``pole_weight``, from the RFEM chain, with the exact Jacobian (module docstring). Memoised
     by its arguments (and :data:`FIT_VERSION`); the result is immutable.
 
-    Two stages. Stage 1 weights all targets equally, with the parameters scaled by the
-    Jacobian's column norms (``x_scale="jac"``) and tolerance 1e-5: this is the well-conditioned
-    problem, and from the RFEM start it reaches, for every n measured (3 to 14), a basin at
-    least as good as the single-stage alternatives. Stage 2 weights the poles and polishes
-    with unscaled parameters (``x_scale=1``) to tolerance 1e-8 or 10 evaluations per parameter:
-    the least-squares problem is rank-deficient (a chain's W(s), hence every pole and zero,
-    depends on only 3 (n - 1) of its 5 n - 5 parameters) and, beyond six bodies, its minimum
-    lies along a long curved valley in which column scaling zigzags (measured: 140 iterations
-    against 13 for three bodies) and every method creeps; the budget ends the creep where the
-    cost still falls by less than about 1e-4 of itself per ten iterations.
+    Two stages (module docstring, "The optimisation"): all targets weighted equally with
+    column-scaled parameters to tolerance 1e-5, then the poles weighted with unscaled
+    parameters to tolerance 1e-8 or a budget of 5 evaluations per parameter, which ends the
+    creep along the valley of this rank-deficient problem (not a failure: no FitWarning).
+    ``max_nfev``, if given, is the budget of each stage, and a stage that exhausts it is
+    reported by ``stopped``.
+
+    Parameters
+    ----------
+    n_bodies : int
+        Number of bodies (>= 2; validated by the caller).
+    pole_weight : float
+        Weight of the poles relative to the zeros (> 0).
+    max_nfev : int, optional
+        Budget of residual evaluations of each stage (default 60 and 5 per parameter).
+
+    Returns
+    -------
+    DimensionlessChain
 
     Raises
     ------
@@ -618,6 +628,18 @@ def fit_frequencies(n_bodies: int, targets=None) -> DimensionlessChain:
     dimensionless form: a symmetric chain of frozen pieces whose n - 1 natural frequencies
     equal ``targets`` (in units of sqrt(EJ/(rho L**4)); default the exact beam's, then
     memoised).
+
+    Parameters
+    ----------
+    n_bodies : int
+        Number of bodies (>= 2; validated by the caller).
+    targets : sequence of n_bodies - 1 float, optional
+        Increasing positive frequencies in units of sqrt(EJ/(rho L**4)) (validated by the
+        caller); default the exact beam's x_k**2.
+
+    Returns
+    -------
+    DimensionlessChain
 
     Raises
     ------
