@@ -71,6 +71,13 @@ same chain for every beam and every BLAS thread count. From 15 bodies on, the RF
 stage 1 into poor basins (6.7 and 390 times the bound at 15 and 16 bodies): the ``fit_bodies``
 limit of :mod:`appendages.limits` stops at 14. Measured numbers: benchmarks/results/fit.md.
 
+Measured and rejected: a warm start from the (n - 1)-body fit (one body split in two: it reached
+the bound at 7 and 8 bodies, then poor basins from 9 on); a homotopy of the targets from the
+RFEM chain's own frequencies (no better, slower); a single pole-weighted stage (poor basins from
+9 bodies); fitting the 3 (n - 1) modal numbers first and then a chain that realises them (no
+chain found for 7 to 9 and 11 bodies: the bound is not reached by the chains near the path); a
+small Tikhonov term on the null directions (no fewer iterations, a higher cost).
+
 References
 ----------
 .. [1] P. A. Belonozhko, P. P. Belonozhko, A. A. Fokov et al., "On the equivalence of mechanical
