@@ -68,8 +68,9 @@ import scipy.special
 from . import limits
 from .interface import (as_frequency_array, check_derived, check_positive, check_range, describe,
                         inverse_2x2)
+from .rod import Rod
 
-__all__ = ["Beam", "characteristic_roots"]
+__all__ = ["Beam", "characteristic_roots", "rectangle_torsion_constant"]
 
 _SERIES_RADIUS = 2.0  # |x| below which the power series in y = x**4 are used
 _N_SERIES = 18        # terms: 4**k |y|**k/(4k)! < 1e-30 at |x| = 2 for k = 18
@@ -257,6 +258,76 @@ def _shape_terms(kind: str, xk: np.ndarray):
     return num / den, c_plus
 
 
+def _shape_coefficients(x: np.ndarray, kind: str):
+    """(A, B, C, D) of ``A cos(x xi) + B sin(x xi) + C e^{x (xi-1)} + D e^{-x xi}`` (xi = x/L),
+    the unnormalised shapes of :func:`_shape_terms` (mean square over [0, 1] equal to 1)."""
+    sigma, c_plus = _shape_terms(kind, x)
+    sign = 1.0 if kind == "free-free" else -1.0
+    return sign, -sign * sigma, c_plus, 0.5 * (1.0 + sigma)
+
+
+def _sin_over(c):
+    """sin(c)/c, 1 at c = 0."""
+    return np.sinc(c / math.pi)
+
+
+def _one_minus_cos_over(c):
+    """(1 - cos c)/c = 2 sin(c/2)**2/c, 0 at c = 0, without cancellation."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = 2.0 * np.sin(0.5 * c) ** 2 / c
+    return np.where(c == 0.0, 0.0, out)
+
+
+def _expm1_over(c):
+    """expm1(c)/c, 1 at c = 0."""
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        out = np.expm1(c) / c
+    return np.where(c == 0.0, 1.0, out)
+
+
+def _shape_products(x1: np.ndarray, kind1: str, x2: np.ndarray, kind2: str) -> np.ndarray:
+    """``integral_0^1 f(xi) g(xi) dxi`` of two unnormalised stable shapes, elementwise.
+
+    f has roots x1 (kind1), g roots x2 (kind2); both are sums of cos, sin and the two
+    decaying exponentials (:func:`_shape_coefficients`). With a = x1, b = x2 and
+    ``S(c) = sin c/c``, ``C(c) = (1 - cos c)/c``, ``E(c) = expm1(c)/c``::
+
+        int cos a cos b = [S(a-b) + S(a+b)]/2      int sin a sin b = [S(a-b) - S(a+b)]/2
+        int sin a cos b = [C(a+b) + C(a-b)]/2      int cos a sin b = [C(a+b) - C(a-b)]/2
+        int e^{a(xi-1)} e^{b(xi-1)} = int e^{-a xi} e^{-b xi} = (1 - e^{-(a+b)})/(a+b)
+        int e^{a(xi-1)} e^{-b xi} = e^{-a} E(a - b)
+        int e^{i a xi} e^{b(xi-1)} = (e^{i a} - e^{-b})/(b + i a)
+        int e^{i a xi} e^{-b xi}   = (1 - e^{-b} e^{i a})/(b - i a)
+
+    (cos and sin from the real and imaginary parts of the last two). Every term is O(1) or
+    smaller and none is a difference of nearly equal numbers; the result is good to a few
+    ulps of 1. For |a - b| large the first forms still hold (``e^{-a} E(a - b)`` then
+    overflows beyond a - b ~ 700: use it for near roots). Divided by sqrt(m) each, the
+    shapes are mass-normalised and this is ``integral rho*A f g dx``.
+    """
+    A1, B1, C1, D1 = _shape_coefficients(x1, kind1)
+    A2, B2, C2, D2 = _shape_coefficients(x2, kind2)
+    a, b = x1, x2
+    total = (A1 * A2 * 0.5 * (_sin_over(a - b) + _sin_over(a + b))
+             + B1 * B2 * 0.5 * (_sin_over(a - b) - _sin_over(a + b))
+             + B1 * A2 * 0.5 * (_one_minus_cos_over(a + b) + _one_minus_cos_over(a - b))
+             + A1 * B2 * 0.5 * (_one_minus_cos_over(a + b) - _one_minus_cos_over(a - b)))
+    same = -np.expm1(-(a + b)) / (a + b)
+    total = total + (C1 * C2 + D1 * D2) * same
+    total = (total + C1 * D2 * np.exp(-a) * _expm1_over(a - b)
+             + D1 * C2 * np.exp(-b) * _expm1_over(b - a))
+
+    def trig_exp(root, cos_coefficient, sin_coefficient, exp_root, rising_coefficient,
+                 falling_coefficient):
+        e_i = np.exp(1j * root)
+        rising = (e_i - np.exp(-exp_root)) / (exp_root + 1j * root)            # e^{r(xi-1)}
+        falling = (1.0 - np.exp(-exp_root) * e_i) / (exp_root - 1j * root)     # e^{-r xi}
+        mixed = rising_coefficient * rising + falling_coefficient * falling
+        return cos_coefficient * mixed.real + sin_coefficient * mixed.imag
+
+    return total + trig_exp(a, A1, B1, b, C2, D2) + trig_exp(b, A2, B2, a, C1, D1)
+
+
 def _check_damping_ratio(damping_ratio) -> float:
     """The modal damping ratio as a float in [0, 1), or TypeError/ValueError naming it."""
     zeta = check_positive("damping_ratio", damping_ratio, "-", allow_zero=True)
@@ -273,6 +344,63 @@ def _check_section(bending_stiffness: float, linear_density: float, ej_formula: 
     check_derived(linear_density, "linear_density", rho_formula, rho_given)
 
 
+def _place_planes(out: np.ndarray, xy: np.ndarray, xz: np.ndarray) -> None:
+    """Put the 2x2 matrices of both bending planes into 6x6 ones (``W6``/``D6`` layout).
+
+    x-y plane in (v, theta_z) = (1, 5); x-z plane in (w, theta_y) = (2, 4) with the
+    off-diagonal sign flipped (theta_y = -dw/dx).
+    """
+    out[..., 1, 1], out[..., 5, 5] = xy[..., 0, 0], xy[..., 1, 1]
+    out[..., 1, 5] = out[..., 5, 1] = xy[..., 0, 1]
+    out[..., 2, 2], out[..., 4, 4] = xz[..., 0, 0], xz[..., 1, 1]
+    out[..., 2, 4] = out[..., 4, 2] = -xz[..., 0, 1]
+
+
+def _check_poisson_ratio(poisson_ratio) -> float:
+    """Poisson's ratio of an isotropic material, in (-1, 1/2) [-]."""
+    if isinstance(poisson_ratio, (bool, np.bool_)) or not isinstance(
+            poisson_ratio, (int, float, np.integer, np.floating)):
+        raise TypeError(f"poisson_ratio must be a real number [-]; got "
+                        f"{type(poisson_ratio).__name__} {describe(poisson_ratio)}")
+    nu = float(poisson_ratio)
+    if not (-1.0 < nu < 0.5):
+        raise ValueError(f"poisson_ratio must lie in (-1, 0.5) for an isotropic material [-]; "
+                         f"got {describe(poisson_ratio)}")
+    return nu
+
+
+def rectangle_torsion_constant(side_a: float, side_b: float) -> float:
+    """Saint-Venant torsion constant J_t [m**4] of a solid a x b rectangle.
+
+    With ``a >= b`` the long and short sides (Timoshenko & Goodier, sec. 109)::
+
+        J_t = a b**3 [1/3 - (64/pi**5) (b/a) sum_{n odd} tanh(n pi a/(2 b))/n**5],
+
+    the sum written as ``(31/32) zeta(5) - sum_{n odd} (1 - tanh(n pi a/(2 b)))/n**5``, whose
+    terms decay like ``exp(-n pi)`` (20 terms reach round-off). A square gives
+    ``0.1406 a**4``, a thin strip ``a b**3/3``.
+
+    References
+    ----------
+    .. [1] S. P. Timoshenko, J. N. Goodier, "Theory of Elasticity", 3rd ed., McGraw-Hill, 1970,
+       sec. 109 (torsion of a rectangular bar).
+    """
+    a, b = max(side_a, side_b), min(side_a, side_b)
+    n = np.arange(1, 41, 2, dtype=float)
+    x = n * math.pi * a / (2.0 * b)
+    e = np.exp(-2.0 * x)
+    deficit = float(np.sum(2.0 * e / (1.0 + e) / n**5))  # 1 - tanh x = 2 e^-2x/(1 + e^-2x)
+    total = (31.0 / 32.0) * float(scipy.special.zeta(5.0)) - deficit
+    return a * b**3 * (1.0 / 3.0 - 64.0 / math.pi**5 * (b / a) * total)
+
+
+#: The beam's three-axis parameters: (name, key of RANGES, unit).
+_THREE_AXIS_PARAMETERS = (("bending_stiffness_y", "bending_stiffness", "N*m^2"),
+                          ("torsional_stiffness", "torsional_stiffness", "N*m^2"),
+                          ("torsional_inertia", "torsional_inertia", "kg*m"),
+                          ("axial_stiffness", "axial_stiffness", "N"))
+
+
 class Beam:
     """Uniform Euler-Bernoulli beam, free at both ends, loaded at its attachment end x = 0.
 
@@ -281,13 +409,27 @@ class Beam:
     length : float, m
         Length L.
     bending_stiffness : float, N*m**2
-        EJ (Young's modulus times the second moment of area of the section).
+        EJ for bending in the local x-y plane (deflection v along y, ``theta_z = dv/dx``):
+        the planar beam.
     linear_density : float, kg/m
         Mass per unit length rho*A.
+    bending_stiffness_y : float, N*m**2, optional
+        EJ for bending in the local x-z plane (deflection w along z, ``theta_y = -dw/dx``);
+        default equal to ``bending_stiffness``.
+    torsional_stiffness : float, N*m**2, optional
+        Saint-Venant torsional stiffness GJ. None with ``torsional_inertia`` given: torsionally
+        rigid (the limit GJ -> inf).
+    torsional_inertia : float, kg*m, optional
+        Polar mass moment of inertia per unit length rho*I_p. Needed for three-axis use
+        (:meth:`W6`, a three-axis spacecraft): without it a root torque would meet no inertia.
+    axial_stiffness : float, N, optional
+        EA. None: inextensible (the limit EA -> inf), the assumption the planar model makes.
     damping_ratio : float, optional
-        Modal damping ratio, the same for every bending mode (dimensionless, 0 <= zeta < 1).
-        The exact W(s) of a damped beam is the undamped closed form plus the exact damping
-        correction of each mode, summed until the rest is below round-off.
+        Modal damping ratio, the same for every elastic mode: bending in both planes, torsion
+        and axial motion (dimensionless, 0 <= zeta < 1; one structural damping ratio, as the
+        planar model has one for every bending mode). The exact W(s) of a damped beam is the
+        undamped closed form plus the exact damping correction of each mode, summed until the
+        rest is below round-off; a damped rod's W has a closed form (:mod:`appendages.rod`).
 
     Raises
     ------
@@ -295,35 +437,84 @@ class Beam:
         A parameter that is not a real number.
     ValueError
         A parameter outside its documented range (:data:`appendages.interface.RANGES`):
-        length 1e-6 to 1e6 m, bending_stiffness 1e-15 to 1e15 N*m**2, linear_density 1e-12 to
-        1e6 kg/m, damping_ratio in [0, 1). Within them the frequency scale
+        length 1e-6 to 1e6 m, bending_stiffness(_y) 1e-15 to 1e15 N*m**2, linear_density 1e-12 to
+        1e6 kg/m, torsional_stiffness 1e-15 to 1e15 N*m**2, torsional_inertia 1e-30 to 1e12 kg*m,
+        axial_stiffness 1e-9 to 1e20 N, damping_ratio in [0, 1); or a torsional_stiffness
+        without a torsional_inertia. Within them the frequency scale
         ``sqrt(EJ/(rho*A L**4))`` lies between 1e-23 and 1e26 rad/s and every derived scale
         (L**3/EJ, the residual tails ``rho*A L**7/EJ**2``) between 1e-90 and 1e90.
 
     Notes
     -----
-    Rotary inertia and shear deformation are neglected (Euler-Bernoulli), so the moment of
-    inertia about the centre of mass is ``m L**2/12``, as in the paper [5]_.
+    Rotary inertia and shear deformation are neglected in bending (Euler-Bernoulli), so the
+    moment of inertia about the centre of mass is ``m L**2/12`` about local y and z, as in the
+    paper [5]_; about the axis it is ``rho*I_p L``. The section is symmetric (shear centre on
+    the axis, principal axes along local y and z), so the four motions decouple and W6 is
+    made of the planar W of each bending plane and the exact W of two rods
+    (:meth:`W6`). A planar beam (no torsional_inertia) works in every planar model and is
+    refused by name in three-axis ones.
 
     References
     ----------
-    See the module docstring.
+    See the module docstring; :mod:`appendages.rod` for torsion and axial motion.
     """
 
     def __init__(self, length: float, bending_stiffness: float, linear_density: float, *,
-                 damping_ratio: float = 0.0):
+                 bending_stiffness_y: float | None = None,
+                 torsional_stiffness: float | None = None,
+                 torsional_inertia: float | None = None,
+                 axial_stiffness: float | None = None, damping_ratio: float = 0.0):
         self.length = check_range("length", length, "length")
         self.bending_stiffness = check_range("bending_stiffness", bending_stiffness,
                                              "bending_stiffness")
         self.linear_density = check_range("linear_density", linear_density, "linear_density")
         self.damping_ratio = _check_damping_ratio(damping_ratio)
+        given = {"bending_stiffness_y": bending_stiffness_y,
+                 "torsional_stiffness": torsional_stiffness,
+                 "torsional_inertia": torsional_inertia, "axial_stiffness": axial_stiffness}
+        for name, quantity, _ in _THREE_AXIS_PARAMETERS:
+            value = given[name]
+            given[name] = None if value is None else check_range(name, value, quantity)
+        if given["torsional_stiffness"] is not None and given["torsional_inertia"] is None:
+            raise ValueError(
+                "torsional_inertia [kg*m] (rho*I_p per unit length) must be given with "
+                f"torsional_stiffness = {describe(torsional_stiffness)} N*m^2; got None")
+        self._bending_stiffness_y = given["bending_stiffness_y"]
+        self.torsional_stiffness = given["torsional_stiffness"]
+        self.torsional_inertia = given["torsional_inertia"]
+        self.axial_stiffness = given["axial_stiffness"]
         self._cache: dict = {}
+
+    @property
+    def bending_stiffness_y(self) -> float:
+        """EJ for bending in the local x-z plane [N*m**2] (default: ``bending_stiffness``)."""
+        if self._bending_stiffness_y is None:
+            return self.bending_stiffness
+        return self._bending_stiffness_y
+
+    @property
+    def three_axis(self) -> bool:
+        """True when the beam has the properties of a three-axis model (a torsional inertia)."""
+        return self.torsional_inertia is not None
+
+    def _require_three_axis(self, what: str) -> None:
+        if self.torsional_inertia is None:
+            raise ValueError(
+                f"{what} needs the beam's torsion: torsional_inertia [kg*m] (rho*I_p per unit "
+                "length) and torsional_stiffness [N*m^2] (GJ; None for a torsionally rigid "
+                "beam) are expected; got torsional_inertia = None (a planar beam). Give them, "
+                "or build the beam with a section constructor (Beam.circular_rod, tube, "
+                "rectangular), which fills every property")
 
     # -- constructors -------------------------------------------------------------------------
     @classmethod
     def circular_rod(cls, length: float, diameter: float, density: float, youngs_modulus: float,
-                     *, damping_ratio: float = 0.0) -> "Beam":
+                     *, poisson_ratio: float = 0.3, damping_ratio: float = 0.0) -> "Beam":
         """Solid circular rod (the paper's example: 10 m, 0.01 m, 7800 kg/m**3, 2.06e11 Pa).
+
+        Every property is filled: ``EJ = E pi d**4/64`` in both planes, ``EA = E pi d**2/4``,
+        ``GJ = G pi d**4/32`` with ``G = E/(2 (1 + nu))`` (the polar moment is the torsion
+        constant of a circle), ``rho*I_p = rho pi d**4/32``.
 
         Parameters
         ----------
@@ -331,23 +522,34 @@ class Beam:
         diameter : float, m
         density : float, kg/m**3
         youngs_modulus : float, Pa
+        poisson_ratio : float, optional
+            nu, in (-1, 0.5) [-], for the shear modulus; default 0.3 (steel; aluminium
+            alloys 0.33). It enters only torsion.
         damping_ratio : float, optional
         """
         d = check_range("diameter", diameter, "length")
         rho = check_range("density", density, "density")
         E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
+        nu = _check_poisson_ratio(poisson_ratio)
         area = math.pi * d**2 / 4.0
         second_moment = math.pi * d**4 / 64.0
         _check_section(E * second_moment, rho * area,
                        "youngs_modulus*pi*diameter**4/64", "density*pi*diameter**2/4",
                        [("diameter", diameter, "m"), ("youngs_modulus", youngs_modulus, "Pa")],
                        [("diameter", diameter, "m"), ("density", density, "kg/m^3")])
-        return cls(length, E * second_moment, rho * area, damping_ratio=damping_ratio)
+        return cls._section(length, E, nu, rho, area, second_moment, second_moment,
+                            2.0 * second_moment, 2.0 * second_moment, damping_ratio,
+                            [("diameter", diameter, "m")])
 
     @classmethod
     def tube(cls, length: float, outer_diameter: float, wall_thickness: float, density: float,
-             youngs_modulus: float, *, damping_ratio: float = 0.0) -> "Beam":
+             youngs_modulus: float, *, poisson_ratio: float = 0.3,
+             damping_ratio: float = 0.0) -> "Beam":
         """Thin- or thick-walled circular tube (a typical deployable boom).
+
+        ``EJ = E pi (D**4 - d**4)/64`` in both planes, ``EA``, ``GJ = G pi (D**4 - d**4)/32``
+        (a closed circular tube's torsion constant is its polar moment) and
+        ``rho*I_p = rho pi (D**4 - d**4)/32``.
 
         Parameters
         ----------
@@ -357,6 +559,8 @@ class Beam:
             Must be at most half the outer diameter (a solid rod at equality).
         density : float, kg/m**3
         youngs_modulus : float, Pa
+        poisson_ratio : float, optional
+            nu in (-1, 0.5) [-], default 0.3.
         damping_ratio : float, optional
         """
         D = check_range("outer_diameter", outer_diameter, "length")
@@ -367,6 +571,7 @@ class Beam:
             )
         rho = check_range("density", density, "density")
         E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
+        nu = _check_poisson_ratio(poisson_ratio)
         d = D - 2.0 * t
         # D**4 - d**4 and D**2 - d**2 factored: no cancellation for a thin wall (t << D)
         area = math.pi * t * (D - t)
@@ -379,41 +584,143 @@ class Beam:
                         ("youngs_modulus", youngs_modulus, "Pa")],
                        [("outer_diameter", outer_diameter, "m"),
                         ("wall_thickness", wall_thickness, "m"), ("density", density, "kg/m^3")])
-        return cls(length, E * second_moment, rho * area, damping_ratio=damping_ratio)
+        return cls._section(length, E, nu, rho, area, second_moment, second_moment,
+                            2.0 * second_moment, 2.0 * second_moment, damping_ratio,
+                            [("outer_diameter", outer_diameter, "m"),
+                             ("wall_thickness", wall_thickness, "m")])
 
     @classmethod
     def rectangular(cls, length: float, width: float, thickness: float, density: float,
-                    youngs_modulus: float, *, damping_ratio: float = 0.0) -> "Beam":
-        """Rectangular section bending about its thin direction (a panel strip or tape).
+                    youngs_modulus: float, *, poisson_ratio: float = 0.3,
+                    damping_ratio: float = 0.0) -> "Beam":
+        """Solid rectangular section: thickness along local y, width along local z.
+
+        The planar beam (x-y plane) bends about its thin direction (a panel strip or tape,
+        a solar-array wing out of its plane): ``EJ = E width thickness**3/12``; the x-z plane
+        bends about the wide direction: ``EJ_y = E thickness width**3/12``. ``EA = E width
+        thickness``, ``GJ = G J_t`` with the Saint-Venant constant
+        (:func:`rectangle_torsion_constant`), ``rho*I_p = rho width thickness (width**2 +
+        thickness**2)/12``.
 
         Parameters
         ----------
         length, width, thickness : float, m
-            ``thickness`` is the dimension in the bending plane.
+            ``thickness`` is the dimension in the x-y bending plane (along local y).
         density : float, kg/m**3
         youngs_modulus : float, Pa
+        poisson_ratio : float, optional
+            nu in (-1, 0.5) [-], default 0.3.
+        damping_ratio : float, optional
         """
         b = check_range("width", width, "length")
         h = check_range("thickness", thickness, "length")
         rho = check_range("density", density, "density")
         E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
+        nu = _check_poisson_ratio(poisson_ratio)
         _check_section(E * b * h**3 / 12.0, rho * b * h, "youngs_modulus*width*thickness**3/12",
                        "density*width*thickness",
                        [("width", width, "m"), ("thickness", thickness, "m"),
                         ("youngs_modulus", youngs_modulus, "Pa")],
                        [("width", width, "m"), ("thickness", thickness, "m"),
                         ("density", density, "kg/m^3")])
-        return cls(length, E * b * h**3 / 12.0, rho * b * h, damping_ratio=damping_ratio)
+        return cls._section(length, E, nu, rho, b * h, b * h**3 / 12.0, h * b**3 / 12.0,
+                            rectangle_torsion_constant(b, h), b * h * (b * b + h * h) / 12.0,
+                            damping_ratio, [("width", width, "m"), ("thickness", thickness, "m")])
+
+    @classmethod
+    def _section(cls, length, E, nu, rho, area, I_z, I_y, torsion_constant, polar_moment,
+                 damping_ratio, dimensions) -> "Beam":
+        """A beam from section properties, every derived one checked against RANGES."""
+        given_E = dimensions + [("youngs_modulus", E, "Pa")]
+        values = {
+            "bending_stiffness_y": check_derived(E * I_y, "bending_stiffness",
+                                                 "youngs_modulus*I_y", given_E),
+            "axial_stiffness": check_derived(E * area, "axial_stiffness",
+                                             "youngs_modulus*area", given_E),
+            "torsional_stiffness": check_derived(
+                E / (2.0 * (1.0 + nu)) * torsion_constant, "torsional_stiffness",
+                "youngs_modulus/(2 (1 + poisson_ratio))*J_t",
+                given_E + [("poisson_ratio", nu, "-")]),
+            "torsional_inertia": check_derived(rho * polar_moment, "torsional_inertia",
+                                               "density*I_p",
+                                               dimensions + [("density", rho, "kg/m^3")]),
+        }
+        return cls(length, E * I_z, rho * area, damping_ratio=damping_ratio, **values)
 
     def __repr__(self) -> str:
+        extra = "".join(f", {name}={value!r}" for name, value in (
+            ("bending_stiffness_y", self._bending_stiffness_y),
+            ("torsional_stiffness", self.torsional_stiffness),
+            ("torsional_inertia", self.torsional_inertia),
+            ("axial_stiffness", self.axial_stiffness)) if value is not None)
         return (f"Beam(length={self.length!r}, bending_stiffness={self.bending_stiffness!r}, "
-                f"linear_density={self.linear_density!r}, damping_ratio={self.damping_ratio!r})")
+                f"linear_density={self.linear_density!r}{extra}, "
+                f"damping_ratio={self.damping_ratio!r})")
+
+    def _three_axis_properties(self) -> dict:
+        return {"bending_stiffness_y": self._bending_stiffness_y,
+                "torsional_stiffness": self.torsional_stiffness,
+                "torsional_inertia": self.torsional_inertia,
+                "axial_stiffness": self.axial_stiffness}
 
     def undamped(self) -> "Beam":
         """The same beam without damping (itself when already undamped)."""
         if self.damping_ratio == 0.0:
             return self
-        return Beam(self.length, self.bending_stiffness, self.linear_density)
+        cached = self._cache.get("undamped")
+        if cached is None:
+            cached = Beam(self.length, self.bending_stiffness, self.linear_density,
+                          **self._three_axis_properties())
+            self._cache["undamped"] = cached
+        return cached
+
+    # -- the four motions ---------------------------------------------------------------------
+    def planar_view(self, plane: str = "xy") -> "Beam":
+        """The planar beam of one bending plane (same length, density and damping).
+
+        Parameters
+        ----------
+        plane : {"xy", "xz"}
+            "xy": EJ = ``bending_stiffness`` (deflection v, ``theta_z = dv/dx``); "xz":
+            EJ = ``bending_stiffness_y``, in the planar convention (``delta = w(0)``,
+            ``phi = dw/dx(0) = -theta_y``, loads F_z and ``-M_y``).
+        """
+        if plane not in ("xy", "xz"):
+            raise ValueError(f"plane must be 'xy' or 'xz'; got {describe(plane)}")
+        key = f"plane_{plane}"
+        cached = self._cache.get(key)
+        if cached is None:
+            EJ = self.bending_stiffness if plane == "xy" else self.bending_stiffness_y
+            if plane == "xy" and all(v is None for v in self._three_axis_properties().values()):
+                cached = self
+            else:
+                cached = Beam(self.length, EJ, self.linear_density,
+                              damping_ratio=self.damping_ratio)
+            self._cache[key] = cached
+        return cached
+
+    def torsion_rod(self) -> Rod | None:
+        """The beam's torsion as an exact rod (GJ, rho*I_p), or None when torsionally rigid.
+
+        Raises ValueError naming the missing property for a planar beam.
+        """
+        self._require_three_axis("torsion_rod()")
+        if self.torsional_stiffness is None:
+            return None
+        if "torsion" not in self._cache:
+            self._cache["torsion"] = Rod(self.length, self.torsional_stiffness,
+                                         self.torsional_inertia,
+                                         damping_ratio=self.damping_ratio, motion="torsion")
+        return self._cache["torsion"]
+
+    def axial_rod(self) -> Rod | None:
+        """The beam's axial motion as an exact rod (EA, rho*A), or None when inextensible."""
+        if self.axial_stiffness is None:
+            return None
+        if "axial" not in self._cache:
+            self._cache["axial"] = Rod(self.length, self.axial_stiffness, self.linear_density,
+                                       damping_ratio=self.damping_ratio, motion="axial")
+        return self._cache["axial"]
 
     # -- rigid properties ---------------------------------------------------------------------
     @property
@@ -430,6 +737,21 @@ class Beam:
     def frequency_scale(self) -> float:
         """sqrt(EJ/(rho*A L**4)) [rad/s]: a root x_k gives the frequency x_k**2 times this."""
         return math.sqrt(self.bending_stiffness / (self.linear_density * self.length**4))
+
+    @property
+    def center_of_mass(self) -> float:
+        """Distance of the centre of mass from the attachment end along x [m]: L/2."""
+        return 0.5 * self.length
+
+    @property
+    def inertia_tensor(self) -> np.ndarray:
+        """Inertia about the centre of mass in beam axes [kg*m**2], undeformed (three axes).
+
+        ``diag(rho*I_p L, m L**2/12, m L**2/12)``: no rotary inertia of the section in bending
+        (Euler-Bernoulli, as :attr:`inertia`).
+        """
+        self._require_three_axis("inertia_tensor")
+        return np.diag([self.torsional_inertia * self.length, self.inertia, self.inertia])
 
     # -- frequencies --------------------------------------------------------------------------
     def _roots(self, kind: str, n: int) -> np.ndarray:
@@ -567,6 +889,27 @@ class Beam:
         scale = self.linear_density / math.sqrt(self.mass)
         return np.column_stack([2.0 * sigma / beta, 2.0 / beta**2]) * scale
 
+    def cantilever_participation_tail(self, n: int) -> np.ndarray:
+        """``sum_{k>n} l_k l_k^T`` of the participation factors, shape (2, 2) [kg, kg*m; ...].
+
+        The rigid mass the first n cantilever modes leave to the others: with
+        ``l_k = rho*A/sqrt(m) (2 sigma_k/beta_k, 2/beta_k**2)`` (:meth:`modal_participation`),
+        ``l_k l_k^T = 4 rho*A/L [[sigma**2/b**2, sigma/b**3], [., 1/b**4]]`` with b = beta_k
+        (in 1/m). Modes n < k <= max(n, 16) are summed explicitly; beyond, ``sigma_k = 1`` and
+        ``beta_k L = (k - 1/2) pi`` to below 1e-19, and ``sum_{k>K} (beta_k L)**-q =
+        pi**-q zeta(q, K + 1/2)`` (Hurwitz). No cancellation, unlike ``M_rr - L^T L``.
+        """
+        K = max(n, 16)
+        L = self.length
+        x = self._roots("clamped-free", K)[n:]
+        sigma, _ = _shape_terms("clamped-free", x)
+        zeta = scipy.special.zeta
+        plain = [math.pi**-q * float(zeta(q, K + 0.5)) for q in (2, 3, 4)]
+        sums = [math.fsum(sigma**2 / x**2) + plain[0], math.fsum(sigma / x**3) + plain[1],
+                math.fsum(1.0 / x**4) + plain[2]]
+        f = 4.0 * self.linear_density * L
+        return f * np.array([[sums[0], sums[1] * L], [sums[1] * L, sums[2] * L**2]])
+
     def free_cantilever_overlap(self, n_free: int, n_cantilever: int) -> np.ndarray:
         r"""Mass inner products of free-free and cantilever modes, shape (n_free, n_cantilever).
 
@@ -574,11 +917,17 @@ class Beam:
         From the beam equation and the boundary conditions (phi'' = phi''' = 0 at both ends,
         psi = psi' = 0 at x = 0, psi'' = psi''' = 0 at x = L),
         ``(b_k^4 - b_i^4) integral phi_k psi_i = phi_k(0) psi_i'''(0) - phi_k'(0) psi_i''(0)``,
-        exact where the roots are well apart. Free-free root k and cantilever root k + 1 both
-        tend to (k + 1/2) pi, where this form cancels; those pairs (k <= n_cantilever + 8) are
-        integrated by Gauss-Legendre quadrature of the stable mode shapes instead.
+        exact where the roots are well apart: its rounding is about ``eps x/|x_k - x_i|``
+        relative (x the roots, themselves rounded to eps x), so it is used where
+        ``|x_k - x_i| >= 1``. Free-free root k and cantilever root k + 1 both tend to
+        (k + 1/2) pi, where it cancels; those pairs are integrated in closed form instead
+        (:func:`_shape_products`, good to a few ulps of their size, about 1):
+        each shape is, on ``xi = x/L``, ``A cos(x xi) + B sin(x xi) + C e^{x (xi - 1)} +
+        D e^{-x xi}``, and the 16 integrals of the products over [0, 1] are elementary and
+        written without cancellation. O(n_free n_cantilever), no quadrature (issue 10: the
+        Gauss-Legendre quadrature this replaces took 100 s in a 1000-mode damped
+        Craig-Bampton model).
         """
-        L = self.length
         for name, value in (("n_free", n_free), ("n_cantilever", n_cantilever)):
             if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
                     or value < 1:
@@ -590,20 +939,13 @@ class Beam:
         sk, _ = _shape_terms("free-free", xk)
         si, _ = _shape_terms("clamped-free", xi)
         # unnormalised shapes (integral of the square = L), in dimensionless roots x = b L:
-        # phi(0) = 2, phi'(0) = -2 sigma_k x_k/L, psi''(0) = 2 x_i^2/L^2, psi'''(0) = -2 sigma_i x_i^3/L^3
+        # phi(0) = 2, phi'(0) = -2 sigma_k x_k/L, psi''(0) = 2 x_i^2/L^2,
+        # psi'''(0) = -2 sigma_i x_i^3/L^3
         numerator = -4.0 * (si * xi**3)[None, :] + 4.0 * (sk * xk)[:, None] * (xi**2)[None, :]
-        with np.errstate(divide="ignore", invalid="ignore"):  # rows below are replaced
+        with np.errstate(divide="ignore", invalid="ignore"):  # near pairs are replaced below
             overlap = numerator / (xk[:, None] ** 4 - xi[None, :] ** 4)
-        n_quad = min(n_free, n_cantilever + 8)
-        # Gauss-Legendre nodes: scipy's asymptotic algorithm (numpy's leggauss solves a dense
-        # eigenproblem, seconds at this size); ~6 nodes per unit of the highest root x resolve
-        # the products of shapes to round-off
-        n_nodes = int(200 + 6 * (n_quad + 1) * math.pi)
-        nodes, weights = scipy.special.roots_legendre(n_nodes)
-        x = 0.5 * (nodes + 1.0) * L
-        phi = self.mode_shapes(x, n_quad)
-        psi = self.mode_shapes(x, n_cantilever, boundary="clamped-free")
-        overlap[:n_quad] = (phi * (0.5 * L * weights * self.linear_density)[:, None]).T @ psi
+        rows, cols = np.nonzero(np.abs(xk[:, None] - xi[None, :]) < 1.0)
+        overlap[rows, cols] = _shape_products(xk[rows], "free-free", xi[cols], "clamped-free")
         return overlap
 
     def _cantilever_tip_values(self, n: int) -> np.ndarray:
@@ -682,6 +1024,114 @@ class Beam:
             D[..., 1, 1] = d4.reshape(s.shape) * (EJ / L)
         D[..., 1, 0] = D[..., 0, 1]
         return D
+
+    # -- three axes ---------------------------------------------------------------------------
+    def _planes_equal(self) -> bool:
+        return self.bending_stiffness_y == self.bending_stiffness
+
+    def W6(self, s) -> np.ndarray:
+        """Exact three-axis transfer matrix W6(s) of the free beam [SI], beam axes.
+
+        Root motions ``(u, v, w, theta_x, theta_y, theta_z)`` caused by root loads
+        ``(F_x, F_y, F_z, M_x, M_y, M_z)`` at x = 0. The motions decouple (symmetric
+        section), so W6 is made of
+
+        * x-y bending: :meth:`W` (``[[W1, W2], [W2, W4]]``) in rows/columns (v, theta_z);
+        * x-z bending: the planar W of :meth:`planar_view` ("xz"), whose coordinates are
+          ``(w, dw/dx = -theta_y)`` under ``(F_z, -M_y)``: in (w, theta_y) it is
+          ``S W S`` with ``S = diag(1, -1)``, i.e. ``[[W1, -W2], [-W2, W4]]`` (the rigid part
+          ``theta_y/F_z = +6/(m L s**2)``, opposite to ``theta_z/F_y``);
+        * torsion and axial motion: the exact rods of :mod:`appendages.rod`,
+          ``z coth(z)/(m_r s**2)``; a torsionally rigid or inextensible beam has the rigid
+          ``1/(m_r s**2)`` (m_r = rho*I_p L or m).
+
+        Every part is exact and stable at any |s| in :data:`~appendages.interface.S_RANGE`
+        (damped too), so W6 is.
+
+        Parameters
+        ----------
+        s : complex or array_like of complex, rad/s
+            Not 0 (the rigid-body pole).
+
+        Returns
+        -------
+        ndarray of complex128, shape ``np.shape(s) + (6, 6)``
+
+        Raises
+        ------
+        ValueError
+            A planar beam (no ``torsional_inertia``), s = 0, or s at an undamped natural
+            frequency.
+        """
+        self._require_three_axis("W6")
+        s = as_frequency_array(s)
+        if np.any(s == 0):
+            raise ValueError("s = 0 is the rigid-body pole of W6 (W6 is infinite there) [rad/s]")
+        W_xy = self.W(s)
+        W_xz = W_xy if self._planes_equal() else self.planar_view("xz").W(s)
+        W6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
+        _place_planes(W6, W_xy, W_xz)
+        W6[..., 0, 0] = self._rod_entry(self.axial_rod(), self.mass, s, "W")
+        W6[..., 3, 3] = self._rod_entry(self.torsion_rod(),
+                                        self.torsional_inertia * self.length, s, "W")
+        return W6
+
+    def dynamic_stiffness6(self, s) -> np.ndarray:
+        """Exact three-axis root dynamic stiffness D6(s) = W6(s)^-1 [SI], beam axes.
+
+        Assembled like :meth:`W6` from each plane's :meth:`dynamic_stiffness` (the x-z
+        plane's off-diagonal with the opposite sign) and the rods' ``m_r s**2 tanh(z)/z``
+        (rigid: ``m_r s**2``). Undamped, it stays accurate where W6 is singular and is
+        infinite exactly at a clamped frequency of some motion; s = 0 gives 0.
+
+        Returns
+        -------
+        ndarray of complex128, shape ``np.shape(s) + (6, 6)``
+        """
+        self._require_three_axis("dynamic_stiffness6")
+        s = as_frequency_array(s)
+        D_xy = self.dynamic_stiffness(s)
+        D_xz = D_xy if self._planes_equal() else self.planar_view("xz").dynamic_stiffness(s)
+        D6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
+        _place_planes(D6, D_xy, D_xz)
+        D6[..., 0, 0] = self._rod_entry(self.axial_rod(), self.mass, s, "D")
+        D6[..., 3, 3] = self._rod_entry(self.torsion_rod(),
+                                        self.torsional_inertia * self.length, s, "D")
+        return D6
+
+    @staticmethod
+    def _rod_entry(rod, rigid_inertia: float, s: np.ndarray, which: str) -> np.ndarray:
+        if rod is not None:
+            return rod.W(s) if which == "W" else rod.dynamic_stiffness(s)
+        with np.errstate(divide="ignore"):
+            return 1.0 / (rigid_inertia * s**2) if which == "W" else rigid_inertia * s**2
+
+    def clamped_frequencies6(self, omega_max: float) -> np.ndarray:
+        """Every natural frequency with the attachment end clamped, all motions [rad/s].
+
+        The cantilever frequencies of both bending planes, torsion and axial motion (rigid
+        motions have none), ascending: every one up to the last returned, which is above
+        ``omega_max`` (the Wittrick-Williams count of a three-axis spacecraft needs them;
+        it takes the last as the bound of completeness). Each motion's list is extended
+        beyond omega_max and the union cut at the smallest of their ends.
+        """
+        self._require_three_axis("clamped_frequencies6")
+        parts = []
+        for plane in (("xy",) if self._planes_equal() else ("xy", "xz")):
+            beam = self.planar_view(plane)
+            n = 8
+            while True:
+                wc = beam.cantilever_frequencies(n)
+                if wc[-1] > omega_max:
+                    break
+                n *= 2
+            parts += [wc, wc] if self._planes_equal() else [wc]
+        for rod in (self.torsion_rod(), self.axial_rod()):
+            if rod is not None:
+                parts.append(rod.cantilever_frequencies_below(omega_max))
+        complete = min(part[-1] for part in parts)
+        merged = np.sort(np.concatenate(parts))
+        return merged[merged <= complete]
 
     def _undamped_entries(self, s: np.ndarray):
         """W1, W2, W4 of the undamped closed form (module docstring), each of shape s.shape."""

@@ -57,7 +57,7 @@ import scipy.linalg
 
 from . import limits
 from .interface import (RANGES, FiniteAppendage, RootModel, as_frequency_array, check_range,
-                        describe, equilibrate, inverse_2x2)
+                        describe, equilibrate, inverse_2x2, three_axis_root_model)
 
 __all__ = ["HingedChain", "MOLENAAR_K"]
 
@@ -179,7 +179,15 @@ class HingedChain(FiniteAppendage):
     def __init__(self, lengths: Sequence[float], masses: Sequence[float],
                  inertias: Sequence[float], hinge_stiffnesses: Sequence[float], *,
                  hinge_dampings: Sequence[float] | None = None,
-                 com_offsets: Sequence[float] | None = None, root: str = "rigid") -> None:
+                 com_offsets: Sequence[float] | None = None, root: str = "rigid",
+                 inertias_y: Sequence[float] | None = None,
+                 hinge_stiffnesses_y: Sequence[float] | None = None,
+                 hinge_dampings_y: Sequence[float] | None = None,
+                 torsional_inertias: Sequence[float] | None = None,
+                 torsion_stiffnesses: Sequence[float] | None = None,
+                 torsion_dampings: Sequence[float] | None = None,
+                 axial_stiffnesses: Sequence[float] | None = None,
+                 axial_dampings: Sequence[float] | None = None) -> None:
         if not isinstance(root, str) or root not in _ROOTS:
             raise ValueError(f"root must be 'rigid' or 'hinged'; got {describe(root)}")
         self.root = root
@@ -219,6 +227,65 @@ class HingedChain(FiniteAppendage):
                     f"{float(self.com_offsets[k])!r} for body {k} of length "
                     f"{float(self.lengths[k])!r}")
         self._check_mass_matrix()
+        self._init_three_axis(n_hinges, inertias_y, hinge_stiffnesses_y, hinge_dampings_y,
+                              torsional_inertias, torsion_stiffnesses, torsion_dampings,
+                              axial_stiffnesses, axial_dampings)
+
+    def _init_three_axis(self, n_hinges, inertias_y, hinge_stiffnesses_y, hinge_dampings_y,
+                         torsional_inertias, torsion_stiffnesses, torsion_dampings,
+                         axial_stiffnesses, axial_dampings) -> None:
+        """Validate and store the three-axis parameters (class docstring)."""
+        n, root = self.n_bodies, self.root
+        per_hinge = f"(root={root!r}: one per hinge)"
+        self.inertias_y = (self.inertias if inertias_y is None else _as_vector(
+            "inertias_y", inertias_y, "body_inertia", "kg*m^2", size=n, allow_zero=True))
+        self.hinge_stiffnesses_y = (self.hinge_stiffnesses if hinge_stiffnesses_y is None
+                                    else _as_vector(f"hinge_stiffnesses_y {per_hinge}",
+                                                    hinge_stiffnesses_y, "hinge_stiffness",
+                                                    "N*m/rad", size=n_hinges))
+        self.hinge_dampings_y = (self.hinge_dampings if hinge_dampings_y is None
+                                 else _as_vector(f"hinge_dampings_y {per_hinge}",
+                                                 hinge_dampings_y, "hinge_damping",
+                                                 "N*m*s/rad", size=n_hinges, allow_zero=True))
+        if inertias_y is not None:
+            self._check_mass_matrix(self.inertias_y, "inertias_y")
+        self.torsional_inertias = (None if torsional_inertias is None else _as_vector(
+            "torsional_inertias", torsional_inertias, "body_inertia", "kg*m^2", size=n))
+        if torsion_stiffnesses is not None and self.torsional_inertias is None:
+            raise ValueError("torsional_inertias [kg*m^2] must be given with "
+                             "torsion_stiffnesses; got None")
+        self.torsion_stiffnesses = (None if torsion_stiffnesses is None else _as_vector(
+            f"torsion_stiffnesses {per_hinge}", torsion_stiffnesses, "hinge_stiffness",
+            "N*m/rad", size=n_hinges))
+        self.axial_stiffnesses = (None if axial_stiffnesses is None else _as_vector(
+            f"axial_stiffnesses {per_hinge}", axial_stiffnesses, "axial_spring", "N/m",
+            size=n_hinges))
+        for name, dampings, springs, unit in (
+                ("torsion_dampings", torsion_dampings, self.torsion_stiffnesses, "N*m*s/rad"),
+                ("axial_dampings", axial_dampings, self.axial_stiffnesses, "N*s/m")):
+            if dampings is not None and springs is None:
+                raise ValueError(f"{name} [{unit}] needs the springs they damp "
+                                 f"({name.replace('dampings', 'stiffnesses')}); got None")
+        self.torsion_dampings = (None if torsion_dampings is None else _as_vector(
+            f"torsion_dampings {per_hinge}", torsion_dampings, "hinge_damping", "N*m*s/rad",
+            size=n_hinges, allow_zero=True))
+        self.axial_dampings = (None if axial_dampings is None else _as_vector(
+            f"axial_dampings {per_hinge}", axial_dampings, None, "N*s/m", size=n_hinges,
+            allow_zero=True))
+
+    @property
+    def three_axis(self) -> bool:
+        """True when the chain has what a three-axis model needs (torsional inertias)."""
+        return self.torsional_inertias is not None
+
+    def _require_three_axis(self, what: str) -> None:
+        if self.torsional_inertias is None:
+            raise ValueError(
+                f"{what} needs the chain's torsion: torsional_inertias [kg*m^2] (each body's "
+                "moment of inertia about the chain's axis) and torsion_stiffnesses [N*m/rad] "
+                "(None: torsionally rigid joints) are expected; got torsional_inertias = None "
+                "(a planar chain). Give them, or fit the chain with "
+                "appendages.fit_chain_3d")
 
     # -- constructors -------------------------------------------------------------------------
     @classmethod
@@ -367,9 +434,11 @@ class HingedChain(FiniteAppendage):
         return _assemble(self.lengths, self.masses, self.inertias, self.com_offsets,
                          self.hinge_stiffnesses, self.hinge_dampings, self.root == "hinged")
 
-    def _check_mass_matrix(self) -> None:
+    def _check_mass_matrix(self, inertias=None, name: str = "inertias") -> None:
         """Raise ValueError when the bodies' mass matrix is singular (e.g. massless last rod)."""
-        M = self._matrices()[0]
+        M = _assemble(self.lengths, self.masses,
+                      self.inertias if inertias is None else inertias, self.com_offsets,
+                      self.hinge_stiffnesses, self.hinge_dampings, self.root == "hinged")[0]
         keep = np.flatnonzero(np.diag(M) != 0.0)
         Mk = M[np.ix_(keep, keep)]
         d = np.sqrt(np.diag(Mk))
@@ -381,7 +450,7 @@ class HingedChain(FiniteAppendage):
             smallest = 0.0
         if keep.size < M.shape[0] - (self.root == "hinged") or smallest < 1e-13:
             raise ValueError(
-                "inertias and com_offsets give a singular mass matrix: some body rotation "
+                f"{name} and com_offsets give a singular mass matrix: some body rotation "
                 "carries no inertia (e.g. a point-mass last body with com_offset 0 and "
                 "inertia 0 [kg*m^2]); give it a positive inertia or com offset")
 
@@ -434,36 +503,102 @@ class HingedChain(FiniteAppendage):
         s = as_frequency_array(s)
         if np.any(s == 0):
             raise ValueError("s = 0 is the rigid-body pole of W (W is infinite there) [rad/s]")
-        s2 = s * s
-        kappa = self.hinge_stiffnesses[:, None] + self.hinge_dampings[:, None] * s.ravel()
-        s2 = s2.ravel()
-        hinged = self.root == "hinged"
-        d11 = d12 = d22 = None
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            for k in range(self.n_bodies - 1, -1, -1):
-                m, J = self.masses[k], self.inertias[k]
-                a, l = self.com_offsets[k], self.lengths[k]
-                if d11 is None:
-                    e11 = e12 = e22 = 0.0
-                else:
-                    kap = kappa[k + 1 if hinged else k]
-                    g = 1.0 / (d22 + kap)
-                    e11 = d11 - d12 * (d12 * g)  # grouped: no overflow of d12**2 at large |s|
-                    e12 = (kap * g) * d12
-                    e22 = (kap * g) * d22
-                d11 = m * s2 + e11
-                d12 = m * a * s2 + e12 + l * e11
-                d22 = (J + m * a * a) * s2 + e22 + 2.0 * l * e12 + l * l * e11
-            D = np.empty(s2.shape + (2, 2), dtype=np.complex128)
-            D[:, 0, 0], D[:, 1, 1] = d11, d22
-            D[:, 0, 1] = D[:, 1, 0] = d12
-            W = inverse_2x2(D)
-            if hinged:
-                W[:, 1, 1] += 1.0 / kappa[0]
+        W = _bending_recursion(s, self.lengths, self.masses, self.inertias, self.com_offsets,
+                               self.hinge_stiffnesses, self.hinge_dampings, self.root == "hinged")
         if not np.all(np.isfinite(W)):
             raise ValueError("s is a natural frequency of the undamped chain: W is infinite "
                              "there [rad/s]")
-        return W.reshape(s.shape + (2, 2))
+        return W
+
+    # -- three axes -----------------------------------------------------------------------------
+    @property
+    def inertia_tensor(self) -> np.ndarray:
+        """Inertia about the chain's centre of mass in chain axes [kg*m**2], undeformed.
+
+        ``diag(sum J_x, sum (J_y + m d**2), sum (J_z + m d**2))`` (d: distance of each body's
+        centre of mass from the chain's, along x; the bodies' principal axes are the chain's).
+        """
+        self._require_three_axis("inertia_tensor")
+        d = self.body_starts + self.com_offsets - self.center_of_mass
+        parallel = float(np.dot(self.masses, d * d))
+        return np.diag([float(np.sum(self.torsional_inertias)),
+                        float(np.sum(self.inertias_y)) + parallel,
+                        float(np.sum(self.inertias)) + parallel])
+
+    def planar_view(self, plane: str = "xy") -> "HingedChain":
+        """The planar chain of one bending plane (same bodies; that plane's inertias, hinges).
+
+        "xz" is written in the planar convention (``phi = dw/dx = -theta_y``), as
+        :meth:`Beam.planar_view`.
+        """
+        if plane not in ("xy", "xz"):
+            raise ValueError(f"plane must be 'xy' or 'xz'; got {describe(plane)}")
+        if plane == "xy":
+            inertias, stiffnesses, dampings = (self.inertias, self.hinge_stiffnesses,
+                                               self.hinge_dampings)
+        else:
+            inertias, stiffnesses, dampings = (self.inertias_y, self.hinge_stiffnesses_y,
+                                               self.hinge_dampings_y)
+        return HingedChain(self.lengths, self.masses, inertias, stiffnesses,
+                           hinge_dampings=dampings, com_offsets=self.com_offsets, root=self.root)
+
+    def W6(self, s) -> np.ndarray:
+        """Three-axis transfer matrix W6(s) [SI] by O(n) recursions, shape ``(..., 6, 6)``.
+
+        Root motions ``(u, v, w, theta_x, theta_y, theta_z)`` per root loads
+        ``(F_x, F_y, F_z, M_x, M_y, M_z)``, chain axes. The bodies' principal axes are the
+        chain's and their centres of mass lie on its axis, so to first order the four motions
+        decouple: each bending plane is the planar recursion of :meth:`W` with that plane's
+        inertias and hinges (the x-z plane's off-diagonal with the opposite sign, as
+        :meth:`Beam.W6`); torsion and axial motion are spring chains, whose recursion from
+        the free tip (``D = mu_n s**2``) is, across a joint ``kappa = k + c s`` and a body of
+        inertia mu (mass or J_x),
+
+            E = kappa D'/(D' + kappa),     D = mu s**2 + E,
+
+        ``W = 1/D_1`` (plus ``1/kappa_0`` for a hinged root); rigid joints give
+        ``1/(sum mu s**2)``.
+
+        Parameters
+        ----------
+        s : complex or array_like of complex, rad/s
+            Not 0 (the rigid-body pole).
+        """
+        from .beam import _place_planes
+
+        self._require_three_axis("W6")
+        s = as_frequency_array(s)
+        if np.any(s == 0):
+            raise ValueError("s = 0 is the rigid-body pole of W6 (W6 is infinite there) [rad/s]")
+        hinged = self.root == "hinged"
+        W6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
+        W_xz = _bending_recursion(s, self.lengths, self.masses, self.inertias_y,
+                                  self.com_offsets, self.hinge_stiffnesses_y,
+                                  self.hinge_dampings_y, hinged)
+        _place_planes(W6, self.W(s), W_xz)
+        W6[..., 0, 0] = _spring_recursion(s, self.masses, self.axial_stiffnesses,
+                                          self.axial_dampings, hinged)
+        W6[..., 3, 3] = _spring_recursion(s, self.torsional_inertias, self.torsion_stiffnesses,
+                                          self.torsion_dampings, hinged)
+        if not np.all(np.isfinite(W6)):
+            raise ValueError("s is a natural frequency of the undamped chain: W6 is infinite "
+                             "there [rad/s]")
+        return W6
+
+    def _three_axis_root_model(self) -> RootModel:
+        """Both planes' planar models, torsion and axial spring chains (module docstring)."""
+        self._require_three_axis("a three-axis root model")
+        hinged = self.root == "hinged"
+        parts = [self.planar_view("xy").root_model(), self.planar_view("xz").root_model()]
+        for label, inertias, springs, dampings in (
+                ("theta_x", self.torsional_inertias, self.torsion_stiffnesses,
+                 self.torsion_dampings),
+                ("u", self.masses, self.axial_stiffnesses, self.axial_dampings)):
+            M, C, K, tip = _spring_chain(inertias, springs, dampings, hinged)
+            start = 1 if hinged else 2  # a rigid root's first body moves with the root
+            names = ("q",) + tuple(f"{label}_{start + k}" for k in range(M.shape[0] - 1))
+            parts.append(RootModel(M, C, K, tip, names, n_root=1))
+        return three_axis_root_model(*parts)
 
     def _body_pencil(self):
         """(K, M) of the bodies alone: for a hinged root, the massless mount removed and
@@ -600,4 +735,97 @@ def _assemble(lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarray,
     tip = np.zeros(size)
     tip[idx] = ell
     tip[1] -= np.sum(ell)  # w(L) - delta - L*phi, with w(L) = delta + sum l_k theta_k
+    return M, C, K, tip
+
+
+def _bending_recursion(s: np.ndarray, lengths, masses, inertias, com_offsets, stiffnesses,
+                       dampings, hinged: bool) -> np.ndarray:
+    """W(s) of a planar chain by the tip-to-root recursion of :meth:`HingedChain.W`.
+
+    Returns shape ``s.shape + (2, 2)``, with inf/NaN entries at an undamped pole (the caller
+    decides). s must be nonzero.
+    """
+    s2 = s * s
+    kappa = stiffnesses[:, None] + dampings[:, None] * s.ravel()
+    s2 = s2.ravel()
+    d11 = d12 = d22 = None
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for k in range(lengths.size - 1, -1, -1):
+            m, J = masses[k], inertias[k]
+            a, l = com_offsets[k], lengths[k]
+            if d11 is None:
+                e11 = e12 = e22 = 0.0
+            else:
+                kap = kappa[k + 1 if hinged else k]
+                g = 1.0 / (d22 + kap)
+                e11 = d11 - d12 * (d12 * g)  # grouped: no overflow of d12**2 at large |s|
+                e12 = (kap * g) * d12
+                e22 = (kap * g) * d22
+            d11 = m * s2 + e11
+            d12 = m * a * s2 + e12 + l * e11
+            d22 = (J + m * a * a) * s2 + e22 + 2.0 * l * e12 + l * l * e11
+        D = np.empty(s2.shape + (2, 2), dtype=np.complex128)
+        D[:, 0, 0], D[:, 1, 1] = d11, d22
+        D[:, 0, 1] = D[:, 1, 0] = d12
+        W = inverse_2x2(D)
+        if hinged:
+            W[:, 1, 1] += 1.0 / kappa[0]
+    return W.reshape(s.shape + (2, 2))
+
+
+def _spring_recursion(s: np.ndarray, inertias, stiffnesses, dampings, hinged: bool) -> np.ndarray:
+    """Root compliance of a spring chain (torsion or axial motion), shape ``s.shape``.
+
+    ``stiffnesses`` None: rigid joints, ``1/(sum inertias s**2)``. Otherwise the recursion
+    of :meth:`HingedChain.W6`; every step is a product or a sum of terms of one sign at
+    small |s|, so the rigid-body part keeps full relative accuracy.
+    """
+    s2 = (s * s).ravel()
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        if stiffnesses is None:
+            return (1.0 / (float(np.sum(inertias)) * s2)).reshape(s.shape)
+        damping = np.zeros(stiffnesses.size) if dampings is None else dampings
+        kappa = stiffnesses[:, None] + damping[:, None] * s.ravel()
+        D = None
+        for k in range(inertias.size - 1, -1, -1):
+            if D is None:
+                E = 0.0
+            else:
+                kap = kappa[k + 1 if hinged else k]
+                E = kap * (D / (D + kap))
+            D = inertias[k] * s2 + E
+        W = 1.0 / D
+        if hinged:
+            W = W + 1.0 / kappa[0]
+    return W.reshape(s.shape)
+
+
+def _spring_chain(inertias: np.ndarray, stiffnesses, dampings, hinged: bool):
+    """(M, C, K, tip) of a spring chain in root coordinates (torsion or axial motion).
+
+    Coordinates: rigid root ``[q_1 (the root, body 1), q_2, ..., q_n]``; hinged root
+    ``[q_mount (massless), q_1, ..., q_n]``; joint springs between neighbours. Rigid joints
+    (``stiffnesses`` None): one coordinate carrying every inertia. ``tip`` is
+    ``q_n - q_root``.
+    """
+    if stiffnesses is None:
+        return (np.array([[float(np.sum(inertias))]]), np.zeros((1, 1)), np.zeros((1, 1)),
+                np.zeros(1))
+    n = inertias.size
+    first = 1 if hinged else 0
+    size = n + first
+    M = np.zeros((size, size))
+    M[np.arange(first, size), np.arange(first, size)] = inertias
+    left = np.arange(size - 1)
+    K = np.zeros((size, size))
+    C = np.zeros((size, size))
+    damping = np.zeros(stiffnesses.size) if dampings is None else dampings
+    for A, values in ((K, stiffnesses), (C, damping)):
+        A[left, left] += values
+        A[left + 1, left + 1] += values
+        A[left, left + 1] -= values
+        A[left + 1, left] -= values
+    tip = np.zeros(size)
+    tip[-1] += 1.0
+    tip[0] -= 1.0
     return M, C, K, tip

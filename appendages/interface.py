@@ -50,6 +50,11 @@ __all__ = [
     "describe",
     "equilibrate",
     "inverse_2x2",
+    "inverse_symmetric",
+    "ROOT_MOTIONS",
+    "ROOT_LOADS",
+    "TIP_MOTIONS",
+    "three_axis_root_model",
     "FlexsatError",
     "ConvergenceError",
 ]
@@ -108,6 +113,12 @@ RANGES = types.MappingProxyType({
     "body_inertia": (0.0, 1e20, "kg*m^2"),         # a chain's body (0: a point mass)
     "hinge_stiffness": (1e-15, 1e15, "N*m/rad"),
     "hinge_damping": (0.0, 1e15, "N*m*s/rad"),
+    # three axes (issue 11): GJ like EJ; rho*I_p = rho*A r**2 with r up to the length bound;
+    # EA = E*A from the youngs_modulus and section ranges
+    "torsional_stiffness": (1e-15, 1e15, "N*m^2"),  # GJ
+    "torsional_inertia": (1e-30, 1e12, "kg*m"),     # rho*I_p per unit length
+    "axial_stiffness": (1e-9, 1e20, "N"),           # EA
+    "axial_spring": (1e-15, 1e20, "N/m"),           # a chain joint's axial spring
 })
 
 
@@ -308,20 +319,67 @@ class Appendage(Protocol):
     def W(self, s) -> np.ndarray: ...
 
 
+#: Root motions of an appendage in three axes, beam axes (the rows of W6).
+ROOT_MOTIONS = ("u", "v", "w", "theta_x", "theta_y", "theta_z")
+#: Root loads of an appendage in three axes, beam axes (the columns of W6).
+ROOT_LOADS = ("F_x", "F_y", "F_z", "M_x", "M_y", "M_z")
+#: Elastic tip motions of a three-axis root model (the rows of ``RootModel.tip``).
+TIP_MOTIONS = ("tip_deflection_y", "tip_deflection_z", "tip_twist")
+
+
+def inverse_symmetric(D: np.ndarray) -> np.ndarray:
+    """Inverse of complex symmetric matrices (stacked in the last two axes), scaled.
+
+    2x2 matrices go through :func:`inverse_2x2`. Larger ones are equilibrated first,
+    ``d_i = 1/sqrt(|D_ii|)`` (1 where D_ii = 0), so that entries in mixed units (N/m, N,
+    N*m of a 6x6 root stiffness) do not decide the accuracy; the result is symmetrised.
+    A singular matrix gives inf or NaN entries (the caller decides).
+    """
+    D = np.asarray(D)
+    if D.shape[-1] == 2:
+        return inverse_2x2(D)
+    diag = np.abs(np.diagonal(D, axis1=-2, axis2=-1))
+    d = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)), 1.0)
+    scale = d[..., :, None] * d[..., None, :]
+    try:
+        inv = np.linalg.inv(D * scale) * scale
+    except np.linalg.LinAlgError:
+        inv = np.empty(D.shape, dtype=np.result_type(D.dtype, np.complex128))
+        flat_in, flat_out = (D * scale).reshape(-1, *D.shape[-2:]), inv.reshape(-1, *D.shape[-2:])
+        flat_scale = np.broadcast_to(scale, D.shape).reshape(flat_in.shape)
+        for k, A in enumerate(flat_in):
+            try:
+                flat_out[k] = np.linalg.inv(A) * flat_scale[k]
+            except np.linalg.LinAlgError:
+                flat_out[k] = np.inf
+    return 0.5 * (inv + np.swapaxes(inv, -1, -2))
+
+
 @dataclasses.dataclass(frozen=True)
 class RootModel:
-    """Second-order realisation of W(s) in attachment-end coordinates.
+    """Second-order realisation of W(s) (or W6(s)) in attachment-end coordinates.
 
     Attributes
     ----------
     mass, damping, stiffness : ndarray, shape (n, n)
-        Symmetric matrices [SI units of the coordinates]; coordinates 0 and 1 are ``delta`` [m] and
-        ``phi`` [rad] of the attachment end, on which ``F_y`` and ``M`` act.
-    tip : ndarray, shape (n,)
-        Row giving the elastic tip deflection [m]: the free end's transverse displacement relative
-        to the line tangent to the appendage at its attachment end, ``w(L) - delta - L*phi``.
+        Symmetric matrices [SI units of the coordinates]. The first ``n_root`` coordinates are
+        the attachment end's motions on which the root loads act: planar (``n_root = 2``)
+        ``delta`` [m] and ``phi`` [rad] loaded by ``F_y``, ``M``; three-axis (``n_root = 6``)
+        ``u, v, w`` [m] and ``theta_x, theta_y, theta_z`` [rad] in beam axes
+        (:data:`ROOT_MOTIONS`) loaded by :data:`ROOT_LOADS`; one motion of a rod
+        (``n_root = 1``, a building block of the three-axis models).
+    tip : ndarray, shape (n,) or (3, n)
+        Planar and rod models: the row giving the elastic tip motion, the free end's
+        transverse displacement relative to the line tangent to the appendage at its
+        attachment end, ``w(L) - delta - L*phi`` [m] (a rod: ``u(L) - u(0)`` or the tip
+        twist). Three-axis models: three rows (:data:`TIP_MOTIONS`), the tip deflections along
+        local y and z and the tip twist, each relative to the rigidly moving root section:
+        ``v(L) - v(0) - L theta_z(0)``, ``w(L) - w(0) + L theta_y(0)`` [m] and
+        ``theta_x(L) - theta_x(0)`` [rad].
     coordinate_names : tuple of str
         Names of the coordinates (for state names).
+    n_root : int
+        Number of attachment-end coordinates: 2 (planar, the default), 6 (three axes) or 1.
     """
 
     mass: np.ndarray
@@ -329,22 +387,30 @@ class RootModel:
     stiffness: np.ndarray
     tip: np.ndarray
     coordinate_names: tuple
+    n_root: int = 2
 
     @property
     def n(self) -> int:
         """Number of generalised coordinates."""
         return self.mass.shape[0]
 
+    @property
+    def tip_rows(self) -> np.ndarray:
+        """The tip row(s) as a 2-D array, shape (1, n) or (3, n)."""
+        return np.atleast_2d(self.tip)
+
     def dynamic_stiffness(self, s: np.ndarray) -> np.ndarray:
         """Attachment-end dynamic stiffness D(s) = W(s)^-1, by static condensation.
 
-        ``D = Z_rr - Z_ri Z_ii^-1 Z_ir`` with ``Z = M s**2 + C s + K`` partitioned into the two
-        attachment-end coordinates (r) and the internal ones (i). Returns shape ``s.shape + (2, 2)``.
+        ``D = Z_rr - Z_ri Z_ii^-1 Z_ir`` with ``Z = M s**2 + C s + K`` partitioned into the
+        ``n_root`` attachment-end coordinates (r) and the internal ones (i). Returns shape
+        ``s.shape + (n_root, n_root)``.
         """
+        r = self.n_root
         s = np.asarray(s, dtype=complex)[..., None, None]
         Z = self.mass * s**2 + self.damping * s + self.stiffness
-        Zrr, Zri, Zir, Zii = Z[..., :2, :2], Z[..., :2, 2:], Z[..., 2:, :2], Z[..., 2:, 2:]
-        if self.n == 2:
+        Zrr, Zri, Zir, Zii = Z[..., :r, :r], Z[..., :r, r:], Z[..., r:, :r], Z[..., r:, r:]
+        if self.n == r:
             return Zrr
         try:
             return Zrr - Zri @ np.linalg.solve(Zii, Zir)
@@ -353,13 +419,78 @@ class RootModel:
         # some s is exactly a natural frequency with the attachment end clamped (Z_ii
         # singular in floating point): D is infinite there; the others are solved one by one
         D = np.empty(Zrr.shape, dtype=complex)
-        flat_D, flat = D.reshape(-1, 2, 2), np.broadcast_to(Z, Z.shape).reshape(-1, *Z.shape[-2:])
+        flat_D, flat = D.reshape(-1, r, r), np.broadcast_to(Z, Z.shape).reshape(-1, *Z.shape[-2:])
         for k, Zk in enumerate(flat):
             try:
-                flat_D[k] = Zk[:2, :2] - Zk[:2, 2:] @ np.linalg.solve(Zk[2:, 2:], Zk[2:, :2])
+                flat_D[k] = Zk[:r, :r] - Zk[:r, r:] @ np.linalg.solve(Zk[r:, r:], Zk[r:, :r])
             except np.linalg.LinAlgError:
                 flat_D[k] = np.inf
         return D
+
+
+#: Where each motion's root coordinates go in a three-axis root model, and their signs:
+#: the x-y plane's (delta, phi) are (v, theta_z); the x-z plane's are (w, -theta_y), since
+#: theta_y = -dw/dx (a rotation about +y turns +x towards -z); torsion theta_x; axial u.
+_THREE_AXIS_LAYOUT = (("xy", (1, 5), (1.0, 1.0)), ("xz", (2, 4), (1.0, -1.0)),
+                      ("torsion", (3,), (1.0,)), ("axial", (0,), (1.0,)))
+
+
+def three_axis_root_model(xy: RootModel, xz: RootModel, torsion: RootModel,
+                          axial: RootModel) -> RootModel:
+    """A three-axis root model from the four decoupled motions of a straight appendage.
+
+    A straight appendage whose section is symmetric (shear centre on the axis, principal axes
+    along local y and z) moves, to first order, in four uncoupled ways: bending in the x-y
+    plane, bending in the x-z plane, torsion and axial motion. Each is realised on its own
+    (planar models with ``n_root = 2`` and the planar sign conventions; rods with
+    ``n_root = 1``); this function places them in one model with the root coordinates
+    ``(u, v, w, theta_x, theta_y, theta_z)`` first (:data:`ROOT_MOTIONS`), then the
+    internal coordinates of each motion in the order of the arguments.
+
+    The x-z plane is written in the planar convention (``delta = w(0)``, ``phi = dw/dx(0)``,
+    loads ``F_z`` and the moment conjugate to ``dw/dx``, which is ``-M_y``); with
+    ``theta_y = -phi`` its coordinates are mapped by ``S = diag(1, -1, 1, ...)``, so its
+    matrices become ``S M S`` (the couplings between ``w`` and ``theta_y`` change sign) and
+    its tip row ``tip S``.
+
+    Parameters
+    ----------
+    xy, xz : RootModel
+        Planar models (``n_root = 2``) of the bending in each plane.
+    torsion, axial : RootModel
+        Rod models (``n_root = 1``): a rigid motion is a 1x1 model with the rigid inertia.
+
+    Returns
+    -------
+    RootModel
+        ``n_root = 6``; ``tip`` has three rows (:data:`TIP_MOTIONS`); internal coordinates
+        are named ``xy.<name>``, ``xz.<name>``, ``torsion.<name>``, ``axial.<name>``.
+    """
+    parts = {"xy": xy, "xz": xz, "torsion": torsion, "axial": axial}
+    n = 6 + sum(rm.n - rm.n_root for rm in parts.values())
+    M, C, K = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    tip = np.zeros((3, n))
+    names = list(ROOT_MOTIONS)
+    offset = 6
+    for label, root_index, root_sign in _THREE_AXIS_LAYOUT:
+        rm = parts[label]
+        if rm.n_root != len(root_index):
+            raise ValueError(f"the {label} part must have n_root = {len(root_index)}; got "
+                             f"{rm.n_root}")
+        n_internal = rm.n - rm.n_root
+        index = np.concatenate([root_index, offset + np.arange(n_internal)]).astype(int)
+        sign = np.concatenate([root_sign, np.ones(n_internal)])
+        flip = np.outer(sign, sign)
+        block = np.ix_(index, index)
+        M[block] += rm.mass * flip
+        C[block] += rm.damping * flip
+        K[block] += rm.stiffness * flip
+        row = {"xy": 0, "xz": 1, "torsion": 2}.get(label)
+        if row is not None:
+            tip[row, index] = np.asarray(rm.tip, dtype=float).reshape(-1) * sign
+        names += [f"{label}.{c}" for c in rm.coordinate_names[rm.n_root:]]
+        offset += n_internal
+    return RootModel(M, C, K, tip, tuple(names), n_root=6)
 
 
 class FiniteAppendage:
@@ -377,13 +508,60 @@ class FiniteAppendage:
     def _root_model(self) -> RootModel:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def root_model(self) -> RootModel:
-        """The realisation of W(s) in attachment-end coordinates (computed once)."""
-        cached = self.__dict__.get("_root_model_cache")
+    def _three_axis_root_model(self) -> RootModel:
+        """The three-axis realisation (n_root = 6); planar-only models do not have one."""
+        raise ValueError(f"{type(self).__name__} is a planar model: it has no three-axis "
+                         "realisation (W6, root_model(n_root=6))")
+
+    def root_model(self, n_root: int = 2) -> RootModel:
+        """The realisation of W(s) in attachment-end coordinates (computed once).
+
+        Parameters
+        ----------
+        n_root : {2, 6}
+            2: the planar model (x-y plane: ``delta``, ``phi``); 6: the three-axis model
+            (root motions :data:`ROOT_MOTIONS`), for models that have one.
+        """
+        if isinstance(n_root, (bool, np.bool_)) or n_root not in (2, 6):
+            raise ValueError(f"n_root must be 2 (planar) or 6 (three axes); got "
+                             f"{describe(n_root)}")
+        key = "_root_model_cache" if n_root == 2 else "_root_model6_cache"
+        cached = self.__dict__.get(key)
         if cached is None:
-            cached = self._root_model()
-            self.__dict__["_root_model_cache"] = cached
+            cached = self._root_model() if n_root == 2 else self._three_axis_root_model()
+            self.__dict__[key] = cached
         return cached
+
+    def dynamic_stiffness6(self, s) -> np.ndarray:
+        """Three-axis attachment-end dynamic stiffness D6(s) = W6(s)^-1, shape ``(..., 6, 6)``.
+
+        Root loads (:data:`ROOT_LOADS`) per unit root motion (:data:`ROOT_MOTIONS`), beam
+        axes, by static condensation of :meth:`root_model` (n_root=6). s = 0 gives 0.
+        """
+        s = as_frequency_array(s)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return self.root_model(6).dynamic_stiffness(s)
+
+    def W6(self, s) -> np.ndarray:
+        """Three-axis transfer matrix W6(s) of the free appendage, shape ``np.shape(s) + (6, 6)``.
+
+        Root motions ``(u, v, w, theta_x, theta_y, theta_z)`` caused by root loads
+        ``(F_x, F_y, F_z, M_x, M_y, M_z)`` at x = 0, beam axes, rigid-body motion included.
+
+        Parameters
+        ----------
+        s : complex or array_like of complex, rad/s
+            Laplace variable, not 0 (the rigid-body pole).
+        """
+        s = as_frequency_array(s)
+        if np.any(s == 0):
+            raise ValueError("s = 0 is the rigid-body pole of W6 (W6 is infinite there) [rad/s]")
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            W = inverse_symmetric(self.root_model(6).dynamic_stiffness(s))
+        if not np.all(np.isfinite(W)):
+            raise ValueError("s is a natural frequency of the undamped model: W6 is infinite "
+                             "there [rad/s]")
+        return W
 
     # -- W(s) ---------------------------------------------------------------------------------
     def W(self, s) -> np.ndarray:

@@ -72,22 +72,397 @@ import numpy as np
 import scipy.linalg
 
 from . import limits
-from .interface import FiniteAppendage, RootModel, as_frequency_array, describe, inverse_2x2
+from .interface import (FiniteAppendage, RootModel, as_frequency_array, describe, inverse_2x2,
+                        three_axis_root_model)
 
-__all__ = ["ModalBeam", "METHODS"]
+__all__ = ["ModalBeam", "METHODS", "MOTION_NAMES"]
 
 METHODS = ("craig-bampton", "residual", "free-free")
 
+#: The four motions of a three-axis model, in the order of :func:`three_axis_root_model`.
+MOTION_NAMES = ("xy", "xz", "torsion", "axial")
+
+#: Complex entries of the largest temporary array of one frequency chunk (32 MB).
+_CHUNK_ELEMENTS = 2_000_000
+
+
+def _chunks(size: int, width: int):
+    """Slices of range(size), each at most _CHUNK_ELEMENTS/width long (bounded memory)."""
+    step = max(1, _CHUNK_ELEMENTS // max(width, 1))
+    for start in range(0, size, step):
+        yield slice(start, min(start + step, size))
+
+
+class _ModalStiffness:
+    r"""Attachment-end dynamic stiffness of a Craig-Bampton model in O(n) per frequency.
+
+    The model ``[[M_rr, L^T], [L, I]] [q_r; eta]'' + [[0, 0], [0, C]] [..]' +
+    [[0, 0], [0, Omega**2]] [..] = [f; 0]`` gives ``D(s) = s**2 M_rr - s**4 L^T H(s) L`` with
+    ``H = (s**2 I + s C + Omega**2)^-1``, which cancels at large |s| (``M_rr - L^T L`` is the
+    small mass left to the dropped modes) and costs O(n**3) per frequency as a solve. Instead:
+
+    * undamped: ``D = s**2 [R + sum_k l_k l_k^T w_k**2/(s**2 + w_k**2)]`` with the tail
+      ``R = M_rr - L^T L = sum_{k>n} l_k l_k^T`` given in closed form by the caller;
+    * damped: the first-order form of the cantilever coordinates, ``x = [Omega eta; eta']``,
+      ``A = [[0, Omega], [-Omega, -C]]`` (nearly skew for light damping, so its eigenvectors
+      are well conditioned), diagonalised once, ``A = V Lambda V^-1``. Then
+      ``H(s) = sum_j u_j v_j^T/(s - lambda_j)`` with ``u_j = Omega^-1 V[:n, j]``,
+      ``v_j^T = V^-1[j, n:]``; the expansion at infinity gives ``sum_j u_j v_j^T = 0`` and
+      ``sum_j lambda_j u_j v_j^T = I``, so ``s**2 H = I + sum_j lambda_j**2 u_j v_j^T/(s -
+      lambda_j)`` and
+
+          D(s) = s**2 [R - sum_j lambda_j**2 (L^T u_j)(v_j^T L)/(s - lambda_j)],
+
+      2n rank-one terms. A realisation too close to defective (condition of V above 1e8,
+      damping near critical) is solved directly instead, chunk by chunk.
+    """
+
+    def __init__(self, M_rr: np.ndarray, participation: np.ndarray, w: np.ndarray,
+                 damping: np.ndarray | None, tail: np.ndarray):
+        self.M_rr, self.L, self.w, self.C, self.R = M_rr, participation, w, damping, tail
+        self.r = M_rr.shape[0]
+        self.damped = damping is not None and np.any(damping)
+        if self.damped:
+            n = w.size
+            A = np.block([[np.zeros((n, n)), np.diag(w)], [-np.diag(w), -damping]])
+            lam, V = scipy.linalg.eig(A)
+            self.direct = np.linalg.cond(V) > 1e8
+            if not self.direct:
+                V_inv = np.linalg.inv(V)
+                X = participation.T @ (V[:n] / w[:, None])      # L^T u_j, (r, 2n)
+                Y = V_inv[:, n:] @ participation                 # v_j^T L, (2n, r)
+                self.lam = lam
+                self.terms = (lam**2)[:, None, None] * (X.T[:, :, None] * Y[:, None, :])
+        else:
+            self.terms = (w**2)[:, None, None] * (participation[:, :, None]
+                                                  * participation[:, None, :])
+
+    def __call__(self, s: np.ndarray) -> np.ndarray:
+        """D(s), shape ``s.shape + (r, r)``; infinite at a clamped frequency (undamped)."""
+        flat = s.ravel()
+        out = np.empty((flat.size, self.r, self.r), dtype=np.complex128)
+        n_terms = self.terms.shape[0] if not (self.damped and self.direct) else self.w.size ** 2
+        for part in _chunks(flat.size, max(n_terms, 1)):
+            ss = flat[part]
+            if self.damped and self.direct:
+                n = self.w.size
+                Z = ((ss**2)[:, None, None] * np.eye(n) + ss[:, None, None] * self.C
+                     + np.diag(self.w**2))
+                HL = np.linalg.solve(Z, np.broadcast_to(self.L, (ss.size,) + self.L.shape))
+                out[part] = ((ss**2)[:, None, None] * self.M_rr
+                             - (ss**4)[:, None, None] * (self.L.T @ HL))
+                continue
+            if self.damped:
+                weights = -1.0 / (ss[:, None] - self.lam)
+            else:
+                s2 = (ss**2)[:, None]
+                weights = 1.0 / (s2 + self.w**2)
+            bracket = self.R + np.tensordot(weights, self.terms, axes=(1, 0))
+            out[part] = (ss**2)[:, None, None] * bracket
+        return out.reshape(s.shape + (self.r, self.r))
+
+
+# -- realisations in attachment-end coordinates --------------------------------------------------
+def _free_root_model(b_rigid, tip_rigid, rigid_line, b_modes, stiffness_modes, damping_modes,
+                     tip_modes, names, n_root) -> RootModel:
+    """Free-interface modal model (rigid + elastic modes) in attachment-end coordinates.
+
+    ``eta = T q``: the rigid modal coordinates ``eta_r = B_r^-T (q_r - B_f^T eta_f)`` (B_r the
+    rigid modes' root values, B_f the elastic ones'), the elastic ones unchanged; an exact
+    change of coordinates, so ``M = T^T T``, ``K = diag(0, w**2)``, ``C = diag(0, C_f)``.
+    The tip row is the modal tip values through T minus the rigid line (``rigid_line``:
+    the root coordinates' contribution to the tip, (1, L) planar, (1,) for a rod).
+    """
+    N = stiffness_modes.size
+    r = n_root
+    Br_inv_T = np.linalg.inv(b_rigid.T)
+    T = np.zeros((N + r, N + r))
+    T[:r, :r] = Br_inv_T
+    T[:r, r:] = -Br_inv_T @ b_modes.T
+    T[r:, r:] = np.eye(N)
+    mass = T.T @ T
+    stiffness = np.zeros((N + r, N + r))
+    stiffness[r:, r:] = np.diag(stiffness_modes)
+    damping = np.zeros((N + r, N + r))
+    damping[r:, r:] = damping_modes
+    tip_abs = np.concatenate([tip_rigid, tip_modes]) @ T
+    tip = tip_abs.copy()
+    tip[:r] -= rigid_line
+    mass = 0.5 * (mass + mass.T)
+    return RootModel(mass, damping, stiffness, tip, names, n_root=n_root)
+
+
+def _fixed_root_model(M_rr, participation, w, damping, tip_modes, rigid_line, names,
+                      n_root) -> RootModel:
+    """Craig-Bampton model: constraint modes (rigid motion of the root) + cantilever modes."""
+    n, r = w.size, n_root
+    mass = np.eye(n + r)
+    mass[:r, :r] = M_rr
+    mass[r:, :r] = participation
+    mass[:r, r:] = participation.T
+    stiffness = np.zeros((n + r, n + r))
+    stiffness[r:, r:] = np.diag(w**2)
+    damping_full = np.zeros((n + r, n + r))
+    if damping is not None:
+        damping_full[r:, r:] = damping
+    tip_abs = np.concatenate([rigid_line, tip_modes])
+    tip = tip_abs.copy()
+    tip[:r] -= rigid_line
+    mass = 0.5 * (mass + mass.T)
+    return RootModel(mass, damping_full, stiffness, tip, names, n_root=n_root)
+
+
+# -- one bending plane ----------------------------------------------------------------------------
+def _bending_residual_modes(beam, n: int):
+    """The two residual attachment modes of the ``"residual"`` truncation (module docstring).
+
+    Returns ``(B, lam, C, tip)``: root values ``B`` (2, 2) (row j: mode j's
+    ``(delta, phi)``), squared frequencies ``lam`` (2,) [rad^2/s^2], damping ``C`` (2, 2)
+    [1/s] and tip values (2,), all for mass-normalised residual modes ``xi = V nu`` with
+    ``R V = R2 V diag(lam)``, ``V^T R2 V = I``.
+    """
+    R, tip_R = beam._free_free_tail(n, 2)
+    R3, _ = beam._free_free_tail(n, 3)
+    R2, _ = beam._free_free_tail(n, 4)
+    lam, V = scipy.linalg.eigh(R, R2)
+    C = V.T @ (2.0 * beam.damping_ratio * R3) @ V
+    return (R @ V).T, lam, 0.5 * (C + C.T), tip_R @ V
+
+
+def _bending_projected_damping(beam, n: int) -> np.ndarray:
+    """The beam's damping operator in its first n cantilever-mode coordinates.
+
+    The beam damps every free-free bending mode k with ratio zeta, i.e. its damping
+    operator is ``sum_k 2 zeta w_k (M phi_k)(M phi_k)^T``. The constraint modes (rigid
+    motions of the root) are M-orthogonal to every bending mode, so only the cantilever
+    coordinates are damped: ``C_ij = sum_k 2 zeta w_k O_ki O_kj`` with the overlaps
+    ``O = beam.free_cantilever_overlap`` (closed forms). The terms decay like k**-6; 4 n + 400
+    free-free modes leave a relative tail below 1e-12. With this, a damped Craig-Bampton
+    model converges to the exact damped W(s) as modes are added, instead of to a beam whose
+    cantilever modes (not its free-free ones) carry the damping.
+    """
+    n_free = 4 * n + 400
+    O = beam.free_cantilever_overlap(n_free, n)
+    w = beam.natural_frequencies(n_free)
+    C = (O.T * (2.0 * beam.damping_ratio * w)) @ O
+    return 0.5 * (C + C.T)
+
+
+class _Bending:
+    """One bending plane truncated to n modes (n >= 0): its planar root model and W/D."""
+
+    def __init__(self, beam, n: int, method: str):
+        self.beam, self.n, self.method = beam, n, method
+
+    def root_model(self) -> RootModel:
+        beam, n = self.beam, self.n
+        zeta = beam.damping_ratio
+        L = beam.length
+        names = ("delta", "phi") + tuple(f"eta[{k + 1}]" for k in range(n))
+        if self.method in ("free-free", "residual"):
+            if n:
+                w = beam.natural_frequencies(n)
+                b_modes, tip_modes = beam._free_free_root_values(n)
+            else:
+                w, b_modes, tip_modes = np.zeros(0), np.zeros((0, 2)), np.zeros(0)
+            stiffness_modes = w**2
+            damping_modes = np.diag(2.0 * zeta * w)
+            if self.method == "residual":
+                # two more "modes": the residual attachment modes with their own inertia
+                b_res, lam, C_res, tip_res = self.residual_modes()
+                b_modes = np.vstack([b_modes, b_res])
+                tip_modes = np.concatenate([tip_modes, tip_res])
+                stiffness_modes = np.concatenate([stiffness_modes, lam])
+                damping_modes = scipy.linalg.block_diag(damping_modes, C_res)
+                names = names + ("residual[1]", "residual[2]")
+            m, J = beam.mass, beam.inertia
+            # rigid modes: translation 1/sqrt(m); rotation about the centre (x - L/2)/sqrt(J)
+            b_rigid = np.array([[1.0 / math.sqrt(m), 0.0],
+                                [-0.5 * L / math.sqrt(J), 1.0 / math.sqrt(J)]])
+            tip_rigid = np.array([1.0 / math.sqrt(m), 0.5 * L / math.sqrt(J)])
+            return _free_root_model(b_rigid, tip_rigid, np.array([1.0, L]), b_modes,
+                                    stiffness_modes, damping_modes, tip_modes, names, 2)
+        M_rr, participation, w, damping = self.craig_bampton_data()
+        tip_modes = beam._cantilever_tip_values(n) if n else np.zeros(0)
+        return _fixed_root_model(M_rr, participation, w, damping, tip_modes,
+                                 np.array([1.0, L]), names, 2)
+
+    def residual_modes(self):
+        cached = getattr(self, "_residual", None)
+        if cached is None:
+            cached = self._residual = _bending_residual_modes(self.beam, self.n)
+        return cached
+
+    def craig_bampton_data(self):
+        """(M_rr, participation (n, 2), cantilever frequencies (n,), damping (n, n) or None)."""
+        cached = getattr(self, "_cb", None)
+        if cached is None:
+            beam, n, L = self.beam, self.n, self.beam.length
+            M_rr = beam.linear_density * np.array([[L, L**2 / 2.0], [L**2 / 2.0, L**3 / 3.0]])
+            if n:
+                w = beam.cantilever_frequencies(n)
+                participation = beam.modal_participation(n)
+            else:
+                w, participation = np.zeros(0), np.zeros((0, 2))
+            damping = (_bending_projected_damping(beam, n)
+                       if beam.damping_ratio > 0.0 and n else None)
+            cached = self._cb = (M_rr, participation, w, damping)
+        return cached
+
+    def stiffness_operator(self) -> _ModalStiffness:
+        cached = getattr(self, "_stiffness", None)
+        if cached is None:
+            M_rr, participation, w, damping = self.craig_bampton_data()
+            cached = self._stiffness = _ModalStiffness(
+                M_rr, participation, w, damping, self.beam.cantilever_participation_tail(self.n))
+        return cached
+
+    def W(self, s: np.ndarray) -> np.ndarray:
+        """W(s), shape ``s.shape + (2, 2)`` (inf/NaN at an undamped pole; s != 0)."""
+        if self.method == "craig-bampton":
+            return inverse_2x2(self.stiffness_operator()(s))
+        beam, n = self.beam, self.n
+        m, L, J = beam.mass, beam.length, beam.inertia
+        if n:
+            w = beam.natural_frequencies(n)
+            b_flex, _ = beam._free_free_root_values(n)
+        else:
+            w, b_flex = np.zeros(0), np.zeros((0, 2))
+        products = np.stack([b_flex[:, 0] ** 2, b_flex[:, 0] * b_flex[:, 1],
+                             b_flex[:, 1] ** 2], axis=1)
+        out = np.empty(s.shape + (2, 2), dtype=np.complex128)
+        flat_out = out.reshape(-1, 2, 2)
+        flat = s.ravel()
+        rigid = np.array([[1.0 / m + 0.25 * L**2 / J, -0.5 * L / J], [-0.5 * L / J, 1.0 / J]])
+        if self.method == "residual":
+            b_res, lam, C_res, _ = self.residual_modes()
+        for part in _chunks(flat.size, max(n, 1)):
+            ss = flat[part]
+            flex = 1.0 / (ss[:, None] ** 2 + 2.0 * beam.damping_ratio * w * ss[:, None] + w**2)
+            entries = flex @ products
+            for k, (i, j) in enumerate(((0, 0), (0, 1), (1, 1))):
+                flat_out[part, i, j] = rigid[i, j] / ss**2 + entries[:, k]
+            if self.method == "residual":
+                H = ((ss**2)[:, None, None] * np.eye(2) + ss[:, None, None] * C_res
+                     + np.diag(lam))
+                residual = b_res.T @ inverse_2x2(H) @ b_res
+                for i, j in ((0, 0), (0, 1), (1, 1)):
+                    flat_out[part, i, j] += residual[:, i, j]
+        out[..., 1, 0] = out[..., 0, 1]
+        return out
+
+    def D(self, s: np.ndarray) -> np.ndarray:
+        """D(s) = W(s)^-1, shape ``s.shape + (2, 2)``; s = 0 gives 0."""
+        if self.method == "craig-bampton":
+            return self.stiffness_operator()(s)
+        D = np.zeros(s.shape + (2, 2), dtype=np.complex128)
+        nonzero = s != 0
+        D[nonzero] = inverse_2x2(self.W(s[nonzero]))
+        return D
+
+
+# -- one rod (torsion or axial motion) -----------------------------------------------------------
+class _RodMotion:
+    """Torsion or axial motion truncated to n modes (n >= 0); ``rod`` None: rigid."""
+
+    def __init__(self, rod, rigid_inertia: float, n: int, method: str):
+        self.rod, self.m, self.n, self.method = rod, rigid_inertia, n, method
+
+    def root_model(self) -> RootModel:
+        rod, n, m = self.rod, self.n, self.m
+        names = ("q",) + tuple(f"eta[{k + 1}]" for k in range(n))
+        if rod is None:
+            return RootModel(np.array([[m]]), np.zeros((1, 1)), np.zeros((1, 1)),
+                             np.zeros(1), ("q",), n_root=1)
+        zeta = rod.damping_ratio
+        if self.method in ("free-free", "residual"):
+            b, tip_modes, w = rod.free_free_modes(n)
+            b_modes = b[:, None]
+            stiffness_modes, damping_modes = w**2, np.diag(2.0 * zeta * w)
+            if self.method == "residual":
+                b_res, lam, c_res, tip_res = self.residual_mode()
+                b_modes = np.vstack([b_modes, [[b_res]]])
+                tip_modes = np.concatenate([tip_modes, [tip_res]])
+                stiffness_modes = np.concatenate([stiffness_modes, [lam]])
+                damping_modes = scipy.linalg.block_diag(damping_modes, [[c_res]])
+                names = names + ("residual[1]",)
+            root = math.sqrt(1.0 / m)
+            return _free_root_model(np.array([[root]]), np.array([root]), np.array([1.0]),
+                                    b_modes, stiffness_modes, damping_modes, tip_modes, names, 1)
+        M_rr, participation, w, damping = self.craig_bampton_data()
+        _, tip_modes, _ = rod.cantilever_modes(n)
+        return _fixed_root_model(M_rr, participation, w, damping, tip_modes, np.array([1.0]),
+                                 names, 1)
+
+    def residual_mode(self):
+        """(root value, squared frequency, damping, tip value) of the one residual mode:
+        the scalar case of :func:`_bending_residual_modes` with the rod's Hurwitz tails."""
+        R, tip_R = self.rod.free_free_tail(self.n, 2)
+        R3, _ = self.rod.free_free_tail(self.n, 3)
+        R4, _ = self.rod.free_free_tail(self.n, 4)
+        v = 1.0 / math.sqrt(R4)
+        return R * v, R / R4, 2.0 * self.rod.damping_ratio * R3 / R4, tip_R * v
+
+    def craig_bampton_data(self):
+        cached = getattr(self, "_cb", None)
+        if cached is None:
+            rod, n = self.rod, self.n
+            l, _, w = rod.cantilever_modes(n)
+            damping = rod.projected_damping(n) if rod.damping_ratio > 0.0 and n else None
+            cached = self._cb = (np.array([[self.m]]), l[:, None], w, damping)
+        return cached
+
+    def W(self, s: np.ndarray) -> np.ndarray:
+        """W(s), shape ``s.shape + (1, 1)``."""
+        if self.rod is None:
+            return (1.0 / (self.m * s**2))[..., None, None]
+        if self.method == "craig-bampton":
+            return 1.0 / self.D(s)
+        rod, n = self.rod, self.n
+        b, _, w = rod.free_free_modes(n)
+        flat = s.ravel()
+        out = np.empty(flat.shape, dtype=np.complex128)
+        if self.method == "residual":
+            b_res, lam, c_res, _ = self.residual_mode()
+        for part in _chunks(flat.size, max(n, 1)):
+            ss = flat[part]
+            flex = 1.0 / (ss[:, None] ** 2 + 2.0 * rod.damping_ratio * w * ss[:, None] + w**2)
+            out[part] = 1.0 / (self.m * ss**2) + flex @ b**2
+            if self.method == "residual":
+                out[part] += b_res**2 / (ss**2 + c_res * ss + lam)
+        return out.reshape(s.shape)[..., None, None]
+
+    def D(self, s: np.ndarray) -> np.ndarray:
+        """D(s), shape ``s.shape + (1, 1)``; s = 0 gives 0."""
+        if self.rod is None:
+            return (self.m * s**2)[..., None, None]
+        if self.method == "craig-bampton":
+            cached = getattr(self, "_stiffness", None)
+            if cached is None:
+                M_rr, participation, w, damping = self.craig_bampton_data()
+                tail = np.array([[self.rod.cantilever_participation_tail(self.n)]])
+                cached = self._stiffness = _ModalStiffness(M_rr, participation, w, damping, tail)
+            return cached(s)
+        D = np.zeros(s.shape + (1, 1), dtype=np.complex128)
+        nonzero = s != 0
+        D[nonzero] = 1.0 / self.W(s[nonzero])
+        return D
+
 
 class ModalBeam(FiniteAppendage):
-    """A beam truncated to ``n_modes`` bending modes (see the module docstring).
+    """A beam truncated to ``n_modes`` modes (see the module docstring).
 
     Parameters
     ----------
     beam : Beam
         The distributed beam.
     n_modes : int
-        Number of bending modes kept, >= 1.
+        Number of elastic modes kept, >= 1. The planar model (x-y bending: :meth:`W`,
+        ``root_model()``) keeps the first ``n_modes`` bending modes of that plane. The
+        three-axis model (:meth:`W6`, ``root_model(n_root=6)``) keeps the ``n_modes`` lowest
+        modes of all four motions together (bending in both planes, torsion, axial motion:
+        the method's kind of modes, cantilever or free-free, ranked by frequency) and any
+        that tie with the last (a round section's twin), :attr:`modes_per_motion`.
     method : {"craig-bampton", "residual", "free-free"}
         Reduction method.
 
@@ -126,7 +501,7 @@ class ModalBeam(FiniteAppendage):
 
     @property
     def mass(self) -> float:
-        """Mass [kg] (exact: rigid-body modes are kept whole by both methods)."""
+        """Mass [kg] (exact: rigid-body modes are kept whole by every method)."""
         return self.beam.mass
 
     @property
@@ -134,126 +509,149 @@ class ModalBeam(FiniteAppendage):
         """Moment of inertia about the centre of mass [kg*m**2]."""
         return self.beam.inertia
 
+    @property
+    def center_of_mass(self) -> float:
+        """Distance of the centre of mass from the attachment end [m] (the beam's)."""
+        return self.beam.center_of_mass
+
+    @property
+    def inertia_tensor(self) -> np.ndarray:
+        """Inertia about the centre of mass in beam axes [kg*m**2] (the beam's, exact)."""
+        return self.beam.inertia_tensor
+
+    def undamped(self) -> "ModalBeam":
+        """The same truncation of the undamped beam (itself when undamped)."""
+        if self.beam.damping_ratio == 0.0:
+            return self
+        cached = self.__dict__.get("_undamped")
+        if cached is None:
+            cached = self.__dict__["_undamped"] = ModalBeam(self.beam.undamped(), self.n_modes,
+                                                            method=self.method)
+        return cached
+
+    # -- the motions ----------------------------------------------------------------------------
+    def _planar(self) -> _Bending:
+        cached = self.__dict__.get("_planar_motion")
+        if cached is None:
+            cached = self.__dict__["_planar_motion"] = _Bending(self.beam, self.n_modes,
+                                                                self.method)
+        return cached
+
+    @property
+    def modes_per_motion(self) -> dict:
+        """Modes the three-axis model keeps per motion: ``{"xy": .., "xz": .., "torsion": ..,
+        "axial": ..}`` (rigid motions: 0). Their sum is ``n_modes`` or more (ties)."""
+        cached = self.__dict__.get("_modes_per_motion")
+        if cached is None:
+            beam, n = self.beam, self.n_modes
+            beam._require_three_axis("a three-axis truncation")
+            kind = "cantilever_frequencies" if self.method == "craig-bampton" \
+                else "natural_frequencies"
+            frequencies = {"xy": getattr(beam.planar_view("xy"), kind)(n),
+                           "xz": getattr(beam.planar_view("xz"), kind)(n)}
+            for name, rod in (("torsion", beam.torsion_rod()), ("axial", beam.axial_rod())):
+                frequencies[name] = getattr(rod, kind)(n) if rod is not None else np.zeros(0)
+            cutoff = np.sort(np.concatenate(list(frequencies.values())))[n - 1]
+            cached = {name: int(np.count_nonzero(f <= cutoff * (1.0 + 1e-12)))
+                      for name, f in frequencies.items()}
+            self.__dict__["_modes_per_motion"] = cached
+        return dict(cached)
+
+    def _motions(self) -> dict:
+        cached = self.__dict__.get("_motion_models")
+        if cached is None:
+            beam, counts = self.beam, self.modes_per_motion
+            cached = {
+                "xy": _Bending(beam.planar_view("xy"), counts["xy"], self.method),
+                "xz": _Bending(beam.planar_view("xz"), counts["xz"], self.method),
+                "torsion": _RodMotion(beam.torsion_rod(), beam.torsional_inertia * beam.length,
+                                      counts["torsion"], self.method),
+                "axial": _RodMotion(beam.axial_rod(), beam.mass, counts["axial"], self.method),
+            }
+            self.__dict__["_motion_models"] = cached
+        return cached
+
+    # -- W(s) -----------------------------------------------------------------------------------
     def W(self, s) -> np.ndarray:
         """Transfer matrix W(s) of the truncated beam, shape ``np.shape(s) + (2, 2)``.
 
         Free-free and residual models are summed mode by mode (the residual modes' 2x2 block
         as ``B^T (s**2 I + s C + Lambda)^-1 B``), which keeps the rigid-body term 1/s**2 and
-        the static flexibility apart near s = 0; Craig-Bampton models invert the
-        attachment-end dynamic stiffness (see :class:`RootModel`).
+        the static flexibility apart near s = 0; Craig-Bampton models invert their
+        attachment-end dynamic stiffness in its modal form (:class:`_ModalStiffness`). Both
+        cost O(n_modes) per frequency and evaluate the frequencies in chunks, so memory stays
+        bounded (about 32 MB of temporaries) for any number of points.
         """
-        if self.method == "craig-bampton":
-            return super().W(s)
         s = as_frequency_array(s)
-        beam, n = self.beam, self.n_modes
-        m, L, J = beam.mass, beam.length, beam.inertia
-        w = beam.natural_frequencies(n)
-        b_flex, _ = beam._free_free_root_values(n)
-        ss = s[..., None]
-        flex = 1.0 / (ss**2 + 2.0 * beam.damping_ratio * w * ss + w**2)
-        out = np.empty(s.shape + (2, 2), dtype=np.complex128)
-        rigid = np.array([[1.0 / m + 0.25 * L**2 / J, -0.5 * L / J], [-0.5 * L / J, 1.0 / J]])
-        for i, j in ((0, 0), (0, 1), (1, 1)):
-            out[..., i, j] = rigid[i, j] / s**2 + flex @ (b_flex[:, i] * b_flex[:, j])
-        if self.method == "residual":
-            b_res, lam, C_res, _ = self._residual_modes()
-            H = (s**2)[..., None, None] * np.eye(2) + s[..., None, None] * C_res + np.diag(lam)
-            residual = b_res.T @ inverse_2x2(H) @ b_res
-            for i, j in ((0, 0), (0, 1), (1, 1)):
-                out[..., i, j] += residual[..., i, j]
-        out[..., 1, 0] = out[..., 0, 1]
-        return out
+        if np.any(s == 0):
+            raise ValueError("s = 0 is the rigid-body pole of W (W is infinite there) [rad/s]")
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            W = self._planar().W(s)
+        if not np.all(np.isfinite(W)):
+            raise ValueError("s is a natural frequency of the undamped model (or the rigid-body "
+                             "pole s = 0): W is infinite there [rad/s]")
+        return W
 
-    def _residual_modes(self):
-        """The two residual modes of the ``"residual"`` truncation (module docstring).
+    def dynamic_stiffness(self, s) -> np.ndarray:
+        """Attachment-end dynamic stiffness D(s) = W(s)^-1 [N/m, N; N, N*m], O(n) per frequency.
 
-        Returns ``(B, lam, C, tip)``: root values ``B`` (2, 2) (row j: mode j's
-        ``(delta, phi)``), squared frequencies ``lam`` (2,) [rad^2/s^2], damping ``C`` (2, 2)
-        [1/s] and tip values (2,), all for mass-normalised residual modes ``xi = V nu`` with
-        ``R V = R2 V diag(lam)``, ``V^T R2 V = I``.
+        Craig-Bampton: the modal form of :class:`_ModalStiffness`, infinite exactly at the
+        model's clamped frequencies (undamped); the others: the inverse of :meth:`W`.
+        s = 0 gives 0.
         """
-        cached = self.__dict__.get("_residual_cache")
-        if cached is None:
-            beam, n = self.beam, self.n_modes
-            R, tip_R = beam._free_free_tail(n, 2)
-            R3, _ = beam._free_free_tail(n, 3)
-            R2, _ = beam._free_free_tail(n, 4)
-            lam, V = scipy.linalg.eigh(R, R2)
-            C = V.T @ (2.0 * beam.damping_ratio * R3) @ V
-            cached = ((R @ V).T, lam, 0.5 * (C + C.T), tip_R @ V)
-            self.__dict__["_residual_cache"] = cached
-        return cached
+        s = as_frequency_array(s)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return self._planar().D(s)
+
+    def W6(self, s) -> np.ndarray:
+        """Three-axis transfer matrix W6(s) of the truncated beam, shape ``np.shape(s) + (6, 6)``.
+
+        The four motions' truncated models (:attr:`modes_per_motion`) placed as in
+        :meth:`Beam.W6`; O(n_modes) per frequency.
+        """
+        from .beam import _place_planes
+
+        s = as_frequency_array(s)
+        if np.any(s == 0):
+            raise ValueError("s = 0 is the rigid-body pole of W6 (W6 is infinite there) [rad/s]")
+        motions = self._motions()
+        W6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            _place_planes(W6, motions["xy"].W(s), motions["xz"].W(s))
+            W6[..., 0:1, 0:1] = motions["axial"].W(s)
+            W6[..., 3:4, 3:4] = motions["torsion"].W(s)
+        if not np.all(np.isfinite(W6)):
+            raise ValueError("s is a natural frequency of the undamped model: W6 is infinite "
+                             "there [rad/s]")
+        return W6
+
+    def dynamic_stiffness6(self, s) -> np.ndarray:
+        """Three-axis D6(s) = W6(s)^-1, shape ``np.shape(s) + (6, 6)``; s = 0 gives 0."""
+        from .beam import _place_planes
+
+        s = as_frequency_array(s)
+        motions = self._motions()
+        D6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            _place_planes(D6, motions["xy"].D(s), motions["xz"].D(s))
+            D6[..., 0:1, 0:1] = motions["axial"].D(s)
+            D6[..., 3:4, 3:4] = motions["torsion"].D(s)
+        return D6
+
+    # -- realisations ---------------------------------------------------------------------------
+    def _residual_modes(self):
+        """The planar model's two residual modes (``method="residual"``), see
+        :func:`_bending_residual_modes`."""
+        return self._planar().residual_modes()
 
     def _projected_damping(self, n: int) -> np.ndarray:
-        """The beam's damping operator in the cantilever-mode coordinates.
-
-        The beam damps every free-free bending mode k with ratio zeta, i.e. its damping
-        operator is ``sum_k 2 zeta w_k (M phi_k)(M phi_k)^T``. The constraint modes (rigid
-        motions of the root) are M-orthogonal to every bending mode, so only the cantilever
-        coordinates are damped: ``C_ij = sum_k 2 zeta w_k O_ki O_kj`` with the overlaps
-        ``O = beam.free_cantilever_overlap``. The terms decay like k**-6; 4 n + 400 free-free
-        modes leave a relative tail below 1e-12. With this, a damped Craig-Bampton model
-        converges to the exact damped W(s) as modes are added, instead of to a beam whose
-        cantilever modes (not its free-free ones) carry the damping.
-        """
-        beam = self.beam
-        n_free = 4 * n + 400
-        O = beam.free_cantilever_overlap(n_free, n)
-        w = beam.natural_frequencies(n_free)
-        C = (O.T * (2.0 * beam.damping_ratio * w)) @ O
-        return 0.5 * (C + C.T)
+        """The beam's damping in its first n cantilever coordinates
+        (:func:`_bending_projected_damping`)."""
+        return _bending_projected_damping(self.beam, n)
 
     def _root_model(self) -> RootModel:
-        beam, n = self.beam, self.n_modes
-        zeta = beam.damping_ratio
-        m, L = beam.mass, beam.length
-        names = ("delta", "phi") + tuple(f"eta[{k + 1}]" for k in range(n))
-        if self.method in ("free-free", "residual"):
-            w = beam.natural_frequencies(n)
-            b_modes, tip_modes = beam._free_free_root_values(n)
-            stiffness_modes = w**2
-            damping_modes = np.diag(2.0 * zeta * w)
-            if self.method == "residual":
-                # two more "modes": the residual attachment modes with their own inertia
-                b_res, lam, C_res, tip_res = self._residual_modes()
-                b_modes = np.vstack([b_modes, b_res])
-                tip_modes = np.concatenate([tip_modes, tip_res])
-                stiffness_modes = np.concatenate([stiffness_modes, lam])
-                damping_modes = scipy.linalg.block_diag(damping_modes, C_res)
-                names = names + ("residual[1]", "residual[2]")
-            N = stiffness_modes.size
-            J = beam.inertia
-            # rigid modes: translation 1/sqrt(m); rotation about the centre (x - L/2)/sqrt(J)
-            b_rigid = np.array([[1.0 / math.sqrt(m), 0.0],
-                                [-0.5 * L / math.sqrt(J), 1.0 / math.sqrt(J)]])
-            tip_rigid = np.array([1.0 / math.sqrt(m), 0.5 * L / math.sqrt(J)])
-            # eta = T q: eta_rigid = B_r^-T (q_r - B_f^T eta_f), eta_f = eta_f
-            Br_inv_T = np.linalg.inv(b_rigid.T)
-            T = np.zeros((N + 2, N + 2))
-            T[:2, :2] = Br_inv_T
-            T[:2, 2:] = -Br_inv_T @ b_modes.T
-            T[2:, 2:] = np.eye(N)
-            mass = T.T @ T
-            stiffness = np.zeros((N + 2, N + 2))
-            stiffness[2:, 2:] = np.diag(stiffness_modes)
-            damping = np.zeros((N + 2, N + 2))
-            damping[2:, 2:] = damping_modes
-            tip_abs = np.concatenate([tip_rigid, tip_modes]) @ T
-        else:
-            w = beam.cantilever_frequencies(n)
-            participation = beam.modal_participation(n)
-            mass = np.eye(n + 2)
-            mass[:2, :2] = beam.linear_density * np.array([[L, L**2 / 2.0], [L**2 / 2.0, L**3 / 3.0]])
-            mass[2:, :2] = participation
-            mass[:2, 2:] = participation.T
-            stiffness = np.zeros((n + 2, n + 2))
-            stiffness[2:, 2:] = np.diag(w**2)
-            damping = np.zeros((n + 2, n + 2))
-            if zeta > 0.0:
-                damping[2:, 2:] = self._projected_damping(n)
-            tip_abs = np.concatenate([[1.0, L], beam._cantilever_tip_values(n)])
-        tip = tip_abs.copy()
-        tip[0] -= 1.0
-        tip[1] -= L
-        mass = 0.5 * (mass + mass.T)
-        return RootModel(mass, damping, stiffness, tip, names)
+        return self._planar().root_model()
+
+    def _three_axis_root_model(self) -> RootModel:
+        motions = self._motions()
+        return three_axis_root_model(*(motions[name].root_model() for name in MOTION_NAMES))

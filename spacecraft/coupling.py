@@ -1,4 +1,4 @@
-r"""A rigid hub coupled to appendages through their W-matrix interface.
+r"""A rigid hub coupled to appendages through their W-matrix interface, planar or three-axis.
 
 Planar motion: the hub has coordinates ``h = (X, Y, theta)`` (its centre of mass and attitude).
 Each appendage i is mounted at point p_i along the unit vector e_i (normal n_i); its attachment
@@ -6,28 +6,27 @@ end follows the hub rigidly,
 
     (axial_i, delta_i, phi_i) = G_i h        (Mount.kinematics)
 
-Finite appendages (realisation in attachment-end coordinates, RootModel)
-    The appendage's first two coordinates are replaced by ``G_i h``, its internal ones kept:
-    ``q_i = T_i [h; z_i]``. Its axial motion is rigid (Euler-Bernoulli members are inextensible),
-    a point mass m_i moving with ``axial_i``. The coupled second-order system is
+Three axes: the hub has ``h = (X, Y, Z, theta_x, theta_y, theta_z)`` (centre of mass, small
+rotation vector, hub axes) and each appendage's root motions in its own axes are
+``(u, v, w, theta_x, theta_y, theta_z)_i = G_i h`` with the 6x6 ``G_i = Mount.transformation()``
+(:mod:`spacecraft.kinematics`); the appendage's axial motion is one of its root coordinates.
 
-        M = M_hub + sum_i (T_i^T M_i T_i + m_i g_i g_i^T),  C, K likewise,
+Finite appendages (realisation in attachment-end coordinates, RootModel)
+    The appendage's root coordinates (2 planar, 6 in three axes) are replaced by their
+    kinematic images of h, its internal ones kept: ``q_i = T_i [h; z_i]``. Planar axial motion
+    is rigid (Euler-Bernoulli members are inextensible), a point mass m_i moving with
+    ``axial_i``. The coupled second-order system is
+
+        M = M_hub + sum_i (T_i^T M_i T_i [+ m_i g_i g_i^T planar]),  C, K likewise,
 
     in coordinates ``[h, z_1, z_2, ...]``, and the state-space plant is built from its
     undamped modes (mass-normalised, ``K V = M V Lambda``): states ``[eta, eta_dot]`` with
     ``A = [[0, I], [-Lambda, -V^T C V]]``, a well-scaled realisation of any size.
 
 Distributed appendages (exact reference)
-    Eliminating the appendage gives the hub's dynamic stiffness, with ``D_i = W_i^-1``,
-
-        Z(s) = M_hub s**2 + sum_i ( G_r,i^T D_i(s) G_r,i + m_i s**2 g_i g_i^T ),
-
-    and ``theta/torque = [Z(s)^-1]_{theta theta}``: the exact frequency response. The coupled
-    natural frequencies are counted with the Wittrick-Williams algorithm: the number of
-    frequencies below w is ``J(w) = sum_i J0_i(w) + s{Z(i w)}``, where J0_i counts the
-    appendage's frequencies with its attachment end clamped (the cantilever frequencies of a
-    beam) and s{.} the negative eigenvalues of the real symmetric Z(iw). Bisection on J finds
-    every frequency without missing one.
+    Eliminating the appendages through ``D_i = W_i^-1`` (``W6_i^-1``) gives the hub's dynamic
+    stiffness Z(s), the exact attitude response and, by the Wittrick-Williams count, the exact
+    coupled natural frequencies: :mod:`spacecraft.exact`.
 
 References
 ----------
@@ -45,13 +44,18 @@ import numpy as np
 import scipy.linalg
 
 from appendages import limits
-from appendages.interface import S_RANGE, describe, equilibrate, inverse_2x2
+from appendages.interface import ROOT_LOADS, TIP_MOTIONS, describe, equilibrate
 
+from .exact import ExactReference, frequency_vector
 from .hub import Hub, Mount
 
-__all__ = ["Spacecraft", "SecondOrderModel"]
+__all__ = ["Spacecraft", "SecondOrderModel", "HUB_COORDINATES"]
 
-_HUB_NAMES = ("X", "Y", "theta")
+#: Hub coordinates: planar and three-axis.
+HUB_COORDINATES = {False: ("X", "Y", "theta"),
+                   True: ("X", "Y", "Z", "theta_x", "theta_y", "theta_z")}
+_HUB_NAMES = HUB_COORDINATES[False]
+_AXES = ("x", "y", "z")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -62,6 +66,8 @@ class SecondOrderModel:
     ----------
     mass, damping, stiffness : ndarray (n, n)
     coordinate_names : tuple of str
+        The hub's coordinates first (:data:`HUB_COORDINATES`), then each appendage's internal
+        ones.
     blocks : list of (Mount, ndarray)
         For each mount the matrix T_i with ``q_i = T_i z`` (appendage coordinates from the
         global ones).
@@ -75,14 +81,22 @@ class SecondOrderModel:
 
 
 class Spacecraft:
-    """Rigid hub with appendages mounted on it.
+    """Rigid hub with appendages mounted on it, planar or three-axis.
 
     Parameters
     ----------
     hub : Hub
+        A scalar inertia: the planar spacecraft; a 3x3 tensor: three axes.
     mounts : sequence of Mount
         Any number (zero for a rigid spacecraft) of appendages of any model that offers the
-        W-matrix interface.
+        W-matrix interface (three axes: ``W6``, finite models ``root_model(6)``). On a
+        three-axis hub, planar mounts lie in its x-y plane.
+
+    Attributes
+    ----------
+    three_axis : bool
+    n_rigid : int
+        Rigid-body modes of the free-floating spacecraft: 3 planar, 6 in three axes.
     """
 
     def __init__(self, hub: Hub, mounts=()):
@@ -106,18 +120,43 @@ class Spacecraft:
         names = [m.name or f"appendage{k + 1}" for k, m in enumerate(mounts)]
         if len(set(names)) != len(names):
             raise ValueError(f"mount names must be unique; got {names}")
+        self.three_axis = bool(hub.three_axis)
+        for name, mount in zip(names, mounts):
+            if mount.three_axis and not self.three_axis:
+                raise ValueError(
+                    f"mount '{name}' has an orientation (three axes) but the hub is planar "
+                    f"(inertia {describe(hub.inertia)} kg*m^2, a scalar): give the hub a 3x3 "
+                    "inertia tensor [kg*m^2] or the mount a planar direction")
+            if self.three_axis and not mount.three_axis:
+                self._check_three_axis_appendage(name, mount.appendage)
         self.hub = hub
         self.mounts = mounts
         self.names = names
+        self.n_rigid = 6 if self.three_axis else 3
         self._cache: dict = {}
+
+    @staticmethod
+    def _check_three_axis_appendage(name: str, appendage) -> None:
+        if not hasattr(appendage, "W6"):
+            raise TypeError(f"mount '{name}': a three-axis spacecraft needs appendages with "
+                            f"W6(s); got {type(appendage).__name__} without 'W6'")
+        try:
+            appendage.inertia_tensor
+        except ValueError as exc:
+            raise ValueError(f"mount '{name}' on a three-axis hub: {exc}") from None
 
     def __repr__(self) -> str:
         return f"Spacecraft({self.hub!r}, {self.mounts!r})"
 
-    # -- rigid properties ---------------------------------------------------------------------
-    def _appendage_centres(self) -> list:
-        return [m.position + 0.5 * m.appendage.length * m.axis for m in self.mounts]
+    @property
+    def exact(self) -> ExactReference:
+        """The exact frequency-domain reference (:mod:`spacecraft.exact`), built once."""
+        cached = self._cache.get("exact")
+        if cached is None:
+            cached = self._cache["exact"] = ExactReference(self.hub, self.mounts)
+        return cached
 
+    # -- rigid properties ---------------------------------------------------------------------
     @property
     def mass(self) -> float:
         """Total mass [kg]."""
@@ -125,40 +164,66 @@ class Spacecraft:
 
     @property
     def center_of_mass(self) -> np.ndarray:
-        """Centre of mass of the undeformed spacecraft in hub axes [m].
+        """Centre of mass of the undeformed spacecraft in hub axes [m] (2 or 3 coordinates).
 
         Appendage centres are taken at mid-length, exact for uniform beams; for chains the
         chain's own centre of mass is used when it offers ``center_of_mass`` (from its root).
         """
-        moment = np.zeros(2)
+        moment = np.zeros(3 if self.three_axis else 2)
         for mount in self.mounts:
             moment += mount.appendage.mass * self._centre(mount)
         return moment / self.mass
 
-    @staticmethod
-    def _centre(mount: Mount) -> np.ndarray:
+    def _centre(self, mount: Mount) -> np.ndarray:
         a = mount.appendage
         distance = getattr(a, "center_of_mass", None)
         if distance is None:
             distance = 0.5 * a.length
+        if self.three_axis:
+            return mount.point + float(distance) * mount.orientation[:, 0]
         return mount.position + float(distance) * mount.axis
 
     @property
-    def inertia(self) -> float:
-        """Moment of inertia of the undeformed spacecraft about its centre of mass [kg*m**2]."""
+    def inertia(self):
+        """Inertia of the undeformed spacecraft about its centre of mass [kg*m**2].
+
+        Planar: the moment of inertia about +z (a float). Three axes: the 3x3 tensor in hub
+        axes, ``J_hub + sum R J_i R^T`` plus the parallel-axis terms
+        ``m (|d|**2 I - d d^T)``.
+        """
         c = self.center_of_mass
-        J = self.hub.inertia + self.hub.mass * float(c @ c)
+        if not self.three_axis:
+            J = self.hub.inertia + self.hub.mass * float(c @ c)
+            for mount in self.mounts:
+                d = self._centre(mount) - c
+                J += mount.appendage.inertia + mount.appendage.mass * float(d @ d)
+            return J
+
+        def parallel(m, d):
+            return m * (float(d @ d) * np.eye(3) - np.outer(d, d))
+
+        J = self.hub.inertia + parallel(self.hub.mass, -c)
         for mount in self.mounts:
-            d = self._centre(mount) - c
-            J += mount.appendage.inertia + mount.appendage.mass * float(d @ d)
-        return J
+            R = mount.orientation
+            J = J + R @ mount.appendage.inertia_tensor @ R.T
+            J = J + parallel(mount.appendage.mass, self._centre(mount) - c)
+        return 0.5 * (J + J.T)
 
     # -- finite assembly ----------------------------------------------------------------------
+    def _root_kinematics(self, mount: Mount):
+        """(G_root, axial row or None): root coordinates of the appendage from hub motion."""
+        if self.three_axis:
+            return mount.transformation(), None
+        G = mount.kinematics()
+        return G[1:], G[0]
+
     def second_order_model(self) -> SecondOrderModel:
         """Assemble M, C, K of hub and appendages (all appendages must be finite models)."""
         cached = self._cache.get("second_order")
         if cached is not None:
             return cached
+        n_root = 6 if self.three_axis else 2
+        n_hub = 6 if self.three_axis else 3
         models = []
         for name, mount in zip(self.names, self.mounts):
             if not hasattr(mount.appendage, "root_model"):
@@ -167,33 +232,36 @@ class Spacecraft:
                     "realisation (root_model); use a truncated model, e.g. beam.truncated(n_modes), "
                     "or the exact frequency-domain methods"
                 )
-            models.append(mount.appendage.root_model())
-        n = 3 + sum(rm.n - 2 for rm in models)
-        limits.check("the appendages' coordinates (3 + their internal ones)", n, "coordinates",
-                     "coordinates of the assembled model")
+            try:
+                models.append(mount.appendage.root_model() if n_root == 2
+                              else mount.appendage.root_model(6))
+            except ValueError as exc:
+                raise ValueError(f"appendage '{name}': {exc}") from None
+        n = n_hub + sum(rm.n - n_root for rm in models)
+        limits.check(f"the appendages' coordinates ({n_hub} + their internal ones)", n,
+                     "coordinates", "coordinates of the assembled model")
         M = np.zeros((n, n))
-        M[:2, :2] = np.eye(2) * self.hub.mass
-        M[2, 2] = self.hub.inertia
+        M[:n_hub, :n_hub] = self.hub.mass_matrix
         C = np.zeros((n, n))
         K = np.zeros((n, n))
-        names = list(_HUB_NAMES)
+        names = list(HUB_COORDINATES[self.three_axis])
         blocks = []
-        offset = 3
+        offset = n_hub
         for name, mount, rm in zip(self.names, self.mounts, models):
-            G = mount.kinematics()
+            G, axial = self._root_kinematics(mount)
             T = np.zeros((rm.n, n))
-            T[:2, :3] = G[1:]
-            T[2:, offset:offset + rm.n - 2] = np.eye(rm.n - 2)
+            T[:n_root, :n_hub] = G
+            T[n_root:, offset:offset + rm.n - n_root] = np.eye(rm.n - n_root)
             M += T.T @ rm.mass @ T
-            g = np.zeros(n)  # axial rigid motion of the appendage
-
-            g[:3] = G[0]
-            M += mount.appendage.mass * np.outer(g, g)
+            if axial is not None:  # planar: the appendage's rigid axial motion
+                g = np.zeros(n)
+                g[:n_hub] = axial
+                M += mount.appendage.mass * np.outer(g, g)
             C += T.T @ rm.damping @ T
             K += T.T @ rm.stiffness @ T
-            names += [f"{name}.{c}" for c in rm.coordinate_names[2:]]
+            names += [f"{name}.{c}" for c in rm.coordinate_names[n_root:]]
             blocks.append((mount, T))
-            offset += rm.n - 2
+            offset += rm.n - n_root
         model = SecondOrderModel(0.5 * (M + M.T), 0.5 * (C + C.T), 0.5 * (K + K.T), tuple(names), blocks)
         self._cache["second_order"] = model
         return model
@@ -205,30 +273,32 @@ class Spacecraft:
         Returns
         -------
         frequencies : ndarray (n,), rad/s
-            Ascending; the three rigid-body modes (X, Y, theta) are exactly 0.
+            Ascending; the rigid-body modes (3 planar: X, Y, theta; 6 in three axes) are
+            exactly 0.
         shapes : ndarray (n, n)
             Mass-normalised mode shapes in the assembled coordinates (columns).
         """
         cached = self._cache.get("modes")
         if cached is None:
             model = self.second_order_model()
+            r = self.n_rigid
             # equilibrated (unit-free) pencil: hub coordinates in m and rad, appendage ones in
             # their own units; eigenvalues unchanged, eigenvectors scaled back by d
             d = equilibrate(model.stiffness, model.mass)
             lam, V = scipy.linalg.eigh(model.stiffness * np.outer(d, d),
                                        model.mass * np.outer(d, d))
             V = V * d[:, None]
-            # A free-floating planar spacecraft has exactly three rigid-body modes; every
-            # hinge/bending stiffness is positive, so the rest are elastic.
-            lam[:3] = 0.0
-            if np.any(lam[3:] <= 0.0):
+            # A free-floating spacecraft has exactly n_rigid rigid-body modes (3 planar, 6 in
+            # three axes); every hinge/bending stiffness is positive, so the rest are elastic.
+            lam[:r] = 0.0
+            if np.any(lam[r:] <= 0.0):
                 raise ValueError(
-                    "the assembled stiffness matrix has more than three zero or negative "
+                    f"the assembled stiffness matrix has more than {r} zero or negative "
                     "eigenvalues: the stiffness range is too wide for double precision "
-                    f"(smallest elastic eigenvalue {lam[3]!r}, largest {lam[-1]!r} [rad^2/s^2])"
+                    f"(smallest elastic eigenvalue {lam[r]!r}, largest {lam[-1]!r} [rad^2/s^2])"
                 )
             V = V.copy()
-            V[:, :3] = self._rigid_modes(V[:, :3], model.mass)
+            V[:, :r] = self._rigid_modes(V[:, :r], model.mass)
             cached = (np.sqrt(lam), V)
             self._cache["modes"] = cached
         return cached[0].copy(), cached[1]
@@ -237,18 +307,31 @@ class Spacecraft:
     def _rigid_modes(R: np.ndarray, M: np.ndarray) -> np.ndarray:
         """Physical rigid-body modes from any basis R of the null space of K.
 
-        Within span(R), the motions with hub displacement (1, 0, 0), (0, 1, 0) and (0, 0, 1)
-        are unique (the hub block of R is invertible); the two translations are M-orthogonal
-        to each other (a rigid translation carries the total mass), and the rotation is made
-        M-orthogonal to them by Gram-Schmidt, which turns it into the rotation about the
-        system's centre of mass. Returned mass-normalised: [x translation, y translation,
-        rotation]; torque excites only the last, and theta sees only the last.
+        Within span(R), the motions with unit hub displacements (the hub block of R is
+        invertible) are unique; the translations are M-orthogonal to each other (a rigid
+        translation carries the total mass), and the rotations are made M-orthogonal to them
+        by Gram-Schmidt, which turns them into rotations about the system's centre of mass.
+        Planar (3 modes): [x translation, y translation, rotation], mass-normalised; torque
+        excites only the last, and theta sees only the last. Three axes (6 modes): the three
+        translations, then the rotations about the principal axes of the spacecraft's inertia
+        at its centre of mass (the eigenvectors of the rotations' 3x3 mass matrix), each
+        mass-normalised.
         """
-        physical = R @ np.linalg.solve(R[:3, :3], np.eye(3))
-        tx, ty, rot = physical.T
-        for t in (tx, ty):
-            rot = rot - (t @ M @ rot) / (t @ M @ t) * t
-        modes = np.column_stack([tx, ty, rot])
+        r = R.shape[1]
+        physical = R @ np.linalg.solve(R[:r, :r], np.eye(r))
+        if r == 3:
+            tx, ty, rot = physical.T
+            for t in (tx, ty):
+                rot = rot - (t @ M @ rot) / (t @ M @ t) * t
+            modes = np.column_stack([tx, ty, rot])
+            return modes / np.sqrt(np.einsum("ij,ik,kj->j", modes, M, modes))
+        translations, rotations = physical[:, :3], physical[:, 3:].copy()
+        for t in translations.T:
+            rotations -= np.outer(t, (t @ M @ rotations) / (t @ M @ t))
+        inertia = rotations.T @ M @ rotations
+        _, principal = np.linalg.eigh(0.5 * (inertia + inertia.T))
+        rotations = rotations @ principal
+        modes = np.column_stack([translations, rotations])
         return modes / np.sqrt(np.einsum("ij,ik,kj->j", modes, M, modes))
 
     def natural_frequencies(self, n: int, *, exact: bool | None = None) -> np.ndarray:
@@ -260,9 +343,10 @@ class Spacecraft:
             Number of frequencies.
         exact : bool, optional
             True: roots of the coupled characteristic equation through each appendage's exact
-            W(s) (Wittrick-Williams count and bisection); the accuracy reference for truncated
-            models of a distributed beam. False: eigenvalues of the assembled finite model.
-            Default: exact when some appendage has no finite realisation.
+            W(s) (W6 in three axes; Wittrick-Williams count and bisection,
+            :mod:`spacecraft.exact`); the accuracy reference for truncated models of a
+            distributed beam. False: eigenvalues of the assembled finite model. Default:
+            exact when some appendage has no finite realisation.
 
         Raises
         ------
@@ -289,11 +373,28 @@ class Spacecraft:
             limits.check("n", int(n), "frequencies", "exact coupled frequencies at once")
         if not exact:
             w, _ = self.modes()
-            if w.size - 3 < n:
-                raise ValueError(f"n = {n} exceeds the {w.size - 3} elastic modes of the finite "
-                             "model; ask for fewer or use exact=True")
-            return w[3:3 + n]
-        return self._wittrick_williams(n)
+            r = self.n_rigid
+            if w.size - r < n:
+                raise ValueError(f"n = {n} exceeds the {w.size - r} elastic modes of the finite "
+                                 "model; ask for fewer or use exact=True")
+            return w[r:r + n]
+        return self.exact.frequencies(n)
+
+    def _signals(self, disturbances: bool):
+        """Hub inputs and attitude outputs: names, hub load columns, rotation indices."""
+        if not self.three_axis:
+            inputs, columns = ["torque"], [2]
+            if disturbances:
+                inputs += ["disturbance_torque", "force_x", "force_y"]
+                columns += [2, 0, 1]
+            return inputs, columns, ["theta"], ["omega"], [2]
+        inputs = [f"torque_{a}" for a in _AXES]
+        columns = [3, 4, 5]
+        if disturbances:
+            inputs += [f"disturbance_torque_{a}" for a in _AXES] + [f"force_{a}" for a in _AXES]
+            columns += [3, 4, 5, 0, 1, 2]
+        return (inputs, columns, [f"theta_{a}" for a in _AXES], [f"omega_{a}" for a in _AXES],
+                [3, 4, 5])
 
     def plant(self, *, tip_deflection: bool = False, root_loads: bool = False,
               disturbances: bool = False, n_modes: int | None = None, prune: bool = False,
@@ -303,14 +404,21 @@ class Spacecraft:
         Parameters
         ----------
         tip_deflection : bool
-            Add outputs ``<name>_tip_deflection`` [m] (elastic, relative to the mount's tangent).
+            Planar: add outputs ``<name>_tip_deflection`` [m] (elastic, relative to the
+            mount's tangent). Three axes: ``<name>_tip_deflection_y``,
+            ``<name>_tip_deflection_z`` [m] and ``<name>_tip_twist`` [rad] (elastic, relative
+            to the rigidly moving root section, the appendage's axes).
         root_loads : bool
-            Add outputs ``<name>_root_force`` [N] and ``<name>_root_moment`` [N*m], the load
-            the hub applies to each appendage at its attachment end (F_y, M of PAPER.md).
+            Planar: add outputs ``<name>_root_force`` [N] and ``<name>_root_moment`` [N*m], the
+            load the hub applies to each appendage at its attachment end (F_y, M of PAPER.md).
+            Three axes: ``<name>_root_force_x/_y/_z`` [N] and ``<name>_root_moment_x/_y/_z``
+            [N*m] in the appendage's axes.
         disturbances : bool
-            Add inputs ``disturbance_torque`` [N*m] (on the hub, apart from the actuator's
-            ``torque``), ``force_x``, ``force_y`` [N] (at the hub's centre of mass, hub axes) and
-            ``<name>_tip_force`` [N] (transverse, at each appendage's free end).
+            Planar: add inputs ``disturbance_torque`` [N*m] (on the hub, apart from the
+            actuator's ``torque``), ``force_x``, ``force_y`` [N] (at the hub's centre of mass,
+            hub axes) and ``<name>_tip_force`` [N] (transverse, at each appendage's free end).
+            Three axes: ``disturbance_torque_x/_y/_z``, ``force_x/_y/_z`` and
+            ``<name>_tip_force_y``, ``<name>_tip_force_z`` (along the appendage's y and z axes).
         n_modes : int, optional
             Keep only the rigid-body modes and the first ``n_modes`` coupled elastic modes.
         prune : bool
@@ -320,57 +428,65 @@ class Spacecraft:
         Returns
         -------
         control.StateSpace
-            Inputs ``torque`` [N*m] (+ disturbances), outputs ``theta`` [rad], ``omega``
-            [rad/s] (+ requested), states ``mode[k]``, ``mode_rate[k]`` (modal coordinates).
+            Planar: inputs ``torque`` [N*m] (+ disturbances), outputs ``theta`` [rad],
+            ``omega`` [rad/s] (+ requested). Three axes: inputs ``torque_x``, ``torque_y``,
+            ``torque_z``, outputs ``theta_x/_y/_z`` [rad] (small-angle attitude, hub axes),
+            ``omega_x/_y/_z`` [rad/s] (+ requested). States ``mode[k]``, ``mode_rate[k]``
+            (modal coordinates).
         """
         import control
 
         model = self.second_order_model()
         w, V = self.modes()
         n = w.size
-        index_theta = 2
-        inputs = ["torque"]
-        load_columns = [np.eye(n)[:, index_theta]]
-        if disturbances:
-            inputs += ["disturbance_torque", "force_x", "force_y"]
-            load_columns += [np.eye(n)[:, index_theta], np.eye(n)[:, 0], np.eye(n)[:, 1]]
-        e_theta = np.eye(n)[index_theta]
-        outputs = ["theta", "omega"]
-        out_pos = [e_theta, np.zeros(n)]  # rows on displacements z
-        out_vel = [np.zeros(n), e_theta]  # rows on velocities z'
+        r = self.n_rigid
+        n_translations = 3 if self.three_axis else 2
+        inputs, columns, theta_names, omega_names, rotation = self._signals(disturbances)
+        load_columns = [np.eye(n)[:, c] for c in columns]
+        outputs = theta_names + omega_names
+        out_pos = [np.eye(n)[i] for i in rotation] + [np.zeros(n)] * len(rotation)
+        out_vel = [np.zeros(n)] * len(rotation) + [np.eye(n)[i] for i in rotation]
         load_rows = []  # (root model, T, row) of each root-load output
-        for name, (mount, T) in zip(self.names, model.blocks):
-            rm = mount.appendage.root_model()
+        for label, (mount, T) in zip(self.names, model.blocks):
+            rm = (mount.appendage.root_model() if not self.three_axis
+                  else mount.appendage.root_model(6))
+            tips = self._tip_rows(rm, mount.appendage.length)
             if disturbances:
-                tip_abs = rm.tip.copy()
-                tip_abs[0] += 1.0
-                tip_abs[1] += mount.appendage.length
-                inputs.append(f"{name}_tip_force")
-                load_columns.append(T.T @ tip_abs)
+                for suffix, (_, absolute) in tips.items():
+                    if absolute is not None:
+                        inputs.append(f"{label}_tip_force{suffix}")
+                        load_columns.append(T.T @ absolute)
             if tip_deflection:
-                outputs.append(f"{name}_tip_deflection")
-                out_pos.append(rm.tip @ T)
-                out_vel.append(np.zeros(n))
+                for suffix, (relative, _) in tips.items():
+                    outputs.append(f"{label}_{suffix.lstrip('_') or 'tip_deflection'}"
+                                   if self.three_axis else f"{label}_tip_deflection")
+                    out_pos.append(relative @ T)
+                    out_vel.append(np.zeros(n))
             if root_loads:
-                for row, label in ((0, "root_force"), (1, "root_moment")):
-                    outputs.append(f"{name}_{label}")
+                if self.three_axis:
+                    labels = [f"root_{'force' if q[0] == 'F' else 'moment'}_{q[-1].lower()}"
+                              for q in ROOT_LOADS]
+                else:
+                    labels = ["root_force", "root_moment"]
+                for row, load in enumerate(labels):
+                    outputs.append(f"{label}_{load}")
                     load_rows.append((rm, T, row))
         F = np.column_stack(load_columns)
         keep = np.arange(n)
         if n_modes is not None:
             if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 0:
                 raise ValueError(f"n_modes must be a non-negative integer; got {describe(n_modes)}")
-            keep = keep[: 3 + n_modes]
+            keep = keep[: r + n_modes]
         modal_damping = V.T @ model.damping @ V
         # damping forces vanish for rigid-body motion (C r = 0 exactly); keep round-off of
         # ~1e-17 out of the rigid rows, where it would couple the rigid-body Jordan block to
         # the elastic modes (and defeat balancing-based tests downstream)
-        modal_damping[:3, :] = 0.0
-        modal_damping[:, :3] = 0.0
+        modal_damping[:r, :] = 0.0
+        modal_damping[:, :r] = 0.0
         if not disturbances:
-            # the centre of mass cannot translate without an external force: leave out the two
+            # the centre of mass cannot translate without an external force: leave out the
             # translation modes (zero load from torque, unseen by theta and tip deflections)
-            keep = keep[keep >= 2]
+            keep = keep[keep >= n_translations]
         Vk, lam = V[:, keep], w[keep] ** 2
         Ck = modal_damping[np.ix_(keep, keep)]
         if prune:
@@ -401,6 +517,28 @@ class Spacecraft:
         states = [f"mode[{k}]" for k in keep] + [f"mode_rate[{k}]" for k in keep]
         return control.ss(A, B, Cmat, D, inputs=inputs, outputs=outputs, states=states, name=name)
 
+    def _tip_rows(self, rm, length: float) -> dict:
+        """Per tip signal: (elastic tip row, absolute tip displacement row or None).
+
+        Planar: ``{"": (tip, tip + delta + L phi)}``. Three axes (:data:`TIP_MOTIONS`):
+        the deflections along local y (``v(L) = v(0) + L theta_z(0) + elastic``) and z
+        (``w(L) = w(0) - L theta_y(0) + elastic``), the twist (no tip-force input).
+        """
+        if not self.three_axis:
+            absolute = rm.tip.copy()
+            absolute[0] += 1.0
+            absolute[1] += length
+            return {"": (rm.tip, absolute)}
+        tip = rm.tip_rows
+        y_abs = tip[0].copy()
+        y_abs[1] += 1.0
+        y_abs[5] += length
+        z_abs = tip[1].copy()
+        z_abs[2] += 1.0
+        z_abs[4] -= length
+        return {f"_{TIP_MOTIONS[0]}": (tip[0], y_abs), f"_{TIP_MOTIONS[1]}": (tip[1], z_abs),
+                f"_{TIP_MOTIONS[2]}": (tip[2], None)}
+
     @staticmethod
     def _output_rows(out_pos, out_vel, load_rows, Vk, lam, Ck, Bq):
         """Output matrices on modal displacements and velocities, and root-load feedthrough.
@@ -424,136 +562,39 @@ class Spacecraft:
 
     # -- exact frequency-domain reference -------------------------------------------------------
     def _hub_dynamic_stiffness(self, s: np.ndarray, *, undamped: bool = False) -> np.ndarray:
-        """Z(s) of the hub with every appendage eliminated through D_i(s) = W_i(s)^-1.
-
-        Shape ``s.shape + (3, 3)``. D_i comes from the appendage's own dynamic stiffness when
-        it offers one (exact closed form of a beam, static condensation of a finite model),
-        which stays accurate where W_i is singular (W_i -> 0 at its clamped frequencies) or
-        huge (at its free poles), where inverting W_i loses every digit.
-        """
-        s = np.asarray(s, dtype=complex)
-        Z = np.zeros(s.shape + (3, 3), dtype=complex)
-        M_hub = np.diag([self.hub.mass, self.hub.mass, self.hub.inertia])
-        Z += M_hub * (s**2)[..., None, None]
-        for mount in self.mounts:
-            G = mount.kinematics()
-            D = _dynamic_stiffness_of(mount.appendage, s, undamped=undamped)
-            Z += G[1:].T @ D @ G[1:]
-            Z += mount.appendage.mass * np.outer(G[0], G[0]) * (s**2)[..., None, None]
-        return Z
+        """Z(s) of the hub with every appendage eliminated (:mod:`spacecraft.exact`)."""
+        return self.exact.hub_dynamic_stiffness(s, undamped=undamped)
 
     def frequency_response(self, omega, *, output: str = "theta"):
-        """Exact frequency response from ``torque`` through every appendage's W(s).
+        """Exact frequency response from the hub torque(s) through every appendage's W (W6).
 
         Parameters
         ----------
         omega : array_like, rad/s
             Positive frequencies.
         output : {"theta", "omega"}
-            theta/torque [rad/(N*m)] or omega/torque [rad/(s*N*m)].
+            Attitude per torque [rad/(N*m)] or rate per torque [rad/(s*N*m)].
 
         Returns
         -------
         control.FrequencyResponseData
-            With input ``torque`` and the requested output name.
+            Planar: input ``torque``, the requested output (``theta`` or ``omega``). Three
+            axes: the exact 3x3 matrix, inputs ``torque_x/_y/_z``, outputs ``theta_x/_y/_z``
+            (or ``omega_x/_y/_z``), hub axes.
         """
         import control
 
-        omega = _frequency_vector(omega)
+        omega = frequency_vector(omega)
         if output not in ("theta", "omega"):
             raise ValueError(f"output must be 'theta' or 'omega'; got {describe(output)}")
-        s = 1j * omega
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            Z = self._hub_dynamic_stiffness(s)
-            e_theta = np.broadcast_to(np.array([[0.0], [0.0], [1.0]]), Z.shape[:-1] + (1,))
-            try:
-                response = np.linalg.solve(Z, e_theta)[..., 2, 0]
-            except np.linalg.LinAlgError:
-                response = np.full(omega.shape, np.nan, dtype=complex)
-        if not np.all(np.isfinite(response)):
-            bad = omega[~np.isfinite(response)]
-            raise ValueError(
-                "omega hits a natural frequency of the undamped spacecraft, where the response "
-                f"is infinite [rad/s]: {describe(bad)}; give the appendages damping or move "
-                "omega off the resonance")
+        response = self.exact.attitude_compliance(omega)
         if output == "omega":
-            response = response * s
-        return control.frd(response.reshape(1, 1, -1), omega, inputs=["torque"], outputs=[output])
-
-    def _count(self, omega: np.ndarray) -> np.ndarray:
-        """Wittrick-Williams count: coupled frequencies (the 3 rigid-body ones included) < omega.
-
-        ``J(w) = sum_i J0_i(w) + s{Z(iw)}`` (module docstring). Exactly at an appendage's clamped
-        frequency D_i is infinite; the count there is its limit from below (a natural frequency
-        is counted only above it), taken by evaluating Z one rounding step lower.
-        """
-        omega = np.asarray(omega, dtype=float)
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            Z = self._hub_dynamic_stiffness(1j * omega, undamped=True).real
-            bad = ~np.all(np.isfinite(Z), axis=(-2, -1))
-            step = 0
-            while np.any(bad) and step < 8:
-                step += 1
-                lower = omega[bad] * (1.0 - 2.0 * step * np.finfo(float).eps)
-                Z[bad] = self._hub_dynamic_stiffness(1j * lower, undamped=True).real
-                bad[bad] = ~np.all(np.isfinite(Z[bad]), axis=(-2, -1))
-        if np.any(bad):  # pragma: no cover - needs a pole on 8 consecutive doubles
-            raise FloatingPointError("the dynamic stiffness of an appendage is not finite near "
-                                     f"omega = {describe(omega[bad])} [rad/s]")
-        Z = 0.5 * (Z + np.swapaxes(Z, -1, -2))
-        # Sylvester's law of inertia: negative eigenvalues of the symmetric 3x3 Z. eigvalsh
-        # is backward stable, so the count is exact unless an eigenvalue is within round-off
-        # of zero, i.e. omega within round-off of a coupled frequency: what bisection needs.
-        negative = (np.linalg.eigvalsh(Z) < 0).sum(axis=-1)
-        top = float(np.max(omega, initial=0.0))
-        clamped = sum(np.searchsorted(self._clamped(k, top), omega)
-                      for k in range(len(self.mounts)))
-        return negative + clamped
-
-    def _clamped(self, k: int, omega_max: float) -> np.ndarray:
-        """Clamped frequencies of appendage k [rad/s], at least up to omega_max (cached)."""
-        cache = self._cache.setdefault("clamped", {})
-        wc = cache.get(k)
-        if wc is None or (wc.size and wc[-1] <= omega_max and
-                          hasattr(self.mounts[k].appendage, "cantilever_frequencies")):
-            wc = _clamped_frequencies(self.mounts[k].appendage, omega_max)
-            cache[k] = wc
-        return wc
-
-    def _wittrick_williams(self, n: int) -> np.ndarray:
-        """First n elastic coupled frequencies by the Wittrick-Williams count and bisection.
-
-        Bracket: with the hub held, the spacecraft falls apart into the clamped appendages; by
-        Rayleigh's interlacing (3 constraints) the k-th elastic coupled frequency is at least
-        the k-th clamped frequency of them all, so half the lowest clamped frequency is below
-        every elastic one. The upper end doubles until the count reaches n + 3.
-        """
-        n_total = n + 3  # the three rigid-body modes count as frequencies <= any omega > 0
-        lowest = min((float(wc[0]) if wc.size else np.inf)
-                     for wc in (self._clamped(k, 0.0) for k in range(len(self.mounts))))
-        if not np.isfinite(lowest):
-            raise ValueError("the spacecraft has no elastic mode: no appendage has a clamped "
-                             "natural frequency")
-        lo = np.full(n, 0.5 * lowest)
-        hi = np.full(1, lowest)
-        while self._count(hi)[0] < n_total:
-            hi = hi * 2.0
-            if not np.isfinite(hi[0]) or hi[0] > 1e12 * lowest:
-                raise ValueError(
-                    f"the spacecraft has fewer than n = {n} elastic natural frequencies "
-                    f"below {hi[0]:.3g} rad/s (a finite appendage has a finite number)")
-        hi = np.full(n, hi[0])
-        target = np.arange(4, n_total + 1)  # frequency k is where the count reaches k
-        active = np.arange(n)
-        for _ in range(200):
-            mid = 0.5 * (lo[active] + hi[active])
-            above = self._count(mid) >= target[active]
-            hi[active] = np.where(above, mid, hi[active])
-            lo[active] = np.where(above, lo[active], mid)
-            active = active[hi[active] - lo[active] > 4e-16 * hi[active]]
-            if active.size == 0:
-                break
-        return 0.5 * (lo + hi)
+            response = response * (1j * omega)[:, None, None]
+        data = np.moveaxis(response, 0, -1)
+        if not self.three_axis:
+            return control.frd(data, omega, inputs=["torque"], outputs=[output])
+        return control.frd(data, omega, inputs=[f"torque_{a}" for a in _AXES],
+                           outputs=[f"{output}_{a}" for a in _AXES])
 
 
 def _closure(active: np.ndarray, coupled: np.ndarray) -> np.ndarray:
@@ -564,72 +605,3 @@ def _closure(active: np.ndarray, coupled: np.ndarray) -> np.ndarray:
         if np.array_equal(grown, active):
             return active
         active = grown
-
-
-def _frequency_vector(omega) -> np.ndarray:
-    """omega as a 1-D float64 array of positive finite frequencies [rad/s], or an error."""
-    if isinstance(omega, (str, bytes)) or omega is None:
-        raise TypeError(f"omega must be an array of frequencies [rad/s]; got "
-                        f"{type(omega).__name__}")
-    arr = np.asarray(omega)
-    if arr.dtype.kind not in "iuf" or arr.dtype == bool:
-        raise TypeError(f"omega must be real frequencies [rad/s]; got dtype {arr.dtype} "
-                        f"{describe(omega)}")
-    limits.check("omega (number of frequencies)", arr.size, "points", "points at once")
-    arr = arr.astype(float)
-    if arr.ndim != 1 or arr.size == 0 or not np.all(np.isfinite(arr)) or np.any(arr <= 0):
-        raise ValueError("omega must be a 1-D array of positive finite frequencies [rad/s]; "
-                         f"got {describe(omega)}")
-    if np.any(arr < S_RANGE[0]) or np.any(arr > S_RANGE[1]):
-        raise ValueError(f"omega must lie between {S_RANGE[0]:g} and {S_RANGE[1]:g} [rad/s] "
-                         "(appendages.interface.S_RANGE); got "
-                         f"{describe(arr[(arr < S_RANGE[0]) | (arr > S_RANGE[1])][0])}")
-    return arr
-
-
-def _dynamic_stiffness_of(appendage, s: np.ndarray, *, undamped: bool) -> np.ndarray:
-    """D(s) = W(s)^-1 of an appendage [N/m, N; N, N*m], shape ``s.shape + (2, 2)``.
-
-    Through the interface only. Undamped (the natural-frequency count): a finite appendage
-    (``root_model()``) by static condensation of its realisation with the damping removed,
-    which carries the poles of D at its clamped frequencies natively (inverting W there,
-    where W is singular, loses every digit); an appendage offering ``undamped()`` (the
-    distributed beam) through its undamped twin. Otherwise an appendage offering
-    ``dynamic_stiffness(s)`` (the beam's closed form) by it, any other by the scaled 2x2
-    inverse of its own W(s), which is the accurate one at small |s| (a chain's recursion, a
-    truncation's modal sum; the condensation subtracts stiffness-sized terms there).
-    """
-    if undamped and hasattr(appendage, "undamped"):
-        appendage = appendage.undamped()
-    if undamped and hasattr(appendage, "root_model"):
-        rm = appendage.root_model()
-        if np.any(rm.damping):
-            rm = dataclasses.replace(rm, damping=np.zeros_like(rm.damping))
-        return rm.dynamic_stiffness(s)
-    if hasattr(appendage, "dynamic_stiffness"):
-        return np.asarray(appendage.dynamic_stiffness(s), dtype=complex)
-    return inverse_2x2(np.asarray(appendage.W(s), dtype=complex))
-
-
-def _clamped_frequencies(appendage, omega_max: float) -> np.ndarray:
-    """Natural frequencies [rad/s] of the appendage with its attachment end clamped, ascending:
-    at least every one up to omega_max (all of them for a finite model)."""
-    if hasattr(appendage, "cantilever_frequencies"):
-        n = 8
-        while True:
-            wc = appendage.cantilever_frequencies(n)
-            if wc[-1] > omega_max:
-                return wc
-            n *= 2
-    if not hasattr(appendage, "root_model"):
-        raise TypeError(
-            f"exact natural frequencies need each appendage's clamped frequencies "
-            f"(cantilever_frequencies(n) or a finite root_model()); "
-            f"{type(appendage).__name__} offers neither")
-    rm = appendage.root_model()
-    Kii, Mii = rm.stiffness[2:, 2:], rm.mass[2:, 2:]
-    if Kii.shape[0] == 0:
-        return np.zeros(0)
-    d = equilibrate(Kii, Mii)
-    lam = scipy.linalg.eigvalsh(Kii * np.outer(d, d), Mii * np.outer(d, d))
-    return np.sqrt(np.clip(lam, 0.0, None))

@@ -1,0 +1,210 @@
+r"""Three-axis equivalent chains: one body layout, the four motions each matched to the beam.
+
+A three-axis hinged chain (:class:`~appendages.chain.HingedChain` with its three-axis
+parameters) has one set of bodies, shared by every motion: lengths, masses and centres of mass
+are physical and cannot differ between the bending planes. What may differ per motion is what
+each motion alone sees: the bodies' inertias about local z (x-y bending), about local y (x-z
+bending) and about x (torsion), and the joints' springs in each motion.
+
+Bending: one fit serves both planes
+    The planar fit (:func:`appendages.equivalence.fit_chain`) is run once, on the x-y plane
+    (EJ = ``bending_stiffness``). An Euler-Bernoulli beam's x-z plane differs from its x-y
+    plane only by its bending stiffness, ``EJ_y = lambda EJ``, with the same mass
+    distribution (no rotary inertia of the section in either plane), so every free-free,
+    pinned, sliding and clamped frequency of the x-z plane is ``sqrt(lambda)`` times the x-y
+    plane's, and so is every pole and zero of its W. A chain with the same bodies and inertias
+    and hinges ``lambda c`` scales the same way (its eigenproblems are ``(lambda K, M)``). The
+    fit's criterion (log-frequency errors of poles and zeros, rigid properties m, J, L and the
+    centre of mass held) is therefore invariant: the x-y fit with its hinges scaled by lambda
+    *is* the fit of the x-z plane, with the same relative errors, and the shared body layout
+    costs nothing. (tests/test_three_axis_chain.py runs fit_chain on both planar views and
+    finds the same layout and hinges in the ratio lambda.) The bodies' inertias about y and z
+    are then equal, as the Euler-Bernoulli beam's are.
+
+Torsion and axial motion: their own criterion
+    Each is a spring chain on the same bodies: inertias ``mu_k`` (the masses m_k for axial
+    motion; ``J_x,k = m_k rho*I_p/(rho*A)`` for torsion, the beam's radius of gyration of the
+    section, so that their sum is the beam's ``rho*I_p L``) joined by springs at the joints.
+    The springs are ``k_h = beta S/h_h exp(alpha xi_h)`` (S = GJ or EA; h_h the distance
+    between the centres of the two bodies the joint connects, the lumped-mass rule; xi_h the
+    joint's position over L minus 1/2): beta scales them all and alpha tilts them towards the
+    tip (alpha > 0) or the root. They are fitted to the exact rod's first free-free frequency
+    ``pi/tau`` (the first pole of its W) and its first clamped-free frequency ``pi/(2 tau)``
+    (the first zero of W), the rod's version of the paper's criterion: the ratio of the two
+    depends on alpha only, which is found by a bracketing root search, then beta matches the
+    pole exactly (both frequencies scale with sqrt(beta)). Where no alpha gives the ratio (two
+    bodies: one spring, nothing to tilt), the pole is matched and the zero is as close as
+    alpha in [-8, 8] allows; :func:`rod_chain_errors` reports both.
+
+Damping
+    A damped beam (modal damping ratio zeta) gives every joint stiffness-proportional damping
+    ``2 zeta k/w_1`` with w_1 that motion's first free-free chain frequency: ratio zeta at the
+    chain's first mode of each motion, the rule of ``HingedChain.rfem`` and of the runner.
+
+References
+----------
+.. [1] Belonozhko et al. 2009 (PAPER.md): the equivalence criterion (poles, zeros, rigid
+   properties).
+.. [2] R. D. Blevins, "Formulas for Natural Frequency and Mode Shape", 1979, table 8-19 (rods).
+.. [3] E. Wittbrodt, I. Adamiec-Wojcik, S. Wojciech, "Dynamics of Flexible Multibody Systems:
+   Rigid Finite Element Method", Springer, 2006 (spring-chain discretisation of rods).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.linalg
+import scipy.optimize
+
+from .chain import HingedChain, _spring_chain
+from .interface import ConvergenceError, describe
+
+__all__ = ["fit_chain_3d", "rod_chain_errors", "rod_chain_frequencies"]
+
+_ALPHA_BOUND = 8.0
+
+
+def rod_chain_frequencies(inertias: np.ndarray, stiffnesses: np.ndarray) -> tuple[float, float]:
+    """First free-free and first clamped (body 1 held) frequencies [rad/s] of a spring chain
+    with a rigid root (bodies 1..n, springs between neighbours)."""
+    M, _, K, _ = _spring_chain(np.asarray(inertias, float), np.asarray(stiffnesses, float), None,
+                               False)
+    free = np.sort(scipy.linalg.eigvalsh(K, M))
+    clamped = scipy.linalg.eigvalsh(K[1:, 1:], M[1:, 1:])
+    return math.sqrt(max(free[1], 0.0)), math.sqrt(max(np.min(clamped), 0.0))
+
+
+def rod_chain_errors(chain: HingedChain, rod, motion: str) -> dict:
+    """Relative errors of a chain's first pole and zero in torsion or axial motion.
+
+    Parameters
+    ----------
+    chain : HingedChain
+        A rigid-root three-axis chain with that motion's springs.
+    rod : Rod
+        The exact rod (``Beam.torsion_rod()`` or ``axial_rod()``).
+    motion : {"torsion", "axial"}
+
+    Returns
+    -------
+    dict
+        ``{"pole": (chain, exact, relative error), "zero": (...)}`` [rad/s].
+    """
+    if motion == "torsion":
+        inertias, springs = chain.torsional_inertias, chain.torsion_stiffnesses
+    else:
+        inertias, springs = chain.masses, chain.axial_stiffnesses
+    pole, zero = rod_chain_frequencies(inertias, springs)
+    exact_pole = float(rod.natural_frequencies(1)[0])
+    exact_zero = float(rod.cantilever_frequencies(1)[0])
+    return {"pole": (pole, exact_pole, pole / exact_pole - 1.0),
+            "zero": (zero, exact_zero, zero / exact_zero - 1.0)}
+
+
+def _fit_springs(inertias: np.ndarray, centres: np.ndarray, joints: np.ndarray, length: float,
+                 rod) -> np.ndarray:
+    """Springs ``beta S/h exp(alpha xi)`` matching the rod's first pole and zero (module
+    docstring)."""
+    spacing = np.diff(centres)
+    xi = joints / length - 0.5
+    base = rod.stiffness / spacing
+
+    def springs(alpha):
+        return base * np.exp(alpha * xi)
+
+    def log_ratio(alpha):
+        pole, zero = rod_chain_frequencies(inertias, springs(alpha))
+        return math.log(pole / zero) - math.log(2.0)  # exact rod: pole/zero = 2
+
+    if spacing.size >= 2:
+        low, high = log_ratio(-_ALPHA_BOUND), log_ratio(_ALPHA_BOUND)
+        if low * high < 0.0:
+            alpha = scipy.optimize.brentq(log_ratio, -_ALPHA_BOUND, _ALPHA_BOUND, xtol=1e-14,
+                                          rtol=1e-15)
+        else:
+            result = scipy.optimize.minimize_scalar(lambda a: abs(log_ratio(a)),
+                                                    bounds=(-_ALPHA_BOUND, _ALPHA_BOUND),
+                                                    method="bounded",
+                                                    options={"xatol": 1e-10})
+            alpha = float(result.x)
+    else:
+        alpha = 0.0
+    trial = springs(alpha)
+    pole, _ = rod_chain_frequencies(inertias, trial)
+    return trial * (float(rod.natural_frequencies(1)[0]) / pole) ** 2
+
+
+def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
+                 **fit_options) -> HingedChain:
+    """A three-axis hinged chain equivalent to a three-axis uniform beam (module docstring).
+
+    Parameters
+    ----------
+    beam : Beam
+        A three-axis beam (``torsional_inertia`` given; ``torsional_stiffness`` None:
+        torsionally rigid joints; ``axial_stiffness`` None: inextensible joints).
+    n_bodies : int
+        Number of rigid bodies (>= 2), as :func:`~appendages.equivalence.fit_chain`.
+    match : {"poles-and-zeros", "frequencies"}
+        The bending fit (:func:`~appendages.equivalence.fit_chain`).
+    **fit_options
+        Passed to :func:`~appendages.equivalence.fit_chain` (``pole_weight``, ``max_nfev``).
+
+    Returns
+    -------
+    HingedChain
+        Rigid root; ``hinge_stiffnesses`` the x-y fit's, ``hinge_stiffnesses_y`` those times
+        ``bending_stiffness_y/bending_stiffness``, ``inertias_y = inertias``,
+        ``torsional_inertias``, ``torsion_stiffnesses`` and ``axial_stiffnesses`` from the rod
+        criterion; dampings when the beam is damped.
+
+    Raises
+    ------
+    ValueError
+        A planar beam (no torsional_inertia), or what fit_chain raises.
+    ConvergenceError
+        If the rod criterion gives non-finite springs.
+    """
+    from .equivalence import fit_chain  # here: equivalence imports the chain module
+
+    if not getattr(beam, "three_axis", False):
+        raise ValueError(
+            "fit_chain_3d needs a three-axis beam: torsional_inertia [kg*m] (rho*I_p per unit "
+            f"length) is expected; got {describe(getattr(beam, 'torsional_inertia', None))} "
+            "(build the beam with a section constructor or give its torsion)")
+    planar = fit_chain(beam.planar_view("xy"), n_bodies, match=match, **fit_options)
+    ratio = beam.bending_stiffness_y / beam.bending_stiffness
+    masses = np.asarray(planar.masses)
+    centres = planar.body_starts + planar.com_offsets
+    joints = np.cumsum(planar.lengths)[:-1]
+    torsional_inertias = masses * (beam.torsional_inertia / beam.linear_density)
+    springs = {}
+    for motion, rod, inertias in (("torsion", beam.torsion_rod(), torsional_inertias),
+                                  ("axial", beam.axial_rod(), masses)):
+        if rod is None:
+            springs[motion] = None
+            continue
+        values = _fit_springs(inertias, centres, joints, beam.length, rod)
+        if not np.all(np.isfinite(values)) or np.any(values <= 0):
+            raise ConvergenceError(f"fit_chain_3d: the {motion} springs of {describe(beam)} "
+                                   f"came out non-finite or non-positive: {describe(values)}")
+        springs[motion] = values
+    stiffnesses_y = ratio * np.asarray(planar.hinge_stiffnesses)
+    dampings = {}
+    zeta = beam.damping_ratio
+    if zeta > 0.0:
+        w_xy = float(planar.poles()[0])
+        dampings = {"hinge_dampings": 2.0 * zeta * np.asarray(planar.hinge_stiffnesses) / w_xy,
+                    "hinge_dampings_y": 2.0 * zeta * stiffnesses_y / (math.sqrt(ratio) * w_xy)}
+        for motion, inertias in (("torsion", torsional_inertias), ("axial", masses)):
+            if springs[motion] is not None:
+                w1, _ = rod_chain_frequencies(inertias, springs[motion])
+                dampings[f"{motion}_dampings"] = 2.0 * zeta * springs[motion] / w1
+    return HingedChain(planar.lengths, planar.masses, planar.inertias, planar.hinge_stiffnesses,
+                       com_offsets=planar.com_offsets, inertias_y=planar.inertias,
+                       hinge_stiffnesses_y=stiffnesses_y,
+                       torsional_inertias=torsional_inertias,
+                       torsion_stiffnesses=springs["torsion"],
+                       axial_stiffnesses=springs["axial"], **dampings)

@@ -1,0 +1,307 @@
+r"""Exact distributed rods: the axial and torsional motion of a uniform straight member.
+
+Both motions obey the same wave equation. With ``S`` the stiffness (EA [N] for axial motion,
+GJ [N*m**2] for torsion), ``mu`` the inertia per unit length (rho*A [kg/m], rho*I_p [kg*m])
+and ``q(x, t)`` the motion (u [m], theta_x [rad]), ``S q'' = mu q_tt``. The member is free at
+x = L and loaded at its attachment end x = 0 by ``P`` (F_x [N] or M_x [N*m]); the end's
+equilibrium gives ``S q'(0) = -P`` (a positive load stretches or twists the member towards
+-x), ``q'(L) = 0``.
+
+Exact root compliance
+---------------------
+In Laplace form ``q'' = k**2 q`` with ``k = s sqrt(mu/S)``. The solution free at x = L is
+``q = A cosh(k (L - x))``; ``S q'(0) = S A k sinh(k L) = P``. Writing ``tau = L sqrt(mu/S)``
+(the travel time of a wave along the member), ``c = sqrt(S mu)`` (its impedance),
+``m = mu L = tau c`` (the rigid inertia: mass or polar moment of inertia) and ``z = s tau``::
+
+    W(s) = q(0)/P = coth(z)/(c s) = z coth(z)/(m s**2),      D(s) = 1/W = m s**2 tanh(z)/z.
+
+Near s = 0, ``z coth z = 1 + z**2/3 - z**4/45 + ...``: W is the rigid ``1/(m s**2)`` plus the
+static flexibility ``L/(3 S)`` of a member loaded by its own inertia. At ``s = i w``,
+``W = -cot(w tau)/(c w)``: poles at the free-free frequencies ``k pi/tau`` and zeros at the
+clamped-free ones ``(k - 1/2) pi/tau`` (k = 1, 2, ...).
+
+Evaluation: for ``|z| < 1/2`` the power series of ``z coth z`` and ``tanh(z)/z`` (Bernoulli
+numbers; radius pi/2, 24 terms leave below 1e-20); beyond, ``t = exp(-2 z)`` with ``Re z >=
+0`` (odd symmetry for Re z < 0), ``|t| <= 1``, ``coth z = (1 + t)/(1 - t)``, never overflowing.
+
+Modal damping
+-------------
+The free-free modes are ``phi_k = sqrt(2/m) cos(k pi x/L)`` (mass-normalised, root value
+``b_k = sqrt(2/m)``, frequency ``w_k = k Omega``, ``Omega = pi/tau``). With every mode damped
+at the ratio zeta, ``W = 1/(m s**2) + (2/m) sum_k 1/(s**2 + 2 zeta w_k s + w_k**2)``.
+Factoring ``k**2 + 2 zeta k a + a**2 = (k - p)(k - q)`` with ``a = s/Omega``,
+``p, q = a (-zeta +- i sqrt(1 - zeta**2))``, and summing the partial fractions with the
+digamma function (``psi(1 + x) = -gamma + sum_k [1/k - 1/(k + x)]``)::
+
+    W(s) = 1/(m s**2) + 2/(m Omega**2) [psi(1 - q) - psi(1 - p)]/(p - q),
+
+exact at any s (zeta = 0 gives back the coth form).
+
+References
+----------
+.. [1] R. D. Blevins, "Formulas for Natural Frequency and Mode Shape", Van Nostrand, 1979,
+   table 8-19 (uniform rods in axial and torsional vibration).
+.. [2] K. F. Graff, "Wave Motion in Elastic Solids", Dover, 1991, ch. 2 (longitudinal and
+   torsional waves in rods, impedance).
+.. [3] NIST DLMF 5.7.6 (series of the digamma function), 5.15 (polygamma), 25.11 (Hurwitz
+   zeta function).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.special
+
+from . import limits
+from .interface import as_frequency_array, check_range, describe
+
+__all__ = ["Rod", "MOTIONS"]
+
+#: The two rod motions and the quantities (keys of RANGES) of their stiffness and inertia.
+MOTIONS = {"axial": ("axial_stiffness", "linear_density"),
+           "torsion": ("torsional_stiffness", "torsional_inertia")}
+
+_SERIES_RADIUS = 0.5
+_N_TERMS = 24
+
+
+def _series():
+    """Coefficients in z**2 of z coth z and tanh(z)/z (Bernoulli numbers B_2k)."""
+    B = scipy.special.bernoulli(2 * _N_TERMS)
+    k = np.arange(_N_TERMS)
+    factorial = scipy.special.factorial(2 * k, exact=False)
+    zcoth = B[2 * k] * 4.0**k / factorial
+    j = k + 1
+    tanh_over_z = B[2 * j] * 4.0**j * (4.0**j - 1.0) / scipy.special.factorial(2 * j)
+    return zcoth, tanh_over_z
+
+
+_ZCOTH, _TANH_OVER_Z = _series()
+
+
+def _horner(coefficients: np.ndarray, x: np.ndarray) -> np.ndarray:
+    out = np.zeros_like(x)
+    for c in coefficients[::-1]:
+        out = out * x + c
+    return out
+
+
+def zcoth_and_tanh_over_z(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``z coth z`` and ``tanh(z)/z`` at complex z, stable at any |z| (module docstring).
+
+    Returns inf where ``sinh z = 0`` (z = i k pi, k != 0) or ``cosh z = 0`` respectively.
+    """
+    z = np.asarray(z, dtype=np.complex128)
+    zcoth = np.empty_like(z)
+    tanhz = np.empty_like(z)
+    small = np.abs(z) < _SERIES_RADIUS
+    if np.any(small):
+        z2 = z[small] ** 2
+        zcoth[small] = _horner(_ZCOTH, z2)
+        tanhz[small] = _horner(_TANH_OVER_Z, z2)
+    big = ~small
+    if np.any(big):
+        zb = z[big]
+        zz = np.where(zb.real < 0.0, -zb, zb)  # both functions are even in z
+        t = np.exp(-2.0 * zz)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            zcoth[big] = zz * (1.0 + t) / (1.0 - t)
+            tanhz[big] = (1.0 - t) / ((1.0 + t) * zz)
+    return zcoth, tanhz
+
+
+class Rod:
+    """A uniform rod in axial or torsional motion, free at both ends (module docstring).
+
+    Parameters
+    ----------
+    length : float, m
+    stiffness : float
+        EA [N] (``motion="axial"``) or GJ [N*m**2] (``motion="torsion"``).
+    inertia : float
+        rho*A [kg/m] (axial) or rho*I_p [kg*m] (torsion), per unit length.
+    damping_ratio : float, optional
+        Modal damping ratio of every elastic mode, 0 <= zeta < 1.
+    motion : {"axial", "torsion"}
+
+    Notes
+    -----
+    A three-axis :class:`~appendages.beam.Beam` builds its rods itself
+    (``Beam.axial_rod()``, ``Beam.torsion_rod()``); the class is public for tests and for
+    members that are only rods.
+    """
+
+    def __init__(self, length: float, stiffness: float, inertia: float, *,
+                 damping_ratio: float = 0.0, motion: str = "axial"):
+        if not isinstance(motion, str) or motion not in MOTIONS:
+            raise ValueError(f"motion must be 'axial' or 'torsion'; got {describe(motion)}")
+        stiffness_quantity, inertia_quantity = MOTIONS[motion]
+        self.motion = motion
+        self.length = check_range("length", length, "length")
+        self.stiffness = check_range(stiffness_quantity, stiffness, stiffness_quantity)
+        self.inertia = check_range(inertia_quantity, inertia, inertia_quantity)
+        from .beam import _check_damping_ratio  # here: beam imports this module
+
+        self.damping_ratio = _check_damping_ratio(damping_ratio)
+
+    def __repr__(self) -> str:
+        return (f"Rod(length={self.length!r}, stiffness={self.stiffness!r}, "
+                f"inertia={self.inertia!r}, damping_ratio={self.damping_ratio!r}, "
+                f"motion={self.motion!r})")
+
+    # -- scales -------------------------------------------------------------------------------
+    @property
+    def rigid_inertia(self) -> float:
+        """mu L: the mass [kg] (axial) or polar moment of inertia [kg*m**2] (torsion)."""
+        return self.inertia * self.length
+
+    @property
+    def travel_time(self) -> float:
+        """tau = L sqrt(mu/S) [s]: free-free frequencies are k pi/tau."""
+        return self.length * math.sqrt(self.inertia / self.stiffness)
+
+    @property
+    def impedance(self) -> float:
+        """c = sqrt(S mu) [N*s/m or N*m*s]."""
+        return math.sqrt(self.stiffness * self.inertia)
+
+    # -- frequencies --------------------------------------------------------------------------
+    def _check_n(self, n) -> int:
+        if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)):
+            raise TypeError(f"n must be an integer (number of frequencies); got "
+                            f"{type(n).__name__} {describe(n)}")
+        if n < 0:
+            raise ValueError(f"n must be a non-negative integer; got {describe(n)}")
+        limits.check("n", int(n), "roots", "frequencies of a rod at once")
+        return int(n)
+
+    def natural_frequencies(self, n: int) -> np.ndarray:
+        """First n free-free frequencies ``k pi/tau`` [rad/s] (the rigid mode left out)."""
+        return np.arange(1, self._check_n(n) + 1) * (math.pi / self.travel_time)
+
+    def cantilever_frequencies(self, n: int) -> np.ndarray:
+        """First n clamped-free frequencies ``(k - 1/2) pi/tau`` [rad/s] (zeros of W)."""
+        return (np.arange(1, self._check_n(n) + 1) - 0.5) * (math.pi / self.travel_time)
+
+    def cantilever_frequencies_below(self, omega_max: float) -> np.ndarray:
+        """Every clamped-free frequency up to ``omega_max`` [rad/s], and the next one."""
+        n = int(max(omega_max, 0.0) * self.travel_time / math.pi + 1.5) + 1
+        return self.cantilever_frequencies(n)
+
+    # -- exact W ------------------------------------------------------------------------------
+    def W(self, s) -> np.ndarray:
+        """Exact root compliance ``q(0)/P`` [m/N or rad/(N*m)], shape ``np.shape(s)``.
+
+        Undamped: ``z coth(z)/(m s**2)``; damped: the digamma form (module docstring).
+        """
+        s = as_frequency_array(s)
+        if np.any(s == 0):
+            raise ValueError("s = 0 is the rigid-body pole of W (W is infinite there) [rad/s]")
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            W = self._W(s)
+        if not np.all(np.isfinite(W)):
+            raise ValueError("s is a natural frequency of the undamped rod: W is infinite "
+                             "there [rad/s]")
+        return W
+
+    def _W(self, s: np.ndarray) -> np.ndarray:
+        m = self.rigid_inertia
+        if self.damping_ratio == 0.0:
+            zcoth, _ = zcoth_and_tanh_over_z(s * self.travel_time)
+            return zcoth / (m * s**2)
+        zeta = self.damping_ratio
+        Omega = math.pi / self.travel_time
+        a = s / Omega
+        root = math.sqrt(1.0 - zeta * zeta)
+        p = a * complex(-zeta, root)
+        q = a * complex(-zeta, -root)
+        psi = scipy.special.psi
+        return 1.0 / (m * s**2) + 2.0 / (m * Omega**2) * (psi(1.0 - q) - psi(1.0 - p)) / (p - q)
+
+    def dynamic_stiffness(self, s) -> np.ndarray:
+        """Exact root dynamic stiffness ``D = 1/W`` [N/m or N*m/rad], shape ``np.shape(s)``.
+
+        Undamped: ``m s**2 tanh(z)/z``, infinite exactly at a clamped-free frequency; s = 0
+        gives 0 (a free rod offers no static stiffness).
+        """
+        s = as_frequency_array(s)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            return self._D(s)
+
+    def _D(self, s: np.ndarray) -> np.ndarray:
+        if self.damping_ratio == 0.0:
+            _, tanhz = zcoth_and_tanh_over_z(s * self.travel_time)
+            return self.rigid_inertia * s**2 * tanhz
+        D = np.zeros(s.shape, dtype=np.complex128)
+        nonzero = s != 0
+        D[nonzero] = 1.0 / self._W(s[nonzero])
+        return D
+
+    # -- modal data ---------------------------------------------------------------------------
+    def free_free_modes(self, n: int):
+        """Root values b_k, tip values phi_k(L) and frequencies of the first n free-free modes.
+
+        Mass-normalised ``phi_k = sqrt(2/m) cos(k pi x/L)``: ``b_k = sqrt(2/m)``,
+        ``phi_k(L) = (-1)**k sqrt(2/m)``, ``w_k = k pi/tau``.
+        """
+        k = np.arange(1, n + 1)
+        amplitude = math.sqrt(2.0 / self.rigid_inertia)
+        return (np.full(n, amplitude), amplitude * (-1.0) ** k,
+                k * (math.pi / self.travel_time))
+
+    def free_free_tail(self, n: int, power: int) -> tuple[float, float]:
+        """``sum_{k>n} b_k**2/w_k**power`` and ``sum_{k>n} phi_k(L) b_k/w_k**power``.
+
+        ``(2/m) (tau/pi)**p`` times the Hurwitz zeta ``zeta(p, n + 1)`` and its alternating
+        twin ``sum_{k>n} (-1)**k k**-p = (-1)**(n+1) 2**-p [zeta(p, (n+1)/2) - zeta(p,
+        (n+2)/2)]``, exact, no cancellation.
+        """
+        f = 2.0 / self.rigid_inertia * (self.travel_time / math.pi) ** power
+        zeta = scipy.special.zeta
+        alternating = ((-1.0) ** (n + 1) * 2.0**-power
+                       * (zeta(power, (n + 1) / 2.0) - zeta(power, (n + 2) / 2.0)))
+        return f * float(zeta(power, n + 1.0)), f * float(alternating)
+
+    def cantilever_modes(self, n: int):
+        """Participation factors, tip values and frequencies of the first n cantilever modes.
+
+        ``psi_k = sqrt(2/m) sin(b_k pi x/L)``, ``b_k = k - 1/2``: participation
+        ``integral mu psi_k dx = sqrt(2 m)/(b_k pi)`` (their squares sum to m), tip value
+        ``(-1)**(k+1) sqrt(2/m)``, frequency ``b_k pi/tau``.
+        """
+        b = np.arange(1, n + 1) - 0.5
+        m = self.rigid_inertia
+        return (math.sqrt(2.0 * m) / (b * math.pi), math.sqrt(2.0 / m) * (-1.0) ** (b - 0.5),
+                b * (math.pi / self.travel_time))
+
+    def cantilever_participation_tail(self, n: int) -> float:
+        """``sum_{k>n}`` of the squared participation factors: ``(2 m/pi**2) zeta(2, n + 1/2)``,
+        the mass the first n cantilever modes leave to the others."""
+        return 2.0 * self.rigid_inertia / math.pi**2 * float(scipy.special.zeta(2.0, n + 0.5))
+
+    def projected_damping(self, n: int) -> np.ndarray:
+        r"""The rod's modal damping in its first n cantilever modes, shape (n, n) [1/s].
+
+        ``C = sum_j 2 zeta w_j O_j O_j^T`` over every free-free mode j, with the overlaps
+        ``O_ji = integral mu phi_j psi_i dx = (2/pi) b_i/(b_i**2 - j**2)`` (b_i = i - 1/2).
+        Summed in closed form: with ``S(b, b') = sum_j j/((j**2 - b**2)(j**2 - b'**2))``,
+        ``C_ii' = 2 zeta Omega (4/pi**2) b b' S(b, b')``, and from ``j/(j**2 - b**2) =
+        [1/(j - b) + 1/(j + b)]/2`` and the digamma series,
+        ``S(b, b') = [g(b') - g(b)]/(2 (b**2 - b'**2))``, ``g(b) = psi(1 - b) + psi(1 + b) =
+        2 psi(b) + 1/b`` at half-integers, and on the diagonal
+        ``S(b, b) = -g'(b)/(4 b) = (pi**2 + 1/b**2 - 2 psi'(b))/(4 b)`` (the reflection
+        ``psi(1 - b) = psi(b) + pi cot(pi b)`` contributes ``-pi**2/sin(pi b)**2 = -pi**2`` to
+        g'). Exact: no truncation of the sum over j.
+        """
+        b = np.arange(1, n + 1) - 0.5
+        g = 2.0 * scipy.special.psi(b) + 1.0 / b
+        with np.errstate(divide="ignore", invalid="ignore"):
+            S = (g[None, :] - g[:, None]) / (2.0 * (b[:, None] ** 2 - b[None, :] ** 2))
+        diagonal = (math.pi**2 + 1.0 / b**2 - 2.0 * scipy.special.polygamma(1, b)) / (4.0 * b)
+        S[np.diag_indices(n)] = diagonal
+        Omega = math.pi / self.travel_time
+        C = 2.0 * self.damping_ratio * Omega * (4.0 / math.pi**2) * np.outer(b, b) * S
+        return 0.5 * (C + C.T)
