@@ -21,9 +21,10 @@ static flexibility ``L/(3 S)`` of a member loaded by its own inertia. At ``s = i
 ``W = -cot(w tau)/(c w)``: poles at the free-free frequencies ``k pi/tau`` and zeros at the
 clamped-free ones ``(k - 1/2) pi/tau`` (k = 1, 2, ...).
 
-Evaluation: for ``|z| < 1/2`` the power series of ``z coth z`` and ``tanh(z)/z`` (Bernoulli
-numbers; radius pi/2, 24 terms leave below 1e-20); beyond, ``t = exp(-2 z)`` with ``Re z >=
-0`` (odd symmetry for Re z < 0), ``|t| <= 1``, ``coth z = (1 + t)/(1 - t)``, never overflowing.
+Evaluation: with ``Re z >= 0`` (both ``z coth z`` and ``tanh(z)/z`` are even), ``t = exp(-2 z)``
+has ``|t| <= 1`` and ``1 - t = -expm1(-2 z)`` keeps full relative accuracy near z = 0, so
+``z coth z = z (1 + t)/(1 - t)`` and ``tanh(z)/z = (1 - t)/((1 + t) z)`` never overflow and
+never cancel.
 
 Modal damping
 -------------
@@ -64,52 +65,26 @@ __all__ = ["Rod", "MOTIONS"]
 MOTIONS = {"axial": ("axial_stiffness", "linear_density"),
            "torsion": ("torsional_stiffness", "torsional_inertia")}
 
-_SERIES_RADIUS = 0.5
-_N_TERMS = 24
-
-
-def _series():
-    """Coefficients in z**2 of z coth z and tanh(z)/z (Bernoulli numbers B_2k)."""
-    B = scipy.special.bernoulli(2 * _N_TERMS)
-    k = np.arange(_N_TERMS)
-    factorial = scipy.special.factorial(2 * k, exact=False)
-    zcoth = B[2 * k] * 4.0**k / factorial
-    j = k + 1
-    tanh_over_z = B[2 * j] * 4.0**j * (4.0**j - 1.0) / scipy.special.factorial(2 * j)
-    return zcoth, tanh_over_z
-
-
-_ZCOTH, _TANH_OVER_Z = _series()
-
-
-def _horner(coefficients: np.ndarray, x: np.ndarray) -> np.ndarray:
-    out = np.zeros_like(x)
-    for c in coefficients[::-1]:
-        out = out * x + c
-    return out
-
-
 def zcoth_and_tanh_over_z(z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``z coth z`` and ``tanh(z)/z`` at complex z, stable at any |z| (module docstring).
 
-    Returns inf where ``sinh z = 0`` (z = i k pi, k != 0) or ``cosh z = 0`` respectively.
+    Both are even in z, so ``Re z >= 0`` is taken; with ``t = exp(-2 z)`` (``|t| <= 1``) and
+    ``e = expm1(-2 z) = t - 1``, ``tanh(z)/z = -e/((1 + t) z)`` and ``z coth z =
+    z (1 + t)/(-e)``: no overflow, and no cancellation near z = 0, where expm1 keeps full
+    relative accuracy (both tend to 1; z = 0 is set exactly). Returns inf where
+    ``sinh z = 0`` (z = i k pi, k != 0) or ``cosh z = 0`` respectively.
     """
     z = np.asarray(z, dtype=np.complex128)
-    zcoth = np.empty_like(z)
-    tanhz = np.empty_like(z)
-    small = np.abs(z) < _SERIES_RADIUS
-    if np.any(small):
-        z2 = z[small] ** 2
-        zcoth[small] = _horner(_ZCOTH, z2)
-        tanhz[small] = _horner(_TANH_OVER_Z, z2)
-    big = ~small
-    if np.any(big):
-        zb = z[big]
-        zz = np.where(zb.real < 0.0, -zb, zb)  # both functions are even in z
-        t = np.exp(-2.0 * zz)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            zcoth[big] = zz * (1.0 + t) / (1.0 - t)
-            tanhz[big] = (1.0 - t) / ((1.0 + t) * zz)
+    zz = np.where(z.real < 0.0, -z, z)
+    t = np.exp(-2.0 * zz)
+    e = np.expm1(-2.0 * zz)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        zcoth = zz * (1.0 + t) / -e
+        tanhz = -e / ((1.0 + t) * zz)
+    zero = zz == 0
+    if np.any(zero):
+        zcoth[zero] = 1.0
+        tanhz[zero] = 1.0
     return zcoth, tanhz
 
 

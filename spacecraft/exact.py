@@ -212,13 +212,9 @@ class ExactReference:
             self._clamped[k] = wc
         return wc
 
-    def count(self, omega: np.ndarray) -> np.ndarray:
-        """Wittrick-Williams count: coupled frequencies (rigid-body ones included) < omega.
-
-        ``J(w) = sum_i J0_i(w) + s{Z(iw)}`` (module docstring). Exactly at an appendage's
-        clamped frequency D_i is infinite; the count there is its limit from below (a natural
-        frequency is counted only above it), taken by evaluating Z one rounding step lower.
-        """
+    def _stiffness_at(self, omega: np.ndarray) -> np.ndarray:
+        """Real symmetric Z(i omega) of the undamped spacecraft; at an appendage's clamped
+        frequency (D infinite) its limit from below, one rounding step lower."""
         omega = np.asarray(omega, dtype=float)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             Z = self.hub_dynamic_stiffness(1j * omega, undamped=True).real
@@ -232,27 +228,63 @@ class ExactReference:
         if np.any(bad):  # pragma: no cover - needs a pole on 8 consecutive doubles
             raise FloatingPointError("the dynamic stiffness of an appendage is not finite near "
                                      f"omega = {describe(omega[bad])} [rad/s]")
-        Z = 0.5 * (Z + np.swapaxes(Z, -1, -2))
-        # Sylvester's law of inertia: negative eigenvalues of the symmetric Z. eigvalsh is
-        # backward stable, so the count is exact unless an eigenvalue is within round-off of
-        # zero, i.e. omega within round-off of a coupled frequency: what bisection needs.
-        # Z is equilibrated first (translations in N/m, rotations in N*m/rad).
-        scale = np.sqrt(np.abs(np.diagonal(Z, axis1=-2, axis2=-1)))
-        scale = np.where(scale > 0, 1.0 / np.where(scale > 0, scale, 1.0), 1.0)
-        negative = (np.linalg.eigvalsh(Z * scale[..., :, None] * scale[..., None, :]) < 0
-                    ).sum(axis=-1)
+        return 0.5 * (Z + np.swapaxes(Z, -1, -2))
+
+    @staticmethod
+    def _scaling(Z: np.ndarray) -> np.ndarray:
+        """Diagonal equilibration 1/sqrt|Z_ii| (1 where Z_ii = 0): N/m against N*m/rad."""
+        diagonal = np.abs(np.diagonal(Z, axis1=-2, axis2=-1))
+        return np.where(diagonal > 0, 1.0 / np.sqrt(np.where(diagonal > 0, diagonal, 1.0)), 1.0)
+
+    def _clamped_below(self, omega: np.ndarray) -> np.ndarray:
+        """Clamped frequencies of all appendages below each omega (the J0 of the count)."""
         top = float(np.max(omega, initial=0.0))
-        clamped = sum(np.searchsorted(self.clamped(k, top), omega)
-                      for k in range(len(self.mounts)))
-        return negative + clamped
+        return sum(np.searchsorted(self.clamped(k, top), omega)
+                   for k in range(len(self.mounts)))
+
+    def count(self, omega: np.ndarray) -> np.ndarray:
+        """Wittrick-Williams count: coupled frequencies (rigid-body ones included) < omega.
+
+        ``J(w) = sum_i J0_i(w) + s{Z(iw)}`` (module docstring). Exactly at an appendage's
+        clamped frequency D_i is infinite; the count there is its limit from below (a natural
+        frequency is counted only above it), taken by evaluating Z one rounding step lower.
+        """
+        omega = np.asarray(omega, dtype=float)
+        return self._count_from(self._stiffness_at(omega), omega)
+
+    def _count_from(self, Z: np.ndarray, omega: np.ndarray) -> np.ndarray:
+        """The count at omega from Z(i omega) (:meth:`_stiffness_at`)."""
+        # Sylvester's law of inertia: negative eigenvalues of the symmetric Z, equilibrated
+        # (a congruence: same inertia). eigvalsh is backward stable, so the count is exact
+        # unless an eigenvalue is within round-off of zero, i.e. omega within round-off of a
+        # coupled frequency: what bisection needs.
+        S = self._scaling(Z)
+        negative = (np.linalg.eigvalsh(Z * S[..., :, None] * S[..., None, :]) < 0).sum(axis=-1)
+        return negative + self._clamped_below(omega)
 
     def frequencies(self, n: int) -> np.ndarray:
-        """First n elastic coupled frequencies by the Wittrick-Williams count and bisection.
+        """First n elastic coupled frequencies by the Wittrick-Williams count.
 
         Bracket: with the hub held, the spacecraft falls apart into the clamped appendages; by
         Rayleigh's interlacing (n_hub constraints) the k-th elastic coupled frequency is at
         least the k-th clamped frequency of them all, so half the lowest clamped frequency is
         below every elastic one. The upper end doubles until the count reaches n + n_rigid.
+
+        Bisection on the count then isolates each frequency: a bracket [lo, hi] whose counts
+        are k - 1 and k. Inside it, the function
+
+            F(w) = det(S Z(i w) S) prod_p (1 - w**2/w_p**2)
+
+        (S the diagonal equilibration at lo, w_p the clamped frequencies of all appendages
+        in the bracket, with their multiplicity) is continuous, since each pole of Z is a
+        rank-one pole of one appendage's D whose sign flip the factor cancels, and it changes
+        sign exactly where the count does: at the frequency, and only there. A safeguarded
+        secant method on F (:class:`_Secant`) converges superlinearly (a few evaluations
+        instead of 40 bisections) and keeps the bracket, so the result is as safe as bisection and
+        accurate to the same rounding (both are decided by the sign of the eigenvalue of Z
+        that crosses zero). One Z evaluation per step serves every frequency at once,
+        bisecting or refining. A multiple frequency (never isolated: a symmetric spacecraft)
+        is finished by bisection.
         """
         n_rigid = self.n_hub
         n_total = n + n_rigid
@@ -261,23 +293,173 @@ class ExactReference:
         if not np.isfinite(lowest):
             raise ValueError("the spacecraft has no elastic mode: no appendage has a clamped "
                              "natural frequency")
-        lo = np.full(n, 0.5 * lowest)
-        hi = np.full(1, lowest)
-        while self.count(hi)[0] < n_total:
-            hi = hi * 2.0
-            if not np.isfinite(hi[0]) or hi[0] > 1e12 * lowest:
+        # the top of the search: the first of lowest * 2**k whose count reaches n + n_rigid,
+        # twelve at a time
+        ladder = lowest * 2.0 ** np.arange(12)
+        while True:
+            reached = np.flatnonzero(self.count(ladder) >= n_total)
+            if reached.size:
+                top = ladder[reached[0]]
+                break
+            if ladder[-1] > 1e12 * lowest or not np.isfinite(ladder[-1]):
                 raise ValueError(
                     f"the spacecraft has fewer than n = {n} elastic natural frequencies "
-                    f"below {hi[0]:.3g} rad/s (a finite appendage has a finite number)")
-        hi = np.full(n, hi[0])
+                    f"below {ladder[-1]:.3g} rad/s (a finite appendage has a finite number)")
+            ladder = ladder[-1] * 2.0 ** np.arange(1, 13)
+        poles = np.sort(np.concatenate([self.clamped(k, float(top))
+                                        for k in range(len(self.mounts))]))
+        # First brackets from one evaluation at the eighths between consecutive clamped
+        # frequencies below the top and beside each (1e-4 and 1e-2 relative): these interlace the
+        # coupled frequencies (Rayleigh), and a coupled frequency next to a clamped one (a
+        # mode that leaves the hub almost still) is split from its neighbours, so most
+        # brackets hold one frequency at once, without bisection steps. (Not at the clamped
+        # frequencies themselves: next to a pole of Z the eigenvalues that decide the count
+        # are swamped by the pole's rounding.)
+        dividers = np.unique(poles[(poles > 0.5 * lowest) & (poles < top)])
+        edges = np.concatenate([[0.5 * lowest], dividers, [top]])
+        inner = edges[:-1, None] + np.diff(edges)[:, None] * (np.arange(1, 8) / 8.0)
+        beside = dividers[:, None] * (1.0 + np.array([-1e-2, -1e-4, 1e-4, 1e-2]))
+        samples = np.unique(np.concatenate([edges[[0, -1]], inner.ravel(), beside.ravel()]))
+        Z_samples = self._stiffness_at(samples)
+        counts = self._count_from(Z_samples, samples)
         target = np.arange(n_rigid + 1, n_total + 1)  # frequency k is where the count reaches k
+        upper = np.searchsorted(counts, target, side="left")  # first sample counting >= k
+        lo, hi = samples[upper - 1], samples[upper]
+        Z_lo, Z_hi = Z_samples[upper - 1], Z_samples[upper]
+        count_lo, count_hi = counts[upper - 1], counts[upper]
+        refine = _Secant(n, self.n_hub)
         active = np.arange(n)
-        for _ in range(200):
-            mid = 0.5 * (lo[active] + hi[active])
-            above = self.count(mid) >= target[active]
-            hi[active] = np.where(above, mid, hi[active])
-            lo[active] = np.where(above, lo[active], mid)
-            active = active[hi[active] - lo[active] > 4e-16 * hi[active]]
+        for _ in range(300):
+            active = active[(hi[active] - lo[active] > 4e-16 * hi[active])
+                            & ~refine.done[active]]
             if active.size == 0:
                 break
-        return 0.5 * (lo + hi)
+            isolated = ((count_lo[active] == target[active] - 1)
+                        & (count_hi[active] == target[active]))
+            start = active[isolated & ~refine.running[active]]
+            if start.size:
+                inner = [poles[(poles > lo[k]) & (poles < hi[k])] for k in start]
+                on_end = np.isin(lo[start], poles) | np.isin(hi[start], poles)
+                ok = ~on_end
+                if np.any(ok):
+                    refine.start(start[ok], lo, hi, Z_lo[start[ok]], Z_hi[start[ok]],
+                                 [p for p, e in zip(inner, ok) if e])
+            by_refine = active[refine.running[active]]
+            by_bisection = active[~refine.running[active]]
+            points = np.concatenate([refine.candidates(by_refine, lo, hi),
+                                     0.5 * (lo[by_bisection] + hi[by_bisection])])
+            Z = self._stiffness_at(points)
+            m = by_refine.size
+            if m:
+                refine.update(by_refine, points[:m], Z[:m], lo, hi)
+            if by_bisection.size:
+                mid, Zb = points[m:], Z[m:]
+                counts = self._count_from(Zb, mid)
+                above = counts >= target[by_bisection]
+                up, down = by_bisection[above], by_bisection[~above]
+                hi[up], count_hi[up], Z_hi[up] = mid[above], counts[above], Zb[above]
+                lo[down], count_lo[down], Z_lo[down] = mid[~above], counts[~above], Zb[~above]
+        return np.where(refine.done, refine.root, 0.5 * (lo + hi))
+
+
+class _Secant:
+    """Safeguarded secant (Dekker's method) on F of :meth:`ExactReference.frequencies`, for
+    many roots at once.
+
+    F is kept as a sign and a logarithm, ``log|F| = log|det(S Z S)| + sum log|1 -
+    w**2/w_p**2|``, so that no value overflows and the secant uses only ratios of F at
+    nearby points. Each root keeps a bracket [a, b] with F of opposite signs, b the end with
+    the smaller |F|, and steps by the secant through b and the previous iterate when that
+    lands between b and the midpoint, by bisection otherwise, and by bisection whenever the
+    bracket has not halved in three steps (T. J. Dekker 1969; R. P. Brent, "Algorithms for
+    Minimization without Derivatives", 1973, ch. 4). A step shorter than the tolerance is
+    lengthened to it, so the bracket closes to ``4.4e-16 |b|`` once the secant has converged.
+    """
+
+    def __init__(self, n: int, n_hub: int):
+        self.running = np.zeros(n, dtype=bool)
+        self.done = np.zeros(n, dtype=bool)
+        self.root = np.zeros(n)
+        self.S = np.ones((n, n_hub))
+        self.poles = [np.zeros(0)] * n
+        self.a, self.b, self.previous = np.zeros(n), np.zeros(n), np.zeros(n)
+        # F at a, b and the previous iterate: signs and log magnitudes
+        self.sa, self.sb, self.sp = np.zeros(n), np.zeros(n), np.zeros(n)
+        self.la, self.lb, self.lp = np.zeros(n), np.zeros(n), np.zeros(n)
+        self.width = np.zeros(n)
+        self.steps = np.zeros(n, dtype=int)
+
+    def _F(self, rows, omega, Z):
+        """(sign, log|F|) at omega; a point exactly on a pole is taken from below, as Z."""
+        S = self.S[rows]
+        sign, logdet = np.linalg.slogdet(Z * S[:, :, None] * S[:, None, :])
+        for j, k in enumerate(rows):
+            factor = 1.0 - (omega[j] / self.poles[k]) ** 2
+            factor[factor == 0.0] = 4.4e-16
+            sign[j] *= np.prod(np.sign(factor))
+            logdet[j] += np.sum(np.log(np.abs(factor)))
+        return sign, logdet
+
+    def start(self, rows, lo, hi, Z_lo, Z_hi, poles):
+        diagonal = np.abs(np.diagonal(Z_lo, axis1=-2, axis2=-1))
+        self.S[rows] = np.where(diagonal > 0, 1.0 / np.sqrt(np.where(diagonal > 0, diagonal,
+                                                                     1.0)), 1.0)
+        for k, p in zip(rows, poles):
+            self.poles[k] = p
+        sa, la = self._F(rows, lo[rows], Z_lo)
+        sb, lb = self._F(rows, hi[rows], Z_hi)
+        good = (sa * sb < 0) & np.isfinite(la) & np.isfinite(lb)
+        rows = rows[good]
+        self.a[rows], self.sa[rows], self.la[rows] = lo[rows], sa[good], la[good]
+        self.b[rows], self.sb[rows], self.lb[rows] = hi[rows], sb[good], lb[good]
+        self.previous[rows], self.sp[rows], self.lp[rows] = lo[rows], sa[good], la[good]
+        self.width[rows] = hi[rows] - lo[rows]
+        self.steps[rows] = 0
+        self.running[rows] = True
+
+    def candidates(self, rows, lo, hi):
+        """Next point of each running root (class docstring)."""
+        swap = rows[self.la[rows] < self.lb[rows]]
+        for first, second in ((self.a, self.b), (self.sa, self.sb), (self.la, self.lb)):
+            first[swap], second[swap] = second[swap], first[swap].copy()
+        a, b, p = self.a[rows], self.b[rows], self.previous[rows]
+        # the secant partner: the previous iterate, or the contrapoint when the swap has made
+        # the previous iterate b itself (regula falsi then)
+        own = p == b
+        p = np.where(own, a, p)
+        sp = np.where(own, self.sa[rows], self.sp[rows])
+        lp = np.where(own, self.la[rows], self.lp[rows])
+        middle = 0.5 * (a + b)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            ratio = sp * self.sb[rows] * np.exp(lp - self.lb[rows])
+            secant = b - (b - p) / (1.0 - ratio)  # b - F(b) (b - p)/(F(b) - F(p))
+        between = np.isfinite(secant) & ((secant - b) * (secant - middle) < 0)
+        checkpoint = (self.steps[rows] > 0) & (self.steps[rows] % 3 == 0)
+        slow = checkpoint & (np.abs(b - a) > 0.5 * self.width[rows])
+        self.width[rows] = np.where(checkpoint, np.abs(b - a), self.width[rows])
+        point = np.where(between & ~slow, secant, middle)
+        # a secant step below the tolerance (or rounding to b itself) means b is the root to
+        # rounding: step by the tolerance towards a, which closes the bracket
+        tolerance = 2.2e-16 * np.abs(b)
+        short = (np.abs(point - b) < tolerance) | (np.isfinite(secant) & ~slow
+                                                    & (np.abs(secant - b) < tolerance))
+        return np.where(short, b + np.sign(middle - b) * tolerance, point)
+
+    def update(self, rows, points, Z, lo, hi):
+        sc, lc = self._F(rows, points, Z)
+        zero = (sc == 0.0) | np.isneginf(lc)
+        self.previous[rows], self.sp[rows], self.lp[rows] = (self.b[rows], self.sb[rows],
+                                                             self.lb[rows])
+        same = rows[sc == self.sa[rows]]
+        # the old b becomes the contrapoint when the new point is on a's side
+        self.a[same], self.sa[same], self.la[same] = self.b[same], self.sb[same], self.lb[same]
+        self.b[rows], self.sb[rows], self.lb[rows] = points, sc, lc
+        self.steps[rows] += 1
+        lo[rows] = np.minimum(self.a[rows], self.b[rows])
+        hi[rows] = np.maximum(self.a[rows], self.b[rows])
+        closed = zero | (hi[rows] - lo[rows] <= 4.5e-16 * hi[rows])
+        finished = rows[closed]
+        self.root[finished] = np.where(zero[closed], points[closed],
+                                       0.5 * (lo[finished] + hi[finished]))
+        self.done[finished] = True
+        self.running[finished] = False
