@@ -46,6 +46,8 @@ from appendages.interface import S_RANGE, describe, equilibrate, inverse_symmetr
 
 __all__ = ["ExactReference", "clamped_frequencies", "dynamic_stiffness_of", "frequency_vector"]
 
+_CHUNK = 65536  # frequencies per evaluation of Z in the count
+
 
 def frequency_vector(omega) -> np.ndarray:
     """omega as a 1-D float64 array of positive finite frequencies [rad/s], or an error."""
@@ -214,8 +216,12 @@ class ExactReference:
 
     def _stiffness_at(self, omega: np.ndarray) -> np.ndarray:
         """Real symmetric Z(i omega) of the undamped spacecraft; at an appendage's clamped
-        frequency (D infinite) its limit from below, one rounding step lower."""
+        frequency (D infinite) its limit from below, one rounding step lower. Evaluated in
+        chunks of 65536 frequencies (bounded memory, within the ``points`` limit)."""
         omega = np.asarray(omega, dtype=float)
+        if omega.size > _CHUNK:
+            return np.concatenate([self._stiffness_at(omega[k:k + _CHUNK])
+                                   for k in range(0, omega.size, _CHUNK)])
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             Z = self.hub_dynamic_stiffness(1j * omega, undamped=True).real
             bad = ~np.all(np.isfinite(Z), axis=(-2, -1))
@@ -317,7 +323,9 @@ class ExactReference:
         # are swamped by the pole's rounding.)
         dividers = np.unique(poles[(poles > 0.5 * lowest) & (poles < top)])
         edges = np.concatenate([[0.5 * lowest], dividers, [top]])
-        inner = edges[:-1, None] + np.diff(edges)[:, None] * (np.arange(1, 8) / 8.0)
+        # (eighths while they are few; midpoints for thousands of frequencies)
+        fractions = np.arange(1, 8) / 8.0 if dividers.size <= 4096 else np.array([0.5])
+        inner = edges[:-1, None] + np.diff(edges)[:, None] * fractions
         beside = dividers[:, None] * (1.0 + np.array([-1e-2, -1e-4, 1e-4, 1e-2]))
         samples = np.unique(np.concatenate([edges[[0, -1]], inner.ravel(), beside.ravel()]))
         Z_samples = self._stiffness_at(samples)
@@ -338,12 +346,16 @@ class ExactReference:
                         & (count_hi[active] == target[active]))
             start = active[isolated & ~refine.running[active]]
             if start.size:
-                inner = [poles[(poles > lo[k]) & (poles < hi[k])] for k in start]
-                on_end = np.isin(lo[start], poles) | np.isin(hi[start], poles)
-                ok = ~on_end
-                if np.any(ok):
-                    refine.start(start[ok], lo, hi, Z_lo[start[ok]], Z_hi[start[ok]],
-                                 [p for p, e in zip(inner, ok) if e])
+                ok = start[~(np.isin(lo[start], poles) | np.isin(hi[start], poles))]
+                if ok.size:
+                    # the clamped frequencies strictly inside each bracket, inf-padded
+                    first = np.searchsorted(poles, lo[ok], side="right")
+                    count = np.searchsorted(poles, hi[ok], side="left") - first
+                    offsets = np.arange(max(int(count.max()), 1))
+                    index = np.minimum(first[:, None] + offsets, max(poles.size - 1, 0))
+                    inner = np.where(offsets < count[:, None],
+                                     poles[index] if poles.size else np.inf, np.inf)
+                    refine.start(ok, lo, hi, Z_lo[ok], Z_hi[ok], inner)
             by_refine = active[refine.running[active]]
             by_bisection = active[~refine.running[active]]
             points = np.concatenate([refine.candidates(by_refine, lo, hi),
@@ -381,7 +393,7 @@ class _Secant:
         self.done = np.zeros(n, dtype=bool)
         self.root = np.zeros(n)
         self.S = np.ones((n, n_hub))
-        self.poles = [np.zeros(0)] * n
+        self.poles = np.full((n, 1), np.inf)  # clamped frequencies in each bracket, inf-padded
         self.a, self.b, self.previous = np.zeros(n), np.zeros(n), np.zeros(n)
         # F at a, b and the previous iterate: signs and log magnitudes
         self.sa, self.sb, self.sp = np.zeros(n), np.zeros(n), np.zeros(n)
@@ -393,19 +405,21 @@ class _Secant:
         """(sign, log|F|) at omega; a point exactly on a pole is taken from below, as Z."""
         S = self.S[rows]
         sign, logdet = np.linalg.slogdet(Z * S[:, :, None] * S[:, None, :])
-        for j, k in enumerate(rows):
-            factor = 1.0 - (omega[j] / self.poles[k]) ** 2
-            factor[factor == 0.0] = 4.4e-16
-            sign[j] *= np.prod(np.sign(factor))
-            logdet[j] += np.sum(np.log(np.abs(factor)))
-        return sign, logdet
+        factor = 1.0 - (omega[:, None] / self.poles[rows]) ** 2
+        factor[factor == 0.0] = 4.4e-16
+        return sign * np.prod(np.sign(factor), axis=1), logdet + np.sum(np.log(np.abs(factor)),
+                                                                        axis=1)
 
     def start(self, rows, lo, hi, Z_lo, Z_hi, poles):
         diagonal = np.abs(np.diagonal(Z_lo, axis1=-2, axis2=-1))
         self.S[rows] = np.where(diagonal > 0, 1.0 / np.sqrt(np.where(diagonal > 0, diagonal,
                                                                      1.0)), 1.0)
-        for k, p in zip(rows, poles):
-            self.poles[k] = p
+        width = poles.shape[1]
+        if width > self.poles.shape[1]:
+            self.poles = np.hstack([self.poles, np.full((self.poles.shape[0],
+                                                         width - self.poles.shape[1]), np.inf)])
+        self.poles[rows] = np.inf
+        self.poles[rows, :width] = poles
         sa, la = self._F(rows, lo[rows], Z_lo)
         sb, lb = self._F(rows, hi[rows], Z_hi)
         good = (sa * sb < 0) & np.isfinite(la) & np.isfinite(lb)
