@@ -1227,7 +1227,8 @@ class Beam:
         return tuple(row.reshape(s.shape) for row in d)
 
     # -- finite models ------------------------------------------------------------------------
-    def truncated(self, n_modes: int, *, method: str = "craig-bampton"):
+    def truncated(self, n_modes: int, *, method: str = "craig-bampton",
+                  modes_per_motion: dict | None = None):
         """A finite modal model of this beam with ``n_modes`` bending modes.
 
         Parameters
@@ -1244,10 +1245,14 @@ class Beam:
             modes, i.e. the hybrid coordinates of flexible-spacecraft dynamics; the zeros of W
             and coupled frequencies converge much faster (see benchmarks/truncation_table.py).
 
+        modes_per_motion : dict, optional
+            Three-axis model only: modes per motion (``"xy"``, ``"xz"``, ``"torsion"``,
+            ``"axial"``) instead of the ``n_modes`` lowest of all (:class:`ModalBeam`).
+
         Returns
         -------
         ModalBeam
         """
         from .modal import ModalBeam
 
-        return ModalBeam(self, n_modes, method=method)
+        return ModalBeam(self, n_modes, method=method, modes_per_motion=modes_per_motion)

@@ -465,6 +465,10 @@ class ModalBeam(FiniteAppendage):
         that tie with the last (a round section's twin), :attr:`modes_per_motion`.
     method : {"craig-bampton", "residual", "free-free"}
         Reduction method.
+    modes_per_motion : dict, optional
+        The three-axis model's modes per motion instead (keys ``"xy"``, ``"xz"``,
+        ``"torsion"``, ``"axial"``; missing ones 0): e.g. the planar model's modes in x-y
+        and a few in the other motions.
 
     Raises
     ------
@@ -473,7 +477,8 @@ class ModalBeam(FiniteAppendage):
         ``appendages.limits.raised(modes=...)``).
     """
 
-    def __init__(self, beam, n_modes: int, *, method: str = "craig-bampton"):
+    def __init__(self, beam, n_modes: int, *, method: str = "craig-bampton",
+                 modes_per_motion: dict | None = None):
         if isinstance(n_modes, (bool, np.bool_)) or not isinstance(n_modes, (int, np.integer)):
             raise TypeError(f"n_modes must be an integer (number of bending modes); got "
                             f"{type(n_modes).__name__} {describe(n_modes)}")
@@ -490,6 +495,18 @@ class ModalBeam(FiniteAppendage):
         self.beam = beam
         self.n_modes = int(n_modes)
         self.method = method
+        if modes_per_motion is not None:
+            if not isinstance(modes_per_motion, dict) or set(modes_per_motion) - set(MOTION_NAMES):
+                raise ValueError(f"modes_per_motion must be a dict with keys among "
+                                 f"{MOTION_NAMES}; got {describe(modes_per_motion)}")
+            counts = {name: modes_per_motion.get(name, 0) for name in MOTION_NAMES}
+            for name, count in counts.items():
+                if isinstance(count, (bool, np.bool_)) or not isinstance(count, (int, np.integer)) \
+                        or count < 0:
+                    raise ValueError(f"modes_per_motion['{name}'] must be a non-negative "
+                                     f"integer (modes); got {describe(count)}")
+                limits.check(f"modes_per_motion['{name}']", int(count), "modes", "modes")
+            self.__dict__["_modes_per_motion"] = {k: int(v) for k, v in counts.items()}
 
     def __repr__(self) -> str:
         return f"ModalBeam({self.beam!r}, n_modes={self.n_modes}, method={self.method!r})"
@@ -525,8 +542,10 @@ class ModalBeam(FiniteAppendage):
             return self
         cached = self.__dict__.get("_undamped")
         if cached is None:
+            counts = self.modes_per_motion if self.beam.three_axis else None
             cached = self.__dict__["_undamped"] = ModalBeam(self.beam.undamped(), self.n_modes,
-                                                            method=self.method)
+                                                            method=self.method,
+                                                            modes_per_motion=counts)
         return cached
 
     # -- the motions ----------------------------------------------------------------------------
@@ -541,10 +560,10 @@ class ModalBeam(FiniteAppendage):
     def modes_per_motion(self) -> dict:
         """Modes the three-axis model keeps per motion: ``{"xy": .., "xz": .., "torsion": ..,
         "axial": ..}`` (rigid motions: 0). Their sum is ``n_modes`` or more (ties)."""
+        self.beam._require_three_axis("a three-axis truncation")
         cached = self.__dict__.get("_modes_per_motion")
         if cached is None:
             beam, n = self.beam, self.n_modes
-            beam._require_three_axis("a three-axis truncation")
             kind = "cantilever_frequencies" if self.method == "craig-bampton" \
                 else "natural_frequencies"
             frequencies = {"xy": getattr(beam.planar_view("xy"), kind)(n),

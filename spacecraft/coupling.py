@@ -452,14 +452,13 @@ class Spacecraft:
                   else mount.appendage.root_model(6))
             tips = self._tip_rows(rm, mount.appendage.length)
             if disturbances:
-                for suffix, (_, absolute) in tips.items():
-                    if absolute is not None:
-                        inputs.append(f"{label}_tip_force{suffix}")
+                for _, force, _, absolute in tips:
+                    if force is not None:
+                        inputs.append(f"{label}_{force}")
                         load_columns.append(T.T @ absolute)
             if tip_deflection:
-                for suffix, (relative, _) in tips.items():
-                    outputs.append(f"{label}_{suffix.lstrip('_') or 'tip_deflection'}"
-                                   if self.three_axis else f"{label}_tip_deflection")
+                for motion, _, relative, _ in tips:
+                    outputs.append(f"{label}_{motion}")
                     out_pos.append(relative @ T)
                     out_vel.append(np.zeros(n))
             if root_loads:
@@ -517,18 +516,20 @@ class Spacecraft:
         states = [f"mode[{k}]" for k in keep] + [f"mode_rate[{k}]" for k in keep]
         return control.ss(A, B, Cmat, D, inputs=inputs, outputs=outputs, states=states, name=name)
 
-    def _tip_rows(self, rm, length: float) -> dict:
-        """Per tip signal: (elastic tip row, absolute tip displacement row or None).
+    def _tip_rows(self, rm, length: float) -> list:
+        """(output name, tip-force input name or None, elastic tip row, absolute row or None).
 
-        Planar: ``{"": (tip, tip + delta + L phi)}``. Three axes (:data:`TIP_MOTIONS`):
-        the deflections along local y (``v(L) = v(0) + L theta_z(0) + elastic``) and z
-        (``w(L) = w(0) - L theta_y(0) + elastic``), the twist (no tip-force input).
+        Planar: the tip deflection and the transverse tip force, whose work is done on the
+        absolute tip displacement ``delta + L phi + elastic``. Three axes
+        (:data:`~appendages.interface.TIP_MOTIONS`): the deflections along local y
+        (``v(L) = v(0) + L theta_z(0) + elastic``) and z (``w(L) = w(0) - L theta_y(0) +
+        elastic``) with their tip forces, and the twist (no input).
         """
         if not self.three_axis:
             absolute = rm.tip.copy()
             absolute[0] += 1.0
             absolute[1] += length
-            return {"": (rm.tip, absolute)}
+            return [("tip_deflection", "tip_force", rm.tip, absolute)]
         tip = rm.tip_rows
         y_abs = tip[0].copy()
         y_abs[1] += 1.0
@@ -536,8 +537,9 @@ class Spacecraft:
         z_abs = tip[1].copy()
         z_abs[2] += 1.0
         z_abs[4] -= length
-        return {f"_{TIP_MOTIONS[0]}": (tip[0], y_abs), f"_{TIP_MOTIONS[1]}": (tip[1], z_abs),
-                f"_{TIP_MOTIONS[2]}": (tip[2], None)}
+        return [(TIP_MOTIONS[0], "tip_force_y", tip[0], y_abs),
+                (TIP_MOTIONS[1], "tip_force_z", tip[1], z_abs),
+                (TIP_MOTIONS[2], None, tip[2], None)]
 
     @staticmethod
     def _output_rows(out_pos, out_vel, load_rows, Vk, lam, Ck, Bq):
