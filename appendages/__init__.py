@@ -5,14 +5,18 @@ from .beam import Beam, characteristic_roots
 from .chain import MOLENAAR_K, HingedChain
 from .equivalence import (EquivalenceResult, FitWarning, ModelQuantities, criterion, fit_chain,
                           spectral_errors)
-from .interface import (Appendage, ConvergenceError, FiniteAppendage, FlexsatError, RootModel)
+from .fit3d import fit_chain_3d
+from .interface import (Appendage, ConvergenceError, FiniteAppendage, FlexsatError, RootModel,
+                        three_axis_root_model)
 from .limits import LimitError
 from .modal import ModalBeam
+from .rod import Rod
 from .selection import ModelChoice, cheapest_model
 
 __all__ = [
     "Appendage", "Beam", "ConvergenceError", "EquivalenceResult", "FiniteAppendage",
     "FitWarning", "FlexsatError", "HingedChain", "LimitError", "MOLENAAR_K", "ModalBeam", "ModelChoice",
-    "ModelQuantities", "RootModel", "characteristic_roots", "cheapest_model", "criterion",
-    "equivalence", "fit_chain", "limits", "spectral_errors",
+    "ModelQuantities", "Rod", "RootModel", "characteristic_roots", "cheapest_model", "criterion",
+    "equivalence", "fit_chain", "fit_chain_3d", "limits", "spectral_errors",
+    "three_axis_root_model",
 ]

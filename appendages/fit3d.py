@@ -22,19 +22,24 @@ Bending: one fit serves both planes
     are then equal, as the Euler-Bernoulli beam's are.
 
 Torsion and axial motion: their own criterion
-    Each is a spring chain on the same bodies: inertias ``mu_k`` (the masses m_k for axial
-    motion; ``J_x,k = m_k rho*I_p/(rho*A)`` for torsion, the beam's radius of gyration of the
-    section, so that their sum is the beam's ``rho*I_p L``) joined by springs at the joints.
-    The springs are ``k_h = beta S/h_h exp(alpha xi_h)`` (S = GJ or EA; h_h the distance
-    between the centres of the two bodies the joint connects, the lumped-mass rule; xi_h the
-    joint's position over L minus 1/2): beta scales them all and alpha tilts them towards the
-    tip (alpha > 0) or the root. They are fitted to the exact rod's first free-free frequency
-    ``pi/tau`` (the first pole of its W) and its first clamped-free frequency ``pi/(2 tau)``
-    (the first zero of W), the rod's version of the paper's criterion: the ratio of the two
-    depends on alpha only, which is found by a bracketing root search, then beta matches the
-    pole exactly (both frequencies scale with sqrt(beta)). Where no alpha gives the ratio (two
-    bodies: one spring, nothing to tilt), the pole is matched and the zero is as close as
-    alpha in [-8, 8] allows; :func:`rod_chain_errors` reports both.
+    Each is a spring chain on the same bodies, joined by springs at the joints, fitted to the
+    exact rod's first free-free frequency ``pi/tau`` (the first pole of its W) and its first
+    clamped-free frequency ``pi/(2 tau)`` (the first zero of W): the rod's version of the
+    paper's criterion. Both frequencies scale with the springs, so a common factor beta
+    matches the pole exactly once one shape parameter has set their ratio to 2, found by a
+    bracketing root search:
+
+    * torsion: the bodies' torsional inertias enter no other motion, so they are free:
+      ``J_x,k`` proportional to ``m_k exp(gamma zeta_k)`` (zeta_k the body centre's position
+      over L minus 1/2), their sum the beam's ``rho*I_p L`` (a rigid property, like m and J
+      in bending); springs ``beta GJ/h_h`` (h_h the distance between the centres of the two
+      bodies the joint connects, the lumped-mass rule). Inertia towards the tip raises the
+      ratio without bound, towards the root lowers it to 1, so gamma always exists;
+    * axial motion: the inertias are the bodies' masses, fixed by the bending fit, and the
+      springs ``beta EA/h_h exp(alpha xi_h)`` are tilted (xi_h the joint's position over L
+      minus 1/2). Where no alpha in [-8, 8] gives the ratio (two bodies: one spring), the
+      pole is matched and the zero is as close as alpha allows; :func:`rod_chain_errors`
+      reports both.
 
 Damping
     A damped beam (modal damping ratio zeta) gives every joint stiffness-proportional damping
@@ -103,37 +108,49 @@ def rod_chain_errors(chain: HingedChain, rod, motion: str) -> dict:
             "zero": (zero, exact_zero, zero / exact_zero - 1.0)}
 
 
-def _fit_springs(inertias: np.ndarray, centres: np.ndarray, joints: np.ndarray, length: float,
-                 rod) -> np.ndarray:
-    """Springs ``beta S/h exp(alpha xi)`` matching the rod's first pole and zero (module
-    docstring)."""
+def _ratio_root(log_ratio) -> tuple[float, bool]:
+    """The tilt in [-bound, bound] where the pole/zero ratio is 2 (brentq), or, when no tilt
+    reaches it, the tilt that comes closest (bounded minimisation); and whether it is exact."""
+    low, high = log_ratio(-_ALPHA_BOUND), log_ratio(_ALPHA_BOUND)
+    if low * high <= 0.0:
+        return scipy.optimize.brentq(log_ratio, -_ALPHA_BOUND, _ALPHA_BOUND, xtol=1e-14,
+                                     rtol=1e-15), True
+    result = scipy.optimize.minimize_scalar(lambda a: abs(log_ratio(a)),
+                                            bounds=(-_ALPHA_BOUND, _ALPHA_BOUND),
+                                            method="bounded", options={"xatol": 1e-10})
+    return float(result.x), False
+
+
+def _fit_rod_chain(masses: np.ndarray, total_inertia: float | None, centres: np.ndarray,
+                   joints: np.ndarray, length: float, rod):
+    """(inertias, springs) of a spring chain matched to the rod's first pole and zero.
+
+    Axial motion (``total_inertia`` None): the inertias are the bodies' masses, and the
+    springs ``beta S/h exp(alpha xi)`` are tilted. Torsion: the bodies' torsional inertias
+    are free (they enter no other motion), ``J_k`` proportional to ``m_k exp(gamma zeta_k)``
+    (zeta_k the body's centre over L minus 1/2) with their sum the beam's, and the springs
+    ``beta S/h``: tilting the inertia reaches any ratio (all at the tip: unbounded; all at the
+    root: 1), tilting springs not always (module docstring).
+    """
     spacing = np.diff(centres)
-    xi = joints / length - 0.5
     base = rod.stiffness / spacing
+    xi = joints / length - 0.5
+    zeta = centres / length - 0.5
 
-    def springs(alpha):
-        return base * np.exp(alpha * xi)
+    def layout(tilt):
+        if total_inertia is None:
+            return masses, base * np.exp(tilt * xi)
+        weights = masses * np.exp(tilt * (zeta - zeta.max()))  # no overflow at any tilt
+        return total_inertia * weights / weights.sum(), base
 
-    def log_ratio(alpha):
-        pole, zero = rod_chain_frequencies(inertias, springs(alpha))
+    def log_ratio(tilt):
+        pole, zero = rod_chain_frequencies(*layout(tilt))
         return math.log(pole / zero) - math.log(2.0)  # exact rod: pole/zero = 2
 
-    if spacing.size >= 2:
-        low, high = log_ratio(-_ALPHA_BOUND), log_ratio(_ALPHA_BOUND)
-        if low * high < 0.0:
-            alpha = scipy.optimize.brentq(log_ratio, -_ALPHA_BOUND, _ALPHA_BOUND, xtol=1e-14,
-                                          rtol=1e-15)
-        else:
-            result = scipy.optimize.minimize_scalar(lambda a: abs(log_ratio(a)),
-                                                    bounds=(-_ALPHA_BOUND, _ALPHA_BOUND),
-                                                    method="bounded",
-                                                    options={"xatol": 1e-10})
-            alpha = float(result.x)
-    else:
-        alpha = 0.0
-    trial = springs(alpha)
-    pole, _ = rod_chain_frequencies(inertias, trial)
-    return trial * (float(rod.natural_frequencies(1)[0]) / pole) ** 2
+    tilt = _ratio_root(log_ratio)[0] if spacing.size >= 2 or total_inertia is not None else 0.0
+    inertias, springs = layout(tilt)
+    pole, _ = rod_chain_frequencies(inertias, springs)
+    return inertias, springs * (float(rod.natural_frequencies(1)[0]) / pole) ** 2
 
 
 def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
@@ -179,18 +196,23 @@ def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     masses = np.asarray(planar.masses)
     centres = planar.body_starts + planar.com_offsets
     joints = np.cumsum(planar.lengths)[:-1]
-    torsional_inertias = masses * (beam.torsional_inertia / beam.linear_density)
+    total_torsional_inertia = beam.torsional_inertia * beam.length
+    torsional_inertias = masses * (total_torsional_inertia / beam.mass)
     springs = {}
-    for motion, rod, inertias in (("torsion", beam.torsion_rod(), torsional_inertias),
-                                  ("axial", beam.axial_rod(), masses)):
+    for motion, rod, total in (("torsion", beam.torsion_rod(), total_torsional_inertia),
+                               ("axial", beam.axial_rod(), None)):
         if rod is None:
             springs[motion] = None
             continue
-        values = _fit_springs(inertias, centres, joints, beam.length, rod)
-        if not np.all(np.isfinite(values)) or np.any(values <= 0):
-            raise ConvergenceError(f"fit_chain_3d: the {motion} springs of {describe(beam)} "
-                                   f"came out non-finite or non-positive: {describe(values)}")
+        inertias, values = _fit_rod_chain(masses, total, centres, joints, beam.length, rod)
+        if not np.all(np.isfinite(values)) or np.any(values <= 0) \
+                or not np.all(np.isfinite(inertias)) or np.any(inertias <= 0):
+            raise ConvergenceError(f"fit_chain_3d: the {motion} chain of {describe(beam)} "
+                                   f"came out non-finite or non-positive: springs "
+                                   f"{describe(values)}, inertias {describe(inertias)}")
         springs[motion] = values
+        if motion == "torsion":
+            torsional_inertias = inertias
     stiffnesses_y = ratio * np.asarray(planar.hinge_stiffnesses)
     dampings = {}
     zeta = beam.damping_ratio

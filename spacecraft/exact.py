@@ -216,8 +216,11 @@ class ExactReference:
 
     def _stiffness_at(self, omega: np.ndarray) -> np.ndarray:
         """Real symmetric Z(i omega) of the undamped spacecraft; at an appendage's clamped
-        frequency (D infinite) its limit from below, one rounding step lower. Evaluated in
-        chunks of 65536 frequencies (bounded memory, within the ``points`` limit)."""
+        frequency (D infinite) its limit from below: evaluated lower by 2, 4, 8, ... ulps
+        until finite (a finite model's condensation can meet an exactly zero pivot a few
+        ulps around its pole, where the last pivot is a difference rounded to zero; at most
+        2**24 ulps, 4e-9 relative, are tried). Evaluated in chunks of 65536 frequencies
+        (bounded memory, within the ``points`` limit)."""
         omega = np.asarray(omega, dtype=float)
         if omega.size > _CHUNK:
             return np.concatenate([self._stiffness_at(omega[k:k + _CHUNK])
@@ -226,12 +229,12 @@ class ExactReference:
             Z = self.hub_dynamic_stiffness(1j * omega, undamped=True).real
             bad = ~np.all(np.isfinite(Z), axis=(-2, -1))
             step = 0
-            while np.any(bad) and step < 8:
+            while np.any(bad) and step < 24:
                 step += 1
-                lower = omega[bad] * (1.0 - 2.0 * step * np.finfo(float).eps)
+                lower = omega[bad] * (1.0 - 2.0**step * np.finfo(float).eps)
                 Z[bad] = self.hub_dynamic_stiffness(1j * lower, undamped=True).real
                 bad[bad] = ~np.all(np.isfinite(Z[bad]), axis=(-2, -1))
-        if np.any(bad):  # pragma: no cover - needs a pole on 8 consecutive doubles
+        if np.any(bad):  # pragma: no cover - a pole 2**24 ulps wide
             raise FloatingPointError("the dynamic stiffness of an appendage is not finite near "
                                      f"omega = {describe(omega[bad])} [rad/s]")
         return 0.5 * (Z + np.swapaxes(Z, -1, -2))
