@@ -334,6 +334,13 @@ class HingedChain(FiniteAppendage):
         zeta, the hinges get stiffness-proportional damping ``2 zeta c / w_1`` (damping ratio
         zeta at the beam's first frequency w_1).
 
+        A three-axis beam (``beam.three_axis``) gives a three-axis chain by the same rule in
+        every motion: hinges ``EJ_y/H`` in the x-z plane, torsion springs ``GJ/H`` and axial
+        springs ``EA/H`` (None where the beam is torsionally rigid or inextensible), body
+        inertias about y equal to those about z (``m l**2/12``, no rotary inertia of the
+        section, as the beam) and about x ``rho*I_p l``; each motion damped at its own first
+        free-free frequency.
+
         Parameters
         ----------
         beam : Beam
@@ -353,9 +360,11 @@ class HingedChain(FiniteAppendage):
         lengths[0] = lengths[-1] = H / 2.0
         masses, inertias = _frozen_pieces(lengths, rho)
         stiffnesses = np.full(n_bodies - 1, EJ / H)
+        three_axis = _three_axis_rfem(beam, lengths, H) if getattr(beam, "three_axis", False) \
+            else {}
         with _derived_from(f"HingedChain.rfem(beam, n_bodies={n_bodies})", beam):
             return cls(lengths, masses, inertias, stiffnesses,
-                       hinge_dampings=_proportional_damping(beam, stiffnesses))
+                       hinge_dampings=_proportional_damping(beam, stiffnesses), **three_axis)
 
     @classmethod
     def superelements(cls, beam, n: int) -> "HingedChain":
@@ -684,6 +693,25 @@ def _beam_properties(beam) -> tuple[float, float, float]:
         raise TypeError(
             "beam must be a uniform beam with length [m], bending_stiffness [N*m^2] and "
             f"linear_density [kg/m]; got {type(beam).__name__}") from exc
+
+
+def _three_axis_rfem(beam, lengths: np.ndarray, H: float) -> dict:
+    """The three-axis parameters of an RFEM chain (:meth:`HingedChain.rfem`)."""
+    n_hinges = lengths.size - 1
+    _, inertias = _frozen_pieces(lengths, beam.linear_density)
+    out = {"inertias_y": inertias,
+           "hinge_stiffnesses_y": np.full(n_hinges, beam.bending_stiffness_y / H),
+           "torsional_inertias": beam.torsional_inertia * lengths}
+    out["hinge_dampings_y"] = _proportional_damping(beam.planar_view("xz"),
+                                                    out["hinge_stiffnesses_y"])
+    for name, rod in (("torsion", beam.torsion_rod()), ("axial", beam.axial_rod())):
+        if rod is not None:
+            springs = np.full(n_hinges, rod.stiffness / H)
+            out[f"{name}_stiffnesses"] = springs
+            zeta = rod.damping_ratio
+            if zeta > 0.0:
+                out[f"{name}_dampings"] = 2.0 * zeta * springs / float(rod.natural_frequencies(1)[0])
+    return out
 
 
 def _proportional_damping(beam, stiffnesses: np.ndarray) -> np.ndarray | None:

@@ -245,3 +245,17 @@ def test_three_axis_chains_on_a_hub_exact_count_equals_eigenvalues():
                                craft.natural_frequencies(n, exact=False), rtol=1e-10)
     P = craft.plant(tip_deflection=True)
     assert "appendage1_tip_twist" in P.output_labels
+
+
+def test_three_axis_rfem_chains_converge_to_the_beams_W6():
+    """RFEM chains of a three-axis beam (the same rule, EJ/H, GJ/H, EA/H, in every motion)
+    converge to the exact W6 like H^2: 4x per doubling of the bodies (measured 4.1-4.2)."""
+    beam = Beam(2.0, 3.0, 0.5, bending_stiffness_y=7.0, torsional_stiffness=1.5,
+                torsional_inertia=0.02, axial_stiffness=900.0)
+    s = np.array([0.5j, 3.0j, 1.0 + 8.0j])
+    exact = beam.W6(s)
+    errors = [(np.abs(HingedChain.rfem(beam, n).W6(s) - exact).max(axis=(1, 2))
+               / np.abs(exact).max(axis=(1, 2))).max() for n in (20, 40, 80)]
+    assert errors[1] < errors[0] / 3.5 and errors[2] < errors[1] / 3.5, errors
+    planar = HingedChain.rfem(Beam(2.0, 3.0, 0.5), 20)
+    assert planar.torsional_inertias is None  # a planar beam's chain stays planar
