@@ -251,14 +251,49 @@ class ExactReference:
         return sum(np.searchsorted(self.clamped(k, top), omega)
                    for k in range(len(self.mounts)))
 
+    def _safe(self, omega: np.ndarray) -> np.ndarray:
+        """omega, or, within 1e-13 of a clamped frequency, a point 2e-13 below the lowest
+        clamped frequency of that cluster.
+
+        Next to a pole of Z its decisive eigenvalues drown in the pole's rounding, and
+        clamped frequencies of different appendages can coincide to an ulp (rods whose
+        lengths are in odd ratios): there the count would not be monotone. Within such a
+        window it is taken from below the whole cluster, so a coupled frequency inside it (a
+        mode that leaves the hub still, at a clamped frequency) is found at the window's
+        upper edge, 1e-13 relative from where it is.
+        """
+        omega = np.asarray(omega, dtype=float)
+        top = float(np.max(omega, initial=0.0)) * (1.0 + 1e-12)
+        poles = np.sort(np.concatenate([self.clamped(k, top)
+                                        for k in range(len(self.mounts))] or [np.zeros(0)]))
+        if poles.size == 0:
+            return omega
+        first = np.searchsorted(poles, omega * (1.0 - 1e-13))
+        near = (first < poles.size) & (poles[np.minimum(first, poles.size - 1)]
+                                       <= omega * (1.0 + 1e-13))
+        if not np.any(near):
+            return omega
+        out = omega.copy()
+        lowest = first[near]
+        # walk down through a cluster of poles each within 1e-13 of the next
+        while True:
+            below = np.maximum(lowest - 1, 0)
+            step = (lowest > 0) & (poles[below] >= poles[lowest] * (1.0 - 1e-13))
+            if not np.any(step):
+                break
+            lowest = np.where(step, below, lowest)
+        out[near] = poles[lowest] * (1.0 - 2e-13)
+        return out
+
     def count(self, omega: np.ndarray) -> np.ndarray:
         """Wittrick-Williams count: coupled frequencies (rigid-body ones included) < omega.
 
         ``J(w) = sum_i J0_i(w) + s{Z(iw)}`` (module docstring). Exactly at an appendage's
         clamped frequency D_i is infinite; the count there is its limit from below (a natural
-        frequency is counted only above it), taken by evaluating Z one rounding step lower.
+        frequency is counted only above it), taken below the cluster of clamped frequencies
+        within 1e-13 (:meth:`_safe`).
         """
-        omega = np.asarray(omega, dtype=float)
+        omega = self._safe(np.asarray(omega, dtype=float))
         return self._count_from(self._stiffness_at(omega), omega)
 
     def _count_from(self, Z: np.ndarray, omega: np.ndarray) -> np.ndarray:
@@ -331,8 +366,15 @@ class ExactReference:
         inner = edges[:-1, None] + np.diff(edges)[:, None] * fractions
         beside = dividers[:, None] * (1.0 + np.array([-1e-2, -1e-4, 1e-4, 1e-2]))
         samples = np.unique(np.concatenate([edges[[0, -1]], inner.ravel(), beside.ravel()]))
+        # none within 1e-8 of a pole (clamped frequencies of different appendages a few ulps
+        # apart put "midpoints" on them): the count is unreliable there
+        if poles.size:
+            nearest = np.searchsorted(poles, samples).clip(1, poles.size - 1)
+            gap = np.minimum(np.abs(samples - poles[nearest - 1]), np.abs(samples - poles[nearest]))
+            samples = samples[(gap > 1e-8 * samples) | (samples == edges[0]) | (samples == top)]
         Z_samples = self._stiffness_at(samples)
-        counts = self._count_from(Z_samples, samples)
+        counts = self.count(samples) if np.any(self._safe(samples) != samples) \
+            else self._count_from(Z_samples, samples)
         target = np.arange(n_rigid + 1, n_total + 1)  # frequency k is where the count reaches k
         upper = np.searchsorted(counts, target, side="left")  # first sample counting >= k
         lo, hi = samples[upper - 1], samples[upper]
@@ -369,7 +411,11 @@ class ExactReference:
                 refine.update(by_refine, points[:m], Z[:m], lo, hi)
             if by_bisection.size:
                 mid, Zb = points[m:], Z[m:]
+                safe = self._safe(mid)
+                moved = safe != mid
                 counts = self._count_from(Zb, mid)
+                if np.any(moved):
+                    counts[moved] = self.count(safe[moved])
                 above = counts >= target[by_bisection]
                 up, down = by_bisection[above], by_bisection[~above]
                 hi[up], count_hi[up], Z_hi[up] = mid[above], counts[above], Zb[above]
