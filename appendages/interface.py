@@ -19,6 +19,18 @@ form in which a hub couples to any appendage: the first two coordinates are set 
 motion at the mount, whatever the appendage's class (``spacecraft.coupling``). The mass matrix may
 be singular (a massless spring between the mount and the first body); the coupled system is not.
 
+Three axes (issue 11)
+---------------------
+A three-axis appendage is loaded at its attachment end by ``(F_x, F_y, F_z, M_x, M_y, M_z)``
+(beam axes: x along the appendage, y the planar deflection direction) and answers with
+``(u, v, w, theta_x, theta_y, theta_z)``: ``W6(s)`` (6x6, symmetric, rigid-body motion
+included), with ``theta_y = -dw/dx``. Its finite realisation is a :class:`RootModel` with
+``n_root = 6`` (``root_model(n_root=6)``) and three tip rows (:data:`TIP_MOTIONS`); a straight
+appendage with a symmetric section is built from its four decoupled motions by
+:func:`three_axis_root_model`. The x-y plane of a three-axis model is the planar model, so the
+planar interface above is its special case. What a three-axis hub needs of an appendage is
+:class:`ThreeAxisAppendage`.
+
 References
 ----------
 .. [1] P. A. Belonozhko, P. P. Belonozhko, A. A. Fokov et al., "On the equivalence of mechanical
@@ -55,6 +67,7 @@ __all__ = [
     "ROOT_LOADS",
     "TIP_MOTIONS",
     "three_axis_root_model",
+    "ThreeAxisAppendage",
     "FlexsatError",
     "ConvergenceError",
 ]
@@ -353,6 +366,22 @@ def inverse_symmetric(D: np.ndarray) -> np.ndarray:
             except np.linalg.LinAlgError:
                 flat_out[k] = np.inf
     return 0.5 * (inv + np.swapaxes(inv, -1, -2))
+
+
+@runtime_checkable
+class ThreeAxisAppendage(Protocol):
+    """What a three-axis hub needs of an appendage (beam axes, rigid-body motion included)."""
+
+    @property
+    def mass(self) -> float: ...  # kg
+
+    @property
+    def center_of_mass(self) -> float: ...  # m, along x from the attachment end
+
+    @property
+    def inertia_tensor(self) -> np.ndarray: ...  # kg*m**2, 3x3 about the centre of mass
+
+    def W6(self, s) -> np.ndarray: ...
 
 
 @dataclasses.dataclass(frozen=True)

@@ -14,7 +14,10 @@ name               default  what it bounds
 ``modes``          1000     bending modes of a truncation (``Beam.truncated(n_modes)``): root
                             model and poles of an undamped 1000-mode beam 25-30 s; a damped
                             Craig-Bampton one also projects 4400 free-free modes on the
-                            cantilever ones, 100 s (its quadrature is the slow part)
+                            cantilever ones: 1.4 s for its root model since the overlaps are
+                            closed forms (100 s by quadrature before issue 10; load 14); its
+                            W(s) costs O(n) per frequency (400 modes, 1000 frequencies: 22 ms,
+                            13 MB)
 ``bodies``         500      bodies of a :class:`~appendages.chain.HingedChain` (also through
                             ``HingedChain.rfem``, ``superelements``: 2 n + 1 bodies)
 ``fit_bodies``     14       bodies of ``fit_chain(match="poles-and-zeros")``, set by the fit's
@@ -26,8 +29,9 @@ name               default  what it bounds
 ``roots``          1e6      frequencies or zeros of a distributed beam asked at once
                             (``Beam.natural_frequencies(n)`` etc.: O(n), ~1 s and 40 MB at 1e6)
 ``frequencies``    100000   exact coupled frequencies asked of
-                            ``Spacecraft.natural_frequencies(n, exact=True)`` (bisection, O(n)
-                            per appendage and step: 5 s on one rod, 26 s on eight at 1e5)
+                            ``Spacecraft.natural_frequencies(n, exact=True)`` (count and
+                            secant, O(n) per appendage and step: 5.4 s on one rod, 32 s on
+                            eight at 1e5, load 9-14)
 ``coordinates``    2500     generalised coordinates of an assembled hub + appendages model
                             (``Spacecraft.plant``, ``modes``: dense generalized eigen-
                             decomposition and modal projections, O(n**3); undamped plants:
