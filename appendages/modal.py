@@ -628,17 +628,10 @@ class ModalBeam(FiniteAppendage):
         The four motions' truncated models (:attr:`modes_per_motion`) placed as in
         :meth:`Beam.W6`; O(n_modes) per frequency.
         """
-        from .beam import _place_planes
-
         s = as_frequency_array(s)
         if np.any(s == 0):
             raise ValueError("s = 0 is the rigid-body pole of W6 (W6 is infinite there) [rad/s]")
-        motions = self._motions()
-        W6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            _place_planes(W6, motions["xy"].W(s), motions["xz"].W(s))
-            W6[..., 0:1, 0:1] = motions["axial"].W(s)
-            W6[..., 3:4, 3:4] = motions["torsion"].W(s)
+        W6 = self._six(s, "W")
         if not np.all(np.isfinite(W6)):
             raise ValueError("s is a natural frequency of the undamped model: W6 is infinite "
                              "there [rad/s]")
@@ -646,16 +639,20 @@ class ModalBeam(FiniteAppendage):
 
     def dynamic_stiffness6(self, s) -> np.ndarray:
         """Three-axis D6(s) = W6(s)^-1, shape ``np.shape(s) + (6, 6)``; s = 0 gives 0."""
+        return self._six(as_frequency_array(s), "D")
+
+    def _six(self, s: np.ndarray, which: str) -> np.ndarray:
+        """The motions' W (``which="W"``) or D ("D") placed in a 6x6 as in :meth:`Beam.W6`."""
         from .beam import _place_planes
 
-        s = as_frequency_array(s)
         motions = self._motions()
-        D6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
+        out = np.zeros(s.shape + (6, 6), dtype=np.complex128)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            _place_planes(D6, motions["xy"].D(s), motions["xz"].D(s))
-            D6[..., 0:1, 0:1] = motions["axial"].D(s)
-            D6[..., 3:4, 3:4] = motions["torsion"].D(s)
-        return D6
+            part = {name: getattr(motion, which)(s) for name, motion in motions.items()}
+            _place_planes(out, part["xy"], part["xz"])
+            out[..., 0:1, 0:1] = part["axial"]
+            out[..., 3:4, 3:4] = part["torsion"]
+        return out
 
     # -- realisations ---------------------------------------------------------------------------
     def _residual_modes(self):
