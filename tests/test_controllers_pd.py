@@ -266,11 +266,13 @@ def test_sample_rate_judged_on_the_rigid_body_crossover(default_scene_design_pla
 
 def test_sample_rate_that_destabilises_the_sampled_loop_is_refused_with_the_reason(
         default_scene_design_plant):
-    """At 1 Hz the chain's 3.204 rad/s mode lies above the Nyquist frequency pi rad/s: the
-    exact sampled loop (ZOH plant and controller) has a pole at +0.022 + 2.985j (aliased), a
-    real instability of the design loop; pd() refuses 1 Hz and says why."""
+    """At 1 Hz the fitted chain's first mode (3.2-3.5 rad/s, depending on the fit) lies above
+    the Nyquist frequency pi rad/s: the exact sampled loop (ZOH plant and controller) has an
+    aliased pole near 2.98 rad/s with a positive real part (+0.005 with the current fit), a real
+    instability of the design loop; pd() refuses 1 Hz and says why. The instability itself is
+    checked below on the loop built by hand, so the test does not hang on the fit's digits."""
     plant = default_scene_design_plant
-    with pytest.raises(ValueError, match=r"pd: .*0\.022.*sample_time = 1 s.*Nyquist.*aliases"):
+    with pytest.raises(ValueError, match=r"pd: .*pole at .*sample_time = 1 s.*Nyquist.*aliases"):
         controllers.pd(plant, natural_frequency=0.2, sample_time=1.0)
     # the same sampled loop, built by hand, is analysed, not crashed on (it raised
     # LinAlgError: a refinement point fell on the unit-circle pole of the sampled chain mode)
