@@ -1,0 +1,37 @@
+"""Sweeps, Monte Carlo and worst cases of the design loop, on Dask (issue 13).
+
+A ``[sweep]`` table in a scene names scene numbers (key paths) and their distributions; every
+sample is a full design-loop evaluation (design on the chain, truth on the beam, the exact beam's
+verdict); the samples run in batches on Dask and stream to Parquet; a differential-evolution
+search finds the worst stability margin over the box; a report shows histograms, margins against
+parameters, a stability map, the probability of instability and the worst case.
+
+Modules: :mod:`.parameters` (key paths, distributions, sampling), :mod:`.fits` (chains of any
+uniform beam from one dimensionless fit), :mod:`.evaluate` (one sample), :mod:`.execute` (Dask,
+batches, Parquet, resume, progress), :mod:`.worst` (worst-case search, ``worst.toml``),
+:mod:`.report` (statistics, plots, files), :mod:`.runner` (the whole sweep), :mod:`.command`
+(``flexsat sweep``).
+
+``spacecraft.sweep`` is this package and can be called as the function :func:`sweep`:
+``spacecraft.sweep(scene, parameters=..., samples=...)`` returns a pyarrow Table.
+"""
+
+import sys
+import types
+
+from .parameters import MAX_SAMPLES, Parameter, SweepError, SweepSpec
+from .runner import SweepResult, load_sweep, run_sweep, sweep, sweep_scene_path, sweep_scenes
+
+__all__ = ["MAX_SAMPLES", "Parameter", "SweepError", "SweepResult", "SweepSpec", "load_sweep",
+           "run_sweep", "sweep", "sweep_scene_path", "sweep_scenes"]
+
+
+class _CallableModule(types.ModuleType):
+    """This package, callable as :func:`sweep` (so ``spacecraft.sweep(...)`` works while
+    ``spacecraft.sweep.report`` stays the module)."""
+
+    def __call__(self, *args, **kwargs):
+        return sweep(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

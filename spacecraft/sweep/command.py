@@ -1,0 +1,114 @@
+"""``flexsat sweep``: the command-line face of :func:`spacecraft.sweep.run_sweep`.
+
+``flexsat sweep [SCENE] [--samples N] [--out DIR] [--scheduler ADDRESS] [--workers N]
+[--resume] [--seed S] [--method M] [--design D] [--no-worst-case] [--max-samples N]
+[--no-plots] [--quiet] [--json]``
+
+SCENE is a scene file with a ``[sweep]`` table or an embedded sweep scene's name (default: the
+embedded ``default`` sweep). Options override the ``[sweep]`` table. Errors of the user or the
+environment (bad scene or sweep, unreachable scheduler, output folder in the way) are one line on
+stderr with exit code 2 (:func:`spacecraft.cli.main` handles them).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["add_arguments", "run_command", "summary_lines"]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the options of ``flexsat sweep`` to a (sub)parser."""
+    parser.add_argument("scene", nargs="?", help="scene file with a [sweep] table, or an "
+                                                 "embedded sweep scene (default: 'default')")
+    parser.add_argument("--samples", type=int, help="Monte Carlo / Latin-hypercube samples")
+    parser.add_argument("--out", type=Path, help="output folder (default: a new "
+                                                 "flexsat-<timestamp> folder here)")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="run on a running Dask cluster (tcp://host:8786)")
+    parser.add_argument("--workers", type=int, help="local worker processes (default: one per "
+                                                    "core; 1 runs in this process)")
+    parser.add_argument("--resume", action="store_true",
+                        help="continue the interrupted sweep in --out")
+    parser.add_argument("--seed", type=int, help="random seed")
+    parser.add_argument("--method", choices=("monte-carlo", "latin-hypercube", "grid"))
+    parser.add_argument("--design", choices=("per-sample", "nominal"),
+                        help="tune per sample, or hold the nominal controller")
+    parser.add_argument("--no-worst-case", action="store_true", help="skip the worst-case "
+                                                                     "search")
+    parser.add_argument("--max-samples", type=int, help="raise the sample limit (1000000)")
+    parser.add_argument("--no-plots", action="store_true", help="skip plots")
+    parser.add_argument("--quiet", action="store_true", help="no progress display")
+    parser.add_argument("--json", action="store_true", help="print summary.json to stdout")
+
+
+def _fmt(value, digits: int = 4) -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "inf" if value > 0 else ("-inf" if value < 0 else "n/a")
+    return f"{value:.{digits}g}" if isinstance(value, float) else str(value)
+
+
+def summary_lines(summary: dict) -> list[str]:
+    """Short summary of a sweep (printed by the command)."""
+    s = summary
+    inst = s["instability"]
+    lines = [f"{s['samples']['total']} samples ({s['samples']['failed']} failed) on "
+             f"{s['executor']}, {_fmt(s['timings'].get('samples'), 3)} s; "
+             f"{_fmt(1e3 * (s['timings'].get('per_sample_median') or math.nan), 3)} ms per "
+             "sample (median)",
+             f"probability of instability ({inst['verdict']} verdict): {_fmt(inst['probability'])}"
+             f" ({inst['unstable']} of {inst['of']}; {100 * inst['confidence']:.0f} % interval "
+             f"{_fmt(inst['interval'][0])} to {_fmt(inst['interval'][1])})"]
+    ranking = s["sensitivity"]["ranking"]
+    if ranking:
+        lines.append("most influential: " + ", ".join(
+            f"{r['parameter']} ({_fmt(r['spearman'], 2)})" for r in ranking[:3]))
+    for w in s["worst_case"]:
+        ver = (w.get("verification") or {}).get("exact_reference", {})
+        check = (f"; exact beam: {_fmt(ver.get(w['metric']))}, "
+                 f"{'stable' if ver.get('stable') else 'unstable'}" if "stable" in ver else "")
+        lines.append(f"worst {w['metric'].replace('_', ' ')}: {_fmt(w['objective'])} (signed) at "
+                     + ", ".join(f"{k} = {_fmt(v, 6)}" for k, v in w["values"].items())
+                     + f"{check} [{(w.get('verification') or {}).get('scene', '')}]")
+    return lines
+
+
+class _Log:
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+        self.t0 = time.perf_counter()
+
+    def __call__(self, message: str) -> None:
+        if not self.quiet:
+            print(f"[{time.perf_counter() - self.t0:6.1f} s] {message}...", file=sys.stderr,
+                  flush=True)
+
+
+def run_command(args) -> int:
+    """Run ``flexsat sweep`` with parsed arguments; returns the exit code."""
+    from ..report import default_output_folder, to_json
+    from .runner import run_sweep
+
+    log = _Log(args.quiet)
+    out = args.out if args.out is not None else (None if args.resume else default_output_folder())
+    settings = {"samples": args.samples, "seed": args.seed, "method": args.method,
+                "design": args.design}
+    if args.no_worst_case:
+        settings["worst_case"] = False
+    result = run_sweep(args.scene, out=out, scheduler=args.scheduler, workers=args.workers,
+                       resume=args.resume, progress=not args.quiet, plots=not args.no_plots,
+                       max_samples=args.max_samples, log=log, **settings)
+    log(f"done in {time.perf_counter() - log.t0:.1f} s")
+    if args.json:
+        print(to_json(result.summary))
+        return 0
+    for line in summary_lines(result.summary):
+        print(line)
+    print(f"wrote summary.json, report.md, report.html and samples/*.parquet to {out}")
+    return 0

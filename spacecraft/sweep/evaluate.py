@@ -1,0 +1,488 @@
+"""One sample of a sweep: one design-loop evaluation, as the scene says, reduced to numbers.
+
+A sample is the sweep's scene with the sampled numbers put in (:func:`~.parameters.apply_values`)
+and validated by :func:`spacecraft.scene.load_scene`. Its evaluation is the runner's design loop
+for one controller and one design model, built with the runner's own model builders
+(:class:`spacecraft.runner._Runner`: beams, truncations, chains, spacecraft, plants, the slew):
+
+1. design (``design = "per-sample"``): the design chain of each beam (the unit fit scaled to the
+   sample's beam, :mod:`.fits`), its plant, the controller tuned on it as the runner tunes it;
+   ``design = "nominal"``: the controller tuned once on the nominal scene, held fixed;
+2. truth: hub + beams truncated to the nominal scene's ``n_modes`` (fixed for the sweep); the
+   closed-loop verdict from its eigenvalues and its gain, phase and modulus margins
+   (:func:`controllers.spillover`);
+3. the slew on the truth loop (if the scene has a manoeuvre): overshoot, settling time, peak tip
+   deflection, peak torque, attitude errors (:func:`controllers.metrics`);
+4. the exact distributed beam (if ``outputs.exact_reference``): the loop closed on the exact
+   frequency response of hub + beams through W(s) (:meth:`Spacecraft.frequency_response`),
+   verdict by the Nyquist criterion and margins (:func:`controllers.spillover` on an FRD).
+
+The exact reference's frequency grid (:func:`exact_grid`) is the runner's construction (1e-3 to
+1e3 times the design bandwidth, dense points across the half-power band of every coupled mode)
+with two changes that make it affordable per sample: the modes are located on an undamped
+Craig-Bampton truncation with two modes more than the cantilever modes below the top of the
+grid (its coupled frequencies agree with the exact ones to a small fraction of the half-power
+band), instead of the exact Wittrick-Williams roots, and it has 40 points a decade and 24 a mode
+instead of 100 and 60. The worst case found is re-run by the runner itself with its full grid
+(:mod:`.worst`).
+
+A sample that fails (a scene the scene reader refuses, a controller that cannot be tuned, any
+numerical failure) is recorded with its error message and NaN metrics; warnings raised while it
+ran are recorded too (the first one), never printed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+import warnings
+
+import numpy as np
+
+from ..runner import RunStats, _Runner
+from ..scene import SceneError, load_scene
+from .fits import FitTemplates
+from .parameters import SweepError, SweepSpec, apply_values
+
+__all__ = ["Context", "METRICS", "prepare", "evaluate", "evaluate_batch", "exact_grid",
+           "exact_verdict", "tune", "columns"]
+
+#: Columns of a sample's result: name -> (kind, unit, meaning). Kinds: "float", "int", "bool",
+#: "str". "truth_*": hub + truncated beams (eigenvalue verdict); "exact_*": hub + exact beams
+#: (Nyquist verdict); the time metrics are those of the slew on the truth loop.
+METRICS: dict[str, tuple[str, str, str]] = {
+    "stable": ("bool", "-", "closed loop stable (exact beam if computed, else truth model)"),
+    "truth_stable": ("bool", "-", "stable on the truth model (eigenvalues)"),
+    "truth_n_unstable_poles": ("int", "-", "unstable closed-loop poles on the truth model"),
+    "truth_least_damping_ratio": ("float", "-", "least closed-loop damping ratio"),
+    "truth_gain_margin": ("float", "dB", "gain margin on the truth model"),
+    "truth_phase_margin": ("float", "deg", "phase margin on the truth model"),
+    "truth_modulus_margin": ("float", "-", "modulus margin min|1 + L| on the truth model"),
+    "exact_stable": ("bool", "-", "stable on the exact beam (Nyquist)"),
+    "exact_n_unstable_poles": ("int", "-", "unstable closed-loop poles on the exact beam"),
+    "exact_gain_margin": ("float", "dB", "gain margin on the exact beam"),
+    "exact_phase_margin": ("float", "deg", "phase margin on the exact beam"),
+    "exact_modulus_margin": ("float", "-", "modulus margin min|1 + L| on the exact beam"),
+    "overshoot": ("float", "%", "slew overshoot"),
+    "settling_time": ("float", "s", "2 % settling time of the slew"),
+    "peak_tip_deflection": ("float", "m", "peak tip deflection during the slew"),
+    "peak_torque": ("float", "N*m", "peak torque during the slew"),
+    "peak_attitude_error": ("float", "rad", "peak |theta - theta_ref| during the slew"),
+    "final_attitude_error": ("float", "rad", "|theta - theta_ref| at the end of the slew"),
+    "n_modes": ("int", "-", "bending modes per truncated beam of the truth model"),
+    "error": ("str", "-", "why the sample failed (empty: it did not)"),
+    "warning": ("str", "-", "first warning raised while evaluating it (empty: none)"),
+    "seconds": ("float", "s", "evaluation time"),
+}
+_TIME_METRICS = ("overshoot", "settling_time", "peak_tip_deflection", "peak_torque",
+                 "peak_attitude_error", "final_attitude_error")
+_EXACT = tuple(k for k in METRICS if k.startswith("exact_"))
+
+#: The exact reference grid: points per decade, points across each mode's half-power band, and
+#: cantilever modes beyond the top of the grid in the truncation that locates the modes.
+POINTS_PER_DECADE = 40
+POINTS_PER_MODE = 24
+EXTRA_LOCATOR_MODES = 2
+#: Points added around each frequency where a margin is attained (:func:`exact_verdict`).
+REFINE_POINTS = 24
+
+
+@dataclasses.dataclass
+class Context:
+    """What every sample of a sweep shares (built once by :func:`prepare`, sent to workers).
+
+    Attributes
+    ----------
+    base : dict
+        The scene mapping (file units) trimmed to the swept loop: one controller type, one fit
+        criterion, ``n_modes`` fixed, tip deflections on, no FMUs, plots or tables.
+    source : str
+        The scene's name (messages).
+    parameters : tuple of Parameter
+    design : str
+        ``"per-sample"`` or ``"nominal"``.
+    variant : str
+        The design model: a fit criterion, or ``"design"`` without fitted chains.
+    controller : str
+        ``"pd"`` or ``"lqr"``.
+    n_modes : int or None
+        Bending modes per truncated beam (None: no beam truth).
+    templates : FitTemplates
+        Unit fits per (n_bodies, match).
+    nominal_controller : control.StateSpace or None
+        ``design = "nominal"``: the controller tuned on the nominal scene.
+    exact : bool
+        Close the loop on the exact beams too.
+    time_responses : bool
+        The scene has a manoeuvre (slew metrics).
+    """
+
+    base: dict
+    source: str
+    parameters: tuple
+    design: str
+    variant: str
+    controller: str
+    n_modes: int | None
+    templates: FitTemplates
+    nominal_controller: object = None
+    exact: bool = False
+    time_responses: bool = False
+
+    def columns(self) -> list[str]:
+        """The metric columns this sweep records."""
+        return columns(self.exact, self.time_responses)
+
+
+def columns(exact: bool, time_responses: bool) -> list[str]:
+    """Metric columns of a sweep with/without the exact reference and the slew."""
+    return [k for k in METRICS if (exact or k not in _EXACT)
+            and (time_responses or k not in _TIME_METRICS)]
+
+
+class _SampleRunner(_Runner):
+    """The runner's model builders, with chains fitted by scaling a unit fit (:mod:`.fits`)."""
+
+    def __init__(self, scene, templates: FitTemplates):
+        super().__init__(scene, None, RunStats(), time_responses=True)
+        self.templates = templates
+
+    def fit(self, spec, match):
+        return self.cached(("fit", spec.beam, spec.fit.n_bodies, match),
+                           lambda: self.templates.chain(self.beam(spec), spec.fit.n_bodies,
+                                                        match))
+
+
+def tune(plant, controller_spec, kind: str):
+    """The controller of kind ``"pd"`` or ``"lqr"`` tuned on a design plant as the runner does.
+
+    Raises
+    ------
+    SceneError
+        If it cannot be tuned on this plant.
+    """
+    import control
+    import controllers
+
+    c = controller_spec
+    try:
+        if kind == "pd":
+            K = controllers.pd(plant, natural_frequency=c.pd.natural_frequency,
+                               bandwidth=c.pd.bandwidth, damping=c.pd.damping,
+                               roll_off=c.pd.roll_off, notch=c.pd.notch,
+                               sample_time=c.sample_time)
+        else:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                K = controllers.lqr(plant, attitude_weight=c.lqr.attitude_weight,
+                                    rate_weight=c.lqr.rate_weight,
+                                    torque_weight=c.lqr.torque_weight,
+                                    deflection_weight=c.lqr.deflection_weight,
+                                    estimator_speed=c.lqr.estimator_speed,
+                                    sample_time=c.sample_time)
+    except ValueError as exc:
+        raise SceneError(f"controller.{kind}: cannot tune on the design model: {exc}") from None
+    if K.dt is None:
+        # a static gain gets dt=None from python-control: it is a continuous-time controller
+        K = control.ss(K.A, K.B, K.C, K.D, 0, inputs=list(K.input_labels),
+                       outputs=list(K.output_labels), name=K.name)
+    return K
+
+
+def _design_controller(runner: _SampleRunner, context: Context):
+    scene = runner.scene
+    models = [runner.design_model(a, context.variant, context.n_modes) for a in scene.appendages]
+    sc = runner.spacecraft(("design", context.variant), models)
+    needs_tip = scene.controller.lqr is not None and \
+        scene.controller.lqr.deflection_weight is not None and context.controller == "lqr"
+    plant, _ = runner.plant(sc, ("design", context.variant), tip=needs_tip,
+                            prune=scene.fidelity.prune)
+    return tune(plant, scene.controller, context.controller)
+
+
+def exact_grid(runner: _Runner) -> np.ndarray:
+    """Frequencies [rad/s] of the exact reference of a sample (module docstring).
+
+    Logarithmic from 1e-3 to 1e3 times the design bandwidth wb (:data:`POINTS_PER_DECADE`),
+    plus :data:`POINTS_PER_MODE` points ``w_k (1 + zeta tan(t))``, t evenly in [-1.5, 1.5] (an
+    even count: no point exactly on an undamped mode), across every coupled mode w_k below
+    1e3 wb, zeta the largest modal damping ratio of the beams (at least 1e-4).
+    """
+    scene = runner.scene
+    exact = runner.exact_spacecraft()
+    wb = runner.design_bandwidth(exact.inertia)
+    w_lo, w_hi = wb * 1e-3, wb * 1e3
+    models = []
+    for a in scene.appendages:
+        if a.truth == "beam":
+            beam = runner.undamped_beam(a)
+            k = 8
+            cantilever = beam.cantilever_frequencies(k)
+            while cantilever[-1] < w_hi and k < 1024:
+                k *= 2
+                cantilever = beam.cantilever_frequencies(k)
+            n = int(np.searchsorted(cantilever, w_hi)) + EXTRA_LOCATOR_MODES
+            models.append(runner.cached(("locator", a.name, n),
+                                        lambda: beam.truncated(n, method="craig-bampton")))
+        else:
+            models.append(runner.truth_model(a, None))
+    modes = runner.spacecraft(("locator",), models).modes()[0][3:]
+    zeta = max([a.beam.damping_ratio for a in scene.appendages if a.beam is not None]
+               + [1e-4])
+    spread = np.tan(np.linspace(-1.5, 1.5, POINTS_PER_MODE))
+    grid = [np.geomspace(w_lo, w_hi, int(round(POINTS_PER_DECADE * math.log10(w_hi / w_lo))))]
+    grid += [w * (1.0 + zeta * spread) for w in modes[modes < w_hi]]
+    omega = np.unique(np.concatenate(grid))
+    return omega[(omega > 0) & (omega <= w_hi)]
+
+
+def _frd(omega: np.ndarray, theta: np.ndarray):
+    import control
+
+    data = np.stack([theta, 1j * omega * theta]).reshape(2, 1, -1)
+    return control.frd(data, omega, inputs=["torque"], outputs=["theta", "omega"])
+
+
+def exact_verdict(runner: _Runner, controller):
+    """The loop on the exact beams: Nyquist verdict and margins (module docstring).
+
+    The margins of an FRD plant interpolate the plant between grid points
+    (:func:`controllers.margins`), which near a lightly damped mode costs accuracy: on the
+    default sweep scene 24 points a mode put the modulus margin 0.14 % and the phase margin
+    1.2 % off the converged values (4560 points). So the grid of :func:`exact_grid` is refined
+    where the margins are attained: :data:`REFINE_POINTS` more points between the second grid
+    points below and above each crossover and the modulus-margin frequency, and the verdict
+    taken on the refined grid.
+
+    Returns
+    -------
+    controllers.SpilloverVerdict
+    """
+    import controllers
+
+    sc = runner.exact_spacecraft()
+    omega = exact_grid(runner)
+    runner.stats.exact_reference_evaluations += 1
+    theta = np.asarray(sc.frequency_response(omega).frdata).reshape(-1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        first = controllers.margins(_frd(omega, theta), controller)
+        extra = []
+        for w in (first.modulus_margin_frequency, first.gain_crossover_frequency,
+                  first.phase_crossover_frequency):
+            if math.isfinite(w) and omega[0] < w < omega[-1]:
+                i = int(np.searchsorted(omega, w))
+                lo, hi = omega[max(i - 2, 0)], omega[min(i + 1, omega.size - 1)]
+                extra.append(np.geomspace(lo, hi, REFINE_POINTS + 2)[1:-1])
+        if extra:
+            new = np.setdiff1d(np.concatenate(extra), omega)
+            theta_new = np.asarray(sc.frequency_response(new).frdata).reshape(-1)
+            order = np.argsort(np.concatenate([omega, new]))
+            omega = np.concatenate([omega, new])[order]
+            theta = np.concatenate([theta, theta_new])[order]
+        return controllers.spillover(_frd(omega, theta), controller)
+
+
+def _margins(prefix: str, verdict) -> dict:
+    m = verdict.margins
+    out = {f"{prefix}_stable": bool(verdict.stable),
+           f"{prefix}_n_unstable_poles": int(verdict.n_unstable_poles),
+           f"{prefix}_gain_margin": float(m.gain_margin),
+           f"{prefix}_phase_margin": float(m.phase_margin),
+           f"{prefix}_modulus_margin": float(m.modulus_margin)}
+    if verdict.least_damping_ratio is not None:
+        out[f"{prefix}_least_damping_ratio"] = float(verdict.least_damping_ratio)
+    return out
+
+
+def _evaluate_scene(context: Context, scene) -> dict:
+    import controllers
+
+    runner = _SampleRunner(scene, context.templates)
+    n = context.n_modes
+    prune = scene.fidelity.prune
+    truth_models = [runner.truth_model(a, n) for a in scene.appendages]
+    truth_sc = runner.spacecraft(("truth", n), truth_models)
+    m = scene.manoeuvre
+    truth_verdict, _ = runner.plant(truth_sc, ("truth", n), prune=prune)
+    K = context.nominal_controller
+    if K is None:
+        K = _design_controller(runner, context)
+    out: dict = {"n_modes": -1 if n is None else int(n)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        out.update(_margins("truth", controllers.spillover(truth_verdict, K)))
+    if context.time_responses and m is not None:
+        truth_sim, _ = runner.plant(truth_sc, ("truth", n), tip=scene.outputs.tip_deflection,
+                                    root_loads=scene.outputs.root_loads,
+                                    disturbances=m.disturbance is not None, prune=prune)
+        response = runner.simulate(controllers.close_loop(truth_sim, K))
+        metrics = controllers.metrics(response)
+        out.update({k: float(metrics[k]) for k in _TIME_METRICS if k in metrics})
+    out["stable"] = out["truth_stable"]
+    if context.exact:
+        out.update(_margins("exact", exact_verdict(runner, K)))
+        out["stable"] = out["exact_stable"]
+    return out
+
+
+def evaluate(context: Context, values, *, index: int | None = None) -> dict:
+    """Evaluate one sample: its metrics (:data:`METRICS`), never raising for a failed sample.
+
+    Parameters
+    ----------
+    context : Context
+    values : sequence of float
+        The parameters' values (file units), in the order of ``context.parameters``.
+    index : int, optional
+        Sample index, for messages.
+
+    Returns
+    -------
+    dict
+        Every column of :meth:`Context.columns`: NaN (float), -1 (int) or None (bool) where
+        not computed; ``error`` and ``warning`` texts ("" if none); ``seconds``.
+    """
+    t0 = time.perf_counter()
+    row = {k: _missing(METRICS[k][0]) for k in context.columns()}
+    source = f"{context.source} (sample {index})" if index is not None else context.source
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            scene = load_scene(apply_values(context.base, context.parameters, values),
+                               source=source)
+            row.update({k: v for k, v in _evaluate_scene(context, scene).items() if k in row})
+        except Exception as exc:  # a failed sample is recorded; the sweep goes on
+            row["error"] = _short(f"{type(exc).__name__}: {exc}")
+    if caught:
+        w = caught[0]
+        row["warning"] = _short(f"{w.category.__name__}: {w.message}")
+    row["seconds"] = time.perf_counter() - t0
+    return row
+
+
+def evaluate_batch(context: Context, indices, values) -> dict:
+    """Evaluate samples; columns ``sample``, the parameters' key paths, then the metrics.
+
+    Parameters
+    ----------
+    context : Context
+    indices : sequence of int
+        Sample indices.
+    values : ndarray, shape (n, d)
+        Their parameter values.
+
+    Returns
+    -------
+    dict of str to list
+        Column name -> values, one per sample (the order of ``indices``).
+    """
+    values = np.asarray(values, dtype=float).reshape(len(indices), len(context.parameters))
+    cols: dict = {"sample": [int(i) for i in indices]}
+    for k, p in enumerate(context.parameters):
+        cols[p.key] = values[:, k].tolist()
+    names = context.columns()
+    for name in names:
+        cols[name] = []
+    for i, v in zip(indices, values):
+        row = evaluate(context, v, index=int(i))
+        for name in names:
+            cols[name].append(row[name])
+    return cols
+
+
+def _missing(kind: str):
+    return {"float": math.nan, "int": -1, "bool": None, "str": ""}[kind]
+
+
+def _short(text: str, limit: int = 300) -> str:
+    text = " ".join(str(text).split())
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+# ---------------------------------------------------------------------------------------------
+# preparing a sweep
+# ---------------------------------------------------------------------------------------------
+def _trim(raw: dict, scene, spec: SweepSpec, n_modes) -> tuple[dict, str, str]:
+    """The scene mapping reduced to the swept loop, and (variant, controller)."""
+    import copy
+
+    base = copy.deepcopy(raw)
+    kind = spec.controller or scene.controller.types[0]
+    if kind not in scene.controller.types:
+        raise SweepError(f"{scene.source}: sweep.controller: {kind!r} is not among the scene's "
+                         f"controller.types {list(scene.controller.types)}")
+    variants = scene.design_variants
+    variant = spec.fit or variants[0]
+    if variant not in variants:
+        raise SweepError(f"{scene.source}: sweep.fit: {variant!r} is not a design model of the "
+                         f"scene (fits: {', '.join(v for v in variants if v != 'design') or 'none'})")
+    c = base.setdefault("controller", {})
+    c["types"] = [kind]
+    c.pop("pd" if kind == "lqr" else "lqr", None)
+    for item, a in zip(base["appendages"], scene.appendages):
+        if a.design == "fit":
+            item.setdefault("fit", {})["match"] = [variant]
+    base.setdefault("outputs", {})["tip_deflection"] = True
+    base["outputs"].setdefault("exact_reference", False)
+    base["export"] = {"fmu": False}
+    base["report"] = {"plots": False, "equivalence": False}
+    if n_modes is not None:
+        fidelity = base.setdefault("fidelity", {})
+        fidelity.pop("tolerance", None)
+        fidelity["n_modes"] = int(n_modes)
+    return base, variant, kind
+
+
+def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
+    """The shared part of every sample: trimmed scene, fixed fidelity, fits, nominal controller.
+
+    Parameters
+    ----------
+    raw : dict
+        The scene mapping without ``sweep`` (file units).
+    spec : SweepSpec
+    source : str
+
+    Returns
+    -------
+    Context
+
+    Raises
+    ------
+    SceneError
+        If the nominal scene is invalid or its fidelity cannot be chosen.
+    """
+    # a swept key the scene leaves out is nominally the centre of its distribution
+    raw = apply_values(raw, spec.parameters, spec.nominal)
+    scene = load_scene(raw, source=source)
+    n_modes = None
+    if scene.has_beam_truth:
+        if scene.fidelity.n_modes is not None:
+            n_modes = scene.fidelity.n_modes
+        else:
+            try:
+                n_modes, _ = _Runner(scene, None, RunStats()).choose_fidelity()
+            except ValueError as exc:
+                raise SceneError(f"{source}: fidelity: {exc}") from None
+    base, variant, kind = _trim(raw, scene, spec, n_modes)
+    trimmed = load_scene(base, source=source)
+    templates = FitTemplates()
+    for k, a in enumerate(trimmed.appendages):
+        if a.design != "fit":
+            continue
+        bodies = {a.fit.n_bodies}
+        for p in spec.parameters:
+            if p.path == ("appendages", k, "fit", "n_bodies") and p.values is not None:
+                bodies |= {int(v) for v in p.values}
+        for n in sorted(bodies):
+            templates.prepare(n, variant)
+    context = Context(base=base, source=source, parameters=spec.parameters, design=spec.design,
+                      variant=variant, controller=kind, n_modes=n_modes, templates=templates,
+                      exact=trimmed.outputs.exact_reference and trimmed.has_beam_truth,
+                      time_responses=trimmed.manoeuvre is not None)
+    if spec.design == "nominal":
+        runner = _SampleRunner(trimmed, templates)
+        context.nominal_controller = _design_controller(runner, context)
+    return context

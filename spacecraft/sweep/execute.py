@@ -1,0 +1,443 @@
+"""Running a sweep's samples on Dask: batches, Parquet streaming, resume, progress.
+
+Where the samples run
+    * a Dask cluster you give: ``client=`` (a ``distributed.Client``) or ``scheduler=ADDRESS``
+      (``--scheduler tcp://host:8786``); its workers need flexsat installed;
+    * otherwise a ``LocalCluster`` of worker processes, one single-threaded worker per core
+      (``workers=`` / ``--workers`` to choose; Dask gives each worker process one BLAS thread);
+    * a tiny sweep (one worker asked, or less than :data:`LOCAL_CLUSTER_SECONDS` of work) runs
+      in this process with Dask's synchronous scheduler, where a cluster's start-up would cost
+      more than it saves.
+
+Batches
+    Each Dask task evaluates a batch of samples (:func:`.evaluate.evaluate_batch`). The batch
+    size is chosen from the time of one evaluation of the nominal scene, measured before the
+    sweep, so that a task takes about :data:`TASK_SECONDS` (the scheduler's per-task overhead,
+    a few milliseconds, stays below 1 % of the work; ``benchmarks/bench_sweep.py`` measures
+    it), and at most a quarter of the samples per worker (the load stays balanced). At most
+    ``2 x workers + 1`` tasks are in flight; a finished batch is written before another is sent.
+
+Output folder (``out``)
+    ``sweep.json``: the sweep's settings and the trimmed scene (a resume must match them);
+    ``samples/part-<first>-<last>.parquet``: one file per finished batch, columns ``sample``,
+    the parameters' key paths (file units), then the metrics (:data:`.evaluate.METRICS`).
+    Each part is written to a temporary name and renamed, so a killed sweep leaves only whole
+    parts. Read them all with ``pyarrow.parquet.read_table(out / "samples")``.
+
+Resume
+    ``resume=True`` (``--resume``) on a folder of the same sweep skips every sample of its
+    parts and runs the rest: nothing finished is lost or repeated. Samples are decided by their
+    index alone (:mod:`.parameters`), so the resumed results are those of an uninterrupted run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+from .evaluate import METRICS, Context, evaluate, evaluate_batch
+from .parameters import SweepError, SweepSpec
+
+__all__ = ["TASK_SECONDS", "LOCAL_CLUSTER_SECONDS", "Progress", "Executor", "open_executor",
+           "SampleStore", "table_from_columns", "schema", "run_samples", "batch_size"]
+
+#: Target duration of one Dask task [s].
+TASK_SECONDS = 0.5
+#: Below this much estimated work [s] a sweep runs in-process (synchronous scheduler).
+LOCAL_CLUSTER_SECONDS = 10.0
+_PARTS = "samples"
+_SETTINGS = "sweep.json"
+
+
+# ---------------------------------------------------------------------------------------------
+# tables
+# ---------------------------------------------------------------------------------------------
+def schema(context: Context):
+    """The pyarrow schema of a sweep's table."""
+    import pyarrow as pa
+
+    kinds = {"float": pa.float64(), "int": pa.int64(), "bool": pa.bool_(), "str": pa.string()}
+    fields = [pa.field("sample", pa.int64(), nullable=False)]
+    fields += [pa.field(p.key, pa.float64(), nullable=False) for p in context.parameters]
+    fields += [pa.field(name, kinds[METRICS[name][0]]) for name in context.columns()]
+    return pa.schema(fields)
+
+
+def table_from_columns(context: Context, columns: dict):
+    """A pyarrow Table of evaluated samples (:func:`.evaluate.evaluate_batch`'s columns)."""
+    import pyarrow as pa
+
+    s = schema(context)
+    return pa.table({f.name: pa.array(columns[f.name], type=f.type) for f in s}, schema=s)
+
+
+# ---------------------------------------------------------------------------------------------
+# progress
+# ---------------------------------------------------------------------------------------------
+class Progress:
+    """A progress bar on stderr: samples done, failed, elapsed, remaining.
+
+    On a terminal one line redrawn at most five times a second; otherwise (a log file) a line
+    at every tenth of the sweep.
+    """
+
+    def __init__(self, total: int, done: int = 0, *, enabled: bool = True, stream=None,
+                 label: str = "sweep"):
+        self.total, self.done, self.failed = int(total), int(done), 0
+        self.start_done = int(done)
+        self.enabled = enabled and total > 0
+        self.stream = sys.stderr if stream is None else stream
+        self.label = label
+        self.t0 = time.perf_counter()
+        self._last = -math.inf
+        self._tenth = -1
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+
+    def update(self, n: int, failed: int = 0) -> None:
+        """Count n more samples, ``failed`` of them failed."""
+        self.done += n
+        self.failed += failed
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        tenth = int(10 * self.done / self.total)
+        if self.tty and (now - self._last > 0.2 or self.done >= self.total):
+            self._last = now
+            print("\r" + self.line(), end="", file=self.stream, flush=True)
+        elif not self.tty and tenth != self._tenth:
+            self._tenth = tenth
+            print(self.line(), file=self.stream, flush=True)
+
+    def line(self) -> str:
+        """The current progress text."""
+        elapsed = time.perf_counter() - self.t0
+        new = self.done - self.start_done
+        rate = new / elapsed if elapsed > 0 else 0.0
+        left = (self.total - self.done) / rate if rate > 0 else math.inf
+        width = 24
+        filled = int(width * self.done / self.total) if self.total else width
+        eta = f"{left:.0f} s left" if math.isfinite(left) else "..."
+        failed = f", {self.failed} failed" if self.failed else ""
+        return (f"{self.label} [{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total}"
+                f"{failed}, {elapsed:.1f} s, {eta}")
+
+    def close(self) -> None:
+        """End the line."""
+        if self.enabled and self.tty:
+            print(file=self.stream, flush=True)
+
+
+# ---------------------------------------------------------------------------------------------
+# executors
+# ---------------------------------------------------------------------------------------------
+@dataclasses.dataclass
+class Executor:
+    """Where batches run: Dask's synchronous scheduler in this process, or a distributed client.
+
+    Attributes
+    ----------
+    kind : str
+        ``"synchronous"`` (in-process), ``"local-cluster"``, ``"scheduler"`` (an address) or
+        ``"client"`` (a client given by the caller).
+    client : distributed.Client or None
+    n_workers : int
+        Worker threads available (1 in-process).
+    owned : list
+        Objects to close (a LocalCluster and its client made here).
+    """
+
+    kind: str
+    client: object = None
+    n_workers: int = 1
+    owned: list = dataclasses.field(default_factory=list)
+    _context_future: object = None
+    _context: object = None
+
+    def describe(self) -> str:
+        """Short text for reports: ``local-cluster, 2 workers``."""
+        return f"{self.kind}, {self.n_workers} worker{'s' if self.n_workers != 1 else ''}"
+
+    def _context_ref(self, context: Context):
+        if self.client is None:
+            return context
+        if self._context is not context:
+            self._context = context
+            self._context_future = self.client.scatter(context, broadcast=True, hash=False)
+        return self._context_future
+
+    def run(self, context: Context, batches: list) -> Iterator[tuple[list, dict]]:
+        """Evaluate batches ``[(indices, values), ...]``; yield ``(indices, columns)`` as each
+        finishes (in-process: in order)."""
+        if self.client is None:
+            import dask
+
+            for indices, values in batches:
+                task = dask.delayed(evaluate_batch, pure=False)(context, indices, values)
+                (columns,) = dask.compute(task, scheduler="synchronous")
+                yield indices, columns
+            return
+        from distributed import as_completed
+
+        ref = self._context_ref(context)
+        pending = list(batches)
+        window = 2 * self.n_workers + 1
+        futures = {}
+
+        def submit():
+            indices, values = pending.pop(0)
+            future = self.client.submit(evaluate_batch, ref, indices, values, pure=False)
+            futures[future.key] = indices
+            return future
+
+        running = as_completed([submit() for _ in range(min(window, len(pending)))])
+        for future in running:
+            indices = futures.pop(future.key)
+            columns = future.result()
+            future.release()
+            if pending:
+                running.add(submit())
+            yield indices, columns
+
+    def evaluate_rows(self, context: Context, values: np.ndarray, size: int) -> list[dict]:
+        """Evaluate parameter rows (no sample index), in order; used by the worst-case search."""
+        values = np.asarray(values, dtype=float)
+        n = values.shape[0]
+        if self.client is None:
+            return [evaluate(context, v) for v in values]
+        size = max(1, min(size, math.ceil(n / self.n_workers)))
+        batches = [(list(range(k, min(k + size, n))), values[k:k + size])
+                   for k in range(0, n, size)]
+        rows: list = [None] * n
+        for indices, columns in self.run(context, batches):
+            names = [c for c in columns if c != "sample"]
+            for j, i in enumerate(indices):
+                rows[i] = {name: columns[name][j] for name in names}
+        return rows
+
+    def close(self) -> None:
+        """Close what this executor started (not a client given by the caller)."""
+        for thing in reversed(self.owned):
+            try:
+                thing.close()
+            except Exception:  # closing a cluster that is already gone
+                pass
+        self.owned.clear()
+
+
+def open_executor(*, client=None, scheduler: str | None = None, workers: int | None = None,
+                  estimated_seconds: float = math.inf) -> Executor:
+    """Choose and start where the samples run (module docstring).
+
+    Parameters
+    ----------
+    client : distributed.Client, optional
+        A client of a running cluster (the caller keeps and closes it).
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``).
+    workers : int, optional
+        Local worker processes (default: the machine's cores); 1 runs in-process.
+    estimated_seconds : float
+        Estimated work [s] (single core); below :data:`LOCAL_CLUSTER_SECONDS` the sweep runs
+        in-process.
+
+    Raises
+    ------
+    SweepError
+        An unreachable scheduler, or a bad worker count.
+    """
+    if client is not None and scheduler is not None:
+        raise SweepError("give a client or a scheduler address, not both")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):
+        raise SweepError(f"workers must be a positive integer; got {workers!r}")
+    if client is not None:
+        return Executor("client", client, max(1, sum(client.nthreads().values())))
+    if scheduler is not None:
+        from distributed import Client
+
+        try:
+            client = Client(scheduler, timeout="10s", set_as_default=False)
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise SweepError(f"--scheduler {scheduler}: cannot reach a Dask scheduler there "
+                             f"({type(exc).__name__}: {' '.join(str(exc).split())[:120]})"
+                             ) from None
+        n = sum(client.nthreads().values())
+        if n == 0:
+            client.close()
+            raise SweepError(f"--scheduler {scheduler}: the cluster has no workers")
+        return Executor("scheduler", client, n, [client])
+    n = workers if workers is not None else (os.cpu_count() or 1)
+    if n == 1 or estimated_seconds < LOCAL_CLUSTER_SECONDS:
+        return Executor("synchronous")
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                           dashboard_address=None, silence_logs=logging.ERROR)
+    client = Client(cluster, set_as_default=False)
+    return Executor("local-cluster", client, n, [cluster, client])
+
+
+def batch_size(seconds_per_sample: float, n_todo: int, n_workers: int) -> int:
+    """Samples per task: about :data:`TASK_SECONDS` of work, at most a quarter of a worker's
+    share of the samples, at least one."""
+    by_time = max(1, int(round(TASK_SECONDS / max(seconds_per_sample, 1e-6))))
+    by_balance = max(1, math.ceil(n_todo / (4 * max(n_workers, 1))))
+    return min(by_time, by_balance)
+
+
+# ---------------------------------------------------------------------------------------------
+# the output folder
+# ---------------------------------------------------------------------------------------------
+class SampleStore:
+    """The Parquet parts of a sweep's output folder (module docstring).
+
+    Parameters
+    ----------
+    folder : path
+    settings : dict
+        The sweep's settings; recorded in ``sweep.json`` and compared on resume.
+    resume : bool
+        Continue the sweep in ``folder`` (its settings must match).
+
+    Raises
+    ------
+    SweepError
+        A non-empty folder without ``resume``; ``resume`` on a folder of another sweep.
+    """
+
+    def __init__(self, folder, settings: dict, *, resume: bool):
+        self.folder = Path(folder)
+        self.parts = self.folder / _PARTS
+        record = self.folder / _SETTINGS
+        if resume:
+            if not record.is_file():
+                raise SweepError(f"{self.folder}: --resume needs the folder of an earlier sweep "
+                                 f"(no {_SETTINGS} there)")
+            try:
+                old = json.loads(record.read_text())
+            except (OSError, ValueError) as exc:
+                raise SweepError(f"{record}: cannot read it ({exc})") from None
+            differs = [k for k in sorted(set(old) | set(settings))
+                       if k not in ("started",) and old.get(k) != settings.get(k)]
+            if differs:
+                raise SweepError(f"{self.folder}: --resume: this folder holds another sweep "
+                                 f"(its {', '.join(differs)} differ{'s' if len(differs) == 1 else ''})"
+                                 "; run the same scene and settings, or choose another --out")
+            for stale in self.parts.glob("*.tmp"):
+                stale.unlink()
+        else:
+            if self.folder.exists() and (not self.folder.is_dir() or any(self.folder.iterdir())):
+                raise SweepError(f"{self.folder}: output folder exists and is not empty; use "
+                                 "--resume to continue its sweep, or choose another --out")
+            self.parts.mkdir(parents=True, exist_ok=True)
+            text = json.dumps(settings, indent=2, allow_nan=False)
+            tmp = record.with_suffix(".tmp")
+            tmp.write_text(text + "\n")
+            os.replace(tmp, record)
+        self.parts.mkdir(parents=True, exist_ok=True)
+
+    def completed(self) -> np.ndarray:
+        """Sample indices already in the folder (sorted)."""
+        import pyarrow.parquet as pq
+
+        done = [pq.read_table(p, columns=["sample"]).column("sample").to_numpy()
+                for p in sorted(self.parts.glob("part-*.parquet"))]
+        return np.sort(np.concatenate(done)) if done else np.zeros(0, dtype=np.int64)
+
+    def write(self, table) -> Path:
+        """Write one batch's table as a part (atomically)."""
+        import pyarrow.parquet as pq
+
+        samples = table.column("sample").to_numpy()
+        path = self.parts / f"part-{samples.min():09d}-{samples.max():09d}.parquet"
+        tmp = path.with_name(path.name + ".tmp")
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+        return path
+
+    def read(self):
+        """Every sample of the folder as one table, sorted by sample."""
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        tables = [pq.read_table(p) for p in sorted(self.parts.glob("part-*.parquet"))]
+        if not tables:
+            return None
+        table = pa.concat_tables(tables)
+        return table.take(np.argsort(table.column("sample").to_numpy(), kind="stable"))
+
+
+# ---------------------------------------------------------------------------------------------
+# the samples
+# ---------------------------------------------------------------------------------------------
+def run_samples(context: Context, spec: SweepSpec, executor: Executor, *,
+                store: SampleStore | None = None, values: np.ndarray | None = None,
+                seconds_per_sample: float = 0.03, progress: bool = True,
+                batch: int | None = None) -> tuple:
+    """Evaluate every sample of the plan not yet in the store.
+
+    Parameters
+    ----------
+    context : Context
+    spec : SweepSpec
+    executor : Executor
+    store : SampleStore, optional
+        Stream each finished batch to it (and skip its samples); None: in memory only.
+    values : ndarray (n_samples, d), optional
+        Every sample's values (default: ``spec.values()``).
+    seconds_per_sample : float
+        Measured cost of one evaluation [s] (for the batch size).
+    progress : bool
+        Progress bar on stderr.
+    batch : int, optional
+        Samples per task (default :func:`batch_size`).
+
+    Returns
+    -------
+    table : pyarrow.Table
+        Every sample of the plan, sorted by index.
+    info : dict
+        ``evaluated`` (samples run now), ``skipped`` (found in the store), ``batch``,
+        ``tasks``, ``seconds`` (wall time).
+    """
+    import pyarrow as pa
+
+    n = spec.n_samples
+    done = store.completed() if store is not None else np.zeros(0, dtype=np.int64)
+    todo = np.setdiff1d(np.arange(n, dtype=np.int64), done)
+    size = batch or batch_size(seconds_per_sample, todo.size, executor.n_workers)
+    values = spec.values() if values is None else np.asarray(values, dtype=float)
+    values = values[todo]
+    batches = [(todo[k:k + size].tolist(), values[k:k + size]) for k in range(0, todo.size, size)]
+    bar = Progress(n, done.size, enabled=progress)
+    tables = []
+    t0 = time.perf_counter()
+    try:
+        for _, columns in executor.run(context, batches):
+            table = table_from_columns(context, columns)
+            if store is not None:
+                store.write(table)
+            else:
+                tables.append(table)
+            bar.update(table.num_rows, sum(1 for e in columns["error"] if e))
+    finally:
+        bar.close()
+    seconds = time.perf_counter() - t0
+    if store is not None:
+        table = store.read()
+    else:
+        table = pa.concat_tables(tables) if tables else schema(context).empty_table()
+        table = table.take(np.argsort(table.column("sample").to_numpy(), kind="stable"))
+    info = {"evaluated": int(todo.size), "skipped": int(done.size), "batch": int(size),
+            "tasks": len(batches), "seconds": seconds}
+    return table, info

@@ -1,0 +1,385 @@
+"""The worst case of a sweep: the smallest stability margin over the parameter box.
+
+Objective
+    For margin m (modulus margin min|1 + L(jw)|, or phase margin [deg]) of the loop on the exact
+    beams (on the truth model where the scene has no exact reference), the *signed margin*
+    ``s = |m|`` if the loop is stable and ``s = -|m|`` if it is not. It is continuous where the
+    Nyquist curve crosses the critical point (there m = 0 and the verdict changes), so
+    minimising it finds the least stable point of the box: the smallest margin if every point
+    is stable, the most unstable one otherwise. A failed evaluation counts as
+    :data:`CAP` (never the worst); an infinite phase margin (|L| never crosses 1) too.
+
+Method
+    Differential evolution (``scipy.optimize.differential_evolution``, the ``best1bin``
+    strategy, ``popsize`` 15 per parameter, no gradient polish: the objective is a minimum over
+    frequency and has kinks), its first population seeded with the sweep's samples of lowest
+    objective inside the box (Latin-hypercube points of the box where there are too few), run
+    until the budget ``worst_case_evaluations`` or DE's convergence test. Each generation's
+    population is evaluated on the Dask workers at once (``updating="deferred"``). The box:
+    :meth:`.parameters.Parameter.box`; log-uniform parameters are searched in log scale,
+    discrete ones by index (``integrality``).
+
+Verification
+    The worst parameter set is written as a scene (``worst.toml``: the sweep's scene with those
+    numbers, without ``[sweep]``, the exact reference on) and run by :func:`spacecraft.runner.run`
+    itself, whose exact-beam verdict (its own dense grid through W(s), exact coupled frequencies)
+    is reported beside the sweep's. With ``design = "nominal"`` the scene pins the design chains
+    to the nominal fit (``design = "chain"``), so the runner tunes the nominal controller again
+    unless the swept numbers change the design model itself (hub, mounts): then it says so.
+
+References
+----------
+.. [1] R. Storn, K. Price, "Differential evolution - a simple and efficient heuristic for global
+   optimization over continuous spaces", J. Global Optimization 11, 1997.
+.. [2] S. Skogestad, I. Postlethwaite, Multivariable Feedback Control, 2nd ed., sec. 2.4.3
+   (modulus margin).
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import json
+import math
+import re
+
+import numpy as np
+
+from ..scene import SceneError
+from .parameters import SweepSpec, apply_values
+
+__all__ = ["CAP", "WorstCase", "signed_margin", "search", "worst_scene", "to_toml", "verify"]
+
+#: Objective of a failed evaluation or an infinite margin (never the worst).
+CAP = {"modulus_margin": 10.0, "phase_margin": 180.0}
+
+
+def signed_margin(row: dict, metric: str, exact: bool) -> float:
+    """The signed margin of an evaluated sample (module docstring)."""
+    prefix = "exact" if exact else "truth"
+    value = row.get(f"{prefix}_{metric}")
+    stable = row.get(f"{prefix}_stable")
+    if row.get("error") or stable is None or value is None or math.isnan(value):
+        return CAP[metric]
+    value = min(abs(float(value)), CAP[metric])
+    return value if stable else -value
+
+
+@dataclasses.dataclass
+class WorstCase:
+    """Outcome of :func:`search`.
+
+    Attributes
+    ----------
+    metric : str
+        ``"modulus_margin"`` or ``"phase_margin"``.
+    values : dict
+        Key path -> worst value (file units).
+    row : dict
+        The evaluation of the worst point (every metric).
+    objective : float
+        Its signed margin.
+    evaluations : int
+        Design-loop evaluations of the search.
+    best_sample : dict
+        The sweep's own sample of lowest objective: ``sample``, ``objective``.
+    message : str
+        Why DE stopped.
+    verification : dict or None
+        The runner's verdict on ``worst.toml`` (:func:`verify`).
+    """
+
+    metric: str
+    values: dict
+    row: dict
+    objective: float
+    evaluations: int
+    best_sample: dict
+    message: str
+    verification: dict | None = None
+
+    def as_dict(self) -> dict:
+        """JSON-ready form."""
+        return dataclasses.asdict(self)
+
+
+class _Coordinates:
+    """Search coordinates of the box: linear, log (loguniform) or an index (discrete)."""
+
+    def __init__(self, spec: SweepSpec):
+        self.parameters = spec.parameters
+        lo, hi, integral = [], [], []
+        for p in self.parameters:
+            a, b = p.box()
+            if p.distribution == "discrete":
+                lo.append(0.0)
+                hi.append(float(len(p.values) - 1))
+                integral.append(True)
+            elif p.distribution == "loguniform":
+                lo.append(math.log(a))
+                hi.append(math.log(b))
+                integral.append(False)
+            else:
+                lo.append(a)
+                hi.append(b)
+                integral.append(False)
+        self.lo, self.hi = np.array(lo), np.array(hi)
+        self.integral = np.array(integral)
+
+    def values(self, x: np.ndarray) -> np.ndarray:
+        x = np.atleast_2d(np.asarray(x, dtype=float))
+        out = np.empty_like(x)
+        for k, p in enumerate(self.parameters):
+            if p.distribution == "discrete":
+                idx = np.clip(np.rint(x[:, k]).astype(int), 0, len(p.values) - 1)
+                out[:, k] = np.asarray(p.values)[idx]
+            elif p.distribution == "loguniform":
+                out[:, k] = np.exp(x[:, k])
+            else:
+                out[:, k] = x[:, k]
+        return out
+
+    def point(self, values: np.ndarray) -> np.ndarray:
+        values = np.atleast_2d(np.asarray(values, dtype=float))
+        x = np.empty_like(values)
+        for k, p in enumerate(self.parameters):
+            if p.distribution == "discrete":
+                x[:, k] = [list(p.values).index(v) if v in p.values else 0 for v in values[:, k]]
+            elif p.distribution == "loguniform":
+                x[:, k] = np.log(values[:, k])
+            else:
+                x[:, k] = values[:, k]
+        return x
+
+    def inside(self, x: np.ndarray) -> np.ndarray:
+        return np.all((x >= self.lo) & (x <= self.hi), axis=1)
+
+
+def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int = 8,
+           popsize: int = 15) -> WorstCase:
+    """Differential evolution on the signed margin, seeded with the sweep's samples.
+
+    Parameters
+    ----------
+    context : .evaluate.Context
+    spec : SweepSpec
+    executor : .execute.Executor
+    table : pyarrow.Table or None
+        The sweep's samples (their parameters and metrics).
+    metric : {"modulus_margin", "phase_margin"}
+    batch : int
+        Samples per Dask task.
+    popsize : int
+        DE population per parameter.
+
+    Returns
+    -------
+    WorstCase
+    """
+    import scipy.optimize
+    from scipy.stats import qmc
+
+    exact = context.exact
+    coords = _Coordinates(spec)
+    d = len(spec.parameters)
+    n_pop = popsize * d
+    # the sweep's samples, best first, as the first population
+    seeds = np.zeros((0, d))
+    best_sample = {"sample": None, "objective": None}
+    if table is not None and table.num_rows:
+        columns = table.to_pydict()
+        objective = np.array([signed_margin({k: columns[k][i] for k in columns}, metric, exact)
+                              for i in range(table.num_rows)])
+        values = np.column_stack([columns[p.key] for p in spec.parameters])
+        x = coords.point(values)
+        order = np.argsort(objective, kind="stable")
+        i0 = int(order[0])
+        best_sample = {"sample": int(columns["sample"][i0]), "objective": float(objective[i0])}
+        keep = order[coords.inside(x[order])]
+        seeds = np.unique(x[keep], axis=0)
+        seeds = seeds[np.argsort([objective[keep][np.flatnonzero(
+            np.all(x[keep] == s, axis=1))[0]] for s in seeds], kind="stable")][:n_pop]
+    if seeds.shape[0] < max(5, n_pop):
+        fill = qmc.LatinHypercube(d, rng=np.random.default_rng(spec.seed)).random(
+            max(5, n_pop) - seeds.shape[0])
+        seeds = np.vstack([seeds, coords.lo + fill * (coords.hi - coords.lo)])
+    cache: dict = {}
+    count = [0]
+
+    def evaluate_population(func, xs):
+        xs = np.asarray(list(xs), dtype=float)
+        fresh = [x for x in xs if x.tobytes() not in cache]
+        if fresh:
+            rows = executor.evaluate_rows(context, coords.values(np.array(fresh)), batch)
+            count[0] += len(fresh)
+            for x, row in zip(fresh, rows):
+                cache[x.tobytes()] = (signed_margin(row, metric, exact), row)
+        return [func(x) for x in xs]
+
+    def objective_of(x):
+        return cache[np.asarray(x, dtype=float).tobytes()][0]
+
+    generations = max(1, spec.worst_case_evaluations // seeds.shape[0] - 1)
+    result = scipy.optimize.differential_evolution(
+        objective_of, list(zip(coords.lo, coords.hi)), init=seeds, popsize=popsize,
+        maxiter=generations, polish=False, updating="deferred", workers=evaluate_population,
+        rng=np.random.default_rng(spec.seed), integrality=coords.integral if
+        coords.integral.any() else None)
+    x = np.asarray(result.x, dtype=float)
+    key = x.tobytes()
+    if key not in cache:
+        evaluate_population(lambda z: None, [x])
+    value, row = cache[key]
+    worst = coords.values(x)[0]
+    return WorstCase(metric, {p.key: float(v) for p, v in zip(spec.parameters, worst)}, row,
+                     float(value), count[0], best_sample, str(result.message))
+
+
+# ---------------------------------------------------------------------------------------------
+# worst.toml and its verification
+# ---------------------------------------------------------------------------------------------
+def worst_scene(context, values: dict) -> tuple[dict, str | None]:
+    """The scene mapping of a worst case, and why the runner may not reproduce it (or None).
+
+    Parameters
+    ----------
+    context : .evaluate.Context
+    values : dict
+        Key path -> value (file units).
+    """
+    from ..scene import load_scene
+    from .evaluate import _SampleRunner
+
+    params = context.parameters
+    raw = apply_values(context.base, params, [values[p.key] for p in params])
+    raw.setdefault("outputs", {})["exact_reference"] = True
+    note = None
+    if context.design == "nominal":
+        nominal = load_scene(context.base, source=context.source)
+        runner = _SampleRunner(nominal, context.templates)
+        for k, (item, a) in enumerate(zip(raw["appendages"], nominal.appendages)):
+            if a.design != "fit":
+                continue
+            chain = runner.design_model(a, context.variant, context.n_modes)
+            item.pop("fit", None)
+            item["design"] = "chain"
+            item["chain"] = {
+                "lengths": chain.lengths.tolist(), "masses": chain.masses.tolist(),
+                "inertias": chain.inertias.tolist(),
+                "hinge_stiffnesses": chain.hinge_stiffnesses.tolist(),
+                "com_offsets": chain.com_offsets.tolist()}
+            if chain.hinge_dampings is not None:
+                item["chain"]["hinge_dampings"] = np.asarray(chain.hinge_dampings).tolist()
+        design_keys = [p.key for p in params if p.path[0] in ("hub", "appendages") and not (
+            p.path[0] == "appendages" and p.path[2] in ("beam", "truth_chain"))]
+        if design_keys:
+            note = ("design = \"nominal\": the runner tunes the controller on this scene's design "
+                    f"model, whose {', '.join(design_keys)} differ from the nominal scene's, so "
+                    "its controller is not the sweep's nominal one")
+    return raw, note
+
+
+def _key(name: str) -> str:
+    return name if re.fullmatch(r"[A-Za-z0-9_-]+", name) else json.dumps(name)
+
+
+def _value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "nan"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {type(value).__name__} as TOML")
+
+
+def to_toml(mapping: dict, header: str = "") -> str:
+    """TOML text of a scene mapping (tables, arrays of tables, numbers, strings, booleans).
+
+    Floats are written with ``repr`` (the shortest text that reads back to the same double).
+    """
+    lines = [f"# {line}" if line else "#" for line in header.splitlines()]
+
+    def table(node: dict, path: list[str]):
+        scalars = {k: v for k, v in node.items() if not isinstance(v, dict)
+                   and not (isinstance(v, list) and v and all(isinstance(i, dict) for i in v))}
+        for k, v in scalars.items():
+            lines.append(f"{_key(k)} = {_value(v)}")
+        for k, v in node.items():
+            if isinstance(v, dict):
+                lines.append("")
+                lines.append(f"[{'.'.join(_key(p) for p in path + [k])}]")
+                table(v, path + [k])
+            elif isinstance(v, list) and v and all(isinstance(i, dict) for i in v):
+                for item in v:
+                    lines.append("")
+                    lines.append(f"[[{'.'.join(_key(p) for p in path + [k])}]]")
+                    table(item, path + [k])
+
+    table(mapping, [])
+    return "\n".join(lines).strip("\n") + "\n"
+
+
+def _verdict(v) -> dict:
+    m = v.margins
+    return {"stable": bool(v.stable), "n_unstable_poles": int(v.n_unstable_poles),
+            "gain_margin": float(m.gain_margin), "phase_margin": float(m.phase_margin),
+            "modulus_margin": float(m.modulus_margin)}
+
+
+def verify(context, values: dict, raw: dict, source: str) -> dict:
+    """Check a worst case on the exact beams two ways.
+
+    ``exact_reference``: the sweep's own loop (the same controller) closed on the runner's exact
+    reference (:meth:`spacecraft.runner._Runner.exact_reference_frd`: its dense grid placed at
+    the exact coupled frequencies), independent of the sweep's lighter grid. ``runner``: the
+    scene ``raw`` (``worst.toml``) run by :func:`spacecraft.runner.run`: what a user re-running
+    it gets. Failures are recorded as ``error`` texts.
+    """
+    import warnings
+
+    import controllers
+
+    from ..runner import run
+    from ..scene import load_scene
+    from .evaluate import _SampleRunner, _design_controller
+
+    out: dict = {}
+    params = context.parameters
+    try:
+        base = apply_values(context.base, params, [values[p.key] for p in params])
+        base.setdefault("outputs", {})["exact_reference"] = True
+        scene = load_scene(base, source=source)
+        runner = _SampleRunner(scene, context.templates)
+        K = context.nominal_controller
+        if K is None:
+            K = _design_controller(runner, context)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            out["exact_reference"] = _verdict(controllers.spillover(
+                runner.exact_reference_frd(), K))
+    except (SceneError, ValueError, ArithmeticError) as exc:
+        out["exact_reference"] = {"error": f"{type(exc).__name__}: {exc}"}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            result = run(load_scene(copy.deepcopy(raw), source=source), time_responses=True)
+        row = result.data["closed_loops"][0]
+        runner_out = {"truth": {k: row["verdict"].get(k) for k in (
+            "stable", "gain_margin", "phase_margin", "modulus_margin")}}
+        if "exact_verdict" in row:
+            runner_out["exact"] = {k: row["exact_verdict"].get(k) for k in (
+                "stable", "gain_margin", "phase_margin", "modulus_margin", "error")
+                if k in row["exact_verdict"]}
+        out["runner"] = runner_out
+    except (SceneError, ValueError, ArithmeticError) as exc:
+        out["runner"] = {"error": f"{type(exc).__name__}: {exc}"}
+    return out
