@@ -1,7 +1,8 @@
 """``flexsat sweep``: the command-line face of :func:`spacecraft.sweep.run_sweep`.
 
 ``flexsat sweep [SCENE] [--samples N] [--out DIR] [--scheduler ADDRESS] [--workers N]
-[--resume] [--seed S] [--method M] [--design D] [--no-worst-case] [--max-samples N]
+[--resume] [--seed S] [--method M] [--design D] [--no-worst-case]
+[--worst-case-evaluations N] [--max-samples N]
 [--no-plots] [--quiet] [--json]``
 
 SCENE is a scene file with a ``[sweep]`` table or an embedded sweep scene's name (default: the
@@ -18,7 +19,7 @@ import sys
 import time
 from pathlib import Path
 
-__all__ = ["add_arguments", "run_command", "summary_lines"]
+__all__ = ["add_arguments", "run_command", "summary_lines", "main"]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -40,6 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="tune per sample, or hold the nominal controller")
     parser.add_argument("--no-worst-case", action="store_true", help="skip the worst-case "
                                                                      "search")
+    parser.add_argument("--worst-case-evaluations", type=int, metavar="N",
+                        help="evaluations per worst-case search (default 600)")
     parser.add_argument("--max-samples", type=int, help="raise the sample limit (1000000)")
     parser.add_argument("--no-plots", action="store_true", help="skip plots")
     parser.add_argument("--quiet", action="store_true", help="no progress display")
@@ -98,7 +101,7 @@ def run_command(args) -> int:
     log = _Log(args.quiet)
     out = args.out if args.out is not None else (None if args.resume else default_output_folder())
     settings = {"samples": args.samples, "seed": args.seed, "method": args.method,
-                "design": args.design}
+                "design": args.design, "worst_case_evaluations": args.worst_case_evaluations}
     if args.no_worst_case:
         settings["worst_case"] = False
     result = run_sweep(args.scene, out=out, scheduler=args.scheduler, workers=args.workers,
@@ -112,3 +115,26 @@ def run_command(args) -> int:
         print(line)
     print(f"wrote summary.json, report.md, report.html and samples/*.parquet to {out}")
     return 0
+
+
+def main(argv=None) -> int:
+    """``python -m spacecraft.sweep.command``: the sweep without the ``flexsat`` front end
+    (the same options; user errors exit 2 with one line)."""
+    from appendages.interface import FlexsatError
+
+    parser = argparse.ArgumentParser(prog="python -m spacecraft.sweep.command",
+                                     description=__doc__.splitlines()[0])
+    add_arguments(parser)
+    args = parser.parse_args(argv)
+    try:
+        return run_command(args)
+    except FlexsatError as exc:
+        print(f"flexsat: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("flexsat: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

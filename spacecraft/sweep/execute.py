@@ -197,7 +197,8 @@ class Executor:
             futures[future.key] = indices
             return future
 
-        running = as_completed([submit() for _ in range(min(window, len(pending)))])
+        running = as_completed([submit() for _ in range(min(window, len(pending)))],
+                               loop=self.client.loop)
         for future in running:
             indices = futures.pop(future.key)
             columns = future.result()
@@ -327,12 +328,12 @@ class SampleStore:
                 old = json.loads(record.read_text())
             except (OSError, ValueError) as exc:
                 raise SweepError(f"{record}: cannot read it ({exc})") from None
-            differs = [k for k in sorted(set(old) | set(settings))
-                       if k not in ("started",) and old.get(k) != settings.get(k)]
+            differs = _differences(old, settings)
             if differs:
                 raise SweepError(f"{self.folder}: --resume: this folder holds another sweep "
-                                 f"(its {', '.join(differs)} differ{'s' if len(differs) == 1 else ''})"
-                                 "; run the same scene and settings, or choose another --out")
+                                 f"(its {', '.join(differs[:3])} differ"
+                                 f"{'s' if len(differs) == 1 else ''}); run the same scene and "
+                                 "settings, or choose another --out")
             for stale in self.parts.glob("*.tmp"):
                 stale.unlink()
         else:
@@ -375,6 +376,20 @@ class SampleStore:
             return None
         table = pa.concat_tables(tables)
         return table.take(np.argsort(table.column("sample").to_numpy(), kind="stable"))
+
+
+def _differences(old, new, prefix: str = "") -> list[str]:
+    """Dotted keys whose values differ between two settings records (``started`` ignored)."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        out = []
+        for k in sorted(set(old) | set(new), key=str):
+            if k != "started":
+                out += _differences(old.get(k), new.get(k), f"{prefix}.{k}" if prefix else k)
+        return out
+    if isinstance(old, list) and isinstance(new, list) and len(old) == len(new):
+        return [d for k, (a, b) in enumerate(zip(old, new))
+                for d in _differences(a, b, f"{prefix}[{k}]")]
+    return [] if old == new else [prefix]
 
 
 # ---------------------------------------------------------------------------------------------

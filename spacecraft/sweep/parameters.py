@@ -463,9 +463,25 @@ def _read_parameter(key: str, spec, raw: Mapping, source: str) -> Parameter:
         nominal = float(centre)
     else:
         nominal = float(current)
-    return Parameter(key, path, d, low, high, mean, std,
-                     None if values is None else tuple(float(v) for v in values), levels,
-                     nominal, integer)
+    parameter = Parameter(key, path, d, low, high, mean, std,
+                          None if values is None else tuple(float(v) for v in values), levels,
+                          nominal, integer)
+    if current is None:
+        # a key the scene leaves out: the scene reader decides whether it is one of its keys
+        try:
+            load_scene(apply_values(raw, [parameter], [nominal]), source=source)
+        except SceneError as exc:
+            if _raw_path(path) in str(exc):
+                raise _unknown(source, key, "is not a key the scene knows", raw) from None
+    return parameter
+
+
+def _raw_path(path: tuple) -> str:
+    """The scene reader's spelling of a path: ``appendages[0].beam.length``."""
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else p)
+    return out
 
 
 # ---------------------------------------------------------------------------------------------

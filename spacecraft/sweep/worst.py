@@ -205,10 +205,18 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
         seeds = np.vstack([seeds, coords.lo + fill * (coords.hi - coords.lo)])
     cache: dict = {}
     count = [0]
+    width = coords.hi - coords.lo
+
+    def snap(x):
+        # DE maps its population to the unit cube and back: a seed on the box's edge comes
+        # back a few ulps inside; put it on the edge again
+        x = np.asarray(x, dtype=float)
+        x = np.where(np.abs(x - coords.lo) <= 1e-12 * width, coords.lo, x)
+        return np.where(np.abs(x - coords.hi) <= 1e-12 * width, coords.hi, x)
 
     def evaluate_population(func, xs):
-        xs = np.asarray(list(xs), dtype=float)
-        fresh = [x for x in xs if x.tobytes() not in cache]
+        xs = [snap(x) for x in xs]
+        fresh = list({x.tobytes(): x for x in xs if x.tobytes() not in cache}.values())
         if fresh:
             rows = executor.evaluate_rows(context, coords.values(np.array(fresh)), batch)
             count[0] += len(fresh)
@@ -217,7 +225,7 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
         return [func(x) for x in xs]
 
     def objective_of(x):
-        return cache[np.asarray(x, dtype=float).tobytes()][0]
+        return cache[snap(x).tobytes()][0]
 
     generations = max(1, spec.worst_case_evaluations // seeds.shape[0] - 1)
     result = scipy.optimize.differential_evolution(
@@ -225,7 +233,7 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
         maxiter=generations, polish=False, updating="deferred", workers=evaluate_population,
         rng=np.random.default_rng(spec.seed), integrality=coords.integral if
         coords.integral.any() else None)
-    x = np.asarray(result.x, dtype=float)
+    x = snap(result.x)
     key = x.tobytes()
     if key not in cache:
         evaluate_population(lambda z: None, [x])
