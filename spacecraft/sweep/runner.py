@@ -191,6 +191,11 @@ def run_sweep(scene=None, *, out=None, client=None, scheduler: str | None = None
                                    **settings)
     if resume and out is None:
         raise SweepError("--resume needs the output folder of the interrupted sweep (--out)")
+    if out is not None and not resume:
+        folder = Path(out)
+        if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
+            raise SweepError(f"{folder}: output folder exists and is not empty; use --resume "
+                             "to continue its sweep, or choose another --out")
     say(f"{spec.n_samples} samples of {len(spec.parameters)} parameters ({spec.method})")
     values = spec.values()
     check_box(spec, raw, source, values)

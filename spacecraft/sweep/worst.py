@@ -14,7 +14,9 @@ Method
     strategy, ``popsize`` 15 per parameter, no gradient polish: the objective is a minimum over
     frequency and has kinks), its first population seeded with the sweep's samples of lowest
     objective inside the box (Latin-hypercube points of the box where there are too few), run
-    until the budget ``worst_case_evaluations`` or DE's convergence test. Each generation's
+    until the budget ``worst_case_evaluations`` or DE's convergence test. The population has
+    15 members per parameter, fewer (at least 5) when the budget would allow fewer than four
+    generations. Each generation's
     population is evaluated on the Dask workers at once (``updating="deferred"``). The box:
     :meth:`.parameters.Parameter.box`; log-uniform parameters are searched in log scale,
     discrete ones by index (``integrality``).
@@ -182,7 +184,9 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
     exact = context.exact
     coords = _Coordinates(spec)
     d = len(spec.parameters)
-    n_pop = popsize * d
+    # the population: popsize per parameter, fewer when the budget would not allow four
+    # generations (DE needs at least 5 members)
+    n_pop = max(5, min(popsize * d, spec.worst_case_evaluations // 4))
     # the sweep's samples, best first, as the first population
     seeds = np.zeros((0, d))
     best_sample = {"sample": None, "objective": None}
@@ -199,9 +203,9 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
         seeds = np.unique(x[keep], axis=0)
         seeds = seeds[np.argsort([objective[keep][np.flatnonzero(
             np.all(x[keep] == s, axis=1))[0]] for s in seeds], kind="stable")][:n_pop]
-    if seeds.shape[0] < max(5, n_pop):
+    if seeds.shape[0] < n_pop:
         fill = qmc.LatinHypercube(d, rng=np.random.default_rng(spec.seed)).random(
-            max(5, n_pop) - seeds.shape[0])
+            n_pop - seeds.shape[0])
         seeds = np.vstack([seeds, coords.lo + fill * (coords.hi - coords.lo)])
     cache: dict = {}
     count = [0]
@@ -227,9 +231,10 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
     def objective_of(x):
         return cache[snap(x).tobytes()][0]
 
-    generations = max(1, spec.worst_case_evaluations // seeds.shape[0] - 1)
+    # evaluations: the first population, then one population per generation
+    generations = max(1, spec.worst_case_evaluations // n_pop - 1)
     result = scipy.optimize.differential_evolution(
-        objective_of, list(zip(coords.lo, coords.hi)), init=seeds, popsize=popsize,
+        objective_of, list(zip(coords.lo, coords.hi)), init=seeds,
         maxiter=generations, polish=False, updating="deferred", workers=evaluate_population,
         rng=np.random.default_rng(spec.seed), integrality=coords.integral if
         coords.integral.any() else None)
