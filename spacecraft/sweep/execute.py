@@ -13,8 +13,10 @@ Batches
     Each Dask task evaluates a batch of samples (:func:`.evaluate.evaluate_batch`). The batch
     size is chosen from the time of one evaluation of the nominal scene, measured before the
     sweep, so that a task takes about :data:`TASK_SECONDS` (the scheduler's per-task overhead,
-    a few milliseconds, stays below 1 % of the work; ``benchmarks/bench_sweep.py`` measures
-    it), and at most a quarter of the samples per worker (the load stays balanced). At most
+    a few milliseconds to 15 ms on a loaded machine, stays below 1 % of the work;
+    ``benchmarks/bench_sweep.py`` measures it; each task is also one Parquet part, so 2 s keeps
+    a 10,000-sample sweep to a few hundred files), and at most a quarter of the samples per
+    worker (the load stays balanced). At most
     ``2 x workers + 1`` tasks are in flight; a finished batch is written before another is sent.
 
 Output folder (``out``)
@@ -50,7 +52,7 @@ __all__ = ["TASK_SECONDS", "LOCAL_CLUSTER_SECONDS", "Progress", "Executor", "ope
            "SampleStore", "table_from_columns", "schema", "run_samples", "batch_size"]
 
 #: Target duration of one Dask task [s].
-TASK_SECONDS = 0.5
+TASK_SECONDS = 2.0
 #: Below this much estimated work [s] a sweep runs in-process (synchronous scheduler).
 LOCAL_CLUSTER_SECONDS = 10.0
 _PARTS = "samples"
@@ -379,11 +381,13 @@ class SampleStore:
 
 
 def _differences(old, new, prefix: str = "") -> list[str]:
-    """Dotted keys whose values differ between two settings records (``started`` ignored)."""
+    """Dotted keys whose values differ between two settings records."""
     if isinstance(old, dict) and isinstance(new, dict):
         out = []
         for k in sorted(set(old) | set(new), key=str):
-            if k != "started":
+            # when it started, and the name the scene was given by (the fingerprint of its
+            # content is compared), may differ
+            if k not in ("started", "scene"):
                 out += _differences(old.get(k), new.get(k), f"{prefix}.{k}" if prefix else k)
         return out
     if isinstance(old, list) and isinstance(new, list) and len(old) == len(new):

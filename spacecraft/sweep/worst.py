@@ -199,10 +199,14 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
         order = np.argsort(objective, kind="stable")
         i0 = int(order[0])
         best_sample = {"sample": int(columns["sample"][i0]), "objective": float(objective[i0])}
-        keep = order[coords.inside(x[order])]
-        seeds = np.unique(x[keep], axis=0)
-        seeds = seeds[np.argsort([objective[keep][np.flatnonzero(
-            np.all(x[keep] == s, axis=1))[0]] for s in seeds], kind="stable")][:n_pop]
+        chosen, seen = [], set()
+        for i in order:
+            if coords.inside(x[i:i + 1])[0] and x[i].tobytes() not in seen:
+                seen.add(x[i].tobytes())
+                chosen.append(x[i])
+                if len(chosen) == n_pop:
+                    break
+        seeds = np.array(chosen, dtype=float).reshape(-1, d)
     if seeds.shape[0] < n_pop:
         fill = qmc.LatinHypercube(d, rng=np.random.default_rng(spec.seed)).random(
             n_pop - seeds.shape[0])
