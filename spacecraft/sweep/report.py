@@ -175,6 +175,24 @@ def _figure(rows: int, cols: int, size):
     return fig, fig.subplots(rows, cols, squeeze=False)
 
 
+_WORST_STYLE = {"modulus_margin": ("*", "black"), "phase_margin": ("D", "tab:purple")}
+
+
+def _worst_marker(ax, w, x, y, size):
+    """Mark a worst case (its own marker per margin; a red edge when it is unstable)."""
+    marker, colour = _WORST_STYLE.get(w["metric"], ("*", "black"))
+    stable = w["row"].get("stable")
+    label = f"worst {w['metric'].replace('_', ' ')}" + ("" if stable else " (unstable)")
+    ax.scatter([x], [y], s=size, marker=marker, color=colour, zorder=5, label=label,
+               edgecolors="tab:red" if not stable else colour, linewidths=1.5)
+
+
+def _log_axis(axis) -> None:
+    from matplotlib.ticker import NullFormatter
+
+    axis.set_minor_formatter(NullFormatter())
+
+
 def _label(name: str) -> str:
     unit = METRICS[name][1] if name in METRICS else ""
     return f"{name} [{unit}]" if unit and unit != "-" else name
@@ -222,10 +240,10 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
                            label="unstable")
             for w in worst:
                 if w["row"].get(m) is not None and math.isfinite(w["row"][m]):
-                    ax.scatter([w["values"][p.key]], [w["row"][m]], s=80, marker="*",
-                               color="black", zorder=5, label=f"worst {w['metric']}")
+                    _worst_marker(ax, w, w["values"][p.key], w["row"][m], 80)
             if p.distribution == "loguniform":
                 ax.set_xscale("log")
+                _log_axis(ax.xaxis)
             ax.set_xlabel(p.key)
             ax.set_ylabel(_label(m))
     axes[0, 0].legend(fontsize=7)
@@ -249,12 +267,13 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
             ax.scatter(x[~stable], y[~stable], marker="x", s=16, color="tab:red",
                        label="unstable")
         for w in worst:
-            ax.scatter([w["values"][a]], [w["values"][b]], marker="*", s=160, color="black",
-                       label=f"worst {w['metric']}")
+            _worst_marker(ax, w, w["values"][a], w["values"][b], 160)
         if pa.distribution == "loguniform":
             ax.set_xscale("log")
+            _log_axis(ax.xaxis)
         if pb.distribution == "loguniform":
             ax.set_yscale("log")
+            _log_axis(ax.yaxis)
         ax.set_xlabel(a)
         ax.set_ylabel(b)
         ax.set_title("stability map (two most influential parameters)")
