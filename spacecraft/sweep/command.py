@@ -82,23 +82,13 @@ def summary_lines(summary: dict) -> list[str]:
     return lines
 
 
-class _Log:
-    def __init__(self, quiet: bool):
-        self.quiet = quiet
-        self.t0 = time.perf_counter()
-
-    def __call__(self, message: str) -> None:
-        if not self.quiet:
-            print(f"[{time.perf_counter() - self.t0:6.1f} s] {message}...", file=sys.stderr,
-                  flush=True)
-
-
 def run_command(args) -> int:
     """Run ``flexsat sweep`` with parsed arguments; returns the exit code."""
+    from ..cli import _Progress
     from ..report import default_output_folder, to_json
     from .runner import run_sweep
 
-    log = _Log(args.quiet)
+    log = _Progress(args.quiet)
     out = args.out if args.out is not None else (None if args.resume else default_output_folder())
     settings = {"samples": args.samples, "seed": args.seed, "method": args.method,
                 "design": args.design, "worst_case_evaluations": args.worst_case_evaluations}

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..report import markdown, render_html, to_json
+from ..report import _fmt, markdown, render_html, to_json
 from .evaluate import METRICS
 from .worst import signed_margin
 
@@ -289,18 +289,7 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
 # pages
 # ---------------------------------------------------------------------------------------------
 def _f(value, digits: int = 4) -> str:
-    if value is None:
-        return "n/a"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, int):
-        return str(value)
-    value = float(value)
-    if math.isnan(value):
-        return "n/a"
-    if math.isinf(value):
-        return "inf" if value > 0 else "-inf"
-    return f"{value:.{digits}g}"
+    return _fmt(value, digits)
 
 
 def _blocks(summary: dict, images: list) -> list:
