@@ -12,6 +12,10 @@ Subcommands
     Fit a chain to a beam and print its parameters.
 ``flexsat export [SCENE] [--out DIR] [--quiet]``
     FMUs only (plant, controllers, closed loops) with their cross-check files.
+``flexsat sweep [SCENE] [--samples N] [--out DIR] [--scheduler ADDRESS] [--workers N] [--resume]``
+    Sweep a scene's numbers on Dask (its ``[sweep]`` table; the embedded default sweep without
+    argument): every sample a design-loop evaluation, samples streamed to Parquet, the worst
+    case searched, a report (:mod:`spacecraft.sweep`).
 ``flexsat scenes``
     List the embedded scenes.
 
@@ -215,6 +219,15 @@ def build_parser() -> argparse.ArgumentParser:
                            help="flexsat's fit (default) or the paper's")
         p.add_argument("--json", action="store_true", help="JSON on stdout")
         _add_limit(p)
+
+    from .sweep.command import add_arguments as add_sweep_arguments
+
+    add_sweep_arguments(sub.add_parser(
+        "sweep", help="sweep a scene on Dask: probability of instability, worst case",
+        description="Sweep the numbers of a scene's [sweep] table (Monte Carlo, Latin hypercube "
+                    "or grid) on Dask; every sample is a design-loop evaluation checked on the "
+                    "exact beam. Writes the samples (Parquet), summary.json, report.md, "
+                    "report.html, plots and worst.toml into a folder."))
 
     sub.add_parser("scenes", help="list the embedded scenes",
                    description="List the embedded scenes (usable as 'flexsat run NAME').")
@@ -423,6 +436,10 @@ def _dispatch(args) -> int:
         return _cmd_table(args)
     if args.command == "fit":
         return _cmd_fit(args)
+    if args.command == "sweep":
+        from .sweep.command import run_command
+
+        return run_command(args)
     return _cmd_scenes(args)
 
 
