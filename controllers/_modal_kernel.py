@@ -1,0 +1,132 @@
+"""Compiled loop of the modal recursion (numba; imported on first use by modal_recursion).
+
+One call propagates ``z[k+1] = Phi z[k] + G0^T u[k] + G1^T u[k+1]`` for block-diagonal Phi
+and writes ``y[k] = H^T z[k] + D u[k]`` (and, on request, the states ``x[k] = V z[k]``),
+time block by time block: per block of ``n_block`` samples the input and output maps are two
+(three) small matrix products through BLAS (np.dot) on data that stays in cache, the
+recursion in between a loop over the modes that the compiler vectorises (the 2 x 2 blocks are
+stored as structure of arrays: first components of all pairs, then second components).
+
+Compiled code is cached on disk (``cache=True``): in numba's ``__pycache__`` beside this file
+when it is writable, otherwise in the user's cache directory (numba's own choice;
+``NUMBA_CACHE_DIR`` overrides it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["modal_recursion"]
+
+
+@njit(cache=True, nogil=True)
+def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, use_G1,
+                    HD, VT, weights, U, z0, Y, X, with_states, n_block, limit):
+    """Propagate the modal recursion; return the number of samples kept (see below).
+
+    Parameters (all float64 C-contiguous unless stated)
+    ---------------------------------------------------
+    f00, f01, f10, f11 : (n_pairs,)
+        2 x 2 blocks [[f00, f01], [f10, f11]] acting on (z[j], z[n_pairs + j]).
+    cl_starts : int64 (n_clusters + 1,)
+        Dense blocks ("clusters") occupy z[cl_starts[c]:cl_starts[c + 1]] (after the pairs).
+    cl_offsets : int64 (n_clusters + 1,)
+        cl_phi[cl_offsets[c]:cl_offsets[c + 1]] is cluster c's Phi, row-major.
+    G0, G1 : (m, nz)
+        Input maps (G1 used only if use_G1).
+    HD : (nz + m, p)
+        Output map [H; D^T]: y[k] = [z[k]; u[k]] @ HD.
+    VT : (nz + m, n)
+        State map [V^T; 0] (used only if with_states).
+    weights : (nz,)
+        max_i |V[i, j]|: |x[k]| <= sum_j weights[j] |z[k, j]| (the overflow check).
+    U : (N + 1, m)
+        Inputs, one row per sample, plus one row of zeros.
+    z0 : (nz,)
+        Initial modal state.
+    Y : (N, p), X : (N, n)
+        Outputs (and states) written in place.
+    n_block : int
+        Samples per time block.
+    limit : float
+        |x| or |y| beyond this ends the run (overflow).
+
+    Returns
+    -------
+    int
+        N, or the number of samples before the first one whose outputs, or whose states
+        at a block's end (bound through ``weights``), left the range.
+    """
+    n_pairs = f00.shape[0]
+    nz = z0.shape[0]
+    m = U.shape[1]
+    p = Y.shape[1]
+    N = Y.shape[0]
+    n_clusters = cl_starts.shape[0] - 1
+    Zb = np.zeros((n_block, nz + m))      # [z[k], u[k]] for the block's samples
+    W = np.empty((n_block, nz))
+    W1 = np.empty((n_block, nz))
+    z = z0.copy()
+    for s in range(0, N, n_block):
+        e = min(s + n_block, N)
+        nb = e - s
+        Zv = Zb[:nb]
+        Wv = W[:nb]
+        # w[k] = G0^T u[k] + G1^T u[k+1] for the block's steps.
+        if m > 0:
+            np.dot(U[s:e], G0, Wv)
+            if use_G1:
+                W1v = W1[:nb]
+                np.dot(U[s + 1:e + 1], G1, W1v)
+                for t in range(nb):
+                    for j in range(nz):
+                        Wv[t, j] += W1v[t, j]
+            for t in range(nb):
+                for i in range(m):
+                    Zv[t, nz + i] = U[s + t, i]
+        else:
+            Wv[:, :] = 0.0
+        # The recursion: row t of Zv holds z[s + t]; z carries z[e] to the next block.
+        for j in range(nz):
+            Zv[0, j] = z[j]
+        for t in range(nb):
+            last = t + 1 == nb
+            for j in range(n_pairs):
+                a = Zv[t, j]
+                b = Zv[t, n_pairs + j]
+                na = f00[j] * a + f01[j] * b + Wv[t, j]
+                nb_ = f10[j] * a + f11[j] * b + Wv[t, n_pairs + j]
+                if last:
+                    z[j] = na
+                    z[n_pairs + j] = nb_
+                else:
+                    Zv[t + 1, j] = na
+                    Zv[t + 1, n_pairs + j] = nb_
+            for c in range(n_clusters):
+                i0 = cl_starts[c]
+                size = cl_starts[c + 1] - i0
+                off = cl_offsets[c]
+                for i in range(size):
+                    acc = Wv[t, i0 + i]
+                    for l in range(size):
+                        acc += cl_phi[off + i * size + l] * Zv[t, i0 + l]
+                    if last:
+                        z[i0 + i] = acc
+                    else:
+                        Zv[t + 1, i0 + i] = acc
+        Yv = Y[s:e]
+        np.dot(Zv, HD, Yv)
+        for t in range(nb):
+            for i in range(p):
+                v = Yv[t, i]
+                if not (abs(v) < limit):        # also catches NaN
+                    return s + t
+        if with_states:
+            np.dot(Zv, VT, X[s:e])
+        bound = 0.0
+        for j in range(nz):
+            bound += weights[j] * abs(z[j])
+        if not (bound < limit) and e < N:
+            return e
+    return N

@@ -1,0 +1,188 @@
+"""Block-diagonal (modal) form of a real square matrix with a bounded transformation.
+
+``A = V diag(A_1, ..., A_r) V^-1`` with real blocks ``A_j``: one per real eigenvalue or
+complex-conjugate pair (1 x 1 or 2 x 2) where the eigenvalues are well separated, one larger
+block per cluster of close (or defective, as a rigid body's double integrator) eigenvalues.
+Decoupling a cluster from the rest costs a transformation whose norm grows as their
+separation shrinks; the norm of every elementary transformation is bounded here, and a
+cluster whose decoupling would exceed the bound grows instead, so that the condition number
+of ``V`` stays moderate and the modal coordinates carry no more round-off than the original
+ones (up to that condition number).
+
+The method is Bavely and Stewart's [1]_ (the one of SLICOT's MB03RD, behind python-control's
+``bdschur``): a real Schur form ``A = Q T Q^T``; then, from the top left, the leading block
+``T11`` is decoupled from the trailing part ``T22`` by the Sylvester equation
+``T11 X - X T22 = -T12``, which makes ``[[I, X], [0, I]]^-1 T [[I, X], [0, I]]`` block
+diagonal; if ``max |X_ij|`` exceeds the bound (or the equation is singular), the eigenvalue
+block of ``T22`` nearest to the eigenvalues of ``T11`` is moved next to it by an orthogonal
+swap (LAPACK ``trexc``) and the enlarged block is tried again.
+
+References
+----------
+.. [1] C. A. Bavely and G. W. Stewart, "An algorithm for computing reducing subspaces by
+   block diagonalization", SIAM J. Numer. Anal. 16(2), 359-367, 1979.
+.. [2] G. H. Golub and C. F. Van Loan, *Matrix Computations*, 4th ed., Johns Hopkins, 2013,
+   sec. 7.6.3 (block diagonalization and its conditioning).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+import scipy.linalg.lapack
+
+__all__ = ["BlockDiagonalForm", "block_diagonal_form", "DEFAULT_MAX_COUPLING"]
+
+#: Default bound on max |X_ij| of each elementary decoupling transformation.  The condition
+#: number of V grows with it; 100 keeps V's condition at ~1e2-1e3 on lightly damped modal
+#: systems, whose modes then decouple into 2 x 2 blocks (a smaller bound only merges more).
+DEFAULT_MAX_COUPLING = 100.0
+
+
+@dataclass(frozen=True)
+class BlockDiagonalForm:
+    """``A = V @ blockdiag(blocks) @ V_inv``.
+
+    Attributes
+    ----------
+    starts : numpy.ndarray of int, shape (r + 1,)
+        Block j occupies rows and columns ``starts[j]:starts[j + 1]``.
+    blocks : list of numpy.ndarray
+        The diagonal blocks ``A_j`` (real, quasi-upper-triangular: real Schur form).
+    V, V_inv : numpy.ndarray, shape (n, n)
+        The transformation and its inverse (columns of V span the blocks' invariant
+        subspaces).
+    condition : float
+        ``||V||_1 ||V_inv||_1``, the 1-norm condition number of V.
+    """
+
+    starts: np.ndarray
+    blocks: list
+    V: np.ndarray
+    V_inv: np.ndarray
+    condition: float
+
+    @property
+    def sizes(self) -> np.ndarray:
+        """Block sizes, shape (r,)."""
+        return np.diff(self.starts)
+
+
+def _schur_blocks(T: np.ndarray, start: int) -> list[tuple[int, int]]:
+    """(first row, size) of the 1 x 1 and 2 x 2 diagonal blocks of quasi-triangular T from
+    row ``start`` on."""
+    n = T.shape[0]
+    out = []
+    i = start
+    while i < n:
+        size = 2 if i + 1 < n and T[i + 1, i] != 0.0 else 1
+        out.append((i, size))
+        i += size
+    return out
+
+
+def _block_eigenvalues(T: np.ndarray, i: int, size: int) -> np.ndarray:
+    """Eigenvalues of the diagonal block of T at row i (1 x 1 or 2 x 2)."""
+    return np.linalg.eigvals(T[i:i + size, i:i + size])
+
+
+def _solves(T11, T22, T12, X, norm_T) -> bool:
+    """Whether X solves T11 X - X T22 = -T12 to round-off (for LAPACK's perturbed solutions):
+    the residual of a backward-stable solve is ~eps (|T11| + |T22|) |X| + eps |T12|."""
+    residual = np.abs(T11 @ X - X @ T22 + T12).max()
+    size = T11.shape[0]
+    return residual <= 64 * size * np.finfo(float).eps * norm_T * max(np.abs(X).max(), 1.0)
+
+
+def block_diagonal_form(A, *, max_coupling: float = DEFAULT_MAX_COUPLING
+                        ) -> BlockDiagonalForm:
+    """Real block-diagonal form of A with every elementary transformation bounded.
+
+    Parameters
+    ----------
+    A : array_like, shape (n, n)
+        Real, finite square matrix.
+    max_coupling : float
+        Bound on ``max |X_ij|`` of each decoupling transformation (see the module
+        docstring); larger values give smaller blocks and a worse-conditioned V.
+
+    Returns
+    -------
+    BlockDiagonalForm
+
+    Notes
+    -----
+    Cost O(n^3) (the Schur form and one Sylvester solve per block), plus O(k n^2) per
+    eigenvalue block moved into a cluster of size k.  A Sylvester solve is accepted when its
+    solution is bounded and it solves the equation to round-off (LAPACK's ``trsyl`` returns
+    the solution of a perturbed equation when the two blocks share an eigenvalue: it is kept
+    only if it also solves the true one, as for an exactly decoupled repeated eigenvalue).
+
+    References
+    ----------
+    .. [1] C. A. Bavely and G. W. Stewart, SIAM J. Numer. Anal. 16(2), 1979.
+    """
+    A = np.array(A, dtype=float)
+    if A.ndim != 2 or A.shape[0] != A.shape[1]:
+        raise ValueError(f"A must be a square matrix; got shape {A.shape}")
+    if not np.all(np.isfinite(A)):
+        raise ValueError("A must be finite; got NaN or inf")
+    if not (np.isfinite(max_coupling) and max_coupling > 0):
+        raise ValueError(f"max_coupling must be positive and finite; got {max_coupling!r}")
+    n = A.shape[0]
+    if n == 0:
+        empty = np.zeros((0, 0))
+        return BlockDiagonalForm(np.zeros(1, dtype=int), [], empty, empty, 1.0)
+    T, Q = scipy.linalg.schur(A, output="real")
+    T = np.asfortranarray(T)
+    V = np.asfortranarray(Q)
+    norm_T = max(np.abs(T).max(), np.finfo(float).tiny)
+    starts = [0]
+    k = 0
+    while k < n:
+        size = 2 if k + 1 < n and T[k + 1, k] != 0.0 else 1
+        cluster = list(_block_eigenvalues(T, k, size))
+        while k + size < n:
+            T11 = T[k:k + size, k:k + size]
+            T22 = T[k + size:, k + size:]
+            T12 = T[k:k + size, k + size:]
+            if not np.any(T12):
+                X = np.zeros_like(T12)
+                break
+            # trsyl: T11 X + isgn X T22 = scale C, here isgn = -1 and C = -T12.
+            X, scale, info = scipy.linalg.lapack.dtrsyl(T11, T22, -T12, isgn=-1)
+            if info >= 0 and scale == 1.0 and np.all(np.isfinite(X)):
+                x_max = np.abs(X).max()
+                if x_max <= max_coupling and (info == 0 or _solves(T11, T22, T12, X, norm_T)):
+                    break
+            # Move the eigenvalue block of T22 nearest to the cluster next to it.
+            candidates = _schur_blocks(T, k + size)
+            distances = [min(abs(mu - lam) for mu in _block_eigenvalues(T, i, s)
+                             for lam in cluster) for i, s in candidates]
+            i, s = candidates[int(np.argmin(distances))]
+            if i != k + size:
+                T, V, info = scipy.linalg.lapack.dtrexc(T, V, i + 1, k + size + 1,
+                                                        overwrite_a=1, overwrite_q=1)
+                if info != 0:          # swap refused (ill-conditioned): take all the rest
+                    size = n - k
+                    break
+            # The moved block may have changed size in the swap (re-read it).
+            moved = 2 if k + size + 1 < n and T[k + size + 1, k + size] != 0.0 else 1
+            cluster.extend(_block_eigenvalues(T, k + size, moved))
+            size += moved
+        else:
+            X = np.zeros((size, 0))
+        if k + size < n:
+            # Columns of the trailing part: V[:, k+size:] += V[:, k:k+size] X; T12 = 0.
+            V[:, k + size:] += V[:, k:k + size] @ X
+            T[k:k + size, k + size:] = 0.0
+        k += size
+        starts.append(k)
+    starts = np.array(starts)
+    V = np.ascontiguousarray(V)
+    V_inv = np.linalg.inv(V)
+    condition = float(np.abs(V).sum(axis=0).max() * np.abs(V_inv).sum(axis=0).max())
+    blocks = [np.array(T[a:b, a:b]) for a, b in zip(starts[:-1], starts[1:])]
+    return BlockDiagonalForm(starts, blocks, V, V_inv, condition)
