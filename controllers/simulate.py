@@ -351,9 +351,18 @@ class Simulator:
         (n, N') when called (None if with_states is False); N' = N unless ``stop`` ended
         an overflowing response early (without ``stop`` that raises FloatingPointError)."""
         modal = self._modal_recursion(U.shape[1])
+        n = self.n_states
         if modal is None:
-            return self._chunked_recursion().propagate(U, X0, with_states=with_states,
-                                                       stop=stop)
+            fill, Y = self._chunked_recursion().propagate(U, X0, with_states=with_states,
+                                                          stop=stop)
+            if fill is None:
+                return None, Y
+
+            def fill_chunked():
+                # Read later, outside run(): limit the threads here too.
+                with blas_threads_for(n):
+                    return fill()
+            return fill_chunked, Y
         Y, _, n_kept = modal.run(U, X0, with_states=False, limit=_OVERFLOW)
         if n_kept < U.shape[1] and not stop:
             raise FloatingPointError(
@@ -364,7 +373,6 @@ class Simulator:
                                      "initial state or input exceeds the float64 range")
         if not with_states:
             return None, Y
-        n = self.n_states
 
         def fill_states():
             # The same run (same samples kept) with the states, O(n^2) per sample.

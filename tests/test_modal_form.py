@@ -1,0 +1,147 @@
+"""Tests of controllers.modal_form: block-diagonal form with a bounded transformation.
+
+References: the eigenvalues of the blocks are those of A (similarity), closed-form spectra of
+the test matrices (a damped oscillator's s = -zeta w +- i w sqrt(1 - zeta^2), a Jordan block's
+single eigenvalue), and the defining identity A = V diag(A_j) V^-1 checked to round-off.
+"""
+
+import numpy as np
+import pytest
+
+from controllers.modal_form import DEFAULT_MAX_COUPLING, block_diagonal_form
+
+EPS = np.finfo(float).eps
+
+
+def assemble(form):
+    """blockdiag(A_j) as a dense matrix."""
+    n = form.V.shape[0]
+    M = np.zeros((n, n))
+    for a, b, block in zip(form.starts[:-1], form.starts[1:], form.blocks):
+        M[a:b, a:b] = block
+    return M
+
+
+def oscillators(rng, omegas, zetas, n_rigid=0, condition=4.0):
+    """Damped oscillators (normal 2 x 2 blocks) and double integrators, in a random basis
+    of condition number ``condition``."""
+    n = 2 * (len(omegas) + n_rigid)
+    A = np.zeros((n, n))
+    for i, (w, z) in enumerate(zip(omegas, zetas)):
+        A[2 * i:2 * i + 2, 2 * i:2 * i + 2] = [[-z * w, w * np.sqrt(1 - z * z)],
+                                               [-w * np.sqrt(1 - z * z), -z * w]]
+    for i in range(len(omegas), len(omegas) + n_rigid):
+        A[2 * i, 2 * i + 1] = 1.0
+    Q1, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    Q2, _ = np.linalg.qr(rng.standard_normal((n, n)))
+    S = Q1 @ np.diag(np.geomspace(1.0, condition, n)) @ Q2
+    return S @ A @ np.linalg.inv(S)
+
+
+def check_factorisation(A, form):
+    """A = V blockdiag V^-1 to round-off: the backward error of the Schur form (~n eps |A|)
+    times the condition number of V (each Sylvester step is backward stable)."""
+    n = A.shape[0]
+    error = np.abs(form.V @ assemble(form) @ form.V_inv - A).max()
+    assert error <= 10 * n * EPS * form.condition * np.abs(A).max()
+    np.testing.assert_allclose(form.V @ form.V_inv, np.eye(n), rtol=0,
+                               atol=10 * n * EPS * form.condition)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_separated_modes_decouple_into_2x2_blocks(seed):
+    """Distinct lightly damped modes (0.1 to 1000 rad/s) split into one 2 x 2 block each,
+    with the modes' eigenvalues, through a transformation of moderate condition (the hidden
+    basis has condition 4; the 2 x 2 blocks of the Schur form add their own non-normality)."""
+    rng = np.random.default_rng(seed)
+    w = np.sort(np.exp(rng.uniform(np.log(0.1), np.log(1000.0), 12)))
+    zeta = np.exp(rng.uniform(np.log(1e-3), np.log(0.05), 12))
+    A = oscillators(rng, w, zeta)
+    form = block_diagonal_form(A)
+    assert list(form.sizes) == [2] * 12
+    check_factorisation(A, form)
+    assert form.condition < 1e4
+    found = np.sort_complex(np.concatenate([np.linalg.eigvals(b) for b in form.blocks]))
+    exact = np.sort_complex(np.concatenate([-zeta * w + 1j * w * np.sqrt(1 - zeta ** 2),
+                                            -zeta * w - 1j * w * np.sqrt(1 - zeta ** 2)]))
+    # Eigenvalues of a similarity: ~cond(S) eps |A| apart.
+    np.testing.assert_allclose(found, exact, rtol=0, atol=1e3 * EPS * np.abs(A).max())
+
+
+def test_rigid_bodies_stay_whole():
+    """Two free rigid bodies (double integrators: two 2 x 2 Jordan blocks at s = 0) cannot
+    be split from each other by a bounded transformation: their four states end in blocks
+    whose eigenvalues are all ~0 (perturbed by round-off, ~sqrt(eps |A|)), and the
+    factorisation holds."""
+    rng = np.random.default_rng(7)
+    A = oscillators(rng, [0.5, 3.0, 40.0], [0.01, 0.02, 0.005], n_rigid=2)
+    form = block_diagonal_form(A)
+    check_factorisation(A, form)
+    near_zero = [b for b in form.blocks if np.abs(np.linalg.eigvals(b)).max() < 1e-4]
+    assert sum(b.shape[0] for b in near_zero) == 4
+    assert form.condition < 1e4
+
+
+def test_close_coupled_eigenvalues_form_a_cluster():
+    """Two oscillators 1e-9 rad/s apart and coupled (nearly defective): decoupling them
+    would need max|X| ~ 1e9, so they share one 4 x 4 block; the transformation stays
+    bounded."""
+    rng = np.random.default_rng(21)
+    A = np.zeros((6, 6))
+    A[0:2, 0:2] = [[0, 1], [-9.0, -0.01]]
+    A[2:4, 2:4] = [[0, 1], [-(3.0 + 1e-9) ** 2, -0.01]]
+    A[4:6, 4:6] = [[0, 1], [-0.25, -0.02]]
+    A[1, 2] = 1.0
+    S = rng.standard_normal((6, 6))
+    A = S @ A @ np.linalg.inv(S)
+    form = block_diagonal_form(A)
+    assert sorted(form.sizes) == [2, 4]
+    check_factorisation(A, form)
+    assert form.condition < 1e6
+
+
+def test_exactly_repeated_decoupled_eigenvalues_split():
+    """A = diag(1, 1, 1): the Sylvester equations are singular but their right-hand sides
+    are zero; the blocks split and V stays orthogonal."""
+    form = block_diagonal_form(np.eye(3))
+    assert list(form.sizes) == [1, 1, 1]
+    np.testing.assert_allclose(form.V @ form.V.T, np.eye(3), rtol=0, atol=1e-15)
+
+
+def test_jordan_block_stays_one_block():
+    """A single 5 x 5 Jordan block: one eigenvalue of multiplicity 5 with one eigenvector;
+    no bounded transformation splits it."""
+    A = -np.eye(5) + np.eye(5, k=1)
+    form = block_diagonal_form(A)
+    assert list(form.sizes) == [5]
+    check_factorisation(A, form)
+
+
+def test_bound_trades_block_size_for_condition():
+    """A smaller bound on the elementary transformations gives larger blocks and a
+    better-conditioned V (Bavely and Stewart's trade-off)."""
+    rng = np.random.default_rng(5)
+    A = oscillators(rng, np.geomspace(1.0, 1.3, 8), np.full(8, 0.01), condition=30.0)
+    loose = block_diagonal_form(A, max_coupling=DEFAULT_MAX_COUPLING)
+    tight = block_diagonal_form(A, max_coupling=2.0)
+    assert max(tight.sizes) > max(loose.sizes)
+    assert tight.condition < loose.condition
+    check_factorisation(A, loose)
+    check_factorisation(A, tight)
+
+
+def test_empty_and_scalar():
+    assert block_diagonal_form(np.zeros((0, 0))).blocks == []
+    form = block_diagonal_form([[2.5]])
+    assert form.blocks[0][0, 0] == 2.5 and form.condition == 1.0
+
+
+@pytest.mark.parametrize("A, match", [
+    (np.ones((2, 3)), "square"),
+    ([[np.nan]], "finite"),
+])
+def test_errors(A, match):
+    with pytest.raises(ValueError, match=match):
+        block_diagonal_form(A)
+    with pytest.raises(ValueError, match="max_coupling must be positive"):
+        block_diagonal_form(np.eye(2), max_coupling=-1.0)

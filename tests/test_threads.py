@@ -1,0 +1,83 @@
+"""Tests of controllers.threads: BLAS threads sized to the problem.
+
+The thread counts are read back through threadpoolctl, the library the limiter uses; the
+simulator's results must not depend on the caller's BLAS settings.
+"""
+
+import numpy as np
+import pytest
+from threadpoolctl import threadpool_info, threadpool_limits
+
+from controllers import threads
+from controllers.simulate import Simulator
+
+
+def blas_threads():
+    """Thread counts of every loaded BLAS library."""
+    return [lib["num_threads"] for lib in threadpool_info() if lib["user_api"] == "blas"]
+
+
+@pytest.fixture
+def two_threads():
+    """The caller's setting: two BLAS threads (as a 2-core machine's default)."""
+    np.ones((2, 2)) @ np.ones((2, 2))            # BLAS loaded
+    with threadpool_limits(limits=2, user_api="blas"):
+        yield
+
+
+def test_small_problems_run_single_threaded(two_threads):
+    assert set(blas_threads()) == {2}
+    with threads.blas_threads_for(10):
+        assert set(blas_threads()) == {1}
+    assert set(blas_threads()) == {2}            # the caller's setting restored
+
+
+def test_large_problems_keep_the_callers_setting(two_threads):
+    with threads.blas_threads_for(threads.SINGLE_THREAD_BELOW):
+        assert set(blas_threads()) == {2}
+
+
+def test_limits_nest(two_threads):
+    """An inner region neither re-limits nor restores early."""
+    with threads.blas_threads_for(5):
+        with threads.blas_threads_for(50):
+            assert set(blas_threads()) == {1}
+        assert set(blas_threads()) == {1}
+    assert set(blas_threads()) == {2}
+
+
+def test_limit_restored_after_an_error(two_threads):
+    with pytest.raises(ZeroDivisionError):
+        with threads.blas_threads_for(5):
+            1 / 0
+    assert set(blas_threads()) == {2}
+
+
+def test_decorator(two_threads):
+    @threads.limits_blas_threads(lambda matrix: matrix.shape[0])
+    def threads_inside(matrix):
+        return blas_threads()
+
+    assert set(threads_inside(np.eye(3))) == {1}
+    assert set(threads_inside(np.eye(threads.SINGLE_THREAD_BELOW))) == {2}
+    assert threads_inside.__name__ == "threads_inside"
+
+
+def test_simulation_does_not_depend_on_the_callers_threads():
+    """Same results, bit for bit, whatever the caller's BLAS threads: below the threshold
+    every product runs on one thread."""
+    rng = np.random.default_rng(2)
+    import control
+
+    A = rng.standard_normal((60, 60))
+    A -= (np.abs(np.linalg.eigvals(A).real).max() + 0.5) * np.eye(60)
+    sys = control.ss(A, rng.standard_normal((60, 2)), rng.standard_normal((3, 60)), 0)
+    T = np.arange(5000) * 0.01
+    U = rng.standard_normal((2, T.size))
+    results = []
+    for n_threads in (1, 2):
+        with threadpool_limits(limits=n_threads, user_api="blas"):
+            response = Simulator(sys, 0.01).run(T, U)
+            results.append((response.y, response.x))
+    np.testing.assert_array_equal(results[0][0], results[1][0])
+    np.testing.assert_array_equal(results[0][1], results[1][1])
