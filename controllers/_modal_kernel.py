@@ -2,8 +2,8 @@
 
 One call propagates ``z[k+1] = Phi z[k] + G0^T u[k] + G1^T u[k+1]`` for block-diagonal Phi
 and writes ``y[k] = H^T z[k] + D u[k]`` (and, on request, the states ``x[k] = V z[k]``),
-time block by time block: per block of ``n_block`` samples the input and output maps are two
-(three) small matrix products through BLAS (np.dot) on data that stays in cache, the
+time block by time block: per block of ``n_block`` samples the input and output maps are
+small matrix products through BLAS (np.dot) on data that stays in cache, the
 recursion in between a loop over the modes that the compiler vectorises (the 2 x 2 blocks are
 stored as structure of arrays: first components of all pairs, then second components).
 
@@ -22,7 +22,7 @@ __all__ = ["modal_recursion"]
 
 @njit(cache=True, nogil=True)
 def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, use_G1,
-                    HD, VT, weights, U, z0, Y, X, with_states, n_block, limit):
+                    HD, weights, U, z0, Y, Z, store, n_block, limit):
     """Propagate the modal recursion; return the number of samples kept (see below).
 
     Parameters (all float64 C-contiguous unless stated)
@@ -37,16 +37,16 @@ def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, u
         Input maps (G1 used only if use_G1).
     HD : (nz + m, p)
         Output map [H; D^T]: y[k] = [z[k]; u[k]] @ HD.
-    VT : (nz + m, n)
-        State map [V^T; 0] (used only if with_states).
     weights : (nz,)
         max_i |V[i, j]|: |x[k]| <= sum_j weights[j] |z[k, j]| (the overflow check).
     U : (N + 1, m)
         Inputs, one row per sample, plus one row of zeros.
     z0 : (nz,)
         Initial modal state.
-    Y : (N, p), X : (N, n)
-        Outputs (and states) written in place.
+    Y : (N, p)
+        Outputs, written in place.
+    Z : (N, nz + m)
+        Rows [z[k], u[k]], written in place if ``store`` (the states are then Z @ [V^T; 0]).
     n_block : int
         Samples per time block.
     limit : float
@@ -71,7 +71,7 @@ def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, u
     for s in range(0, N, n_block):
         e = min(s + n_block, N)
         nb = e - s
-        Zv = Zb[:nb]
+        Zv = Z[s:e] if store else Zb[:nb]
         Wv = W[:nb]
         # w[k] = G0^T u[k] + G1^T u[k+1] for the block's steps.
         if m > 0:
@@ -122,8 +122,6 @@ def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, u
                 v = Yv[t, i]
                 if not (abs(v) < limit):        # also catches NaN
                     return s + t
-        if with_states:
-            np.dot(Zv, VT, X[s:e])
         bound = 0.0
         for j in range(nz):
             bound += weights[j] * abs(z[j])

@@ -22,6 +22,7 @@ discrete system (``benchmarks/issue10.py``).
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 
 from .discretise import discretise_blocks
 from .modal_form import BlockDiagonalForm, block_diagonal_form
@@ -80,7 +81,11 @@ class ModalRecursion:
 
     def __init__(self, A, B, C, D, dt, hold, *, form: BlockDiagonalForm | None = None):
         self.form = form if form is not None else block_diagonal_form(A)
-        V, V_inv = self.form.V, self.form.V_inv
+        V = self.form.V
+        # z = V^-1 x by an LU solve, not the explicit inverse: backward stable, so that the
+        # inputs and the initial state seen in x (V z) are B and x0 to ~eps, where the
+        # explicit inverse leaves ~cond(V) eps.
+        self._lu = scipy.linalg.lu_factor(V)
         n, m = B.shape
         p = C.shape[0]
         sizes = self.form.sizes
@@ -104,7 +109,7 @@ class ModalRecursion:
             cl_starts.append(cl_starts[-1] + s)
 
         # Exact discretisation, block by block (stacked by size).
-        Bz = V_inv @ B
+        Bz = scipy.linalg.lu_solve(self._lu, B)
         Phi = [None] * len(starts)
         G0z = np.zeros((n, m))
         G1z = np.zeros((n, m))
@@ -149,7 +154,6 @@ class ModalRecursion:
         self._VT[position] = V.T
         self._weights = np.zeros(nz)
         self._weights[position] = np.abs(V).max(axis=0)
-        self._V_inv = V_inv
         self._position = position
         self.n_pairs = n_pairs
         self.cluster_sizes = [s for _, s in clusters]
@@ -163,9 +167,9 @@ class ModalRecursion:
         cost += nz * m * (2 if self._use_G1 else 1) + (nz + m) * p
         return cost + ((nz + m) * n if with_states else 0)
 
-    def run(self, U: np.ndarray, x0: np.ndarray, *, with_states: bool,
+    def run(self, U: np.ndarray, x0: np.ndarray, *, store: bool,
             limit: float) -> tuple[np.ndarray, np.ndarray | None, int]:
-        """Outputs (p, N), states (n, N) or None, and the number of samples kept.
+        """Outputs (p, N), the modal record or None, and the number of samples kept.
 
         Parameters
         ----------
@@ -173,24 +177,29 @@ class ModalRecursion:
             Inputs at the samples.
         x0 : numpy.ndarray, shape (n,)
             Initial state (original coordinates).
-        with_states : bool
-            Whether to compute the state trajectory.
+        store : bool
+            Whether to keep the modal states (for :meth:`states`; N (n + m) floats).
         limit : float
             Outputs or (block-end) states beyond this magnitude end the run: the samples
             kept are those before (see :func:`._modal_kernel.modal_recursion`).
         """
         kernel = _load_kernel()
-        n, m, p, nz = self._n, self._m, self._p, self._nz
+        m, p, nz = self._m, self._p, self._nz
         N = U.shape[1]
         U_rows = np.zeros((N + 1, m))
         U_rows[:N] = U.T
         z0 = np.zeros(nz)
-        z0[self._position] = self._V_inv @ x0
+        z0[self._position] = scipy.linalg.lu_solve(self._lu, x0)
         Y = np.empty((N, p))
-        X = np.empty((N, n)) if with_states else np.empty((0, n))
+        Z = np.empty((N, nz + m)) if store else np.empty((0, nz + m))
         f00, f01, f10, f11 = self._f
         kept = kernel(f00, f01, f10, f11, self._cl_starts, self._cl_offsets, self._cl_phi,
-                      self._G0, self._G1, self._use_G1, self._HD, self._VT, self._weights,
-                      U_rows, z0, Y, X, with_states, self._n_block, limit)
+                      self._G0, self._G1, self._use_G1, self._HD, self._weights,
+                      U_rows, z0, Y, Z, store, self._n_block, limit)
         Y = np.ascontiguousarray(Y[:kept].T)
-        return Y, (X[:kept].T if with_states else None), int(kept)
+        return Y, (Z[:kept] if store else None), int(kept)
+
+    def states(self, record: np.ndarray) -> np.ndarray:
+        """States (n, N) from the modal record of :meth:`run`: x = V z, one matrix product
+        (an F-ordered view of the sample-major result)."""
+        return (record @ self._VT).T

@@ -363,7 +363,7 @@ class Simulator:
                 with blas_threads_for(n):
                     return fill()
             return fill_chunked, Y
-        Y, _, n_kept = modal.run(U, X0, with_states=False, limit=_OVERFLOW)
+        Y, record, n_kept = modal.run(U, X0, store=with_states, limit=_OVERFLOW)
         if n_kept < U.shape[1] and not stop:
             raise FloatingPointError(
                 "simulation overflowed: the response of this (unstable) system exceeds "
@@ -375,9 +375,9 @@ class Simulator:
             return None, Y
 
         def fill_states():
-            # The same run (same samples kept) with the states, O(n^2) per sample.
+            # x = V z from the modal states the run kept: O(n^2) per sample.
             with blas_threads_for(n):
-                return modal.run(U[:, :n_kept], X0, with_states=True, limit=np.inf)[1]
+                return modal.states(record)
         return fill_states, Y
 
 
