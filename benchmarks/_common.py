@@ -14,12 +14,11 @@ from __future__ import annotations
 import os
 import sys
 
-# Single-threaded BLAS unless asked otherwise (FLEXSAT_BENCH_BLAS_THREADS=default or a number):
-# on this 2-core machine, with other work running, OpenBLAS's threads make small dense
-# operations up to 100x slower (a 12x12 triangular solve: 12.7 ms threaded under load vs
-# 0.12 ms single-threaded), which would measure the machine's load, not the algorithms.
-# Must run before numpy is imported: every benchmark script imports this module first.
-BLAS_THREADS = os.environ.get("FLEXSAT_BENCH_BLAS_THREADS", "1")
+# The user's BLAS settings unless asked otherwise (FLEXSAT_BENCH_BLAS_THREADS=1 or another
+# number sets OPENBLAS/OMP/MKL_NUM_THREADS before numpy is loaded): flexsat limits the BLAS
+# threads of small problems itself (controllers/threads.py), so its figures must hold with a
+# user's default settings.  Every benchmark script imports this module first.
+BLAS_THREADS = os.environ.get("FLEXSAT_BENCH_BLAS_THREADS", "default")
 if BLAS_THREADS != "default":
     if "numpy" in sys.modules:
         print("warning: numpy imported before benchmarks/_common.py; BLAS threads not limited",

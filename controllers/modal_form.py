@@ -83,9 +83,15 @@ def _schur_blocks(T: np.ndarray, start: int) -> list[tuple[int, int]]:
     return out
 
 
-def _block_eigenvalues(T: np.ndarray, i: int, size: int) -> np.ndarray:
-    """Eigenvalues of the diagonal block of T at row i (1 x 1 or 2 x 2)."""
-    return np.linalg.eigvals(T[i:i + size, i:i + size])
+def _block_eigenvalues(T: np.ndarray, i: int, size: int) -> list[complex]:
+    """Eigenvalues of the diagonal block of T at row i (1 x 1, or 2 x 2 in LAPACK's
+    standard form [[a, b], [c, a]] with b c < 0: a +- i sqrt(-b c))."""
+    if size == 1:
+        return [complex(T[i, i])]
+    a, b, c, d = T[i, i], T[i, i + 1], T[i + 1, i], T[i + 1, i + 1]
+    mean, half = 0.5 * (a + d), 0.5 * (a - d)
+    root = np.sqrt(complex(half * half + b * c))
+    return [mean + root, mean - root]
 
 
 def _solves(T11, T22, T12, X, norm_T) -> bool:

@@ -21,6 +21,8 @@ discrete system (``benchmarks/issue10.py``).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import scipy.linalg
 
@@ -48,7 +50,12 @@ def _load_kernel():
     if _kernel is None:
         try:
             from ._modal_kernel import modal_recursion
-        except ImportError:
+        except ImportError:              # numba not installed: the chunked recursion runs
+            _kernel = False
+        except Exception as error:       # numba installed but unusable (e.g. no cache dir)
+            warnings.warn(f"flexsat: the compiled simulator could not be loaded ({error!s:.200}); "
+                          "simulating with the chunked recursion instead", RuntimeWarning,
+                          stacklevel=3)
             _kernel = False
         else:
             _kernel = modal_recursion
