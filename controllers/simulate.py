@@ -21,6 +21,11 @@ Two ways to run the recursion, chosen per system and run (see :class:`Simulator`
   when numba is not installed, and for short runs, where loading the compiled loop (once
   per process, ~0.5 s) would cost more than it saves.
 
+Every simulation runs with one BLAS thread (:func:`.threads.one_blas_thread`), whatever the
+caller's settings: its results never depend on them (a threaded matrix product rounds
+differently), and at these sizes a second thread saves little (the compiled loop is
+sequential; the states' product runs at ~20 GFLOP/s on one core).
+
 References
 ----------
 .. [1] C. F. Van Loan, "Computing integrals involving the matrix exponential", IEEE Trans.
@@ -40,7 +45,7 @@ from .chunked import OVERFLOW, ChunkedRecursion
 from .discretise import discretise
 from .modal_form import block_diagonal_form
 from .modal_recursion import ModalRecursion, kernel_available
-from .threads import blas_threads_for
+from .threads import one_blas_thread
 
 __all__ = ["HOLDS", "METHODS", "OVERFLOW_ACTIONS", "Simulator", "simulate"]
 
@@ -183,7 +188,7 @@ class Simulator:
             if self._discrete:
                 self._discrete_matrices = (self._A, self._B, np.zeros_like(self._B))
             else:
-                with blas_threads_for(self.n_states):
+                with one_blas_thread():
                     self._discrete_matrices = discretise(self._A, self._B, self.dt,
                                                          self.hold)
         return self._discrete_matrices
@@ -207,12 +212,12 @@ class Simulator:
         """Samples per chunk of the chunked recursion, for runs with states (``run``) or
         outputs only (``outputs``): from the cost model, shortened when the accuracy probe
         or the float range requires it (see :mod:`.chunked`)."""
-        with blas_threads_for(self.n_states):
+        with one_blas_thread():
             return self._chunked_recursion().chunk_length(with_states)
 
     def method_for(self, n_samples: int) -> str:
         """The method ("modal" or "chunked") a run of ``n_samples`` samples uses."""
-        with blas_threads_for(self.n_states):
+        with one_blas_thread():
             return "modal" if self._modal_recursion(n_samples) is not None else "chunked"
 
     def _chunked_recursion(self) -> ChunkedRecursion:
@@ -292,7 +297,7 @@ class Simulator:
             raise ValueError(f"on_overflow must be one of {OVERFLOW_ACTIONS}; got "
                              f"{on_overflow!r:.100}")
         T, U, X0 = self._check_run_arguments(T, U, X0)
-        with blas_threads_for(self.n_states):
+        with one_blas_thread():
             fill_states, Y = self._propagate(U, X0, with_states=True,
                                              stop=on_overflow == "stop")
         n_kept = Y.shape[1]
@@ -332,7 +337,7 @@ class Simulator:
             The response overflows float64.
         """
         T, U, X0 = self._check_run_arguments(T, U, X0)
-        with blas_threads_for(self.n_states):
+        with one_blas_thread():
             return self._propagate(U, X0, with_states=False)[1]
 
     def _check_run_arguments(self, T, U, X0):
@@ -351,7 +356,6 @@ class Simulator:
         (n, N') when called (None if with_states is False); N' = N unless ``stop`` ended
         an overflowing response early (without ``stop`` that raises FloatingPointError)."""
         modal = self._modal_recursion(U.shape[1])
-        n = self.n_states
         if modal is None:
             fill, Y = self._chunked_recursion().propagate(U, X0, with_states=with_states,
                                                           stop=stop)
@@ -360,7 +364,7 @@ class Simulator:
 
             def fill_chunked():
                 # Read later, outside run(): limit the threads here too.
-                with blas_threads_for(n):
+                with one_blas_thread():
                     return fill()
             return fill_chunked, Y
         Y, record, n_kept = modal.run(U, X0, store=with_states, limit=_OVERFLOW)
@@ -376,7 +380,7 @@ class Simulator:
 
         def fill_states():
             # x = V z from the modal states the run kept: O(n^2) per sample.
-            with blas_threads_for(n):
+            with one_blas_thread():
                 return modal.states(record)
         return fill_states, Y
 

@@ -28,7 +28,7 @@ import functools
 import threading
 from typing import Callable, Iterator
 
-__all__ = ["SINGLE_THREAD_BELOW", "blas_threads_for", "limits_blas_threads"]
+__all__ = ["SINGLE_THREAD_BELOW", "blas_threads_for", "limits_blas_threads", "one_blas_thread"]
 
 #: Problems with fewer states than this run with one BLAS thread.  Measured on a 2-core
 #: x86-64 (benchmarks/issue10.py, "threads"): up to ~400 states one thread is as fast or
@@ -67,14 +67,28 @@ def blas_threads_for(n_states: int) -> Iterator[None]:
 
     Notes
     -----
-    BLAS thread counts are process-wide: while one Python thread is inside a limited
-    region, BLAS calls of other Python threads also run single-threaded.  The limit is
-    restored when the outermost region exits.
+    Above the threshold the caller's setting applies, and results may then differ in the
+    last bits with the number of threads (a threaded matrix product blocks its sums
+    differently); below it they never do.  See :func:`one_blas_thread`.
     """
-    global _depth, _limiter
     if n_states >= SINGLE_THREAD_BELOW:
         yield
         return
+    with one_blas_thread():
+        yield
+
+
+@contextlib.contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """Run the body with one BLAS thread, whatever the caller's setting.
+
+    Notes
+    -----
+    BLAS thread counts are process-wide: while one Python thread is inside a limited
+    region, BLAS calls of other Python threads also run single-threaded.  The limit is
+    restored when the outermost region exits; inner regions cost no call into BLAS.
+    """
+    global _depth, _limiter
     with _lock:
         if _depth == 0:
             controller = _get_controller()

@@ -63,16 +63,20 @@ def test_decorator(two_threads):
     assert threads_inside.__name__ == "threads_inside"
 
 
-def test_simulation_does_not_depend_on_the_callers_threads():
-    """Same results, bit for bit, whatever the caller's BLAS threads: below the threshold
-    every product runs on one thread."""
+@pytest.mark.parametrize("n_states, n_samples", [(60, 5000), (threads.SINGLE_THREAD_BELOW, 400)])
+def test_simulation_does_not_depend_on_the_callers_threads(n_states, n_samples):
+    """Same results, bit for bit, whatever the caller's BLAS threads: a simulation runs
+    every product on one thread, also for systems above the threshold (a two-thread
+    product of 1e5 x 400 by 400 x 400 matrices differs from the one-thread product in the
+    last bits)."""
     rng = np.random.default_rng(2)
     import control
 
-    A = rng.standard_normal((60, 60))
-    A -= (np.abs(np.linalg.eigvals(A).real).max() + 0.5) * np.eye(60)
-    sys = control.ss(A, rng.standard_normal((60, 2)), rng.standard_normal((3, 60)), 0)
-    T = np.arange(5000) * 0.01
+    n = n_states
+    A = rng.standard_normal((n, n)) / np.sqrt(n)
+    A -= (np.abs(np.linalg.eigvals(A).real).max() + 0.5) * np.eye(n)
+    sys = control.ss(A, rng.standard_normal((n, 2)), rng.standard_normal((3, n)), 0)
+    T = np.arange(n_samples) * 0.01
     U = rng.standard_normal((2, T.size))
     results = []
     for n_threads in (1, 2):
