@@ -16,6 +16,7 @@ import scipy.linalg
 from .frequency import _evaluator, _poles_of
 from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_plant, _is_digital,
                       _labels, _measurements, _reference_inputs, _short)
+from .threads import limits_blas_threads, total_states
 
 __all__ = ["close_loop", "loop_frequency_response"]
 
@@ -304,6 +305,7 @@ class _Loop:
         return np.unique(np.concatenate(grid))
 
 
+@limits_blas_threads(total_states)
 def loop_frequency_response(plant, controller, omega: np.ndarray | None = None
                             ) -> tuple[np.ndarray, np.ndarray]:
     """Open-loop transfer L(j omega) with the loop broken at the torque input.

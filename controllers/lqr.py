@@ -29,6 +29,7 @@ from .pd import _check_sampling, _positive, _rigid_crossover
 from .riccati import _modal_correction, _solve_care
 from .signals import OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant, _short
 from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _warn_removed
+from .threads import limits_blas_threads, total_states
 
 __all__ = ["lqr", "KalmanNoise", "LQRDesign", "lqr_design", "reference_state",
            "PRESCRIBED_STABILITY"]
@@ -239,6 +240,7 @@ def _rigid_bandwidths(q_theta, r, J, speed, weights) -> tuple[float, float]:
     return math.exp(log_wr), math.exp(log_we)
 
 
+@limits_blas_threads(total_states)
 def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float,
                torque_weight: float, deflection_weight=None,
                estimator: str | KalmanNoise | np.ndarray = "kalman",
@@ -461,6 +463,7 @@ def _checked(design: LQRDesign, alpha: float, T, weights: str, estimator) -> LQR
     return design
 
 
+@limits_blas_threads(total_states)
 def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float,
         torque_weight: float, deflection_weight=None,
         estimator: str | KalmanNoise | np.ndarray = "kalman", estimator_speed: float = 3.0,

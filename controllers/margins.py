@@ -13,6 +13,7 @@ import scipy.optimize
 from .loop import _Loop, close_loop, loop_frequency_response
 from .signals import _check_controller, _check_plant, _is_digital
 from .stability import _continuous_poles
+from .threads import limits_blas_threads, total_states
 
 __all__ = ["Margins", "SpilloverVerdict", "margins", "spillover"]
 
@@ -132,6 +133,7 @@ def _crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values:
     return np.concatenate([exact, root[keep]])
 
 
+@limits_blas_threads(total_states)
 def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     """Gain, phase and modulus margins of the loop plant-controller.
 
@@ -256,6 +258,7 @@ class SpilloverVerdict:
         return "\n".join(lines)
 
 
+@limits_blas_threads(total_states)
 def spillover(truth_plant, controller) -> SpilloverVerdict:
     """Stability verdict of a controller on a truth model (never raises for an unstable loop).
 

@@ -16,6 +16,7 @@ from .margins import _crossings
 from .modes import _verify_loop, flexible_modes, rigid_body_inertia
 from .signals import OMEGA, THETA, THETA_REF, TORQUE, _check_plant, _real_number, _short
 from .stability import _warn_removed
+from .threads import limits_blas_threads, total_states
 
 __all__ = [
     "pd",
@@ -167,6 +168,7 @@ def _second_order(numerator: tuple[float, float, float], w: float, zeta: float):
     return control.ss(control.tf(list(numerator), [1.0, 2.0 * zeta * w, w * w]))
 
 
+@limits_blas_threads(total_states)
 def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
        bandwidth: float | None = None, damping: float = 0.7, roll_off: float | None = None,
        notch: float | str | None = None, sample_time: float | None = None

@@ -28,7 +28,8 @@ import functools
 import threading
 from typing import Callable, Iterator
 
-__all__ = ["SINGLE_THREAD_BELOW", "blas_threads_for", "limits_blas_threads", "one_blas_thread"]
+__all__ = ["SINGLE_THREAD_BELOW", "blas_threads_for", "limits_blas_threads", "one_blas_thread",
+           "total_states"]
 
 #: Problems with fewer states than this run with one BLAS thread.  Measured on a 2-core
 #: x86-64 (benchmarks/issue10.py, "threads"): up to ~400 states one thread is as fast or
@@ -115,8 +116,8 @@ def limits_blas_threads(size: Callable[..., int]) -> Callable:
 
     Examples
     --------
-    >>> @limits_blas_threads(lambda plant, **_: plant.nstates)   # doctest: +SKIP
-    ... def lqr(plant, *, attitude_weight=1.0): ...
+    >>> @limits_blas_threads(total_states)                       # doctest: +SKIP
+    ... def margins(plant, controller): ...
     """
     def decorate(function: Callable) -> Callable:
         @functools.wraps(function)
@@ -129,3 +130,9 @@ def limits_blas_threads(size: Callable[..., int]) -> Callable:
                 return function(*args, **kwargs)
         return wrapper
     return decorate
+
+
+def total_states(*args, **kwargs) -> int:
+    """The states of every system among the arguments (objects with ``nstates``): the
+    problem size of an entry point such as ``margins(plant, controller)``."""
+    return sum(int(getattr(a, "nstates", 0) or 0) for a in (*args, *kwargs.values()))

@@ -85,3 +85,24 @@ def test_simulation_does_not_depend_on_the_callers_threads(n_states, n_samples):
             results.append((response.y, response.x))
     np.testing.assert_array_equal(results[0][0], results[1][0])
     np.testing.assert_array_equal(results[0][1], results[1][1])
+
+
+def test_total_states_counts_every_system():
+    import control
+
+    plant = control.ss(np.eye(3), np.ones((3, 1)), np.ones((1, 3)), 0)
+    controller = control.ss(np.eye(2), np.ones((2, 1)), np.ones((1, 2)), 0)
+    assert threads.total_states(plant, controller, omega=np.ones(4)) == 5
+    assert threads.total_states(plant, controller=controller) == 5
+
+
+@pytest.mark.parametrize("name", ["lqr", "lqr_design", "pd", "margins", "spillover",
+                                  "loop_frequency_response"])
+def test_design_entry_points_limit_threads(name):
+    """The design-loop entry points run inside limits_blas_threads (functools.wraps keeps
+    the function as __wrapped__, its name and its docstring)."""
+    import controllers
+
+    entry = getattr(controllers, name)
+    assert hasattr(entry, "__wrapped__") and entry.__name__ == name
+    assert entry.__doc__ == entry.__wrapped__.__doc__
