@@ -13,9 +13,12 @@ Two ways to run the recursion, chosen per system and run (see :class:`Simulator`
   (:mod:`.modal_form`: real Schur form, blocks decoupled by Sylvester equations with a bound
   on the transformation, close or defective eigenvalues kept together), every block
   discretised exactly, the recursion in a compiled loop (numba): O(n) per sample for the
-  outputs, one matrix product per block of samples for the states.  Measured 10 to 100 times
-  faster than forced_response from 20 to 400 states and at least as accurate against an
-  extended-precision solution (``benchmarks/issue10.py``);
+  outputs, one matrix product x = V z for the states.  Measured on issue 10's general
+  systems (20 to 400 states, 1e4 and 1e5 samples; ``benchmarks/issue10.py``): outputs 30 to
+  60 times faster than forced_response once set up, states 5 to 30 times (their O(n^2) per
+  sample product bounds it); a one-shot call pays an O(n^3) set-up (a Schur form, as
+  forced_response pays a matrix exponential); outputs at least as accurate against an
+  extended-precision solution;
 - the chunked recursion (:mod:`.chunked`): block processing of the dense discrete system,
   when the modal transformation would be ill-conditioned (strongly non-normal systems),
   when numba is not installed, and for short runs, where loading the compiled loop (once
@@ -434,8 +437,8 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
     A drop-in replacement for :func:`control.forced_response` on state-space systems: same
     arguments ``T, U, X0``, same interpretation of the input (``hold="linear"``), same
     returned shapes and signal names, results equal to round-off (measured closer to an
-    extended-precision solution); 10 to 100 times faster on long runs
-    (``benchmarks/issue10.py``).  Uses one :class:`Simulator`; build one yourself to
+    extended-precision solution); several to 60 times faster, most when only the outputs
+    are read and on long runs (``benchmarks/issue10.py``).  Uses one :class:`Simulator`; build one yourself to
     simulate the same system repeatedly.
 
     Parameters
