@@ -3,6 +3,7 @@
 Works on any python-control LTI plant with input ``'torque'`` and outputs ``'theta'``,
 ``'omega'`` (optionally ``'*tip_deflection'``); imports no other flexsat package.
 """
+from .frequency import frequency_response_data
 from .loop import close_loop, loop_frequency_response
 from .margins import Margins, SpilloverVerdict, margins, spillover
 from .modes import INFLUENCE_TOL, FlexibleMode, flexible_modes, rigid_body_inertia
@@ -34,6 +35,7 @@ __all__ = [
     "compare_metrics",
     "disturbance_response",
     "flexible_modes",
+    "frequency_response_data",
     "loop_frequency_response",
     "lqr",
     "lqr_design",

@@ -11,9 +11,8 @@ import math
 
 import control
 import numpy as np
-import scipy.linalg
 
-from .frequency import _evaluator, _poles_of
+from .frequency import _evaluator, _poles_of, _siso_zeros
 from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_plant, _is_digital,
                       _labels, _measurements, _reference_inputs, _short)
 from .threads import limits_blas_threads, total_states
@@ -232,19 +231,16 @@ class _Loop:
         """Poles of the controller and zeros of each of its measurement channels."""
         c = self.controller
         roots = [_poles_of(self.controller_ev)]
-        n = c.nstates
         for name in self.measured:
             j = list(c.input_labels).index(name)
-            M = np.block([[c.A, c.B[:, [j]]], [c.C, c.D[:, [j]]]])
-            N = scipy.linalg.block_diag(np.eye(n), np.zeros((1, 1)))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                z = scipy.linalg.eigvals(M, N)
-            roots.append(z[np.isfinite(z) & (np.abs(z) < 1e12)])
-        return np.concatenate(roots).astype(complex)
+            roots.append(_siso_zeros(c.A, c.B[:, j], c.C[0], c.D[0, j]))
+        roots = np.concatenate(roots).astype(complex)
+        return roots[np.isfinite(roots) & (np.abs(roots) < 1e12)]
 
     def zeros(self) -> np.ndarray:
-        """Invariant zeros of L (z-plane for a digital loop): finite generalized eigenvalues of
-        ([[A, B], [C, D]], [[I, 0], [0, 0]]) for the series connection plant -> controller."""
+        """Zeros of L (z-plane for a digital loop): the zeros of the series connection plant ->
+        controller, by :func:`~controllers.frequency._siso_zeros` (a real eigenproblem of the
+        loop's order, not the QZ of its pencil)."""
         p, c = self._plant_discretised, self.controller
         i_t = list(p.input_labels).index(TORQUE)
         i_m = [list(p.output_labels).index(n) for n in self.measured]
@@ -256,11 +252,7 @@ class _Loop:
         B = np.vstack([Bt, Bcm @ Dmt])
         C = -np.hstack([Dcm @ Cm, Cc])
         D = -Dcm @ Dmt
-        n = n_p + n_c
-        M = np.block([[A, B], [C, D]])
-        N = scipy.linalg.block_diag(np.eye(n), np.zeros((1, 1)))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            z = scipy.linalg.eigvals(M, N)
+        z = _siso_zeros(A, B, C, D)
         return z[np.isfinite(z) & (np.abs(z) < 1e12)]
 
     def grid(self, n_points: int = 600) -> np.ndarray:

@@ -24,6 +24,7 @@ import control
 import numpy as np
 import scipy.linalg
 
+from .frequency import _ModalEvaluator
 from .modes import _design_model, _verify_loop, rigid_body_inertia
 from .pd import _check_sampling, _positive, _rigid_crossover
 from .riccati import _modal_correction, _solve_care
@@ -262,7 +263,9 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
     w_r, w_e = _rigid_bandwidths(q_theta, r, J, speed, weights)
     A = np.asarray(plant.A, dtype=float)
     with np.errstate(all="ignore"):
-        w_modes = np.abs(np.linalg.eigvals(A)) if A.size else np.zeros(0)
+        # O(n) for a modal plant (its decoupled parts), one Schur form otherwise
+        w_modes = np.abs(_ModalEvaluator(A, np.zeros((A.shape[0], 0)),
+                                         np.zeros((0, A.shape[0])), np.zeros((0, 0))).poles())
     w_plant = float(w_modes.max(initial=0.0))
     # the lowest flexible mode (the rigid-body eigenvalues are ~sqrt(eps ||A||) from 0)
     w_low = float(w_modes[w_modes > 1e-6 * math.sqrt(max(w_plant, 1.0))].min(initial=np.inf))
@@ -428,8 +431,9 @@ def _design(plant, Q, N, R, r, J, x_ref, noise, L_given, sigma, T) -> LQRDesign:
 
         def target(x):
             return rho * x / abs(x) if abs(x) > 0 else complex(0.0)
-    K = K + _modal_correction(Phi - Gamma @ K, Gamma, flagged, target)
-    L = L + _modal_correction((Phi - L @ Cm).T, Cm.T, flagged, target).T
+    dK, regulator_poles = _modal_correction(Phi - Gamma @ K, Gamma, flagged, target)
+    dL, estimator_poles = _modal_correction((Phi - L @ Cm).T, Cm.T, flagged, target)
+    K, L = K + dK, L + dL.T
     Bm = Gamma - L @ Dm
     Ac = Phi - L @ Cm - Bm @ K
     g = K @ x_ref  # torque per rad of reference (a rigid rotation needs no torque)
@@ -437,7 +441,7 @@ def _design(plant, Q, N, R, r, J, x_ref, noise, L_given, sigma, T) -> LQRDesign:
     controller = control.ss(Ac, Bc, -K, np.array([[g[0], 0.0, 0.0]]), 0 if T is None else T,
                             inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="lqr")
     return LQRDesign(controller, K, L, Q * r, R * r, N * r, x_ref,
-                     np.linalg.eigvals(Phi - Gamma @ K), np.linalg.eigvals(Phi - L @ Cm))
+                     regulator_poles, estimator_poles)
 
 
 def _checked(design: LQRDesign, alpha: float, T, weights: str, estimator) -> LQRDesign:

@@ -297,8 +297,11 @@ def test_modal_correction_moves_one_mode_and_no_other():
     S = rng.standard_normal((6, 6))
     M = S @ scipy.linalg.block_diag(*blocks) @ np.linalg.inv(S)
     G = rng.standard_normal((6, 1))
-    dK = _modal_correction(M, G, lambda x: x.real > -1e-3, lambda x: complex(-0.5, x.imag))
+    dK, reported = _modal_correction(M, G, lambda x: x.real > -1e-3,
+                                     lambda x: complex(-0.5, x.imag))
     got = np.sort_complex(np.linalg.eigvals(M - G @ dK))
+    # the eigenvalues it reports are those of the corrected matrix (same round-off)
+    np.testing.assert_allclose(np.sort_complex(reported), got, rtol=0, atol=1e-10)
     want = np.sort_complex(np.array([-1 + 2j, -1 - 2j, -0.5 + 7j, -0.5 - 7j, -3 + 0.5j,
                                      -3 - 0.5j]))
     # eigenvalues of a random 6 x 6 similarity (condition ~1e2): round-off ~1e-13
