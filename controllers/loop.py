@@ -13,8 +13,8 @@ import control
 import numpy as np
 
 from .frequency import _evaluator, _poles_of, _siso_zeros
-from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_plant, _is_digital,
-                      _labels, _measurements, _reference_inputs, _short)
+from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_pair, _check_plant,
+                      _is_digital, _labels, _measurements, _reference_inputs, _short)
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["close_loop", "loop_frequency_response"]
@@ -26,11 +26,14 @@ def close_loop(plant, controller: control.StateSpace):
     Parameters
     ----------
     plant : control.StateSpace or control.FrequencyResponseData
-        Continuous-time plant (input ``'torque'``, outputs ``'theta'``, ``'omega'``, ...). An FRD
-        plant (e.g. the exact distributed model) gives the closed loop's frequency response on
-        its grid; it needs ``'theta'`` or ``'omega'`` (the other is j w times / divided by it).
+        Continuous-time plant (input ``'torque'``, outputs ``'theta'``, ``'omega'``, ...; or the
+        three-axis signals ``'torque_x'``, ..., ``'omega_z'``, :mod:`controllers.signals`). An
+        FRD plant (e.g. the exact distributed model) gives the closed loop's frequency response
+        on its grid; it needs ``'theta'`` or ``'omega'`` (the other is j w times / divided by
+        it; planar FRDs only).
     controller : control.StateSpace
-        Controller with output ``'torque'``; its inputs are plant outputs (measurements) and
+        Controller with output ``'torque'`` (three-axis: ``'torque_x'``, ``'torque_y'``,
+        ``'torque_z'``); its inputs are plant outputs (measurements) and
         reference inputs (names containing ``'ref'``). If the controller is discrete-time
         (``dt`` > 0), the plant is discretised with a zero-order hold at that ``dt`` and the
         result is the exact sampled-data loop at the sampling instants (every plant input,
@@ -40,57 +43,58 @@ def close_loop(plant, controller: control.StateSpace):
     Returns
     -------
     control.StateSpace or control.FrequencyResponseData
-        Inputs: the controller's reference inputs, then the plant's inputs other than torque.
-        Outputs: every plant output, then ``'torque'``. States: plant states, controller states.
-        With u = torque, y_m the measurements and d the other plant inputs:
-        torque = (K_r r + K_y (C_m x + D_md d)) / (1 - K_y D_mt), the algebraic loop through the
-        feedthroughs solved exactly (an error if 1 - K_y D_mt = 0).
+        Inputs: the controller's reference inputs, then the plant's inputs other than the
+        torques. Outputs: every plant output, then the torque(s). States: plant states,
+        controller states. With u the torque(s), y_m the measurements and d the other plant
+        inputs: u = (I - K_y D_mt)^-1 (K_r r + K_y (C_m x + D_md d)), the algebraic loop through
+        the feedthroughs solved exactly (an error if I - K_y D_mt is singular).
     """
     if isinstance(plant, control.FrequencyResponseData):
         return _close_loop_frd(plant, controller)
-    _check_plant(plant)
-    _check_controller(controller)
+    ch = _check_pair(plant, controller)
     measured = _measurements(plant, controller)
     refs = _reference_inputs(controller, _labels(plant, "output"))
     p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
     c_in = list(controller.input_labels)
-    disturbances = [n for n in p_in if n != TORQUE]
+    disturbances = [n for n in p_in if n not in ch.torques]
     if _is_digital(controller):
         plant = control.c2d(plant, controller.dt, method="zoh")
     Ap, Bp, Cp, Dp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))
     Ac, Bc, Cc, Dc = (np.asarray(M, dtype=float)
                       for M in (controller.A, controller.B, controller.C, controller.D))
-    i_t = p_in.index(TORQUE)
+    i_t = [p_in.index(n) for n in ch.torques]
     i_d = [p_in.index(n) for n in disturbances]
     i_m = [p_out.index(n) for n in measured]
     j_m = [c_in.index(n) for n in measured]
     j_r = [c_in.index(n) for n in refs]
-    # torque = Cc xc + Dr r + Dy y_m,  y_m = Cm xp + Dmt torque + Dmd d: solve the (scalar)
-    # algebraic loop torque (1 - Dy Dmt) = Cc xc + Dr r + Dy (Cm xp + Dmd d)
+    m = len(i_t)
+    # u = Cc xc + Dr r + Dy y_m,  y_m = Cm xp + Dmt u + Dmd d: solve the algebraic loop
+    # (I - Dy Dmt) u = Cc xc + Dr r + Dy (Cm xp + Dmd d)
     Dy = Dc[:, j_m]
-    gain = 1.0 - float((Dy @ Dp[i_m, i_t])[0])
-    if abs(gain) < 1e-12:
+    gain = np.eye(m) - Dy @ Dp[np.ix_(i_m, i_t)]
+    if abs(np.linalg.det(gain)) < 1e-12:
         raise ValueError("algebraic loop: the controller's direct feedthrough times the plant's "
-                         "feedthrough from torque to the measurements is 1")
-    # torque = F [xp; xc; r; d]
-    F = np.hstack([Dy @ Cp[i_m], Cc, Dc[:, j_r], Dy @ Dp[np.ix_(i_m, i_d)]]) / gain
+                         "feedthrough from torque to the measurements makes I - Dc Dp singular")
+    # u = F [xp; xc; r; d]
+    F = np.linalg.solve(gain, np.hstack([Dy @ Cp[i_m], Cc, Dc[:, j_r],
+                                         Dy @ Dp[np.ix_(i_m, i_d)]]))
     n_p, n_c = Ap.shape[0], Ac.shape[0]
     n_r = len(j_r)
     # the plant with the torque substituted, then the controller driven by r and y_m
     Fx, Fr, Fd = F[:, : n_p + n_c], F[:, n_p + n_c: n_p + n_c + n_r], F[:, n_p + n_c + n_r:]
-    bt = Bp[:, [i_t]]
+    bt = Bp[:, i_t]
     A_top = np.hstack([Ap, np.zeros((n_p, n_c))]) + bt @ Fx
-    ym_x = np.hstack([Cp[i_m], np.zeros((len(i_m), n_c))]) + Dp[np.ix_(i_m, [i_t])] @ Fx
+    ym_x = np.hstack([Cp[i_m], np.zeros((len(i_m), n_c))]) + Dp[np.ix_(i_m, i_t)] @ Fx
     A_bot = np.hstack([np.zeros((n_c, n_p)), Ac]) + Bc[:, j_m] @ ym_x
     B_top = np.hstack([bt @ Fr, Bp[:, i_d] + bt @ Fd])
-    ym_r = Dp[np.ix_(i_m, [i_t])] @ Fr
-    ym_d = Dp[np.ix_(i_m, i_d)] + Dp[np.ix_(i_m, [i_t])] @ Fd
+    ym_r = Dp[np.ix_(i_m, i_t)] @ Fr
+    ym_d = Dp[np.ix_(i_m, i_d)] + Dp[np.ix_(i_m, i_t)] @ Fd
     B_bot = np.hstack([Bc[:, j_r] + Bc[:, j_m] @ ym_r, Bc[:, j_m] @ ym_d])
-    C = np.vstack([np.hstack([Cp, np.zeros((Cp.shape[0], n_c))]) + Dp[:, [i_t]] @ Fx, Fx])
-    D = np.vstack([np.hstack([Dp[:, [i_t]] @ Fr, Dp[:, i_d] + Dp[:, [i_t]] @ Fd]),
+    C = np.vstack([np.hstack([Cp, np.zeros((Cp.shape[0], n_c))]) + Dp[:, i_t] @ Fx, Fx])
+    D = np.vstack([np.hstack([Dp[:, i_t] @ Fr, Dp[:, i_d] + Dp[:, i_t] @ Fd]),
                    np.hstack([Fr, Fd])])
     inputs = refs + disturbances
-    outputs = p_out + [TORQUE]
+    outputs = p_out + list(ch.torques)
     states = [f"plant_x{i}" for i in range(n_p)] + [f"controller_x{i}" for i in range(n_c)]
     return control.ss(np.vstack([A_top, A_bot]), np.vstack([B_top, B_bot]), C, D, plant.dt,
                       inputs=inputs, outputs=outputs, states=states, name="closed_loop")
@@ -147,8 +151,10 @@ class _Loop:
     """L(omega) = -sum_i K_i P_i at real frequencies omega [rad/s] (see module docstring)."""
 
     def __init__(self, plant, controller):
-        _check_plant(plant, allow_frd=True)
-        _check_controller(controller)
+        self.ch = ch = _check_pair(plant, controller, allow_frd=True)
+        if ch.mimo and isinstance(plant, control.FrequencyResponseData):
+            raise ValueError("three-axis loops need a StateSpace plant (a FrequencyResponseData "
+                             "plant is supported for the planar loop only)")
         self.digital = _is_digital(controller)
         self.dt = float(controller.dt) if self.digital else 0.0
         self.frd = isinstance(plant, control.FrequencyResponseData)
@@ -179,10 +185,10 @@ class _Loop:
             self.plant_data = np.array(rows, dtype=complex).reshape(len(rows), self.omega.size)
         else:
             self.measured = _measurements(plant, controller)
-        self.controller_ev = _evaluator(controller, self.measured, [TORQUE])
+        self.controller_ev = _evaluator(controller, self.measured, list(ch.torques))
         if not self.frd:
             p = control.c2d(plant, self.dt, method="zoh") if self.digital else plant
-            self.plant_ev = _evaluator(p, [TORQUE], self.measured)
+            self.plant_ev = _evaluator(p, list(ch.torques), self.measured)
             self._plant_discretised = p
         self.plant = plant
         self.controller = controller
@@ -193,10 +199,12 @@ class _Loop:
             return np.exp(1j * omega * self.dt)
         return 1j * omega
 
-    def __call__(self, omega) -> np.ndarray:
+    def matrix(self, omega) -> np.ndarray:
+        """L(j omega) = -K P, shape (f, m, m) for m torque channels (loop broken at the plant's
+        torque inputs, negative-feedback convention)."""
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
         z = self._point(omega)
-        K = self.controller_ev(z)[:, 0, :]  # (f, n_meas)
+        K = self.controller_ev(z)  # (f, m, n_meas)
         if self.frd:
             P = self._interpolated_plant(omega)  # (f, n_meas)
             if self.digital:
@@ -204,9 +212,26 @@ class _Loop:
                 # H(jw) = (1 - exp(-jwT)) / (jwT) (Franklin, Powell & Workman, sec. 6.3)
                 wT = omega * self.dt
                 P = P * ((1 - np.exp(-1j * wT)) / (1j * wT))[:, None]
-        else:
-            P = self.plant_ev(z)[:, :, 0]
-        return -np.sum(K * P, axis=1)
+            return -np.sum(K[:, 0, :] * P, axis=1)[:, None, None]
+        return -(K @ self.plant_ev(z))
+
+    def __call__(self, omega) -> np.ndarray:
+        """L(j omega): shape (f,) for the planar loop, (f, m, m) for a three-axis one."""
+        L = self.matrix(omega)
+        return L[:, 0, 0] if not self.ch.mimo else L
+
+    def broken(self, omega, i: int) -> np.ndarray:
+        """Loop-at-a-time L_i(j omega), shape (f,): the loop broken at torque input i, the other
+        loops closed. With S = (I + L)^-1 the sensitivity at the plant input, an injection at
+        input i returns through 1 / (1 + L_i) = S_ii, so L_i = 1 / S_ii - 1 (Skogestad &
+        Postlethwaite, Multivariable Feedback Control, 2nd ed., sec. 9.3)."""
+        L = self.matrix(omega)
+        if L.shape[1] == 1:
+            return L[:, 0, 0]
+        m = L.shape[1]
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            S = np.linalg.solve(np.eye(m) + L, np.broadcast_to(np.eye(m), L.shape))
+            return 1.0 / S[:, i, i] - 1.0
 
     def _interpolated_plant(self, omega: np.ndarray) -> np.ndarray:
         """FRD plant rows at omega: exact on its grid, in between linear in log frequency for
@@ -237,16 +262,19 @@ class _Loop:
         roots = np.concatenate(roots).astype(complex)
         return roots[np.isfinite(roots) & (np.abs(roots) < 1e12)]
 
-    def zeros(self) -> np.ndarray:
-        """Zeros of L (z-plane for a digital loop): the zeros of the series connection plant ->
-        controller, by :func:`~controllers.frequency._siso_zeros` (a real eigenproblem of the
-        loop's order, not the QZ of its pencil)."""
+    def zeros(self, channel: int = 0) -> np.ndarray:
+        """Zeros of the loop of one torque channel alone, -K_ii P_ii (z-plane for a digital
+        loop; the planar loop's L): the zeros of the series connection plant -> controller
+        from torque input ``channel`` to torque output ``channel``, by
+        :func:`~controllers.frequency._siso_zeros` (a real eigenproblem of the loop's order,
+        not the QZ of its pencil)."""
         p, c = self._plant_discretised, self.controller
-        i_t = list(p.input_labels).index(TORQUE)
+        i_t = list(p.input_labels).index(self.ch.torques[channel])
         i_m = [list(p.output_labels).index(n) for n in self.measured]
         j_m = [list(c.input_labels).index(n) for n in self.measured]
         Ap, Bt, Cm, Dmt = p.A, p.B[:, [i_t]], p.C[i_m], p.D[np.ix_(i_m, [i_t])]
-        Ac, Bcm, Cc, Dcm = c.A, c.B[:, j_m], c.C, c.D[:, j_m]
+        Ac, Bcm = c.A, c.B[:, j_m]
+        Cc, Dcm = c.C[[channel]], c.D[np.ix_([channel], j_m)]
         n_p, n_c = Ap.shape[0], Ac.shape[0]
         A = np.block([[Ap, np.zeros((n_p, n_c))], [Bcm @ Cm, Ac]])
         B = np.vstack([Bt, Bcm @ Dmt])
@@ -255,6 +283,23 @@ class _Loop:
         z = _siso_zeros(A, B, C, D)
         return z[np.isfinite(z) & (np.abs(z) < 1e12)]
 
+    def _loop_at_a_time_poles(self) -> np.ndarray:
+        """Poles of each loop-at-a-time L_i that the open loop does not have: those of the loop
+        with torque i not fed back (the other loops closed); none for a planar loop."""
+        if not self.ch.mimo:
+            return np.zeros(0, dtype=complex)
+        roots = []
+        for i in range(self.ch.n_axes):
+            cut = control.ss(self.controller.A, self.controller.B,
+                             np.where(np.arange(self.ch.n_axes)[:, None] == i, 0.0,
+                                      self.controller.C),
+                             np.where(np.arange(self.ch.n_axes)[:, None] == i, 0.0,
+                                      self.controller.D), self.controller.dt,
+                             inputs=list(self.controller.input_labels),
+                             outputs=list(self.controller.output_labels))
+            roots.append(np.linalg.eigvals(close_loop(self.plant, cut).A))
+        return np.concatenate(roots).astype(complex)
+
     def grid(self, n_points: int = 600) -> np.ndarray:
         """Frequency grid [rad/s] refined around every lightly damped pole and zero of L."""
         if self.frd:
@@ -262,7 +307,9 @@ class _Loop:
             roots = self._controller_roots()
         else:
             roots = np.concatenate([_poles_of(self.plant_ev), _poles_of(self.controller_ev),
-                                    self.zeros()]).astype(complex)
+                                    self._loop_at_a_time_poles()]
+                                   + [self.zeros(i) for i in range(self.ch.n_axes)]
+                                   ).astype(complex)
         if self.digital:
             # z-plane roots: map back with s = log(z) / T (z = 0 is infinitely fast: drop it)
             roots = np.log(roots[np.abs(roots) > 1e-12]) / self.dt

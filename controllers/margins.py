@@ -11,11 +11,12 @@ import numpy as np
 import scipy.optimize
 
 from .loop import _Loop, close_loop, loop_frequency_response
-from .signals import _check_controller, _check_plant, _is_digital
+from .signals import _check_controller, _check_pair, _check_plant, _is_digital
 from .stability import _continuous_poles
 from .threads import limits_blas_threads, total_states
 
-__all__ = ["Margins", "SpilloverVerdict", "margins", "spillover"]
+__all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "margins",
+           "spillover", "disk_margin_gain", "disk_margin_phase"]
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,92 @@ class Margins:
         """The three margins under their metric names (gain_margin, phase_margin, modulus_margin)."""
         return {"gain_margin": self.gain_margin, "phase_margin": self.phase_margin,
                 "modulus_margin": self.modulus_margin}
+
+
+def disk_margin_gain(alpha: float) -> float:
+    """Gain margin [dB] guaranteed by a balanced disk margin alpha: the loop tolerates gains in
+    [(1 - alpha/2) / (1 + alpha/2), (1 + alpha/2) / (1 - alpha/2)], +-20 log10 of the upper end
+    (inf for alpha >= 2).
+
+    References
+    ----------
+    P. Seiler, A. Packard, P. Gahinet, "An introduction to disk margins", IEEE Control Systems
+    Magazine 40(5), 2020, sec. "Disk margins" (the balanced disk, sigma = 0).
+    """
+    if alpha >= 2.0:
+        return math.inf
+    return 20.0 * math.log10((1.0 + alpha / 2.0) / (1.0 - alpha / 2.0))
+
+
+def disk_margin_phase(alpha: float) -> float:
+    """Phase margin [deg] guaranteed by a balanced disk margin alpha: +-2 arctan(alpha / 2)
+    (Seiler, Packard & Gahinet 2020; 90 deg at alpha = 2)."""
+    return math.degrees(2.0 * math.atan(alpha / 2.0)) if math.isfinite(alpha) else 180.0
+
+
+@dataclass(frozen=True)
+class MultiLoopMargins:
+    """Margins of a three-axis loop (see :func:`margins`).
+
+    Attributes
+    ----------
+    loop_at_a_time : dict of str to Margins
+        Per hub axis ('x', 'y', 'z'): the classical margins of L_i = 1/S_ii - 1, the loop
+        broken at torque input i with the other loops closed.
+    disk_margin : float
+        Balanced multivariable disk margin alpha at the plant input, for an unstructured
+        (full-block) perturbation: alpha = 1 / max over omega of sigma_max(S - I/2), S = (I + L)^-1
+        (Seiler, Packard & Gahinet 2020). The loop stays stable for simultaneous, independent
+        (and even coupled) gain and phase variations in all three torque channels within the
+        disk: gains in [(1 - alpha/2)/(1 + alpha/2), (1 + alpha/2)/(1 - alpha/2)] with phases
+        within +-2 arctan(alpha/2). It is a lower bound of the margin for independent
+        (diagonal) perturbations, equal to it when L is diagonal.
+    disk_gain_margin : float, dB
+        :func:`disk_margin_gain` of disk_margin.
+    disk_phase_margin : float, deg
+        :func:`disk_margin_phase` of disk_margin.
+    disk_margin_frequency : float, rad/s
+        Where sigma_max(S - I/2) peaks.
+    min_singular_value : float
+        min over omega of sigma_min(I + L(j omega)) (the return difference at the plant input,
+        1 / ||S||_inf); any multiplicative input perturbation I + Delta with
+        sigma_max(Delta) < min_singular_value keeps the loop stable.
+    min_singular_value_frequency : float, rad/s
+    """
+
+    loop_at_a_time: dict
+    disk_margin: float
+    disk_gain_margin: float
+    disk_phase_margin: float
+    disk_margin_frequency: float
+    min_singular_value: float
+    min_singular_value_frequency: float
+
+    @property
+    def gain_margin(self) -> float:
+        """The smallest |gain margin| over the axes, dB."""
+        return min((m.gain_margin for m in self.loop_at_a_time.values()), key=abs)
+
+    @property
+    def phase_margin(self) -> float:
+        """The smallest |phase margin| over the axes, deg."""
+        return min((m.phase_margin for m in self.loop_at_a_time.values()), key=abs)
+
+    @property
+    def modulus_margin(self) -> float:
+        """The smallest modulus margin over the axes."""
+        return min(m.modulus_margin for m in self.loop_at_a_time.values())
+
+    def as_dict(self) -> dict[str, float]:
+        """Per axis ``gain_margin_x``, ``phase_margin_x``, ``modulus_margin_x``, ...; then
+        ``disk_margin``, ``disk_gain_margin``, ``disk_phase_margin``, ``min_singular_value``."""
+        out = {}
+        for axis, m in self.loop_at_a_time.items():
+            out.update({f"{k}_{axis}": v for k, v in m.as_dict().items()})
+        out.update(disk_margin=self.disk_margin, disk_gain_margin=self.disk_gain_margin,
+                   disk_phase_margin=self.disk_phase_margin,
+                   min_singular_value=self.min_singular_value)
+        return out
 
 
 def _crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values: np.ndarray
@@ -158,13 +245,22 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
 
     Returns
     -------
-    Margins
+    Margins or MultiLoopMargins
+        Margins for a planar loop. For a three-axis loop, :class:`MultiLoopMargins`: the
+        classical margins of each loop-at-a-time L_i = 1/S_ii - 1 (axis i broken, the others
+        closed) and the multivariable disk margin and return difference at the plant input. The
+        disk margin is taken for an unstructured perturbation (sigma_max of S - I/2): it needs
+        no mu computation, it is exact for decoupled (diagonal) loops and a guaranteed lower
+        bound otherwise, and it reads directly as simultaneous gain and phase margins in all
+        channels (:func:`disk_margin_gain`, :func:`disk_margin_phase`).
 
     References
     ----------
     G. F. Franklin, J. D. Powell, A. Emami-Naeini, Feedback Control of Dynamic Systems, 7th ed.,
     sec. 6.4 (gain and phase margins); S. Skogestad, I. Postlethwaite, Multivariable Feedback
-    Control, 2nd ed., sec. 2.4.3 (modulus margin = 1/||S||_inf).
+    Control, 2nd ed., sec. 2.4.3 (modulus margin = 1/||S||_inf) and sec. 9.3 (loop-at-a-time
+    margins); P. Seiler, A. Packard, P. Gahinet, "An introduction to disk margins", IEEE Control
+    Systems Magazine 40(5), 2020 (disk margins, balanced sigma = 0, multiloop).
     """
     loop = _Loop(plant, controller)
     if omega is None:
@@ -172,6 +268,50 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     omega = np.unique(np.asarray(omega, dtype=float).reshape(-1))
     if omega.size < 2 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
         raise ValueError("omega must hold at least two positive finite frequencies [rad/s]")
+    if not loop.ch.mimo:
+        return _siso_margins(loop, omega)
+    per_axis = {axis: _siso_margins(lambda w, i=i: loop.broken(w, i), omega)
+                for i, axis in enumerate(loop.ch.axes)}
+    m = loop.ch.n_axes
+
+    def singular_values(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(sigma_max(S - I/2), sigma_min(I + L)) at each frequency."""
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            R = np.eye(m) + loop.matrix(w)
+            S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
+            return (np.linalg.svd(S - 0.5 * np.eye(m), compute_uv=False)[:, 0],
+                    np.linalg.svd(R, compute_uv=False)[:, -1])
+
+    peak, smallest = singular_values(omega)
+    ok = np.isfinite(peak) & np.isfinite(smallest)
+    disk_peak, w_disk = _refined_extremum(lambda w: singular_values(w)[0], omega[ok], peak[ok],
+                                          maximum=True)
+    sigma, w_sigma = _refined_extremum(lambda w: singular_values(w)[1], omega[ok], smallest[ok],
+                                       maximum=False)
+    alpha = 1.0 / disk_peak if disk_peak > 0 else math.inf
+    return MultiLoopMargins(per_axis, alpha, disk_margin_gain(alpha), disk_margin_phase(alpha),
+                            w_disk, sigma, w_sigma)
+
+
+def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
+                      ) -> tuple[float, float]:
+    """Grid extremum of f refined between the grid neighbours (bounded scalar search in
+    log omega)."""
+    sign = -1.0 if maximum else 1.0
+    i = int(np.argmin(sign * values))
+    best, w_best = float(values[i]), float(omega[i])
+    if 0 < i < omega.size - 1:
+        res = scipy.optimize.minimize_scalar(
+            lambda lw: sign * float(f(np.array([math.exp(lw)]))[0]),
+            bounds=(math.log(omega[i - 1]), math.log(omega[i + 1])), method="bounded",
+            options={"xatol": 1e-12})
+        if sign * res.fun < sign * best:
+            best, w_best = float(sign * res.fun), float(math.exp(res.x))
+    return best, w_best
+
+
+def _siso_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray) -> Margins:
+    """Gain, phase and modulus margins of a scalar loop function L(omega) on a grid, refined."""
     with np.errstate(divide="ignore", invalid="ignore"):
         L = loop(omega)
     finite = np.isfinite(L)  # a grid point exactly on an undamped pole: L is infinite there
@@ -218,6 +358,33 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
 
 
 @dataclass(frozen=True)
+class ModeSpillover:
+    """What the loop did to one flexible mode of the truth plant (see :func:`spillover`).
+
+    Attributes
+    ----------
+    frequency : float, rad/s
+        |lambda| of the open-loop mode.
+    open_loop_damping : float
+        -Re(lambda) / |lambda|.
+    closed_loop_frequency : float, rad/s
+        |s| of the closed-loop pole nearest the mode.
+    closed_loop_damping : float
+        -Re(s) / |s| of that pole (negative: the loop destabilised the mode).
+    """
+
+    frequency: float
+    open_loop_damping: float
+    closed_loop_frequency: float
+    closed_loop_damping: float
+
+    @property
+    def stable(self) -> bool:
+        """True if the closed-loop pole has Re(s) < 0."""
+        return self.closed_loop_damping > 0
+
+
+@dataclass(frozen=True)
 class SpilloverVerdict:
     """Is a controller (designed on one model) stable on a truth model, and by how much.
 
@@ -233,10 +400,14 @@ class SpilloverVerdict:
         None for a FrequencyResponseData truth plant (no poles available).
     least_damped_frequency : float or None, rad/s
         Natural frequency of that pole.
-    margins : Margins
-        Margins of the loop on the truth plant.
+    margins : Margins or MultiLoopMargins
+        Margins of the loop on the truth plant (:func:`margins`).
     method : str
         ``'eigenvalues'`` (StateSpace truth) or ``'nyquist'`` (FrequencyResponseData truth).
+    modes : tuple of ModeSpillover
+        Per flexible mode of a StateSpace truth plant (complex eigenvalues, by frequency): its
+        open-loop damping and that of the nearest closed-loop pole (the spillover of the loop
+        into each mode); empty for an FRD truth plant.
     """
 
     stable: bool
@@ -245,6 +416,7 @@ class SpilloverVerdict:
     least_damped_frequency: float | None
     margins: Margins
     method: str
+    modes: tuple = ()
 
     def __str__(self) -> str:
         state = "STABLE" if self.stable else f"UNSTABLE ({self.n_unstable_poles} unstable poles)"
@@ -256,6 +428,22 @@ class SpilloverVerdict:
         lines.append(f"  gain margin {m.gain_margin:.4g} dB, phase margin {m.phase_margin:.4g} deg,"
                      f" modulus margin {m.modulus_margin:.4g}")
         return "\n".join(lines)
+
+
+def _mode_spillover(plant, closed_poles: np.ndarray) -> tuple[ModeSpillover, ...]:
+    """Each flexible mode of the plant and the closed-loop pole nearest it."""
+    lam = _continuous_poles(plant)
+    w_max = max(np.abs(lam).max(initial=0.0), 1.0)
+    flexible = np.sort_complex(lam[(lam.imag > 1e-6 * math.sqrt(w_max))])
+    upper = closed_poles[closed_poles.imag >= 0]
+    out = []
+    if not upper.size:
+        return ()
+    for x in flexible:
+        p = upper[int(np.argmin(np.abs(upper - x)))]
+        out.append(ModeSpillover(float(abs(x)), float(-x.real / abs(x)), float(abs(p)),
+                                 float(-p.real / abs(p)) if abs(p) else 0.0))
+    return tuple(sorted(out, key=lambda m: m.frequency))
 
 
 @limits_blas_threads(total_states)
@@ -303,7 +491,7 @@ def spillover(truth_plant, controller) -> SpilloverVerdict:
             stable=bool(not unstable.any()), n_unstable_poles=int(unstable.sum()),
             least_damping_ratio=None if i is None else float(zeta[i]),
             least_damped_frequency=None if i is None else float(w[i]),
-            margins=mg, method="eigenvalues")
+            margins=mg, method="eigenvalues", modes=_mode_spillover(truth_plant, s))
     if _is_digital(controller):
         raise ValueError("spillover on a FrequencyResponseData truth_plant needs a continuous "
                          "controller (the sampled-data Nyquist count would need the aliased "

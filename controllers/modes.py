@@ -37,7 +37,8 @@ import scipy.sparse.csgraph
 
 from .frequency import _ModalEvaluator, _evaluator
 from .loop import close_loop
-from .signals import OMEGA, THETA, TORQUE, _check_plant, _is_digital, _require_signal
+from .signals import (OMEGA, THETA, TORQUE, _check_plant, _is_digital, _require_signal,
+                      _short, channels)
 from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _continuous_poles
 
 __all__ = ["FlexibleMode", "INFLUENCE_TOL", "rigid_body_inertia", "flexible_modes"]
@@ -71,69 +72,102 @@ class FlexibleMode:
     participation: float
 
 
-def _rigid_gain(ev: _ModalEvaluator) -> tuple[complex, complex]:
-    """Coefficients (a1, a2) of the singular part a1/s + a2/s^2 at s = 0 of a SISO evaluator.
+def _rigid_gain(ev: _ModalEvaluator) -> tuple[np.ndarray, np.ndarray]:
+    """Coefficients (A1, A2) of the singular part A1/s + A2/s^2 at s = 0 of an evaluator.
 
     With the rigid block T11 nilpotent of index 2, (sI - T11)^-1 = I/s + T11/s^2, so
-    a1 = C1 B1 and a2 = C1 T11 B1.
+    A1 = C1 B1 and A2 = C1 T11 B1 (shapes (outputs, inputs)).
     """
+    p, m = ev.C.shape[0], ev.B.shape[1]
     if ev.k == 0:
-        return 0j, 0j
-    a1 = (ev.C1 @ ev.B1)[0, 0]
-    a2 = (ev.C1 @ ev.T11 @ ev.B1)[0, 0]
-    return a1, a2
+        return np.zeros((p, m), dtype=complex), np.zeros((p, m), dtype=complex)
+    return ev.C1 @ ev.B1, ev.C1 @ ev.T11 @ ev.B1
 
 
-def rigid_body_inertia(plant: control.StateSpace) -> float:
-    """Total inertia J [kg*m^2] seen by the torque: lim_{s->0} s^2 theta(s)/torque(s) = 1/J.
+def rigid_body_inertia(plant: control.StateSpace) -> float | np.ndarray:
+    """Total inertia seen by the torque(s): lim_{s->0} s^2 theta(s)/torque(s) = J^-1.
 
     Parameters
     ----------
     plant : control.StateSpace
-        Continuous-time free-floating plant with input ``'torque'`` and output ``'theta'``.
+        Continuous-time free-floating plant with input ``'torque'`` and output ``'theta'``
+        (planar), or inputs ``'torque_x'``, ... and outputs ``'theta_x'``, ... (three-axis).
 
     Returns
     -------
-    float
-        J in kg*m^2 (about the system's centre of mass for a free-floating spacecraft).
+    float or ndarray (3, 3)
+        J in kg*m^2 (about the system's centre of mass for a free-floating spacecraft): a float
+        for a planar plant; for a three-axis plant the symmetric positive definite inertia
+        tensor in hub axes, the inverse of the 1/s^2 coefficient of the 3 x 3 transfer
+        theta/torque.
 
     Raises
     ------
     ValueError
-        If the channel torque -> theta has no rigid-body double integrator.
+        If the channel torque -> theta has no rigid-body double integrator (three-axis: if its
+        1/s^2 coefficient is not symmetric positive definite).
 
     References
     ----------
     Low-frequency limit of the free-floating plant theta/torque -> 1/(J s^2); e.g. P. C. Hughes,
     Spacecraft Attitude Dynamics, Wiley 1986, ch. 12 (hybrid coordinates).
     """
-    _check_plant(plant)
-    ev = _evaluator(plant, [TORQUE], [THETA])
-    a1, a2 = _rigid_gain(ev)
-    scale = abs(a2) if a2 else 1.0
-    # a frequency scale to compare the 1/s and 1/s^2 coefficients: a1/a2 is in rad/s
+    ch = _check_plant(plant)
+    ev = _evaluator(plant, list(ch.torques), list(ch.thetas))
+    A1, A2 = _rigid_gain(ev)
+    scale = float(np.linalg.norm(A2, 2)) if np.any(A2) else 1.0
+    # a frequency scale to compare the 1/s and 1/s^2 coefficients: A1/A2 is in rad/s
     w_scale = math.sqrt(max(np.linalg.norm(ev.A, 1), 1e-300))
     nilpotent_ok = ev.k == 0 or np.linalg.norm(ev.T11 @ ev.T11) <= 1e-6 * max(
         np.linalg.norm(ev.T11), 1e-300)
-    if (ev.k == 0 or not nilpotent_ok or abs(a2.imag) > 1e-8 * scale or a2.real <= 0
-            or abs(a1) > 1e-6 * scale * w_scale):
+    bad = (ev.k == 0 or not nilpotent_ok or np.abs(A2.imag).max() > 1e-8 * scale
+           or np.abs(A1).max() > 1e-6 * scale * w_scale)
+    if not ch.mimo:
+        a1, a2 = complex(A1[0, 0]), complex(A2[0, 0])
+        if bad or a2.real <= 0:
+            raise ValueError(
+                "plant must be free-floating: the channel torque -> theta needs a rigid-body "
+                f"double integrator 1/(J s^2) with J > 0 [kg*m^2]; got singular part "
+                f"{a1:.3g}/s + {a2:.3g}/s^2 ({ev.k} eigenvalue(s) of A near zero)")
+        return float(1.0 / a2.real)
+    Jinv = A2.real
+    asymmetric = np.abs(Jinv - Jinv.T).max() > 1e-8 * scale
+    eig = np.linalg.eigvalsh(0.5 * (Jinv + Jinv.T))
+    if bad or asymmetric or eig.min() <= 1e-12 * eig.max():
         raise ValueError(
-            "plant must be free-floating: the channel torque -> theta needs a rigid-body double "
-            f"integrator 1/(J s^2) with J > 0 [kg*m^2]; got singular part {a1:.3g}/s + {a2:.3g}/s^2 "
-            f"({ev.k} eigenvalue(s) of A near zero)")
-    return float(1.0 / a2.real)
+            "plant must be free-floating: the channels torque_* -> theta_* need a rigid-body "
+            "double integrator J^-1/s^2 with J symmetric positive definite [kg*m^2]; got the "
+            f"1/s^2 coefficient {_short(np.round(Jinv, 12))} and 1/s coefficient of norm "
+            f"{np.abs(A1).max():.3g} ({ev.k} eigenvalue(s) of A near zero)")
+    J = np.linalg.inv(0.5 * (Jinv + Jinv.T))
+    return 0.5 * (J + J.T)
 
 
-def flexible_modes(plant: control.StateSpace, *, input: str = TORQUE, output: str = THETA,
-                   min_participation: float = 1e-9) -> list[FlexibleMode]:
+def _inertia_matrix(J) -> np.ndarray:
+    """J as an (m, m) array (a planar inertia as (1, 1))."""
+    return np.atleast_2d(np.asarray(J, dtype=float))
+
+
+def _sqrt_inertia(J) -> np.ndarray:
+    """Symmetric square root of the inertia, (m, m)."""
+    Jm = _inertia_matrix(J)
+    w, V = np.linalg.eigh(Jm)
+    return (V * np.sqrt(np.maximum(w, 0.0))) @ V.T
+
+
+def flexible_modes(plant: control.StateSpace, *, input: str | None = None,
+                   output: str | None = None, min_participation: float = 1e-9
+                   ) -> list[FlexibleMode]:
     """Flexible (lightly damped, complex) modes visible in one channel of a plant.
 
     Parameters
     ----------
     plant : control.StateSpace
         Continuous-time plant with named signals.
-    input, output : str
-        Channel (default torque -> theta).
+    input, output : str, optional
+        Channel. Default: torque -> theta (planar); for a three-axis plant the 3 x 3 channel
+        torque_* -> theta_* (each mode's residue is then a (3, 3) matrix and its
+        participation 2 |lambda| ||J^1/2 R J^1/2||_2, the planar 2 |r| |lambda| J in any axis).
     min_participation : float
         Modes whose participation (see :class:`FlexibleMode`) is below this are dropped
         (uncontrollable or unobservable in the channel, e.g. symmetric modes of two wings).
@@ -143,28 +177,38 @@ def flexible_modes(plant: control.StateSpace, *, input: str = TORQUE, output: st
     list of FlexibleMode
         Sorted by frequency, one entry per complex-conjugate pair.
     """
-    _check_plant(plant)
-    _require_signal(plant, input, "input", "plant")
-    _require_signal(plant, output, "output", "plant")
-    ev = _evaluator(plant, [input], [output])
+    ch = _check_plant(plant)
+    if input is None and output is None:
+        inputs, outputs = list(ch.torques), list(ch.thetas)
+    else:
+        inputs = [ch.torques[0] if input is None else input]
+        outputs = [ch.thetas[0] if output is None else output]
+    _require_signal(plant, inputs[0], "input", "plant")
+    _require_signal(plant, outputs[0], "output", "plant")
+    ev = _evaluator(plant, inputs, outputs)
     try:
         J = rigid_body_inertia(plant)
     except ValueError:
-        J = 1.0
+        J = np.eye(ch.n_axes)
+    Jh = _sqrt_inertia(J)
+    if len(inputs) == 1:  # one channel: the inertia seen by that torque
+        i = list(ch.torques).index(inputs[0]) if inputs[0] in ch.torques else 0
+        Jh = np.array([[math.sqrt(_inertia_matrix(J)[i, i])]])
     if not ev.modal:
         lam, V = np.linalg.eig(plant.A)
         raise ValueError("plant A is defective outside its rigid-body block; cannot list modes "
                          f"(eigenvalues {lam[:6]}...)")
     modes = []
-    for lam, c, b in zip(ev.lam, ev.Cm[0], ev.Bm[:, 0]):
+    for k, lam in enumerate(ev.lam):
         if lam.imag <= 0:
             continue
         w = abs(lam)
-        r = complex(c * b)
-        participation = 2.0 * abs(r) * w * J
+        R = np.outer(ev.Cm[:, k], ev.Bm[k])
+        participation = 2.0 * w * np.linalg.norm(Jh @ R @ Jh, 2)
         if participation < min_participation:
             continue
-        modes.append(FlexibleMode(float(w), float(-lam.real / w), r, float(participation)))
+        residue = complex(R[0, 0]) if R.size == 1 else R
+        modes.append(FlexibleMode(float(w), float(-lam.real / w), residue, float(participation)))
     return sorted(modes, key=lambda m: m.frequency)
 
 
@@ -172,36 +216,61 @@ def flexible_modes(plant: control.StateSpace, *, input: str = TORQUE, output: st
 # the modes a loop can influence: the design model
 # --------------------------------------------------------------------------------------------
 def _channel_rows(plant) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Input column of 'torque' and output rows of 'theta', 'omega' (float64)."""
+    """Input columns of the torques and output rows of the thetas and omegas (float64):
+    B (n, m), C_theta (m, n), C_omega (m, n); m = 1 (planar) or 3."""
+    ch = channels(plant)
     inputs, outputs = list(plant.input_labels), list(plant.output_labels)
-    b = np.asarray(plant.B, dtype=float)[:, inputs.index(TORQUE)]
+    B = np.asarray(plant.B, dtype=float)[:, [inputs.index(n) for n in ch.torques]]
     C = np.asarray(plant.C, dtype=float)
-    return b, C[outputs.index(THETA)], C[outputs.index(OMEGA)]
+    return (B, C[[outputs.index(n) for n in ch.thetas]],
+            C[[outputs.index(n) for n in ch.omegas]])
 
 
-def _cluster_participation(A, lam, Wl, Vr, group, b, c_theta, c_omega, J, tol) -> float:
-    """Participation max(2 |r_theta| |lambda| J, 2 |r_omega| J) of a cluster of eigenvalues.
+def _cluster_null_spaces(A, lam, group, tol):
+    """Right and left null spaces (V, U) of A - mu I for a cluster of eigenvalues."""
+    mu = lam[group].mean()
+    U, s, Vh = np.linalg.svd(A - mu * np.eye(A.shape[0]))
+    null = s <= tol
+    if not null.any():
+        null[-len(group):] = True
+    return Vh[null].conj().T, U[:, null], mu
 
-    A simple eigenvalue's residue is r = (c v)(w^H b) / (w^H v) with right and left
-    eigenvectors v, w (any scaling). A cluster's is c P b with the spectral projector
+
+def _cluster_participation(A, lam, Wl, Vr, group, B, C_theta, C_omega, Jh, tol) -> float:
+    """Participation max(2 |lambda| ||J^1/2 R_theta J^1/2||, 2 ||J^1/2 R_omega J^1/2||) of a
+    cluster of eigenvalues (planar: max(2 |r_theta| |lambda| J, 2 |r_omega| J)).
+
+    A simple eigenvalue's residue is R = (C v)(w^H B) / (w^H v) with right and left
+    eigenvectors v, w (any scaling). A cluster's is C P B with the spectral projector
     P = V (U^H V)^-1 U^H on its right and left null spaces V, U (the SVD of A - mu I).
-    Both are invariant under a change of state coordinates.
+    Both are invariant under a change of state coordinates; J^1/2 (Jh) makes them invariant
+    under a change of torque units per axis too.
     """
     if len(group) == 1:
         i = group[0]
         v, w = Vr[:, i], Wl[:, i]
-        wb = np.vdot(w, b) / np.vdot(w, v)
-        r_theta, r_omega, mu = (c_theta @ v) * wb, (c_omega @ v) * wb, lam[i]
+        wB = (w.conj() @ B) / np.vdot(w, v)
+        R_theta, R_omega, mu = np.outer(C_theta @ v, wB), np.outer(C_omega @ v, wB), lam[i]
     else:
-        mu = lam[group].mean()
-        U, s, Vh = np.linalg.svd(A - mu * np.eye(A.shape[0]))
-        null = s <= tol
-        if not null.any():
-            null[-len(group):] = True
-        Un, Vn = U[:, null], Vh[null].conj().T
-        Pb = Vn @ np.linalg.lstsq(Un.conj().T @ Vn, Un.conj().T @ b, rcond=None)[0]
-        r_theta, r_omega = c_theta @ Pb, c_omega @ Pb
-    return float(max(2.0 * abs(r_theta) * abs(mu) * J, 2.0 * abs(r_omega) * J))
+        Vn, Un, mu = _cluster_null_spaces(A, lam, group, tol)
+        PB = Vn @ np.linalg.lstsq(Un.conj().T @ Vn, Un.conj().T @ B, rcond=None)[0]
+        R_theta, R_omega = C_theta @ PB, C_omega @ PB
+    return float(max(2.0 * abs(mu) * np.linalg.norm(Jh @ R_theta @ Jh, 2),
+                     2.0 * np.linalg.norm(Jh @ R_omega @ Jh, 2)))
+
+
+def _cluster_reachable(A, lam, group, B, C_meas, tol) -> bool:
+    """Multi-input PBH test of a cluster of k (nearly) repeated eigenvalues: the torques reach
+    and the measurements see all k of them, rank(U^H B) = rank(C V) = k (singular values above
+    1e-8 of the largest). One torque reaches one combination only (rank 1)."""
+    Vn, Un, _ = _cluster_null_spaces(A, lam, group, tol)
+    k = len(group)
+
+    def rank(M):
+        sv = np.linalg.svd(M, compute_uv=False)
+        return int(np.sum(sv > 1e-8 * sv.max())) if sv.size and sv.max() > 0 else 0
+
+    return rank(Un.conj().T @ B) >= k and rank(C_meas @ Vn) >= k
 
 
 def _clusters(lam: np.ndarray, mask: np.ndarray, tol: float) -> list[list[int]]:
@@ -220,7 +289,7 @@ def _clusters(lam: np.ndarray, mask: np.ndarray, tol: float) -> list[list[int]]:
     return groups
 
 
-def _design_model(plant: control.StateSpace, *, critical: float, J: float, what: str
+def _design_model(plant: control.StateSpace, *, critical: float, J, what: str
                   ) -> tuple[control.StateSpace, list[RemovedMode], np.ndarray]:
     """The plant without the modes a loop cannot influence (see the module docstring).
 
@@ -240,14 +309,16 @@ def _design_model(plant: control.StateSpace, *, critical: float, J: float, what:
     Raises
     ------
     ValueError
-        Repeated (within 1e-8 of ||A||) critical modes of which the torque reaches one
-        combination only: a single torque cannot control them all.
+        Repeated (within 1e-8 of ||A||) critical modes that the torques do not all reach or the
+        measurements do not all see (multi-input PBH test, :func:`_cluster_reachable`; a single
+        torque reaches one combination only): the loop cannot control them all.
     """
     A = np.asarray(plant.A, dtype=float)
     n = A.shape[0]
     if n == 0:
         return plant, [], np.zeros(0, dtype=complex)
     b, c_theta, c_omega = _channel_rows(plant)
+    Jh = _sqrt_inertia(J)
     Ab, (d, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
     norm = max(np.linalg.norm(Ab, 1), np.finfo(float).tiny)
     rigid_tol = 1e-6 * math.sqrt(max(norm, 1.0))  # as _ModalEvaluator: sqrt(eps)-perturbed
@@ -261,13 +332,15 @@ def _design_model(plant: control.StateSpace, *, critical: float, J: float, what:
     for part in range(n_parts):
         idx = np.flatnonzero(part_of == part)
         Ap = Ab[np.ix_(idx, idx)]
-        bp, ctp, cop = b[idx] / d[idx], c_theta[idx] * d[idx], c_omega[idx] * d[idx]
+        bp = b[idx] / d[idx, None]
+        ctp, cop = c_theta[:, idx] * d[None, idx], c_omega[:, idx] * d[None, idx]
         lam, Wl, Vr = scipy.linalg.eig(Ap, left=True, right=True)
         rigid = np.abs(lam) <= rigid_tol
         if rigid.all():
             # nilpotent part: its share of the rigid-body response 1/(J s^2) (theta: the
             # 1/s^2 coefficient C A B; omega: the 1/s coefficient C B)
-            share = J * max(abs(ctp @ Ap @ bp), abs(cop @ bp))
+            share = max(np.linalg.norm(Jh @ (ctp @ Ap @ bp) @ Jh, 2),
+                        np.linalg.norm(Jh @ (cop @ bp) @ Jh, 2))
             if share <= INFLUENCE_TOL:
                 removed.append(RemovedMode(0.0, 0.0, float(share), idx.size,
                                            "rigid-body motion that carries no part of "
@@ -278,7 +351,7 @@ def _design_model(plant: control.StateSpace, *, critical: float, J: float, what:
             continue
         removable = np.zeros(lam.size, dtype=bool)
         for group in _clusters(lam, (~rigid) & (lam.real >= -critical), cluster_tol):
-            p = _cluster_participation(Ap, lam, Wl, Vr, group, bp, ctp, cop, J, cluster_tol)
+            p = _cluster_participation(Ap, lam, Wl, Vr, group, bp, ctp, cop, Jh, cluster_tol)
             mu = lam[group].mean()
             if p <= INFLUENCE_TOL:
                 removable[group] = True
@@ -287,10 +360,14 @@ def _design_model(plant: control.StateSpace, *, critical: float, J: float, what:
                     w = abs(mu)
                     removed.append(RemovedMode(float(w), float(-mu.real / w) if w else 0.0, p,
                                                len(group), "participation <= INFLUENCE_TOL"))
-            elif len(group) > 1:
+            elif len(group) > 1 and not _cluster_reachable(
+                    Ap, lam, group, bp, np.vstack([ctp, cop]), cluster_tol):
+                reach = ("a single torque reaches only one combination of them" if
+                         b.shape[1] == 1 else "the torques reach (or the measurements see) "
+                         "fewer independent combinations of them")
                 raise ValueError(
                     f"{what}: {len(group)} modes at {abs(mu):.6g} rad/s are (nearly) repeated "
-                    "and undamped: a single torque reaches only one combination of them, the "
+                    f"and undamped: {reach}, the "
                     "others stay undamped; give them damping or remove all but one from the "
                     "design plant")
         if not removable.any():
@@ -328,18 +405,20 @@ def _design_model(plant: control.StateSpace, *, critical: float, J: float, what:
     return design, sorted(removed, key=lambda m: m.frequency), np.concatenate(removed_eigs)
 
 
-def _mode_participations(plant, J: float, eigenvalues) -> list[float]:
+def _mode_participations(plant, J, eigenvalues) -> list[float]:
     """Participation (see the module docstring) of the plant's modes nearest ``eigenvalues``
     (one eigendecomposition for all)."""
     b, c_theta, c_omega = _channel_rows(plant)
     Ab, (d, _) = scipy.linalg.matrix_balance(np.asarray(plant.A, dtype=float), permute=False,
                                              separate=True)
     lam, Wl, Vr = scipy.linalg.eig(Ab, left=True, right=True)
-    return [_cluster_participation(Ab, lam, Wl, Vr, [int(np.argmin(np.abs(lam - x)))], b / d,
-                                   c_theta * d, c_omega * d, J, 0.0) for x in eigenvalues]
+    Jh = _sqrt_inertia(J)
+    return [_cluster_participation(Ab, lam, Wl, Vr, [int(np.argmin(np.abs(lam - x)))],
+                                   b / d[:, None], c_theta * d[None, :], c_omega * d[None, :],
+                                   Jh, 0.0) for x in eigenvalues]
 
 
-def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J: float,
+def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J,
                  what: str, advise, removed_eigs: np.ndarray | None = None,
                  scale_floor: float = 0.0) -> tuple[float, list[RemovedMode]]:
     """Check the stability guarantee of a designed loop on its design plant.

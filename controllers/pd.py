@@ -3,9 +3,28 @@
 On the rigid-body part of the plant, theta/torque = 1/(J s^2), the control law
 torque = Kp (theta_ref - theta) - Kd omega gives the closed loop J s^2 + Kd s + Kp = 0, i.e.
 s^2 + 2 zeta wn s + wn^2 = 0 with Kp = J wn^2 and Kd = 2 zeta wn J.
+
+Three axes: the same law with 3 x 3 gains on the vectors theta, omega, theta_ref (hub axes) and
+the rigid-body plant J theta'' = torque, J the inertia tensor. From a specification per axis
+(natural frequencies wn_i, dampings zeta_i; a scalar applies to every axis):
+
+``axes="principal"`` (default)
+    J = R diag(j) R^T (principal moments j_i, principal axes the columns of R, each matched to
+    the hub axis it is closest to), Kp = R diag(j_i wn_i^2) R^T, Kd = R diag(2 j_i zeta_i wn_i)
+    R^T: symmetric positive definite gains, so the loop on collocated attitude and rate is
+    passive and damps every flexible mode; the rigid loop decouples along the principal axes
+    into j_i s^2 + 2 j_i zeta_i wn_i s + j_i wn_i^2.
+``axes="hub"``
+    Kp = J diag(wn^2), Kd = J diag(2 zeta wn): the rigid loop decouples along the hub axes into
+    s^2 + 2 zeta_i wn_i s + wn_i^2 (each hub axis exactly as specified), at the price of
+    non-symmetric gains when J is not diagonal and the axes' specifications differ (no passivity
+    argument then; the design is checked on the plant all the same).
+
+With one wn and zeta for all axes both give Kp = wn^2 J, Kd = 2 zeta wn J.
 """
 from __future__ import annotations
 
+import itertools
 import math
 
 import control
@@ -13,14 +32,16 @@ import numpy as np
 
 from .frequency import _evaluator
 from .margins import _crossings
-from .modes import _verify_loop, flexible_modes, rigid_body_inertia
-from .signals import OMEGA, THETA, THETA_REF, TORQUE, _check_plant, _real_number, _short
+from .modes import _inertia_matrix, _verify_loop, flexible_modes, rigid_body_inertia
+from .signals import (OMEGA, THETA, THETA_REF, TORQUE, _check_plant, _real_number, _short,
+                      channels)
 from .stability import _warn_removed
 from .threads import limits_blas_threads, total_states
 
 __all__ = [
     "pd",
     "pd_gains",
+    "principal_axes",
     "natural_frequency_from_bandwidth",
     "check_sample_time",
     "ROLL_OFF_DAMPING",
@@ -78,15 +99,44 @@ def natural_frequency_from_bandwidth(bandwidth: float, damping: float) -> float:
     return bandwidth / math.sqrt(1.0 - 2.0 * z2 + math.sqrt(4.0 * z2 * z2 - 4.0 * z2 + 2.0))
 
 
-def pd_gains(inertia: float, natural_frequency: float, damping: float) -> tuple[float, float]:
+def pd_gains(inertia, natural_frequency, damping, *, axes: str = "principal"):
     """Kp [N*m/rad] = J wn^2 and Kd [N*m*s/rad] = 2 zeta wn J (closed loop J s^2 + Kd s + Kp).
+
+    A scalar inertia gives float gains. A (3, 3) inertia tensor gives (3, 3) gain matrices from
+    per-axis natural frequencies and dampings (scalars or 3-sequences) in the principal axes of
+    J or in the hub axes (``axes``, see the module docstring).
 
     Computed in IEEE arithmetic: a gain beyond the float64 range is inf (0 below it), never an
     OverflowError.
     """
-    J, wn, zeta = (np.float64(x) for x in (inertia, natural_frequency, damping))
-    with np.errstate(over="ignore", under="ignore"):
-        return float(J * wn * wn), float(2.0 * zeta * wn * J)
+    if np.ndim(inertia) == 0:
+        J, wn, zeta = (np.float64(x) for x in (inertia, natural_frequency, damping))
+        with np.errstate(over="ignore", under="ignore"):
+            return float(J * wn * wn), float(2.0 * zeta * wn * J)
+    J = np.asarray(inertia, dtype=float)
+    wn = np.broadcast_to(np.asarray(natural_frequency, dtype=float), (3,))
+    zeta = np.broadcast_to(np.asarray(damping, dtype=float), (3,))
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        if axes == "hub":
+            return J * (wn * wn)[None, :], J * (2.0 * zeta * wn)[None, :]
+        j, R = principal_axes(J)
+        return (R * (j * wn * wn)) @ R.T, (R * (2.0 * zeta * wn * j)) @ R.T
+
+
+def principal_axes(inertia) -> tuple[np.ndarray, np.ndarray]:
+    """Principal moments j [kg*m^2] and axes R (columns, hub axes) of an inertia tensor,
+    J = R diag(j) R^T, ordered so that column i is the principal axis closest to hub axis i
+    (the permutation maximising the product of |R_ii|) with R_ii > 0. A diagonal J gives
+    R = I exactly."""
+    J = np.asarray(inertia, dtype=float)
+    if np.count_nonzero(J - np.diag(np.diag(J))) == 0:
+        return np.diag(J).copy(), np.eye(3)
+    j, V = np.linalg.eigh(0.5 * (J + J.T))
+    best = max(itertools.permutations(range(3)),
+               key=lambda p: float(np.prod(np.abs(V[np.arange(3), list(p)]))))
+    R = V[:, list(best)]
+    R = R * np.where(np.diag(R) < 0, -1.0, 1.0)[None, :]
+    return j[list(best)], R
 
 
 def _rigid_crossover(plant, controller) -> float:
@@ -98,22 +148,30 @@ def _rigid_crossover(plant, controller) -> float:
     lowest frequency where |L_r| falls through 1: the loop's bandwidth, which flexible
     resonances (crossings of |L| = 1 at undamped modes) do not move.
     """
-    J = rigid_body_inertia(plant)
-    inputs = [name for name in (THETA, OMEGA) if name in controller.input_labels]
+    ch = channels(plant)
+    Jinv = np.linalg.inv(_inertia_matrix(rigid_body_inertia(plant)))
+    inputs = [name for name in ch.thetas + ch.omegas if name in controller.input_labels]
     if not inputs:
         return 0.0
-    ev = _evaluator(controller, inputs, [TORQUE])
-    powers = np.array([2.0 if name == THETA else 1.0 for name in inputs])
+    ev = _evaluator(controller, inputs, list(ch.torques))
+    # rigid-body plant rows: theta_i = (J^-1 u)_i / s^2, omega_i = (J^-1 u)_i / s
+    rows = np.array([Jinv[(ch.thetas + ch.omegas).index(n) % ch.n_axes] for n in inputs])
+    powers = np.array([2.0 if name in ch.thetas else 1.0 for name in inputs])
 
     def gain(w):
         w = np.asarray(w, dtype=float)
         with np.errstate(all="ignore"):
-            K = ev(1j * w)[:, 0, :]
-            return np.abs(np.sum(K / (J * (1j * w[:, None]) ** powers), axis=1))
+            K = ev(1j * w)  # (f, m, n_in)
+            P = rows[None, :, :] / (1j * w[:, None, None]) ** powers[None, :, None]
+            L = K @ P
+            if L.shape[1] == 1:
+                return np.abs(L[:, 0, 0])
+            return np.linalg.svd(L, compute_uv=False)[:, 0]
 
     with np.errstate(all="ignore"):
-        K0 = np.abs(ev(np.array([0.0]))[0, 0, :])
-    w0 = max(math.sqrt(K0[i] / J) if name == THETA else K0[i] / J
+        K0 = np.abs(ev(np.array([0.0]))[0]).max(axis=0)
+    j_max = float(np.abs(Jinv).max())
+    w0 = max(math.sqrt(K0[i] * j_max) if name in ch.thetas else K0[i] * j_max
              for i, name in enumerate(inputs))
     if not (math.isfinite(w0) and w0 > 0):
         return 0.0
@@ -169,10 +227,9 @@ def _second_order(numerator: tuple[float, float, float], w: float, zeta: float):
 
 
 @limits_blas_threads(total_states)
-def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
-       bandwidth: float | None = None, damping: float = 0.7, roll_off: float | None = None,
-       notch: float | str | None = None, sample_time: float | None = None
-       ) -> control.StateSpace:
+def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, damping=0.7,
+       roll_off: float | None = None, notch: float | str | None = None,
+       sample_time: float | None = None, axes: str = "principal") -> control.StateSpace:
     """PD attitude controller tuned on a free-floating design plant.
 
     The control law is torque = F(s) N(s) [Kp (theta_ref - theta) - Kd omega] with
@@ -186,13 +243,14 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
     plant : control.StateSpace
         Continuous design plant: input ``'torque'`` [N*m], outputs ``'theta'`` [rad],
         ``'omega'`` [rad/s]; free-floating (rigid-body double integrator).
-    natural_frequency : float, rad/s, optional
-        Closed-loop natural frequency wn. Give exactly one of natural_frequency, bandwidth.
+    natural_frequency : float or sequence of 3 floats, rad/s, optional
+        Closed-loop natural frequency wn (three-axis plant: one per axis, or one for all).
+        Give exactly one of natural_frequency, bandwidth.
     bandwidth : float, rad/s, optional
         Closed-loop -3 dB bandwidth wb of the second-order prototype, converted with
         :func:`natural_frequency_from_bandwidth`.
-    damping : float
-        Closed-loop damping ratio zeta (default 0.7).
+    damping : float or sequence of 3 floats
+        Closed-loop damping ratio zeta (default 0.7; three-axis: per axis or one for all).
     roll_off : float, rad/s, optional
         Corner wr of a second-order Butterworth low-pass F(s) = wr^2 / (s^2 + sqrt(2) wr s + wr^2)
         on the controller output (-40 dB/decade above wr, gain-stabilising the flexible modes).
@@ -211,11 +269,17 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
         the exact sampled loop on the design plant must meet the guarantee below (a flexible
         mode above the Nyquist frequency can alias into instability).
 
+    axes : {"principal", "hub"}
+        Three-axis plants: the axes of the per-axis specification (module docstring); ignored
+        for a planar plant.
+
     Returns
     -------
     control.StateSpace
-        Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']``; continuous, or discrete
-        with ``dt = sample_time``. The gains themselves are given by :func:`pd_gains`.
+        Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']``; three-axis: inputs
+        ``theta_ref_x, theta_ref_y, theta_ref_z, theta_x, ..., omega_z``, outputs
+        ``torque_x, torque_y, torque_z`` (the filters act on each torque alike). Continuous, or
+        discrete with ``dt = sample_time``. The gains themselves are given by :func:`pd_gains`.
 
     Notes
     -----
@@ -250,28 +314,44 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
     B. Wie, Space Vehicle Dynamics and Control, 2nd ed., AIAA 2008 (gain and phase stabilisation
     of flexible modes).
     """
-    _check_plant(plant)
+    ch = _check_plant(plant)
     if (natural_frequency is None) == (bandwidth is None):
         raise ValueError("give exactly one of natural_frequency [rad/s] or bandwidth [rad/s]; got "
                          f"natural_frequency={_short(natural_frequency)}, "
                          f"bandwidth={_short(bandwidth)}")
-    damping = _positive(damping, "damping", "1")
+    if axes not in ("principal", "hub"):
+        raise ValueError(f"axes must be 'principal' or 'hub'; got {_short(axes)}")
+    damping = _per_axis(damping, "damping", "1", ch.n_axes)
     if natural_frequency is not None:
         spec = "natural_frequency"
-        wn = _positive(natural_frequency, "natural_frequency", "rad/s")
+        wn = _per_axis(natural_frequency, "natural_frequency", "rad/s", ch.n_axes)
     else:
         spec = "bandwidth"
-        wn = natural_frequency_from_bandwidth(bandwidth, damping)
-    spec_text = f"{spec} = {natural_frequency if bandwidth is None else bandwidth:.4g} rad/s"
+        wb = _per_axis(bandwidth, "bandwidth", "rad/s", ch.n_axes)
+        wn = np.array([natural_frequency_from_bandwidth(b, z) for b, z in zip(wb, damping)])
+    given = natural_frequency if bandwidth is None else bandwidth
+    spec_text = (f"{spec} = {float(given):.4g} rad/s" if np.ndim(given) == 0 else
+                 f"{spec} = {_short(np.asarray(given, dtype=float))} rad/s")
     J = rigid_body_inertia(plant)
     with np.errstate(over="ignore", under="ignore"):
-        Kp, Kd = pd_gains(J, wn, damping)
-    if not (math.isfinite(Kp) and math.isfinite(Kd) and Kp > 0 and Kd > 0):
-        raise ValueError(f"pd: {spec_text} with damping {damping:.4g} and the plant's inertia "
-                         f"J = {J:.4g} kg*m^2 gives gains Kp = J wn^2 = {Kp:.3g} N*m/rad, "
-                         f"Kd = 2 zeta wn J = {Kd:.3g} N*m*s/rad outside the floating-point "
-                         f"range; choose a {spec} within a few decades of the plant's modes")
-    controller = control.ss([], [], [], [[Kp, -Kp, -Kd]])
+        if ch.mimo:
+            Kp, Kd = pd_gains(J, wn, damping, axes=axes)
+        else:
+            Kp, Kd = pd_gains(J, wn[0], damping[0])
+    if not (np.all(np.isfinite(Kp)) and np.all(np.isfinite(Kd))
+            and np.all(np.diag(np.atleast_2d(Kp)) > 0) and np.all(np.diag(np.atleast_2d(Kd)) > 0)):
+        J_text = f"{J:.4g}" if not ch.mimo else _short(np.round(J, 6))
+        raise ValueError(f"pd: {spec_text} with damping {_short(damping if ch.mimo else damping[0])}"
+                         f" and the plant's inertia J = {J_text} kg*m^2 gives gains "
+                         f"Kp = J wn^2 = {_short(Kp)} N*m/rad, Kd = 2 zeta wn J = {_short(Kd)} "
+                         f"N*m*s/rad outside the floating-point range; choose a {spec} within a "
+                         "few decades of the plant's modes")
+    if ch.mimo:
+        gains = np.hstack([Kp, -Kp, -Kd])
+    else:
+        gains = [[Kp, -Kp, -Kd]]
+    controller = control.ss([], [], [], gains)
+    wn_max = float(np.max(wn))
     filters = []
     if notch is not None:
         if isinstance(notch, str):
@@ -285,29 +365,33 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
             wz = modes[0].frequency
         else:
             wz = _positive(_real_number(notch, "notch", "rad/s"), "notch", "rad/s")
-        if wz <= 2.0 * wn:
-            raise ValueError(f"notch frequency must exceed 2 x natural frequency = {2 * wn:.4g} "
-                             f"rad/s (it would cut into the rigid-body loop); got {wz:.4g} rad/s")
-        controller = _second_order((1.0, 2.0 * NOTCH_ZERO_DAMPING * wz, wz * wz), wz,
-                                   NOTCH_POLE_DAMPING) * controller
+        if wz <= 2.0 * wn_max:
+            raise ValueError(f"notch frequency must exceed 2 x natural frequency = "
+                             f"{2 * wn_max:.4g} rad/s (it would cut into the rigid-body loop); "
+                             f"got {wz:.4g} rad/s")
+        controller = _per_output(_second_order((1.0, 2.0 * NOTCH_ZERO_DAMPING * wz, wz * wz), wz,
+                                               NOTCH_POLE_DAMPING), ch.n_axes) * controller
         filters.append(f"notch = {wz:.4g} rad/s")
     if roll_off is not None:
         wr = _positive(roll_off, "roll_off", "rad/s")
-        if wr <= 2.0 * wn:
-            raise ValueError(f"roll_off corner must exceed 2 x natural frequency = {2 * wn:.4g} "
-                             f"rad/s; got {wr:.4g} rad/s")
-        controller = _second_order((0.0, 0.0, wr * wr), wr, ROLL_OFF_DAMPING) * controller
+        if wr <= 2.0 * wn_max:
+            raise ValueError(f"roll_off corner must exceed 2 x natural frequency = "
+                             f"{2 * wn_max:.4g} rad/s; got {wr:.4g} rad/s")
+        controller = _per_output(_second_order((0.0, 0.0, wr * wr), wr, ROLL_OFF_DAMPING),
+                                 ch.n_axes) * controller
         filters.append(f"roll_off = {wr:.4g} rad/s")
-    controller = control.ss(controller.A, controller.B, controller.C, controller.D, 0,
-                            inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="pd")
+    signals = dict(inputs=list(ch.refs + ch.thetas + ch.omegas), outputs=list(ch.torques),
+                   name="pd")
+    controller = control.ss(controller.A, controller.B, controller.C, controller.D, 0, **signals)
     T = None
     if sample_time is not None:
         T = _positive(_real_number(sample_time, "sample_time", "s"), "sample_time", "s")
         check_sample_time(T, plant, controller)
         digital = control.c2d(controller, T, method="zoh")
-        controller = control.ss(digital.A, digital.B, digital.C, digital.D, T,
-                                inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="pd")
-    rigid_poles = np.roots([1.0, 2.0 * damping * wn, wn * wn]).astype(complex)
+        controller = control.ss(digital.A, digital.B, digital.C, digital.D, T, **signals)
+    rigid_poles = np.concatenate([np.roots([1.0, 2.0 * z * w, w * w])
+                                  for w, z in zip(wn, damping)]).astype(complex)
+    damping_text = _short(damping) if ch.mimo else f"{damping[0]:.4g}"
 
     def advise(pole: complex, alpha: float, scale: float) -> str:
         w = abs(pole)
@@ -319,10 +403,10 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
         if rigid and pole.real > 0 and (filters or T is not None):
             lag = f"the filter ({', '.join(filters)})" if filters else "the zero-order hold"
             return (f"the phase lag of {lag} destabilises the rigid-body loop ({spec_text}, "
-                    f"damping {damping:.4g}): raise damping, or move the filter up / shorten "
+                    f"damping {damping_text}): raise damping, or move the filter up / shorten "
                     "sample_time")
         if rigid:
-            return (f"{spec_text} with damping {damping:.4g} puts the rigid-body poles inside "
+            return (f"{spec_text} with damping {damping_text} puts the rigid-body poles inside "
                     f"the margin: raise {spec} or damping (the margin scales with the loop's "
                     f"fastest pole or mode, {scale:.4g} rad/s)")
         if T is not None:
@@ -334,15 +418,34 @@ def pd(plant: control.StateSpace, *, natural_frequency: float | None = None,
         if filters:
             return (f"the phase lag of the filter ({', '.join(filters)}) at {w:.4g} rad/s does "
                     "not let the loop damp this mode: move the filter, or give the mode damping")
-        return (f"{spec_text} with damping {damping:.4g} is too high for this plant: the loop "
+        return (f"{spec_text} with damping {damping_text} is too high for this plant: the loop "
                 "cannot damp this pole (a flexible mode pushed toward a zero of theta/torque, or "
                 f"round-off of a loop {scale / max(w, 1e-300):.1e} times faster than it); "
                 f"lower {spec}")
 
-    _, excused = _verify_loop(plant, controller, J=J, what="pd", advise=advise, scale_floor=wn)
+    _, excused = _verify_loop(plant, controller, J=J, what="pd", advise=advise,
+                              scale_floor=wn_max)
     _warn_removed("pd", excused, "(the loop moves them by less than the stability margin; they "
                   "keep their open-loop eigenvalues)")
     return controller
+
+
+def _per_axis(value, name: str, unit: str, n_axes: int) -> np.ndarray:
+    """A positive specification per axis: a real number (every axis) or, for three axes, a
+    sequence of 3 positive finite numbers [unit]."""
+    if n_axes > 1 and isinstance(value, (list, tuple, np.ndarray)):
+        array = np.asarray(value)
+        if array.shape != (n_axes,) or array.dtype.kind not in "fiu":
+            raise ValueError(f"{name} must be a real number or {n_axes} of them (one per axis) "
+                             f"[{unit}]; got {_short(value)}")
+        return np.array([_positive(float(x), f"{name}[{i}]", unit)
+                         for i, x in enumerate(array)])
+    return np.full(n_axes, _positive(value, name, unit))
+
+
+def _per_output(siso: control.StateSpace, n: int) -> control.StateSpace:
+    """The SISO filter on each of n outputs (block diagonal)."""
+    return siso if n == 1 else control.append(*([siso] * n))
 
 
 def _safe_modes(plant):

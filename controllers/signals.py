@@ -1,22 +1,34 @@
 """Signal conventions and checks shared by the controllers package.
 
 A plant is a continuous-time ``control.StateSpace`` (or, for the frequency-domain functions, a
-``control.FrequencyResponseData``) with input ``'torque'`` [N*m] (possibly other inputs such as
-``'disturbance_torque'``) and outputs ``'theta'`` [rad] and ``'omega'`` [rad/s], optionally
-``'<appendage>.tip_deflection'`` [m] outputs (DESIGN.md). A controller is a
-``control.StateSpace`` with output ``'torque'`` and inputs ``'theta_ref'``, ``'theta'``,
-``'omega'`` (torque = controller(inputs), no hidden minus sign). A controller with ``dt`` set is
-a digital controller: its loop with a continuous plant is the sampled-data loop (zero-order hold
-on the torque, sampled measurements).
+``control.FrequencyResponseData``) with named signals (DESIGN.md), in one of two conventions:
+
+planar (single axis)
+    input ``'torque'`` [N*m], outputs ``'theta'`` [rad] and ``'omega'`` [rad/s]; a controller
+    has output ``'torque'`` and inputs ``'theta_ref'``, ``'theta'``, ``'omega'``.
+three-axis
+    inputs ``'torque_x'``, ``'torque_y'``, ``'torque_z'`` [N*m] (hub axes), outputs
+    ``'theta_x'``, ``'theta_y'``, ``'theta_z'`` [rad] (small angles) and ``'omega_x'``,
+    ``'omega_y'``, ``'omega_z'`` [rad/s]; a controller has outputs ``'torque_x'``,
+    ``'torque_y'``, ``'torque_z'`` and inputs ``'theta_ref_x'``, ``'theta_ref_y'``,
+    ``'theta_ref_z'``, ``'theta_x'``, ..., ``'omega_z'``.
+
+Either may have other inputs (``'disturbance_torque'``, forces) and outputs (tip deflections,
+``'*tip_deflection'`` [m], or any other tip motion). torque = controller(inputs): no hidden minus
+sign. Reference inputs are the controller inputs whose names contain ``'ref'``. A controller with
+``dt`` set is a digital controller: its loop with a continuous plant is the sampled-data loop
+(zero-order hold on the torque, sampled measurements).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence
 
 import control
 import numpy as np
 
-__all__ = ["TORQUE", "THETA", "OMEGA", "THETA_REF", "TIP_SUFFIX"]
+__all__ = ["TORQUE", "THETA", "OMEGA", "THETA_REF", "TIP_SUFFIX", "AXES", "Channels",
+           "PLANAR", "THREE_AXIS", "channels"]
 
 #: Longest echo of a user's value in an error message [characters].
 MESSAGE_VALUE_CHARS = 100
@@ -26,6 +38,71 @@ THETA = "theta"
 OMEGA = "omega"
 THETA_REF = "theta_ref"
 TIP_SUFFIX = "tip_deflection"
+#: Hub axes of a three-axis plant, in the order of its signals.
+AXES = ("x", "y", "z")
+
+
+@dataclass(frozen=True)
+class Channels:
+    """The attitude signals of one convention (see the module docstring).
+
+    Attributes
+    ----------
+    torques, thetas, omegas, refs : tuple of str
+        Actuator torques, attitude and rate measurements, attitude references, one per axis.
+    axes : tuple of str
+        Axis names (``('',)`` for the planar plant, ``('x', 'y', 'z')``).
+    """
+
+    torques: tuple[str, ...]
+    thetas: tuple[str, ...]
+    omegas: tuple[str, ...]
+    refs: tuple[str, ...]
+    axes: tuple[str, ...]
+
+    @property
+    def n_axes(self) -> int:
+        """1 (planar) or 3."""
+        return len(self.torques)
+
+    @property
+    def mimo(self) -> bool:
+        """True for the three-axis convention."""
+        return len(self.torques) > 1
+
+    @property
+    def measurements(self) -> tuple[str, ...]:
+        """The thetas, then the omegas."""
+        return self.thetas + self.omegas
+
+    def suffix(self, i: int) -> str:
+        """'' (planar) or '_x', '_y', '_z': the ending of axis i's metric names."""
+        return f"_{self.axes[i]}" if self.mimo else ""
+
+
+PLANAR = Channels((TORQUE,), (THETA,), (OMEGA,), (THETA_REF,), ("",))
+THREE_AXIS = Channels(tuple(f"{TORQUE}_{a}" for a in AXES), tuple(f"{THETA}_{a}" for a in AXES),
+                      tuple(f"{OMEGA}_{a}" for a in AXES), tuple(f"{THETA_REF}_{a}" for a in AXES),
+                      AXES)
+
+
+def channels(system, kind: str = "plant") -> Channels:
+    """The convention of a plant (by its inputs) or a controller (by its outputs).
+
+    Raises
+    ------
+    ValueError
+        Neither ``'torque'`` nor all of ``'torque_x'``, ``'torque_y'``, ``'torque_z'``.
+    """
+    names = list(system.input_labels if kind == "plant" else system.output_labels)
+    signal = "input" if kind == "plant" else "output"
+    if TORQUE in names:
+        return PLANAR
+    if all(name in names for name in THREE_AXIS.torques):
+        return THREE_AXIS
+    raise ValueError(f"{kind} must have an {signal} named 'torque' (planar) or {signal}s "
+                     f"'torque_x', 'torque_y', 'torque_z' (three-axis); got {signal}s "
+                     f"{_short(names)}")
 
 
 def _short(value, limit: int = MESSAGE_VALUE_CHARS) -> str:
@@ -62,7 +139,8 @@ def _require_signal(system, name: str, kind: str, what: str) -> int:
     return labels.index(name)
 
 
-def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> None:
+def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> Channels:
+    """Check a plant's type and signals; return its convention."""
     allowed = (control.StateSpace, control.FrequencyResponseData) if allow_frd else (
         control.StateSpace,)
     if not isinstance(plant, allowed):
@@ -70,26 +148,50 @@ def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> None
         raise TypeError(f"{what} must be a control.{expected}; got {type(plant).__name__}")
     if isinstance(plant, control.StateSpace) and not plant.isctime(strict=True):
         raise ValueError(f"{what} must be continuous-time (dt=0); got dt={plant.dt}")
-    _require_signal(plant, TORQUE, "input", what)
+    labels = _labels(plant, "input")
+    if TORQUE not in labels and not all(n in labels for n in THREE_AXIS.torques):
+        raise ValueError(f"{what} must have an input named 'torque' (or inputs 'torque_x', "
+                         f"'torque_y', 'torque_z' for three axes); got inputs {_short(labels)}")
+    ch = channels(plant)
     if isinstance(plant, control.FrequencyResponseData):
-        # an FRD needs one of theta, omega: the other follows from omega = j w theta
-        if THETA not in plant.output_labels and OMEGA not in plant.output_labels:
-            raise ValueError(f"{what} must have an output named 'theta' or 'omega'; got outputs "
-                             f"{_short(list(plant.output_labels))}")
-        return
-    _require_signal(plant, THETA, "output", what)
-    _require_signal(plant, OMEGA, "output", what)
+        # an FRD needs one of theta, omega per axis: the other follows from omega = j w theta
+        outputs = list(plant.output_labels)
+        for theta, omega in zip(ch.thetas, ch.omegas):
+            if theta not in outputs and omega not in outputs:
+                raise ValueError(f"{what} must have an output named {theta!r} or {omega!r}; "
+                                 f"got outputs {_short(outputs)}")
+        return ch
+    for name in ch.measurements:
+        _require_signal(plant, name, "output", what)
+    return ch
 
 
-def _check_controller(controller, what: str = "controller") -> None:
+def _check_controller(controller, what: str = "controller") -> Channels:
+    """Check a controller's type, outputs and time base; return its convention."""
     if not isinstance(controller, control.StateSpace):
         raise TypeError(f"{what} must be a control.StateSpace; got {type(controller).__name__}")
-    if controller.noutputs != 1 or controller.output_labels[0] != TORQUE:
-        raise ValueError(f"{what} must have exactly one output named 'torque'; got outputs "
-                         f"{_short(list(controller.output_labels))}")
+    outputs = list(controller.output_labels)
+    if outputs == [TORQUE]:
+        ch = PLANAR
+    elif outputs == list(THREE_AXIS.torques):
+        ch = THREE_AXIS
+    else:
+        raise ValueError(f"{what} must have exactly one output named 'torque' (planar) or the "
+                         "outputs 'torque_x', 'torque_y', 'torque_z' (three-axis); got outputs "
+                         f"{_short(outputs)}")
     if controller.dt is True:  # None: a static gain, usable in either time base
         raise ValueError(f"{what} must be continuous (dt=0) or have a sample time dt > 0 [s]; "
                          f"got dt={controller.dt}")
+    return ch
+
+
+def _check_pair(plant, controller, *, allow_frd: bool = False) -> Channels:
+    """Plant and controller of one convention."""
+    ch = _check_plant(plant, allow_frd=allow_frd)
+    if _check_controller(controller) is not ch:
+        raise ValueError(f"controller outputs {_short(list(controller.output_labels))} do not "
+                         f"drive the plant's torque inputs {_short(list(ch.torques))}")
+    return ch
 
 
 def _measurements(plant, controller) -> list[str]:
