@@ -25,10 +25,11 @@ import numpy as np
 import scipy.linalg
 
 from .frequency import _ModalEvaluator
-from .modes import _design_model, _verify_loop, rigid_body_inertia
+from .modes import _design_model, _inertia_matrix, _verify_loop, rigid_body_inertia
 from .pd import _check_sampling, _positive, _rigid_crossover
 from .riccati import _modal_correction, _solve_care
-from .signals import OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant, _short
+from .signals import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant, _short,
+                      channels)
 from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _warn_removed
 from .threads import limits_blas_threads, total_states
 
@@ -50,25 +51,44 @@ class KalmanNoise:
 
     Attributes
     ----------
-    torque_noise : float, N^2 m^2 s
-        Intensity of w.
-    attitude_noise : float, rad^2 s
-        Intensity of v_theta.
-    rate_noise : float, rad^2/s
-        Intensity of v_omega.
+    torque_noise : float or tuple of 3 floats, N^2 m^2 s
+        Intensity of w (three axes: per torque axis, independent noises).
+    attitude_noise : float or tuple of 3 floats, rad^2 s
+        Intensity of v_theta (per axis).
+    rate_noise : float or tuple of 3 floats, rad^2/s
+        Intensity of v_omega (per axis).
     """
 
-    torque_noise: float
-    attitude_noise: float
-    rate_noise: float
+    torque_noise: float | tuple
+    attitude_noise: float | tuple
+    rate_noise: float | tuple
 
     def __post_init__(self):
         for name, unit in (("torque_noise", "N^2 m^2 s"), ("attitude_noise", "rad^2 s"),
                            ("rate_noise", "rad^2/s")):
-            _positive(getattr(self, name), name, unit)
+            value = getattr(self, name)
+            if isinstance(value, (tuple, list, np.ndarray)):
+                if len(value) != 3:
+                    raise ValueError(f"{name} must be a real number or 3 of them (one per axis) "
+                                     f"[{unit}]; got {_short(value)}")
+                object.__setattr__(self, name, tuple(
+                    _positive(v, f"{name}[{i}]", unit) for i, v in enumerate(value)))
+            else:
+                _positive(value, name, unit)
+
+    def per_axis(self, n_axes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(torque, attitude, rate) intensities as arrays of n_axes entries."""
+        out = []
+        for value in (self.torque_noise, self.attitude_noise, self.rate_noise):
+            array = np.asarray(value, dtype=float).reshape(-1)
+            if array.size not in (1, n_axes):
+                raise ValueError(f"KalmanNoise has {array.size} entries per noise; the plant has "
+                                 f"{n_axes} axis(es)")
+            out.append(np.broadcast_to(array, (n_axes,)).copy())
+        return out[0], out[1], out[2]
 
     @classmethod
-    def default(cls, inertia: float, attitude_weight: float, torque_weight: float,
+    def default(cls, inertia, attitude_weight, torque_weight,
                 estimator_speed: float = 3.0) -> "KalmanNoise":
         """Noises that make the filter about ``estimator_speed`` times faster than the regulator.
 
@@ -86,13 +106,23 @@ class KalmanNoise:
         B. D. O. Anderson, J. B. Moore, Optimal Control: Linear Quadratic Methods, 1990, sec. 5.2
         (asymptotic LQ poles: w_r = (q/r)^(1/4) for a double integrator) and the duality of
         LQR and Kalman filtering.
+
+        Three axes: the same per axis, with J_ii, q_i, r_i (a scalar weight for every axis).
         """
         k = _positive(estimator_speed, "estimator_speed", "1")
-        w_r = (attitude_weight / (torque_weight * inertia ** 2)) ** 0.25
-        w_e = k * w_r
-        V = 1.0 / attitude_weight
-        return cls(torque_noise=k ** 4 / torque_weight, attitude_noise=V,
-                   rate_noise=V * w_e ** 2)
+        if all(np.ndim(x) == 0 for x in (inertia, attitude_weight, torque_weight)):
+            w_r = (attitude_weight / (torque_weight * inertia ** 2)) ** 0.25
+            w_e = k * w_r
+            V = 1.0 / attitude_weight
+            return cls(torque_noise=k ** 4 / torque_weight, attitude_noise=V,
+                       rate_noise=V * w_e ** 2)
+        Jd = np.diag(np.atleast_2d(np.asarray(inertia, dtype=float)))
+        q = np.broadcast_to(np.asarray(attitude_weight, dtype=float), Jd.shape)
+        r = np.broadcast_to(np.asarray(torque_weight, dtype=float), Jd.shape)
+        w_e = k * (q / (r * Jd ** 2)) ** 0.25
+        V = 1.0 / q
+        return cls(torque_noise=tuple(k ** 4 / r), attitude_noise=tuple(V),
+                   rate_noise=tuple(V * w_e ** 2))
 
 
 @dataclass(frozen=True)
@@ -102,15 +132,17 @@ class LQRDesign:
     Attributes
     ----------
     controller : control.StateSpace
-        Output-feedback controller, inputs ['theta_ref', 'theta', 'omega'], output ['torque'].
-    K : ndarray, shape (1, n_states)
-        State-feedback gain, torque = -K (x_hat - x_ref theta_ref).
-    L : ndarray, shape (n_states, 2)
-        Estimator gain on (theta, omega) innovations.
+        Output-feedback controller, inputs ['theta_ref', 'theta', 'omega'], output ['torque']
+        (three-axis: inputs theta_ref_x..z, theta_x..z, omega_x..z; outputs torque_x..z).
+    K : ndarray, shape (m, n_states)
+        State-feedback gain, torque = -K (x_hat - x_ref theta_ref); m = 1 or 3 torques.
+    L : ndarray, shape (n_states, 2 m)
+        Estimator gain on the (theta..., omega...) innovations.
     Q, R, N : ndarray
-        Weights on the design plant's states (shapes (n, n), (1, 1), (n, 1)).
-    x_ref : ndarray, shape (n_states,)
-        Equilibrium state of a unit rigid rotation (A x_ref = 0, theta = 1, omega = 0).
+        Weights on the design plant's states (shapes (n, n), (m, m), (n, m)).
+    x_ref : ndarray, shape (n_states,) or (n_states, 3)
+        Equilibrium state of a unit rigid rotation (A x_ref = 0, theta = 1, omega = 0); three
+        axes: one column per axis (theta = e_i).
     regulator_poles, estimator_poles : ndarray, complex128
         Eigenvalues of A - B K and A - L C_m (z-plane for a digital design), A, B, C_m those
         of the design model.
@@ -183,84 +215,114 @@ def reference_state(plant: control.StateSpace) -> np.ndarray:
     A rigid rotation of a free-floating spacecraft is an equilibrium with zero torque, so the
     reference theta_ref shifts the regulator's state target to x_ref theta_ref.
 
+    Returns
+    -------
+    ndarray, shape (n_states,) (planar) or (n_states, 3) (three-axis: column i a unit rotation
+    about hub axis i, theta = e_i, omega = 0)
+
     Raises
     ------
     ValueError
         If no such equilibrium exists (the plant is not free-floating).
     """
-    _check_plant(plant)
+    ch = _check_plant(plant)
     labels = list(plant.output_labels)
-    c_theta = plant.C[labels.index(THETA)]
-    c_omega = plant.C[labels.index(OMEGA)]
-    n = plant.nstates
-    M = np.vstack([plant.A, c_theta, c_omega])
-    rhs = np.zeros(n + 2)
-    rhs[n] = 1.0
+    C_theta = plant.C[[labels.index(n) for n in ch.thetas]]
+    C_omega = plant.C[[labels.index(n) for n in ch.omegas]]
+    n, m = plant.nstates, ch.n_axes
+    M = np.vstack([plant.A, C_theta, C_omega])
+    rhs = np.zeros((n + 2 * m, m))
+    rhs[n:n + m] = np.eye(m)
     x, *_ = np.linalg.lstsq(M, rhs, rcond=None)
     residual = np.linalg.norm(M @ x - rhs)
     if residual > 1e-8 * max(1.0, np.linalg.norm(M) * np.linalg.norm(x)):
         raise ValueError("plant has no rigid-rotation equilibrium (A x = 0 with theta = 1 rad, "
                          f"omega = 0): it is not free-floating (residual {residual:.3g})")
-    return x
+    return x[:, 0] if not ch.mimo else x
 
 
-def _check_weights(attitude_weight, rate_weight, torque_weight):
-    q_theta = _nonneg(attitude_weight, "attitude_weight", "1/rad^2")
-    q_omega = _nonneg(rate_weight, "rate_weight", "s^2/rad^2")
-    if isinstance(torque_weight, bool) or not isinstance(torque_weight, (int, float, np.floating,
-                                                                         np.integer)):
-        raise TypeError(f"torque_weight must be a real number [1/(N*m)^2]; got "
-                        f"{type(torque_weight).__name__}")
-    r = float(torque_weight)
+def _weight_array(value, name: str, unit: str, n_axes: int, *, positive: bool) -> np.ndarray:
+    """A weight per axis: a real number (every axis) or, for three axes, 3 of them."""
+    check = _positive_weight if positive else _nonneg
+    if n_axes > 1 and isinstance(value, (list, tuple, np.ndarray)):
+        array = np.asarray(value)
+        if array.shape != (n_axes,):
+            raise ValueError(f"{name} must be a real number or {n_axes} of them (one per axis) "
+                             f"[{unit}]; got {_short(value)}")
+        return np.array([check(x.item() if hasattr(x, "item") else x, f"{name}[{i}]", unit)
+                         for i, x in enumerate(array)])
+    return np.full(n_axes, check(value, name, unit))
+
+
+def _positive_weight(value, name: str, unit: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
+    r = float(value)
     if not (np.isfinite(r) and r > 0):
-        raise ValueError(f"torque_weight R must be positive definite (> 0) [1/(N*m)^2]; got {r}")
-    if q_theta <= 0:
+        raise ValueError(f"{name} R must be positive definite (> 0) [{unit}]; got {r}")
+    return r
+
+
+def _check_weights(attitude_weight, rate_weight, torque_weight, n_axes: int = 1):
+    """(q_theta, q_omega, r), each an array of n_axes entries."""
+    q_theta = _weight_array(attitude_weight, "attitude_weight", "1/rad^2", n_axes,
+                            positive=False)
+    q_omega = _weight_array(rate_weight, "rate_weight", "s^2/rad^2", n_axes, positive=False)
+    r = _weight_array(torque_weight, "torque_weight", "1/(N*m)^2", n_axes, positive=True)
+    if np.any(q_theta <= 0):
+        got = q_theta[0] if n_axes == 1 else _short(q_theta)
         raise ValueError("attitude_weight must be positive [1/rad^2]: with no weight on theta the "
                          "rigid-body attitude mode is undetectable in the cost (A, sqrt(Q)) and "
-                         f"the attitude is not regulated; got {q_theta}")
+                         f"the attitude is not regulated; got {got}")
     return q_theta, q_omega, r
 
 
 def _weights_text(q_theta, q_omega, r, W_tip) -> str:
-    text = f"attitude_weight={q_theta:.3g}, rate_weight={q_omega:.3g}, torque_weight={r:.3g}"
-    return text + (f", deflection_weight={_short(np.diag(W_tip))}" if W_tip.size else "")
+    def text(x):
+        return f"{x[0]:.3g}" if x.size == 1 else _short(np.round(x, 6))
+
+    out = (f"attitude_weight={text(q_theta)}, rate_weight={text(q_omega)}, "
+           f"torque_weight={text(r)}")
+    return out + (f", deflection_weight={_short(np.diag(W_tip))}" if W_tip.size else "")
 
 
-def _rigid_bandwidths(q_theta, r, J, speed, weights) -> tuple[float, float]:
-    """Rigid-body bandwidths of regulator and estimator, (q/(r J^2))^(1/4) and k times it
-    [rad/s], computed in logarithms (the ratio q/r of extreme weights overflows)."""
-    log_wr = 0.25 * (math.log(q_theta) - math.log(r) - 2.0 * math.log(J))
+def _rigid_bandwidths(q_theta, r, Jd, speed, weights) -> tuple[np.ndarray, np.ndarray]:
+    """Rigid-body bandwidths of regulator and estimator per axis, (q/(r J^2))^(1/4) and k times
+    it [rad/s], computed in logarithms (the ratio q/r of extreme weights overflows)."""
+    log_wr = 0.25 * (np.log(q_theta) - np.log(r) - 2.0 * np.log(Jd))
     log_we = log_wr + math.log(speed)
     # the Riccati equations hold w^4 (the scaled attitude weight q / (r J^2)): keep it, and its
     # inverse, well inside float64 (1e+-308): |ln w| <= 150, w within 7e-66 .. 1.4e65 rad/s
-    if max(abs(log_wr), abs(log_we)) > 150.0:
+    worst = int(np.argmax(np.maximum(np.abs(log_wr), np.abs(log_we))))
+    if max(abs(log_wr[worst]), abs(log_we[worst])) > 150.0:
         raise ValueError(f"lqr: the weights set a rigid-body bandwidth (attitude_weight / "
-                         f"(torque_weight J^2))^(1/4) = 1e{log_wr / math.log(10):.1f} rad/s "
-                         f"(estimator 1e{log_we / math.log(10):.1f} rad/s), whose 4th power "
-                         f"leaves the floating-point range; got {weights}")
-    return math.exp(log_wr), math.exp(log_we)
+                         f"(torque_weight J^2))^(1/4) = 1e{log_wr[worst] / math.log(10):.1f} rad/s "
+                         f"(estimator 1e{log_we[worst] / math.log(10):.1f} rad/s), whose 4th "
+                         f"power leaves the floating-point range; got {weights}")
+    return np.exp(log_wr), np.exp(log_we)
 
 
 @limits_blas_threads(total_states)
-def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float,
-               torque_weight: float, deflection_weight=None,
-               estimator: str | KalmanNoise | np.ndarray = "kalman",
+def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torque_weight,
+               deflection_weight=None, estimator: str | KalmanNoise | np.ndarray = "kalman",
                estimator_speed: float = 3.0, sample_time: float | None = None) -> LQRDesign:
     """LQR + estimator design; see :func:`lqr` (which returns only the controller)."""
-    _check_plant(plant)
+    ch = _check_plant(plant)
+    m = ch.n_axes
     if sample_time is not None and not isinstance(estimator, (str, KalmanNoise)):
         raise ValueError("a Luenberger gain array is a continuous-time estimator; with sample_time "
                          "use estimator='kalman' or a KalmanNoise")
     if isinstance(estimator, str) and estimator != "kalman":
         raise ValueError(f"estimator must be 'kalman', a KalmanNoise or a Luenberger gain array "
-                         f"of shape (n_states, 2); got {_short(estimator)}")
-    q_theta, q_omega, r = _check_weights(attitude_weight, rate_weight, torque_weight)
+                         f"of shape (n_states, {2 * m}); got {_short(estimator)}")
+    q_theta, q_omega, r = _check_weights(attitude_weight, rate_weight, torque_weight, m)
     speed = _positive(estimator_speed, "estimator_speed", "1")
     tip_names, W_tip = _deflection_weights(plant, deflection_weight)
     weights = _weights_text(q_theta, q_omega, r, W_tip)
     T = None if sample_time is None else _positive(sample_time, "sample_time", "s")
     J = rigid_body_inertia(plant)
-    w_r, w_e = _rigid_bandwidths(q_theta, r, J, speed, weights)
+    Jd = np.diag(_inertia_matrix(J)).copy()  # the inertia each torque sees first
+    w_r, w_e = _rigid_bandwidths(q_theta, r, Jd, speed, weights)
     A = np.asarray(plant.A, dtype=float)
     with np.errstate(all="ignore"):
         # O(n) for a modal plant (its decoupled parts), one Schur form otherwise
@@ -270,59 +332,65 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
     # the lowest flexible mode (the rigid-body eigenvalues are ~sqrt(eps ||A||) from 0)
     w_low = float(w_modes[w_modes > 1e-6 * math.sqrt(max(w_plant, 1.0))].min(initial=np.inf))
     # a dominant rate weight sets its own rigid-body pole, at about sqrt(q_omega / r) / J
-    w_rate = math.exp(0.5 * (math.log(q_omega) - math.log(r)) - math.log(J)) if q_omega else 0.0
-    scale = max(w_plant, w_r, w_e, w_rate)
+    with np.errstate(divide="ignore"):
+        w_rate = np.where(q_omega > 0, np.exp(0.5 * (np.log(np.where(q_omega > 0, q_omega, 1.0))
+                                                     - np.log(r)) - np.log(Jd)), 0.0)
+    scale = max(w_plant, w_r.max(), w_e.max(), w_rate.max())
     alpha = MARGIN * scale
     sigma = PRESCRIBED_STABILITY * alpha
-    if scale > MAX_SCALE_RATIO * min(w_r, w_e):
+    if scale > MAX_SCALE_RATIO * min(w_r.min(), w_e.min()):
         # sigma > 4e-3 w_r: the prescribed stability would move the rigid-body poles by ~1 %
         raise ValueError(
             f"lqr: the rigid-body bandwidth (attitude_weight / (torque_weight J^2))^(1/4) = "
-            f"{w_r:.3g} rad/s (estimator {w_e:.3g} rad/s) is too low for this plant, whose modes "
-            f"reach {w_plant:.4g} rad/s: the stability margin would move the rigid-body poles; "
-            "raise attitude_weight (or lower torque_weight), raise estimator_speed or leave the "
-            f"highest modes out of the plant; got {weights}")
-    if scale > MAX_SCALE_RATIO * w_low or w_rate > 1e65:
+            f"{w_r.min():.3g} rad/s (estimator {w_e.min():.3g} rad/s) is too low for this "
+            f"plant, whose modes reach {w_plant:.4g} rad/s: the stability margin would move the "
+            "rigid-body poles; raise attitude_weight (or lower torque_weight), raise "
+            f"estimator_speed or leave the highest modes out of the plant; got {weights}")
+    if scale > MAX_SCALE_RATIO * w_low or w_rate.max() > 1e65:
         raise ValueError(
             f"lqr: the rigid-body bandwidths set by the weights, (attitude_weight / "
-            f"(torque_weight J^2))^(1/4) = {w_r:.3g} rad/s, estimator {w_e:.3g} rad/s and "
-            f"sqrt(rate_weight / torque_weight) / J = {w_rate:.3g} rad/s, reach more than "
-            f"{MAX_SCALE_RATIO:g} times the plant's lowest flexible mode {w_low:.4g} rad/s, "
-            "whose poles the stability margin then cannot resolve; lower attitude_weight and "
-            f"rate_weight (or raise torque_weight); got {weights}")
+            f"(torque_weight J^2))^(1/4) = {w_r.max():.3g} rad/s, estimator {w_e.max():.3g} "
+            f"rad/s and sqrt(rate_weight / torque_weight) / J = {w_rate.max():.3g} rad/s, reach "
+            f"more than {MAX_SCALE_RATIO:g} times the plant's lowest flexible mode "
+            f"{w_low:.4g} rad/s, whose poles the stability margin then cannot resolve; lower "
+            f"attitude_weight and rate_weight (or raise torque_weight); got {weights}")
     design_plant, removed, removed_eigs = _design_model(plant, critical=sigma, J=J, what="lqr")
     noise = None
     if isinstance(estimator, KalmanNoise):
         noise = estimator
+        noise.per_axis(m)  # the right number of axes
     elif isinstance(estimator, str):
         with np.errstate(all="ignore"):
-            noise_values = (speed ** 4 / r, 1.0 / q_theta,
-                            (1.0 / q_theta) * (speed * w_r) ** 2)
-        if not all(np.isfinite(v) and v > 0 for v in noise_values):
+            noise_values = np.concatenate([speed ** 4 / r, 1.0 / q_theta,
+                                           (1.0 / q_theta) * (speed * w_r) ** 2])
+        if not np.all(np.isfinite(noise_values) & (noise_values > 0)):
             raise ValueError("lqr: the default Kalman noises (estimator_speed^4 / torque_weight, "
                              "1 / attitude_weight, ...) leave the floating-point range for these "
                              f"weights; give a KalmanNoise or moderate weights; got {weights}")
-        noise = KalmanNoise.default(J, q_theta, r, speed)
+        noise = (KalmanNoise.default(float(Jd[0]), float(q_theta[0]), float(r[0]), speed)
+                 if m == 1 else KalmanNoise.default(_inertia_matrix(J), q_theta, r, speed))
     else:
         L_given = np.asarray(estimator, dtype=float)
         n_d = design_plant.nstates
-        if L_given.shape != (n_d, 2):
+        if L_given.shape != (n_d, 2 * m):
             detail = (f" (the design model: the plant without the {len(removed)} mode(s) the "
                       "loop cannot influence, see LQRDesign.removed_modes)" if removed else "")
-            raise ValueError(f"Luenberger estimator gain must have shape ({n_d}, 2) (states x "
-                             f"[theta, omega]){detail}; got {L_given.shape}")
-    Q, N, R = _cost(design_plant, q_theta, q_omega, r, tip_names, W_tip)
+            what = "[theta, omega]" if m == 1 else "[theta_x..z, omega_x..z]"
+            raise ValueError(f"Luenberger estimator gain must have shape ({n_d}, {2 * m}) "
+                             f"(states x {what}){detail}; got {L_given.shape}")
+    Q, N, R, r0 = _cost(design_plant, q_theta, q_omega, r, tip_names, W_tip)
     x_ref = reference_state(design_plant)
     L_fixed = None if noise is not None else L_given
     for digital in ([False, True] if T is not None else [False]):
         try:
             with np.errstate(all="ignore"):
-                design = _design(design_plant, Q, N, R, r, J, x_ref, noise, L_fixed, sigma,
+                design = _design(design_plant, Q, N, R, r0, Jd, x_ref, noise, L_fixed, sigma,
                                  T if digital else None)
         except (np.linalg.LinAlgError, ValueError, FloatingPointError, ZeroDivisionError) as exc:
             raise ValueError(
                 f"lqr: the {'digital ' if digital else ''}design failed numerically for these "
-                f"weights ({_short(str(exc))}); the rigid-body bandwidth is {w_r:.3g} rad/s "
+                f"weights ({_short(str(exc))}); the rigid-body bandwidth is "
+                f"{_short(np.round(w_r, 4)) if m > 1 else f'{w_r[0]:.3g}'} rad/s "
                 f"against plant modes up to {w_plant:.4g} rad/s: choose weights that put it "
                 f"within a few decades of the modes; got {weights}") from None
         if T is not None and not digital:
@@ -343,21 +411,24 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight: float, rate_weight
 
 
 def _cost(plant, q_theta, q_omega, r, tip_names, W_tip):
-    """Q, N, R of the cost on the design model's states, divided by r.
+    """Q, N, R of the cost on the design model's states, divided by r0, and r0.
 
-    The LQR gain does not change when Q, N, R are scaled together; dividing by r keeps extreme
-    but valid weights (r = 1e-300) away from the floating-point limits.
+    r0 is the torque weight (three axes: the geometric mean of the axes' weights). The LQR gain
+    does not change when Q, N, R are scaled together; dividing by r0 keeps extreme but valid
+    weights (r = 1e-300) away from the floating-point limits.
     """
+    ch = channels(plant)
     labels = list(plant.output_labels)
-    i_t = list(plant.input_labels).index(TORQUE)
-    rows = [labels.index(name) for name in [THETA, OMEGA] + tip_names]
+    i_t = [list(plant.input_labels).index(n) for n in ch.torques]
+    rows = [labels.index(name) for name in list(ch.thetas + ch.omegas) + tip_names]
     Cw = plant.C[rows]
-    Dw = plant.D[np.ix_(rows, [i_t])]
-    W = scipy.linalg.block_diag(np.diag([q_theta, q_omega]), W_tip)
+    Dw = plant.D[np.ix_(rows, i_t)]
+    r0 = float(r[0]) if r.size == 1 else float(np.exp(np.mean(np.log(r))))
+    W = scipy.linalg.block_diag(np.diag(np.concatenate([q_theta, q_omega])), W_tip)
     with np.errstate(over="ignore", invalid="ignore"):
-        Q = Cw.T @ (W / r) @ Cw
-        N = Cw.T @ (W / r) @ Dw
-        R = np.array([[1.0]]) + Dw.T @ (W / r) @ Dw
+        Q = Cw.T @ (W / r0) @ Cw
+        N = Cw.T @ (W / r0) @ Dw
+        R = np.diag(r / r0) + Dw.T @ (W / r0) @ Dw
     if not (np.all(np.isfinite(Q)) and np.all(np.isfinite(N)) and np.all(np.isfinite(R))):
         raise ValueError("lqr: the weights divided by torque_weight overflow; got "
                          f"{_weights_text(q_theta, q_omega, r, W_tip)}")
@@ -366,37 +437,47 @@ def _cost(plant, q_theta, q_omega, r, tip_names, W_tip):
     eig_q = np.linalg.eigvalsh(0.5 * (Qc + Qc.T))
     if eig_q.min() < -1e-10 * max(1.0, abs(eig_q).max()):
         raise ValueError(f"state weight Q must be positive semidefinite; got eigenvalue "
-                         f"{eig_q.min() * r:.3g}")
-    return Q, N, R
+                         f"{eig_q.min() * r0:.3g}")
+    return Q, N, R, r0
 
 
-def _design(plant, Q, N, R, r, J, x_ref, noise, L_given, sigma, T) -> LQRDesign:
+def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T) -> LQRDesign:
     """The LQR + estimator on the design model with prescribed degree of stability sigma
-    (cost Q, N, R divided by r); digital (ZOH, predictor estimator) if T is given."""
+    (cost Q, N, R divided by r0); digital (ZOH, predictor estimator) if T is given."""
+    ch = channels(plant)
+    m = ch.n_axes
     labels = list(plant.output_labels)
-    i_t = list(plant.input_labels).index(TORQUE)
+    i_t = [list(plant.input_labels).index(n) for n in ch.torques]
     A = np.asarray(plant.A, dtype=float)
-    B = np.asarray(plant.B[:, [i_t]], dtype=float)
+    B = np.asarray(plant.B[:, i_t], dtype=float)
     n = A.shape[0]
-    meas_rows = [labels.index(THETA), labels.index(OMEGA)]
+    meas_rows = [labels.index(name) for name in ch.thetas + ch.omegas]
     Cm = plant.C[meas_rows]
-    Dm = plant.D[np.ix_(meas_rows, [i_t])]
+    Dm = plant.D[np.ix_(meas_rows, i_t)]
     I = np.eye(n)
-    # Scaling: torque in units of J rad/s^2 (B_s = J B) and the cost divided by J^2, the noises
-    # divided by the attitude noise. Neither changes the gains (K = J K_s) but both bring the
-    # Hamiltonians' entries to the plant's own scale (omega^2, omega_r^4): with hub and weights
-    # in SI units they span 1e-16 (B B^T of a 5e7 kg m^2 hub) to 1e11 (q), and the Schur
-    # vectors lose the weakly excited modes (Re = -3e-16 instead of < -sigma, measured).
-    Bs, Qs, Ns = J * B, Q / J ** 2, N / J
+    # Scaling: torque i in units of J_ii rad/s^2 (B_s = B S, S = diag(J_ii)) and the cost divided
+    # by c = J^2 (three axes: the squared geometric mean of the J_ii), the noises divided by the
+    # attitude noise (its geometric mean). Neither changes the gains (K = S K_s) but both bring
+    # the Hamiltonians' entries to the plant's own scale (omega^2, omega_r^4): with hub and
+    # weights in SI units they span 1e-16 (B B^T of a 5e7 kg m^2 hub) to 1e11 (q), and the
+    # Schur vectors lose the weakly excited modes (Re = -3e-16 instead of < -sigma, measured).
+    c_root = Jd[0] if m == 1 else float(np.exp(np.mean(np.log(Jd))))
+    S = np.diag(Jd)
+    Sn = np.diag(Jd / c_root)  # S / sqrt(c): 1 for the planar design
+    Bs, Qs, Ns = B @ S, Q / c_root ** 2, N @ Sn / c_root
+    Rs = Sn @ R @ Sn
     if noise is not None:
-        Ws = noise.torque_noise / (J ** 2 * noise.attitude_noise) * (Bs @ Bs.T)
-        Vs = np.diag([1.0, noise.rate_noise / noise.attitude_noise])
+        W_t, V_t, V_w = noise.per_axis(m)
+        v0 = V_t[0] if m == 1 else float(np.exp(np.mean(np.log(V_t))))
+        Ws = (B * (W_t / v0)) @ B.T
+        Vs = np.diag(np.concatenate([V_t, V_w]) / v0)
     if T is None:
-        P = _solve_care(A + sigma * I, Bs, Qs, R, Ns, "regulator")
-        K = J * np.linalg.solve(R, Bs.T @ P + Ns.T)
+        P = _solve_care(A + sigma * I, Bs, Qs, Rs, Ns, "regulator")
+        K = S @ np.linalg.solve(Rs, Bs.T @ P + Ns.T)
         if L_given is None:
-            S = _solve_care(A.T + sigma * I, Cm.T, Ws, Vs, np.zeros((n, 2)), "Kalman filter")
-            L = S @ Cm.T @ np.linalg.inv(Vs)
+            Sk = _solve_care(A.T + sigma * I, Cm.T, Ws, Vs, np.zeros((n, 2 * m)),
+                             "Kalman filter")
+            L = Sk @ Cm.T @ np.linalg.inv(Vs)
         else:
             L = L_given
         Phi, Gamma = A, B
@@ -407,15 +488,15 @@ def _design(plant, Q, N, R, r, J, x_ref, noise, L_given, sigma, T) -> LQRDesign:
         # W_d = B W B^T T, V_d = V / T. Prescribed degree of stability: the DAREs of
         # Phi / rho, Gamma / rho with rho = exp(-sigma T) put every closed-loop |z| < rho.
         # Predictor estimator: x_hat[k+1] = Phi x_hat + Gamma u + L (y[k] - C x_hat - D u).
-        E = scipy.linalg.expm(np.block([[A, B], [np.zeros((1, n + 1))]]) * T)
+        E = scipy.linalg.expm(np.block([[A, B], [np.zeros((m, n + m))]]) * T)
         Phi, Gamma = E[:n, :n], E[:n, n:]
         rho = math.exp(-sigma * T)
-        Pt, Gt = Phi / rho, J * Gamma / rho
-        P = scipy.linalg.solve_discrete_are(Pt, Gt, Qs * T, R * T, s=Ns * T)
-        K = J * np.linalg.solve(R * T + Gt.T @ P @ Gt, Gt.T @ P @ Pt + (Ns * T).T)
+        Pt, Gt = Phi / rho, Gamma @ S / rho
+        P = scipy.linalg.solve_discrete_are(Pt, Gt, Qs * T, Rs * T, s=Ns * T)
+        K = S @ np.linalg.solve(Rs * T + Gt.T @ P @ Gt, Gt.T @ P @ Pt + (Ns * T).T)
         Wd, Vd = Ws * T, Vs / T
-        S = scipy.linalg.solve_discrete_are(Pt.T, Cm.T, Wd, Vd)
-        L = rho * (Pt @ S @ Cm.T @ np.linalg.inv(Cm @ S @ Cm.T + Vd))
+        Sk = scipy.linalg.solve_discrete_are(Pt.T, Cm.T, Wd, Vd)
+        L = rho * (Pt @ Sk @ Cm.T @ np.linalg.inv(Cm @ Sk @ Cm.T + Vd))
     # poles the Riccati solution could not resolve (below): moved by a modal correction
     if T is None:
         def flagged(x):
@@ -436,11 +517,14 @@ def _design(plant, Q, N, R, r, J, x_ref, noise, L_given, sigma, T) -> LQRDesign:
     K, L = K + dK, L + dL.T
     Bm = Gamma - L @ Dm
     Ac = Phi - L @ Cm - Bm @ K
-    g = K @ x_ref  # torque per rad of reference (a rigid rotation needs no torque)
-    Bc = np.hstack([Bm * g, L])
-    controller = control.ss(Ac, Bc, -K, np.array([[g[0], 0.0, 0.0]]), 0 if T is None else T,
-                            inputs=[THETA_REF, THETA, OMEGA], outputs=[TORQUE], name="lqr")
-    return LQRDesign(controller, K, L, Q * r, R * r, N * r, x_ref,
+    X_ref = x_ref.reshape(n, m)
+    g = K @ X_ref  # torque per rad of reference (a rigid rotation needs no torque)
+    Bc = np.hstack([Bm @ g, L])
+    controller = control.ss(Ac, Bc, -K, np.hstack([g, np.zeros((m, 2 * m))]),
+                            0 if T is None else T,
+                            inputs=list(ch.refs + ch.thetas + ch.omegas),
+                            outputs=list(ch.torques), name="lqr")
+    return LQRDesign(controller, K, L, Q * r0, R * r0, N * r0, x_ref,
                      regulator_poles, estimator_poles)
 
 
@@ -468,8 +552,8 @@ def _checked(design: LQRDesign, alpha: float, T, weights: str, estimator) -> LQR
 
 
 @limits_blas_threads(total_states)
-def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float,
-        torque_weight: float, deflection_weight=None,
+def lqr(plant: control.StateSpace, *, attitude_weight, rate_weight, torque_weight,
+        deflection_weight=None,
         estimator: str | KalmanNoise | np.ndarray = "kalman", estimator_speed: float = 3.0,
         sample_time: float | None = None) -> control.StateSpace:
     """LQR attitude controller with a state estimator, as a dynamic output-feedback controller.
@@ -478,22 +562,26 @@ def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float
     ----------
     plant : control.StateSpace
         Continuous free-floating design plant (e.g. hub + chain): input ``'torque'`` [N*m],
-        outputs ``'theta'`` [rad], ``'omega'`` [rad/s], optionally ``'*tip_deflection'`` [m].
-    attitude_weight : float, 1/rad^2
-        Weight q_theta > 0 on theta^2 in the cost.
-    rate_weight : float, s^2/rad^2
-        Weight q_omega >= 0 on omega^2.
-    torque_weight : float, 1/(N*m)^2
-        R = r > 0 on torque^2.
+        outputs ``'theta'`` [rad], ``'omega'`` [rad/s], optionally ``'*tip_deflection'`` [m];
+        or the three-axis signals ``'torque_x'``..``'omega_z'`` (:mod:`controllers.signals`).
+    attitude_weight : float or 3 floats, 1/rad^2
+        Weight q_theta > 0 on theta^2 in the cost (three axes: on each theta_i^2, one value for
+        every axis or one per hub axis).
+    rate_weight : float or 3 floats, s^2/rad^2
+        Weight q_omega >= 0 on omega^2 (per axis likewise).
+    torque_weight : float or 3 floats, 1/(N*m)^2
+        R = r > 0 on torque^2 (per torque axis likewise; R = diag(r_i)).
     deflection_weight : float (1/m^2), mapping name -> float, or (n_tip, n_tip) PSD array, optional
         Weight on the plant's tip-deflection outputs (a float applies to each of them).
-    estimator : "kalman", KalmanNoise or ndarray (n_states, 2)
+    estimator : "kalman", KalmanNoise or ndarray (n_states, 2) (three axes: (n_states, 6))
         "kalman" (default): steady-state Kalman filter on the design model with the noises of
         :meth:`KalmanNoise.default` (torque disturbance entering with the torque, attitude and rate
         sensor noise; filter about ``estimator_speed`` times faster than the regulator's rigid-body
         poles). A KalmanNoise: a Kalman filter with those intensities. An array: a Luenberger gain
-        L on the innovations [theta - theta_hat, omega - omega_hat] (continuous designs only),
-        for the states of the design model (the plant's, when no mode is removed).
+        L on the innovations [theta - theta_hat, omega - omega_hat] (three axes: theta_x..z,
+        omega_x..z; continuous designs only), for the states of the design model (the
+        plant's, when no mode is removed). The default noises are per axis
+        (:meth:`KalmanNoise.default` with J_ii and each axis's weights).
     estimator_speed : float
         Ratio of estimator to regulator bandwidth for the default Kalman noises (default 3).
     sample_time : float, s, optional
@@ -505,8 +593,9 @@ def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float
     Returns
     -------
     control.StateSpace
-        Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']``, states = the estimate
-        x_hat of the design model's states:
+        Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']`` (three axes: inputs
+        ``theta_ref_x..z, theta_x..z, omega_x..z``, outputs ``torque_x..z``), states = the
+        estimate x_hat of the design model's states:
         x_hat' = A x_hat + B torque + L (y - C x_hat - D torque),
         torque = -K (x_hat - x_ref theta_ref), with x_ref from :func:`reference_state`. On a
         free-floating truth plant the steady state is theta = theta_ref exactly (a rigid
@@ -535,6 +624,12 @@ def lqr(plant: control.StateSpace, *, attitude_weight: float, rate_weight: float
         bandwidth is too low or too high for the plant (the message names the weights), nearly
         repeated undamped modes that one torque cannot all reach, a Luenberger gain that does not
         stabilise the estimator (names ``estimator``), a sample time too long.
+
+    Three axes: the Riccati equations are those of the multi-input problem (R diagonal,
+    B with three columns); each torque is scaled by its axis's inertia J_ii and the cost by the
+    squared geometric mean of the J_ii, which leaves the gains unchanged and the Hamiltonian
+    well scaled. On a rigid body with a diagonal inertia the gains are those of three planar
+    designs, one per axis.
 
     References
     ----------
