@@ -127,6 +127,10 @@ def main(argv=None) -> int:
     parser.add_argument("--stages", nargs="+", default=list(STAGES), choices=STAGES)
     parser.add_argument("--controllers-from", default=None)
     parser.add_argument("--label", default="")
+    parser.add_argument("--skip", nargs="*", default=[], metavar="STAGE:N",
+                        help="stage:size pairs not to measure (e.g. frd:400 before "
+                             "frequency_response_data existed: control.frd solves an 802 x 802 "
+                             "system per frequency, minutes per run)")
     parser.add_argument("--child", nargs=3, metavar=("STAGE", "N", "REPEATS"),
                         help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -137,8 +141,11 @@ def main(argv=None) -> int:
         print(json.dumps(child(stage, int(n), int(repeats))))
         return 0
     rows, results = [], []
+    suffix = f"_{args.label}" if args.label else ""
     for stage in args.stages:
         for n in args.sizes:
+            if f"{stage}:{n}" in args.skip:
+                continue
             command = [sys.executable, os.path.abspath(__file__), "--child", stage, str(n),
                        str(args.repeats)]
             if args.controllers_from:
@@ -153,32 +160,39 @@ def main(argv=None) -> int:
             rows.append([stage, n, r["n_states"], f"{med['wall_s']:.3f}", f"{med['cpu_s']:.3f}",
                          f"{med['traced_peak_MB']:.1f}", f"{r['maxrss_MB']:.0f}",
                          f"{r['load_average'][0]:.2f}"])
+            _write(args, results, rows, suffix)  # after every measurement: nothing is lost
+    print(_write(args, results, rows, suffix))
+    return 0
+
+
+def _write(args, results, rows, suffix) -> str:
+    """JSON and Markdown of the results so far; returns the Markdown."""
     slopes = {}
     for stage in args.stages:
         mine = [r for r in results if r["stage"] == stage]
-        slopes[stage] = {"cpu": _slope([r["n_modes"] for r in mine],
-                                       [statistics.median(r["cpu_s"]) for r in mine]),
-                         "wall": _slope([r["n_modes"] for r in mine],
-                                        [statistics.median(r["wall_s"]) for r in mine])}
-    suffix = f"_{args.label}" if args.label else ""
+        if len(mine) > 1:
+            slopes[stage] = {"cpu": _slope([r["n_modes"] for r in mine],
+                                           [statistics.median(r["cpu_s"]) for r in mine]),
+                             "wall": _slope([r["n_modes"] for r in mine],
+                                            [statistics.median(r["wall_s"]) for r in mine])}
     write_json(f"analysis_scaling{suffix}.json",
                {"machine": machine_info(), "repeats": args.repeats,
-                "controllers_from": args.controllers_from, "results": results,
-                "slopes": slopes})
+                "controllers_from": args.controllers_from, "skipped": args.skip,
+                "results": results, "slopes": slopes})
     m = machine_info()
     text = "\n".join([
         f"# Analysis cost against the number of modes{' (' + args.label + ')' if args.label else ''}",
         "", f"`python benchmarks/analysis_scaling.py` on {m['date_utc']} UTC ({m['cpu']}, "
         f"{m['nproc']} cores, single-threaded BLAS). Medians of {args.repeats}; each stage in "
-        "its own process.", "",
+        "its own process." + (f" Not measured: {', '.join(args.skip)}." if args.skip else ""),
+        "",
         markdown_table(["stage", "modes", "states", "wall [s]", "cpu [s]", "traced peak [MB]",
                         "max RSS [MB]", "load (1 min)"], rows), "",
         markdown_table(["stage", "slope of cpu time in n", "slope of wall time in n"],
                        [[s, f"{v['cpu']:.2f}", f"{v['wall']:.2f}"] for s, v in slopes.items()]),
         ""])
     (RESULTS / f"analysis_scaling{suffix}.md").write_text(text + "\n")
-    print(text)
-    return 0
+    return text
 
 
 if __name__ == "__main__":

@@ -1,11 +1,14 @@
 """flexsat controllers: PD and LQR attitude controllers for any plant with named signals.
 
 Works on any python-control LTI plant with input ``'torque'`` and outputs ``'theta'``,
-``'omega'`` (optionally ``'*tip_deflection'``); imports no other flexsat package.
+``'omega'`` (optionally ``'*tip_deflection'``), or with the three-axis signals ``'torque_x'``,
+``'torque_y'``, ``'torque_z'``, ``'theta_x'``..``'theta_z'``, ``'omega_x'``..``'omega_z'``
+(:mod:`controllers.signals`): one set of functions for both; imports no other flexsat package.
 """
 from .frequency import frequency_response_data
 from .loop import close_loop, loop_frequency_response
-from .margins import Margins, SpilloverVerdict, margins, spillover
+from .margins import (Margins, ModeSpillover, MultiLoopMargins, SpilloverVerdict, margins,
+                      spillover)
 from .modes import INFLUENCE_TOL, FlexibleMode, flexible_modes, rigid_body_inertia
 from .timeresp import (METRIC_UNITS, disturbance_response, metrics, slew, slew_profile,
                        step_response)
@@ -27,6 +30,8 @@ __all__ = [
     "LQRDesign",
     "METRIC_UNITS",
     "Margins",
+    "ModeSpillover",
+    "MultiLoopMargins",
     "Simulator",
     "SpilloverVerdict",
     "assert_closed_loops_close",

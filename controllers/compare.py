@@ -16,7 +16,8 @@ import numpy as np
 
 from .loop import close_loop, loop_frequency_response
 from .margins import SpilloverVerdict, margins, spillover
-from .signals import THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_controller, _check_plant
+from .signals import (THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_controller, _check_plant,
+                      channels, tip_outputs)
 from .timeresp import METRIC_UNITS, _check_slew, _time_grid, _trace, metrics, slew
 
 __all__ = ["Comparison", "compare", "metric_table", "difference_columns"]
@@ -154,22 +155,28 @@ class Comparison:
         FigureCanvasAgg(fig)
         axes = fig.subplots(3, 2)
         t = self.t
-        third = next((n for n in self.difference if n.endswith(TIP_SUFFIX)), "omega")
+        ch = channels(self.controller, "controller")
+        third = tip_outputs(self.difference)[:3] or list(ch.omegas)
         units = {THETA: "rad", TORQUE: "N*m", "omega": "rad/s"}
-        for ax, name in zip(axes[:, 0], (THETA, TORQUE, third)):
-            for label, resp, style in (("design", self.design_response, "-"),
-                                       ("truth", self.truth_response, "--")):
-                y = _trace(resp, name)
-                if y is not None:
-                    stop = getattr(resp, "diverged_at", None)
-                    ax.plot(np.asarray(resp.t).reshape(-1), y, style,
-                            label=f"{name} ({label})" + (f", diverged at {stop:.4g} s"
-                                                         if stop is not None else ""))
-            if name == THETA:
-                ref = _trace(self.design_response, THETA_REF, "input")
-                if ref is not None:
-                    ax.plot(np.asarray(self.design_response.t).reshape(-1), ref, ":",
-                            color="gray", label="theta_ref")
+        for ax, (kind, names) in zip(axes[:, 0], ((THETA, ch.thetas), (TORQUE, ch.torques),
+                                                   (third[0], third))):
+            for name in names:
+                for label, resp, style in (("design", self.design_response, "-"),
+                                           ("truth", self.truth_response, "--")):
+                    y = _trace(resp, name)
+                    if y is not None:
+                        stop = getattr(resp, "diverged_at", None)
+                        ax.plot(np.asarray(resp.t).reshape(-1), y, style,
+                                label=f"{name} ({label})" + (f", diverged at {stop:.4g} s"
+                                                             if stop is not None else ""))
+            if kind == THETA:
+                for ref_name in ch.refs:
+                    ref = _trace(self.design_response, ref_name, "input")
+                    if ref is not None:
+                        ax.plot(np.asarray(self.design_response.t).reshape(-1), ref, ":",
+                                color="gray", label=ref_name)
+            name = kind if kind in (THETA, TORQUE) else (
+                "omega" if kind in ch.omegas else kind)
             ax.set_ylabel(f"{name} [{units.get(name, 'm')}]")
             ax.legend(loc="best", fontsize="small")
             ax.grid(True)
@@ -177,6 +184,13 @@ class Comparison:
         for label, plant, style in (("design", self.design_plant, "-"),
                                     ("truth", self.truth_plant, "--")):
             omega, L = loop_frequency_response(plant, self.controller)
+            if L.ndim == 3:  # three axes: the diagonal of L
+                for i, a in enumerate(ch.axes):
+                    axes[0, 1].semilogx(omega, 20 * np.log10(np.abs(L[:, i, i])), style,
+                                        label=f"L_{a}{a} ({label})")
+                    axes[1, 1].semilogx(omega, np.degrees(np.unwrap(np.angle(L[:, i, i]))),
+                                        style, label=f"L_{a}{a} ({label})")
+                continue
             axes[0, 1].semilogx(omega, 20 * np.log10(np.abs(L)), style, label=f"L ({label})")
             axes[1, 1].semilogx(omega, np.degrees(np.unwrap(np.angle(L))), style,
                                 label=f"L ({label})")
@@ -187,7 +201,8 @@ class Comparison:
         for ax in axes[:2, 1]:
             ax.legend(loc="best", fontsize="small")
             ax.grid(True, which="both")
-        axes[2, 1].plot(t, self.difference[THETA])
+        for name in ch.thetas:
+            axes[2, 1].plot(t, self.difference[name], label=name)
         axes[2, 1].set_ylabel("theta truth - design [rad]")
         axes[2, 1].set_xlabel("time [s]")
         axes[2, 1].grid(True)
@@ -199,7 +214,7 @@ class Comparison:
 def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
             controller: control.StateSpace, *, angle: float, duration: float,
             t_final: float | None = None, dt: float | None = None,
-            max_samples: int | None = None) -> Comparison:
+            max_samples: int | None = None, axis=None) -> Comparison:
     """Close one controller around a design plant and a truth plant and compare.
 
     Parameters
@@ -223,6 +238,10 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
     max_samples : int, optional
         Most samples per response (default :data:`controllers.timeresp.MAX_SAMPLES`); more
         are refused by name before any work.
+    axis : {'x', 'y', 'z'} or sequence of 3 floats, optional
+        Three-axis plants (required there): the eigen-axis of the slew (:func:`slew`). The
+        metrics are then the three-axis ones of :func:`metrics` and the margins those of
+        :class:`~controllers.MultiLoopMargins` (per axis, disk margin).
 
     Returns
     -------
@@ -244,9 +263,9 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
     _time_grid(design_loop, 3.0 * duration if t_final is None else t_final, dt,
                duration / 500.0, max_samples)
     design_response = slew(design_loop, angle, duration, t_final=t_final, dt=dt,
-                           max_samples=max_samples)
+                           max_samples=max_samples, axis=axis)
     truth_response = slew(truth_loop, angle, duration, t_final=t_final, dt=dt,
-                          max_samples=max_samples)
+                          max_samples=max_samples, axis=axis)
     verdict = spillover(truth_plant, controller)
     design_metrics = metrics(design_response) | margins(design_plant, controller).as_dict()
     truth_metrics = metrics(truth_response) | verdict.margins.as_dict()

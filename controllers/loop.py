@@ -363,8 +363,10 @@ def loop_frequency_response(plant, controller, omega: np.ndarray | None = None
     Returns
     -------
     omega : ndarray, shape (n,), rad/s
-    L : ndarray, shape (n,), complex128
-        L = -sum_i K_i P_i (negative-feedback convention: the loop is unstable at L = -1).
+    L : ndarray, shape (n,) (planar) or (n, 3, 3) (three-axis), complex128
+        L = -sum_i K_i P_i (negative-feedback convention: the loop is unstable at L = -1);
+        three axes: L = -K P broken at the three torque inputs (row: torque output, column:
+        torque input).
     """
     loop = _Loop(plant, controller)
     if omega is None:

@@ -29,7 +29,7 @@ from .modes import _design_model, _inertia_matrix, _verify_loop, rigid_body_iner
 from .pd import _check_sampling, _positive, _rigid_crossover
 from .riccati import _modal_correction, _solve_care
 from .signals import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant, _short,
-                      channels)
+                      channels, tip_outputs)
 from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _warn_removed
 from .threads import limits_blas_threads, total_states
 
@@ -180,7 +180,7 @@ def _nonneg(value, name: str, unit: str) -> float:
 
 
 def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray]:
-    tips = [n for n in plant.output_labels if n.endswith(TIP_SUFFIX)]
+    tips = tip_outputs(plant.output_labels)
     if deflection_weight is None:
         return [], np.zeros((0, 0))
     if not tips:

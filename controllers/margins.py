@@ -305,7 +305,7 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
             lambda lw: sign * float(f(np.array([math.exp(lw)]))[0]),
             bounds=(math.log(omega[i - 1]), math.log(omega[i + 1])), method="bounded",
             options={"xatol": 1e-12})
-        if sign * res.fun < sign * best:
+        if res.fun < sign * best:  # both in the minimised sign
             best, w_best = float(sign * res.fun), float(math.exp(res.x))
     return best, w_best
 

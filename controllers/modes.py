@@ -329,12 +329,11 @@ def _design_model(plant: control.StateSpace, *, critical: float, J, what: str
     split: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
     removed: list[RemovedMode] = []
     removed_eigs: list[np.ndarray] = []
-    for part in range(n_parts):
-        idx = np.flatnonzero(part_of == part)
+    for idx, (lam, Wl, Vr) in _joint_parts(Ab, part_of, n_parts, critical, rigid_tol,
+                                           cluster_tol):
         Ap = Ab[np.ix_(idx, idx)]
         bp = b[idx] / d[idx, None]
         ctp, cop = c_theta[:, idx] * d[None, idx], c_omega[:, idx] * d[None, idx]
-        lam, Wl, Vr = scipy.linalg.eig(Ap, left=True, right=True)
         rigid = np.abs(lam) <= rigid_tol
         if rigid.all():
             # nilpotent part: its share of the rigid-body response 1/(J s^2) (theta: the
@@ -403,6 +402,46 @@ def _design_model(plant: control.StateSpace, *, critical: float, J, what: str
                         inputs=list(plant.input_labels), outputs=list(plant.output_labels),
                         states=states, name=plant.name)
     return design, sorted(removed, key=lambda m: m.frequency), np.concatenate(removed_eigs)
+
+
+def _joint_parts(Ab, part_of, n_parts, critical, rigid_tol, cluster_tol):
+    """The decoupled parts of A (connected components), joined where a (nearly) repeated
+    critical eigenvalue (non-rigid, Re >= -critical) occurs in several of them, each with its
+    eigen-decomposition (eigenvalues, left and right eigenvectors).
+
+    Identical modes in separate parts (two identical wings in a modal realisation) are one
+    repeated eigenvalue of A: which combinations of them the torques reach is a question about
+    them together (the PBH test of _cluster_reachable), so their parts are analysed as one.
+    Critical eigenvalues lie within critical of the imaginary axis: sorted by their imaginary
+    parts, repeated ones are neighbours (O(n log n), no pairwise search).
+    """
+    parts = [np.flatnonzero(part_of == p) for p in range(n_parts)]
+    eigs = [scipy.linalg.eig(Ab[np.ix_(idx, idx)], left=True, right=True) for idx in parts]
+    owner = np.concatenate([np.full(e[0].size, p) for p, e in enumerate(eigs)]) if eigs else \
+        np.zeros(0, dtype=int)
+    lam = np.concatenate([e[0] for e in eigs]) if eigs else np.zeros(0, dtype=complex)
+    root = list(range(n_parts))
+
+    def find(p):
+        while root[p] != p:
+            root[p] = root[root[p]]
+            p = root[p]
+        return p
+
+    critical_ones = np.nonzero((np.abs(lam) > rigid_tol) & (lam.real >= -critical))[0]
+    order = critical_ones[np.argsort(lam[critical_ones].imag, kind="stable")]
+    for i, j in zip(order[:-1], order[1:]):
+        if owner[i] != owner[j] and abs(lam[i] - lam[j]) <= cluster_tol:
+            root[find(owner[i])] = find(owner[j])
+    groups: dict[int, list[int]] = {}
+    for p in range(n_parts):
+        groups.setdefault(find(p), []).append(p)
+    for members in groups.values():
+        if len(members) == 1:
+            yield parts[members[0]], eigs[members[0]]
+        else:
+            idx = np.sort(np.concatenate([parts[p] for p in members]))
+            yield idx, scipy.linalg.eig(Ab[np.ix_(idx, idx)], left=True, right=True)
 
 
 def _mode_participations(plant, J, eigenvalues) -> list[float]:

@@ -28,7 +28,7 @@ import control
 import numpy as np
 
 __all__ = ["TORQUE", "THETA", "OMEGA", "THETA_REF", "TIP_SUFFIX", "AXES", "Channels",
-           "PLANAR", "THREE_AXIS", "channels"]
+           "PLANAR", "THREE_AXIS", "channels", "tip_outputs"]
 
 #: Longest echo of a user's value in an error message [characters].
 MESSAGE_VALUE_CHARS = 100
@@ -84,6 +84,13 @@ PLANAR = Channels((TORQUE,), (THETA,), (OMEGA,), (THETA_REF,), ("",))
 THREE_AXIS = Channels(tuple(f"{TORQUE}_{a}" for a in AXES), tuple(f"{THETA}_{a}" for a in AXES),
                       tuple(f"{OMEGA}_{a}" for a in AXES), tuple(f"{THETA_REF}_{a}" for a in AXES),
                       AXES)
+
+
+def tip_outputs(labels) -> list[str]:
+    """The tip-motion outputs among ``labels``: names ending in ``'tip_deflection'`` (planar)
+    or holding ``'tip_'`` (three-axis tip motions such as ``'wing_tip_deflection_z'`` or
+    ``'wing_tip_twist'``)."""
+    return [n for n in labels if n.endswith(TIP_SUFFIX) or "tip_" in n]
 
 
 def channels(system, kind: str = "plant") -> Channels:

@@ -44,7 +44,7 @@ def _tolerance(value, name: str, what: str, default: float) -> float:
     return value
 
 
-def _as_metrics(item, what: str, angle, duration, t_final) -> dict[str, float]:
+def _as_metrics(item, what: str, angle, duration, t_final, axis=None) -> dict[str, float]:
     if isinstance(item, Mapping):
         out = {}
         for key, value in item.items():
@@ -60,7 +60,7 @@ def _as_metrics(item, what: str, angle, duration, t_final) -> dict[str, float]:
         if angle is None or duration is None:
             raise ValueError(f"{what} is a closed loop: give angle [rad] and duration [s] of the "
                              "slew from which its metrics are computed")
-        return _metrics(slew(item, angle, duration, t_final=t_final))
+        return _metrics(slew(item, angle, duration, t_final=t_final, axis=axis))
     raise TypeError(f"{what} must be a metrics mapping or a closed loop (control.StateSpace); "
                     f"got {type(item).__name__}")
 
@@ -111,7 +111,7 @@ def assert_closed_loops_close(actual, expected, *,
                               atol: float | Mapping[str, float] = DEFAULT_ATOL,
                               metrics: Sequence[str] | None = None,
                               angle: float | None = None, duration: float | None = None,
-                              t_final: float | None = None) -> None:
+                              t_final: float | None = None, axis=None) -> None:
     """Assert that two closed loops (or one and stored reference metrics) agree.
 
     Parameters
@@ -128,6 +128,10 @@ def assert_closed_loops_close(actual, expected, *,
     angle : float, rad, optional
     duration, t_final : float, s, optional
         Slew used for closed loops (see :func:`controllers.slew`).
+    axis : {'x', 'y', 'z'} or sequence of 3 floats, optional
+        Three-axis closed loops: the eigen-axis of that slew. Their metrics are per output
+        signal (``peak_attitude_error_x``, ``peak_torque_y``, ``peak_<tip output>``, ... beside
+        the vector-norm metrics, :func:`controllers.metrics`), all compared by default.
 
     Raises
     ------
@@ -136,8 +140,8 @@ def assert_closed_loops_close(actual, expected, *,
         difference, tolerance, PASS/FAIL.
     """
     __tracebackhide__ = True  # pytest: report the failure at the caller's line
-    a = _as_metrics(actual, "actual", angle, duration, t_final)
-    e = _as_metrics(expected, "expected", angle, duration, t_final)
+    a = _as_metrics(actual, "actual", angle, duration, t_final, axis)
+    e = _as_metrics(expected, "expected", angle, duration, t_final, axis)
     ok, table = compare_metrics(a, e, rtol=rtol, atol=atol, metrics=metrics)
     if not ok:
         n_fail = sum(line.rstrip().endswith("FAIL") for line in table.splitlines()[2:])

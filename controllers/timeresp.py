@@ -17,8 +17,8 @@ import math
 import control
 import numpy as np
 
-from .signals import (THETA, THETA_REF, TIP_SUFFIX, TORQUE, _real_number, _require_signal,
-                      _short)
+from .signals import (AXES, PLANAR, THETA, THETA_REF, THREE_AXIS, TIP_SUFFIX, TORQUE, Channels,
+                      _real_number, _require_signal, _short, tip_outputs)
 from .simulate import _OVERFLOW, simulate
 
 __all__ = ["METRIC_UNITS", "MAX_SAMPLES", "slew_profile", "slew", "step_response",
@@ -37,7 +37,15 @@ METRIC_UNITS: dict[str, str] = {
     "gain_margin": "dB",
     "phase_margin": "deg",
     "modulus_margin": "1",
+    "disk_margin": "1",
+    "disk_gain_margin": "dB",
+    "disk_phase_margin": "deg",
+    "min_singular_value": "1",
 }
+# three-axis metrics per hub axis carry the unit of their planar name
+METRIC_UNITS.update({f"{name}_{axis}": METRIC_UNITS[name] for axis in AXES for name in (
+    "peak_torque", "peak_attitude_error", "final_attitude_error", "gain_margin", "phase_margin",
+    "modulus_margin")})
 
 #: Most samples a time response may have unless the caller raises ``max_samples``: 1e7
 #: samples of a loop with 10 outputs and inputs hold 0.8 GB of float64.
@@ -108,12 +116,45 @@ def _time_grid(system, t_final, dt, default_dt: float, max_samples) -> np.ndarra
     return np.arange(n, dtype=float) * step
 
 
-def _check_closed_loop(closed_loop) -> None:
+def _check_closed_loop(closed_loop) -> Channels:
+    """A closed loop from close_loop; its convention (by its attitude and torque outputs)."""
     if not isinstance(closed_loop, control.StateSpace):
         raise TypeError("closed_loop must be a control.StateSpace (from close_loop); got "
                         f"{type(closed_loop).__name__}")
-    for name in (THETA, TORQUE):
-        _require_signal(closed_loop, name, "output", "closed_loop")
+    ch = _response_channels(list(closed_loop.output_labels))
+    if ch is None:
+        for name in (THETA, TORQUE):
+            _require_signal(closed_loop, name, "output", "closed_loop")
+    return ch
+
+
+def _response_channels(outputs) -> Channels | None:
+    """PLANAR or THREE_AXIS by the outputs theta/torque or theta_x..z/torque_x..z; else None."""
+    for ch in (PLANAR, THREE_AXIS):
+        if all(n in outputs for n in ch.thetas + ch.torques):
+            return ch
+    return None
+
+
+def _axis_vector(axis, ch: Channels) -> np.ndarray:
+    """The unit slew axis: None for a planar loop; for three axes 'x', 'y', 'z' or a non-zero
+    3-vector (normalised; hub axes)."""
+    if not ch.mimo:
+        if axis is not None:
+            raise ValueError(f"axis is for three-axis loops; this planar loop turns about its "
+                             f"one axis; got axis={_short(axis)}")
+        return np.ones(1)
+    if axis is None:
+        raise ValueError("axis must be given for a three-axis loop: 'x', 'y', 'z' or a 3-vector "
+                         "(hub axes) of the eigen-axis slew")
+    if isinstance(axis, str):
+        if axis not in AXES:
+            raise ValueError(f"axis must be 'x', 'y', 'z' or a 3-vector; got {_short(axis)}")
+        return np.eye(3)[AXES.index(axis)]
+    e = np.asarray(axis, dtype=float)
+    if e.shape != (3,) or not np.all(np.isfinite(e)) or not np.any(e):
+        raise ValueError(f"axis must be a non-zero finite 3-vector (hub axes); got {_short(axis)}")
+    return e / np.linalg.norm(e)
 
 
 def _check_slew(angle, duration) -> tuple[float, float]:
@@ -163,7 +204,7 @@ def _inputs(closed_loop, n_t: int, **rows: np.ndarray) -> np.ndarray:
 
 def slew(closed_loop: control.StateSpace, angle: float, duration: float, *,
          t_final: float | None = None, dt: float | None = None,
-         max_samples: int | None = None) -> control.TimeResponseData:
+         max_samples: int | None = None, axis=None) -> control.TimeResponseData:
     """Response of a closed loop to a cycloidal slew of ``angle`` in ``duration``.
 
     Parameters
@@ -183,6 +224,10 @@ def slew(closed_loop: control.StateSpace, angle: float, duration: float, *,
         w rad/s take dt well below pi / w.
     max_samples : int, optional
         Most samples allowed (default MAX_SAMPLES); more raise ValueError before any work.
+    axis : {'x', 'y', 'z'} or sequence of 3 floats, optional
+        Three-axis loops only (and required there): the eigen-axis e (hub axes, normalised) of
+        the slew, theta_ref(t) = e * slew_profile(t, angle, duration) (small angles: a rotation
+        by angle about e).
 
     Returns
     -------
@@ -192,18 +237,22 @@ def slew(closed_loop: control.StateSpace, angle: float, duration: float, *,
         time at which an unstable loop left the float64 range; the response then ends at the
         sample before (see the module docstring).
     """
-    _check_closed_loop(closed_loop)
-    _require_signal(closed_loop, THETA_REF, "input", "closed_loop")
+    ch = _check_closed_loop(closed_loop) or PLANAR
+    e = _axis_vector(axis, ch)
+    for name in ch.refs:
+        _require_signal(closed_loop, name, "input", "closed_loop")
     angle, duration = _check_slew(angle, duration)
     t_final = 3.0 * duration if t_final is None else t_final
     T = _time_grid(closed_loop, t_final, dt, duration / 500.0, max_samples)
-    U = _inputs(closed_loop, T.size, theta_ref=slew_profile(T, angle, duration))
+    profile = slew_profile(T, angle, duration)
+    U = _inputs(closed_loop, T.size, **{name: e_i * profile if ch.mimo else profile
+                                        for name, e_i in zip(ch.refs, e)})
     return _simulate(closed_loop, T, U)
 
 
 def step_response(closed_loop: control.StateSpace, *, amplitude: float = 1.0,
                   t_final: float = 10.0, dt: float | None = None,
-                  max_samples: int | None = None) -> control.TimeResponseData:
+                  max_samples: int | None = None, axis=None) -> control.TimeResponseData:
     """Response to a step of ``amplitude`` [rad] in theta_ref at t = 0.
 
     Parameters
@@ -215,13 +264,29 @@ def step_response(closed_loop: control.StateSpace, *, amplitude: float = 1.0,
         Default t_final / 2000.
     max_samples : int, optional
         Most samples allowed (default MAX_SAMPLES).
+    axis : {'x', 'y', 'z'} or sequence of 3 floats, optional
+        Three-axis loops (required there): theta_ref = amplitude * e, e the unit axis.
 
     Returns
     -------
     control.TimeResponseData
         With ``diverged_at`` as for :func:`slew`.
     """
-    return _step_on(closed_loop, THETA_REF, amplitude, "rad", t_final, dt, max_samples)
+    ch = _check_closed_loop(closed_loop) or PLANAR
+    if not ch.mimo:
+        _axis_vector(axis, ch)
+        return _step_on(closed_loop, THETA_REF, amplitude, "rad", t_final, dt, max_samples)
+    e = _axis_vector(axis, ch)
+    for name in ch.refs:
+        _require_signal(closed_loop, name, "input", "closed_loop")
+    amplitude = _real_number(amplitude, "amplitude", "rad")
+    if not (np.isfinite(amplitude) and amplitude != 0):
+        raise ValueError(f"amplitude must be non-zero and finite [rad]; got {amplitude:.6g}")
+    T = _time_grid(closed_loop, _real_number(t_final, "t_final", "s"), dt,
+                   float(t_final) / 2000.0, max_samples)
+    U = _inputs(closed_loop, T.size, **{name: np.full(T.size, amplitude * e_i)
+                                        for name, e_i in zip(ch.refs, e)})
+    return _simulate(closed_loop, T, U)
 
 
 def disturbance_response(closed_loop: control.StateSpace, input: str = "disturbance_torque", *,
@@ -311,6 +376,15 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
         ``diverged_at`` [s], the time it did, and None for every other metric: the numbers of
         its finite part would read as those of a loop that settles. Never NaN or inf.
 
+        Three-axis responses (outputs theta_x..z, torque_x..z): the same names with vector
+        norms, ``peak_torque`` the largest |torque_i|, ``peak_attitude_error`` max
+        ||theta - theta_ref||, ``final_attitude_error`` ||theta - theta_ref|| at the end,
+        ``overshoot`` along the final reference r_f, 100 max(0, max(theta . r_f) / |r_f|^2 - 1),
+        ``settling_time`` on ||theta - r_f|| <= settling_band |r_f| (for a planar response
+        these are the planar definitions); then per hub axis ``peak_torque_x``,
+        ``peak_attitude_error_x``, ``final_attitude_error_x``, ... and per tip output
+        ``peak_<name>`` [m].
+
     References
     ----------
     Franklin, Powell & Emami-Naeini, Feedback Control of Dynamic Systems, 7th ed., sec. 3.4
@@ -323,14 +397,16 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
         raise ValueError(f"settling_band must be in (0, 1) [fraction of the reference]; "
                          f"got {settling_band:.6g}")
     t = np.asarray(response.t, dtype=float).reshape(-1)
+    if _response_channels(list(response.output_labels)) is THREE_AXIS:
+        return _three_axis_metrics(response, t, settling_band)
     theta = _trace(response, THETA)
     torque = _trace(response, TORQUE)
     if theta is None or torque is None:
-        raise ValueError("response must have outputs 'theta' and 'torque'; got "
-                         f"{_short(list(response.output_labels))}")
+        raise ValueError("response must have outputs 'theta' and 'torque' (or theta_x..z and "
+                         f"torque_x..z); got {_short(list(response.output_labels))}")
     ref = _trace(response, THETA_REF, "input")
     ref = np.zeros_like(theta) if ref is None else ref
-    tips = [n for n in response.output_labels if n.endswith(TIP_SUFFIX)]
+    tips = tip_outputs(response.output_labels)
     r_f = float(ref[-1]) if ref.size else 0.0
     names = ["peak_torque", "peak_attitude_error", "final_attitude_error"]
     names += ["peak_tip_deflection"] if tips else []
@@ -356,5 +432,54 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
             out["settling_time"] = None
         else:
             out["settling_time"] = float(t[outside[-1] + 1])
+    out["diverged"] = False
+    return out
+
+
+def _three_axis_metrics(response, t: np.ndarray, settling_band: float) -> dict:
+    """:func:`metrics` of a three-axis response (see its docstring)."""
+    ch = THREE_AXIS
+    theta = np.array([_trace(response, n) for n in ch.thetas])
+    torque = np.array([_trace(response, n) for n in ch.torques])
+    refs = [_trace(response, n, "input") for n in ch.refs]
+    ref = np.array([np.zeros(t.size) if r is None else r for r in refs])
+    tips = tip_outputs(response.output_labels)
+    r_f = ref[:, -1]
+    phi = float(np.linalg.norm(r_f))
+    per_axis = [f"{name}_{a}" for a in ch.axes for name in
+                ("peak_torque", "peak_attitude_error", "final_attitude_error")]
+    names = ["peak_torque", "peak_attitude_error", "final_attitude_error"]
+    names += ["peak_tip_deflection"] if tips else []
+    names += ["overshoot", "settling_time"] if phi != 0.0 else []
+    names += per_axis + [f"peak_{n}" for n in tips]
+    diverged_at = _divergence(response, t, list(theta) + list(torque) + list(ref)
+                              + [_trace(response, n) for n in tips])
+    if diverged_at is not None:
+        return {**{name: None for name in names}, "diverged": True, "diverged_at": diverged_at}
+    error = theta - ref
+    norm = np.sqrt(np.sum(error * error, axis=0))
+    out: dict[str, float | bool | None] = {
+        "peak_torque": float(np.max(np.abs(torque))),
+        "peak_attitude_error": float(np.max(norm)),
+        "final_attitude_error": float(norm[-1])}
+    peaks = {n: float(np.max(np.abs(_trace(response, n)))) for n in tips}
+    if tips:
+        out["peak_tip_deflection"] = max(peaks.values())
+    if phi != 0.0:
+        along = (r_f @ theta) / (phi * phi)  # progress along the slew axis, 1 at the target
+        out["overshoot"] = float(100.0 * max(0.0, np.max(along) - 1.0))
+        miss = theta - r_f[:, None]
+        outside = np.nonzero(np.sqrt(np.sum(miss * miss, axis=0)) > settling_band * phi)[0]
+        if outside.size == 0:
+            out["settling_time"] = float(t[0])
+        elif outside[-1] == t.size - 1:
+            out["settling_time"] = None
+        else:
+            out["settling_time"] = float(t[outside[-1] + 1])
+    for i, a in enumerate(ch.axes):
+        out[f"peak_torque_{a}"] = float(np.max(np.abs(torque[i])))
+        out[f"peak_attitude_error_{a}"] = float(np.max(np.abs(error[i])))
+        out[f"final_attitude_error_{a}"] = float(abs(error[i, -1]))
+    out.update({f"peak_{n}": v for n, v in peaks.items()})
     out["diverged"] = False
     return out
