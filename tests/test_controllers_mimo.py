@@ -356,3 +356,23 @@ def test_three_axis_errors_name_the_parameter():
                      0, inputs=list(bad_J.input_labels), outputs=list(bad_J.output_labels))
     with pytest.raises(ValueError, match="J symmetric positive definite"):
         controllers.rigid_body_inertia(bad)
+
+
+def test_no_runtime_warning_leaks_from_three_axis_designs_and_analysis():
+    """Continuous and digital three-axis PD and LQR, their margins (undamped poles on the grid
+    edges, loop-at-a-time inverses), spillover, a comparison: no numpy RuntimeWarning escapes."""
+    import warnings
+
+    Jd = np.diag(J3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        for K in (controllers.pd(FLEX3, natural_frequency=RATE, roll_off=1.5),
+                  controllers.pd(FLEX3, natural_frequency=RATE, sample_time=0.5),
+                  controllers.lqr(FLEX3, attitude_weight=(Jd * RATE ** 2) ** 2, rate_weight=0.0,
+                                  torque_weight=1.0)):
+            m = controllers.margins(TRUTH3, K)
+            assert m.disk_margin > 0 and all(np.isfinite(v.modulus_margin)
+                                             for v in m.loop_at_a_time.values())
+            controllers.spillover(TRUTH3, K)
+        controllers.compare(FLEX3, TRUTH3, K, angle=0.05, duration=30.0, axis="z",
+                            t_final=60.0)
