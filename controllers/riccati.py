@@ -165,8 +165,14 @@ def _modal_correction(M, G, flagged, target) -> tuple[np.ndarray, np.ndarray]:
     n, m = G.shape
     dK = np.zeros((m, n))
     done: list[complex] = []
-    for _ in range(n):
+    for iteration in range(n):
         Mk = M - G @ dK
+        if iteration == 0:
+            # usually nothing is flagged: eigenvalues alone cost a third of eig with left
+            # eigenvectors (0.3 s against 1 s for n = 802)
+            lam = np.linalg.eigvals(Mk)
+            if not any(flagged(x) for x in lam):
+                return dK, lam
         lam, Wl = scipy.linalg.eig(Mk, left=True, right=False)
         todo = [i for i in range(n) if flagged(lam[i]) and lam[i].imag >= 0
                 and all(abs(lam[i] - x) > 1e-12 * max(1.0, abs(x)) for x in done)]

@@ -171,6 +171,10 @@ def test_lqr_three_axis_tracks_every_axis_and_is_stable_on_truth():
     K = design.controller
     assert design.K.shape == (3, FLEX3.nstates) and design.L.shape == (FLEX3.nstates, 6)
     assert design.x_ref.shape == (FLEX3.nstates, 3)
+    # the guarantee of controllers.stability, by construction (prescribed degree of stability)
+    assert design.margin > 0
+    assert max(design.regulator_poles.real.max(), design.estimator_poles.real.max()) <= \
+        -design.margin
     for plant in (FLEX3, TRUTH3):
         loop = controllers.close_loop(plant, K)
         assert np.linalg.eigvals(loop.A).real.max() < 0
