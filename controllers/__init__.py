@@ -14,7 +14,7 @@ from .timeresp import (METRIC_UNITS, disturbance_response, metrics, slew, slew_p
                        step_response)
 from .compare import Comparison, compare
 from .lqr import KalmanNoise, LQRDesign, lqr, lqr_design, reference_state
-from .pd import natural_frequency_from_bandwidth, pd, pd_gains
+from .pd import natural_frequency_from_bandwidth, pd, pd_gains, principal_axes
 from .simulate import Simulator, simulate
 from .stability import MARGIN, RemovedMode, RemovedModesWarning
 from .testing import assert_closed_loops_close, compare_metrics
@@ -49,6 +49,7 @@ __all__ = [
     "natural_frequency_from_bandwidth",
     "pd",
     "pd_gains",
+    "principal_axes",
     "reference_state",
     "rigid_body_inertia",
     "simulate",
