@@ -270,9 +270,15 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
         raise ValueError("omega must hold at least two positive finite frequencies [rad/s]")
     if not loop.ch.mimo:
         return _siso_margins(loop, omega)
-    per_axis = {axis: _siso_margins(lambda w, i=i: loop.broken(w, i), omega)
-                for i, axis in enumerate(loop.ch.axes)}
     m = loop.ch.n_axes
+    # L on the grid once: the loop-at-a-time functions and the singular values all follow from
+    # S = (I + L)^-1 there; only the refinements evaluate L again
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        R = np.eye(m) + loop.matrix(omega)
+        S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
+        per_axis = {axis: _siso_margins(lambda w, i=i: loop.broken(w, i), omega,
+                                        1.0 / S[:, i, i] - 1.0)
+                    for i, axis in enumerate(loop.ch.axes)}
 
     def singular_values(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(sigma_max(S - I/2), sigma_min(I + L)) at each frequency."""
@@ -282,7 +288,12 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
             return (np.linalg.svd(S - 0.5 * np.eye(m), compute_uv=False)[:, 0],
                     np.linalg.svd(R, compute_uv=False)[:, -1])
 
-    peak, smallest = singular_values(omega)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        finite = np.all(np.isfinite(R), axis=(1, 2)) & np.all(np.isfinite(S), axis=(1, 2))
+        peak = np.full(omega.size, np.nan)
+        smallest = np.full(omega.size, np.nan)
+        peak[finite] = np.linalg.svd(S[finite] - 0.5 * np.eye(m), compute_uv=False)[:, 0]
+        smallest[finite] = np.linalg.svd(R[finite], compute_uv=False)[:, -1]
     ok = np.isfinite(peak) & np.isfinite(smallest)
     disk_peak, w_disk = _refined_extremum(lambda w: singular_values(w)[0], omega[ok], peak[ok],
                                           maximum=True)
@@ -310,10 +321,13 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
     return best, w_best
 
 
-def _siso_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray) -> Margins:
-    """Gain, phase and modulus margins of a scalar loop function L(omega) on a grid, refined."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        L = loop(omega)
+def _siso_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
+                  L: np.ndarray | None = None) -> Margins:
+    """Gain, phase and modulus margins of a scalar loop function L(omega) on a grid, refined
+    (L: its values on the grid, if already known)."""
+    if L is None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            L = loop(omega)
     finite = np.isfinite(L)  # a grid point exactly on an undamped pole: L is infinite there
     omega, L = omega[finite], L[finite]
 
