@@ -45,7 +45,9 @@ def assert_guarantee(plant, controller, removed_frequencies, margin=None):
     if margin is None:  # pd: alpha = MARGIN x the loop's spectral scale (at least this)
         margin = controllers.MARGIN * max(np.abs(poles).max(), np.abs(lam).max())
     for p in poles[poles.real > -margin]:
-        assert any(abs(abs(p.imag) - w) <= 2 * margin and abs(p.real) <= 2 * margin
+        # the warning prints each left-out frequency to 6 significant digits (RemovedMode's
+        # format "{:.6g}"): read back, it is exact to within half a unit of its 6th digit
+        assert any(abs(abs(p.imag) - w) <= 2 * margin + 5e-6 * w and abs(p.real) <= 2 * margin
                    for w in removed_frequencies), (p, margin, removed_frequencies)
 
 
