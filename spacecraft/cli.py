@@ -391,7 +391,7 @@ def _cmd_fit(args) -> int:
     from appendages.equivalence import fit_chain
 
     from .report import to_json
-    from .runner import _describe
+    from .tables import describe_model as _describe
 
     _check_n_bodies(args)
     beam, source = _beam_from(args)

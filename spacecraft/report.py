@@ -1,88 +1,61 @@
-"""The report of a scene run: Markdown and HTML pages, PNG plots, results.json, FMUs.
+"""The report of a scene run: Markdown and HTML pages, PNG plots, results.json, time series, FMUs.
 
-:func:`write_report` writes a :class:`~spacecraft.runner.RunResult` into a folder. The same
-list of blocks (headings, paragraphs, tables, images) renders to ``report.md`` and
-``report.html``, so both say the same; every number shown is also in ``results.json``
-(machine-readable, non-finite numbers written as the strings ``"inf"``/``"-inf"`` and NaN as
-null). :func:`output_folder` makes the folder appear only when complete: files go to a hidden
-temporary sibling that is renamed at the end, and removed if anything fails.
+:func:`write_report` writes a :class:`~spacecraft.runner.RunResult` into a folder. The same list
+of blocks (:mod:`spacecraft.pages`) renders to ``report.md`` and ``report.html``, so both say
+the same; every number shown is also in ``results.json`` (numbers only, :mod:`spacecraft.results`).
+:func:`output_folder` makes the folder appear only when complete.
 
-Files
+The report, in the order an attitude engineer reads it:
 
-- ``report.md``, ``report.html``: equivalence table (the paper's layout plus errors against the
-  exact beam), closed-loop metrics (design vs truth, PD and LQR), verdicts (spillover, margins);
-- ``plots/slew_<controller>.png`` (theta, torque, tip deflection; design vs truth),
-  ``plots/bode_W.png`` (|W_r| of the exact beam, the truncated beam and the chains),
-  ``plots/pole_zero.png`` (poles and zeros of theta/torque of the truth and design plants);
-- ``results.json``;
-- ``fmu/plant.fmu``, ``fmu/<controller>.fmu``, ``fmu/closed_loop_<controller>.fmu`` with their
-  FMI cross-check files ``<name>_in.csv``, ``<name>_ref.csv``, ``<name>_ref.opt``.
+- Summary: per loop its verdict on the truth model (stable, or UNSTABLE: diverges, in red),
+  its margins, the slew's overshoot and settling time, the peak tip deflection per appendage;
+  then the design warnings (:mod:`spacecraft.verdicts`);
+- The question asked: hub, appendages, manoeuvre, disturbance, sample rate, outputs;
+- Models: the truth model's fidelity and why (the tolerance, the band it had to match), the
+  coupled frequencies of exact beam, truth and design models;
+- Controllers: the control law, gains (PD: J, wn, zeta, Kp, Kd, filters; LQR: weights, K, L,
+  regulator and estimator poles), sample rate and Nyquist frequency, the modes left out of the
+  design and why;
+- Equivalence criterion of the fitted chains (the paper's table against the exact beam);
+- Closed loops: per controller the slew's metrics design vs truth (withheld for a diverging
+  loop), the margins with their crossover frequencies, the peaks per appendage (tip
+  deflection, root force and moment when asked), the disturbance response apart from the slew,
+  the verdicts (spillover on the truth model, Nyquist on the exact beam);
+- Basilisk's run of the manoeuvre, when asked (:mod:`spacecraft.simulators`);
+- Plots (:mod:`spacecraft.plots`), FMUs and SSP files (:mod:`spacecraft.exports`), the time
+  series, numerical warnings, the work done.
 """
 
 from __future__ import annotations
 
 import concurrent.futures
 import datetime
-import html
-import json
 import math
 import os
-import re
 from pathlib import Path
 
-import numpy as np
-
+from .naming import controller_label, design_label, plural
 from .output import MARKER, default_output_folder, output_folder
+from .pages import Tone, bad, markdown, markdown_text, render_html, warn
+from .results import to_json, write_timeseries
 
 __all__ = ["write_report", "output_folder", "default_output_folder", "to_json", "markdown",
            "render_html", "equivalence_markdown", "metric_rows", "summary_lines", "MARKER",
-           "markdown_text"]
+           "markdown_text", "report_blocks", "METRIC_LABELS", "MARGIN_LABELS"]
 
 
 # ---------------------------------------------------------------------------------------------
-# JSON
-# ---------------------------------------------------------------------------------------------
-def _clean(value):
-    """JSON-ready copy: numpy scalars and arrays to Python, inf to "inf", NaN to None."""
-    if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return [_clean(v) for v in value.tolist()]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        value = float(value)
-        if math.isnan(value):
-            return None
-        if math.isinf(value):
-            return "inf" if value > 0 else "-inf"
-        return value
-    if isinstance(value, complex):
-        return {"re": _clean(value.real), "im": _clean(value.imag)}
-    return value
-
-
-def to_json(data: dict) -> str:
-    """Strict JSON text of a results dict (no NaN or Infinity literals)."""
-    return json.dumps(_clean(data), indent=2, allow_nan=False)
-
-
-# ---------------------------------------------------------------------------------------------
-# blocks -> Markdown / HTML
+# numbers
 # ---------------------------------------------------------------------------------------------
 def _fmt(value, digits: int = 5) -> str:
     if value is None:
         return "n/a"
     if isinstance(value, str):
         return value
-    if isinstance(value, (bool, np.bool_)):
+    if isinstance(value, bool):
         return "yes" if value else "no"
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
+    if isinstance(value, int):
+        return str(value)
     value = float(value)
     if math.isnan(value):
         return "n/a"
@@ -97,95 +70,12 @@ def _percent(value) -> str:
     return f"{100.0 * value:+.2f} %"
 
 
-# Inline Markdown markup (CommonMark + GFM): code, emphasis, links and images, tables,
-# strikethrough; each is a literal character when backslash-escaped (CommonMark 0.31, sec. 2.4).
-_MD_INLINE = re.compile(r"([\\`*\[\]|~])")
-# "_" opens or closes emphasis only at a word boundary (left/right-flanking delimiter runs)
-_MD_UNDERSCORE = re.compile(r"(?<![A-Za-z0-9])_|_(?![A-Za-z0-9])")
-# what turns the start of a line into a block (heading, quote, list, thematic break)
-_MD_BLOCK_START = re.compile(r"^([#>+=-])|^(\d+)([.)])")
-
-
-def markdown_text(text, *, line_start: bool = False) -> str:
-    """Plain text as Markdown that renders as exactly that text.
-
-    ``&``, ``<`` and ``>`` become HTML entities (no raw HTML: a title cannot inject a
-    ``<script>``); inline markup characters are backslash-escaped; line breaks become spaces.
-    ``line_start``: the text begins a line (a paragraph or list item), so block markers
-    (``#``, ``>``, ``-``, ``1.``) at its start are escaped too.
-    """
-    text = str(text).replace("\r", " ").replace("\n", " ")
-    text = html.escape(text, quote=False)
-    text = _MD_INLINE.sub(r"\\\1", text)
-    text = _MD_UNDERSCORE.sub(r"\\_", text)
-    if line_start:
-        text = _MD_BLOCK_START.sub(lambda m: ("\\" + m.group(1)) if m.group(1)
-                                   else f"{m.group(2)}\\{m.group(3)}", text, count=1)
-    return text
-
-
-def markdown(blocks: list) -> str:
-    """Render blocks as Markdown; every text is escaped (:func:`markdown_text`)."""
-    md = markdown_text
-    out = []
-    for block in blocks:
-        kind = block[0]
-        if kind in ("h1", "h2", "h3"):
-            text = md(block[1])
-            # a heading's closing #s would be dropped: escape a final one
-            text = text[:-1] + "\\#" if text.endswith("#") else text
-            out.append("#" * int(kind[1]) + " " + text)
-        elif kind == "p":
-            out.append(md(block[1], line_start=True))
-        elif kind == "ul":
-            out.append("\n".join(f"- {md(item, line_start=True)}" for item in block[1]))
-        elif kind == "table":
-            header, rows = block[1], block[2]
-            lines = ["| " + " | ".join(md(h) for h in header) + " |", "|" + "---|" * len(header)]
-            lines += ["| " + " | ".join(md(c) for c in row) + " |" for row in rows]
-            out.append("\n".join(lines))
-        elif kind == "img":
-            out.append(f"![{md(block[2])}](<{block[1]}>)")
-        elif kind == "pre":
-            fence = "`" * max(3, 1 + max((len(r) for r in re.findall("`+", block[1])),
-                                         default=0))
-            out.append(f"{fence}\n{block[1]}\n{fence}")
-    return "\n\n".join(out) + "\n"
-
-
-def render_html(blocks: list, title: str) -> str:
-    """Render the same blocks as a self-contained HTML page."""
-    esc = html.escape
-    body = []
-    for block in blocks:
-        kind = block[0]
-        if kind in ("h1", "h2", "h3"):
-            body.append(f"<{kind}>{esc(block[1])}</{kind}>")
-        elif kind == "p":
-            body.append(f"<p>{esc(block[1])}</p>")
-        elif kind == "ul":
-            body.append("<ul>" + "".join(f"<li>{esc(i)}</li>" for i in block[1]) + "</ul>")
-        elif kind == "table":
-            head = "".join(f"<th>{esc(h)}</th>" for h in block[1])
-            rows = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in row) + "</tr>"
-                           for row in block[2])
-            body.append(f"<table><thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>")
-        elif kind == "img":
-            body.append(f'<figure><img src="{esc(block[1])}" alt="{esc(block[2])}">'
-                        f"<figcaption>{esc(block[2])}</figcaption></figure>")
-        elif kind == "pre":
-            body.append(f"<pre>{esc(block[1])}</pre>")
-    style = ("body{font-family:sans-serif;max-width:70em;margin:2em auto;padding:0 1em}"
-             "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;"
-             "padding:.2em .5em;text-align:right}th{background:#eee}td:first-child,"
-             "th:first-child{text-align:left}img{max-width:100%}")
-    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>{esc(title)}</title><style>{style}</style></head><body>\n"
-            + "\n".join(body) + "\n</body></html>\n")
+def _label(variant: str) -> str:
+    return design_label(variant)
 
 
 # ---------------------------------------------------------------------------------------------
-# content
+# tables
 # ---------------------------------------------------------------------------------------------
 def equivalence_markdown(table: dict) -> tuple[list, list]:
     """Header and rows of the paper's table with errors against the exact beam."""
@@ -207,69 +97,111 @@ def equivalence_markdown(table: dict) -> tuple[list, list]:
 
 
 METRIC_LABELS = {
-    "overshoot": "overshoot [%]", "settling_time": "settling time [s]",
+    "overshoot": "overshoot [%]", "settling_time": "settling time (2 %) [s]",
     "peak_torque": "peak torque [N m]", "peak_tip_deflection": "peak tip deflection [m]",
     "peak_attitude_error": "peak attitude error [rad]",
-    "final_attitude_error": "final attitude error [rad]",
+    "final_attitude_error": "attitude error at the end [rad]",
 }
 MARGIN_LABELS = {"gain_margin": "gain margin [dB]", "phase_margin": "phase margin [deg]",
-                 "modulus_margin": "modulus margin [-]"}
+                 "modulus_margin": "modulus margin [-]",
+                 "gain_crossover_frequency": "gain crossover [rad/s]",
+                 "phase_crossover_frequency": "phase crossover [rad/s]"}
+_FLAG_TEXT = {"diverges": "diverges", "slew unfinished": "slew unfinished",
+              "not settled": "not settled"}
 
 
-def metric_rows(rows: list, controller: str) -> tuple[list, list]:
-    """Header and rows of the closed-loop metrics of one controller, design vs truth."""
-    mine = [r for r in rows if r["controller"] == controller and "metrics" in r]
+def _cell(row: dict, table: str, which: str, name: str):
+    """A metric's cell: its value, or why it is withheld (toned)."""
+    flag = (row.get(table.replace("metrics", "flags") if table != "metrics" else "metric_flags")
+            or {}).get(which, {}).get(name)
+    if flag is not None:
+        text = _FLAG_TEXT.get(flag, flag)
+        return bad(text) if flag == "diverges" else warn(text)
+    return _fmt((row.get(table) or {}).get(which, {}).get(name))
+
+
+def metric_rows(rows: list, controller: str, table: str = "metrics") -> tuple[list, list]:
+    """Header and rows of the closed-loop metrics of one controller, design vs truth
+    (``table``: ``"metrics"`` of the slew or ``"disturbance_metrics"``)."""
+    mine = [r for r in rows if r["controller"] == controller and r.get(table)]
     header = ["metric"]
     for r in mine:
-        header += [f"{_label(r['design'])}: design", f"{_label(r['design'])}: truth",
-                   "difference"]
+        header += [f"{_label(r['design'])}: on design model", f"{_label(r['design'])}: on "
+                   "truth model", "truth - design"]
     out = []
-    names = list(METRIC_LABELS)
-    for name in names:
-        if not any(name in r["metrics"]["design"] for r in mine):
-            continue
-        row = [METRIC_LABELS[name]]
+    if table == "metrics":
+        status_row = ["response"]
         for r in mine:
-            d, t = r["metrics"]["design"].get(name), r["metrics"]["truth"].get(name)
+            for which in ("design", "truth"):
+                s = r["status"][which]
+                text = s["text"] if s["status"] != "settles" else "settles"
+                status_row.append(bad(text) if s["status"] in ("unstable", "diverges")
+                                  else warn(text) if s["status"] != "settles" else text)
+            status_row.append("")
+        out.append(status_row)
+    for name, label in METRIC_LABELS.items():
+        if not any(name in r[table]["design"] for r in mine):
+            continue
+        row = [label]
+        for r in mine:
+            d, t = r[table]["design"].get(name), r[table]["truth"].get(name)
             diff = None if d is None or t is None else t - d
-            gone = {w: _diverged(r, w) is not None for w in ("design", "truth")}
-            row += ["diverged" if gone["design"] else _fmt(d),
-                    "diverged" if gone["truth"] else _fmt(t),
-                    "-" if any(gone.values()) else _fmt(diff, 3)]
+            row += [_cell(r, table, "design", name), _cell(r, table, "truth", name),
+                    _fmt(diff, 3) if diff is not None else "-"]
         out.append(row)
+    if table != "metrics":
+        return header, out
     for name, label in MARGIN_LABELS.items():
         row = [label]
         for r in mine:
             d, t = r["design_margins"].get(name), r["verdict"].get(name)
             diff = None if d is None or t is None or not (math.isfinite(d) and math.isfinite(t)) \
                 else t - d
-            row += [_fmt(d, 4), _fmt(t, 4), _fmt(diff, 3)]
+            row += [_fmt(d, 4), _margin_cell(name, t), _fmt(diff, 3)]
         out.append(row)
     return header, out
 
 
-def _diverged(row: dict, which: str) -> float | None:
-    """Time [s] at which the ``which`` ("design"/"truth") response of a closed-loop row
-    stopped because it diverged, or None."""
-    return (row.get("diverged") or {}).get(which)
+def _margin_cell(name: str, value):
+    from .verdicts import MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN, MIN_PHASE_MARGIN
+
+    text = _fmt(value, 4)
+    if value is None or not math.isfinite(value):
+        return text
+    low = ((name == "gain_margin" and abs(value) < MIN_GAIN_MARGIN)
+           or (name == "phase_margin" and value < MIN_PHASE_MARGIN)
+           or (name == "modulus_margin" and value < MIN_MODULUS_MARGIN))
+    if name == "phase_margin" and value < 0:
+        return bad(text)
+    return warn(text) if low else text
 
 
-def _divergence(row: dict) -> str:
-    """``"diverges, simulation stopped at t = ... s"`` for a row whose truth (or design)
-    response diverged, else ''."""
-    for which in ("truth", "design"):
-        at = _diverged(row, which)
-        if at is not None:
-            where = "" if which == "truth" else " (on the design model)"
-            return f"diverges{where}, simulation stopped at t = {_fmt(at, 6)} s"
-    return ""
+def _appendage_rows(rows: list, names: list) -> tuple[list, list]:
+    """Peak tip deflection, root force and root moment per appendage, per loop."""
+    from .responses import APPENDAGE_SIGNALS
 
-
-def _label(variant: str) -> str:
-    """Display name of a design variant (a fit criterion)."""
-    from .runner import FIT_LABELS
-
-    return FIT_LABELS.get(variant, variant)
+    header = ["loop", "appendage"]
+    present = [(metric, unit) for _, metric, unit in APPENDAGE_SIGNALS
+               if any(metric in p for r in rows for p in
+                      (r.get("appendages") or {}).get("truth", {}).values())]
+    if not present:
+        return header, []
+    for metric, unit in present:
+        label = metric.replace("peak_", "peak ").replace("_", " ")
+        header += [f"{label} [{unit}]: design", f"{label} [{unit}]: truth"]
+    out = []
+    for r in rows:
+        if "appendages" not in r:
+            continue
+        for name in names:
+            row = [f"{controller_label(r['controller'])} tuned on {_label(r['design'])}", name]
+            for metric, _ in present:
+                for which in ("design", "truth"):
+                    value = r["appendages"][which].get(name, {}).get(metric)
+                    gone = r["status"][which]["status"] in ("unstable", "diverges")
+                    row.append(bad("diverges") if gone else _fmt(value, 4))
+            out.append(row)
+    return header, out
 
 
 def _verdict_rows(rows: list) -> tuple[list, list]:
@@ -281,81 +213,181 @@ def _verdict_rows(rows: list) -> tuple[list, list]:
     out = []
     for r in rows:
         v = r["verdict"]
-        state = "stable" if v["stable"] else f"UNSTABLE ({v['n_unstable_poles']} poles)"
-        if _divergence(r):
-            state = f"UNSTABLE: {_divergence(r)}"
-        row = [_label(r["design"]), r["controller"].upper(), state, _fmt(v["least_damping_ratio"], 3),
-               _fmt(v["least_damped_frequency"], 4), _fmt(v["gain_margin"], 4),
-               _fmt(v["phase_margin"], 4), _fmt(v["modulus_margin"], 3)]
+        status = (r.get("status") or {}).get("truth")
+        if v["stable"]:
+            state = "stable"
+        elif status is not None and status["status"] in ("unstable", "diverges"):
+            state = bad(status["text"])
+        else:
+            state = bad(f"UNSTABLE ({plural(v['n_unstable_poles'], 'pole')})")
+        row = [_label(r["design"]), controller_label(r["controller"]), state,
+               _fmt(v["least_damping_ratio"], 3), _fmt(v["least_damped_frequency"], 4),
+               _margin_cell("gain_margin", v["gain_margin"]),
+               _margin_cell("phase_margin", v["phase_margin"]),
+               _margin_cell("modulus_margin", v["modulus_margin"])]
         if exact:
             e = r.get("exact_verdict", {})
             row.append("n/a" if "stable" not in e else
-                       ("stable" if e["stable"] else f"UNSTABLE ({e['n_unstable_poles']} poles)"))
+                       ("stable" if e["stable"] else
+                        bad(f"UNSTABLE ({plural(e['n_unstable_poles'], 'pole')})")))
         out.append(row)
     return header, out
 
 
-def summary_lines(data: dict) -> list[str]:
-    """Short summary of a run (the CLI prints it)."""
-    lines = []
+# ---------------------------------------------------------------------------------------------
+# summary
+# ---------------------------------------------------------------------------------------------
+def _fidelity_line(data: dict) -> str:
     fid = data.get("fidelity", {})
+    truth = data["truth"]
     if fid.get("n_modes"):
-        how = "chosen for tolerance " + _fmt(fid["choice"]["tolerance"]) if fid.get("choice") \
-            else "given"
-        modes = "mode" if fid["n_modes"] == 1 else "modes"
-        lines.append(f"truth model: {fid['n_modes']} bending {modes} per beam ({fid['method']}, "
-                     f"{how}); "
-                     f"plant {data['truth']['n_states']} states, "
-                     f"{data['truth']['modes_dropped']} modes pruned")
-    else:
-        lines.append(f"truth model: chains, plant {data['truth']['n_states']} states")
-    for r in data.get("closed_loops", []):
-        v = r["verdict"]
-        state = "stable" if v["stable"] else "UNSTABLE"
-        text = (f"{r['controller'].upper()} tuned on {_label(r['design'])}: {state} on truth, phase "
-                f"margin {_fmt(v['phase_margin'], 3)} deg")
-        if _divergence(r):
-            lines.append(f"{r['controller'].upper()} tuned on {_label(r['design'])}: UNSTABLE: "
-                         f"{_divergence(r)}; phase margin {_fmt(v['phase_margin'], 3)} deg")
-            continue
-        if "metrics" in r:
-            m = r["metrics"]["truth"]
-            if "overshoot" in m:
-                text += f", overshoot {_fmt(m['overshoot'], 3)} %"
-            if "peak_tip_deflection" in m:
-                text += f", peak tip deflection {_fmt(m['peak_tip_deflection'], 3)} m"
-        lines.append(text)
+        how = ("chosen for tolerance " + _fmt(fid["choice"]["tolerance"]) if fid.get("choice")
+               else "given")
+        return (f"truth model: {plural(fid['n_modes'], 'bending mode')} per beam "
+                f"({fid['method']}, {how}); plant {plural(truth['n_states'], 'state')}, "
+                f"{plural(truth['modes_dropped'], 'mode')} pruned")
+    return f"truth model: the chains as given; plant {plural(truth['n_states'], 'state')}"
+
+
+def _loop_line(r: dict) -> str | Tone:
+    who = f"{controller_label(r['controller'])} tuned on {_label(r['design'])}"
+    v = r["verdict"]
+    status = (r.get("status") or {}).get("truth")
+    margins = (f"gain margin {_fmt(v['gain_margin'], 3)} dB, phase margin "
+               f"{_fmt(v['phase_margin'], 3)} deg, modulus margin "
+               f"{_fmt(v['modulus_margin'], 3)}")
+    if status is not None and status["status"] in ("unstable", "diverges"):
+        return bad(f"{who}: {status['text']} on the truth model; {margins}")
+    if status is None and not v["stable"]:
+        return bad(f"{who}: UNSTABLE on the truth model "
+                   f"({plural(v['n_unstable_poles'], 'pole')}); {margins}")
+    text = f"{who}: stable on the truth model; {margins}"
+    if status is not None:
+        m = r["metrics"]["truth"]
+        if status["status"] == "slew unfinished":
+            text += "; the simulated time ends before the slew"
+        else:
+            if m.get("overshoot") is not None:
+                text += f"; overshoot {_fmt(m['overshoot'], 3)} %"
+            if m.get("settling_time") is not None:
+                text += f", settles in {_fmt(m['settling_time'], 4)} s"
+            elif status["status"] == "not settled":
+                text += ", does not settle within the simulated time"
+        peaks = r.get("appendages", {}).get("truth", {})
+        tips = [(n, p["peak_tip_deflection"]) for n, p in peaks.items()
+                if p.get("peak_tip_deflection") is not None]
+        if tips:
+            text += "; peak tip deflection " + ", ".join(
+                f"{_fmt(value, 3)} m ({name})" for name, value in tips)
+    return warn(text) if status is not None and status["status"] != "settles" else text
+
+
+def summary_lines(data: dict) -> list:
+    """Short summary of a run (the CLI prints it): the truth model, one line per loop, one per
+    design warning (``warning: ...``)."""
+    lines: list = [_fidelity_line(data)]
+    lines += [_loop_line(r) for r in data.get("closed_loops", [])]
+    b = data.get("basilisk")
+    if b:
+        for kind, entry in b.items():
+            lines.append(f"Basilisk, {controller_label(kind)}: " + entry["summary"])
+    lines += [warn(f"warning: {w['message']}") for w in data.get("design_warnings", [])]
     return lines
 
 
-def _blocks(data: dict, images: list) -> list:
-    b: list = [("h1", data.get("title") or "flexsat report"),
-               ("p", f"Scene: {data['scene']}. Generated by flexsat {data.get('version', '')} "
-                     f"on {data.get('created', '')}."),
-               ("h2", "Summary"), ("ul", summary_lines(data))]
-    b.append(("h2", "Models"))
+# ---------------------------------------------------------------------------------------------
+# sections
+# ---------------------------------------------------------------------------------------------
+def _question(data: dict) -> list:
+    """What the scene asked: hub, appendages, controllers, manoeuvre, outputs."""
+    s = data.get("scene_resolved")
+    if not s:
+        return []
+    items = [f"hub: mass {_fmt(s['hub']['mass'])} kg, inertia {_fmt(s['hub']['inertia'])} "
+             "kg m^2 about its centre of mass"]
+    for a in s["appendages"]:
+        truth = ("distributed beam" if a["truth"] == "beam" else "chain")
+        design = {"fit": "chains fitted to the beam (" + " and ".join(
+            _label(m) for m in (a["fit"] or {}).get("match", [])) + ")",
+                  "chain": "the given chain", "truth": "the truth model itself"}[a["design"]]
+        beam = a.get("beam")
+        what = ""
+        if beam:
+            dims = ", ".join(f"{k} {_fmt(v)}" for k, v in beam["dimensions"].items())
+            what = (f" ({beam['section']}, length {_fmt(beam['length'])} m, {dims}"
+                    + (f", density {_fmt(beam['density'])} kg/m^3, E {_fmt(beam['youngs_modulus'])} Pa"
+                       if beam.get("density") else "")
+                    + f", damping ratio {_fmt(beam['damping_ratio'])})")
+        items.append(f"appendage {a['name']}{what} at ({_fmt(a['position'][0])}, "
+                     f"{_fmt(a['position'][1])}) m, direction "
+                     f"{_fmt(math.degrees(a['direction']), 4)} deg: truth model {truth}, "
+                     f"design model {design}")
+    c = s["controller"]
+    rate = c.get("sample_time")
+    items.append("controllers: " + ", ".join(controller_label(k) for k in c["types"]) + "; "
+                 + (f"digital at {_fmt(1.0 / rate)} Hz (sample time {_fmt(rate)} s, zero-order "
+                    "hold)" if rate else "continuous-time"))
+    m = s.get("manoeuvre")
+    if m:
+        items.append(f"manoeuvre: slew of {_fmt(math.degrees(m['slew_angle']), 5)} deg in "
+                     f"{_fmt(m['slew_time'])} s (cycloidal), simulated for {_fmt(m['duration'])} "
+                     f"s at a step of {_fmt(m['step'])} s")
+        d = m.get("disturbance")
+        if d:
+            unit = "N m" if d["input"] == "disturbance_torque" else "N"
+            length = (f"for {_fmt(d['length'])} s" if d.get("length") is not None
+                      else "to the end")
+            items.append(f"disturbance: {_fmt(d['amplitude'])} {unit} on {d['input']} from "
+                         f"t = {_fmt(d['start'])} s {length} (its response is reported apart "
+                         "from the slew's)")
+    o = s["outputs"]
+    asked = [k.replace("_", " ") for k in ("tip_deflection", "root_loads", "exact_reference")
+             if o.get(k)]
+    items.append("outputs: " + (", ".join(asked) if asked else "attitude, rate and torque only"))
+    sim = s.get("simulator", {})
+    if sim.get("name") == "basilisk":
+        items.append("simulator: flexsat and Basilisk (the design chains, nonlinear)")
+    return [("h2", "The question"), ("ul", items)]
+
+
+def _models(data: dict) -> list:
+    b: list = [("h2", "Models")]
     fid = data["fidelity"]
     truth = data["truth"]
     if fid.get("n_modes"):
-        b.append(("p", f"Truth model: every distributed beam truncated to {fid['n_modes']} "
-                       f"bending modes ({fid['method']}); the coupled plant keeps "
-                       f"{truth['modes_kept']} of {truth['modes_total']} modes "
-                       f"({truth['modes_dropped']} pruned: not excited by the inputs or not seen "
-                       f"by the outputs) and has {truth['n_states']} states."))
+        b.append(("p", f"Truth model: every distributed beam truncated to "
+                       f"{plural(fid['n_modes'], 'bending mode')} ({fid['method']}); the coupled "
+                       f"plant keeps {truth['modes_kept']} of {plural(truth['modes_total'], 'mode')}"
+                       f" ({truth['modes_dropped']} pruned: not excited by the inputs or not "
+                       f"seen by the outputs) and has {plural(truth['n_states'], 'state')}."))
         choice = fid.get("choice")
         if choice:
-            b.append(("p", f"n_modes was chosen for a relative tolerance of "
-                           f"{_fmt(choice['tolerance'])}: coupled frequencies up to "
-                           f"{_fmt(choice['reference_frequencies'][-1], 4)} rad/s and the gain "
+            b.append(("p", f"Why {fid['n_modes']}: n_modes is the smallest number meeting the "
+                           f"relative tolerance {_fmt(choice['tolerance'])} on the coupled "
+                           f"frequencies up to {_fmt(choice['reference_frequencies'][-1], 4)} "
+                           f"rad/s (bandwidth_factor {_fmt(fid.get('bandwidth_factor'))} x the "
+                           "controllers' bandwidth, and the first mode above) and on the gain "
                            f"|theta/torque| on [{_fmt(choice['band'][0], 3)}, "
-                           f"{_fmt(choice['band'][1], 3)}] rad/s against the exact beam."))
+                           f"{_fmt(choice['band'][1], 3)}] rad/s, against the exact beam."))
             b.append(("table", ["n_modes", "frequency error [-]", "gain error [-]"],
                       [[t["n_modes"], _fmt(t["frequency_error"], 3), _fmt(t["gain_error"], 3)]
                        for t in choice["trials"]]))
+        else:
+            b.append(("p", "n_modes was given by the scene (fidelity.n_modes)."))
+        for name, r in truth.get("resolved", {}).items():
+            band = truth.get("loop_band")
+            text = (f"The truth model of {name} ({r['model']}) represents it up to about "
+                    f"{_fmt(r['frequency'], 4)} rad/s")
+            if band is not None:
+                text += (f"; the loops act below {_fmt(band, 4)} rad/s (bandwidth_factor x "
+                         "the fastest crossover)")
+                text = warn(text + ": modes missing there.") if band > r["frequency"] \
+                    else text + "."
+            b.append(("p", text))
     else:
-        b.append(("p", f"Truth model: the chains as given; the plant has {truth['n_states']} "
-                       f"states ({truth['modes_dropped']} of {truth['modes_total']} modes "
-                       "pruned)."))
+        b.append(("p", f"Truth model: the chains as given; the plant has "
+                       f"{plural(truth['n_states'], 'state')} ({truth['modes_dropped']} of "
+                       f"{plural(truth['modes_total'], 'mode')} pruned)."))
     header = ["mode"]
     columns = []
     if "exact" in data:
@@ -370,6 +402,161 @@ def _blocks(data: dict, images: list) -> list:
     b.append(("h3", "Coupled natural frequencies [rad/s]"))
     b.append(("table", header, [[k + 1] + [_fmt(c[k]) if k < len(c) else "-" for c in columns]
                                 for k in range(n)]))
+    return b
+
+
+def _controllers(data: dict) -> list:
+    ctrl = data.get("controllers")
+    if not ctrl:
+        return []
+    b: list = [("h2", "Controllers")]
+    removed = []
+    digital = {(r["design"], r["controller"]): r.get("digital") for r in
+               data.get("closed_loops", [])}
+    for variant, kinds in ctrl.items():
+        for kind, c in kinds.items():
+            who = f"{controller_label(kind)} tuned on {_label(variant)}"
+            b.append(("h3", who))
+            items = [f"control law: {c['structure']}"]
+            if c["kind"] == "pd":
+                items += [f"design inertia J = {_fmt(c['inertia'])} kg m^2 (rigid-body limit of "
+                          "the design plant)",
+                          f"natural frequency wn = {_fmt(c['natural_frequency'])} rad/s, damping "
+                          f"ratio {_fmt(c['damping'])}",
+                          f"Kp = J wn^2 = {_fmt(c['Kp'])} N m/rad, Kd = 2 zeta wn J = "
+                          f"{_fmt(c['Kd'])} N m s/rad",
+                          "roll-off: " + (f"second-order Butterworth at {_fmt(c['roll_off'])} rad/s"
+                                          if c["roll_off"] else "none"),
+                          "notch: " + (f"at {_fmt(c['notch'])} rad/s"
+                                       + (" (the first flexible mode)" if c.get("notch_spec")
+                                          else "") if c["notch"] else "none")]
+            else:
+                items += [f"weights: attitude {_fmt(c['attitude_weight'])} 1/rad^2, rate "
+                          f"{_fmt(c['rate_weight'])} s^2/rad^2, torque {_fmt(c['torque_weight'])}"
+                          " 1/(N m)^2" + (f", tip deflection {_fmt(c['deflection_weight'])} 1/m^2"
+                                          if c.get("deflection_weight") else ""),
+                          f"rigid-body regulator frequency (q / (r J^2))^(1/4) = "
+                          f"{_fmt(c['rigid_body_frequency'], 4)} rad/s; estimator "
+                          f"{_fmt(c['estimator_speed'])} x faster",
+                          f"controller states: {c['n_states']} (the estimate of the design "
+                          "model's states)",
+                          "regulator poles [1/s]: " + _poles_text(c["regulator_poles"]),
+                          "estimator poles [1/s]: " + _poles_text(c["estimator_poles"])]
+            facts = digital.get((variant, kind))
+            if facts:
+                items.append(f"digital: {_fmt(facts['sample_rate'])} Hz (T = "
+                             f"{_fmt(facts['sample_time'])} s), Nyquist frequency pi/T = "
+                             f"{_fmt(facts['nyquist_frequency'], 4)} rad/s"
+                             + (f"; the zero-order hold lags {_fmt(facts['hold_phase_lag_at_crossover'], 3)}"
+                                " deg at the crossover" if "hold_phase_lag_at_crossover" in facts
+                                else ""))
+            else:
+                items.append("continuous-time")
+            b.append(("ul", items))
+            if c["kind"] == "lqr":
+                rows = [[state, _fmt(k, 4), _fmt(l_[0], 4), _fmt(l_[1], 4)]
+                        for state, k, l_ in zip(c["states"], c["K"], c["L"])]
+                b.append(("table", ["design-model state", "K (torque per state)",
+                                    "L (theta innovation)", "L (omega innovation)"], rows))
+            for line in c.get("removed_modes", []):
+                removed.append(f"{who}: {line}")
+    b.append(("h3", "Modes left out of the design and why"))
+    if removed:
+        b.append(("p", "A mode that the loop cannot influence (its participation seen from "
+                       "torque to theta and omega is below controllers.INFLUENCE_TOL, e.g. the "
+                       "symmetric bending of symmetric wings, or undamped and unreachable) is "
+                       "left out of the design's guarantee; it keeps its open-loop eigenvalue "
+                       "in the closed loop:"))
+        b.append(("ul", removed))
+    else:
+        b.append(("p", "None: every mode of the design plants is within the loops' reach."))
+    return b
+
+
+def _poles_text(poles: list) -> str:
+    shown = [p for p in poles if p["im"] >= 0][:6]
+    text = ", ".join(f"{_fmt(p['re'], 3)}" + (f" +/- {_fmt(p['im'], 3)}j" if p["im"] > 0 else "")
+                     for p in shown)
+    more = len([p for p in poles if p["im"] >= 0]) - len(shown)
+    return text + (f" and {more} more" if more > 0 else "")
+
+
+def _closed_loops(data: dict) -> list:
+    rows = data.get("closed_loops", [])
+    if not rows:
+        return []
+    b: list = [("h2", "Closed loops")]
+    for kind in dict.fromkeys(r["controller"] for r in rows):
+        header, mrows = metric_rows(rows, kind)
+        if mrows:
+            b.append(("h3", f"{controller_label(kind)}: the slew, design model vs truth model"))
+            b.append(("table", header, mrows))
+        if any(r.get("disturbance_metrics") for r in rows):
+            header, drows = metric_rows(rows, kind, "disturbance_metrics")
+            if drows:
+                b.append(("h3", f"{controller_label(kind)}: the disturbance alone (theta_ref "
+                                "= 0)"))
+                b.append(("table", header, drows))
+    names = [a["name"] for a in data.get("scene_resolved", {}).get("appendages", [])]
+    header, arows = _appendage_rows(rows, names)
+    if arows:
+        b.append(("h3", "Peaks per appendage during the slew"))
+        b.append(("table", header, arows))
+    b.append(("h3", "Verdicts: spillover and margins on the truth model"))
+    header, vrows = _verdict_rows(rows)
+    b.append(("table", header, vrows))
+    from .verdicts import MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN, MIN_PHASE_MARGIN
+
+    b.append(("p", f"Margins below gain {MIN_GAIN_MARGIN:g} dB, phase {MIN_PHASE_MARGIN:g} deg "
+                   f"or modulus {MIN_MODULUS_MARGIN:g} are marked (Skogestad & Postlethwaite, "
+                   "Multivariable Feedback Control, sec. 2.4.3); an unstable loop's time "
+                   "metrics are withheld: it diverges."))
+    return b
+
+
+def _basilisk(data: dict) -> list:
+    entries = data.get("basilisk")
+    if not entries:
+        return []
+    b: list = [("h2", "Basilisk: the manoeuvre in a nonlinear multibody simulator")]
+    first = next(iter(entries.values()))
+    b.append(("p", f"Basilisk {first['bsk_version']} runs the design chains ("
+                   f"{_label(first['design'])}) with their nonlinear kinematics and each "
+                   f"controller as flight software at {_fmt(first['sample_time'])} s (RK4 step "
+                   f"{_fmt(first['dt'])} s); flexsat predicts the same sampled-data loop on the "
+                   "linear chain and on the truth model (exact at the samples). Peak "
+                   "differences over the manoeuvre, relative to the reference's peak:"))
+    header = ["controller", "signal", "Basilisk - flexsat exact beam (truth)",
+              "Basilisk - flexsat linear chain (nonlinearity)",
+              "flexsat: linear chain - truth (the chain's cost)"]
+    out = []
+    for kind, e in entries.items():
+        d = e["differences"]
+        for name in d.get("basilisk_vs_chain", {}):
+            row = [controller_label(kind), name]
+            for key in ("basilisk_vs_truth", "basilisk_vs_chain", "chain_vs_truth"):
+                v = d.get(key, {}).get(name)
+                row.append("n/a" if v is None else
+                           f"{_fmt(v['peak_difference'], 3)} ({_percent(v['relative'])[1:]})"
+                           if v["relative"] is not None else _fmt(v["peak_difference"], 3))
+            out.append(row)
+        b.append(("p", f"{controller_label(kind)}: {e['summary']}"))
+    b.append(("table", header, out))
+    return b
+
+
+def report_blocks(data: dict, images: list) -> list:
+    """The report as blocks (:mod:`spacecraft.pages`)."""
+    b: list = [("h1", data.get("title") or "flexsat report"),
+               ("p", f"Scene: {data['scene']}. Generated by flexsat {data.get('version', '')} "
+                     f"on {data.get('created', '')}."),
+               ("h2", "Summary"), ("ul", summary_lines(data))]
+    if data.get("design_warnings"):
+        b.append(("h2", "Warnings"))
+        b.append(("ul", [warn(w["message"]) for w in data["design_warnings"]]))
+    b += _question(data)
+    b += _models(data)
+    b += _controllers(data)
     for table in data.get("equivalence", []):
         b.append(("h2", f"Equivalence criterion: {table['appendage']}"))
         b.append(("p", "The paper's quantities (m, J, L, gains k_r, zeros n_r1, n_r2, natural "
@@ -378,254 +565,47 @@ def _blocks(data: dict, images: list) -> list:
                        "largest |ln(W_r/W_r,exact)| over the band (gain and phase error of W)."))
         header, rows = equivalence_markdown(table)
         b.append(("table", header, rows))
-    rows = data.get("closed_loops", [])
-    if rows:
-        b.append(("h2", "Closed loops"))
-        for kind in dict.fromkeys(r["controller"] for r in rows):
-            header, mrows = metric_rows(rows, kind)
-            b.append(("h3", f"{kind.upper()}: design model vs truth model"))
-            b.append(("table", header, mrows))
-        b.append(("h3", "Verdicts: spillover and margins on the truth model"))
-        header, vrows = _verdict_rows(rows)
-        b.append(("table", header, vrows))
+    b += _closed_loops(data)
+    b += _basilisk(data)
     if images:
         b.append(("h2", "Plots"))
         for path, caption in images:
             b.append(("img", path, caption))
-    files = data.get("files", {}).get("fmu", [])
-    if files:
+    files = data.get("files", {})
+    if files.get("fmu") or files.get("ssp"):
         b.append(("h2", "FMUs"))
-        b.append(("ul", [f"{f['path']}: {f['description']}" for f in files]))
+        b.append(("ul", [f"{f['path']}: {f['description']}" for f in
+                         files.get("fmu", []) + files.get("ssp", [])]))
+    if files.get("timeseries"):
+        b.append(("h2", "Time series"))
+        b.append(("p", "Every response as CSV (time and every signal, SI units in the header), "
+                       "listed in results.json under files.timeseries:"))
+        b.append(("ul", [f"{f['path']}: {controller_label(f['controller'])} tuned on "
+                         f"{_label(f['design']) if f['design'] else 'the design chain'}, "
+                         f"{f['input']} on the {f['model']} model" for f in files["timeseries"]]))
     if data.get("warnings"):
-        b.append(("h2", "Warnings"))
-        b.append(("p", "Numerical warnings raised while running the scene (each once):"))
+        b.append(("h2", "Numerical warnings"))
+        b.append(("p", "Warnings raised by the numerical libraries while running the scene "
+                       "(each once):"))
         b.append(("ul", list(data["warnings"])))
     stats = data.get("stats", {})
     b.append(("h2", "Work done"))
-    b.append(("p", ", ".join(f"{k} {v}" for k, v in stats.items() if k != "seconds")))
+    b.append(("p", _work(stats)))
     return b
 
 
-# ---------------------------------------------------------------------------------------------
-# plots
-# ---------------------------------------------------------------------------------------------
-def _figure(rows: int, cols: int, size):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    # a fixed layout: constrained layout redraws every figure several times (half the cost)
-    fig = Figure(figsize=size)
-    FigureCanvasAgg(fig)
-    fig.subplots_adjust(left=0.09, right=0.98, bottom=0.08, top=0.92, hspace=0.35, wspace=0.25)
-    return fig, fig.subplots(rows, cols, squeeze=False)
-
-
-def _trace(response, name):
-    labels = list(response.output_labels)
-    if name not in labels:
-        return None
-    return np.asarray(response.y).reshape(len(labels), -1)[labels.index(name)]
-
-
-#: Points drawn per curve: a longer response is drawn as its min/max envelope (peaks kept).
-_PLOT_POINTS = 4000
-
-
-def _envelope(t: np.ndarray, y: np.ndarray, points: int = _PLOT_POINTS):
-    """``(t, y)`` to draw: all samples when few, else the min and max of each of ``points / 2``
-    buckets in time order, so that a plot of 10^7 samples costs what one of 10^4 does."""
-    per = t.size // (points // 2)
-    if per < 2:
-        return t, y
-    m = (t.size // per) * per
-    tb, yb = t[:m].reshape(-1, per), y[:m].reshape(-1, per)
-    lo, hi = np.argmin(yb, axis=1), np.argmax(yb, axis=1)
-    first, second = np.minimum(lo, hi), np.maximum(lo, hi)
-    rows = np.arange(tb.shape[0])
-    tt = np.stack([tb[rows, first], tb[rows, second]], axis=1).reshape(-1)
-    yy = np.stack([yb[rows, first], yb[rows, second]], axis=1).reshape(-1)
-    return np.concatenate([tt, t[m:]]), np.concatenate([yy, y[m:]])
-
-
-def _plot_slews(result, folder: Path) -> list:
-    from .runner import diverged_at
-
-    out = []
-    kinds = list(dict.fromkeys(k[1] for k in result.responses))
-    for kind in kinds:
-        keys = [k for k in result.responses if k[1] == kind]
-        first = result.responses[keys[0]]
-        tips = [n for n in first.output_labels if n.endswith("tip_deflection")]
-        signals = [("theta", "deg"), ("torque", "N m")] + [(n, "m") for n in tips[:2]]
-        fig, axes = _figure(len(signals), 1, (9, 2.4 * len(signals)))
-        for ax, (name, unit) in zip(axes[:, 0], signals):
-            curves = []
-            for variant, _, which in keys:
-                resp = result.responses[(variant, kind, which)]
-                y = _trace(resp, name)
-                if y is None:
-                    continue
-                with np.errstate(over="ignore", invalid="ignore"):
-                    y = np.degrees(y) if name == "theta" else np.asarray(y, dtype=float)
-                label = f"{_label(variant)}: {which}"
-                at = diverged_at(resp)
-                if at is not None:
-                    label += f" (diverges, stopped at t = {_fmt(at, 4)} s)"
-                curves.append((np.asarray(resp.t, dtype=float).reshape(-1), y, which, label,
-                               at is not None))
-            # a diverging response would squash the others to a line: the axis shows the
-            # range of the bounded ones, and the diverging one is clipped just outside it
-            bounded = [y for _, y, _, _, gone in curves if not gone and y.size]
-            if bounded and any(gone for *_, gone in curves):
-                lo = min(float(np.min(y)) for y in bounded)
-                hi = max(float(np.max(y)) for y in bounded)
-                pad = 0.2 * (hi - lo) or 1.0
-                lo, hi = lo - pad, hi + pad
-            else:
-                lo = hi = None
-            for t, y, which, label, gone in curves:
-                if gone and lo is not None:
-                    y = np.clip(y, lo - (hi - lo), hi + (hi - lo))
-                ax.plot(*_envelope(t, y), "-" if which == "truth" else "--", label=label)
-            if lo is not None:
-                ax.set_ylim(lo, hi)
-            ax.set_ylabel(f"{name} [{unit}]")
-            ax.grid(True)
-            ax.legend(fontsize="small", loc="best")
-        axes[-1, 0].set_xlabel("time [s]")
-        fig.suptitle(f"{kind.upper()} slew: design model (chain) vs truth model")
-        path = folder / f"slew_{kind}.png"
-        fig.savefig(path, dpi=100)
-        out.append((path, f"{kind.upper()} slew responses: theta, torque, tip deflection; "
-                          "design vs truth"))
-    return out
-
-
-def _plot_bode(result, folder: Path, stats, exact: bool) -> list:
-    scene = result.scene
-    a = scene.appendages[0]
-    models = result.models[a.name]
-    curves = []
-    if exact and "beam" in models and a.truth == "beam":
-        curves.append(("beam (exact)", models["beam"], "-"))
-        stats.exact_reference_evaluations += 1
-    curves.append((f"truth model ({type(models['truth']).__name__})", models["truth"], "--"))
-    for match, chain in models.get("fits", {}).items():
-        from .runner import FIT_LABELS
-
-        curves.append((FIT_LABELS.get(match, match), chain, ":"))
-    if not models.get("fits"):
-        for variant, d in result.designs.items():
-            model = d["appendages"][a.name]
-            if model is not models["truth"]:
-                curves.append((f"design ({type(model).__name__})", model, ":"))
-    w_ref = []
-    for _, model, _ in curves:
-        if hasattr(model, "poles"):
-            w_ref.append(float(np.asarray(model.poles())[0]))
-    w1 = min(w_ref) if w_ref else 1.0
-    omega = np.geomspace(w1 / 30.0, w1 * 30.0, 800)
-    s = 1j * omega
-    fig, axes = _figure(2, 2, (11, 7))
-    entries = [((0, 0), "W1 = delta/F_y [m/N]"), ((0, 1), "W2 = W3 = delta/M [1/N]"),
-               ((1, 1), "W4 = phi/M [1/(N m)]")]
-    for label, model, style in curves:
-        W = model.W(s)
-        for (i, j), title in entries:
-            axes[i if (i, j) != (1, 1) else 1, j].loglog(omega, np.abs(W[:, i, j]), style,
-                                                         label=label)
-    for (i, j), title in entries:
-        ax = axes[i, j]
-        ax.set_title(title, fontsize="medium")
-        ax.grid(True)
-        ax.minorticks_off()  # hundreds of minor log ticks cost seconds to draw
-        ax.set_xlabel("frequency [rad/s]")
-        ax.legend(fontsize="small")
-    axes[1, 0].axis("off")
-    axes[1, 0].text(0.0, 0.5, f"appendage '{a.name}' at its attachment end\n(free appendage, "
-                              "rigid-body term included)", fontsize="medium")
-    fig.suptitle("Bode magnitude of W_r")
-    path = folder / "bode_W.png"
-    fig.savefig(path, dpi=100)
-    return [(path, "Bode magnitude of W_r: exact beam, truncated beam, chains")]
-
-
-def _plot_pole_zero(result, folder: Path) -> list:
-    import control
-
-    fig, axes = _figure(1, 1, (8, 6))
-    ax = axes[0, 0]
-    plants = [("truth", result.truth["verdict"], "C0")]
-    for k, (variant, d) in enumerate(result.designs.items()):
-        plants.append((f"design: {variant}", d["plant"], f"C{k + 1}"))
-    for label, plant, color in plants:
-        siso = plant[list(plant.output_labels).index("theta"),
-                     list(plant.input_labels).index("torque")]
-        poles = np.asarray(control.poles(siso))
-        zeros = np.asarray(control.zeros(siso))
-        ax.plot(poles.real, poles.imag, "x", color=color, label=f"poles, {label}")
-        ax.plot(zeros.real, zeros.imag, "o", mfc="none", color=color, label=f"zeros, {label}")
-    ax.set_xlabel("Re s [1/s]")
-    ax.set_ylabel("Im s [rad/s]")
-    ax.axvline(0.0, color="gray", lw=0.5)
-    ax.grid(True)
-    ax.legend(fontsize="small")
-    fig.suptitle("Poles and zeros of theta/torque")
-    path = folder / "pole_zero.png"
-    fig.savefig(path, dpi=100)
-    return [(path, "Pole/zero map of theta/torque: truth and design plants")]
-
-
-# ---------------------------------------------------------------------------------------------
-# FMUs
-# ---------------------------------------------------------------------------------------------
-def _fmu_jobs(result) -> list:
-    """(name, system, description) of every FMU the scene asks for."""
-    scene = result.scene
-    primary = next(iter(result.designs))
-    jobs = []
-    if "plant" in scene.export.systems:
-        jobs.append(("plant", result.truth["sim"], "truth plant (hub + appendages)"))
-    for kind, K in result.designs[primary]["controllers"].items():
-        if "controller" in scene.export.systems:
-            jobs.append((kind, K, f"{kind.upper()} controller tuned on {_label(primary)}"))
-        if "closed_loop" in scene.export.systems:
-            loop = result.loops.get((primary, kind, "truth"))
-            if loop is None:
-                import controllers
-
-                loop = controllers.close_loop(result.truth["sim"], K)
-            jobs.append((f"closed_loop_{kind}", loop,
-                         f"{kind.upper()} loop closed on the truth plant"))
-    return jobs
-
-
-def _start_fmu_exports(result, folder: Path, pool) -> list:
-    """Submit the FMU builds to a thread pool; returns [(job, future)]."""
-    import fmu
-
-    scene = result.scene
-    step = scene.export.step or (scene.manoeuvre.step if scene.manoeuvre else None)
-    stop = scene.manoeuvre.duration if scene.manoeuvre else 100.0 * step
-
-    def build(job):
-        name, system, description = job
-        return fmu.export(system, folder / f"{name}.fmu", model_name=name, step=step,
-                          stop_time=stop, reference=scene.export.reference_files,
-                          description=f"flexsat: {description}")
-
-    return [(job, pool.submit(build, job)) for job in _fmu_jobs(result)]
-
-
-def _finish_fmu_exports(started: list, stats) -> list:
-    out = []
-    for (name, system, description), future in started:
-        path = future.result()
-        stats.fmu_builds += 1
-        out.append({"path": f"fmu/{path.name}", "description": description,
-                    "inputs": list(system.input_labels), "outputs": list(system.output_labels),
-                    "n_states": int(system.nstates)})
-    return out
+def _work(stats: dict) -> str:
+    parts = [plural(stats.get("chain_fits", 0), "chain fit"),
+             plural(stats.get("pd_designs", 0) + stats.get("lqr_designs", 0),
+                    "controller design"),
+             plural(stats.get("simulations", 0), "simulation"),
+             plural(stats.get("plots", 0), "plot"),
+             plural(stats.get("fmu_builds", 0), "FMU") + " built",
+             plural(stats.get("exact_reference_evaluations", 0), "exact-beam evaluation")]
+    seconds = stats.get("seconds", {})
+    if seconds:
+        parts.append("time per stage: " + ", ".join(f"{k} {v:.2f} s" for k, v in seconds.items()))
+    return "; ".join(parts) + " (every counter in results.json, stats)."
 
 
 # ---------------------------------------------------------------------------------------------
@@ -643,7 +623,7 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
     fmus, plots : bool, optional
         Override the scene's ``export.fmu`` / ``report.plots`` (False: skip).
     pages : bool
-        Write report.md, report.html and results.json (False: FMUs only).
+        Write report.md, report.html, results.json and the time series (False: FMUs only).
     progress : callable, optional
         Called with a short message per step.
 
@@ -653,6 +633,8 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
         The results (``result.data`` plus ``files``, ``version``, ``created``), as written to
         results.json.
     """
+    from .exports import finish_exports, start_exports, write_ssps
+
     folder = Path(folder)
     progress = progress or (lambda message: None)
     scene = result.scene
@@ -660,33 +642,38 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
     do_fmus = scene.export.fmu if fmus is None else (fmus and scene.export.fmu)
     wanted_plots = scene.report.plots if plots is None or plots else ()
     data = dict(result.data)
-    data["version"] = _version()
+    data["version"] = version()
     data["created"] = datetime.datetime.now().isoformat(timespec="seconds")
     files: dict = {"fmu": [], "plots": []}
     # The C compiler runs in subprocesses: the FMU builds (two at a time, both cores) proceed
     # while the plots are drawn.
-    pool = concurrent.futures.ThreadPoolExecutor(max_workers=2)
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=2) if do_fmus else None
     try:
         started = []
         if do_fmus:
             (folder / "fmu").mkdir(exist_ok=True)
-            started = _start_fmu_exports(result, folder / "fmu", pool)
-            progress(f"exporting {len(started)} FMUs")
+            started = start_exports(result, folder / "fmu", pool)
+            progress(f"exporting {plural(len(started), 'FMU')}")
         images = _plots(result, folder, wanted_plots if pages else (), progress)
         if started:
             progress("waiting for the FMU builds")
-        files["fmu"] = _finish_fmu_exports(started, stats)
+        files["fmu"] = finish_exports(started, stats)
+        if do_fmus and scene.export.ssp:
+            files["ssp"] = write_ssps(result, folder / "fmu", files["fmu"])
     finally:
         # on an error or a signal the builds not yet started are dropped; running ones (a few
         # tenths of a second of gcc) finish before the folder is removed
-        pool.shutdown(wait=True, cancel_futures=True)
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
     images = [(f"plots/{Path(p).name}", caption) for p, caption in images]
     files["plots"] = [p for p, _ in images]
+    if pages and scene.report.timeseries and (result.responses or result.basilisk):
+        files["timeseries"] = write_timeseries(result, folder / "timeseries")
     data["files"] = files
     data["stats"] = stats.as_dict()
     if pages:
         progress("writing report")
-        blocks = _blocks(data, images)
+        blocks = report_blocks(data, images)
         (folder / "report.md").write_text(markdown(blocks), encoding="utf-8")
         (folder / "report.html").write_text(render_html(blocks, data.get("title") or "flexsat"),
                                             encoding="utf-8")
@@ -697,26 +684,30 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
 
 def _plots(result, folder: Path, wanted, progress) -> list:
     """Draw the plots asked for; returns [(path, caption)]."""
-    scene, stats = result.scene, result.stats
-    images = []
     if not wanted:
-        return images
+        return []
+    from .plots import draw
+
     (folder / "plots").mkdir(exist_ok=True)
     progress("plotting")
-    if "slew" in wanted and result.responses:
-        images += _plot_slews(result, folder / "plots")
-    if "bode" in wanted:
-        images += _plot_bode(result, folder / "plots", stats, scene.outputs.exact_reference)
-    if "pole_zero" in wanted:
-        images += _plot_pole_zero(result, folder / "plots")
-    stats.plots += len(images)
-    return images
+    return draw(result, folder / "plots", wanted, result.stats,
+                exact=result.scene.outputs.exact_reference)
 
 
-def _version() -> str:
+def version() -> str:
+    """flexsat's version: pyproject.toml's in a source checkout, else the installed
+    distribution's, else ``"unknown"``."""
+    root = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    if root.is_file():
+        import tomllib
+
+        try:
+            return tomllib.loads(root.read_text(encoding="utf-8"))["project"]["version"]
+        except (OSError, KeyError, tomllib.TOMLDecodeError):
+            pass
     try:
-        from importlib.metadata import version
+        from importlib.metadata import version as installed
 
-        return version("flexsat")
-    except Exception:  # not installed (a source checkout)
+        return installed("flexsat")
+    except Exception:  # not installed
         return "unknown"

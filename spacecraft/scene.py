@@ -113,11 +113,35 @@ key                                    unit       meaning
                                                   ``"closed_loop"``; default all three
 ``export.reference_files``             -          FMI cross-check files; default true
 ``export.step``                        s          FMU communication step; default manoeuvre
-                                                  step
-``report.plots``                       -          true (all), false, or a list of ``"slew"``,
-                                                  ``"bode"``, ``"pole_zero"``; default false
+                                                  step (a digital controller's FMU samples at
+                                                  its own sample time whatever the step)
+``export.fmi_version``                 -          ``"2.0"`` (default), ``"3.0"`` or a list of
+                                                  both (one set of FMUs per version)
+``export.sources_only``                -          FMUs without a binary (C sources and build
+                                                  description only); default false
+``export.ssp``                         -          also an SSP file per controller connecting
+                                                  plant and controller FMUs; needs both in
+                                                  ``export.systems``; default false
+``report.plots``                       -          true (all), false, or a list of ``"slew"``
+                                                  (responses), ``"loop"`` (Bode and Nyquist of
+                                                  L(j omega)), ``"poles"`` (closed-loop poles),
+                                                  ``"W"`` (W(s) of every appendage); default
+                                                  false (``"bode"``, ``"pole_zero"``: old names
+                                                  of ``"W"``, ``"poles"``)
 ``report.equivalence``                 -          equivalence table of fitted chains; default
                                                   true when a chain is fitted
+``report.timeseries``                  -          the responses as CSV files beside
+                                                  results.json; default true
+``simulator.name``                     -          ``"flexsat"`` (default) or ``"basilisk"``:
+                                                  the manoeuvre also in Basilisk, on the design
+                                                  chains (needs ``flexsat[basilisk]``)
+``simulator.sample_rate``              Hz         Basilisk's flight-software rate; default the
+                                                  controller's, else 30 per crossover period
+``simulator.dt``                       s          Basilisk's RK4 step (divides the sample
+                                                  time); default from the highest mode
+``simulator.reaction_wheel.spin_inertia``  kg m^2  torque through a reaction wheel about z
+``simulator.reaction_wheel.max_torque``  N m      its motor torque limit; default none
+``simulator.reaction_wheel.max_speed``  rad/s     its speed limit; default none
 ``limits.<name>``                      -          raise (or lower) a work limit (table "Limits")
 =====================================  =========  ==============================================
 
@@ -167,6 +191,11 @@ rigid-body LQR frequency (q / (r J^2))^(1/4), derived 1e-5 .. 1e3          rad/s
 ``manoeuvre.disturbance.amplitude``                   1e-12 <= |x| <= 1e9  N, N m
 ``manoeuvre.disturbance.start``                       0 .. < duration      s
 ``manoeuvre.disturbance.length``                      1e-9 .. 1e10         s
+``simulator.sample_rate``                             1e-3 .. 1e6          Hz
+``simulator.dt``                                      1e-9 .. 1e3          s
+``simulator.reaction_wheel.spin_inertia``             1e-9 .. 1e6          kg m^2
+``simulator.reaction_wheel.max_torque``               1e-9 .. 1e6          N m
+``simulator.reaction_wheel.max_speed``                1e-3 .. 1e6          rad/s
 ====================================================  ===================  ==================
 
 Limits (work a scene may ask for; :mod:`spacecraft.limits` has the measurements behind them).
@@ -201,18 +230,21 @@ import importlib.resources
 import math
 import numbers
 import os
-import re
 import tomllib
-import unicodedata
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from appendages.interface import FlexsatError
-
 from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, Limits, estimate_cost
+from .scene_reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
+                           _NAME, _Reader, _kind, _quoted, _short, _shown)
+from .scene_specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLOT_ALIASES,
+                          PLOTS, SECTIONS, SIMULATORS, AppendageSpec, BeamSpec, ChainSpec,
+                          ControllerSpec, DisturbanceSpec, ExportSpec, FidelitySpec, FitSpec,
+                          HubSpec, LQRSpec, ManoeuvreSpec, OutputsSpec, PDSpec,
+                          ReactionWheelSpec, ReportSpec, Scene, SimulatorSpec, scene_dict)
 
 __all__ = [
     "SceneError",
@@ -231,524 +263,19 @@ __all__ = [
     "OutputsSpec",
     "ExportSpec",
     "ReportSpec",
+    "SimulatorSpec",
+    "ReactionWheelSpec",
     "load_scene",
     "default_scene",
     "example_scenes",
     "scene_path",
+    "scene_dict",
     "read_limits",
     "RANGES",
     "BEAM_FREQUENCY_RANGE",
     "NAME_LENGTH",
+    "PLOTS",
 ]
-
-PLOTS = ("slew", "bode", "pole_zero")
-EXPORTABLE = ("plant", "controller", "closed_loop")
-SECTIONS = ("rod", "tube", "rectangular", "uniform")
-MATCHES = ("poles-and-zeros", "frequencies")
-METHODS = ("craig-bampton", "residual", "free-free")
-CONTROLLERS = ("pd", "lqr")
-
-
-class SceneError(FlexsatError, ValueError):
-    """A scene that cannot be run: names the file, the key path and the problem."""
-
-
-# ---------------------------------------------------------------------------------------------
-# the validated scene (SI units inside)
-# ---------------------------------------------------------------------------------------------
-@dataclasses.dataclass(frozen=True)
-class HubSpec:
-    """Hub: mass [kg], inertia about its centre of mass [kg m^2]."""
-
-    mass: float
-    inertia: float
-
-
-@dataclasses.dataclass(frozen=True)
-class BeamSpec:
-    """A uniform beam by section and material (SI units; see the module table)."""
-
-    section: str
-    length: float
-    dimensions: tuple          # (key, value) pairs: section dimensions [m], or EJ [N m^2] and
-    #                            rho*A [kg/m] for "uniform"
-    density: float | None      # kg/m^3
-    youngs_modulus: float | None  # Pa
-    damping_ratio: float
-
-    def build(self):
-        """The :class:`appendages.Beam`."""
-        from appendages import Beam
-
-        d, z = dict(self.dimensions), self.damping_ratio
-        if self.section == "rod":
-            return Beam.circular_rod(self.length, d["diameter"], self.density,
-                                     self.youngs_modulus, damping_ratio=z)
-        if self.section == "tube":
-            return Beam.tube(self.length, d["outer_diameter"], d["wall_thickness"], self.density,
-                             self.youngs_modulus, damping_ratio=z)
-        if self.section == "rectangular":
-            return Beam.rectangular(self.length, d["width"], d["thickness"], self.density,
-                                    self.youngs_modulus, damping_ratio=z)
-        return Beam(self.length, d["bending_stiffness"], d["linear_density"], damping_ratio=z)
-
-
-@dataclasses.dataclass(frozen=True)
-class ChainSpec:
-    """A hinged chain: explicit arrays, or rigid finite elements of the appendage's beam."""
-
-    root: str = "rigid"
-    lengths: tuple | None = None
-    masses: tuple | None = None
-    inertias: tuple | None = None
-    hinge_stiffnesses: tuple | None = None
-    hinge_dampings: tuple | None = None
-    com_offsets: tuple | None = None
-    from_beam: str | None = None
-    n_bodies: int | None = None
-    root_stiffness: float | None = None
-    root_damping: float = 0.0
-
-
-@dataclasses.dataclass(frozen=True)
-class FitSpec:
-    """Chain fit: number of bodies and one or more matching criteria."""
-
-    n_bodies: int = 3
-    match: tuple = MATCHES
-
-
-@dataclasses.dataclass(frozen=True)
-class AppendageSpec:
-    """One mounted appendage: name, mount (position [m], direction [rad]) and its models."""
-
-    name: str
-    position: tuple
-    direction: float
-    truth: str
-    design: str
-    beam: BeamSpec | None
-    chain: ChainSpec | None
-    fit: FitSpec | None
-    truth_chain: ChainSpec | None = None
-
-
-@dataclasses.dataclass(frozen=True)
-class FidelitySpec:
-    """Truth-model fidelity: a fixed n_modes, or a tolerance from which n_modes is chosen."""
-
-    n_modes: int | None = None
-    tolerance: float | None = 1e-3
-    method: str = "craig-bampton"
-    bandwidth_factor: float = 5.0
-    prune: bool = True
-
-
-@dataclasses.dataclass(frozen=True)
-class PDSpec:
-    """PD specification (rad/s, damping ratio)."""
-
-    natural_frequency: float | None = None
-    bandwidth: float | None = None
-    damping: float = 0.7
-    roll_off: float | None = None
-    notch: float | str | None = None
-
-
-@dataclasses.dataclass(frozen=True)
-class LQRSpec:
-    """LQR weights (1/rad^2, s^2/rad^2, 1/(N m)^2, 1/m^2) and estimator speed ratio."""
-
-    attitude_weight: float
-    torque_weight: float
-    rate_weight: float = 0.0
-    deflection_weight: float | None = None
-    estimator_speed: float = 3.0
-
-
-@dataclasses.dataclass(frozen=True)
-class ControllerSpec:
-    """Controllers to tune on the design model and their sample time [s] (None: continuous)."""
-
-    types: tuple
-    pd: PDSpec | None
-    lqr: LQRSpec | None
-    sample_time: float | None = None
-
-
-@dataclasses.dataclass(frozen=True)
-class DisturbanceSpec:
-    """A rectangular pulse on a plant disturbance input (N or N m), from start [s] for length [s]."""
-
-    input: str
-    amplitude: float
-    start: float = 0.0
-    length: float | None = None
-
-
-@dataclasses.dataclass(frozen=True)
-class ManoeuvreSpec:
-    """Slew of slew_angle [rad] in slew_time [s], simulated for duration [s] at step [s]."""
-
-    slew_angle: float
-    slew_time: float
-    duration: float
-    step: float
-    disturbance: DisturbanceSpec | None = None
-
-
-@dataclasses.dataclass(frozen=True)
-class OutputsSpec:
-    """Which outputs to build: tip deflections, root loads, exact-beam references."""
-
-    tip_deflection: bool = False
-    root_loads: bool = False
-    exact_reference: bool = False
-
-
-@dataclasses.dataclass(frozen=True)
-class ExportSpec:
-    """FMU export: whether, which systems, cross-check files, communication step [s]."""
-
-    fmu: bool = False
-    systems: tuple = EXPORTABLE
-    reference_files: bool = True
-    step: float | None = None
-
-
-@dataclasses.dataclass(frozen=True)
-class ReportSpec:
-    """Plots wanted and whether to tabulate the equivalence criterion."""
-
-    plots: tuple = ()
-    equivalence: bool = True
-
-
-@dataclasses.dataclass(frozen=True)
-class Scene:
-    """A validated scene (SI units). Build it with :func:`load_scene` or :func:`default_scene`."""
-
-    title: str
-    source: str
-    hub: HubSpec
-    appendages: tuple
-    fidelity: FidelitySpec
-    controller: ControllerSpec
-    manoeuvre: ManoeuvreSpec | None
-    outputs: OutputsSpec
-    export: ExportSpec
-    report: ReportSpec
-    limits: Limits = Limits()
-
-    def replace(self, **changes) -> "Scene":
-        """A copy with some top-level parts replaced (e.g. ``export=ExportSpec(fmu=False)``)."""
-        return dataclasses.replace(self, **changes)
-
-    @property
-    def has_beam_truth(self) -> bool:
-        """True if some appendage's truth model is a distributed beam."""
-        return any(a.truth == "beam" for a in self.appendages)
-
-    @property
-    def design_variants(self) -> tuple:
-        """Labels of the design models: one per fit criterion (or ``("design",)``)."""
-        matches: list = []
-        for a in self.appendages:
-            if a.design == "fit":
-                for m in a.fit.match:
-                    if m not in matches:
-                        matches.append(m)
-        return tuple(matches) if matches else ("design",)
-
-
-# ---------------------------------------------------------------------------------------------
-# ranges of the values (SI units inside; the file's units where they differ)
-# ---------------------------------------------------------------------------------------------
-@dataclasses.dataclass(frozen=True)
-class _Range:
-    """Accepted values of one kind of key: ``lo <= |value| <= hi`` in ``unit``.
-
-    sign: ``"positive"`` (value > 0), ``"non-negative"`` (0 allowed besides the range),
-    ``"signed"`` (either sign, 0 allowed), ``"non-zero"`` (either sign, not 0).
-    ``below``: the upper end is excluded.
-    """
-
-    unit: str
-    lo: float
-    hi: float
-    sign: str = "positive"
-    below: bool = False
-
-
-#: Accepted values per key (without the appendage index). Values outside are refused by name:
-#: they are outside what flexsat's models and numerics are verified for (see the module table).
-RANGES = {
-    "hub.mass": _Range("kg", 1e-3, 1e7),
-    "hub.inertia": _Range("kg*m^2", 1e-6, 1e10),
-    "position": _Range("m", 0.0, 1e3, "signed"),
-    "direction": _Range("deg", 0.0, 360.0, "signed"),
-    "direction vector": _Range("-", 0.0, 1e6, "signed"),
-    "beam.length": _Range("m", 1e-2, 1e3),
-    "beam.section": _Range("m", 1e-5, 10.0),
-    "beam.wall_thickness": _Range("m", 1e-6, 5.0),
-    "beam.density": _Range("kg/m^3", 1.0, 1e5),
-    "beam.youngs_modulus": _Range("Pa", 1e5, 1e13),
-    "beam.bending_stiffness": _Range("N*m^2", 1e-6, 1e12),
-    "beam.linear_density": _Range("kg/m", 1e-6, 1e5),
-    "beam.damping_ratio": _Range("-", 0.0, 1.0, "non-negative", below=True),
-    "chain.lengths": _Range("m", 1e-3, 1e3),
-    "chain.masses": _Range("kg", 1e-6, 1e7),
-    "chain.inertias": _Range("kg*m^2", 1e-12, 1e10, "non-negative"),
-    "chain.hinge_stiffnesses": _Range("N*m/rad", 1e-6, 1e12),
-    "chain.hinge_dampings": _Range("N*m*s/rad", 1e-12, 1e12, "non-negative"),
-    "chain.com_offsets": _Range("m", 1e-12, 1e3, "non-negative"),
-    "chain.root_stiffness": _Range("N*m/rad", 1e-6, 1e12),
-    "chain.root_damping": _Range("N*m*s/rad", 1e-12, 1e12, "non-negative"),
-    "fidelity.tolerance": _Range("-", 1e-12, 0.5),
-    "fidelity.bandwidth_factor": _Range("-", 1.0, 1e3),
-    "controller.sample_rate": _Range("Hz", 1e-3, 1e6),
-    "pd.frequency": _Range("rad/s", 1e-5, 1e3),
-    "pd.damping": _Range("-", 1e-3, 10.0),
-    "pd.filter": _Range("rad/s", 1e-5, 1e6),
-    "lqr.attitude_weight": _Range("1/rad^2", 1e-12, 1e12),
-    "lqr.rate_weight": _Range("s^2/rad^2", 1e-12, 1e12, "non-negative"),
-    "lqr.torque_weight": _Range("1/(N*m)^2", 1e-12, 1e12),
-    "lqr.deflection_weight": _Range("1/m^2", 1e-12, 1e12, "non-negative"),
-    "lqr.estimator_speed": _Range("-", 0.1, 100.0),
-    "manoeuvre.slew_angle": _Range("deg", 1e-6, 360.0, "non-zero"),
-    "manoeuvre.slew_time": _Range("s", 1e-3, 1e8),
-    "manoeuvre.duration": _Range("s", 1e-3, 1e10),
-    "manoeuvre.step": _Range("s", 1e-9, 1e6),
-    "disturbance.amplitude": _Range("N, N*m", 1e-12, 1e9, "non-zero"),
-    "disturbance.start": _Range("s", 1e-12, 1e10, "non-negative"),
-    "disturbance.length": _Range("s", 1e-9, 1e10),
-    "export.step": _Range("s", 1e-9, 1e6),
-}
-
-#: First free-free bending frequency of a beam [rad/s]: a beam outside is refused (its
-#: frequencies would be far from any attitude-control band and the coupled plant ill-scaled).
-BEAM_FREQUENCY_RANGE = (1e-4, 1e5)
-# beta_1 L of the first free-free bending mode (Blevins, Formulas for Natural Frequency and
-# Mode Shape, table 8-1): omega_1 = (beta_1 L)^2 sqrt(EJ / (rho A L^4))
-_BETA1_L = 4.730040745
-
-#: Longest appendage name [characters]: names become FMI variable names and C identifiers.
-NAME_LENGTH = 64
-_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
-
-#: Longest value shown in a message [characters].
-_SHOWN = 100
-
-
-# ---------------------------------------------------------------------------------------------
-# the reader
-# ---------------------------------------------------------------------------------------------
-_MISSING = object()
-
-
-def _short(text: str, limit: int = _SHOWN) -> str:
-    """``text`` cut to ``limit`` characters, saying how long it was."""
-    return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
-
-
-def _shown(value) -> str:
-    """A value for a message: repr (control characters escaped), at most about 100 characters."""
-    try:
-        text = repr(value)
-    except Exception:  # a foreign object whose repr fails: its type is enough
-        text = f"<{type(value).__name__}>"
-    return _short(text)
-
-
-def _key(key) -> str:
-    """A key of the user's file for a key path: as is if plain, else quoted and shortened."""
-    if isinstance(key, str) and re.fullmatch(r"[A-Za-z0-9_-]{1,100}", key):
-        return key
-    return _shown(key)
-
-
-class _Reader:
-    """Pops keys off a table, checking types and ranges, and reports problems with file and key
-    path; ``limits`` bound the sizes (modes, bodies, appendages, strings)."""
-
-    def __init__(self, source: str, limits: Limits | None = None):
-        self.source = source
-        self.limits = Limits() if limits is None else limits
-
-    def error(self, path: str, problem: str) -> SceneError:
-        where = f"{self.source}: " if self.source else ""
-        return SceneError(f"{where}{path}: {problem}" if path else f"{where}{problem}")
-
-    def table(self, data, path: str) -> dict:
-        if not isinstance(data, Mapping):
-            raise self.error(path, f"must be a table; got {_kind(data)}")
-        return dict(data)
-
-    def done(self, table: dict, path: str, allowed) -> None:
-        if table:
-            key = _key(sorted(table, key=str)[0])
-            full = f"{path}.{key}" if path else key
-            raise self.error(full, "unknown key; expected one of " + ", ".join(sorted(allowed)))
-
-    def take(self, table: dict, key: str, path: str, default=_MISSING):
-        full = f"{path}.{key}" if path else key
-        if key not in table:
-            if default is _MISSING:
-                raise self.error(full, "missing required value")
-            return default, full
-        return table.pop(key), full
-
-    def number(self, table: dict, key: str, path: str, kind: str, *, default=_MISSING):
-        """A number of the range ``RANGES[kind]`` (or ``default`` when absent)."""
-        value, full = self.take(table, key, path, default)
-        if value is default and default is not _MISSING:
-            return value
-        return self.check_number(value, full, kind)
-
-    def check_number(self, value, full: str, kind: str) -> float:
-        rng = RANGES[kind]
-        unit = rng.unit
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-            raise self.error(full, f"must be a number [{unit}]; got {_kind(value)}")
-        try:
-            value = float(value)
-        except (OverflowError, ValueError):  # an integer beyond the float range
-            raise self.error(full, f"must be finite [{unit}]; got {_shown(value)}") from None
-        if not math.isfinite(value):
-            raise self.error(full, f"must be finite [{unit}]; got {value!r}")
-        size = abs(value)
-        if rng.sign in ("positive", "non-negative") and value < 0:
-            what = "positive" if rng.sign == "positive" else "non-negative"
-            raise self.error(full, f"must be {what} [{unit}]; got {value!r}")
-        if value == 0 and rng.sign in ("positive", "non-zero"):
-            what = "positive" if rng.sign == "positive" else "non-zero"
-            raise self.error(full, f"must be {what} [{unit}]; got 0")
-        if value == 0:
-            return 0.0
-        too_big = size >= rng.hi if rng.below else size > rng.hi
-        if too_big or size < rng.lo:
-            magnitude = "" if rng.sign in ("positive", "non-negative") else " in magnitude"
-            if rng.below and rng.lo == 0:
-                limit = f"must be below {rng.hi:g}{magnitude}"
-            elif rng.lo == 0:
-                limit = f"must be at most {rng.hi:g}{magnitude}"
-            else:
-                limit = f"must lie between {rng.lo:g} and {rng.hi:g}{magnitude}"
-            zero = " (or be 0)" if rng.sign in ("non-negative", "signed") and rng.lo > 0 else ""
-            raise self.error(full, f"{limit} [{unit}]{zero}; got {value!r}")
-        return value
-
-    def integer(self, table: dict, key: str, path: str, *, minimum: int, limit: str | None = None,
-                default=_MISSING):
-        """An integer >= minimum, at most the limit ``limit`` (a :class:`Limits` field)."""
-        value, full = self.take(table, key, path, default)
-        if value is default and default is not _MISSING:
-            if limit is not None and value is not None:
-                self.check_limit(full, value, limit)   # a lowered limit applies to defaults
-            return value
-        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
-            raise self.error(full, f"must be an integer; got {_kind(value)}")
-        value = int(value)
-        if value < minimum:
-            raise self.error(full, f"must be at least {minimum}; got {value}")
-        if limit is not None:
-            self.check_limit(full, value, limit)
-        return value
-
-    def check_limit(self, full: str, value: int, limit: str, what: str = "") -> None:
-        """Refuse ``value`` above the work limit ``limit``, saying how to raise it."""
-        bound = getattr(self.limits, limit)
-        if value > bound:
-            raise self.error(full, f"{what or _shown(value)}: over the limit {bound:g} "
-                             f"(limits.{limit}, {LIMIT_UNITS[limit][1]}); ask for less, or if "
-                             f"you really want more raise it: [limits] {limit} = N in the "
-                             f"scene, or --limit {limit}=N")
-
-    def boolean(self, table: dict, key: str, path: str, default: bool) -> bool:
-        value, full = self.take(table, key, path, default)
-        if not isinstance(value, bool):
-            raise self.error(full, f"must be true or false; got {_kind(value)}")
-        return value
-
-    def text(self, table: dict, key: str, path: str, default: str) -> str:
-        """A free-text string: at most limits.string_length characters, one line."""
-        value, full = self.take(table, key, path, default)
-        if not isinstance(value, str):
-            raise self.error(full, f"must be a string; got {_kind(value)}")
-        self.check_limit(full, len(value), "string_length", f"a text of {len(value)} characters")
-        bad = [c for c in value if unicodedata.category(c) in ("Cc", "Cs", "Zl", "Zp")]
-        if bad:
-            raise self.error(full, f"must be one line of text without control characters; got "
-                             f"{_shown(bad[0])} in {_shown(value)}")
-        return value
-
-    def choice(self, table: dict, key: str, path: str, choices, default=_MISSING):
-        value, full = self.take(table, key, path, default)
-        if value is None and default is None:
-            return None
-        if not isinstance(value, str):
-            raise self.error(full, f"must be a string, one of {_quoted(choices)}; got {_kind(value)}")
-        if value not in choices:
-            raise self.error(full, f"must be one of {_quoted(choices)}; got {_shown(value)}")
-        return value
-
-    def choices(self, table: dict, key: str, path: str, choices, default) -> tuple:
-        """A string or a list of strings from ``choices`` (no duplicates)."""
-        value, full = self.take(table, key, path, default)
-        if isinstance(value, str):
-            value = [value]
-        if not isinstance(value, (list, tuple)):
-            raise self.error(full, f"must be a string or a list of strings from "
-                                   f"{_quoted(choices)}; got {_kind(value)}")
-        if len(value) > len(choices):
-            raise self.error(full, f"must list each of {_quoted(choices)} at most once; got "
-                             f"{len(value)} entries")
-        out = []
-        for k, item in enumerate(value):
-            if not isinstance(item, str) or item not in choices:
-                raise self.error(f"{full}[{k}]", f"must be one of {_quoted(choices)}; got "
-                                 f"{_shown(item)}")
-            if item in out:
-                raise self.error(f"{full}[{k}]", f"{item!r} is listed twice")
-            out.append(item)
-        return tuple(out)
-
-    def vector(self, table: dict, key: str, path: str, kind: str, *, default=_MISSING,
-               size: int | None = None, limit: str | None = None):
-        """An array of numbers of the range ``RANGES[kind]``; its length at most ``limit``."""
-        value, full = self.take(table, key, path, default)
-        if value is default and default is not _MISSING:
-            return value
-        unit = RANGES[kind].unit
-        if not isinstance(value, (list, tuple)):
-            raise self.error(full, f"must be an array of numbers [{unit}]; got {_kind(value)}")
-        if size is not None and len(value) != size:
-            raise self.error(full, f"must have {size} entries [{unit}]; got {len(value)}")
-        if not value:
-            raise self.error(full, f"must not be empty [{unit}]")
-        if limit is not None:
-            self.check_limit(full, len(value), limit, f"an array of {len(value)} entries")
-        return tuple(self.check_number(v, f"{full}[{k}]", kind) for k, v in enumerate(value))
-
-
-def _kind(value) -> str:
-    if isinstance(value, (bool, np.bool_)):
-        return f"boolean {str(bool(value)).lower()}"
-    if isinstance(value, numbers.Real):
-        return f"number {_shown(value)}"
-    if isinstance(value, numbers.Number):
-        return f"{_short(type(value).__name__)} {_shown(value)}"
-    if isinstance(value, str):
-        return f"string {_shown(value)}"
-    if isinstance(value, Mapping):
-        return "a table"
-    if isinstance(value, (list, tuple)):
-        return f"an array of {len(value)}"
-    return _short(type(value).__name__)
-
-
-def _quoted(choices) -> str:
-    return ", ".join(repr(c) for c in choices)
 
 
 _SECTION_KEYS = {
@@ -922,6 +449,10 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
 
 def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
     t = r.table(data, path)
+    # unknown keys first: a misspelt table ([controller.pid]) is named as such, not taken for
+    # a missing [controller.pd]
+    r.done({k: v for k, v in t.items() if k not in ("types", "sample_rate", *CONTROLLERS)},
+           path, {"types", "sample_rate", *CONTROLLERS})
     present = tuple(c for c in CONTROLLERS if c in t)
     types = r.choices(t, "types", path, CONTROLLERS, default=list(present or ("pd",)))
     if not types:
@@ -976,7 +507,9 @@ def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> Manoeuvr
     step = default_step if step is None else step
     if sample_time is not None and not math.isclose(step, sample_time, rel_tol=1e-9):
         raise r.error(f"{path}.step", f"must equal the controller's sample time "
-                      f"1/sample_rate = {sample_time:g} s for a digital controller; got {step:g}")
+                      f"1/sample_rate = {sample_time:g} s for a digital controller (a sampled "
+                      f"loop is simulated at its samples); got {step:g}: remove manoeuvre.step "
+                      "(it defaults to the sample time) or change controller.sample_rate")
     if duration < 2 * step:
         raise r.error(f"{path}.duration", f"must cover at least two steps ({2 * step:g} s); "
                       f"got {duration:g}")
@@ -996,6 +529,30 @@ def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> Manoeuvr
                           f"manoeuvre.duration = {duration:g} [s]; got {disturbance.start:g}")
     r.done(t, path, {"slew_angle", "slew_time", "duration", "step", "disturbance"})
     return ManoeuvreSpec(angle, slew_time, duration, step, disturbance)
+
+
+def _read_simulator(r: _Reader, data, path: str) -> SimulatorSpec:
+    t = r.table(data, path)
+    name = r.choice(t, "name", path, SIMULATORS, default="flexsat")
+    rate = r.number(t, "sample_rate", path, "simulator.sample_rate", default=None)
+    dt = r.number(t, "dt", path, "simulator.dt", default=None)
+    wheel = None
+    if "reaction_wheel" in t:
+        p = f"{path}.reaction_wheel"
+        wt = r.table(t.pop("reaction_wheel"), p)
+        wheel = ReactionWheelSpec(
+            spin_inertia=r.number(wt, "spin_inertia", p, "reaction_wheel.spin_inertia"),
+            max_torque=r.number(wt, "max_torque", p, "reaction_wheel.max_torque", default=None),
+            max_speed=r.number(wt, "max_speed", p, "reaction_wheel.max_speed", default=None))
+        r.done(wt, p, {"spin_inertia", "max_torque", "max_speed"})
+    r.done(t, path, {"name", "sample_rate", "dt", "reaction_wheel"})
+    if name != "basilisk" and (rate is not None or dt is not None or wheel is not None):
+        raise r.error(path, "sample_rate, dt and reaction_wheel apply to name = 'basilisk' only")
+    sample_time = None if rate is None else 1.0 / rate
+    if dt is not None and sample_time is not None and dt > sample_time * (1 + 1e-12):
+        raise r.error(f"{path}.dt", f"must not exceed the flight-software sample time "
+                      f"1/sample_rate = {sample_time:g} [s]; got {dt:g}")
+    return SimulatorSpec(name, sample_time, dt, wheel)
 
 
 def _limit_value(r: _Reader, value, full: str, name: str):
@@ -1127,19 +684,37 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) ->
                         systems=r.choices(et, "systems", "export", EXPORTABLE,
                                           default=list(EXPORTABLE)),
                         reference_files=r.boolean(et, "reference_files", "export", True),
-                        step=r.number(et, "step", "export", "export.step", default=None))
-    r.done(et, "export", {"fmu", "systems", "reference_files", "step"})
+                        step=r.number(et, "step", "export", "export.step", default=None),
+                        fmi_versions=r.choices(et, "fmi_version", "export", FMI_VERSIONS,
+                                               default=["2.0"]),
+                        sources_only=r.boolean(et, "sources_only", "export", False),
+                        ssp=r.boolean(et, "ssp", "export", False))
+    r.done(et, "export", {"fmu", "systems", "reference_files", "step", "fmi_version",
+                          "sources_only", "ssp"})
+    if not export.fmi_versions:
+        raise r.error("export.fmi_version", f"must name at least one of {_quoted(FMI_VERSIONS)}")
+    if export.ssp and not {"plant", "controller"} <= set(export.systems):
+        raise r.error("export.ssp", "needs both 'plant' and 'controller' in export.systems (an "
+                      "SSP connects the two FMUs)")
 
     rt = r.table(t.pop("report", {}), "report")
     plots_value, full = r.take(rt, "plots", "report", False)
     if isinstance(plots_value, bool):
         plots = PLOTS if plots_value else ()
     else:
+        if isinstance(plots_value, (list, tuple)):
+            plots_value = [PLOT_ALIASES.get(p, p) if isinstance(p, str) else p
+                           for p in plots_value]
+        elif isinstance(plots_value, str):
+            plots_value = PLOT_ALIASES.get(plots_value, plots_value)
         plots = r.choices({"plots": plots_value}, "plots", "report", PLOTS, default=())
     equivalence = r.boolean(rt, "equivalence", "report", True)
-    r.done(rt, "report", {"plots", "equivalence"})
+    timeseries = r.boolean(rt, "timeseries", "report", True)
+    r.done(rt, "report", {"plots", "equivalence", "timeseries"})
+    simulator = (_read_simulator(r, t.pop("simulator"), "simulator") if "simulator" in t
+                 else SimulatorSpec())
     r.done(t, "", {"title", "hub", "appendages", "fidelity", "controller", "manoeuvre",
-                   "outputs", "export", "report", "limits"})
+                   "outputs", "export", "report", "limits", "simulator"})
 
     # outputs the scene cannot produce
     if outputs.exact_reference and not any(a.truth == "beam" for a in appendages):
@@ -1153,18 +728,31 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) ->
             and not outputs.tip_deflection):
         raise r.error("controller.lqr.deflection_weight", "needs tip-deflection outputs: set "
                       "outputs.tip_deflection = true")
-    if export.fmu and controller.sample_time is not None and (
-            {"controller", "closed_loop"} & set(export.systems)):
-        raise r.error("export.systems", "FMU export handles continuous-time systems only; a "
-                      "digital controller (controller.sample_rate) cannot be exported: export "
-                      "only 'plant' or remove sample_rate")
+    if simulator.name == "basilisk":
+        if manoeuvre is None:
+            raise r.error("simulator.name", "'basilisk' simulates the manoeuvre: the scene needs "
+                          "a manoeuvre table")
+        beams = [k for k, a in enumerate(appendages) if a.design == "truth" and a.truth == "beam"]
+        if beams:
+            raise r.error(f"appendages[{beams[0]}].design", "Basilisk simulates the design "
+                          "chains, and this appendage's design model is the distributed beam "
+                          "(design = 'truth'); give it a chain design (design = 'fit' or "
+                          "'chain') or drop simulator.name = 'basilisk'")
+        if (manoeuvre.disturbance is not None
+                and manoeuvre.disturbance.input.endswith("_tip_force")):
+            raise r.error("manoeuvre.disturbance.input", "a tip force is not applied by the "
+                          "Basilisk model (it applies disturbance_torque, force_x, force_y); "
+                          "choose one of those or drop simulator.name = 'basilisk'")
+        if simulator.sample_time is None and controller.sample_time is not None:
+            simulator = dataclasses.replace(simulator, sample_time=controller.sample_time)
     if export.fmu and manoeuvre is None and export.step is None:
         raise r.error("export.step", "missing: without a manoeuvre table the FMU step must be "
                       "given [s]")
     scene = Scene(title=title, source=source or "<dict>", hub=hub, appendages=appendages,
                   fidelity=fidelity, controller=controller, manoeuvre=manoeuvre,
-                  outputs=outputs, export=export, report=ReportSpec(plots, equivalence),
-                  limits=r.limits)
+                  outputs=outputs, export=export,
+                  report=ReportSpec(plots, equivalence, timeseries), limits=r.limits,
+                  simulator=simulator)
     _check_cost(r, scene)
     return scene
 

@@ -60,7 +60,7 @@ def test_default_scene_is_the_papers_rod_in_si_units():
     assert scene.design_variants == ("poles-and-zeros", "frequencies")
     assert scene.controller.types == ("pd", "lqr")
     assert scene.export.fmu and set(scene.export.systems) == {"plant", "controller", "closed_loop"}
-    assert set(scene.report.plots) == {"slew", "bode", "pole_zero"}
+    assert set(scene.report.plots) == {"slew", "loop", "poles", "W"}
     assert scene.outputs.tip_deflection
 
 
@@ -110,8 +110,27 @@ def test_scene_error_is_a_flexsat_error():
      r"controller\.lqr\.deflection_weight: needs tip-deflection outputs"),
     ({"manoeuvre.disturbance": {"input": "wing_tip_force", "amplitude": 1.0}},
      r"manoeuvre\.disturbance\.input: must be one of .*'rod_tip_force'"),
-    ({"controller.sample_rate": 2.0, "export.fmu": True},
-     r"export\.systems: FMU export handles continuous-time systems only"),
+    # typos: the closest known key is named, also for a misspelt required key
+    ({"appendages.0.beam.youngs_modulus": None, "appendages.0.beam.youngs_modulu": 2e11},
+     r"appendages\[0\]\.beam\.youngs_modulus: missing required value \(is 'youngs_modulu' a "
+     r"misspelling of 'youngs_modulus'\?\)"),
+    ({"controller.pid": {"natural_frequency": 0.1}, "controller.pd": None},
+     r"controller\.pid: unknown key; expected one of .*; did you mean 'pd'\?"),
+    ({"manoeuvre.slew_tme": 60.0, "manoeuvre.slew_time": None},
+     r"manoeuvre\.slew_time: missing required value \(is 'slew_tme' a misspelling"),
+    ({"hub.inertai": 50.0}, r"hub\.inertai: unknown key; expected one of inertia, mass; did "
+                            r"you mean 'inertia'\?"),
+    # FMI versions, SSP, simulator
+    ({"export.fmi_version": "4.0"}, r"export\.fmi_version\[0\]: must be one of '2\.0', '3\.0'"),
+    ({"export.ssp": True, "export.systems": ["plant", "closed_loop"]},
+     r"export\.ssp: needs both 'plant' and 'controller'"),
+    ({"simulator.name": "simulink"}, r"simulator\.name: must be one of 'flexsat', 'basilisk'"),
+    ({"simulator.dt": 0.01}, r"simulator: sample_rate, dt and reaction_wheel apply to name = "
+                             r"'basilisk' only"),
+    ({"simulator.name": "basilisk", "appendages.0.design": "truth", "appendages.0.fit": None},
+     r"appendages\[0\]\.design: Basilisk simulates the design chains"),
+    ({"simulator.name": "basilisk", "simulator.sample_rate": 10.0, "simulator.dt": 0.5},
+     r"simulator\.dt: must not exceed the flight-software sample time"),
 ])
 def test_bad_scenes_name_the_key_and_the_problem(changes, match):
     with pytest.raises(SceneError, match=match):
@@ -157,3 +176,40 @@ def test_toml_nan_is_rejected(tmp_path):
     path.write_text("[hub]\nmass = nan\ninertia = 1.0\n")
     with pytest.raises(SceneError, match=r"nan\.toml: hub\.mass: must be finite \[kg\]; got nan"):
         load_scene(path)
+
+
+def test_digital_controllers_and_loops_can_be_exported():
+    """FMUs of sampled systems are Co-Simulation FMUs that sample at their own period: a digital
+    controller's export is no longer refused."""
+    scene = load_scene(scene_with(**{"controller.sample_rate": 2.0, "manoeuvre.step": None,
+                                     "export.fmu": True, "export.fmi_version": ["2.0", "3.0"],
+                                     "export.ssp": True}))
+    assert scene.controller.sample_time == 0.5 and scene.manoeuvre.step == 0.5
+    assert scene.export.fmi_versions == ("2.0", "3.0") and scene.export.ssp
+
+
+def test_old_plot_names_are_accepted():
+    scene = load_scene(scene_with(**{"report.plots": ["bode", "pole_zero", "slew"]}))
+    assert scene.report.plots == ("W", "poles", "slew")
+
+
+def test_basilisk_simulator_takes_the_digital_controllers_rate():
+    scene = load_scene(scene_with(**{"simulator.name": "basilisk", "controller.sample_rate": 10.0,
+                                     "manoeuvre.step": None}))
+    assert scene.simulator.name == "basilisk" and scene.simulator.sample_time == 0.1
+    wheel = load_scene(scene_with(**{"simulator.name": "basilisk",
+                                     "simulator.reaction_wheel": {"spin_inertia": 0.05}}))
+    assert wheel.simulator.reaction_wheel.spin_inertia == 0.05
+
+
+def test_resolved_scene_is_json_ready():
+    import json
+
+    from spacecraft.scene import scene_dict
+
+    data = scene_dict(load_scene(None))
+    text = json.dumps(data, allow_nan=False)   # no NaN or inf anywhere
+    back = json.loads(text)
+    assert back["manoeuvre"]["slew_angle"] == pytest.approx(math.radians(10.0), rel=1e-15)
+    assert back["appendages"][0]["beam"]["dimensions"] == {"diameter": 0.01}
+    assert back["controller"]["types"] == ["pd", "lqr"] and "SI" in back["units"]

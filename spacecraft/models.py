@@ -1,0 +1,427 @@
+"""The models a scene needs, built once: appendages, spacecraft, plants, exact references.
+
+:class:`ModelBuilder` builds, for one scene, the distributed beams, the chains (explicit, RFEM
+or fitted to a beam), the truncated truth models, the coupled :class:`Spacecraft` of each model
+set, the state-space plants with the signals asked for, and the exact frequency-domain
+references through W(s) of the distributed beams; it chooses the number of modes from the
+scene's tolerance (:mod:`spacecraft.fidelity`). Everything is cached for the run: one chain fit
+per (beam, criterion), one Spacecraft (one eigen-decomposition) per model set, one plant per
+signal set. An error of flexsat's API raised by a call made with the scene's values becomes a
+:class:`SceneError` naming the scene key (:meth:`ModelBuilder.scene_values`).
+
+The scene runner (:mod:`spacecraft.runner`) and the sweeps (:mod:`spacecraft.sweep`) build on it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import math
+import time
+import warnings
+from collections.abc import Callable
+from pathlib import Path
+
+import control
+import numpy as np
+
+import appendages
+import controllers
+import fmu
+from appendages.interface import FlexsatError
+
+from .coupling import Spacecraft
+from .fidelity import MAX_MODES, FidelityChoice, choose_n_modes
+from .hub import Hub, Mount
+from .limits import estimate_cost
+from .scene import AppendageSpec, ChainSpec, Scene, SceneError
+
+__all__ = ["ModelBuilder", "RunStats", "raised_by_flexsat", "LQR_FREQUENCY_RANGE",
+           "ProgressCallback"]
+
+#: Range of the rigid-body LQR natural frequency (q / (r J^2))^(1/4) [rad/s]: that of a PD's
+#: natural frequency in a scene (spacecraft.scene.RANGES["pd.frequency"]).
+LQR_FREQUENCY_RANGE = (1e-5, 1e3)
+
+# Folders of flexsat's packages: an exception raised by code in them is a checked condition of
+# our API (its message names the parameter), one raised deeper (numpy, scipy) is not.
+_OUR_FOLDERS = tuple(Path(p.__file__).resolve().parent
+                     for p in (appendages, controllers, fmu)) + (Path(__file__).resolve().parent,)
+
+ProgressCallback = Callable[[str], None]
+
+# Frequency grid of the exact frequency-domain reference: this many points per decade, plus
+# points packed across the half-power band of every exact coupled mode.
+_POINTS_PER_DECADE = 100
+
+
+@dataclasses.dataclass
+class RunStats:
+    """Work counters kept by the runner and the report writer (proof of what was skipped).
+
+    Attributes
+    ----------
+    fmu_builds : int
+        FMUs compiled.
+    plots : int
+        PNG figures written.
+    exact_reference_evaluations : int
+        Calls into the exact distributed-beam reference (exact coupled frequencies, exact
+        frequency responses, equivalence tables against the exact W).
+    chain_fits : int
+        Chains fitted to beams.
+    pd_designs, lqr_designs : int
+        Controllers tuned.
+    simulations : int
+        Time responses computed.
+    simulator_setups : int
+        Discretisations (matrix exponentials + modal forms) built; one per closed loop.
+    eigendecompositions : int
+        Spacecraft assemblies whose modes were computed (one per model set).
+    plant_builds : int
+        State-space plants built (each reused for every controller).
+    tip_deflection_outputs, root_load_outputs : int
+        Such outputs in the plants built.
+    modes_kept, modes_dropped : int
+        Modes of the truth plant kept and dropped by pruning (elastic and rigid).
+    cache_hits : int
+        Requests answered from the run's caches.
+    seconds : dict
+        Wall time per stage [s] (informative, never asserted).
+    """
+
+    fmu_builds: int = 0
+    plots: int = 0
+    exact_reference_evaluations: int = 0
+    chain_fits: int = 0
+    pd_designs: int = 0
+    lqr_designs: int = 0
+    simulations: int = 0
+    simulator_setups: int = 0
+    eigendecompositions: int = 0
+    plant_builds: int = 0
+    tip_deflection_outputs: int = 0
+    root_load_outputs: int = 0
+    modes_kept: int = 0
+    modes_dropped: int = 0
+    cache_hits: int = 0
+    seconds: dict = dataclasses.field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        """JSON-ready copy."""
+        return dataclasses.asdict(self)
+
+
+
+def raised_by_flexsat(exc: BaseException) -> bool:
+    """True if ``exc`` was raised by code of flexsat's packages (a checked condition), not
+    inside numpy, scipy or python-control."""
+    tb = exc.__traceback__
+    if tb is None:
+        return False
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    try:
+        path = Path(tb.tb_frame.f_code.co_filename).resolve()
+    except (OSError, ValueError):
+        return False
+    return any(path.is_relative_to(folder) for folder in _OUR_FOLDERS)
+
+
+class ModelBuilder:
+    def __init__(self, scene: Scene, progress: ProgressCallback | None, stats: RunStats,
+                 time_responses: bool = True):
+        self.time_responses = time_responses
+        self.scene = scene
+        self.progress = progress or (lambda message: None)
+        self.stats = stats
+        self._index = {a.name: k for k, a in enumerate(scene.appendages)}
+        with self.scene_values("hub"):
+            self.hub = Hub(scene.hub.mass, scene.hub.inertia)
+        self._cache: dict = {}
+        self._modal_spacecraft: set = set()
+
+    # -- errors --------------------------------------------------------------------------------
+    @contextlib.contextmanager
+    def scene_values(self, key: str, what: str = ""):
+        """Report an error of our API, raised by a call made with the scene's values at ``key``,
+        as a SceneError naming that key (a user error); anything else passes unchanged."""
+        try:
+            yield
+        except SceneError:
+            raise
+        except (ValueError, TypeError, FlexsatError) as exc:
+            if not (isinstance(exc, FlexsatError) or raised_by_flexsat(exc)):
+                raise  # numpy/scipy trouble with accepted values: a bug of ours
+            raise SceneError(f"{self.scene.source}: {key}: {what}{exc}") from exc
+
+    def key(self, spec: AppendageSpec, rest: str) -> str:
+        """Key path of an appendage's sub-key: ``appendages[1].beam``."""
+        return f"appendages[{self._index[spec.name]}].{rest}"
+
+    # -- caching -------------------------------------------------------------------------------
+    def cached(self, key, build):
+        if key in self._cache:
+            self.stats.cache_hits += 1
+            return self._cache[key]
+        value = build()
+        self._cache[key] = value
+        return value
+
+    def stage(self, name: str):
+        runner = self
+
+        class _Stage:
+            def __enter__(self):
+                runner.progress(name)
+                self.t0 = time.perf_counter()
+
+            def __exit__(self, *exc):
+                runner.stats.seconds[name] = (runner.stats.seconds.get(name, 0.0)
+                                              + time.perf_counter() - self.t0)
+        return _Stage()
+
+    # -- appendage models ----------------------------------------------------------------------
+    def beam(self, spec: AppendageSpec):
+        def build():
+            with self.scene_values(self.key(spec, "beam")):
+                return spec.beam.build()
+        return self.cached(("beam", spec.beam), build)
+
+    def chain(self, spec: AppendageSpec, chain: ChainSpec):
+        from appendages.chain import HingedChain
+
+        which = "truth_chain" if chain is spec.truth_chain else "chain"
+
+        def build():
+            with self.scene_values(self.key(spec, which)):
+                return built()
+
+        def built():
+            if chain.from_beam is None:
+                return HingedChain(chain.lengths, chain.masses, chain.inertias,
+                                   chain.hinge_stiffnesses, hinge_dampings=chain.hinge_dampings,
+                                   com_offsets=chain.com_offsets, root=chain.root)
+            base = HingedChain.rfem(self.beam(spec), chain.n_bodies)
+            if chain.root == "rigid":
+                return base
+            dampings = (np.zeros(base.hinge_stiffnesses.size) if base.hinge_dampings is None
+                        else np.asarray(base.hinge_dampings))
+            return HingedChain(base.lengths, base.masses, base.inertias,
+                               np.concatenate([[chain.root_stiffness], base.hinge_stiffnesses]),
+                               hinge_dampings=np.concatenate([[chain.root_damping], dampings]),
+                               com_offsets=base.com_offsets, root="hinged")
+        return self.cached(("chain", spec.name, id(chain)), build)
+
+    def fit(self, spec: AppendageSpec, match: str):
+        """Chain fitted to the beam, with the beam's modal damping at its first frequency."""
+        def build():
+            from appendages.chain import HingedChain
+            from appendages.equivalence import fit_chain
+
+            beam = self.beam(spec)
+            self.stats.chain_fits += 1
+            with warnings.catch_warnings(), self.scene_values(
+                    self.key(spec, "fit"), f"cannot fit a chain (match = {match!r}): "):
+                warnings.simplefilter("ignore", RuntimeWarning)
+                chain = fit_chain(beam, spec.fit.n_bodies, match=match)
+            zeta = beam.damping_ratio
+            if zeta == 0.0:
+                return chain
+            # hinge damping 2 zeta c / w_1: damping ratio zeta at the chain's first mode, as the
+            # beam's modal damping (stiffness-proportional, Rayleigh)
+            w1 = float(chain.poles()[0])
+            return HingedChain(chain.lengths, chain.masses, chain.inertias,
+                               chain.hinge_stiffnesses,
+                               hinge_dampings=2.0 * zeta * chain.hinge_stiffnesses / w1,
+                               com_offsets=chain.com_offsets, root=chain.root)
+        # identical beams (two symmetric wings) share one fit
+        return self.cached(("fit", spec.beam, spec.fit.n_bodies, match), build)
+
+    def undamped_beam(self, spec: AppendageSpec):
+        """The appendage's beam without damping (for the choice of the number of modes)."""
+        from appendages import Beam
+
+        def build():
+            beam = self.beam(spec)
+            if beam.damping_ratio == 0.0:
+                return beam
+            return Beam(beam.length, beam.bending_stiffness, beam.linear_density)
+        return self.cached(("undamped beam", spec.beam), build)
+
+    def truth_model(self, spec: AppendageSpec, n_modes: int | None):
+        if spec.truth == "beam":
+            def build():
+                with self.scene_values("fidelity"):
+                    return self.beam(spec).truncated(n_modes, method=self.scene.fidelity.method)
+            return self.cached(("truncated", spec.name, n_modes, self.scene.fidelity.method),
+                               build)
+        return self.chain(spec, spec.truth_chain or spec.chain)
+
+    def design_model(self, spec: AppendageSpec, variant: str, n_modes: int | None):
+        if spec.design == "fit":
+            match = variant if variant in spec.fit.match else spec.fit.match[0]
+            return self.fit(spec, match)
+        if spec.design == "chain":
+            return self.chain(spec, spec.chain)
+        return self.truth_model(spec, n_modes)
+
+    def spacecraft(self, key, models) -> Spacecraft:
+        def build():
+            mounts = []
+            for a, model in zip(self.scene.appendages, models):
+                with self.scene_values(f"appendages[{self._index[a.name]}]",
+                                       "cannot mount it: "):
+                    mounts.append(Mount(model, a.position, a.direction, name=a.name))
+            return Spacecraft(self.hub, mounts)
+        return self.cached(("spacecraft", key), build)
+
+    def plant(self, sc: Spacecraft, key, *, tip=False, root_loads=False, disturbances=False,
+              prune=True):
+        """Plant with the requested signals, pruned if asked (built once per signal set)."""
+        def build():
+            if id(sc) not in self._modal_spacecraft:
+                self._modal_spacecraft.add(id(sc))
+                self.stats.eigendecompositions += 1
+            self.stats.plant_builds += 1
+            full = sc.plant(tip_deflection=tip, root_loads=root_loads, disturbances=disturbances,
+                            prune=prune)
+            n_total = sc.modes()[0].size
+            kept = full.nstates // 2
+            if tip:
+                self.stats.tip_deflection_outputs += len(sc.mounts)
+            if root_loads:
+                self.stats.root_load_outputs += 2 * len(sc.mounts)
+            return full, {"modes_total": int(n_total), "modes_kept": int(kept),
+                          "modes_dropped": int(n_total - kept)}
+        return self.cached(("plant", key, tip, root_loads, disturbances, prune), build)
+
+    # -- exact reference -----------------------------------------------------------------------
+    def exact_spacecraft(self) -> Spacecraft:
+        models = [self.beam(a) if a.truth == "beam" else self.truth_model(a, None)
+                  for a in self.scene.appendages]
+        return self.spacecraft("exact", models)
+
+    def exact_frequencies(self, k: int) -> np.ndarray:
+        def build():
+            self.stats.exact_reference_evaluations += 1
+            return self.exact_spacecraft().natural_frequencies(k, exact=True)
+        return self.cached(("exact_frequencies", k), build)
+
+    def exact_response(self, omega: np.ndarray) -> np.ndarray:
+        self.stats.exact_reference_evaluations += 1
+        frd = self.exact_spacecraft().frequency_response(omega, output="theta")
+        return np.asarray(frd.frdata).reshape(-1)
+
+    # -- the run -------------------------------------------------------------------------------
+    def design_bandwidth(self, inertia: float) -> float:
+        """Rigid-body closed-loop natural frequency of the fastest controller [rad/s]."""
+        from controllers import natural_frequency_from_bandwidth
+
+        c = self.scene.controller
+        values = []
+        if c.pd is not None:
+            values.append(c.pd.natural_frequency if c.pd.natural_frequency is not None
+                          else natural_frequency_from_bandwidth(c.pd.bandwidth, c.pd.damping))
+        if c.lqr is not None:
+            values.append(self.lqr_frequency(inertia))
+        return max(values)
+
+    def lqr_frequency(self, inertia: float) -> float:
+        """Rigid-body LQR natural frequency [rad/s], refused outside LQR_FREQUENCY_RANGE."""
+        lqr = self.scene.controller.lqr
+        # rigid-body LQR poles: w = (q / (r J^2))^(1/4) (Anderson & Moore, sec. 5.2), formed
+        # as (q/r)^(1/4) / sqrt(J): no overflow of J^2
+        w = (lqr.attitude_weight / lqr.torque_weight) ** 0.25 / math.sqrt(inertia)
+        lo, hi = LQR_FREQUENCY_RANGE
+        if not lo <= w <= hi:
+            raise SceneError(
+                f"{self.scene.source}: controller.lqr: the weights give a rigid-body "
+                f"closed-loop frequency (attitude_weight / (torque_weight J^2))^(1/4) = {w:.3g} "
+                f"rad/s with J = {inertia:.4g} kg m^2, outside [{lo:g}, {hi:g}] rad/s; change "
+                "attitude_weight or torque_weight")
+        return w
+
+    def choose_fidelity(self) -> tuple[int | None, FidelityChoice | None]:
+        scene = self.scene
+        if not scene.has_beam_truth:
+            return None, None
+        if scene.fidelity.n_modes is not None:
+            return scene.fidelity.n_modes, None
+        with self.stage("choosing the number of modes"):
+            inertia = self.exact_spacecraft().inertia
+            bandwidth = self.design_bandwidth(inertia)
+
+            # The choice compares undamped models (natural frequencies are undamped, and the
+            # low-band gain depends on damping only at second order): trial truncations of
+            # undamped beams skip the damping projection, and only the chosen one is built
+            # with damping.
+            def truncated(n):
+                models = [self.undamped_beam(a).truncated(n, method=scene.fidelity.method)
+                          if a.truth == "beam" else self.truth_model(a, n)
+                          for a in scene.appendages]
+                sc = self.spacecraft(("undamped truth", n), models)
+                plant, _ = self.plant(sc, ("undamped truth", n), prune=scene.fidelity.prune)
+                frequencies = sc.modes()[0][3:]
+                return frequencies, plant
+
+            def exact_response(omega):
+                self.stats.exact_reference_evaluations += 1
+                models = [self.undamped_beam(a) if a.truth == "beam" else
+                          self.truth_model(a, None) for a in scene.appendages]
+                frd = self.spacecraft("undamped exact", models).frequency_response(omega)
+                return np.asarray(frd.frdata).reshape(-1)
+
+            with self.scene_values("fidelity.tolerance"):
+                choice = choose_n_modes(truncated, self.exact_frequencies, exact_response,
+                                        bandwidth=bandwidth, tolerance=scene.fidelity.tolerance,
+                                        bandwidth_factor=scene.fidelity.bandwidth_factor,
+                                        method=scene.fidelity.method,
+                                        first_zero=self.first_clamped_frequency(),
+                                        n_max=self.max_modes())
+        return choice.n_modes, choice
+
+    def max_modes(self) -> int:
+        """Most modes per beam the search from a tolerance may try: fidelity.MAX_MODES, within
+        limits.modes and the loop size limits.states allows."""
+        scene = self.scene
+        cap = min(MAX_MODES, scene.limits.modes)
+        while cap > 1:
+            trial = scene.replace(fidelity=dataclasses.replace(scene.fidelity, n_modes=cap))
+            if estimate_cost(trial).loop_states <= scene.limits.states:
+                break
+            cap -= 1
+        return cap
+
+    def first_clamped_frequency(self) -> float:
+        """Lowest clamped-root frequency of the appendages [rad/s] (first zero of theta/torque)."""
+        values = []
+        for a in self.scene.appendages:
+            if a.truth == "beam":
+                values.append(float(self.beam(a).cantilever_frequencies(1)[0]))
+        return min(values, default=math.inf)
+
+
+    def exact_reference_frd(self):
+        """Exact theta and omega per torque of hub + distributed beams, as an FRD."""
+        scene = self.scene
+        inertia = self.exact_spacecraft().inertia
+        wb = self.design_bandwidth(inertia)
+        w_lo, w_hi = wb * 1e-3, wb * 1e3
+        frequencies = self.exact_frequencies(8)
+        while frequencies[-1] < w_hi and frequencies.size < 64:
+            frequencies = self.exact_frequencies(2 * frequencies.size)
+        n_dec = math.log10(w_hi / w_lo)
+        grid = [np.geomspace(w_lo, w_hi, int(_POINTS_PER_DECADE * n_dec))]
+        zeta = max([a.beam.damping_ratio for a in scene.appendages if a.beam is not None]
+                   + [1e-4])
+        # an even count: no point exactly at a mode (an undamped beam's W is infinite there)
+        spread = np.tan(np.linspace(-1.5, 1.5, 60))
+        for f in frequencies[frequencies < w_hi]:
+            grid.append(f * (1.0 + max(zeta, 1e-4) * spread))
+        omega = np.unique(np.concatenate(grid))
+        omega = omega[(omega > 0) & (omega <= w_hi)]
+        theta = self.exact_response(omega)
+        data = np.stack([theta, 1j * omega * theta]).reshape(2, 1, -1)
+        return control.frd(data, omega, inputs=["torque"], outputs=["theta", "omega"])
+

@@ -1,0 +1,642 @@
+"""The report's figures: what an attitude-control engineer looks at first.
+
+One figure per question, every controller side by side in it (so a scene's plots are at most
+four PNG files, drawn on matplotlib's Agg canvas without pyplot):
+
+- ``slew.png``: per controller, theta with theta_ref [deg], the attitude error |theta -
+  theta_ref| on a log scale [deg] (an overshoot of a few percent is visible there, with the
+  2 % settling band and the end of the slew), the torque [N m], the tip deflection of every
+  appendage [m] (one panel each, named) and, with a disturbance, the attitude response to the
+  disturbance alone;
+- ``loop.png``: per controller, the open-loop transfer L(j omega) with the loop broken at the
+  torque (negative-feedback convention, unstable at L = -1): |L| [dB] and arg L [deg] on the
+  design model, the truth model and (when computed) the exact distributed beam, the gain and
+  phase crossovers marked with the margins; and its Nyquist plot near -1 with the unit circle
+  and the modulus-margin circle;
+- ``poles.png``: per controller, the closed-loop poles on the design and truth models in the
+  s-plane near the loop's bandwidth with lines of constant damping ratio, and damping ratio
+  against natural frequency for every pole (the flexible modes far above the bandwidth);
+  unstable poles red, the right half-plane shaded;
+- ``W.png``: |W1|, |W2| = |W3|, |W4| of every (distinct) appendage: the exact beam, the truth
+  model and the design chains, with the band where the truth model is resolved.
+
+Names and colours are those of :mod:`spacecraft.naming`: one colour per design model, the loop
+on the truth model solid, on the design model dashed, the exact beam black, Basilisk dotted,
+anything unstable red. A figure has one legend (above the panels).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .naming import (DESIGN_STYLE, EXACT_COLOUR, REFERENCE_COLOUR, TRUTH_STYLE,
+                     UNSTABLE_COLOUR, controller_label, design_label, variant_colour)
+from .responses import trace
+
+__all__ = ["plot_slew", "plot_loop", "plot_poles", "plot_W", "draw", "PLOT_FILES",
+           "envelope", "identical"]
+
+#: File of each plot of ``report.plots``.
+PLOT_FILES = {"slew": "slew.png", "loop": "loop.png", "poles": "poles.png", "W": "W.png"}
+
+#: Points drawn per curve: a longer response is drawn as its min/max envelope (peaks kept).
+_PLOT_POINTS = 4000
+#: Resolution of the PNG files [dots per inch].
+_DPI = 90
+#: Largest number of appendages with a tip-deflection panel of their own.
+_MAX_TIP_PANELS = 6
+
+
+def _figure(rows: int, cols: int, size, *, top: float = 0.9, left: float = 0.08,
+            hspace: float = 0.45, wspace: float = 0.28, bottom: float | None = None):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    # a fixed layout: constrained or tight layout redraws every figure several times
+    fig = Figure(figsize=size)
+    FigureCanvasAgg(fig)
+    fig.subplots_adjust(left=left, right=0.98, bottom=bottom or 0.62 / size[1], top=top,
+                        hspace=hspace, wspace=wspace)
+    return fig, fig.subplots(rows, cols, squeeze=False)
+
+
+def _legend(fig, handles: list, top: float | None = None) -> None:
+    """One legend for the figure at its top; the panels start below it (and below their
+    titles)."""
+    seen, unique = set(), []
+    for h in handles:
+        if h.get_label() not in seen and not h.get_label().startswith("_"):
+            seen.add(h.get_label())
+            unique.append(h)
+    ncol = min(3, len(unique))
+    fig.legend(handles=unique, loc="upper center", bbox_to_anchor=(0.5, 0.995), ncol=ncol,
+               fontsize="small", frameon=False)
+    rows = -(-len(unique) // max(ncol, 1))
+    height = fig.get_figheight()
+    fig.subplots_adjust(top=1.0 - (0.12 + 0.2 * rows + 0.4) / height)
+
+
+def _line(**style):
+    from matplotlib.lines import Line2D
+
+    return Line2D([], [], **style)
+
+
+def envelope(t: np.ndarray, y: np.ndarray, points: int = _PLOT_POINTS):
+    """``(t, y)`` to draw: all samples when few, else the min and max of each of ``points / 2``
+    buckets in time order, so that a plot of 10^7 samples costs what one of 10^4 does."""
+    per = t.size // (points // 2)
+    if per < 2:
+        return t, y
+    m = (t.size // per) * per
+    tb, yb = t[:m].reshape(-1, per), y[:m].reshape(-1, per)
+    lo, hi = np.argmin(yb, axis=1), np.argmax(yb, axis=1)
+    first, second = np.minimum(lo, hi), np.maximum(lo, hi)
+    rows = np.arange(tb.shape[0])
+    tt = np.stack([tb[rows, first], tb[rows, second]], axis=1).reshape(-1)
+    yy = np.stack([yb[rows, first], yb[rows, second]], axis=1).reshape(-1)
+    return np.concatenate([tt, t[m:]]), np.concatenate([yy, y[m:]])
+
+
+def identical(a: np.ndarray, b: np.ndarray) -> bool:
+    """Two curves that would be drawn on top of each other: same length, equal within 1e-9 of
+    their range (round-off of two realisations of the same loop is ~1e-12)."""
+    if a.shape != b.shape:
+        return False
+    with np.errstate(invalid="ignore", over="ignore"):
+        scale = max(float(np.max(np.abs(a), initial=0.0)), 1e-300)
+        return bool(np.all(np.abs(a - b) <= 1e-9 * scale))
+
+
+def _rows(result, kind: str) -> list:
+    return [r for r in result.data.get("closed_loops", []) if r["controller"] == kind]
+
+
+def _unstable(row, which: str = "truth") -> bool:
+    status = (row.get("status") or {}).get(which)
+    if status is not None:
+        return status["status"] in ("unstable", "diverges")
+    return which == "truth" and not row["verdict"]["stable"]
+
+
+# ---------------------------------------------------------------------------------------------
+# slew
+# ---------------------------------------------------------------------------------------------
+def plot_slew(result, path: Path) -> str:
+    """Draw ``slew.png``; returns its caption."""
+    scene = result.scene
+    m = scene.manoeuvre
+    kinds = list(dict.fromkeys(k[1] for k in result.responses))
+    first = result.responses[next(iter(result.responses))]
+    names = [a.name for a in scene.appendages
+             if f"{a.name}_tip_deflection" in first.output_labels][:_MAX_TIP_PANELS]
+    panels = [("theta", "attitude theta [deg]"), ("error", "|theta - theta_ref| [deg]"),
+              ("torque", "torque [N m]")]
+    panels += [(f"{n}_tip_deflection", f"tip deflection, {n} [m]") for n in names]
+    if result.disturbance_responses:
+        panels.append(("disturbance", "theta, disturbance alone [deg]"))
+    n_rows, n_cols = len(panels), len(kinds)
+    height = 1.9 * n_rows + 1.3
+    top = 1.0 - 1.0 / height
+    fig, axes = _figure(n_rows, n_cols, (6.2 * n_cols + 0.6, height), top=top,
+                        left=0.1 if n_cols == 1 else 0.07)
+    handles = []
+    angle = math.degrees(m.slew_angle)
+    for col, kind in enumerate(kinds):
+        rows = {r["design"]: r for r in _rows(result, kind)}
+        bad = [v for v, r in rows.items() if _unstable(r)]
+        title = f"{controller_label(kind)}: " + (
+            "UNSTABLE on the truth model when tuned on " + ", ".join(map(design_label, bad))
+            if bad else "stable on the truth model")
+        axes[0, col].set_title(title, fontsize="medium",
+                               color=UNSTABLE_COLOUR if bad else "black")
+        for row_index, (signal, label) in enumerate(panels):
+            ax = axes[row_index, col]
+            curves = []
+            for (variant, k, which), resp in result.responses.items():
+                if k != kind:
+                    continue
+                source = result.disturbance_responses if signal == "disturbance" else None
+                if source is not None:
+                    resp = source.get((variant, k, which))
+                    if resp is None:
+                        continue
+                y = _slew_signal(resp, signal)
+                if y is None:
+                    continue
+                row = rows.get(variant)
+                curves.append((variant, which, np.asarray(resp.t, float).reshape(-1), y,
+                               row is not None and _unstable(row, which)))
+            _draw_curves(ax, curves, handles, log=signal == "error", note=row_index == 0)
+            if signal == "theta":
+                t = np.asarray(first.t, float).reshape(-1)
+                import controllers
+
+                ref = np.degrees(controllers.slew_profile(t, m.slew_angle, m.slew_time))
+                handles += ax.plot(t, ref, ":", color=REFERENCE_COLOUR, lw=1.2,
+                                   label="theta_ref (reference)")
+            if signal == "error":
+                band = 0.02 * abs(angle)
+                handles.append(ax.axhline(band, color=REFERENCE_COLOUR, lw=0.8, ls="-.",
+                                          label="2 % settling band"))
+            if signal in ("theta", "error", "torque") or signal.endswith("_tip_deflection"):
+                if m.slew_time <= m.duration:
+                    handles.append(ax.axvline(m.slew_time, color=REFERENCE_COLOUR, lw=0.6,
+                                              ls="--", label="end of the slew"))
+            ax.set_ylabel(label, fontsize="small")
+            ax.grid(True, alpha=0.4)
+            ax.tick_params(labelsize="small")
+        axes[-1, col].set_xlabel("time [s]")
+    _legend(fig, handles, top)
+    fig.savefig(path, dpi=_DPI)
+    caption = (f"Slew of {angle:g} deg in {m.slew_time:g} s, simulated {m.duration:g} s: "
+               "theta and theta_ref; the attitude error on a log scale with the 2 % settling "
+               "band; torque; tip deflection of each appendage")
+    if result.disturbance_responses:
+        caption += "; the attitude response to the disturbance alone"
+    return caption + (". Solid: loop on the truth model, dashed: on the design model; one "
+                      "colour per design model; red: unstable.")
+
+
+def _slew_signal(resp, signal: str) -> np.ndarray | None:
+    with np.errstate(over="ignore", invalid="ignore"):
+        if signal == "error":
+            theta, ref = trace(resp, "theta"), trace(resp, "theta_ref", "input")
+            if theta is None or ref is None:
+                return None
+            return np.degrees(np.abs(theta - ref))
+        if signal in ("theta", "disturbance"):
+            y = trace(resp, "theta")
+            return None if y is None else np.degrees(y)
+        y = trace(resp, signal)
+        return None if y is None else np.asarray(y, float)
+
+
+def _draw_curves(ax, curves: list, handles: list, *, log: bool = False,
+                 note: bool = False) -> None:
+    """Draw responses: identical ones once (noted), diverging ones red and clipped just
+    outside the range of the bounded ones."""
+    drawn: list = []
+    merged = []
+    for c in curves:
+        twin = next((d for d in drawn if d[1] == c[1] and d[4] == c[4]
+                     and identical(d[3], c[3])), None)
+        if twin is None:
+            drawn.append(c)
+        else:
+            merged.append((twin[0], c[0], c[1]))
+    bounded = [y for *_, y, gone in drawn if not gone and y.size]
+    lo = hi = None
+    if bounded and any(gone for *_, gone in drawn) and not log:
+        lo = min(float(np.min(y)) for y in bounded)
+        hi = max(float(np.max(y)) for y in bounded)
+        pad = 0.25 * (hi - lo) or 1.0
+        lo, hi = lo - pad, hi + pad
+    for variant, which, t, y, gone in drawn:
+        style = TRUTH_STYLE if which == "truth" else DESIGN_STYLE
+        colour = UNSTABLE_COLOUR if gone else variant_colour(variant)
+        label = (f"UNSTABLE: {design_label(variant)}, loop on the {which} model" if gone
+                 else f"{design_label(variant)}: loop on the {which} model")
+        if gone and lo is not None:
+            y = np.clip(y, lo - (hi - lo), hi + (hi - lo))
+        if log:
+            y = np.maximum(y, 1e-9)
+        tt, yy = envelope(t, y)
+        # the unstable curve beneath: the stable ones it would hide stay visible
+        handles += (ax.semilogy if log else ax.plot)(
+            tt, yy, style, color=colour, lw=1.6 if gone else 1.2, label=label,
+            zorder=1.5 if gone else 2.5)
+    if lo is not None:
+        ax.set_ylim(lo, hi)
+    if log and drawn:
+        tops = [float(np.max(y)) for *_, y, _ in drawn if y.size and np.isfinite(y).any()]
+        if tops:
+            top = max(tops)
+            ax.set_ylim(max(top * 1e-6, 1e-9), top * 3.0)
+    if note:
+        for a, b, which in merged:
+            ax.text(0.99, 0.05, f"loops on the {which} model: {design_label(a)} and "
+                    f"{design_label(b)} coincide", transform=ax.transAxes, ha="right",
+                    va="bottom", fontsize="x-small", color=REFERENCE_COLOUR,
+                    bbox=dict(facecolor="white", edgecolor="none", alpha=0.85, pad=1))
+
+
+# ---------------------------------------------------------------------------------------------
+# open loop: Bode and Nyquist
+# ---------------------------------------------------------------------------------------------
+def _wrapped_phase(L: np.ndarray) -> np.ndarray:
+    """arg L in (-270, 90] deg, NaN where it wraps (no vertical line drawn across): the
+    rigid-body loop's -180 deg sits mid-range, and a lightly damped mode's +180 deg swing
+    above a PD's -90 deg stays on the axis."""
+    phase = 90.0 - np.mod(90.0 - np.degrees(np.angle(L)), 360.0)
+    jumps = np.abs(np.diff(phase)) > 180.0
+    phase = phase.copy()
+    phase[1:][jumps] = np.nan
+    return phase
+
+
+def loop_band(result) -> tuple[float, float]:
+    """Frequency range [rad/s] of the loop plots, from the models: from 1/30 of the slowest
+    crossover (or natural frequency) to 30 x the fastest, extended to 1.5 x the design
+    plants' highest mode (at most 1e3 x the crossover)."""
+    crossings = []
+    for r in result.data.get("closed_loops", []):
+        for source in (r["design_margins"], r["verdict"]):
+            w = source.get("gain_crossover_frequency")
+            if w is not None and math.isfinite(w) and w > 0:
+                crossings.append(w)
+    spec = result.scene.controller
+    if spec.pd is not None and spec.pd.natural_frequency is not None:
+        crossings.append(spec.pd.natural_frequency)
+    if not crossings:
+        crossings = [1.0]
+    w_lo, w_hi = min(crossings) / 30.0, max(crossings) * 30.0
+    modes = []
+    for d in result.designs.values():
+        A = np.asarray(d["plant"].A, dtype=float)
+        if A.size:
+            modes.append(float(np.max(np.abs(np.linalg.eigvals(A)))))
+    if modes:
+        w_hi = min(max(w_hi, 1.5 * max(modes)), 1e3 * max(crossings))
+    return w_lo, w_hi
+
+
+def plot_loop(result, path: Path) -> str:
+    """Draw ``loop.png``; returns its caption."""
+    import controllers
+
+    kinds = list(dict.fromkeys(r["controller"] for r in result.data["closed_loops"]))
+    w_lo, w_hi = loop_band(result)
+    n = len(kinds)
+    height = 3.6 * n + 1.0
+    top = 1.0 - 0.8 / height
+    fig, axes = _figure(n, 3, (16.5, height), top=top, wspace=0.3, left=0.06)
+    handles = []
+    for i, kind in enumerate(kinds):
+        mag, ph, nyq = axes[i]
+        notes = []
+        for row in _rows(result, kind):
+            variant = row["design"]
+            d = result.designs[variant]
+            K = d["controllers"][kind]
+            colour = variant_colour(variant)
+            sources = [("design", d["plant"], DESIGN_STYLE, colour),
+                       ("truth", result.truth["verdict"], TRUTH_STYLE,
+                        UNSTABLE_COLOUR if _unstable(row) else colour)]
+            if result.exact_frd is not None and not K.isdtime(strict=True):
+                sources.append(("exact beam", result.exact_frd, ":", colour))
+            for which, plant, style, c in sources:
+                with np.errstate(all="ignore"):
+                    omega, L = controllers.loop_frequency_response(plant, K)
+                keep = (omega >= w_lo) & (omega <= w_hi) & np.isfinite(L)
+                omega, L = omega[keep], L[keep]
+                if omega.size < 2:
+                    continue
+                where = "the exact beam" if which == "exact beam" else f"the {which} model"
+                label = f"{design_label(variant)}: L on {where}"
+                with np.errstate(divide="ignore"):
+                    handles += mag.semilogx(omega, 20 * np.log10(np.abs(L)), style, color=c,
+                                            lw=1.2, label=label)
+                ph.semilogx(omega, _wrapped_phase(L), style, color=c, lw=1.2)
+                if which != "exact beam":   # near -1 it is the truth model's curve
+                    inside = np.abs(L + 1.0) < 6.0
+                    nyq.plot(np.where(inside, L.real, np.nan),
+                             np.where(inside, L.imag, np.nan), style, color=c, lw=1.2)
+            v = row["verdict"]
+            wc, pm, gm = v["gain_crossover_frequency"], v["phase_margin"], v["gain_margin"]
+            if wc is not None and math.isfinite(wc) and w_lo <= wc <= w_hi:
+                mag.axvline(wc, color=colour, lw=0.7, ls="-.")
+                ph.axvline(wc, color=colour, lw=0.7, ls="-.")
+                if math.isfinite(pm):
+                    ph.plot([wc, wc], [-180.0, -180.0 + pm], color=colour, lw=3, alpha=0.6)
+            wp = v["phase_crossover_frequency"]
+            if wp is not None and math.isfinite(wp) and w_lo <= wp <= w_hi and math.isfinite(gm):
+                mag.plot([wp, wp], [0.0, -gm], color=colour, lw=3, alpha=0.6)
+            mm = v["modulus_margin"]
+            if mm is not None and math.isfinite(mm):
+                circle = np.exp(1j * np.linspace(0, 2 * np.pi, 200))
+                nyq.plot((-1 + mm * circle).real, (-1 + mm * circle).imag, color=colour,
+                         lw=0.7, ls="-.")
+            notes.append(f"{design_label(variant)}, on the truth model: GM {_num(gm, 'dB')}, "
+                         f"PM {_num(pm, 'deg')}, modulus margin {_num(mm, '')}")
+        mag.axhline(0.0, color=REFERENCE_COLOUR, lw=0.7)
+        ph.axhline(-180.0, color=REFERENCE_COLOUR, lw=0.7)
+        ph.set_ylim(-270, 90)
+        ph.set_yticks([-270, -180, -90, 0, 90])
+        circle = np.exp(1j * np.linspace(0, 2 * np.pi, 200))
+        nyq.plot(circle.real, circle.imag, color=REFERENCE_COLOUR, lw=0.7, ls=":")
+        nyq.plot([-1], [0], "x", color=UNSTABLE_COLOUR, ms=9, mew=2)
+        nyq.set_xlim(-3.0, 1.0)
+        nyq.set_ylim(-2.0, 2.0)
+        nyq.set_aspect("equal", adjustable="box")
+        label = controller_label(kind)
+        mag.set_title(f"{label}: |L(j omega)|", fontsize="medium")
+        ph.set_title(f"{label}: arg L(j omega)", fontsize="medium")
+        nyq.set_title(f"{label}: Nyquist near -1", fontsize="medium")
+        mag.set_ylabel("|L| [dB]")
+        ph.set_ylabel("arg L [deg]")
+        nyq.set_ylabel("Im L")
+        nyq.set_xlabel("Re L")
+        for ax in (mag, ph):
+            ax.set_xlim(w_lo, w_hi)
+            ax.set_xlabel("frequency [rad/s]")
+            ax.grid(True, alpha=0.4)
+            ax.minorticks_off()   # hundreds of minor log ticks cost time to draw
+        nyq.grid(True, alpha=0.4)
+        mag.text(0.98, 0.97, "\n".join(notes), transform=mag.transAxes, fontsize="x-small",
+                 va="top", ha="right",
+                 bbox=dict(facecolor="white", edgecolor="0.8", alpha=0.9, lw=0.5))
+    handles.append(_line(color=REFERENCE_COLOUR, lw=3, alpha=0.6,
+                         label="margins: phase at the gain crossover, gain at the phase crossover"))
+    _legend(fig, handles, top)
+    fig.savefig(path, dpi=_DPI)
+    return ("Open-loop transfer L(j omega), loop broken at the torque (unstable at L = -1), of "
+            "each controller on its design model (dashed), on the truth model (solid) and on "
+            "the exact beam (dotted, when computed): magnitude and phase with the gain "
+            "crossover (dash-dotted) and the margins as bars; Nyquist near -1 with the unit "
+            f"circle and the modulus-margin circle. Frequencies {w_lo:.3g} to {w_hi:.3g} "
+            "rad/s, from the crossovers and the design plant's modes.")
+
+
+def _num(value, unit: str) -> str:
+    if value is None:
+        return "n/a"
+    if not math.isfinite(value):
+        return "inf"
+    return f"{value:.3g}{(' ' + unit) if unit else ''}"
+
+
+# ---------------------------------------------------------------------------------------------
+# closed-loop poles
+# ---------------------------------------------------------------------------------------------
+_DAMPING_LINES = (0.05, 0.2, 0.4, 0.7)
+
+
+def plot_poles(result, path: Path) -> str:
+    """Draw ``poles.png``; returns its caption."""
+    kinds = list(dict.fromkeys(k[1] for k in result.poles))
+    n = len(kinds)
+    height = 8.2
+    top = 1.0 - 0.9 / height
+    fig, axes = _figure(2, n, (6.4 * n + 0.6, height), top=top, hspace=0.35)
+    handles = []
+    for col, kind in enumerate(kinds):
+        near, spread = axes[0, col], axes[1, col]
+        rows = {r["design"]: r for r in _rows(result, kind)}
+        scale = 0.0
+        for r in rows.values():
+            for source in (r["design_margins"], r["verdict"]):
+                w = source.get("gain_crossover_frequency")
+                if w is not None and math.isfinite(w):
+                    scale = max(scale, w)
+        if scale == 0.0:
+            spec = result.scene.controller
+            scale = (spec.pd.natural_frequency if spec.pd is not None
+                     and spec.pd.natural_frequency else 1.0)
+        radius = 4.0 * scale
+        # and the first flexible mode beyond, where spillover shows first
+        above = [abs(z) for s_ in result.poles.values() for z in np.asarray(s_)
+                 if abs(z) > 1.5 * scale]
+        if above:
+            radius = max(radius, 1.3 * min(above))
+        for (variant, k, which), s in result.poles.items():
+            if k != kind:
+                continue
+            s = np.asarray(s, dtype=complex)
+            marker = "o" if which == "truth" else "x"
+            colour = variant_colour(variant)
+            w = np.abs(s)
+            zeta = np.where(w > 0, -s.real / np.where(w > 0, w, 1.0), 0.0)
+            growing = s.real > 1e-10 * np.maximum(1.0, w)
+            style = dict(marker=marker, ls="none", ms=6 if which == "truth" else 7,
+                         mfc="none" if which == "truth" else colour, mec=colour, mew=1.3)
+            label = f"{design_label(variant)}: poles of the loop on the {which} model"
+            sel = (w <= radius) & ~growing
+            handles += near.plot(s.real[sel], s.imag[sel], label=label, **style)
+            spread.semilogx(w[~growing & (w > 0)], zeta[~growing & (w > 0)], **style)
+            if growing.any():
+                bad = dict(style, mfc=UNSTABLE_COLOUR, mec=UNSTABLE_COLOUR, ms=8)
+                handles += near.plot(s.real[growing & (w <= radius)],
+                                     s.imag[growing & (w <= radius)],
+                                     label="unstable poles (Re s > 0)", **bad)
+                spread.semilogx(w[growing], zeta[growing], **bad)
+                for z in s[growing & (s.imag >= 0)][:3]:
+                    target = near if abs(z) <= radius else spread
+                    xy = (z.real, z.imag) if target is near else (abs(z), -z.real / abs(z))
+                    target.annotate(f"unstable: {abs(z):.3g} rad/s, zeta {-z.real / abs(z):.2g}",
+                                    xy=xy, xytext=(8, 8), textcoords="offset points",
+                                    color=UNSTABLE_COLOUR, fontsize="x-small")
+        # damping lines: rays s = w (-zeta + j sqrt(1 - zeta^2))
+        for zeta in _DAMPING_LINES:
+            x, y = -zeta * radius, math.sqrt(1 - zeta * zeta) * radius
+            near.plot([0, x], [0, y], color=REFERENCE_COLOUR, lw=0.5, ls=":")
+            near.plot([0, x], [0, -y], color=REFERENCE_COLOUR, lw=0.5, ls=":")
+            near.text(0.97 * x, 0.97 * y, f"zeta {zeta:g}", fontsize="x-small",
+                      color=REFERENCE_COLOUR, ha="right", va="top", rotation=0)
+        near.axvspan(0, radius * 0.25, color=UNSTABLE_COLOUR, alpha=0.06, lw=0)
+        near.axvline(0, color=REFERENCE_COLOUR, lw=0.7)
+        near.set_xlim(-1.05 * radius, 0.25 * radius)
+        near.set_ylim(-1.05 * radius, 1.05 * radius)
+        near.set_aspect("equal", adjustable="box")
+        near.set_title(f"{controller_label(kind)}: closed-loop poles near the bandwidth "
+                       f"(|s| <= {radius:.3g} rad/s; dotted: damping ratio)", fontsize="small")
+        near.set_xlabel("Re s [1/s]")
+        near.set_ylabel("Im s [rad/s]")
+        spread.axhspan(-1.0, 0.0, color=UNSTABLE_COLOUR, alpha=0.06, lw=0)
+        spread.axhline(0.0, color=REFERENCE_COLOUR, lw=0.7)
+        spread.set_yscale("symlog", linthresh=1e-3)
+        spread.set_ylim(-1.0, 1.05)
+        spread.set_xlabel("natural frequency |s| [rad/s]")
+        spread.set_ylabel("damping ratio zeta [-]")
+        spread.set_title(f"{controller_label(kind)}: every closed-loop pole", fontsize="small")
+        for ax in (near, spread):
+            ax.grid(True, alpha=0.4)
+    _legend(fig, handles, top)
+    fig.savefig(path, dpi=_DPI)
+    return ("Closed-loop poles of each controller on its design model (crosses) and on the "
+            "truth model (circles), one colour per design model: top, the s-plane near the "
+            "loop's bandwidth with lines of constant damping ratio; bottom, damping ratio "
+            "against natural frequency of every pole (symmetric log scale below 1e-3). "
+            "Unstable poles red; the unstable region shaded.")
+
+
+# ---------------------------------------------------------------------------------------------
+# W(s) of the appendages
+# ---------------------------------------------------------------------------------------------
+def plot_W(result, path: Path, stats, exact: bool) -> str:
+    """Draw ``W.png``; returns its caption."""
+    scene = result.scene
+    groups: list = []     # (appendage names, spec) of distinct appendages
+    for a in scene.appendages:
+        key = (a.beam, a.chain, a.truth_chain, a.fit, a.truth, a.design)
+        for g in groups:
+            if g[1] == key:
+                g[0].append(a.name)
+                break
+        else:
+            groups.append(([a.name], key, a))
+    groups = groups[:_MAX_TIP_PANELS]
+    height = 3.1 * len(groups) + 1.2
+    top = 1.0 - 0.9 / height
+    fig, axes = _figure(len(groups), 3, (16.0, height), top=top, wspace=0.25, left=0.06)
+    handles = []
+    notes = []
+    loop_band_top = result.data.get("truth", {}).get("loop_band")
+    resolved = result.data.get("truth", {}).get("resolved", {})
+    for g, (names, _, a) in enumerate(groups):
+        models = result.models[a.name]
+        curves = []
+        if "beam" in models and a.truth == "beam" and exact:
+            curves.append(("exact beam", models["beam"], "-", EXACT_COLOUR, 1.6))
+            stats.exact_reference_evaluations += 1
+        truth = models["truth"]
+        truth_name = _model_name(truth)
+        curves.append((f"truth model: {truth_name}", truth, "--", "#7f7f7f", 1.4))
+        for variant, d in result.designs.items():
+            model = d["appendages"][a.name]
+            if model is truth:
+                continue
+            label = f"{design_label(variant)}: {_model_name(model)}"
+            if any(c[1] is model for c in curves):
+                continue
+            curves.append((label, model, "-.", variant_colour(variant), 1.2))
+        w_first = []
+        for _, model, *_ in curves:
+            try:
+                p = np.asarray(model.poles(), dtype=float)
+                if p.size:
+                    w_first.append(float(p[0]))
+            except (AttributeError, ValueError):
+                pass
+        w1 = min(w_first) if w_first else 1.0
+        w_lo, w_hi = w1 / 30.0, w1 * 30.0
+        res = resolved.get(a.name)
+        if res is not None:
+            w_hi = max(w_hi, 3.0 * res["frequency"])
+        omega = np.geomspace(w_lo, w_hi, 1200)
+        s = 1j * omega
+        for label, model, style, colour, lw in curves:
+            with np.errstate(all="ignore"):
+                W = np.asarray(model.W(s))
+            for c, (i, j) in enumerate(((0, 0), (0, 1), (1, 1))):
+                ax = axes[g, c]
+                handles += ax.loglog(omega, np.abs(W[:, i, j]), style, color=colour, lw=lw,
+                                     label=label)
+        for c, title in enumerate(("W1 = delta / F_y [m/N]", "W2 = W3 = delta / M [1/N]",
+                                   "W4 = phi / M [1/(N m)]")):
+            ax = axes[g, c]
+            ax.set_title(f"{', '.join(names)}: {title}", fontsize="small")
+            ax.grid(True, alpha=0.4)
+            ax.minorticks_off()
+            ax.set_xlim(w_lo, w_hi)
+            ax.set_xlabel("frequency [rad/s]")
+            if res is not None and res["frequency"] < w_hi:
+                ax.axvspan(res["frequency"], w_hi, color="0.85", alpha=0.5, lw=0)
+            if loop_band_top is not None and w_lo < loop_band_top < w_hi:
+                ax.axvline(loop_band_top, color=REFERENCE_COLOUR, lw=0.8, ls="-.")
+        notes.append(_truncation_note(names, a, models, res, loop_band_top))
+    handles.append(_line(color="0.85", lw=6, alpha=0.5,
+                         label="beyond the truth model's resolution"))
+    if loop_band_top is not None:
+        handles.append(_line(color=REFERENCE_COLOUR, lw=0.8, ls="-.",
+                             label="top of the loops' band (bandwidth_factor x crossover)"))
+    _legend(fig, handles, top)
+    fig.savefig(path, dpi=_DPI)
+    return ("W(s) of each appendage at its attachment end (free appendage, rigid-body term "
+            "included): magnitudes of W1, W2 = W3 and W4 of the exact distributed beam, the "
+            "truth model and the design chains; the phase of these lightly damped models is 0 "
+            "or 180 deg between resonances and anti-resonances (the loop's phase is in the loop "
+            "plot). " + " ".join(n for n in notes if n))
+
+
+def _model_name(model) -> str:
+    name = type(model).__name__
+    if hasattr(model, "n_modes"):
+        method = getattr(model, "method", None)
+        return f"beam, {model.n_modes} {method or ''} modes".replace("  ", " ")
+    if hasattr(model, "n_bodies"):
+        return f"{model.n_bodies}-body chain"
+    return name
+
+
+def _truncation_note(names, a, models, res, band) -> str:
+    """Why the truth model's W departs from the exact beam's, with the numbers."""
+    if res is None or "beam" not in models:
+        return ""
+    beam, truth = models["beam"], models["truth"]
+    try:
+        exact_w = np.asarray(beam.natural_frequencies(3), dtype=float)
+        truth_w = np.asarray(truth.poles(), dtype=float)[:3]
+    except (AttributeError, ValueError):
+        return ""
+    text = (f"{', '.join(names)}: the truth model ({res['model']}) represents the beam up to "
+            f"about {res['frequency']:.3g} rad/s (shaded beyond); its free-free resonances "
+            + ", ".join(f"{w:.3g}" for w in truth_w) + " rad/s against the exact beam's "
+            + ", ".join(f"{w:.3g}" for w in exact_w) + " rad/s")
+    if band is not None:
+        text += (f"; the loops act below {band:.3g} rad/s, "
+                 + ("inside the resolved band." if band <= res["frequency"] else
+                    "BEYOND the resolved band: raise fidelity.n_modes."))
+    return text
+
+
+def draw(result, folder: Path, wanted, stats, *, exact: bool) -> list:
+    """Draw the plots asked for into ``folder``; returns ``[(path, caption)]``."""
+    out = []
+    if "slew" in wanted and result.responses:
+        path = folder / PLOT_FILES["slew"]
+        out.append((path, plot_slew(result, path)))
+    if "loop" in wanted and result.data.get("closed_loops"):
+        path = folder / PLOT_FILES["loop"]
+        out.append((path, plot_loop(result, path)))
+    if "poles" in wanted and result.poles:
+        path = folder / PLOT_FILES["poles"]
+        out.append((path, plot_poles(result, path)))
+    if "W" in wanted:
+        path = folder / PLOT_FILES["W"]
+        out.append((path, plot_W(result, path, stats, exact)))
+    stats.plots += len(out)
+    return out

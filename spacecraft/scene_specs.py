@@ -1,0 +1,304 @@
+"""The scene's data model: a validated scene and its parts, in SI units (angles in rad).
+
+:func:`spacecraft.scene.load_scene` builds a :class:`Scene` from a TOML file or a dict and checks
+every value once; everything downstream (the runner, the report, the command line) reads these
+frozen dataclasses. The keys of the file, their units and ranges are documented in
+:mod:`spacecraft.scene`. :func:`scene_dict` gives the resolved scene (every default filled in)
+as a JSON-ready dict for ``results.json``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from .limits import Limits
+
+__all__ = [
+    "HubSpec", "BeamSpec", "ChainSpec", "FitSpec", "AppendageSpec", "FidelitySpec", "PDSpec",
+    "LQRSpec", "ControllerSpec", "DisturbanceSpec", "ManoeuvreSpec", "OutputsSpec", "ExportSpec",
+    "ReportSpec", "ReactionWheelSpec", "SimulatorSpec", "Scene", "scene_dict", "PLOTS",
+    "PLOT_ALIASES", "EXPORTABLE", "SECTIONS", "MATCHES", "METHODS", "CONTROLLERS",
+    "FMI_VERSIONS", "SIMULATORS",
+]
+
+#: Plots a scene may ask for (``report.plots``): the slew responses, the open-loop transfer
+#: L(j omega) (Bode and Nyquist), the closed-loop poles, and W(s) of every appendage.
+PLOTS = ("slew", "loop", "poles", "W")
+#: Earlier names of plots, still accepted: ``bode`` (W(s) of the appendage), ``pole_zero``.
+PLOT_ALIASES = {"bode": "W", "pole_zero": "poles"}
+EXPORTABLE = ("plant", "controller", "closed_loop")
+SECTIONS = ("rod", "tube", "rectangular", "uniform")
+MATCHES = ("poles-and-zeros", "frequencies")
+METHODS = ("craig-bampton", "residual", "free-free")
+CONTROLLERS = ("pd", "lqr")
+#: FMI versions of exported FMUs (``export.fmi_version``).
+FMI_VERSIONS = ("2.0", "3.0")
+#: Simulators of the manoeuvre (``simulator.name``): flexsat's own exact linear simulation, or
+#: Basilisk beside it.
+SIMULATORS = ("flexsat", "basilisk")
+
+
+@dataclasses.dataclass(frozen=True)
+class HubSpec:
+    """Hub: mass [kg], inertia about its centre of mass [kg m^2]."""
+
+    mass: float
+    inertia: float
+
+
+@dataclasses.dataclass(frozen=True)
+class BeamSpec:
+    """A uniform beam by section and material (SI units; see the module table)."""
+
+    section: str
+    length: float
+    dimensions: tuple          # (key, value) pairs: section dimensions [m], or EJ [N m^2] and
+    #                            rho*A [kg/m] for "uniform"
+    density: float | None      # kg/m^3
+    youngs_modulus: float | None  # Pa
+    damping_ratio: float
+
+    def build(self):
+        """The :class:`appendages.Beam`."""
+        from appendages import Beam
+
+        d, z = dict(self.dimensions), self.damping_ratio
+        if self.section == "rod":
+            return Beam.circular_rod(self.length, d["diameter"], self.density,
+                                     self.youngs_modulus, damping_ratio=z)
+        if self.section == "tube":
+            return Beam.tube(self.length, d["outer_diameter"], d["wall_thickness"], self.density,
+                             self.youngs_modulus, damping_ratio=z)
+        if self.section == "rectangular":
+            return Beam.rectangular(self.length, d["width"], d["thickness"], self.density,
+                                    self.youngs_modulus, damping_ratio=z)
+        return Beam(self.length, d["bending_stiffness"], d["linear_density"], damping_ratio=z)
+
+
+@dataclasses.dataclass(frozen=True)
+class ChainSpec:
+    """A hinged chain: explicit arrays, or rigid finite elements of the appendage's beam."""
+
+    root: str = "rigid"
+    lengths: tuple | None = None
+    masses: tuple | None = None
+    inertias: tuple | None = None
+    hinge_stiffnesses: tuple | None = None
+    hinge_dampings: tuple | None = None
+    com_offsets: tuple | None = None
+    from_beam: str | None = None
+    n_bodies: int | None = None
+    root_stiffness: float | None = None
+    root_damping: float = 0.0
+
+
+@dataclasses.dataclass(frozen=True)
+class FitSpec:
+    """Chain fit: number of bodies and one or more matching criteria."""
+
+    n_bodies: int = 3
+    match: tuple = MATCHES
+
+
+@dataclasses.dataclass(frozen=True)
+class AppendageSpec:
+    """One mounted appendage: name, mount (position [m], direction [rad]) and its models."""
+
+    name: str
+    position: tuple
+    direction: float
+    truth: str
+    design: str
+    beam: BeamSpec | None
+    chain: ChainSpec | None
+    fit: FitSpec | None
+    truth_chain: ChainSpec | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class FidelitySpec:
+    """Truth-model fidelity: a fixed n_modes, or a tolerance from which n_modes is chosen."""
+
+    n_modes: int | None = None
+    tolerance: float | None = 1e-3
+    method: str = "craig-bampton"
+    bandwidth_factor: float = 5.0
+    prune: bool = True
+
+
+@dataclasses.dataclass(frozen=True)
+class PDSpec:
+    """PD specification (rad/s, damping ratio)."""
+
+    natural_frequency: float | None = None
+    bandwidth: float | None = None
+    damping: float = 0.7
+    roll_off: float | None = None
+    notch: float | str | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class LQRSpec:
+    """LQR weights (1/rad^2, s^2/rad^2, 1/(N m)^2, 1/m^2) and estimator speed ratio."""
+
+    attitude_weight: float
+    torque_weight: float
+    rate_weight: float = 0.0
+    deflection_weight: float | None = None
+    estimator_speed: float = 3.0
+
+
+@dataclasses.dataclass(frozen=True)
+class ControllerSpec:
+    """Controllers to tune on the design model and their sample time [s] (None: continuous)."""
+
+    types: tuple
+    pd: PDSpec | None
+    lqr: LQRSpec | None
+    sample_time: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class DisturbanceSpec:
+    """A rectangular pulse on a plant disturbance input (N or N m), from start [s] for length [s]."""
+
+    input: str
+    amplitude: float
+    start: float = 0.0
+    length: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class ManoeuvreSpec:
+    """Slew of slew_angle [rad] in slew_time [s], simulated for duration [s] at step [s]."""
+
+    slew_angle: float
+    slew_time: float
+    duration: float
+    step: float
+    disturbance: DisturbanceSpec | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class OutputsSpec:
+    """Which outputs to build: tip deflections, root loads, exact-beam references."""
+
+    tip_deflection: bool = False
+    root_loads: bool = False
+    exact_reference: bool = False
+
+
+@dataclasses.dataclass(frozen=True)
+class ExportSpec:
+    """FMU export: whether, which systems, cross-check files, communication step [s], FMI
+    versions, sources-only FMUs, SSP files of plant and controller."""
+
+    fmu: bool = False
+    systems: tuple = EXPORTABLE
+    reference_files: bool = True
+    step: float | None = None
+    fmi_versions: tuple = ("2.0",)
+    sources_only: bool = False
+    ssp: bool = False
+
+
+@dataclasses.dataclass(frozen=True)
+class ReportSpec:
+    """Plots wanted, whether to tabulate the equivalence criterion, whether to write the time
+    series (CSV files beside results.json)."""
+
+    plots: tuple = ()
+    equivalence: bool = True
+    timeseries: bool = True
+
+
+@dataclasses.dataclass(frozen=True)
+class ReactionWheelSpec:
+    """A reaction wheel about the hub's z axis for the Basilisk run (kg m^2, N m, rad/s)."""
+
+    spin_inertia: float
+    max_torque: float | None = None
+    max_speed: float | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class SimulatorSpec:
+    """Who simulates the manoeuvre besides flexsat: ``"flexsat"`` (nobody else) or
+    ``"basilisk"`` (the design chains in Basilisk, flight-software sample time [s], RK4 step
+    [s], optional reaction wheel)."""
+
+    name: str = "flexsat"
+    sample_time: float | None = None
+    dt: float | None = None
+    reaction_wheel: ReactionWheelSpec | None = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """A validated scene (SI units). Build it with :func:`~spacecraft.scene.load_scene` or
+    :func:`~spacecraft.scene.default_scene`."""
+
+    title: str
+    source: str
+    hub: HubSpec
+    appendages: tuple
+    fidelity: FidelitySpec
+    controller: ControllerSpec
+    manoeuvre: ManoeuvreSpec | None
+    outputs: OutputsSpec
+    export: ExportSpec
+    report: ReportSpec
+    limits: Limits = Limits()
+    simulator: SimulatorSpec = SimulatorSpec()
+
+    def replace(self, **changes) -> "Scene":
+        """A copy with some top-level parts replaced (e.g. ``export=ExportSpec(fmu=False)``)."""
+        return dataclasses.replace(self, **changes)
+
+    @property
+    def has_beam_truth(self) -> bool:
+        """True if some appendage's truth model is a distributed beam."""
+        return any(a.truth == "beam" for a in self.appendages)
+
+    @property
+    def design_variants(self) -> tuple:
+        """Labels of the design models: one per fit criterion (or ``("design",)``)."""
+        matches: list = []
+        for a in self.appendages:
+            if a.design == "fit":
+                for m in a.fit.match:
+                    if m not in matches:
+                        matches.append(m)
+        return tuple(matches) if matches else ("design",)
+
+
+def _plain(value):
+    """Dataclasses, tuples and numbers as JSON-ready Python (tuples of pairs of a section's
+    dimensions become a table)."""
+    if dataclasses.is_dataclass(value):
+        return {f.name: _plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, tuple) and value and all(
+            isinstance(v, tuple) and len(v) == 2 and isinstance(v[0], str) for v in value):
+        return {k: _plain(v) for k, v in value}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def scene_dict(scene: Scene) -> dict:
+    """The resolved scene: every key with its value after defaults, SI units inside (angles in
+    rad, ``sample_time`` [s] for the file's ``sample_rate`` [Hz]), JSON-ready.
+
+    Returns
+    -------
+    dict
+        Mirrors :class:`Scene` (``appendages`` a list of tables; a beam's section dimensions a
+        table ``dimensions``), plus ``units`` naming the unit system.
+    """
+    out = _plain(scene)
+    out["units"] = ("SI: m, kg, s, N, Pa, rad (slew_angle, direction), rad/s; controller and "
+                    "simulator sample_time in s")
+    return out

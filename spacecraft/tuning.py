@@ -1,0 +1,160 @@
+"""The scene's controllers tuned on a design plant, with what an engineer needs to know of them.
+
+:func:`tune` calls :func:`controllers.pd` or :func:`controllers.lqr_design` with the scene's
+specification and returns the controller with its description (:class:`Tuned`): the control
+law's structure, its gains (PD: Kp = J wn^2, Kd = 2 zeta wn J with the design plant's inertia J;
+LQR: the state-feedback gain K and the estimator gain L, the regulator and estimator poles),
+its filters (roll-off, notch), its sample time, and the modes the design leaves out because the
+loop cannot influence them (announced by controllers with a
+:class:`controllers.RemovedModesWarning`; an LQR lists them in ``LQRDesign.removed_modes``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+
+import control
+import numpy as np
+
+import controllers
+
+__all__ = ["Tuned", "tune", "digital_facts"]
+
+
+@dataclasses.dataclass
+class Tuned:
+    """A controller tuned on a design plant.
+
+    Attributes
+    ----------
+    controller : control.StateSpace
+        Inputs ``theta_ref``, ``theta``, ``omega``; output ``torque``; continuous (dt = 0) or
+        digital (dt = sample time).
+    description : dict
+        JSON-ready: ``kind``, ``structure`` (the control law in words), gains and filters,
+        ``sample_time`` [s] (None: continuous), ``n_states``.
+    removed_modes : list of str
+        The modes the design leaves out, one line each, with the reason.
+    """
+
+    controller: control.StateSpace
+    description: dict
+    removed_modes: list
+
+
+def _poles(values) -> list:
+    return [{"re": float(z.real), "im": float(z.imag)} for z in np.asarray(values, complex)]
+
+
+def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
+    """Tune the controller ``kind`` ("pd" or "lqr") of a scene's controller table on a plant.
+
+    Parameters
+    ----------
+    kind : str
+    plant : control.StateSpace
+        Design plant (inputs ``torque``; outputs ``theta``, ``omega``).
+    spec : spacecraft.scene.ControllerSpec
+
+    Returns
+    -------
+    Tuned
+
+    Raises
+    ------
+    ValueError, TypeError
+        From controllers (the runner turns them into a SceneError naming the key).
+    """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", controllers.RemovedModesWarning)
+        if kind == "pd":
+            tuned = _pd(plant, spec)
+        else:
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                tuned = _lqr(plant, spec)
+    removed = [" ".join(str(w.message).split()) for w in caught
+               if issubclass(w.category, controllers.RemovedModesWarning)]
+    for w in caught:  # anything else goes on to the caller's record
+        if not issubclass(w.category, controllers.RemovedModesWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    if not tuned.removed_modes:
+        tuned.removed_modes = removed
+    K = tuned.controller
+    if K.dt is None:
+        # a static-gain StateSpace gets dt=None from python-control; it is a continuous-time
+        # controller
+        K = control.ss(K.A, K.B, K.C, K.D, 0, inputs=list(K.input_labels),
+                       outputs=list(K.output_labels), name=K.name)
+        tuned.controller = K
+    tuned.description["n_states"] = int(K.nstates)
+    tuned.description["sample_time"] = spec.sample_time
+    return tuned
+
+
+def _pd(plant, spec) -> Tuned:
+    p = spec.pd
+    K = controllers.pd(plant, natural_frequency=p.natural_frequency, bandwidth=p.bandwidth,
+                       damping=p.damping, roll_off=p.roll_off, notch=p.notch,
+                       sample_time=spec.sample_time)
+    J = controllers.rigid_body_inertia(plant)
+    wn = (p.natural_frequency if p.natural_frequency is not None
+          else controllers.natural_frequency_from_bandwidth(p.bandwidth, p.damping))
+    Kp, Kd = controllers.pd_gains(J, wn, p.damping)
+    notch = p.notch
+    if notch == "first_mode":
+        notch = float(controllers.flexible_modes(plant)[0].frequency)
+    filters = (["N(s) notch"] if notch is not None else []) + (
+        ["F(s) roll-off"] if p.roll_off is not None else [])
+    law = "Kp (theta_ref - theta) - Kd omega"
+    structure = (f"torque = {' '.join(f.split()[0] for f in filters)} [{law}]" if filters
+                 else f"torque = {law}")
+    description = {
+        "kind": "pd", "structure": structure, "inertia": J, "natural_frequency": wn,
+        "damping": p.damping, "Kp": Kp, "Kd": Kd, "roll_off": p.roll_off, "notch": notch,
+        "notch_spec": p.notch if isinstance(p.notch, str) else None,
+    }
+    return Tuned(K, description, [])
+
+
+def _lqr(plant, spec) -> Tuned:
+    q = spec.lqr
+    design = controllers.lqr_design(plant, attitude_weight=q.attitude_weight,
+                                     rate_weight=q.rate_weight, torque_weight=q.torque_weight,
+                                     deflection_weight=q.deflection_weight,
+                                     estimator_speed=q.estimator_speed,
+                                     sample_time=spec.sample_time)
+    n = design.controller.nstates
+    description = {
+        "kind": "lqr",
+        "structure": ("torque = -K (x_hat - x_ref theta_ref), x_hat from a Kalman filter on "
+                      "theta and omega (output feedback; x_hat: the design model's states)"),
+        "attitude_weight": q.attitude_weight, "rate_weight": q.rate_weight,
+        "torque_weight": q.torque_weight, "deflection_weight": q.deflection_weight,
+        "estimator_speed": q.estimator_speed,
+        "rigid_body_frequency": (q.attitude_weight / q.torque_weight) ** 0.25
+        / math.sqrt(controllers.rigid_body_inertia(plant)),
+        "K": np.asarray(design.K, dtype=float).reshape(-1).tolist(),
+        "L": np.asarray(design.L, dtype=float).tolist(),
+        "states": list(design.design_plant.state_labels) if design.design_plant is not None
+        else [f"x{i}" for i in range(n)],
+        "regulator_poles": _poles(design.regulator_poles),
+        "estimator_poles": _poles(design.estimator_poles),
+    }
+    removed = [f"{m} - {m.reason}" for m in design.removed_modes]
+    return Tuned(design.controller, description, removed)
+
+
+def digital_facts(sample_time: float | None, crossover: float | None) -> dict | None:
+    """Sample rate [Hz], Nyquist frequency [rad/s] and the zero-order hold's phase lag
+    omega_c T / 2 [deg] at the loop's crossover omega_c [rad/s] (Franklin, Powell & Workman,
+    Digital Control of Dynamic Systems, 3rd ed., sec. 6.3); None for a continuous loop."""
+    if sample_time is None:
+        return None
+    out = {"sample_time": sample_time, "sample_rate": 1.0 / sample_time,
+           "nyquist_frequency": math.pi / sample_time}
+    if crossover is not None and math.isfinite(crossover) and crossover > 0:
+        out["hold_phase_lag_at_crossover"] = math.degrees(crossover * sample_time / 2.0)
+    return out

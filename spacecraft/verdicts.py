@@ -1,0 +1,300 @@
+"""Verdicts on a closed loop that cannot be misread, and the design warnings of a run.
+
+Status of a loop's response (:func:`loop_status`), from its closed-loop poles and its
+simulation:
+
+- ``"diverges"``: the response left the float64 range (it stops there);
+- ``"unstable"``: a closed-loop pole has Re(s) > 0 (the response grows as exp(sigma t),
+  sigma the largest real part, even if the simulated time shows little of it);
+- ``"slew unfinished"``: the simulated time ends before the slew does (manoeuvre.duration <
+  slew_time): overshoot and settling time are not defined;
+- ``"not settled"``: stable, but still outside the 2 % band at the end of the simulated time;
+- ``"settles"``.
+
+For the first two, every time metric of the response is withheld (None, with the flag
+``"diverges"``): the numbers of a growing response's first seconds read as those of a loop that
+settles. A pole with |Re(s)| <= 1e-10 max(1, |s|) (an undamped mode the loop does not reach,
+e.g. a symmetric mode of symmetric wings when pruning is off) is marginal: it neither grows nor
+decays, and the status says so without withholding the metrics.
+
+Warnings (:func:`design_warnings`): every one has a ``code``, the loop it concerns and a
+message that says what to change. Thresholds (classical robustness targets, Skogestad &
+Postlethwaite [1]_ sec. 2.4.3: "typically we require GM > 2 and PM > 30 deg", and a peak
+sensitivity below 2, i.e. a modulus margin above 0.5):
+
+==============================  ===========  ==================================================
+check                           threshold    on
+==============================  ===========  ==================================================
+gain margin                     6 dB         |GM| on the truth model (a negative GM of a
+                                             conditionally stable loop counts by its size)
+phase margin                    30 deg       on the truth model
+modulus margin                  0.5          min |1 + L| on the truth model
+unstable on the truth model     -            closed-loop poles with Re(s) > 0
+unstable on the exact beam      -            Nyquist count on W(s) of the distributed beam
+manoeuvre ends before the slew  -            manoeuvre.duration < slew_time
+not settled                     2 % band     still outside at the end of the simulated time
+truth model misses modes        1 %          a coupled mode below bandwidth_factor x the loop's
+                                             crossover that the truth model does not resolve
+==============================  ===========  ==================================================
+
+References
+----------
+.. [1] S. Skogestad, I. Postlethwaite, Multivariable Feedback Control, 2nd ed., Wiley 2005,
+   sec. 2.4.3 (gain, phase and modulus margins; typical requirements).
+.. [2] Craig & Bampton, AIAA J. 6(7), 1968: a truncation to n fixed-interface modes represents
+   the appendage up to about its n-th clamped (cantilever) frequency.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "MIN_MODULUS_MARGIN", "MODE_ERROR",
+           "MARGINAL", "STATUS_TEXT", "closed_loop_poles", "loop_status", "withheld_metrics",
+           "design_warnings", "resolved_frequency", "TIME_METRICS"]
+
+#: Smallest acceptable |gain margin| on the truth model [dB] (a factor of 2).
+MIN_GAIN_MARGIN = 6.0
+#: Smallest acceptable phase margin on the truth model [deg].
+MIN_PHASE_MARGIN = 30.0
+#: Smallest acceptable modulus margin min |1 + L| on the truth model [-] (peak |S| <= 2).
+MIN_MODULUS_MARGIN = 0.5
+#: Relative frequency error above which a coupled mode counts as missed by the truth model.
+MODE_ERROR = 0.01
+#: |Re(s)| <= MARGINAL max(1, |s|) [1/s]: a pole on the imaginary axis (neither grows nor
+#: decays; the eigenvalues of the loops are computed to ~1e-13 relative, see
+#: controllers.stability).
+MARGINAL = 1e-10
+
+#: The time-domain metrics of a response (withheld for a diverging loop).
+TIME_METRICS = ("overshoot", "settling_time", "peak_torque", "peak_tip_deflection",
+                "peak_attitude_error", "final_attitude_error")
+
+#: What each status means, for the report.
+STATUS_TEXT = {
+    "settles": "settles",
+    "not settled": "does not settle within the simulated time",
+    "slew unfinished": "the simulated time ends before the slew",
+    "unstable": "UNSTABLE: diverges",
+    "diverges": "UNSTABLE: diverges",
+}
+
+
+def closed_loop_poles(loop) -> np.ndarray:
+    """Poles of a closed loop in the s-plane [1/s]; a digital loop's z-plane poles mapped by
+    s = log(z) / T (poles at z = 0, deadbeat, left out)."""
+    A = np.asarray(loop.A, dtype=float)
+    if A.size == 0:
+        return np.zeros(0, dtype=complex)
+    lam = np.linalg.eigvals(A).astype(complex)
+    if loop.isdtime(strict=True):
+        lam = lam[np.abs(lam) > 1e-300]
+        lam = np.log(lam) / float(loop.dt)
+    return lam
+
+
+def loop_status(poles: np.ndarray, response, manoeuvre, metrics: dict | None) -> dict:
+    """Status of a loop's slew response (see the module docstring).
+
+    Parameters
+    ----------
+    poles : ndarray, complex, 1/s
+        Closed-loop poles (:func:`closed_loop_poles`).
+    response : control.TimeResponseData or None
+        The slew response (attributes ``diverged``, ``diverged_at``), None without a manoeuvre.
+    manoeuvre : ManoeuvreSpec or None
+    metrics : dict or None
+        :func:`controllers.metrics` of the response.
+
+    Returns
+    -------
+    dict
+        ``status`` (a key of :data:`STATUS_TEXT`), ``text``, ``growth_rate`` [1/s] (largest
+        Re(s) of a growing pole, else None), ``doubling_time`` [s] (ln 2 / growth_rate),
+        ``diverged_at`` [s] or None, ``marginal_frequencies`` [rad/s] (undamped modes).
+    """
+    s = np.asarray(poles, dtype=complex)
+    size = np.maximum(1.0, np.abs(s))
+    growing = s.real > MARGINAL * size
+    marginal = np.abs(s.real) <= MARGINAL * size
+    growth = float(np.max(s.real[growing])) if growing.any() else None
+    out = {"growth_rate": growth,
+           "doubling_time": math.log(2.0) / growth if growth else None,
+           "diverged_at": None,
+           "marginal_frequencies": sorted({round(float(w), 12) for w in
+                                           np.abs(s[marginal & (s.imag >= 0)])})}
+    at = None if response is None else getattr(response, "diverged_at", None)
+    if response is not None and getattr(response, "diverged", False):
+        out.update(status="diverges", diverged_at=at)
+        out["text"] = (f"UNSTABLE: diverges, simulation stopped at t = {at:.6g} s (the "
+                       "response left the floating-point range)" if at is not None
+                       else "UNSTABLE: diverges")
+    elif growth is not None:
+        at_w = sorted({float(f"{abs(z):.3g}") for z in s[growing & (s.imag >= 0)]})
+        out["status"] = "unstable"
+        out["growing_frequencies"] = at_w
+        out["text"] = (f"UNSTABLE: diverges (growing mode{'s' if len(at_w) != 1 else ''} at "
+                       + ", ".join(f"{w:.3g}" for w in at_w[:4]) + f" rad/s, sigma = "
+                       f"{growth:.3g} 1/s: the amplitude doubles every "
+                       f"{out['doubling_time']:.3g} s)")
+    elif manoeuvre is not None and manoeuvre.duration < manoeuvre.slew_time:
+        out["status"] = "slew unfinished"
+        out["text"] = (f"the simulated time {manoeuvre.duration:g} s ends before the slew "
+                       f"({manoeuvre.slew_time:g} s): no overshoot or settling time")
+    elif metrics is not None and "settling_time" in metrics and metrics["settling_time"] is None:
+        out["status"] = "not settled"
+        out["text"] = (f"does not settle within the simulated time ({manoeuvre.duration:g} s): "
+                       "lengthen manoeuvre.duration")
+    else:
+        out["status"] = "settles"
+        out["text"] = "settles"
+    if out["marginal_frequencies"] and out["status"] in ("settles", "not settled"):
+        out["text"] += (" (marginally stable: undamped modes the loop does not reach at "
+                        + ", ".join(f"{w:.4g}" for w in out["marginal_frequencies"][:4])
+                        + " rad/s)")
+    return out
+
+
+def withheld_metrics(metrics: dict, status: dict) -> tuple[dict, dict]:
+    """The metrics to report under a status, and the flags of those withheld.
+
+    Returns
+    -------
+    values : dict
+        ``metrics`` with None for every metric the status makes meaningless.
+    flags : dict
+        name -> ``"diverges"``, ``"slew unfinished"`` or ``"not settled"`` for each None.
+    """
+    values, flags = dict(metrics), {}
+    kind = status["status"]
+    if kind in ("diverges", "unstable"):
+        for name in TIME_METRICS:
+            if name in values:
+                values[name] = None
+                flags[name] = "diverges"
+    elif kind == "slew unfinished":
+        for name in ("overshoot", "settling_time"):
+            if name in values:
+                values[name] = None
+                flags[name] = "slew unfinished"
+    elif kind == "not settled" and "settling_time" in values:
+        values["settling_time"] = None
+        flags["settling_time"] = "not settled"
+    values.pop("diverged_at", None)
+    values["diverged"] = kind in ("diverges", "unstable")
+    return values, flags
+
+
+def resolved_frequency(beam, n_modes: int, method: str) -> float:
+    """Highest frequency [rad/s] up to which a truncation of ``beam`` to ``n_modes`` modes
+    represents it: its n-th clamped (cantilever) frequency for Craig-Bampton (fixed-interface
+    modes [2]_), its n-th free-free bending frequency for the free-free and residual
+    truncations."""
+    if method == "craig-bampton":
+        return float(beam.cantilever_frequencies(n_modes)[-1])
+    return float(beam.natural_frequencies(n_modes)[-1])
+
+
+def _who(row) -> str:
+    from .naming import controller_label, design_label
+
+    return f"{controller_label(row['controller'])} tuned on {design_label(row['design'])}"
+
+
+def _warning(code: str, message: str, row=None) -> dict:
+    out = {"code": code, "message": message}
+    if row is not None:
+        out["design"], out["controller"] = row["design"], row["controller"]
+    return out
+
+
+def design_warnings(data: dict, *, loop_band: float | None, resolved: dict) -> list[dict]:
+    """The warnings of a run's results (see the module docstring's table).
+
+    Parameters
+    ----------
+    data : dict
+        The run's results (``closed_loops`` rows with ``verdict``, ``design_margins``,
+        ``status``, ``exact_verdict``; ``truth``; ``exact``; ``fidelity``).
+    loop_band : float or None, rad/s
+        bandwidth_factor x the fastest loop's crossover (None: no check of the truth model).
+    resolved : dict
+        appendage name -> (frequency [rad/s] up to which its truth model is resolved,
+        description), for the appendages whose truth is a truncated beam.
+
+    Returns
+    -------
+    list of dict
+        ``code``, ``message``, and ``design``, ``controller`` for a loop's warning.
+    """
+    out = []
+    for row in data.get("closed_loops", []):
+        who = _who(row)
+        v = row["verdict"]
+        status = row.get("status", {}).get("truth")
+        unstable = (status or {}).get("status") in ("unstable", "diverges") or (
+            status is None and not v["stable"] and v.get("least_damping_ratio") is not None
+            and v["least_damping_ratio"] < 0)
+        if unstable:
+            zeta, w = v.get("least_damping_ratio"), v.get("least_damped_frequency")
+            where = (f": poles at {w:.4g} rad/s with damping ratio {zeta:.3g}"
+                     if zeta is not None and w is not None else "")
+            out.append(_warning("unstable", f"{who} is UNSTABLE on the truth model{where}; "
+                                "retune it (lower bandwidth, a roll-off or notch at the mode) "
+                                "or design on a better model", row))
+        else:
+            low = []
+            gm, pm, mm = v.get("gain_margin"), v.get("phase_margin"), v.get("modulus_margin")
+            if gm is not None and math.isfinite(gm) and abs(gm) < MIN_GAIN_MARGIN:
+                low.append(f"gain margin {gm:.3g} dB (< {MIN_GAIN_MARGIN:g} dB)")
+            if pm is not None and math.isfinite(pm) and pm < MIN_PHASE_MARGIN:
+                low.append(f"phase margin {pm:.3g} deg (< {MIN_PHASE_MARGIN:g} deg)")
+            if mm is not None and math.isfinite(mm) and mm < MIN_MODULUS_MARGIN:
+                low.append(f"modulus margin {mm:.3g} (< {MIN_MODULUS_MARGIN:g})")
+            if low:
+                out.append(_warning("margins", f"{who}: low robustness on the truth model: "
+                                    + ", ".join(low) + "; a small change of the plant can "
+                                    "destabilise it (lower the bandwidth, add damping or a "
+                                    "roll-off)", row))
+        e = row.get("exact_verdict") or {}
+        if "stable" in e and not e["stable"] and not unstable:
+            out.append(_warning("unstable_exact", f"{who} is stable on the truncated truth model "
+                                "but UNSTABLE on the exact distributed beam (Nyquist): the truth "
+                                "model misses what destabilises it; raise fidelity.n_modes or "
+                                "lower fidelity.tolerance", row))
+        if status is not None and status["status"] in ("slew unfinished", "not settled"):
+            out.append(_warning(status["status"].replace(" ", "_"), f"{who}: {status['text']}",
+                                row))
+    # one warning for the manoeuvre rather than one per loop
+    unfinished = [w for w in out if w["code"] == "slew_unfinished"]
+    if unfinished:
+        out = [w for w in out if w["code"] != "slew_unfinished"]
+        out.append(_warning("slew_unfinished", unfinished[0]["message"].split(": ", 1)[1]
+                            + "; set manoeuvre.duration beyond manoeuvre.slew_time (3 x "
+                            "slew_time is the default)"))
+    if loop_band is not None:
+        for name, (w_resolved, what) in resolved.items():
+            if w_resolved < loop_band:
+                out.append(_warning("truth_resolution", f"the truth model of {name!r} ({what}) "
+                                    f"resolves the appendage up to about {w_resolved:.4g} rad/s, "
+                                    f"but the loops act up to {loop_band:.4g} rad/s "
+                                    "(bandwidth_factor x crossover): modes in that band are "
+                                    "missing; raise fidelity.n_modes or use fidelity.tolerance"))
+    exact = (data.get("exact") or {}).get("coupled_frequencies")
+    truth = data.get("truth", {}).get("coupled_frequencies")
+    if loop_band is not None and exact and truth is not None:
+        missed = []
+        for k, w in enumerate(exact):
+            if w > loop_band:
+                break
+            if k >= len(truth) or abs(truth[k] / w - 1.0) > MODE_ERROR:
+                missed.append((w, truth[k] if k < len(truth) else None))
+        if missed:
+            text = ", ".join(f"{w:.4g} rad/s (truth model: "
+                             + (f"{t:.4g})" if t is not None else "missing)") for w, t in missed)
+            out.append(_warning("missed_modes", f"the truth model misses exact coupled modes "
+                                f"inside the loops' band (up to {loop_band:.4g} rad/s): {text}; "
+                                "raise fidelity.n_modes or use fidelity.tolerance"))
+    return out
