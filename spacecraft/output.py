@@ -312,7 +312,9 @@ class OutputFolder:
                 if state == "absent":
                     continue
                 who = (f"flexsat run (pid {record['pid']} on {record['host']}, since "
-                       f"{record.get('since', '?')})" if record else "run")
+                       f"{record.get('since', '?')})" if record else
+                       # claimed a moment ago: its owner record is not written yet
+                       "flexsat run")
                 if state == "alive":
                     raise _Busy(f"{_shown(path)}: another {who} is writing this folder; wait "
                                 "for it or choose another --out")

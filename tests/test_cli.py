@@ -108,11 +108,11 @@ def test_progress_goes_to_stderr(scene_file, tmp_path, capsys):
 
 def test_no_plots_flag_and_plots_when_asked(scene_file, tmp_path):
     text = SCENE.replace("equivalence = false", "equivalence = false\nplots = [\"slew\", "
-                                                "\"pole_zero\"]")
+                                                "\"poles\"]")
     scene_file.write_text(text)
     assert flexsat("run", scene_file, "--out", tmp_path / "a", "--quiet") == 0
     assert sorted(p.name for p in (tmp_path / "a" / "plots").iterdir()) == [
-        "pole_zero.png", "slew_pd.png"]
+        "poles.png", "slew.png"]
     assert json.loads((tmp_path / "a" / "results.json").read_text())["stats"]["plots"] == 2
     assert flexsat("run", scene_file, "--out", tmp_path / "b", "--quiet", "--no-plots") == 0
     assert not (tmp_path / "b" / "plots").exists()

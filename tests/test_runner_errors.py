@@ -51,8 +51,13 @@ def test_a_diverging_loop_is_reported_not_raised():
     truth = result.responses[("frequencies", "lqr", "truth")]
     assert truth.diverged and truth.diverged_at == at
     assert np.all(np.isfinite(truth.y)) and truth.t[-1] == at
-    assert all(v == math.inf for v in row["metrics"]["truth"].values())
-    assert all(v == math.inf for v in row["peak_difference"].values())
+    # no settling metrics for a diverging loop: None, flagged "diverges" (issue 14)
+    time_metrics = [k for k in row["metrics"]["truth"] if k != "diverged"]
+    assert time_metrics and all(row["metrics"]["truth"][k] is None for k in time_metrics)
+    assert all(row["metric_flags"]["truth"][k] == "diverges" for k in time_metrics)
+    assert row["metrics"]["truth"]["diverged"] is True
+    assert all(v is None for v in row["peak_difference"].values())
+    assert set(row["peak_difference_flags"].values()) == {"diverges"}
     line = [s for s in summary_lines(result.data) if s.startswith("LQR")][0]
     assert f"UNSTABLE: diverges, simulation stopped at t = {at:.6g} s" in line
 
@@ -62,7 +67,12 @@ def test_a_short_run_of_the_same_loop_is_not_called_diverging():
     row = result.data["closed_loops"][0]
     assert row["verdict"]["stable"] is False and row["diverged"] == {"design": None,
                                                                      "truth": None}
-    assert all(math.isfinite(v) for v in row["metrics"]["truth"].values())
+    # the response is still finite at 200 s, but the loop has growing poles: unstable, and its
+    # settling metrics are withheld (issue 14: "settling time 91 s" for an UNSTABLE loop)
+    assert row["status"]["truth"]["status"] == "unstable"
+    assert row["status"]["truth"]["growth_rate"] > 0
+    assert row["metrics"]["truth"]["settling_time"] is None
+    assert row["metric_flags"]["truth"]["settling_time"] == "diverges"
 
 
 def test_overflow_prefix_is_the_exact_response():
@@ -128,7 +138,9 @@ def test_warnings_are_collected_into_the_results(monkeypatch, recwarn):
     original = controllers.metrics
 
     def noisy(response, **kwargs):
-        np.log(np.zeros(1))   # RuntimeWarning: divide by zero encountered in log
+        # the runner evaluates metrics under np.errstate (a diverging response's overflow is a
+        # verdict, not a warning): raise the RuntimeWarning as numpy would outside it
+        warnings.warn("divide by zero encountered in log", RuntimeWarning)
         warnings.warn("a\nmulti-line\nwarning", UserWarning)
         return original(response, **kwargs)
 
