@@ -50,7 +50,7 @@ def slew_and_disturbance_inputs(loop, manoeuvre, T: np.ndarray):
     return U, D
 
 
-def simulate_manoeuvre(loop, manoeuvre, *, simulator=None) -> dict:
+def simulate_manoeuvre(loop, manoeuvre, *, simulator=None, together: bool = False) -> dict:
     """The slew and (if any) the disturbance response of a closed loop.
 
     Parameters
@@ -60,6 +60,9 @@ def simulate_manoeuvre(loop, manoeuvre, *, simulator=None) -> dict:
     manoeuvre : spacecraft.scene.ManoeuvreSpec
     simulator : controllers.Simulator, optional
         A simulator of ``loop`` at ``manoeuvre.step`` to reuse (continuous loops).
+    together : bool
+        Simulate slew and disturbance at once (``"slew"`` is then the whole manoeuvre's
+        response, ``"disturbance"`` None): what the spacecraft does under both.
 
     Returns
     -------
@@ -69,6 +72,8 @@ def simulate_manoeuvre(loop, manoeuvre, *, simulator=None) -> dict:
     """
     T = time_grid(manoeuvre)
     U, D = slew_and_disturbance_inputs(loop, manoeuvre, T)
+    if together and D is not None:
+        U, D = U + D, None
     if loop.isdtime(strict=True):
         outputs = _discrete_outputs
     else:

@@ -23,6 +23,7 @@ import math
 import warnings
 from pathlib import Path
 
+import control
 import numpy as np
 
 import controllers
@@ -277,7 +278,7 @@ class _Runner(ModelBuilder):
             loop = controllers.close_loop(plant, K)
             loops[key] = loop
             poles[key] = closed_loop_poles(loop)
-            runs = self.simulate(loop)
+            runs = self.simulate_runs(loop)
             slew, shock = runs["slew"], runs["disturbance"]
             responses[key] = slew
             with np.errstate(all="ignore"):
@@ -315,7 +316,7 @@ class _Runner(ModelBuilder):
             row["peak_difference_flags"] = flags
         return row
 
-    def simulate(self, loop) -> dict:
+    def simulate_runs(self, loop, *, together: bool = False) -> dict:
         """The manoeuvre on a closed loop: ``{"slew": ..., "disturbance": ... or None}``
         (see :func:`spacecraft.responses.simulate_manoeuvre`)."""
         m = self.scene.manoeuvre
@@ -324,8 +325,14 @@ class _Runner(ModelBuilder):
             self.stats.simulator_setups += 1
             with self.scene_values("manoeuvre.step"):
                 simulator = controllers.Simulator(loop, m.step)
-        self.stats.simulations += 1 + (m.disturbance is not None)
-        return simulate_manoeuvre(loop, m, simulator=simulator)
+        self.stats.simulations += 1 + (m.disturbance is not None and not together)
+        return simulate_manoeuvre(loop, m, simulator=simulator, together=together)
+
+    def simulate(self, loop) -> control.TimeResponseData:
+        """The whole manoeuvre's response of a closed loop (slew and disturbance at once;
+        outputs only): what :mod:`spacecraft.sweep` evaluates. A response that leaves the
+        float64 range stops at its last finite sample (``diverged``, ``diverged_at``)."""
+        return self.simulate_runs(loop, together=True)["slew"]
 
     def truth_resolution(self, n_modes, rows) -> tuple[float | None, dict]:
         """The band the loops act in, bandwidth_factor x the fastest crossover [rad/s], and per
