@@ -175,12 +175,21 @@ def build_parser() -> argparse.ArgumentParser:
         "Attitude control design for spacecraft with flexible appendages: exact beams, "
         "equivalent hinged chains, PD/LQR tuned on the chain and checked on the beam, FMUs."))
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
+    parser.add_argument("--version", action="version", version=f"flexsat {_version()}")
+    # --debug is accepted after the subcommand too; SUPPRESS: a subcommand without it does not
+    # reset the top level's
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                        help="show tracebacks of errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
-    run = sub.add_parser("run", help="run a scene and write its report folder",
-                         description="Run a scene (TOML file or embedded scene name; the "
-                                     "default scene without argument) and write report.md, "
-                                     "report.html, results.json, plots and FMUs into a folder.")
+    def command(name, **kwargs):
+        return sub.add_parser(name, parents=[common], **kwargs)
+
+    run = command("run", help="run a scene and write its report folder",
+                  description="Run a scene (TOML file or embedded scene name; the default "
+                              "scene without argument) and write report.md, report.html, "
+                              "results.json, plots and FMUs into a folder.")
     run.add_argument("scene", nargs="?", help="scene file or embedded scene name "
                                               "(see 'flexsat scenes')")
     run.add_argument("--out", type=Path, help="output folder (default: a new "
@@ -191,10 +200,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no progress display")
     _add_limit(run)
 
-    export = sub.add_parser("export", help="export FMUs only",
-                            description="Tune the scene's controllers and export the FMUs of "
-                                        "plant, controllers and closed loops (with cross-check "
-                                        "files) into a folder; no report, plots or slews.")
+    export = command("export", help="export FMUs only",
+                     description="Tune the scene's controllers and export the FMUs of plant, "
+                                 "controllers and closed loops (with cross-check files) into a "
+                                 "folder; no report, plots or slews.")
     export.add_argument("scene", nargs="?", help="scene file or embedded scene name")
     export.add_argument("--out", type=Path, help="output folder (default: a new folder here)")
     export.add_argument("--quiet", action="store_true", help="no progress display")
@@ -208,7 +217,7 @@ def build_parser() -> argparse.ArgumentParser:
             ("fit", "fit a chain to a beam and print its parameters",
              "Fit a chain of rigid bodies to a beam (default: the paper's steel rod) and print "
              "its body lengths, masses, inertias and hinge stiffnesses.")):
-        p = sub.add_parser(name, help=helptext, description=description)
+        p = command(name, help=helptext, description=description)
         p.add_argument("--scene", help="take the beam of the scene's first beam appendage")
         for option, kind, text in _BEAM_OPTIONS:
             p.add_argument(option, type=kind, help=text)
@@ -218,20 +227,41 @@ def build_parser() -> argparse.ArgumentParser:
                            default="poles-and-zeros",
                            help="flexsat's fit (default) or the paper's")
         p.add_argument("--json", action="store_true", help="JSON on stdout")
+        p.add_argument("--quiet", action="store_true", help="no progress display")
         _add_limit(p)
 
     from .sweep.command import add_arguments as add_sweep_arguments
 
-    add_sweep_arguments(sub.add_parser(
+    add_sweep_arguments(command(
         "sweep", help="sweep a scene on Dask: probability of instability, worst case",
         description="Sweep the numbers of a scene's [sweep] table (Monte Carlo, Latin hypercube "
                     "or grid) on Dask; every sample is a design-loop evaluation checked on the "
                     "exact beam. Writes the samples (Parquet), summary.json, report.md, "
                     "report.html, plots and worst.toml into a folder."))
 
-    sub.add_parser("scenes", help="list the embedded scenes",
-                   description="List the embedded scenes (usable as 'flexsat run NAME').")
+    scenes = command("scenes", help="list the embedded scenes",
+                            description="List the embedded scenes (usable as 'flexsat run "
+                                        "NAME').")
+    scenes.add_argument("--json", action="store_true",
+                        help="JSON on stdout: name, title and path of each scene")
     return parser
+
+
+def _version() -> str:
+    """flexsat's version (:func:`spacecraft.report.version`, without importing the report)."""
+    root = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    try:
+        for line in root.read_text(encoding="utf-8").splitlines():
+            if line.startswith("version"):
+                return line.partition("=")[2].strip().strip('"')
+    except OSError:
+        pass
+    try:
+        from importlib.metadata import version
+
+        return version("flexsat")
+    except Exception:  # not installed
+        return "unknown"
 
 
 def _add_limit(parser) -> None:
@@ -252,9 +282,18 @@ def _scene(argument, limits=None):
     if argument is None:
         return load_scene(None, limits=limits)
     path = Path(argument)
-    if not path.exists() and argument in example_scenes():
-        return load_scene(scene_path(argument), source=f"{argument} (embedded scene)",
-                          limits=limits)
+    if not path.exists():
+        names = example_scenes()
+        if argument in names:
+            return load_scene(scene_path(argument), source=f"{argument} (embedded scene)",
+                              limits=limits)
+        if path.suffix == "" and path.parent == Path("."):
+            import difflib
+
+            close = difflib.get_close_matches(argument, names, n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+            raise _UserError(f"{_one_line(argument)[:100]}: no such scene file or embedded "
+                             f"scene (embedded: {', '.join(names)}){hint}")
     return load_scene(path, limits=limits)
 
 
@@ -350,12 +389,20 @@ def _equivalence(args):
     from appendages.equivalence import fit_chain
     import warnings
 
+    progress = _Progress(args.quiet)
     fits = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         for match in ("poles-and-zeros", "frequencies"):
+            progress(_fit_message(args.n_bodies, match))
             fits[match] = fit_chain(beam, args.n_bodies, match=match)
+    progress("equivalence table")
     return beam, source, equivalence_table(beam, fits)
+
+
+def _fit_message(n_bodies: int, match: str) -> str:
+    """Progress line of a chain fit (an optimisation: seconds for ten bodies)."""
+    return f"fitting a chain of {n_bodies} bodies (match = {match!r})"
 
 
 def _cmd_table(args) -> int:
@@ -395,9 +442,12 @@ def _cmd_fit(args) -> int:
 
     _check_n_bodies(args)
     beam, source = _beam_from(args)
+    progress = _Progress(args.quiet)
+    progress(_fit_message(args.n_bodies, args.match))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         chain = fit_chain(beam, args.n_bodies, match=args.match)
+    progress("done")
     data = {"beam": _beam_dict(beam), "source": source, "match": args.match,
             "n_bodies": args.n_bodies, "chain": _describe(chain),
             "beam_frequencies": beam.natural_frequencies(args.n_bodies - 1).tolist()}
@@ -422,8 +472,15 @@ def _cmd_fit(args) -> int:
 def _cmd_scenes(args) -> int:
     from .scene import example_scenes, load_scene, scene_path
 
-    for name in example_scenes():
-        print(f"{name:14s} {load_scene(scene_path(name)).title}")
+    scenes = [{"name": name, "title": load_scene(scene_path(name)).title,
+               "path": str(scene_path(name))} for name in example_scenes()]
+    if getattr(args, "json", False):
+        import json
+
+        print(json.dumps(scenes, indent=2))
+        return 0
+    for s in scenes:
+        print(f"{s['name']:14s} {s['title']}")
     return 0
 
 

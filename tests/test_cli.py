@@ -272,3 +272,65 @@ def test_example_scenes_run(name, tmp_path, capsys):
     data = json.loads((out / "results.json").read_text())
     assert data["closed_loops"] and all(r["verdict"]["stable"] for r in data["closed_loops"])
     assert f"to {out}" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 14, command line: --version, --debug anywhere, scenes --json, did-you-mean, progress
+# ---------------------------------------------------------------------------------------------
+def test_version_prints_the_project_version(capsys):
+    import tomllib
+    from pathlib import Path
+
+    pyproject = Path(cli.__file__).resolve().parents[1] / "pyproject.toml"
+    expected = tomllib.loads(pyproject.read_text())["project"]["version"]
+    with pytest.raises(SystemExit) as exc:
+        flexsat("--version")
+    assert exc.value.code == 0
+    assert capsys.readouterr().out.strip() == f"flexsat {expected}"
+
+
+@pytest.mark.parametrize("command", [["run"], ["table"], ["fit"], ["export"], ["scenes"]])
+def test_debug_is_accepted_after_the_subcommand(command):
+    parser = cli.build_parser()
+    assert parser.parse_args(command + ["--debug"]).debug is True
+    assert parser.parse_args(["--debug"] + command).debug is True
+    assert parser.parse_args(command).debug is False
+
+
+def test_debug_after_the_subcommand_shows_the_traceback(scene_file, tmp_path, capsys,
+                                                       monkeypatch):
+    import spacecraft.runner
+
+    def broken(*args, **kwargs):
+        raise ZeroDivisionError("x")
+    monkeypatch.setattr(spacecraft.runner, "run", broken)
+    assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet", "--debug") == 1
+    assert "Traceback" in capsys.readouterr().err
+
+
+def test_scenes_json_lists_name_title_and_a_loadable_path(capsys):
+    from spacecraft.scene import example_scenes, load_scene
+
+    assert flexsat("scenes", "--json") == 0
+    scenes = json.loads(capsys.readouterr().out)
+    assert [s["name"] for s in scenes] == example_scenes()
+    for s in scenes:
+        assert load_scene(s["path"]).title == s["title"]
+
+
+def test_a_misspelt_scene_name_suggests_the_embedded_one(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)   # no file of that name here
+    assert flexsat("run", "two_wing", "--out", tmp_path / "o") == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "two_wing: no such scene file or embedded scene" in err
+    assert "did you mean 'two_wings'?" in err
+
+
+def test_fit_shows_progress_on_stderr_unless_quiet(capsys):
+    assert flexsat("fit", "--n-bodies", "3", "--json") == 0
+    captured = capsys.readouterr()
+    assert "fitting a chain of 3 bodies (match = 'poles-and-zeros')" in captured.err
+    json.loads(captured.out)   # stdout stays pure JSON
+    assert flexsat("table", "--quiet") == 0
+    assert capsys.readouterr().err == ""
