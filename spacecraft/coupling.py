@@ -447,6 +447,9 @@ class Spacecraft:
         out_pos = [np.eye(n)[i] for i in rotation] + [np.zeros(n)] * len(rotation)
         out_vel = [np.zeros(n)] * len(rotation) + [np.eye(n)[i] for i in rotation]
         load_rows = []  # (root model, T, row) of each root-load output
+        # outputs are labelled per appendage (tip, root force, root moment, next appendage...)
+        # but stacked as every motion row, then every root-load row: ("motion"|"load", index)
+        sources = [("motion", k) for k in range(len(outputs))]
         for label, (mount, T) in zip(self.names, model.blocks):
             rm = (mount.appendage.root_model() if not self.three_axis
                   else mount.appendage.root_model(6))
@@ -459,6 +462,7 @@ class Spacecraft:
             if tip_deflection:
                 for motion, _, relative, _ in tips:
                     outputs.append(f"{label}_{motion}")
+                    sources.append(("motion", len(out_pos)))
                     out_pos.append(relative @ T)
                     out_vel.append(np.zeros(n))
             if root_loads:
@@ -469,6 +473,7 @@ class Spacecraft:
                     labels = ["root_force", "root_moment"]
                 for row, load in enumerate(labels):
                     outputs.append(f"{label}_{load}")
+                    sources.append(("load", len(load_rows)))
                     load_rows.append((rm, T, row))
         F = np.column_stack(load_columns)
         keep = np.arange(n)
@@ -513,6 +518,9 @@ class Spacecraft:
         D = np.zeros((len(outputs), len(inputs)))
         if load_rows:
             D[-len(load_rows):] = D_rows
+        # rows into the order of the labels
+        order = [k if kind == "motion" else len(out_pos) + k for kind, k in sources]
+        Cmat, D = Cmat[order], D[order]
         states = [f"mode[{k}]" for k in keep] + [f"mode_rate[{k}]" for k in keep]
         return control.ss(A, B, Cmat, D, inputs=inputs, outputs=outputs, states=states, name=name)
 

@@ -221,3 +221,60 @@ def test_digital_controller_is_closed_as_a_sampled_data_loop():
     got = digital.data["closed_loops"][0]["metrics"]["truth"]["overshoot"]
     expected = continuous.data["closed_loops"][0]["metrics"]["truth"]["overshoot"]
     assert got == pytest.approx(expected, abs=0.05)
+
+
+def _two_wings(**changes):
+    """Two identical wings at +-1 m along x (mirror images) and a boom on y."""
+    wing = {"section": "rectangular", "length": 6.0, "width": 0.5, "thickness": 0.02,
+            "density": 1600.0, "youngs_modulus": 7.0e10, "damping_ratio": 0.005}
+    data = scene_with(**{
+        "appendages": [
+            {"name": "wing_px", "position": [1.0, 0.0], "direction": 0.0, "beam": dict(wing),
+             "fit": {"match": "poles-and-zeros"}},
+            {"name": "wing_mx", "position": [-1.0, 0.0], "direction": 180.0,
+             "beam": dict(wing), "fit": {"match": "poles-and-zeros"}},
+            {"name": "boom", "position": [0.0, 1.0], "direction": 90.0,
+             "beam": {"section": "tube", "length": 4.0, "outer_diameter": 0.05,
+                      "wall_thickness": 0.002, "density": 2700.0, "youngs_modulus": 7.0e10},
+             "fit": {"match": "poles-and-zeros"}}],
+        "fidelity.n_modes": 2, "outputs.tip_deflection": True, "report.equivalence": False,
+        **changes})
+    return data
+
+
+def test_root_load_outputs_do_not_shift_the_tip_deflections():
+    """Before: with root_loads the plant's output labels were interleaved per appendage
+    (tip, force, moment, tip, ...) while its rows were every motion first, then every load:
+    wing_mx's 'tip deflection' was wing_px's root force (0.094 against 0.00015 m)."""
+    wing = Beam(6.0, 7.0e10 * 0.5 * 0.02 ** 3 / 12.0, 1600.0 * 0.5 * 0.02, damping_ratio=0.005)
+    boom = Beam(4.0, 1.0e4, 0.8, damping_ratio=0.005)
+    sc = Spacecraft(Hub(500.0, 400.0), [
+        Mount(wing.truncated(2), (1.0, 0.0), 0.0, name="wing_px"),
+        Mount(wing.truncated(2), (-1.0, 0.0), math.pi, name="wing_mx"),
+        Mount(boom.truncated(2), (0.0, 1.0), math.pi / 2, name="boom")])
+    with_loads = sc.plant(tip_deflection=True, root_loads=True, prune=False)
+    plain = sc.plant(tip_deflection=True, prune=False)
+    s = 0.5j
+    for P in (with_loads, plain):
+        P.H = P.C @ np.linalg.solve(s * np.eye(P.nstates) - P.A, P.B) + P.D
+    for name in plain.output_labels:
+        # the same realisation with more rows: equal to round-off of one solve
+        np.testing.assert_allclose(with_loads.H[list(with_loads.output_labels).index(name)],
+                                   plain.H[list(plain.output_labels).index(name)],
+                                   rtol=1e-12, atol=0)
+    # mirror-image wings under torque: equal tip deflections in their own axes
+    tips = [abs(with_loads.H[list(with_loads.output_labels).index(f"{n}_tip_deflection"),
+                             list(with_loads.input_labels).index("torque")])
+            for n in ("wing_px", "wing_mx")]
+    assert tips[0] == pytest.approx(tips[1], rel=1e-9)
+
+
+def test_report_peaks_of_mirror_image_wings_are_equal_with_root_loads():
+    result = run(_two_wings(**{"outputs.root_loads": True}))
+    peaks = result.data["closed_loops"][0]["appendages"]["truth"]
+    # the mirror symmetry holds to the round-off of the simulation
+    assert peaks["wing_px"]["peak_tip_deflection"] == pytest.approx(
+        peaks["wing_mx"]["peak_tip_deflection"], rel=1e-8)
+    assert peaks["wing_px"]["peak_root_moment"] == pytest.approx(
+        peaks["wing_mx"]["peak_root_moment"], rel=1e-8)
+    assert peaks["boom"]["peak_root_force"] > 0
