@@ -54,6 +54,7 @@ _TIME_DERIVATIVE = {
 # Matching is case-insensitive except for the one-letter symbols below.
 _WORD_UNITS = {
     "theta": "rad", "phi": "rad", "psi": "rad", "angle": "rad", "attitude": "rad",
+    "twist": "rad",
     "omega": "rad/s", "rate": "rad/s",
     "alpha": "rad/s2",
     "torque": "N.m", "tau": "N.m", "moment": "N.m",
