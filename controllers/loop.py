@@ -329,14 +329,23 @@ class _Loop:
         # an even count: no point falls on the peak itself, where an undamped pole (zeta = 0,
         # a free beam mode) makes L infinite
         theta = np.linspace(-1.45, 1.45, 40)
-        for lam in roots:
+        # a root within 1/50 of the half-power half-width zeta w of one already placed is
+        # resolved by that one's points (the innermost lie 0.037 zeta w from the centre): the
+        # plant's modes that the loop leaves where they are come back as poles of every
+        # loop-at-a-time function and as zeros, several copies of each
+        upper = roots[(roots.imag > 0) & (np.abs(roots) > 0)]
+        upper = upper[np.argsort(upper.imag, kind="stable")]
+        last, last_width = complex(np.inf), 0.0
+        for lam in upper:
             w = abs(lam)
-            if lam.imag <= 0 or w <= 0:
-                continue
             zeta = max(abs(lam.real) / w, 1e-7)
             if zeta > 0.3:
                 continue
-            pts = lam.imag + zeta * w * np.tan(theta)
+            width = zeta * w
+            if abs(lam - last) <= 0.02 * min(width, last_width):
+                continue
+            last, last_width = lam, width
+            pts = lam.imag + width * np.tan(theta)
             grid.append(pts[(pts > w_lo) & (pts < w_hi)])
         if self.frd:
             inside = [g[(g >= self.omega[0]) & (g <= self.omega[-1])] for g in grid[1:]]

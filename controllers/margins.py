@@ -292,8 +292,11 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
         finite = np.all(np.isfinite(R), axis=(1, 2)) & np.all(np.isfinite(S), axis=(1, 2))
         peak = np.full(omega.size, np.nan)
         smallest = np.full(omega.size, np.nan)
-        peak[finite] = np.linalg.svd(S[finite] - 0.5 * np.eye(m), compute_uv=False)[:, 0]
-        smallest[finite] = np.linalg.svd(R[finite], compute_uv=False)[:, -1]
+        # the grid scan only locates the extrema (their values are recomputed by the SVD and
+        # refined below): sigma_min(I + L) = 1 / sigma_max(S), and sigma_max of a 3 x 3 in
+        # closed form, a tenth of the cost of a batched SVD over thousands of frequencies
+        peak[finite] = _largest_singular_values(S[finite] - 0.5 * np.eye(m))
+        smallest[finite] = 1.0 / _largest_singular_values(S[finite])
     ok = np.isfinite(peak) & np.isfinite(smallest)
     disk_peak, w_disk = _refined_extremum(lambda w: singular_values(w)[0], omega[ok], peak[ok],
                                           maximum=True)
@@ -304,13 +307,56 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
                             w_disk, sigma, w_sigma)
 
 
+def _largest_singular_values(A: np.ndarray) -> np.ndarray:
+    """sigma_max of each matrix of a stack, shape (f, m, m) -> (f,).
+
+    For m = 3, the largest eigenvalue of the Hermitian G = A^H A in closed form (Smith's
+    trigonometric solution of the characteristic cubic, B = G - q I, q = tr G / 3,
+    p^2 = ||B||_F^2 / 6: lambda_max = q + 2 p cos(acos(det B / (2 p^3)) / 3)); the largest
+    eigenvalue is computed so to a relative error of a few eps, or about sqrt(eps) where the
+    two largest eigenvalues coincide (acos is ill-conditioned at -1): good enough to locate an
+    extremum on a grid (:func:`_refined_extremum` takes the values from the SVD). Other sizes:
+    numpy's SVD.
+
+    References
+    ----------
+    O. K. Smith, "Eigenvalues of a symmetric 3 x 3 matrix", Communications of the ACM 4(4),
+    1961, p. 168; J. Kopp, "Efficient numerical diagonalization of hermitian 3x3 matrices",
+    Int. J. Mod. Phys. C 19(3), 2008 (accuracy of the analytical method).
+    """
+    if A.shape[1:] != (3, 3):
+        return np.linalg.svd(A, compute_uv=False)[:, 0]
+    # scaled by the largest |entry| first: G and det B square and cube it
+    scale = np.abs(A).max(axis=(1, 2))
+    scale = np.where(scale > 0, scale, 1.0)
+    A = A / scale[:, None, None]
+    G = np.einsum("fki,fkj->fij", A.conj(), A)
+    q = np.einsum("fii->f", G).real / 3.0
+    B = G - q[:, None, None] * np.eye(3)
+    p = np.sqrt(np.einsum("fij,fij->f", B.real, B.real)
+                + np.einsum("fij,fij->f", B.imag, B.imag)) / math.sqrt(6.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # det B by cofactors along the first row (B Hermitian: real up to round-off)
+        det = (B[:, 0, 0] * (B[:, 1, 1] * B[:, 2, 2] - B[:, 1, 2] * B[:, 2, 1])
+               - B[:, 0, 1] * (B[:, 1, 0] * B[:, 2, 2] - B[:, 1, 2] * B[:, 2, 0])
+               + B[:, 0, 2] * (B[:, 1, 0] * B[:, 2, 1] - B[:, 1, 1] * B[:, 2, 0])).real
+        r = np.clip(det / (2.0 * p ** 3), -1.0, 1.0)
+    r = np.where(p > 0, r, 1.0)
+    lam = q + 2.0 * p * np.cos(np.arccos(r) / 3.0)
+    return scale * np.sqrt(np.maximum(lam, 0.0))
+
+
 def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
                       ) -> tuple[float, float]:
     """Grid extremum of f refined between the grid neighbours (bounded scalar search in
-    log omega)."""
+    log omega). ``values`` (to 1e-6 relative) only locate it: f itself gives the values at
+    the grid points within 1e-6 of the extremum, and the best of them is refined."""
     sign = -1.0 if maximum else 1.0
     i = int(np.argmin(sign * values))
-    best, w_best = float(values[i]), float(omega[i])
+    near = np.flatnonzero(sign * values <= sign * values[i] + 1e-6 * abs(values[i]))
+    exact = np.asarray(f(omega[near]), dtype=float)
+    i = int(near[np.argmin(sign * exact)])
+    best, w_best = float(exact[near == i][0]), float(omega[i])
     if 0 < i < omega.size - 1:
         res = scipy.optimize.minimize_scalar(
             lambda lw: sign * float(f(np.array([math.exp(lw)]))[0]),
