@@ -225,13 +225,17 @@ class _Loop:
         loops closed. With S = (I + L)^-1 the sensitivity at the plant input, an injection at
         input i returns through 1 / (1 + L_i) = S_ii, so L_i = 1 / S_ii - 1 (Skogestad &
         Postlethwaite, Multivariable Feedback Control, 2nd ed., sec. 9.3)."""
+        return self.broken_all(omega)[:, i]
+
+    def broken_all(self, omega) -> np.ndarray:
+        """Every loop-at-a-time L_i(j omega) (see :meth:`broken`), shape (f, m)."""
         L = self.matrix(omega)
         if L.shape[1] == 1:
-            return L[:, 0, 0]
+            return L[:, :, 0]
         m = L.shape[1]
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             S = np.linalg.solve(np.eye(m) + L, np.broadcast_to(np.eye(m), L.shape))
-            return 1.0 / S[:, i, i] - 1.0
+            return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
 
     def _interpolated_plant(self, omega: np.ndarray) -> np.ndarray:
         """FRD plant rows at omega: exact on its grid, in between linear in log frequency for

@@ -155,19 +155,36 @@ def _crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values:
     M. Dowell, P. Jarratt, "A modified regula falsi method for computing the root of an
     equation", BIT 11, 1971 (the Illinois algorithm).
     """
-    exact = omega[values == 0]
-    sign = np.sign(values)
-    i = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
-    if i.size == 0:
+    return _crossings_of_many(lambda x, owner: f(x), [(omega, values)])[0]
+
+
+def _crossings_of_many(f: Callable[[np.ndarray, np.ndarray], np.ndarray],
+                       grids: list[tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+    """Zeros of several functions at once, as :func:`_crossings` finds those of one.
+
+    ``grids[j] = (omega_j, values_j)``: function j on its grid. ``f(x, owner)`` evaluates, at
+    each x[k], the function ``owner[k]``: one call refines the brackets of every function
+    (the three loop-at-a-time functions of a three-axis loop come from one evaluation of
+    L). Returns the zeros of each function, in the order of ``grids``.
+    """
+    exact = [omega[values == 0] for omega, values in grids]
+    brackets = []
+    for j, (omega, values) in enumerate(grids):
+        sign = np.sign(values)
+        i = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
+        brackets.append((np.full(i.size, j), omega[i], omega[i + 1], values[i], values[i + 1]))
+    owner, a, b, fa, fb = (np.concatenate(parts) for parts in zip(*brackets))
+    if owner.size == 0:
         return exact
-    a, b = omega[i].copy(), omega[i + 1].copy()
-    fa, fb = values[i].copy(), values[i + 1].copy()  # true values at the ends
+    a, b, fa, fb = a.astype(float), b.astype(float), fa.astype(float), fb.astype(float)
+    owner = owner.astype(int)
+    n = owner.size
     ga, gb = fa.copy(), fb.copy()  # Illinois-scaled values used for the secant
     scale = np.maximum(np.abs(fa), np.abs(fb))
-    last = np.zeros(i.size, dtype=int)  # -1: a moved last time, +1: b moved
-    width_before = np.full(i.size, np.inf)
-    suspect = np.zeros(i.size, dtype=bool)
-    active = np.ones(i.size, dtype=bool)
+    last = np.zeros(n, dtype=int)  # -1: a moved last time, +1: b moved
+    width_before = np.full(n, np.inf)
+    suspect = np.zeros(n, dtype=bool)
+    active = np.ones(n, dtype=bool)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for iteration in range(200):
             active &= (b - a) > 1e-13 * b
@@ -184,12 +201,12 @@ def _crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values:
                 width_before[k] = b[k] - a[k]
             bisect |= suspect[k]
             x = np.where(bisect, mid, x)
-            fx = np.asarray(f(x), dtype=float)
+            fx = np.asarray(f(x, owner[k]), dtype=float)
             bad = ~np.isfinite(fx)
             if bad.any():  # on an undamped pole: step to the midpoint instead
                 x[bad] = mid[bad]
                 bisect = bisect | bad
-                fx[bad] = np.asarray(f(x[bad]), dtype=float)
+                fx[bad] = np.asarray(f(x[bad], owner[k][bad]), dtype=float)
                 lost = ~np.isfinite(fx)
                 active[k[lost]] = False
                 k, x, fx, bisect = k[~lost], x[~lost], fx[~lost], bisect[~lost]
@@ -217,7 +234,9 @@ def _crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values:
         root = np.where(np.abs(fa) <= np.abs(fb), a, b)
         at_root = np.minimum(np.abs(fa), np.abs(fb))
         keep = np.isfinite(at_root) & (at_root <= 1e-6 * scale)
-    return np.concatenate([exact, root[keep]])
+    return [np.concatenate([exact[j], root[keep & (owner == j)]]) for j in range(len(grids))]
+
+
 
 
 @limits_blas_threads(total_states)
@@ -276,9 +295,9 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         R = np.eye(m) + loop.matrix(omega)
         S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
-        per_axis = {axis: _siso_margins(lambda w, i=i: loop.broken(w, i), omega,
-                                        1.0 / S[:, i, i] - 1.0)
-                    for i, axis in enumerate(loop.ch.axes)}
+        per_axis = dict(zip(loop.ch.axes, _loops_margins(
+            lambda w, owner: loop.broken_all(w)[np.arange(w.size), owner], omega,
+            1.0 / np.diagonal(S, axis1=1, axis2=2).T - 1.0)))
 
     def singular_values(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(sigma_max(S - I/2), sigma_min(I + L)) at each frequency."""
@@ -374,47 +393,67 @@ def _siso_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
     if L is None:
         with np.errstate(divide="ignore", invalid="ignore"):
             L = loop(omega)
-    finite = np.isfinite(L)  # a grid point exactly on an undamped pole: L is infinite there
-    omega, L = omega[finite], L[finite]
+    return _loops_margins(lambda w, owner: loop(w), omega, L[None, :])[0]
 
-    def value(w: float) -> complex:
-        return complex(loop(np.array([w]))[0])
 
-    def log_gain(w: np.ndarray) -> np.ndarray:
+def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], omega: np.ndarray,
+                   L: np.ndarray) -> list[Margins]:
+    """Margins of m scalar loop functions L_j at once (the loop-at-a-time functions of a
+    three-axis loop), each as :func:`_siso_margins` finds them: ``L`` (m, f) on the grid,
+    ``evaluate(w, owner)`` the value of L_owner[k] at w[k] (one evaluation of the loop serves
+    every function, so the crossings of all of them are refined together)."""
+    grids = []
+    for row in L:
+        finite = np.isfinite(row)  # a grid point exactly on an undamped pole: L is infinite
+        grids.append((omega[finite], row[finite]))
+
+    def values_at(roots: list[np.ndarray]) -> list[np.ndarray]:
+        owner = np.concatenate([np.full(r.size, j) for j, r in enumerate(roots)]).astype(int)
+        if owner.size == 0:
+            return [np.zeros(0, dtype=complex) for _ in roots]
+        values = evaluate(np.concatenate(roots), owner)
+        return [values[owner == j] for j in range(len(roots))]
+
+    def log_gain(w: np.ndarray, owner: np.ndarray) -> np.ndarray:
         with np.errstate(divide="ignore"):
-            return np.log(np.abs(loop(w)))
+            return np.log(np.abs(evaluate(w, owner)))
 
     # phase crossovers: L real and negative (Im L changes sign where Re L < 0). Crossings where
     # |L| < 1e-9 (a gain margin above 180 dB) are round-off in Im L, not a margin.
-    gain_margin, w_pc = math.inf, math.inf
-    w_roots = _crossings(lambda w: loop(w).imag, omega, L.imag)
-    L_roots = loop(w_roots) if w_roots.size else np.zeros(0, dtype=complex)
-    for w, Lw in zip(w_roots, L_roots):
-        if Lw.real < 0 and abs(Lw) > 1e-9:
-            gm = -20.0 * math.log10(abs(Lw))
-            if abs(gm) < abs(gain_margin):
-                gain_margin, w_pc = gm, float(w)
+    phase_roots = _crossings_of_many(lambda w, owner: evaluate(w, owner).imag,
+                                     [(w, row.imag) for w, row in grids])
     # gain crossovers: |L| = 1
-    phase_margin, w_gc = math.inf, math.inf
-    w_roots = _crossings(log_gain, omega, np.log(np.abs(L)))
-    L_roots = loop(w_roots) if w_roots.size else np.zeros(0, dtype=complex)
-    for w, Lw in zip(w_roots, L_roots):
-        pm = 180.0 + math.degrees(cmath.phase(Lw))  # in (0, 360]
-        pm = pm - 360.0 if pm > 180.0 else pm
-        if abs(pm) < abs(phase_margin):
-            phase_margin, w_gc = pm, float(w)
-    # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
-    dist = np.abs(1.0 + L)
-    i = int(np.argmin(dist))
-    mm, w_mm = float(dist[i]), float(omega[i])
-    if 0 < i < omega.size - 1:
-        res = scipy.optimize.minimize_scalar(
-            lambda lw: abs(1.0 + value(math.exp(lw))),
-            bounds=(math.log(omega[i - 1]), math.log(omega[i + 1])), method="bounded",
-            options={"xatol": 1e-12})
-        if res.fun < mm:
-            mm, w_mm = float(res.fun), float(math.exp(res.x))
-    return Margins(float(gain_margin), float(phase_margin), mm, float(w_gc), float(w_pc), w_mm)
+    gain_roots = _crossings_of_many(log_gain, [(w, np.log(np.abs(row))) for w, row in grids])
+    L_phase, L_gain = values_at(phase_roots), values_at(gain_roots)
+    out = []
+    for j, (w_grid, row) in enumerate(grids):
+        gain_margin, w_pc = math.inf, math.inf
+        for w, Lw in zip(phase_roots[j], L_phase[j]):
+            if Lw.real < 0 and abs(Lw) > 1e-9:
+                gm = -20.0 * math.log10(abs(Lw))
+                if abs(gm) < abs(gain_margin):
+                    gain_margin, w_pc = gm, float(w)
+        phase_margin, w_gc = math.inf, math.inf
+        for w, Lw in zip(gain_roots[j], L_gain[j]):
+            pm = 180.0 + math.degrees(cmath.phase(Lw))  # in (0, 360]
+            pm = pm - 360.0 if pm > 180.0 else pm
+            if abs(pm) < abs(phase_margin):
+                phase_margin, w_gc = pm, float(w)
+        # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
+        dist = np.abs(1.0 + row)
+        i = int(np.argmin(dist))
+        mm, w_mm = float(dist[i]), float(w_grid[i])
+        if 0 < i < w_grid.size - 1:
+            owner = np.array([j])
+            res = scipy.optimize.minimize_scalar(
+                lambda lw: abs(1.0 + complex(evaluate(np.array([math.exp(lw)]), owner)[0])),
+                bounds=(math.log(w_grid[i - 1]), math.log(w_grid[i + 1])), method="bounded",
+                options={"xatol": 1e-12})
+            if res.fun < mm:
+                mm, w_mm = float(res.fun), float(math.exp(res.x))
+        out.append(Margins(float(gain_margin), float(phase_margin), mm, float(w_gc), float(w_pc),
+                           w_mm))
+    return out
 
 
 @dataclass(frozen=True)
