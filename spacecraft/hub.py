@@ -175,7 +175,11 @@ class Mount:
                 raise TypeError(
                     "a three-axis mount needs an appendage with W6(s) (root motions per root "
                     f"loads in three axes); got {type(appendage).__name__} without 'W6'")
-            appendage.inertia_tensor  # a planar appendage says by name what it lacks
+            try:
+                appendage.inertia_tensor  # a planar appendage says by name what it lacks
+            except ValueError as exc:
+                label = f" '{name}'" if isinstance(name, str) else ""
+                raise ValueError(f"three-axis mount{label} (orientation given): {exc}") from None
             angle = None
         else:
             if direction is _UNSET:

@@ -159,9 +159,11 @@ def euler_orientation(sequence: str, angles) -> np.ndarray:
     from scipy.spatial.transform import Rotation
 
     if not isinstance(sequence, str) or len(sequence) != 3 or \
-            not (set(sequence) <= set("xyz") or set(sequence) <= set("XYZ")):
+            not (set(sequence) <= set("xyz") or set(sequence) <= set("XYZ")) or \
+            sequence[0] == sequence[1] or sequence[1] == sequence[2]:
         raise ValueError(f"sequence must be three axes from 'xyz' (extrinsic) or 'XYZ' "
-                         f"(intrinsic); got {describe(sequence)}")
+                         f"(intrinsic), no two consecutive alike (e.g. 'ZYX', 'zxz'); got "
+                         f"{describe(sequence)}")
     angles = real_vector3("angles", angles, "rad")
     return Rotation.from_euler(sequence, angles).as_matrix()
 
