@@ -27,7 +27,21 @@ def cross(v):
 
 
 def lagrangian_W6(chain, s):
-    """W6 of a linear 3-D chain from maximal coordinates and constraints (module docstring).
+    """W6 of a linear 3-D chain from maximal coordinates and constraints (module docstring,
+    :func:`lagrangian_matrices`)."""
+    M, K, C, T = lagrangian_matrices(chain)
+    s = np.atleast_1d(s)
+    out = np.empty(s.shape + (6, 6), dtype=complex)
+    E = T[:6]
+    for i, si in enumerate(s):
+        Z = T.T @ (K + si * C + si**2 * M) @ T
+        out[i] = E @ np.linalg.solve(Z, E.T)
+    return out
+
+
+def lagrangian_matrices(chain):
+    """Mass, stiffness and damping matrices of a linear 3-D chain in maximal coordinates, and
+    an orthonormal basis T of the motions its joints allow (q = T z).
 
     Coordinates: root frame (u0, theta0), then each body's (r_k, theta_k); body k's point at
     distance d from its start is ``r_k + theta_k x ((d - a_k) e_x)``. Joint h (between the
@@ -91,14 +105,7 @@ def lagrangian_W6(chain, s):
     for k in range(n - 1):
         joint(point(k, chain.lengths[k]) - point(k + 1, 0.0), rotation(k + 1) - rotation(k),
               k + 1 if hinged else k)
-    T = scipy.linalg.null_space(np.array(constraints))
-    s = np.atleast_1d(s)
-    out = np.empty(s.shape + (6, 6), dtype=complex)
-    E = T[:6]
-    for i, si in enumerate(s):
-        Z = T.T @ (K + si * C + si**2 * M) @ T
-        out[i] = E @ np.linalg.solve(Z, E.T)
-    return out
+    return M, K, C, scipy.linalg.null_space(np.array(constraints))
 
 
 def random_chain(rng, n, root, *, axial=True, torsion=True, damped=False):
