@@ -184,9 +184,10 @@ class _ModalEvaluator:
             T11, k = self.T11, self.k
             X = np.empty((s.size, k, m), dtype=complex)
             for i in range(k - 1, -1, -1):
-                rhs = self.B1[i] + np.einsum("j,fjm->fm", T11[i, i + 1:], X[:, i + 1:])
+                # (j,) @ (f, j, m) -> (f, m): matmul, several times faster than einsum here
+                rhs = self.B1[i] + T11[i, i + 1:] @ X[:, i + 1:]
                 X[:, i] = rhs / (s - T11[i, i])[:, None]
-            G += np.einsum("pk,fkm->fpm", self.C1, X)
+            G += self.C1 @ X
         for Ad, Bd, Cd in self.dense:
             G += _dense_response(Ad, Bd, Cd, s)
         return G
