@@ -249,8 +249,12 @@ def _cluster_participation(A, lam, Wl, Vr, group, B, C_theta, C_omega, Jh, tol) 
     if len(group) == 1:
         i = group[0]
         v, w = Vr[:, i], Wl[:, i]
-        wB = (w.conj() @ B) / np.vdot(w, v)
-        R_theta, R_omega, mu = np.outer(C_theta @ v, wB), np.outer(C_omega @ v, wB), lam[i]
+        wB = Jh.T @ ((w.conj() @ B) / np.vdot(w, v))
+        # a simple eigenvalue's residue is of rank one, J^1/2 (C v)(w^H B) J^1/2: its 2-norm
+        # is the product of the two vectors' norms (no SVD)
+        b = np.linalg.norm(wB)
+        return float(max(2.0 * abs(lam[i]) * np.linalg.norm(Jh @ (C_theta @ v)) * b,
+                         2.0 * np.linalg.norm(Jh @ (C_omega @ v)) * b))
     else:
         Vn, Un, mu = _cluster_null_spaces(A, lam, group, tol)
         PB = Vn @ np.linalg.lstsq(Un.conj().T @ Vn, Un.conj().T @ B, rcond=None)[0]
