@@ -215,7 +215,7 @@ def test_co_simulation_equals_python_control(name, version):
 
 
 @pytest.mark.parametrize("version", ["2.0", "3.0"])
-@pytest.mark.parametrize("name", ["plant", "lqr", "loop"])
+@pytest.mark.parametrize("name", ["plant", "pd", "lqr", "loop"])
 def test_model_exchange_equals_the_continuous_response(name, version):
     """CVode at rtol 1e-10 against the exact response to inputs stepping on the output grid
     (the ZOH discretisation, exact there): the solver's error, 1e-6 relative to each signal's
