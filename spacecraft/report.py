@@ -285,6 +285,10 @@ def _loop_line(r: dict) -> str | Tone:
 def summary_lines(data: dict) -> list:
     """Short summary of a run (the CLI prints it): the truth model, one line per loop, one per
     design warning (``warning: ...``)."""
+    if data.get("three_axis"):
+        from .three_axis_run import three_axis_summary
+
+        return three_axis_summary(data)
     lines: list = [_fidelity_line(data)]
     lines += [_loop_line(r) for r in data.get("closed_loops", [])]
     b = data.get("basilisk")
@@ -635,6 +639,11 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
     """
     from .exports import finish_exports, start_exports, write_ssps
 
+    if result.data.get("three_axis"):
+        from .three_axis_run import write_three_axis_report
+
+        return write_three_axis_report(result.scene, result.basilisk["three_axis"], folder,
+                                       fmus=fmus, plots=plots, pages=pages, progress=progress)
     folder = Path(folder)
     progress = progress or (lambda message: None)
     scene = result.scene

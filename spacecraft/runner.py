@@ -408,11 +408,30 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     """
     scene = load_scene(scene)
     stats = RunStats() if stats is None else stats
+    if scene.three_axis:
+        return _run_three_axis(scene, progress, stats, time_responses)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("default")
         result = _Runner(scene, progress, stats, time_responses).run()
     result.data["warnings"] = warning_lines(caught)
     return result
+
+
+def _run_three_axis(scene, progress, stats, time_responses) -> RunResult:
+    """A three-axis scene (:mod:`spacecraft.three_axis_run`) in a RunResult: ``data`` its
+    numbers, ``loops``/``responses``/``designs`` its systems."""
+    from .three_axis_run import run_three_axis
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")
+        out = run_three_axis(scene, progress=progress, time_responses=time_responses)
+    out["data"]["warnings"] = out["data"]["warnings"] + warning_lines(caught)
+    return RunResult(scene=scene, data=out["data"], stats=stats,
+                     truth={"plant": out["plants"]["truth"]},
+                     designs={"design": {"plant": out["plants"]["design"],
+                                         "controllers": out["controllers"]}},
+                     responses=out["responses"], loops=out["loops"], models={},
+                     basilisk={"three_axis": out})
 
 
 def warning_lines(caught) -> list[str]:

@@ -320,7 +320,9 @@ def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
     damping = r.number(t, "damping_ratio", path, "beam.damping_ratio", default=0.0)
     allowed = {"section", "length", "damping_ratio", *_SECTION_KEYS[section]}
     if section != "uniform":
-        allowed |= {"density", "youngs_modulus"}
+        allowed |= {"density", "youngs_modulus", "poisson_ratio"}
+    poisson = (r.number(t, "poisson_ratio", path, "beam.poisson_ratio", default=0.3)
+               if section != "uniform" else 0.3)
     for key in list(t):
         if key in _SECTION_RANGES or key in ("density", "youngs_modulus"):
             raise r.error(f"{path}.{key}", f"does not apply to section {section!r}; it needs "
@@ -340,7 +342,7 @@ def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
         raise r.error(path, f"first bending frequency {omega_1:.3g} rad/s (from length, section "
                       f"and material) lies outside [{lo:g}, {hi:g}] rad/s, the range flexsat's "
                       "models are verified for; check the units of length, section and material")
-    return BeamSpec(section, length, tuple(dims.items()), density, youngs, damping)
+    return BeamSpec(section, length, tuple(dims.items()), density, youngs, damping, poisson)
 
 
 _CHAIN_ARRAYS = {"lengths": "chain.lengths", "masses": "chain.masses",
@@ -398,7 +400,20 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
         raise r.error(full, f"must be an ASCII identifier of at most {NAME_LENGTH} characters "
                       "(a letter or '_', then letters, digits or '_': it names FMU variables); "
                       f"got {_kind(name)}")
-    position = r.vector(t, "position", path, "position", default=(0.0, 0.0), size=2)
+    three_axis = getattr(r, "three_axis", False)
+    orientation = None
+    if three_axis:
+        position = r.vector(t, "position", path, "position", default=(0.0, 0.0, 0.0), size=3)
+        orientation = _read_orientation(r, t, path)
+    else:
+        for key in ("orientation", "orientation_sequence"):
+            if key in t:
+                raise r.error(f"{path}.{key}", "applies to three-axis scenes only (hub.inertia "
+                              "a 3x3 tensor [kg m^2]); a planar appendage has a direction")
+        position = r.vector(t, "position", path, "position", default=(0.0, 0.0), size=2)
+    if three_axis and "direction" in t:
+        raise r.error(f"{path}.direction", "is planar; a three-axis appendage has an "
+                      "orientation (Euler angles [deg] in orientation_sequence, default 'ZYX')")
     direction_value, full = r.take(t, "direction", path, 0.0)
     if isinstance(direction_value, (list, tuple)):
         vec = r.vector({"direction": direction_value}, "direction", path, "direction vector",
@@ -409,6 +424,8 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
     else:
         direction = math.radians(r.check_number(direction_value, full, "direction"))
     beam = _read_beam(r, t.pop("beam"), f"{path}.beam") if "beam" in t else None
+    if three_axis:
+        _check_three_axis_appendage(r, t, path, beam)
     chain = (_read_chain(r, t.pop("chain"), f"{path}.chain", beam is not None)
              if "chain" in t else None)
     truth_chain = (_read_chain(r, t.pop("truth_chain"), f"{path}.truth_chain", beam is not None)
@@ -443,8 +460,80 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
     if design == "chain" and chain is None:
         raise r.error(f"{path}.design", "is 'chain' but the appendage has no chain table")
     r.done(t, path, {"name", "position", "direction", "beam", "chain", "truth_chain", "truth",
-                     "design", "fit"})
-    return AppendageSpec(name, position, direction, truth, design, beam, chain, fit, truth_chain)
+                     "design", "fit"} | ({"orientation", "orientation_sequence"} if three_axis
+                                         else set()))
+    return AppendageSpec(name, position, direction, truth, design, beam, chain, fit, truth_chain,
+                         orientation)
+
+
+def _check_three_axis_scene(r: _Reader, simulator, outputs, export, plots) -> None:
+    """What a three-axis scene cannot ask for (yet): by key."""
+    if simulator.name != "flexsat":
+        raise r.error("simulator.name", f"{simulator.name!r} is planar; a three-axis scene is "
+                      "simulated by flexsat")
+    if outputs.exact_reference:
+        raise r.error("outputs.exact_reference", "the exact frequency-response reference is "
+                      "planar; a three-axis report gives the exact coupled frequencies")
+    if export.ssp:
+        raise r.error("export.ssp", "is planar for now (the SSP connects torque, theta, omega)")
+    unsupported = [p for p in plots if p not in ("slew", "poles")]
+    if unsupported:
+        raise r.error("report.plots", f"a three-axis report plots 'slew' (per axis, tip motions "
+                      f"in both planes) and 'poles'; got {_shown(unsupported)}")
+
+
+def _read_inertia_tensor(r: _Reader, value, full: str) -> tuple:
+    """A 3x3 symmetric positive definite inertia tensor [kg m^2], rows as tuples."""
+    import numpy as np
+
+    from .hub import Hub
+
+    if len(value) != 3 or not all(isinstance(row, (list, tuple)) and len(row) == 3
+                                  for row in value):
+        raise r.error(full, "must be a number (planar) or a 3x3 array of numbers [kg m^2] "
+                      "(three axes: the tensor about the hub's centre of mass, hub axes)")
+    rows = tuple(tuple(r.check_number(v, f"{full}[{i}][{j}]", "hub.inertia tensor")
+                       for j, v in enumerate(row)) for i, row in enumerate(value))
+    try:
+        Hub(1.0, np.array(rows))
+    except ValueError as exc:
+        raise r.error(full, str(exc).replace("hub inertia ", "", 1)) from None
+    return rows
+
+
+def _read_orientation(r: _Reader, t: dict, path: str) -> tuple:
+    """``orientation``: Euler angles [deg] of the appendage's axes (local x along it) in the
+    ``orientation_sequence`` (default ``"ZYX"``: yaw about the hub's z, then pitch about the
+    new y, then roll about the new x, the appendage's own axis)."""
+    from .kinematics import euler_orientation
+
+    angles = r.vector(t, "orientation", path, "orientation", default=(0.0, 0.0, 0.0), size=3)
+    sequence, full = r.take(t, "orientation_sequence", path, "ZYX")
+    try:
+        R = euler_orientation(sequence, [math.radians(a) for a in angles])
+    except (TypeError, ValueError) as exc:
+        raise r.error(full, str(exc)) from None
+    return tuple(tuple(float(v) for v in row) for row in R)
+
+
+def _check_three_axis_appendage(r: _Reader, t: dict, path: str, beam) -> None:
+    """A three-axis scene needs beams that twist and stretch (sections give GJ, rho I_p, EA) and
+    fitted design chains (3-D chains in every motion)."""
+    if beam is not None and beam.section == "uniform":
+        raise r.error(f"{path}.beam.section", "a three-axis scene needs the torsional and axial "
+                      "properties that a section gives (GJ [N m^2] with Poisson's ratio, "
+                      "rho*I_p [kg m], EA [N]): 'rod', 'tube' or 'rectangular'; got 'uniform' "
+                      "(bending only)")
+    for key in ("chain", "truth_chain"):
+        if key in t:
+            raise r.error(f"{path}.{key}", "explicit chains are planar; a three-axis scene "
+                          "fits 3-D chains to the beams (design = 'fit')")
+    if beam is None:
+        raise r.error(path, "a three-axis appendage needs a beam table")
+    for key, allowed in (("truth", "beam"), ("design", "fit")):
+        if key in t and t[key] != allowed:
+            raise r.error(f"{path}.{key}", f"must be {allowed!r} in a three-axis scene; got "
+                          f"{_shown(t[key])}")
 
 
 def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
@@ -527,8 +616,32 @@ def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> Manoeuvr
         if disturbance.start >= duration:
             raise r.error(f"{p}.start", f"must fall inside the simulated time, before "
                           f"manoeuvre.duration = {duration:g} [s]; got {disturbance.start:g}")
-    r.done(t, path, {"slew_angle", "slew_time", "duration", "step", "disturbance"})
-    return ManoeuvreSpec(angle, slew_time, duration, step, disturbance)
+    slew_axis = None
+    if getattr(r, "three_axis", False):
+        slew_axis = _read_slew_axis(r, t, path)
+    elif "slew_axis" in t:
+        raise r.error(f"{path}.slew_axis", "applies to three-axis scenes only (hub.inertia a "
+                      "3x3 tensor [kg m^2]); a planar slew turns about the hub's z axis")
+    if disturbance is not None and getattr(r, "three_axis", False):
+        raise r.error(f"{path}.disturbance", "is not supported in three-axis scenes yet")
+    r.done(t, path, {"slew_angle", "slew_time", "duration", "step", "disturbance", "slew_axis"})
+    return ManoeuvreSpec(angle, slew_time, duration, step, disturbance, slew_axis)
+
+
+def _read_slew_axis(r: _Reader, t: dict, path: str) -> tuple:
+    """``slew_axis``: ``"x"``, ``"y"``, ``"z"`` or a non-zero 3-vector in hub axes
+    (normalised here), the axis of the eigen-axis slew."""
+    value, full = r.take(t, "slew_axis", path)
+    if isinstance(value, str):
+        if value not in ("x", "y", "z"):
+            raise r.error(full, f"must be 'x', 'y', 'z' or an array of 3 numbers (hub axes); "
+                          f"got {_shown(value)}")
+        return tuple(float(a == value) for a in "xyz")
+    axis = r.vector({"slew_axis": value}, "slew_axis", path, "manoeuvre.slew_axis", size=3)
+    norm = math.sqrt(sum(a * a for a in axis))
+    if norm == 0.0:
+        raise r.error(full, "must be a non-zero vector (hub axes); got [0, 0, 0]")
+    return tuple(a / norm for a in axis)
 
 
 def _read_simulator(r: _Reader, data, path: str) -> SimulatorSpec:
@@ -636,9 +749,13 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) ->
     r.limits = Limits(**limits)
     title = r.text(t, "title", "", "")
     ht = r.table(r.take(t, "hub", "")[0], "hub")
-    hub = HubSpec(r.number(ht, "mass", "hub", "hub.mass"),
-                  r.number(ht, "inertia", "hub", "hub.inertia"))
+    mass = r.number(ht, "mass", "hub", "hub.mass")
+    if isinstance(ht.get("inertia"), (list, tuple)):
+        hub = HubSpec(mass, _read_inertia_tensor(r, ht.pop("inertia"), "hub.inertia"))
+    else:
+        hub = HubSpec(mass, r.number(ht, "inertia", "hub", "hub.inertia"))
     r.done(ht, "hub", {"mass", "inertia"})
+    r.three_axis = hub.three_axis
     items, full = r.take(t, "appendages", "")
     if not isinstance(items, (list, tuple)) or not items:
         raise r.error(full, "must be a non-empty array of tables ([[appendages]])")
@@ -748,6 +865,8 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) ->
     if export.fmu and manoeuvre is None and export.step is None:
         raise r.error("export.step", "missing: without a manoeuvre table the FMU step must be "
                       "given [s]")
+    if hub.three_axis:
+        _check_three_axis_scene(r, simulator, outputs, export, plots)
     scene = Scene(title=title, source=source or "<dict>", hub=hub, appendages=appendages,
                   fidelity=fidelity, controller=controller, manoeuvre=manoeuvre,
                   outputs=outputs, export=export,

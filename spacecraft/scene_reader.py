@@ -73,6 +73,10 @@ class _Range:
 RANGES = {
     "hub.mass": _Range("kg", 1e-3, 1e7),
     "hub.inertia": _Range("kg*m^2", 1e-6, 1e10),
+    "hub.inertia tensor": _Range("kg*m^2", 0.0, 1e10, "signed"),
+    "orientation": _Range("deg", 0.0, 360.0, "signed"),
+    "beam.poisson_ratio": _Range("-", 0.0, 0.5, "non-negative", below=True),
+    "manoeuvre.slew_axis": _Range("-", 0.0, 1e6, "signed"),
     "position": _Range("m", 0.0, 1e3, "signed"),
     "direction": _Range("deg", 0.0, 360.0, "signed"),
     "direction vector": _Range("-", 0.0, 1e6, "signed"),

@@ -41,10 +41,16 @@ SIMULATORS = ("flexsat", "basilisk")
 
 @dataclasses.dataclass(frozen=True)
 class HubSpec:
-    """Hub: mass [kg], inertia about its centre of mass [kg m^2]."""
+    """Hub: mass [kg], inertia about its centre of mass [kg m^2]: a number (planar) or a 3x3
+    tensor, rows as tuples (three axes)."""
 
     mass: float
-    inertia: float
+    inertia: float | tuple
+
+    @property
+    def three_axis(self) -> bool:
+        """True for a 3x3 inertia tensor."""
+        return isinstance(self.inertia, tuple)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,21 +64,23 @@ class BeamSpec:
     density: float | None      # kg/m^3
     youngs_modulus: float | None  # Pa
     damping_ratio: float
+    poisson_ratio: float = 0.3  # - (shear modulus G = E / (2 (1 + nu)): torsion)
 
     def build(self):
-        """The :class:`appendages.Beam`."""
+        """The :class:`appendages.Beam` (every property of a section filled: both bending
+        planes, torsion and axial motion)."""
         from appendages import Beam
 
-        d, z = dict(self.dimensions), self.damping_ratio
+        d, z, nu = dict(self.dimensions), self.damping_ratio, self.poisson_ratio
         if self.section == "rod":
             return Beam.circular_rod(self.length, d["diameter"], self.density,
-                                     self.youngs_modulus, damping_ratio=z)
+                                     self.youngs_modulus, poisson_ratio=nu, damping_ratio=z)
         if self.section == "tube":
             return Beam.tube(self.length, d["outer_diameter"], d["wall_thickness"], self.density,
-                             self.youngs_modulus, damping_ratio=z)
+                             self.youngs_modulus, poisson_ratio=nu, damping_ratio=z)
         if self.section == "rectangular":
             return Beam.rectangular(self.length, d["width"], d["thickness"], self.density,
-                                    self.youngs_modulus, damping_ratio=z)
+                                    self.youngs_modulus, poisson_ratio=nu, damping_ratio=z)
         return Beam(self.length, d["bending_stiffness"], d["linear_density"], damping_ratio=z)
 
 
@@ -114,6 +122,7 @@ class AppendageSpec:
     chain: ChainSpec | None
     fit: FitSpec | None
     truth_chain: ChainSpec | None = None
+    orientation: tuple | None = None  # three axes: 3x3 rotation, rows (columns: local x, y, z)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -178,6 +187,7 @@ class ManoeuvreSpec:
     duration: float
     step: float
     disturbance: DisturbanceSpec | None = None
+    slew_axis: tuple | None = None  # three axes: unit vector of the eigen-axis slew, hub axes
 
 
 @dataclasses.dataclass(frozen=True)
@@ -251,6 +261,11 @@ class Scene:
     report: ReportSpec
     limits: Limits = Limits()
     simulator: SimulatorSpec = SimulatorSpec()
+
+    @property
+    def three_axis(self) -> bool:
+        """True if the hub has a 3x3 inertia tensor (a three-axis scene)."""
+        return self.hub.three_axis
 
     def replace(self, **changes) -> "Scene":
         """A copy with some top-level parts replaced (e.g. ``export=ExportSpec(fmu=False)``)."""
