@@ -143,6 +143,20 @@ key                                    unit       meaning
 ``simulator.reaction_wheel.max_torque``  N m      its motor torque limit; default none
 ``simulator.reaction_wheel.max_speed``  rad/s     its speed limit; default none
 ``limits.<name>``                      -          raise (or lower) a work limit (table "Limits")
+**three axes** (``hub.inertia`` a 3x3)
+``hub.inertia``                        kg m^2     ``[[Jxx, Jxy, Jxz], [..], [..]]``: symmetric
+                                                  positive definite, about the hub's centre of
+                                                  mass, hub axes; makes the scene three-axis
+``appendages[i].position``             m          ``[x, y, z]``; default [0, 0, 0]
+``appendages[i].orientation``          deg        Euler angles of the appendage's axes (x along
+                                                  it); default [0, 0, 0]; replaces direction
+``appendages[i].orientation_sequence``  -         ``"ZYX"`` (default: yaw, pitch, roll) or any
+                                                  scipy sequence (upper case intrinsic)
+``appendages[i].beam.poisson_ratio``   -          sections: G = E / (2 (1 + nu)) for torsion;
+                                                  default 0.3 (a section is needed: torsion
+                                                  and axial motion; no ``"uniform"``)
+``manoeuvre.slew_axis`` *              -          ``"x"``, ``"y"``, ``"z"`` or ``[x, y, z]`` (hub
+                                                  axes): the eigen-axis slew of slew_angle
 =====================================  =========  ==============================================
 
 Ranges (SI units, the file's deg and Hz where it uses them; ``|x|``: either sign)
@@ -155,6 +169,10 @@ keys                                                  accepted             unit
 ``appendages[i].position``                            |x| <= 1e3           m
 ``appendages[i].direction`` (an angle)               |x| <= 360           deg
 ``appendages[i].direction`` (a vector)               |x| <= 1e6           -
+``hub.inertia`` (a 3x3 tensor, entries)               |x| <= 1e10          kg m^2
+``appendages[i].orientation``                         |x| <= 360           deg
+``beam.poisson_ratio``                                0 .. 0.5 (excluded)  -
+``manoeuvre.slew_axis``                               |x| <= 1e6           -
 ``beam.length``                                       1e-2 .. 1e3          m
 ``beam.diameter``, ``outer_diameter``, ``width``,     1e-5 .. 10, and at   m
 ``thickness``                                         most the length
