@@ -642,7 +642,7 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
     if result.data.get("three_axis"):
         from .three_axis_run import write_three_axis_report
 
-        return write_three_axis_report(result.scene, result.basilisk["three_axis"], folder,
+        return write_three_axis_report(result.scene, result.three_axis, folder,
                                        fmus=fmus, plots=plots, pages=pages, progress=progress)
     folder = Path(folder)
     progress = progress or (lambda message: None)

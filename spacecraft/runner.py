@@ -80,6 +80,9 @@ class RunResult:
     basilisk : dict
         Controller kind -> :class:`spacecraft.basilisk.SlewComparison` (Basilisk's run of the
         manoeuvre beside flexsat's), when the scene asks for it.
+    three_axis : dict
+        A three-axis scene's run (:func:`spacecraft.three_axis_run.run_three_axis`): plants,
+        controllers, loops, responses; empty for a planar scene.
     """
 
     scene: Scene
@@ -94,6 +97,7 @@ class RunResult:
     disturbance_responses: dict = dataclasses.field(default_factory=dict)
     poles: dict = dataclasses.field(default_factory=dict)
     basilisk: dict = dataclasses.field(default_factory=dict)
+    three_axis: dict = dataclasses.field(default_factory=dict)
 
 
 def _verdict(v) -> dict:
@@ -431,7 +435,7 @@ def _run_three_axis(scene, progress, stats, time_responses) -> RunResult:
                      designs={"design": {"plant": out["plants"]["design"],
                                          "controllers": out["controllers"]}},
                      responses=out["responses"], loops=out["loops"], models={},
-                     basilisk={"three_axis": out})
+                     three_axis=out)
 
 
 def warning_lines(caught) -> list[str]:
