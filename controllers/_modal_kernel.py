@@ -7,20 +7,71 @@ small matrix products through BLAS (np.dot) on data that stays in cache, the
 recursion in between a loop over the modes that the compiler vectorises (the 2 x 2 blocks are
 stored as structure of arrays: first components of all pairs, then second components).
 
-Compiled code is cached on disk (``cache=True``): in numba's ``__pycache__`` beside this file
-when it is writable, otherwise in the user's cache directory (numba's own choice;
-``NUMBA_CACHE_DIR`` overrides it).
+Compiled code is cached on disk, so that a process loads it (~0.3 s) instead of compiling
+it (~2.5 s of CPU): where numba puts it (``NUMBA_CACHE_DIR`` if set, else ``__pycache__``
+beside this file when writable, else the user's cache directory), and when none of those is
+writable (a read-only installation run by a user without a writable home) in a private
+directory under the system's temporary directory (:func:`_cached`); only if that fails too
+is the loop compiled in every process, uncached.
 """
 
 from __future__ import annotations
 
+import os
+import stat
+import tempfile
+
+import numba
 import numpy as np
 from numba import njit
 
 __all__ = ["modal_recursion"]
 
 
-@njit(cache=True, nogil=True)
+def _private_directory() -> str | None:
+    """``<tmp>/flexsat-numba-<uid>``, created with mode 0700; None unless it is a directory
+    owned by this user that nobody else can write (compiled code loaded from a directory that
+    another user controls would run as ours)."""
+    uid = os.getuid() if hasattr(os, "getuid") else None
+    name = f"flexsat-numba-{uid if uid is not None else 'user'}"
+    path = os.path.join(tempfile.gettempdir(), name)
+    try:
+        os.makedirs(path, mode=0o700, exist_ok=True)
+        info = os.lstat(path)
+    except OSError:
+        return None
+    if not stat.S_ISDIR(info.st_mode) or info.st_mode & (stat.S_IWGRP | stat.S_IWOTH):
+        return None
+    if uid is not None and info.st_uid != uid:
+        return None
+    return path
+
+
+def _cached(function):
+    """``njit(cache=True, nogil=True)(function)``, with the fallbacks of the module docstring.
+
+    numba raises RuntimeError ("no locator available") at decoration when no cache location
+    is writable; its user-provided locator reads ``numba.config.CACHE_DIR`` at that moment
+    and keeps the path, so the private directory is set for this decoration only.
+    """
+    try:
+        return njit(cache=True, nogil=True)(function)
+    except RuntimeError:
+        pass
+    directory = _private_directory()
+    if directory is not None:
+        previous = numba.config.CACHE_DIR
+        numba.config.CACHE_DIR = directory
+        try:
+            return njit(cache=True, nogil=True)(function)
+        except RuntimeError:
+            pass
+        finally:
+            numba.config.CACHE_DIR = previous
+    return njit(nogil=True)(function)
+
+
+@_cached
 def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, use_G1,
                     HD, weights, U, z0, Y, Z, store, n_block, limit):
     """Propagate the modal recursion; return the number of samples kept (see below).

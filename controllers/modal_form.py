@@ -151,12 +151,12 @@ def block_diagonal_form(A, *, max_coupling: float = DEFAULT_MAX_COUPLING
     form = _Decoupling(np.asfortranarray(T), max_coupling)
     form.split(0, n)
     starts = np.array(sorted(form.starts) + [n])
-    V = np.ascontiguousarray(scaling[:, None] * (Q @ form.Y))
+    # The condition number that matters for round-off is that of V without its (exact)
+    # diagonal scaling: W = Q Y (one product, used for both).
+    W = Q @ form.Y
+    V = np.ascontiguousarray(scaling[:, None] * W)
     T = form.T
     V_inv = np.linalg.inv(V)
-    # The condition number that matters for round-off is that of V without its (exact)
-    # diagonal scaling: W = Q Y.
-    W = Q @ form.Y
     W_inv = V_inv * scaling[None, :]
     condition = float(np.abs(W).sum(axis=0).max() * np.abs(W_inv).sum(axis=0).max())
     blocks = [np.array(T[a:b, a:b]) for a, b in zip(starts[:-1], starts[1:])]

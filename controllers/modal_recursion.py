@@ -52,7 +52,7 @@ def _load_kernel():
             from ._modal_kernel import modal_recursion
         except ImportError:              # numba not installed: the chunked recursion runs
             _kernel = False
-        except Exception as error:       # numba installed but unusable (e.g. no cache dir)
+        except Exception as error:       # numba installed but unusable (a broken install)
             warnings.warn(f"flexsat: the compiled simulator could not be loaded ({error!s:.200}); "
                           "simulating with the chunked recursion instead", RuntimeWarning,
                           stacklevel=3)
