@@ -31,11 +31,16 @@ from typing import Callable, Iterator
 __all__ = ["SINGLE_THREAD_BELOW", "blas_threads_for", "limits_blas_threads", "one_blas_thread",
            "total_states"]
 
-#: Problems with fewer states than this run with one BLAS thread.  Measured on a 2-core
-#: x86-64 (benchmarks/issue10.py, "threads"): up to ~400 states one thread is as fast or
-#: faster for every stage of a design loop on a quiet machine and much faster on a busy one;
-#: only products of ~1000 x 1000 matrices gain from a second thread.
-SINGLE_THREAD_BELOW = 500
+#: Problems with fewer states than this run with one BLAS thread: every design loop up to
+#: 400 bending modes (802 plant states and the controller's), whose results then never
+#: depend on the caller's thread count.  Measured on a 2-core x86-64 (benchmarks/issue10.py,
+#: "threads", "analysis"): up to ~400 states one thread is as fast or faster for every stage
+#: of a design loop on a quiet machine; at 802 states on a busy one (load 7) two default
+#: threads made LQR + Kalman 37 s of CPU and 58 s of wall time against 7.5 s and 17 s with
+#: one, margins 4.0 s and 8.4 s against 0.63 s and 1.5 s (their O(n) work per frequency
+#: gains nothing from threads).  Only dense products and factorisations of order well above
+#: 1000 can gain from a second thread; they keep the caller's setting.
+SINGLE_THREAD_BELOW = 1024
 
 _lock = threading.Lock()
 _depth = 0                     # nesting depth of active single-thread regions
