@@ -600,6 +600,60 @@ def section_design(repeats: int) -> dict:
     return out
 
 
+# Issue 10, item 3: each stage in a fresh process (its peak memory its own), the user's
+# default BLAS settings; benchmarks/analysis_scaling.py's stages plus the appendage's own
+# frequency response W(s) of the Craig-Bampton truncation (and of the residual one).
+ANALYSIS_STAGES = ("lqr_kalman", "margins", "frd", "design_loop")
+
+W_STAGE = r"""
+import json, os, resource, time, tracemalloc
+import numpy as np
+from _common import paper_rod
+model = paper_rod().truncated(NMODES, method="METHOD")
+s = 1j * np.logspace(-2, 4, 1000)
+walls, cpus, peaks = [], [], []
+for _ in range(REPEATS):
+    tracemalloc.start()
+    w0, c0 = time.perf_counter(), time.process_time()
+    model.W(s)
+    walls.append(time.perf_counter() - w0); cpus.append(time.process_time() - c0)
+    peaks.append(tracemalloc.get_traced_memory()[1] / 1e6)
+    tracemalloc.stop()
+print(json.dumps({"stage": "W METHOD", "wall_s": walls, "cpu_s": cpus, "traced_peak_MB": peaks,
+                  "maxrss_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e3,
+                  "load_average": os.getloadavg()}))
+"""
+
+
+def section_analysis(n_modes: int, repeats: int) -> dict:
+    """LQR + Kalman on the n-mode plant, margins, FRD (1000 frequencies), the whole design
+    loop, and W(s) of the n-mode Craig-Bampton and residual truncations (1000 frequencies):
+    wall and CPU time (medians), peak traced allocations (tracemalloc) and the process's peak
+    resident set (ru_maxrss, imports included)."""
+    env = dict(os.environ, FLEXSAT_BENCH_BLAS_THREADS="default",
+               PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "benchmarks")]))
+    out = {}
+    runs = [(stage, [sys.executable, str(ROOT / "benchmarks" / "analysis_scaling.py"),
+                     "--child", stage, str(n_modes), str(repeats)])
+            for stage in ANALYSIS_STAGES]
+    runs += [(f"W {method}", [sys.executable, "-c",
+                              W_STAGE.replace("NMODES", str(n_modes))
+                              .replace("METHOD", method).replace("REPEATS", str(repeats))])
+             for method in ("craig-bampton", "residual")]
+    for stage, command in runs:
+        done = subprocess.run(command, cwd=ROOT / "benchmarks", env=env, check=True,
+                              capture_output=True, text=True)
+        r = json.loads(done.stdout.strip().splitlines()[-1])
+        out[stage] = {"wall_s": statistics.median(r["wall_s"]),
+                      "cpu_s": statistics.median(r["cpu_s"]),
+                      "traced_peak_MB": statistics.median(r["traced_peak_MB"]),
+                      "maxrss_MB": r["maxrss_MB"], "repeats": len(r["wall_s"]),
+                      "load": [round(x, 2) for x in r["load_average"]]}
+        print(f"analysis, {n_modes} modes, {stage}: {json.dumps(out[stage])}", flush=True)
+    out["n_modes"] = n_modes
+    return out
+
+
 def section_cli(repeats: int) -> dict:
     out = {}
     env = dict(os.environ)
@@ -742,6 +796,27 @@ def markdown(results: dict) -> str:
                                  [[k, *(f"{d[k][s] * 1e3:.1f}" for s in keys)]
                                   for k in ("20 modes", "400 modes")]),
                   f"(load {d['load']})", ""]
+    if "analysis" in results:
+        an = results["analysis"]
+        targets = {"lqr_kalman": "<= 10 s", "margins": "<= 200 MB", "frd": "<= 200 MB",
+                   "design_loop": "<= 15 s, <= 500 MB", "W craig-bampton": "<= 200 MB",
+                   "W residual": "-"}
+        lines += [f"## Analysis at {an['n_modes']} modes (issue 10, item 3)", "",
+                  "Each stage in a fresh process, the user's default BLAS settings: "
+                  "lqr_kalman = `controllers.lqr` (LQR + Kalman) on the plant of "
+                  f"{an['n_modes']} Craig-Bampton modes; margins = `controllers.margins` of "
+                  "the chain-tuned LQR on it; frd = `controllers.frequency_response_data`, "
+                  "1000 frequencies; design_loop = LQR on the chain, the loop on the "
+                  "beam plant, margins, the slew 100 s at 100 Hz; W = the truncated beam's "
+                  "W(s) at 1000 frequencies. Traced peak: tracemalloc's peak of the stage "
+                  "(numpy's allocations included); max RSS: the process's peak resident "
+                  "set, imports included (~200 MB of them).", "",
+                  markdown_table(["stage", "wall [s]", "CPU [s]", "traced peak [MB]",
+                                  "max RSS [MB]", "target", "repeats", "load"],
+                                 [[k, f"{v['wall_s']:.3f}", f"{v['cpu_s']:.3f}",
+                                   f"{v['traced_peak_MB']:.0f}", f"{v['maxrss_MB']:.0f}",
+                                   targets.get(k, "-"), v["repeats"], v["load"][0]]
+                                  for k, v in an.items() if k != "n_modes"]), ""]
     if "cli" in results:
         c = results["cli"]
         lines += ["## Command line (wall time, s)", "",
@@ -755,7 +830,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--only", default="simulate,first_call,threads,scaling,design,cli")
+    parser.add_argument("--only",
+                        default="simulate,first_call,threads,scaling,design,analysis,cli")
     parser.add_argument("--markdown", action="store_true",
                         help="only rewrite performance.md from performance.json")
     args = parser.parse_args(argv)
@@ -786,6 +862,8 @@ def main(argv=None) -> int:
         results["scaling"] = section_scaling(sizes, repeats)
     if "design" in sections:
         results["design"] = section_design(repeats)
+    if "analysis" in sections:
+        results["analysis"] = section_analysis(400, 3 if args.quick else repeats)
     if "cli" in sections:
         results["cli"] = section_cli(repeats)
     results["load_at_end"] = load()
