@@ -559,10 +559,12 @@ for n_modes in SIZES:
     for name, f in stages.items():
         try:
             f()
-            ts = []
+            ts, cs = [], []
             for _ in range(REPEATS):
-                t0 = time.perf_counter(); f(); ts.append(time.perf_counter() - t0)
+                c0, t0 = time.process_time(), time.perf_counter(); f()
+                ts.append(time.perf_counter() - t0); cs.append(time.process_time() - c0)
             row[name] = statistics.median(ts)
+            row[name + " cpu"] = statistics.median(cs)
         except Exception as error:
             row[name] = None
             row[name + " error"] = str(error)[:100]
@@ -577,7 +579,7 @@ def section_scaling(sizes, repeats: int) -> dict:
     rows = list(data.values())
     slopes = {}
     for stage in ("plant build", "lqr", "margins", "frequency response", "simulate"):
-        pts = [(r["n_states"], r[stage]) for r in rows if r.get(stage)]
+        pts = [(r["n_states"], r[stage + " cpu"]) for r in rows if r.get(stage)]
         pts = pts[-3:]                       # the largest sizes: the asymptotic slope
         if len(pts) >= 2:
             x, y = np.log([p[0] for p in pts]), np.log([p[1] for p in pts])
@@ -594,10 +596,14 @@ import design_loop
 design_loop.N_MODES = NMODES
 times = {}
 design_loop.evaluate(times)
-times = {}
+times, cpus = {}, []
 for _ in range(REPEATS):
+    c0 = time.process_time()
     design_loop.evaluate(times)
-print(json.dumps({k: statistics.median(v) for k, v in times.items()}))
+    cpus.append(time.process_time() - c0)
+out = {k: statistics.median(v) for k, v in times.items()}
+out["total cpu"] = statistics.median(cpus)
+print(json.dumps(out))
 """
 
 
@@ -796,18 +802,21 @@ def markdown(results: dict) -> str:
     if "scaling" in results:
         sc = results["scaling"]
         stages = ["plant build", "lqr", "margins", "frequency response", "simulate"]
-        lines += ["## Scaling with the number of states (times in ms)", "",
+        lines += ["## Scaling with the number of states (wall / CPU, ms)", "",
                   markdown_table(["states", *stages],
                                  [[r["n_states"], *("-" if r.get(s) is None else
-                                                    f"{r[s] * 1e3:.1f}" for s in stages)]
+                                                    f"{r[s] * 1e3:.1f} / "
+                                                    f"{r.get(s + ' cpu', r[s]) * 1e3:.1f}"
+                                                    for s in stages)]
                                   for r in sc["rows"]]), "",
-                  "Log-log slopes over the three largest sizes: " + ", ".join(
+                  "Log-log slopes of the CPU time over the three largest sizes: " + ", ".join(
                       f"{k} {v:.2f}" for k, v in sc["loglog_slope_largest_3"].items())
                   + f" (load {sc['load']}).", ""]
     if "design" in results:
         d = results["design"]
         keys = list(d["20 modes"])
-        lines += ["## Design-loop evaluation, stage by stage (ms)", "",
+        lines += ["## Design-loop evaluation, stage by stage (wall ms; total cpu: CPU ms)",
+                  "",
                   markdown_table(["truth model", *keys],
                                  [[k, *(f"{d[k][s] * 1e3:.1f}" for s in keys)]
                                   for k in ("20 modes", "400 modes")]),
@@ -874,7 +883,7 @@ def main(argv=None) -> int:
     if "threads" in sections:
         results["threads"] = section_threads(repeats)
     if "scaling" in sections:
-        sizes = (10, 40) if args.quick else (10, 25, 50, 100, 200)
+        sizes = (10, 40) if args.quick else (10, 25, 50, 100, 200, 400)
         results["scaling"] = section_scaling(sizes, repeats)
     if "design" in sections:
         results["design"] = section_design(repeats)
