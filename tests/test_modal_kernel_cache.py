@@ -33,7 +33,8 @@ y = simulator.outputs(T, np.ones((1, T.size)))
 stats = _modal_kernel.modal_recursion.stats
 print(json.dumps({"method": simulator.method_for(T.size), "cache_path": stats.cache_path,
                   "hits": sum(stats.cache_hits.values()),
-                  "misses": sum(stats.cache_misses.values()), "finite": bool(np.isfinite(y).all())}))
+                  "misses": sum(stats.cache_misses.values()),
+                  "finite": bool(np.isfinite(y).all())}))
 """
 
 
