@@ -662,6 +662,33 @@ print(json.dumps({"stage": "W METHOD", "wall_s": walls, "cpu_s": cpus, "traced_p
                   "load_average": os.getloadavg()}))
 """
 
+# The peak resident set of this process's own memory: VmHWM of /proc/self/status (Linux; a
+# new address space at exec starts it afresh), where ru_maxrss keeps the maximum of the
+# parent's at fork across exec (getrusage(2)): a child of this script, grown to ~1 GB by
+# the simulate section, would report that.  None where /proc is missing.
+PEAK_RSS = r"""
+def _peak_rss_MB():
+    try:
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1e3
+    except OSError:
+        return None
+"""
+
+# analysis_scaling.py's child, then the peak resident set on a line of its own.
+ANALYSIS_CHILD = PEAK_RSS + r"""
+import json, runpy, sys
+sys.argv = ["analysis_scaling.py", "--child", "STAGE", "NMODES", "REPEATS"]
+try:
+    runpy.run_path("analysis_scaling.py", run_name="__main__")
+except SystemExit as end:                 # its main() ends with sys.exit(0)
+    if end.code:
+        raise
+print(json.dumps({"peak_rss_MB": _peak_rss_MB()}))
+"""
+
 
 def section_analysis(n_modes: int, repeats: int) -> dict:
     """LQR + Kalman on the n-mode plant, margins, FRD (1000 frequencies), the whole design
@@ -671,21 +698,22 @@ def section_analysis(n_modes: int, repeats: int) -> dict:
     env = dict(os.environ, FLEXSAT_BENCH_BLAS_THREADS="default",
                PYTHONPATH=os.pathsep.join([str(ROOT), str(ROOT / "benchmarks")]))
     out = {}
-    runs = [(stage, [sys.executable, str(ROOT / "benchmarks" / "analysis_scaling.py"),
-                     "--child", stage, str(n_modes), str(repeats)])
-            for stage in ANALYSIS_STAGES]
-    runs += [(f"W {method}", [sys.executable, "-c",
-                              W_STAGE.replace("NMODES", str(n_modes))
-                              .replace("METHOD", method).replace("REPEATS", str(repeats))])
+    runs = [(stage, ANALYSIS_CHILD.replace("STAGE", stage).replace("NMODES", str(n_modes))
+             .replace("REPEATS", str(repeats))) for stage in ANALYSIS_STAGES]
+    runs += [(f"W {method}", W_STAGE.replace("NMODES", str(n_modes)).replace("METHOD", method)
+              .replace("REPEATS", str(repeats))
+              + "\n" + PEAK_RSS + "\nprint(json.dumps({'peak_rss_MB': _peak_rss_MB()}))\n")
              for method in ("craig-bampton", "residual")]
-    for stage, command in runs:
-        done = subprocess.run(command, cwd=ROOT / "benchmarks", env=env, check=True,
-                              capture_output=True, text=True)
-        r = json.loads(done.stdout.strip().splitlines()[-1])
+    for stage, code in runs:
+        done = subprocess.run([sys.executable, "-c", code], cwd=ROOT / "benchmarks", env=env,
+                              check=True, capture_output=True, text=True)
+        lines = done.stdout.strip().splitlines()
+        r, peak = json.loads(lines[-2]), json.loads(lines[-1])["peak_rss_MB"]
         out[stage] = {"wall_s": statistics.median(r["wall_s"]),
                       "cpu_s": statistics.median(r["cpu_s"]),
                       "traced_peak_MB": statistics.median(r["traced_peak_MB"]),
-                      "maxrss_MB": r["maxrss_MB"], "repeats": len(r["wall_s"]),
+                      "maxrss_MB": peak if peak is not None else r["maxrss_MB"],
+                      "repeats": len(r["wall_s"]),
                       "load": [round(x, 2) for x in r["load_average"]]}
         print(f"analysis, {n_modes} modes, {stage}: {json.dumps(out[stage])}", flush=True)
     out["n_modes"] = n_modes
@@ -961,7 +989,7 @@ def markdown(results: dict) -> str:
                   "beam plant, margins, the slew 100 s at 100 Hz; W = the truncated beam's "
                   "W(s) at 1000 frequencies. Traced peak: tracemalloc's peak of the stage "
                   "(numpy's allocations included); max RSS: the process's peak resident "
-                  "set, imports included (~200 MB of them).", "",
+                  "set (VmHWM), imports included (~200 MB of them).", "",
                   markdown_table(["stage", "wall [s]", "CPU [s]", "traced peak [MB]",
                                   "max RSS [MB]", "target", "repeats", "load"],
                                  [[k, f"{v['wall_s']:.3f}", f"{v['cpu_s']:.3f}",
