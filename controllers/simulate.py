@@ -14,11 +14,15 @@ Two ways to run the recursion, chosen per system and run (see :class:`Simulator`
   on the transformation, close or defective eigenvalues kept together), every block
   discretised exactly, the recursion in a compiled loop (numba): O(n) per sample for the
   outputs, one matrix product x = V z for the states.  Measured on issue 10's general
-  systems (20 to 400 states, 1e4 and 1e5 samples; ``benchmarks/issue10.py``): outputs 30 to
-  60 times faster than forced_response once set up, states 5 to 30 times (their O(n^2) per
-  sample product bounds it); a one-shot call pays an O(n^3) set-up (a Schur form, as
-  forced_response pays a matrix exponential); outputs at least as accurate against an
-  extended-precision solution;
+  systems (20 to 400 states, 1e4 and 1e5 samples, both holds, one BLAS thread, CPU time;
+  ``benchmarks/results/performance.md``): outputs 26 to 77 times faster than forced_response
+  once set up, 27 to 40 times in one shot at 1e5 samples; in one shot at 1e4 samples the
+  O(n^3) set-up (balanced Schur form, decoupling, exact discretisation: about twice the
+  Schur form alone) bounds the gain, 12 to 19 times at 20 to 50 states, 3 to 9 times at 100
+  to 400; states 2.6 to 24 times once set up, bounded by their O(n^2)-per-sample product (a
+  hand-written C loop with the same product is no faster); errors against an
+  extended-precision solution of the order of forced_response's (0.5 to 3.6 times them: the
+  free rigid bodies' drift dominates both);
 - the chunked recursion (:mod:`.chunked`): block processing of the dense discrete system,
   when the modal transformation would be ill-conditioned (strongly non-normal systems),
   when numba is not installed, and for short runs, where loading the compiled loop (once
