@@ -374,7 +374,7 @@ def _section_simulate(sizes, lengths, holds, repeats, limit: CompiledLimit) -> l
                             "states": times["Simulator.run, states"] / times["C limit, states"],
                             "lfilter (b), outputs":
                                 times["lfilter (b), outputs"] / times["C limit, outputs"]},
-                        # What any method that needs a Schur form can reach in one shot.
+                        # What a Schur-based method with the C loop reaches in one shot.
                         "one_shot_bound_outputs": fr_t / (times["Schur form"]
                                                           + times["C limit, outputs"]),
                         "one_shot_bound_states": fr_t / (times["Schur form"]
@@ -859,8 +859,10 @@ def markdown(results: dict) -> str:
                   "set-up column); reused = a `Simulator` built once. y = outputs only, x = "
                   "states read. C limit = the hand-written C modal recursion on flexsat's "
                   "own modal data (states: its modal states times V, one BLAS product, as "
-                  "flexsat). bound = forced_response / (Schur form + C limit): the most any "
-                  "method that needs a Schur form can reach in one shot. flexsat / limit = "
+                  "flexsat). bound = forced_response / (Schur form + C limit): what a method "
+                  "that needs a Schur form reaches in one shot with the per-sample C loop (a "
+                  "set-up of the Schur form alone; flexsat's blocked loop runs a little "
+                  "faster than the C loop). flexsat / limit = "
                   "flexsat's time (reused) divided by the C limit's: the target is <= 2, "
                   "below 1 flexsat is faster than the per-sample C loop (its input and "
                   "output maps run as blocked BLAS products). (b) / limit: one `lfilter` "
