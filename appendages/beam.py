@@ -73,6 +73,8 @@ from .rod import Rod
 __all__ = ["Beam", "characteristic_roots", "rectangle_torsion_constant"]
 
 _SERIES_RADIUS = 2.0  # |x| below which the power series in y = x**4 are used
+_MAX_CORRECTION_MODES = 20000  # free-free modes summed explicitly in a damping correction
+_TAIL_TERMS = 12      # terms of the series in s/w_k of the damping correction's tail
 _N_SERIES = 18        # terms: 4**k |y|**k/(4k)! < 1e-30 at |x| = 2 for k = 18
 
 
@@ -991,11 +993,19 @@ class Beam:
         W[..., 0, 0], W[..., 0, 1], W[..., 1, 1] = self._undamped_entries(s)
         W[..., 1, 0] = W[..., 0, 1]
         if self.damping_ratio > 0.0:
-            with np.errstate(divide="ignore", invalid="ignore"):  # undamped poles, repaired below
-                corrections = self._damping_correction(s)
+            # the closed form plus each mode's damping; near an undamped pole, where the two
+            # cancel, the circle mean of _repair_near_poles instead
+            flat, W_flat = s.reshape(-1), W.reshape(-1, 2, 2)
+            near, k = self._near_poles(flat)
+            far = np.nonzero(~near)[0]
+            with np.errstate(divide="ignore", invalid="ignore"):  # a pole's own point is near
+                corrections = self._damping_correction(flat[far])
             for (i, j), d in zip(((0, 0), (0, 1), (1, 1)), corrections):
-                W[..., i, j] += d
-            self._repair_near_poles(s, W)
+                W_flat[far, i, j] += d
+            if near.any():
+                for (i, j), d in zip(((0, 0), (0, 1), (1, 1)),
+                                     self._repair_near_poles(flat[near], k[near])):
+                    W_flat[near, i, j] = d
         elif not np.all(np.isfinite(W)):
             raise ValueError("s is a natural frequency of the undamped beam: W is infinite there "
                              "[rad/s]")
@@ -1161,78 +1171,159 @@ class Beam:
         return (f1.reshape(s.shape) * (L**3 / EJ), f2.reshape(s.shape) * (L**2 / EJ),
                 f4.reshape(s.shape) * (L / EJ))
 
-    def _repair_near_poles(self, s: np.ndarray, W: np.ndarray, n_points: int = 32) -> None:
-        """Re-evaluate damped W near an undamped pole +-i w_k without cancellation.
+    def _repair_near_poles(self, s: np.ndarray, k: np.ndarray, n_points: int = 32):
+        """Damped W at points s near an undamped pole +-i w_k, without cancellation.
 
         There the undamped closed form is huge and the damping correction cancels it. Instead,
         ``g(s) = W_undamped(s) - b_k b_k^T/(s^2 + w_k^2)`` is analytic in a disc around i w_k and
         equals its mean over a circle of radius r (mean-value property; the trapezoidal rule
         with 32 points converges like (|s - i w_k|/r)^32 there). Then
         ``W = g(s) + b_k b_k^T/(s^2 + 2 zeta w_k s + w_k^2) + sum_{j != k} corrections``.
-        """
-        flat = s.ravel()
-        W_flat = W.reshape(-1, 2, 2)
-        x_est = np.sqrt(np.abs(flat) / self.frequency_scale)
-        n = int(min(x_est.max() / math.pi + 3, 20000))
-        w = self.natural_frequencies(n)
-        gaps = np.diff(np.concatenate([[0.0], w, [w[-1] + (w[-1] - w[-2] if n > 1 else w[-1])]]))
-        radius = 0.25 * np.minimum(gaps[:-1], gaps[1:])
-        root, _ = self._free_free_root_values(n)
-        zeta = self.damping_ratio
-        theta = 2 * np.pi * (np.arange(n_points) + 0.5) / n_points
-        for index, si in enumerate(flat):
-            k = int(np.argmin(np.abs(np.abs(si) - w)))
-            pole = 1j * w[k] if si.imag >= 0 else -1j * w[k]
-            if abs(si - pole) > 0.1 * radius[k]:
-                continue
-            z = si + radius[k] * np.exp(1j * theta)
-            u1, u2, u4 = self._undamped_entries(z)
-            bb = np.outer(root[k], root[k])
-            pole_term = 1.0 / (z**2 + w[k] ** 2)
-            g = np.array([[np.mean(u1 - bb[0, 0] * pole_term), np.mean(u2 - bb[0, 1] * pole_term)],
-                          [0.0, np.mean(u4 - bb[1, 1] * pole_term)]])
-            damped = 1.0 / (si**2 + 2 * zeta * w[k] * si + w[k] ** 2)
-            others = [d[0] for d in self._damping_correction(np.array([si]), exclude=k)]
-            W_flat[index, 0, 0] = g[0, 0] + bb[0, 0] * damped + others[0]
-            W_flat[index, 0, 1] = g[0, 1] + bb[0, 1] * damped + others[1]
-            W_flat[index, 1, 1] = g[1, 1] + bb[1, 1] * damped + others[2]
+        The points are those of :meth:`_near_poles`, ``|s -+ i w_k| <= r/10`` with r a quarter
+        of the smaller gap to the neighbouring frequencies, so the rule's error is below
+        1e-32 relative to g. All points at once: one evaluation of the closed form on all the
+        circles, one damping correction leaving each point's own mode out.
 
-    def _damping_correction(self, s: np.ndarray, exclude: int | None = None):
-        """Sum over all modes of b_k b_k^T [1/(s^2 + 2 zeta w_k s + w_k^2) - 1/(s^2 + w_k^2)].
+        Parameters
+        ----------
+        s : ndarray of complex, shape (n,)
+        k : ndarray of int, shape (n,)
+            The mode (index from 0) each point is near.
+
+        Returns
+        -------
+        tuple of 3 ndarrays of complex, shape (n,)
+            The entries (1,1), (1,2), (2,2) of W.
+        """
+        w = self.natural_frequencies(int(k.max()) + 2)
+        gaps = np.diff(np.concatenate([[0.0], w]))
+        radius = 0.25 * np.minimum(gaps[k], gaps[k + 1])
+        root, _ = self._free_free_root_values(int(k.max()) + 1)
+        bb = (root[k, 0] ** 2, root[k, 0] * root[k, 1], root[k, 1] ** 2)
+        theta = 2 * np.pi * (np.arange(n_points) + 0.5) / n_points
+        z = s[:, None] + radius[:, None] * np.exp(1j * theta)
+        wk = w[k]
+        pole_term = 1.0 / (z**2 + (wk**2)[:, None])
+        undamped = self._undamped_entries(z)
+        damped = 1.0 / (s**2 + 2.0 * self.damping_ratio * wk * s + wk**2)
+        others = self._damping_correction(s, exclude=k)
+        return tuple(np.mean(u - b[:, None] * pole_term, axis=1) + b * damped + d
+                     for u, b, d in zip(undamped, bb, others))
+
+    def _near_poles(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Which points of a flat s lie within a tenth of the repair radius of an undamped pole
+        +-i w_k (:meth:`_repair_near_poles`), and that k (index from 0; -1 elsewhere)."""
+        c0 = self.frequency_scale
+        # the nearest free-free frequency: x_k = (k + 1/2) pi + O(e^-x_k), so the root nearest
+        # sqrt(|s|/c0) is among the two around it (the first two roots checked by the table)
+        # (beyond 20000 modes, where W is not repaired, every point has k = 19999: not near)
+        x = np.minimum(np.sqrt(np.abs(s) / c0), (_MAX_CORRECTION_MODES + 2) * math.pi)
+        guess = np.clip(np.floor(x / math.pi - 0.5).astype(np.int64) - 1, 0, None)
+        k_max = min(int(guess.max(initial=0)) + 3, _MAX_CORRECTION_MODES)
+        w = self.natural_frequencies(k_max + 1)
+        gaps = np.diff(np.concatenate([[0.0], w]))
+        candidates = np.clip(guess[:, None] + np.arange(3)[None, :], 0, k_max - 1)
+        distance = np.abs(np.abs(s)[:, None] - w[candidates])
+        k = candidates[np.arange(s.size), np.argmin(distance, axis=1)]
+        pole = np.where(s.imag >= 0, 1j, -1j) * w[k]
+        radius = 0.25 * np.minimum(gaps[k], gaps[k + 1])
+        near = np.abs(s - pole) <= 0.1 * radius
+        return near, np.where(near, k, -1)
+
+    def _damping_correction(self, s: np.ndarray, exclude: np.ndarray | None = None):
+        r"""Sum over all modes of b_k b_k^T [1/(s^2 + 2 zeta w_k s + w_k^2) - 1/(s^2 + w_k^2)].
 
         The undamped closed form holds every mode without damping; this adds each mode's
-        damping exactly. Modes are summed explicitly up to N, where w_N >= 1e3 |s| (at most
-        20000 modes); beyond, the term is ``-2 zeta s b_k b_k^T/w_k^3 (1 + O(|s|/w_k))`` with
-        the asymptotic ``b_k = (2, -2 x_k/L)/sqrt(m)``, ``x_k = (k + 1/2) pi``, and the sum of
-        ``x_k^-p`` over k > N is replaced by its midpoint integral
-        ``((N + 1) pi)^(1-p)/(pi (p - 1))`` (p = 6, 5, 4 for the three entries).
-        Returns the three distinct entries, each of shape ``s.shape``. Mode ``exclude`` (an
-        index from 0) is left out of the sum.
+        damping exactly. Each term is ``b_k b_k^T/w_k^2 f(s/w_k)`` with
+
+            f(u) = -2 zeta u / ((1 + u^2)(1 + 2 zeta u + u^2)) = sum_{j>=1} c_j u^j,  |u| < 1,
+
+        written as a product (no difference of the two nearly equal fractions). Modes are
+        summed explicitly up to N (per point, N >= 16 and ``w_{N+1} >= 10 |s|``, rounded up to
+        a power of two so that points share their sums; at most 20000 modes); beyond, the
+        asymptotic ``b_k = (2, -2 x_k/L)/sqrt(m)``, ``x_k = (k + 1/2) pi`` (exact to
+        ``e^-x_k``, below 1e-20 for k > 16) turn the tail into Hurwitz zeta sums,
+
+            sum_{k>N} b_k b_k^T/w_k^2 f(s/w_k)
+                = 4/m sum_j c_j s^j / c0^(j+2) [[Z(2j+4), -Z(2j+3)/L], [., Z(2j+2)/L^2]],
+            Z(q) = sum_{k>N} x_k^-q = pi^-q zeta(q, N + 3/2),
+
+        with the series cut after ``J = 12`` terms: |c_j| <= 2 zeta (j + 1)^2 and |u| <= 1/10
+        leave a relative error below 2e-11 of the tail (the tail itself is O(zeta |s|/w_N^3)).
+        Where the 20000-mode cap binds and |s|/w_{N+1} > 1/2 only the leading term is kept.
+
+        Parameters
+        ----------
+        s : ndarray of complex
+        exclude : ndarray of int, optional
+            Per point (shape ``s.shape``), a mode (index from 0) left out of the sum, -1 for
+            none (:meth:`_repair_near_poles`).
+
+        Returns
+        -------
+        tuple of 3 ndarrays of complex
+            The three distinct entries (1,1), (1,2), (2,2), each of shape ``s.shape``.
         """
         zeta, m, L, c0 = self.damping_ratio, self.mass, self.length, self.frequency_scale
-        s_max = float(np.abs(s).max())
-        x_needed = math.sqrt(1e3 * s_max / c0)
-        n = int(min(max(64, x_needed / math.pi + 1, (exclude or 0) + 64), 20000))
-        root, _ = self._free_free_root_values(n)
-        w = self.natural_frequencies(n)
         flat = s.ravel()
+        skip = np.full(flat.size, -1, dtype=np.int64) if exclude is None \
+            else np.asarray(exclude, dtype=np.int64).ravel()
+        # N: w_{N+1} = ((N + 3/2) pi)^2 c0 >= 10 |s|, N >= 16, N > the excluded mode
+        needed = np.sqrt(10.0 * np.abs(flat) / c0) / math.pi - 1.5
+        needed = np.maximum(np.maximum(needed, 16.0), skip + 1.0)
+        bucket = np.minimum(2.0 ** np.ceil(np.log2(needed)), _MAX_CORRECTION_MODES).astype(int)
         d = np.empty((3, flat.size), dtype=np.complex128)
-        products = np.stack([root[:, 0] ** 2, root[:, 0] * root[:, 1], root[:, 1] ** 2], axis=1)
-        if exclude is not None:
-            products[exclude] = 0.0
-            w = w.copy()
-            w[exclude] = 1.0  # any finite value: its products are zero
-        chunk = max(1, 2_000_000 // n)
-        for start in range(0, flat.size, chunk):
-            ss = flat[start:start + chunk, None]
-            term = 1.0 / (ss**2 + 2.0 * zeta * w * ss + w**2) - 1.0 / (ss**2 + w**2)
-            d[:, start:start + chunk] = (term @ products).T
-        tail = [((n + 1) * math.pi) ** (1 - p) / (math.pi * (p - 1)) for p in (6, 5, 4)]
-        coefficient = -2.0 * zeta * flat * 4.0 / (m * c0**3)
-        d[0] += coefficient * tail[0]
-        d[1] += coefficient * (-1.0 / L) * tail[1]
-        d[2] += coefficient * tail[2] / L**2
+        n_all = int(bucket.max(initial=16))
+        root, _ = self._free_free_root_values(n_all)
+        w_all = self.natural_frequencies(n_all)
+        # b_k b_k^T w_k: the numerator of each term divided by -2 zeta s
+        products = np.stack([root[:, 0] ** 2, root[:, 0] * root[:, 1], root[:, 1] ** 2],
+                            axis=1) * w_all[:, None]
+        for n in np.unique(bucket):
+            where = np.nonzero(bucket == n)[0]
+            w, w2 = w_all[:n], w_all[:n] ** 2
+            chunk = max(1, 1_000_000 // n)
+            for start in range(0, where.size, chunk):
+                idx = where[start:start + chunk]
+                ss = flat[idx, None]
+                undamped = ss**2 + w2
+                # infinite only at a point's own excluded mode (exactly on its pole), zeroed
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    inverse = 1.0 / (undamped * (undamped + (2.0 * zeta) * w * ss))
+                rows = np.nonzero(skip[idx] >= 0)[0]
+                inverse[rows, skip[idx][rows]] = 0.0
+                d[:, idx] = (-2.0 * zeta) * flat[idx] * (inverse @ products[:n]).T
+            d[:, where] += self._damping_tail(flat[where], n)
         return tuple(row.reshape(s.shape) for row in d)
+
+    def _damping_tail(self, s: np.ndarray, n: int) -> np.ndarray:
+        """The damping correction of the modes k > n (:meth:`_damping_correction`), shape
+        (3, s.size)."""
+        zeta, m, L, c0 = self.damping_ratio, self.mass, self.length, self.frequency_scale
+        ratio = np.abs(s) / (((n + 1.5) * math.pi) ** 2 * c0)  # |u| at the first tail mode
+        n_terms = _TAIL_TERMS if float(ratio.max(initial=0.0)) <= 0.5 else 1
+        # f(u)/(-2 zeta u) = 1/((1 + u^2)(1 + 2 zeta u + u^2)): the product of the series
+        # sum (-1)^i u^(2i) and the Chebyshev series sum U_j(-zeta) u^j
+        cheb = np.empty(n_terms)
+        cheb[0] = 1.0
+        if n_terms > 1:
+            cheb[1] = -2.0 * zeta
+        for j in range(2, n_terms):
+            cheb[j] = -2.0 * zeta * cheb[j - 1] - cheb[j - 2]
+        alternating = np.zeros(n_terms)
+        alternating[::2] = (-1.0) ** np.arange((n_terms + 1) // 2)
+        c = -2.0 * zeta * np.convolve(alternating, cheb)[:n_terms]  # c_{j+1}, j = 0..J-1
+        j = np.arange(1, n_terms + 1)
+        orders = 2 * j[None, :] + np.array([[4], [3], [2]])  # (3, J): q of Z(q)
+        Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, n + 1.5)
+        scale = np.array([4.0 / m, -4.0 / (m * L), 4.0 / (m * L * L)])[:, None]
+        # sum_j c_j (s/c0)^j / c0^2 Z: a polynomial in v = s/c0 (|v| small where it is used)
+        v = s / c0
+        coefficients = scale * c[None, :] * Z / c0**2  # (3, J), of v^1 .. v^J
+        out = np.zeros((3, s.size), dtype=np.complex128)
+        for t in range(n_terms - 1, -1, -1):
+            out = (out + coefficients[:, t:t + 1]) * v
+        return out
 
     # -- finite models ------------------------------------------------------------------------
     def truncated(self, n_modes: int, *, method: str = "craig-bampton",
