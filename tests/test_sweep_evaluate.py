@@ -19,7 +19,7 @@ PARAMETERS = {"hub.inertia": {"distribution": "uniform", "low": 40.0, "high": 60
 
 
 def frequency_fit_scene():
-    """The default sweep scene with the paper's fit (scaled and fresh fits agree to 1e-14)."""
+    """The default sweep scene with the paper's fit."""
     raw = scene()
     raw["appendages"][0]["fit"]["match"] = "frequencies"
     return raw
@@ -32,10 +32,12 @@ def context_of(raw, **settings):
 
 @pytest.mark.slow
 def test_a_sample_is_the_runners_design_loop():
-    """Truth-model margins and slew metrics equal the runner's on the same one-loop scene;
-    the exact-beam verdict agrees with the runner's (its denser grid through exact coupled
-    frequencies): same verdict, margins within the grids' interpolation error."""
-    raw = frequency_fit_scene()
+    """Truth-model margins and slew metrics equal the runner's on the same one-loop scene
+    (flexsat's poles-and-zeros fit: the sample's chain is the runner's, from the same memoised
+    dimensionless fit); the exact-beam verdict agrees with the runner's (its denser grid
+    through exact coupled frequencies): same verdict, margins within the grids' interpolation
+    error."""
+    raw = scene()
     context, spec = context_of(raw, design="per-sample")
     values = [45.0, 0.003]
     row = evaluate(context, values)
@@ -49,8 +51,8 @@ def test_a_sample_is_the_runners_design_loop():
     with np.errstate(all="ignore"):
         metrics = controllers.metrics(result.responses[key])
     assert row["truth_stable"] == truth["stable"]
-    # same models and controller up to the chain fit's rounding (1e-14): margins refined to
-    # 1e-12 relative in frequency; the simulations agree to round-off
+    # same models and controller: margins refined to 1e-12 relative in frequency; the
+    # simulations agree to round-off
     for name in ("gain_margin", "phase_margin", "modulus_margin"):
         assert row[f"truth_{name}"] == pytest.approx(truth[name], rel=1e-9), name
     for name in ("overshoot", "settling_time", "peak_tip_deflection", "peak_torque",
@@ -64,8 +66,7 @@ def test_a_sample_is_the_runners_design_loop():
     import spacecraft.sweep.evaluate as module
     from spacecraft.sweep.evaluate import _SampleRunner, _design_controller, exact_verdict
 
-    runner = _SampleRunner(load_scene(apply_values(context.base, context.parameters, values)),
-                           context.templates)
+    runner = _SampleRunner(load_scene(apply_values(context.base, context.parameters, values)))
     K = _design_controller(runner, context)
     saved = module.POINTS_PER_DECADE, module.POINTS_PER_MODE
     module.POINTS_PER_DECADE, module.POINTS_PER_MODE = 400, 600

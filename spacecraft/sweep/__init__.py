@@ -6,11 +6,11 @@ verdict); the samples run in batches on Dask and stream to Parquet; a differenti
 search finds the worst stability margin over the box; a report shows histograms, margins against
 parameters, a stability map, the probability of instability and the worst case.
 
-Modules: :mod:`.parameters` (key paths, distributions, sampling), :mod:`.fits` (chains of any
-uniform beam from one dimensionless fit), :mod:`.evaluate` (one sample), :mod:`.execute` (Dask,
-batches, Parquet, resume, progress), :mod:`.worst` (worst-case search, ``worst.toml``),
-:mod:`.report` (statistics, plots, files), :mod:`.runner` (the whole sweep), :mod:`.command`
-(``flexsat sweep``).
+Modules: :mod:`.parameters` (key paths, distributions, sampling), :mod:`.evaluate` (one
+sample), :mod:`.execute` (Dask, batches, Parquet, resume, progress), :mod:`.worst` (worst-case
+search, ``worst.toml``), :mod:`.report` (statistics, plots, files), :mod:`.runner` (the whole
+sweep), :mod:`.command` (``flexsat sweep``). Chains of the samples' beams come from the
+runner's fit, memoised per process in dimensionless form (:mod:`appendages.fitting`).
 
 ``spacecraft.sweep`` is this package and can be called as the function :func:`sweep`:
 ``spacecraft.sweep(scene, parameters=..., samples=...)`` returns a pyarrow Table.

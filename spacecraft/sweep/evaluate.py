@@ -5,8 +5,10 @@ and validated by :func:`spacecraft.scene.load_scene`. Its evaluation is the runn
 for one controller and one design model, built with the runner's own model builders
 (:class:`spacecraft.runner._Runner`: beams, truncations, chains, spacecraft, plants, the slew):
 
-1. design (``design = "per-sample"``): the design chain of each beam (the unit fit scaled to the
-   sample's beam, :mod:`.fits`), its plant, the controller tuned on it as the runner tunes it;
+1. design (``design = "per-sample"``): the design chain of each beam (the runner's fit:
+   :func:`appendages.equivalence.fit_chain` solves the dimensionless fit once per process and
+   scales it to each beam, :mod:`appendages.fitting`), its plant, the controller tuned on it as
+   the runner tunes it;
    ``design = "nominal"``: the controller tuned once on the nominal scene, held fixed;
 2. truth: hub + beams truncated to the nominal scene's ``n_modes`` (fixed for the sweep); the
    closed-loop verdict from its eigenvalues and its gain, phase and modulus margins
@@ -47,7 +49,6 @@ import numpy as np
 
 from ..runner import RunStats, _Runner
 from ..scene import SceneError, load_scene
-from .fits import FitTemplates
 from .parameters import SweepError, SweepSpec, apply_values
 
 __all__ = ["Context", "METRICS", "prepare", "evaluate", "evaluate_batch", "exact_grid",
@@ -119,8 +120,6 @@ class Context:
         ``"pd"`` or ``"lqr"``.
     n_modes : int or None
         Bending modes per truncated beam (None: no beam truth).
-    templates : FitTemplates
-        Unit fits per (n_bodies, match).
     nominal_controller : control.StateSpace or None
         ``design = "nominal"``: the controller tuned on the nominal scene.
     exact : bool
@@ -136,7 +135,6 @@ class Context:
     variant: str
     controller: str
     n_modes: int | None
-    templates: FitTemplates
     nominal_controller: object = None
     exact: bool = False
     time_responses: bool = False
@@ -153,16 +151,15 @@ def columns(exact: bool, time_responses: bool) -> list[str]:
 
 
 class _SampleRunner(_Runner):
-    """The runner's model builders, with chains fitted by scaling a unit fit (:mod:`.fits`)."""
+    """The runner's model builders for one sample (time responses on, no output folder).
 
-    def __init__(self, scene, templates: FitTemplates):
+    Chains come from the runner's own fit (:meth:`_Runner.fit`): ``fit_chain`` memoises the
+    dimensionless fit in each process (:mod:`appendages.fitting`), so a worker fits each
+    ``(n_bodies, match)`` once (0.04 s for three bodies) and scales it to every sample's beam.
+    """
+
+    def __init__(self, scene):
         super().__init__(scene, None, RunStats(), time_responses=True)
-        self.templates = templates
-
-    def fit(self, spec, match):
-        return self.cached(("fit", spec.beam, spec.fit.n_bodies, match),
-                           lambda: self.templates.chain(self.beam(spec), spec.fit.n_bodies,
-                                                        match))
 
 
 def tune(plant, controller_spec, kind: str):
@@ -411,7 +408,7 @@ def _margins(prefix: str, verdict) -> dict:
 def _evaluate_scene(context: Context, scene) -> dict:
     import controllers
 
-    runner = _SampleRunner(scene, context.templates)
+    runner = _SampleRunner(scene)
     n = context.n_modes
     prune = scene.fidelity.prune
     truth_models = [runner.truth_model(a, n) for a in scene.appendages]
@@ -549,7 +546,7 @@ def _trim(raw: dict, scene, spec: SweepSpec, n_modes) -> tuple[dict, str, str]:
 
 
 def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
-    """The shared part of every sample: trimmed scene, fixed fidelity, fits, nominal controller.
+    """The shared part of every sample: trimmed scene, fixed fidelity, nominal controller.
 
     Parameters
     ----------
@@ -581,22 +578,12 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
                 raise SceneError(f"{source}: fidelity: {exc}") from None
     base, variant, kind = _trim(raw, scene, spec, n_modes)
     trimmed = load_scene(base, source=source)
-    templates = FitTemplates()
-    for k, a in enumerate(trimmed.appendages):
-        if a.design != "fit":
-            continue
-        bodies = {a.fit.n_bodies}
-        for p in spec.parameters:
-            if p.path == ("appendages", k, "fit", "n_bodies") and p.values is not None:
-                bodies |= {int(v) for v in p.values}
-        for n in sorted(bodies):
-            templates.prepare(n, variant)
     context = Context(base=base, source=source, parameters=spec.parameters, design=spec.design,
-                      variant=variant, controller=kind, n_modes=n_modes, templates=templates,
+                      variant=variant, controller=kind, n_modes=n_modes,
                       exact=(trimmed.outputs.exact_reference and trimmed.has_beam_truth
                              and trimmed.controller.sample_time is None),
                       time_responses=trimmed.manoeuvre is not None)
     if spec.design == "nominal":
-        runner = _SampleRunner(trimmed, templates)
+        runner = _SampleRunner(trimmed)
         context.nominal_controller = _design_controller(runner, context)
     return context

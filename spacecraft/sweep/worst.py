@@ -273,7 +273,7 @@ def worst_scene(context, values: dict) -> tuple[dict, str | None]:
     note = None
     if context.design == "nominal":
         nominal = load_scene(context.base, source=context.source)
-        runner = _SampleRunner(nominal, context.templates)
+        runner = _SampleRunner(nominal)
         for k, (item, a) in enumerate(zip(raw["appendages"], nominal.appendages)):
             if a.design != "fit":
                 continue
@@ -375,7 +375,7 @@ def verify(context, values: dict, raw: dict, source: str) -> dict:
         base = apply_values(context.base, params, [values[p.key] for p in params])
         base.setdefault("outputs", {})["exact_reference"] = True
         scene = load_scene(base, source=source)
-        runner = _SampleRunner(scene, context.templates)
+        runner = _SampleRunner(scene)
         K = context.nominal_controller
         if K is None:
             K = _design_controller(runner, context)
