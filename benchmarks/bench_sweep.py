@@ -9,26 +9,36 @@ on a 100 kg hub, LQR + Kalman tuned on the fitted 3-body chain and held (design 
    median over ``--samples-per-sample`` samples after a warm-up, with the stage costs of a
    cProfile run; beside it one ``spacecraft.run`` of the same one-loop scene (the runner refits
    the chain, picks the fidelity and builds the equivalence data every time);
-2. ``task_overhead``: on a LocalCluster of 2 single-threaded worker processes, the wall time
-   per task of tasks that evaluate no sample (``evaluate_batch`` on an empty batch: argument
-   transfer, scheduling, result), 2 x 200 tasks in flight as the sweep keeps them; its ratio
-   to a task of the sweep (``TASK_SECONDS`` of work);
+2. ``task_overhead``: on a LocalCluster of 2 single-threaded worker processes, tasks that
+   evaluate no sample (``evaluate_batch`` on an empty batch: argument transfer, scheduling,
+   result), 2 x 200 tasks in flight as the sweep keeps them: the wall time per task of one
+   worker and the CPU time per task of the client, the scheduler (in this process) and the
+   workers; their ratio to a task of the sweep (``TASK_SECONDS`` of work);
 3. ``speed_up``: the same ``--speed-up-samples`` samples on LocalClusters of 1 and 2 workers
-   (cluster started and warmed before the clock), median of ``--repeats`` runs each;
-4. ``ten_thousand``: ``run_sweep`` of 10,000 samples end to end (read, prepare, local cluster,
-   samples streamed to Parquet, report without plots), no worst-case search; then the shipped
-   scene as shipped (1000 samples and the worst-case search, its worst case).
+   (cluster started and every worker warmed before the clock), median of ``--repeats`` runs
+   each; beside the wall times, the workers' CPU time per sample, how busy the workers were
+   (their CPU time over workers x wall time) and the CPU time of the client and scheduler as
+   a fraction of the workers' (Dask's share of the work);
+4. ``ten_thousand``: ``run_sweep`` of 10,000 samples end to end on a fresh LocalCluster of 2
+   workers (the cluster's start, the workers' imports, prepare, every sample streamed to
+   Parquet, the report without plots), no worst-case search; then the shipped scene as shipped
+   (1000 samples and the worst-case searches, their worst cases).
 
 Every figure carries the load average (``os.getloadavg``) before and after it: the machine has
 2 cores and is shared, so a speed-up measured under load measures the load.
 
-Run::
+Modes::
 
-    python benchmarks/bench_sweep.py [--quick] [--only-per-sample]
+    python benchmarks/bench_sweep.py            # everything (a quiet machine: ~7 min)
+    python benchmarks/bench_sweep.py --shared   # CPU per sample, per-task overhead, Dask's
+                                                # CPU share (a shared machine: ~3 min)
+    python benchmarks/bench_sweep.py --quick    # a smoke run of everything (~1 min)
+    python benchmarks/bench_sweep.py --only-per-sample
 
-Writes ``benchmarks/results/sweep.json`` and ``sweep.md`` (``--only-per-sample``:
-``sweep_per_sample.json``, the first item alone, with CPU times beside wall times: on a loaded
-machine the process's CPU time is the closer measure of the work).
+Writes ``benchmarks/results/sweep.json`` and ``sweep.md`` (``--shared``: ``sweep_shared.*``;
+``--quick``: ``sweep_quick.*``; ``--only-per-sample``: ``sweep_per_sample.json``). CPU times
+(``time.process_time``, and the workers' own through ``Client.run``) stand beside wall times:
+on a loaded machine they are the closer measure of the work.
 """
 
 from __future__ import annotations
@@ -111,7 +121,27 @@ def cluster(n_workers: int):
     return c, Client(c, set_as_default=False)
 
 
+def _cpu(client) -> tuple[float, float]:
+    """(this process's CPU time: the client and, for a LocalCluster, its scheduler; the
+    workers' CPU time summed) [s]."""
+    workers = client.run(time.process_time)
+    return time.process_time(), float(sum(workers.values()))
+
+
+def _accounted(client, run) -> dict:
+    """Wall time, the client's + scheduler's CPU time and the workers' CPU time of ``run()``."""
+    before = load()
+    c0, w0 = _cpu(client)
+    t = time.perf_counter()
+    out = run()
+    wall = time.perf_counter() - t
+    c1, w1 = _cpu(client)
+    return {"wall_s": wall, "client_cpu_s": c1 - c0, "workers_cpu_s": w1 - w0,
+            "load_before": before, "load_after": load(), "result": out}
+
+
 def task_overhead(n_tasks: int) -> dict:
+    """Per-task cost of Dask itself: tasks that evaluate no sample (module docstring, 2)."""
     import numpy as np
     import spacecraft.sweep as S
     from spacecraft.sweep.evaluate import prepare
@@ -124,72 +154,95 @@ def task_overhead(n_tasks: int) -> dict:
         executor = Executor("client", client, 2)
         empty = [([], np.zeros((0, len(spec.parameters))))] * n_tasks
         list(executor.run(context, empty[:20]))          # warm-up: imports, context scatter
-        before = load()
-        t = time.perf_counter()
-        for _ in executor.run(context, empty):
-            pass
-        wall = time.perf_counter() - t
-        after = load()
+        run = _accounted(client, lambda: sum(1 for _ in executor.run(context, empty)))
     finally:
         client.close()
         c.close()
+    wall = run["wall_s"]
     # two workers run tasks side by side: per task of one worker, the overhead is 2 x wall / n
     per_task = 2.0 * wall / n_tasks
+    cpu_per_task = (run["client_cpu_s"] + run["workers_cpu_s"]) / n_tasks
     return {"tasks": n_tasks, "wall_s": wall, "per_task_s": per_task,
+            "cpu_per_task_s": cpu_per_task,
+            "client_cpu_per_task_s": run["client_cpu_s"] / n_tasks,
+            "workers_cpu_per_task_s": run["workers_cpu_s"] / n_tasks,
             "task_seconds": TASK_SECONDS, "fraction_of_a_task": per_task / TASK_SECONDS,
-            "load_before": before,
-            "load_after": after}
+            "cpu_fraction_of_a_task": cpu_per_task / TASK_SECONDS,
+            "load_before": run["load_before"], "load_after": run["load_after"]}
 
 
 def speed_up(n: int, repeats: int) -> dict:
+    """The same n samples on LocalClusters of 1 and 2 workers (module docstring, 3)."""
     import spacecraft.sweep as S
     from spacecraft.sweep.evaluate import evaluate, prepare
     from spacecraft.sweep.execute import Executor, run_samples
 
     raw, spec, source = S.load_sweep(None, samples=n)
     context = prepare(raw, spec, source)
-    t = time.perf_counter()
     evaluate(context, spec.nominal)
-    evaluate(context, spec.nominal)
-    one = (time.perf_counter() - t) / 2
-    out = {"samples": n, "repeats": repeats}
+    c = time.process_time()
+    for _ in range(5):
+        evaluate(context, spec.nominal)
+    one = (time.process_time() - c) / 5  # CPU: the batch size must not follow the load
+    out = {"samples": n, "repeats": repeats, "seconds_per_sample_for_batches": one}
     for workers in (1, 2):
         c, client = cluster(workers)
         try:
             executor = Executor("client", client, workers)
-            run_samples(context, spec, executor, seconds_per_sample=one, progress=False)  # warm
-            walls, loads = [], []
+            # warm: every worker imports flexsat and receives the context before the clock
+            list(executor.run(context, [([0], spec.nominal.reshape(1, -1))] * (2 * workers)))
+            runs = []
             for _ in range(repeats):
-                loads.append(load())
-                t = time.perf_counter()
-                _, info = run_samples(context, spec, executor, seconds_per_sample=one,
-                                      progress=False)
-                walls.append(time.perf_counter() - t)
-            loads.append(load())
+                runs.append(_accounted(client, lambda: run_samples(
+                    context, spec, executor, seconds_per_sample=one, progress=False)))
         finally:
             client.close()
             c.close()
-        out[f"workers_{workers}"] = {"median_s": statistics.median(walls), "runs_s": walls,
-                                     "batch": info["batch"], "tasks": info["tasks"],
-                                     "loads": loads}
+        info = runs[-1]["result"][1]
+        walls = [r["wall_s"] for r in runs]
+        work = [r["workers_cpu_s"] for r in runs]
+        client_cpu = [r["client_cpu_s"] for r in runs]
+        out[f"workers_{workers}"] = {
+            "median_s": statistics.median(walls), "runs_s": walls,
+            "batch": info["batch"], "tasks": info["tasks"],
+            "workers_cpu_per_sample_s": statistics.median(work) / n,
+            "client_cpu_s": statistics.median(client_cpu),
+            # the client's and scheduler's CPU against the workers': Dask's share of the work
+            "client_cpu_fraction": statistics.median(client_cpu) / statistics.median(work),
+            # the workers' CPU time against their wall-time capacity: 1 on an idle machine,
+            # lower when tasks wait (scheduling gaps, stragglers) or the machine is shared
+            "workers_busy_fraction": statistics.median(work) / (workers * statistics.median(walls)),
+            "loads": [r["load_before"] for r in runs] + [runs[-1]["load_after"]]}
     out["speed_up"] = out["workers_1"]["median_s"] / out["workers_2"]["median_s"]
     return out
 
 
 def ten_thousand(n: int) -> dict:
+    """``run_sweep`` of n samples end to end on a fresh LocalCluster of 2 workers (module
+    docstring, 4): the cluster's start, the workers' imports, every sample to Parquet, the
+    report without plots."""
     from spacecraft.sweep import run_sweep
 
     with tempfile.TemporaryDirectory() as tmp:
         before = load()
         t = time.perf_counter()
-        result = run_sweep(None, samples=n, worst_case=False, out=Path(tmp) / "sweep",
-                           plots=False, progress=False)
+        c, client = cluster(2)
+        start = time.perf_counter() - t
+        try:
+            run = _accounted(client, lambda: run_sweep(
+                None, samples=n, worst_case=False, out=Path(tmp) / "sweep", plots=False,
+                progress=False, client=client))
+        finally:
+            client.close()
+            c.close()
         wall = time.perf_counter() - t
-        after = load()
-    s = result.summary
-    return {"samples": n, "wall_s": wall, "load_before": before, "load_after": after,
+    s = run["result"].summary
+    return {"samples": n, "wall_s": wall, "cluster_start_s": start, "sweep_s": run["wall_s"],
+            "client_cpu_s": run["client_cpu_s"], "workers_cpu_s": run["workers_cpu_s"],
+            "workers_cpu_per_sample_s": run["workers_cpu_s"] / n,
+            "load_before": before, "load_after": run["load_after"],
             "executor": s["executor"], "timings": s["timings"], "failed": s["samples"]["failed"],
-            "instability": s["instability"]}
+            "batch": s.get("batch"), "instability": s["instability"]}
 
 
 def shipped() -> dict:
@@ -208,17 +261,58 @@ def shipped() -> dict:
             "worst_case": s["worst_case"], "nominal": s["nominal"]}
 
 
+def _rows(result: dict) -> list[list[str]]:
+    p = result["per_sample"]
+    rows = [
+        ["one sample (median)", f"{p['median_s'] * 1e3:.1f} ms wall, "
+         f"{p['cpu_median_s'] * 1e3:.1f} ms CPU", f"{p['load_before']}"],
+        ["one sample without the exact-beam verdict (CPU)",
+         f"{p['without_exact_cpu_median_s'] * 1e3:.1f} ms", f"{p['load_after']}"],
+        ["spacecraft.run of the same scene (median of 3)",
+         f"{p['runner_run_median_s'] * 1e3:.0f} ms", f"{p['load_after']}"]]
+    if "task_overhead" in result:
+        o = result["task_overhead"]
+        rows.append(["Dask per-task overhead (empty tasks, 2 workers)",
+                     f"{o['per_task_s'] * 1e3:.2f} ms wall, {o['cpu_per_task_s'] * 1e3:.2f} ms "
+                     f"CPU ({100 * o['cpu_fraction_of_a_task']:.2f} % of a "
+                     f"{o['task_seconds']:g} s task)", f"{o['load_before']}"])
+    if "speed_up" in result:
+        s = result["speed_up"]
+        for w in (1, 2):
+            r = s[f"workers_{w}"]
+            rows.append([f"{s['samples']} samples, {w} worker{'s' if w > 1 else ''} "
+                         f"(median of {s['repeats']}; {r['tasks']} tasks of {r['batch']})",
+                         f"{r['median_s']:.2f} s; workers' CPU "
+                         f"{r['workers_cpu_per_sample_s'] * 1e3:.1f} ms a sample, busy "
+                         f"{100 * r['workers_busy_fraction']:.0f} %; client + scheduler CPU "
+                         f"{100 * r['client_cpu_fraction']:.2f} % of the workers'",
+                         f"{r['loads']}"])
+        rows.append(["speed-up 1 -> 2 workers", f"{s['speed_up']:.2f}x", ""])
+    if "ten_thousand" in result:
+        b = result["ten_thousand"]
+        rows.append([f"{b['samples']} samples end to end ({b['executor']}, cluster start "
+                     f"{b['cluster_start_s']:.1f} s included)",
+                     f"{b['wall_s']:.1f} s; workers' CPU {b['workers_cpu_per_sample_s'] * 1e3:.1f}"
+                     f" ms a sample; client + scheduler CPU {b['client_cpu_s']:.1f} s",
+                     f"{b['load_before']} -> {b['load_after']}"])
+    return rows
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="small counts (a smoke run)")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--quick", action="store_true", help="small counts (a smoke run, ~1 min)")
+    mode.add_argument("--shared", action="store_true",
+                      help="what a shared machine can measure: CPU per sample, per-task "
+                           "overhead, Dask's CPU share (sweep_shared.json)")
+    mode.add_argument("--only-per-sample", action="store_true",
+                      help="measure one sample only (sweep_per_sample.json)")
     parser.add_argument("--samples-per-sample", type=int, default=40)
-    parser.add_argument("--speed-up-samples", type=int, default=400)
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--speed-up-samples", type=int, default=2000)
+    parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--tasks", type=int, default=400)
     parser.add_argument("--big", type=int, default=10_000)
     parser.add_argument("--skip-shipped", action="store_true")
-    parser.add_argument("--only-per-sample", action="store_true",
-                        help="measure one sample only (sweep_per_sample.json)")
     args = parser.parse_args(argv)
     if args.only_per_sample:
         result = {"machine": machine_info(), "per_sample": per_sample(args.samples_per_sample)}
@@ -229,8 +323,10 @@ def main(argv=None) -> int:
               f"verdict; load {p['load_before']} -> {p['load_after']}")
         return 0
     if args.quick:
-        args.samples_per_sample, args.speed_up_samples, args.repeats = 10, 40, 2
-        args.tasks, args.big = 40, 100
+        args.samples_per_sample, args.speed_up_samples, args.repeats = 10, 100, 1
+        args.tasks, args.big = 40, 200
+    if args.shared:
+        args.speed_up_samples, args.repeats = 600, 1
     result = {"machine": machine_info()}
     print("per sample...", file=sys.stderr)
     result["per_sample"] = per_sample(args.samples_per_sample)
@@ -238,37 +334,24 @@ def main(argv=None) -> int:
     result["task_overhead"] = task_overhead(args.tasks)
     print("speed-up...", file=sys.stderr)
     result["speed_up"] = speed_up(args.speed_up_samples, args.repeats)
-    print(f"{args.big} samples...", file=sys.stderr)
-    result["ten_thousand"] = ten_thousand(args.big)
-    if not args.skip_shipped:
-        print("the shipped scene...", file=sys.stderr)
-        result["shipped"] = shipped()
-    name = "sweep_quick" if args.quick else "sweep"
+    if not args.shared:
+        print(f"{args.big} samples...", file=sys.stderr)
+        result["ten_thousand"] = ten_thousand(args.big)
+        if not args.skip_shipped:
+            print("the shipped scene...", file=sys.stderr)
+            result["shipped"] = shipped()
+    name = "sweep_quick" if args.quick else "sweep_shared" if args.shared else "sweep"
     write_json(f"{name}.json", result)
-    p, o, s, b = (result["per_sample"], result["task_overhead"], result["speed_up"],
-                  result["ten_thousand"])
-    rows = [
-        ["one sample (median)", f"{p['median_s'] * 1e3:.1f} ms wall, "
-         f"{p['cpu_median_s'] * 1e3:.1f} ms CPU", f"{p['load_before']}"],
-        ["one sample without the exact-beam verdict (CPU)",
-         f"{p['without_exact_cpu_median_s'] * 1e3:.1f} ms", f"{p['load_after']}"],
-        ["spacecraft.run of the same scene (median of 3)",
-         f"{p['runner_run_median_s'] * 1e3:.0f} ms", f"{p['load_after']}"],
-        ["Dask per-task overhead", f"{o['per_task_s'] * 1e3:.2f} ms "
-         f"({100 * o['fraction_of_a_task']:.2f} % of a {o.get('task_seconds', 0.5):g} s task)",
-         f"{o['load_before']}"],
-        [f"{s['samples']} samples, 1 worker (median of {s['repeats']})",
-         f"{s['workers_1']['median_s']:.2f} s", f"{s['workers_1']['loads']}"],
-        [f"{s['samples']} samples, 2 workers", f"{s['workers_2']['median_s']:.2f} s",
-         f"{s['workers_2']['loads']}"],
-        ["speed-up 1 -> 2 workers", f"{s['speed_up']:.2f}x", ""],
-        [f"{b['samples']} samples end to end ({b['executor']})", f"{b['wall_s']:.1f} s",
-         f"{b['load_before']} -> {b['load_after']}"],
-    ]
+    p = result["per_sample"]
+    machine = result["machine"]
     lines = ["# Sweep benchmark", "",
-             f"`python benchmarks/bench_sweep.py` on {result['machine']['date_utc']} UTC "
-             f"({result['machine']['cpu']}, {result['machine']['nproc']} cores, shared).", "",
-             markdown_table(["what", "time", "load average (1, 5, 15 min)"], rows), ""]
+             f"`python benchmarks/bench_sweep.py{' --quick' if args.quick else ''}"
+             f"{' --shared' if args.shared else ''}` on {machine['date_utc']} UTC "
+             f"({machine['cpu']}, {machine['nproc']} cores).", ""]
+    if args.shared:
+        lines += ["A shared machine: the CPU times are the measure; wall times and the speed-up "
+                  "measure the load as much as the sweep.", ""]
+    lines += [markdown_table(["what", "time", "load average (1, 5, 15 min)"], _rows(result)), ""]
     if "shipped" in result:
         sh = result["shipped"]
         lines += [f"Shipped scene as shipped: {sh['wall_s']:.1f} s ({sh['executor']}), "
