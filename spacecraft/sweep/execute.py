@@ -12,11 +12,13 @@ Where the samples run
 Batches
     Each Dask task evaluates a batch of samples (:func:`.evaluate.evaluate_batch`). The batch
     size is chosen from the time of one evaluation of the nominal scene, measured before the
-    sweep, so that a task takes about :data:`TASK_SECONDS` (the scheduler's per-task overhead,
-    a few milliseconds to 15 ms on a loaded machine, stays below 1 % of the work;
-    ``benchmarks/bench_sweep.py`` measures it; each task is also one Parquet part, so 2 s keeps
-    a 10,000-sample sweep to a few hundred files), and at most a quarter of the samples per
-    worker (the load stays balanced). At most
+    sweep, so that a task takes about :data:`TASK_SECONDS` (Dask's per-task cost, 9 ms of CPU
+    time and 27 ms of a worker's wall time measured on this 2-core machine at load 8, stays
+    below 1.5 % of the work; ``benchmarks/bench_sweep.py`` measures it; each task is also one
+    Parquet part, so 2 s keeps a 10,000-sample sweep to about a hundred files), and at most a
+    quarter of the samples per worker (the load stays balanced). Besides, an idle LocalCluster
+    of 2 workers takes about 7 % of one core (scheduler, client, heartbeats:
+    :data:`_LOCAL_CLUSTER_CONFIG`). At most
     ``2 x workers + 1`` tasks are in flight; a finished batch is written before another is sent.
 
 Output folder (``out``)
@@ -55,6 +57,12 @@ __all__ = ["TASK_SECONDS", "LOCAL_CLUSTER_SECONDS", "Progress", "Executor", "ope
 TASK_SECONDS = 2.0
 #: Below this much estimated work [s] a sweep runs in-process (synchronous scheduler).
 LOCAL_CLUSTER_SECONDS = 10.0
+#: Dask settings of the LocalCluster a sweep starts (not of a cluster given to it): no
+#: statistical profiler in the workers (it samples the running task's stack every 10 ms) and a
+#: system monitor every 5 s instead of 0.5 s. An idle worker then uses 1.6 % of a core
+#: instead of 2.9 % (measured on this 2-core machine, load 6): time taken from the samples.
+_LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
+                         "distributed.admin.system-monitor.interval": "5s"}
 _PARTS = "samples"
 _SETTINGS = "sweep.json"
 
@@ -282,10 +290,12 @@ def open_executor(*, client=None, scheduler: str | None = None, workers: int | N
         return Executor("synchronous")
     import logging
 
+    import dask
     from distributed import Client, LocalCluster
 
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
+    with dask.config.set(_LOCAL_CLUSTER_CONFIG):
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                               dashboard_address=None, silence_logs=logging.ERROR)
     client = Client(cluster, set_as_default=False)
     return Executor("local-cluster", client, n, [cluster, client])
 
