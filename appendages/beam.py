@@ -1214,8 +1214,8 @@ class Beam:
         """Which points of a flat s lie within a tenth of the repair radius of an undamped pole
         +-i w_k (:meth:`_repair_near_poles`), and that k (index from 0; -1 elsewhere)."""
         c0 = self.frequency_scale
-        # the nearest free-free frequency: x_k = (k + 1/2) pi + O(e^-x_k), so the root nearest
-        # sqrt(|s|/c0) is among the two around it (the first two roots checked by the table)
+        # the nearest free-free frequency: root k (from 0) lies within 0.02 of (k + 3/2) pi, so
+        # the one nearest x = sqrt(|s|/c0) is among the three from floor(x/pi - 3/2) up
         # (beyond 20000 modes, where W is not repaired, every point has k = 19999: not near)
         x = np.minimum(np.sqrt(np.abs(s) / c0), (_MAX_CORRECTION_MODES + 2) * math.pi)
         guess = np.clip(np.floor(x / math.pi - 0.5).astype(np.int64) - 1, 0, None)
@@ -1248,8 +1248,10 @@ class Beam:
                 = 4/m sum_j c_j s^j / c0^(j+2) [[Z(2j+4), -Z(2j+3)/L], [., Z(2j+2)/L^2]],
             Z(q) = sum_{k>N} x_k^-q = pi^-q zeta(q, N + 3/2),
 
-        with the series cut after ``J = 12`` terms: |c_j| <= 2 zeta (j + 1)^2 and |u| <= 1/10
-        leave a relative error below 2e-11 of the tail (the tail itself is O(zeta |s|/w_N^3)).
+        with the series cut after ``J = 12`` terms (c_j from the Chebyshev series of
+        1/(1 + 2 zeta u + u^2), whose |U_n| <= n + 1, give |c_j| <= zeta (j + 1)^2/2): with
+        |u| <= 1/10 the terms left out are below 1e-10 of the first (the tail itself is
+        O(zeta |s|/w_N^3)).
         Where the 20000-mode cap binds and |s|/w_{N+1} > 1/2 only the leading term is kept.
 
         Parameters
