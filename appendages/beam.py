@@ -1276,11 +1276,7 @@ class Beam:
         bucket = np.minimum(2.0 ** np.ceil(np.log2(needed)), _MAX_CORRECTION_MODES).astype(int)
         d = np.empty((3, flat.size), dtype=np.complex128)
         n_all = int(bucket.max(initial=16))
-        root, _ = self._free_free_root_values(n_all)
-        w_all = self.natural_frequencies(n_all)
-        # b_k b_k^T w_k: the numerator of each term divided by -2 zeta s
-        products = np.stack([root[:, 0] ** 2, root[:, 0] * root[:, 1], root[:, 1] ** 2],
-                            axis=1) * w_all[:, None]
+        w_all, products = self._damping_products(n_all)
         for n in np.unique(bucket):
             where = np.nonzero(bucket == n)[0]
             w, w2 = w_all[:n], w_all[:n] ** 2
@@ -1298,12 +1294,39 @@ class Beam:
             d[:, where] += self._damping_tail(flat[where], n)
         return tuple(row.reshape(s.shape) for row in d)
 
+    def _damping_products(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(w_k, b_k b_k^T w_k as rows (11, 12, 22)) of the first n modes, kept per beam: the
+        numerators of the damping correction's terms divided by -2 zeta s."""
+        cached = self._cache.get("damping_products")
+        if cached is None or cached[0].size < n:
+            root, _ = self._free_free_root_values(n)
+            w = self.natural_frequencies(n)
+            products = np.stack([root[:, 0] ** 2, root[:, 0] * root[:, 1], root[:, 1] ** 2],
+                                axis=1) * w[:, None]
+            cached = (w, products)
+            self._cache["damping_products"] = cached
+        return cached[0][:n], cached[1][:n]
+
     def _damping_tail(self, s: np.ndarray, n: int) -> np.ndarray:
         """The damping correction of the modes k > n (:meth:`_damping_correction`), shape
         (3, s.size)."""
-        zeta, m, L, c0 = self.damping_ratio, self.mass, self.length, self.frequency_scale
+        c0 = self.frequency_scale
         ratio = np.abs(s) / (((n + 1.5) * math.pi) ** 2 * c0)  # |u| at the first tail mode
         n_terms = _TAIL_TERMS if float(ratio.max(initial=0.0)) <= 0.5 else 1
+        coefficients = self._cache.get(("damping_tail", n, n_terms))
+        if coefficients is None:
+            coefficients = self._damping_tail_coefficients(n, n_terms)
+            self._cache[("damping_tail", n, n_terms)] = coefficients
+        # sum_j c_j (s/c0)^j / c0^2 Z: a polynomial in v = s/c0 (|v| small where it is used)
+        v = s / c0
+        out = np.zeros((3, s.size), dtype=np.complex128)
+        for t in range(n_terms - 1, -1, -1):
+            out = (out + coefficients[:, t:t + 1]) * v
+        return out
+
+    def _damping_tail_coefficients(self, n: int, n_terms: int) -> np.ndarray:
+        """Coefficients of v^1 .. v^J (v = s/c0) of the tail after n modes, shape (3, J)."""
+        zeta, m, L, c0 = self.damping_ratio, self.mass, self.length, self.frequency_scale
         # f(u)/(-2 zeta u) = 1/((1 + u^2)(1 + 2 zeta u + u^2)): the product of the series
         # sum (-1)^i u^(2i) and the Chebyshev series sum U_j(-zeta) u^j
         cheb = np.empty(n_terms)
@@ -1319,13 +1342,7 @@ class Beam:
         orders = 2 * j[None, :] + np.array([[4], [3], [2]])  # (3, J): q of Z(q)
         Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, n + 1.5)
         scale = np.array([4.0 / m, -4.0 / (m * L), 4.0 / (m * L * L)])[:, None]
-        # sum_j c_j (s/c0)^j / c0^2 Z: a polynomial in v = s/c0 (|v| small where it is used)
-        v = s / c0
-        coefficients = scale * c[None, :] * Z / c0**2  # (3, J), of v^1 .. v^J
-        out = np.zeros((3, s.size), dtype=np.complex128)
-        for t in range(n_terms - 1, -1, -1):
-            out = (out + coefficients[:, t:t + 1]) * v
-        return out
+        return scale * c[None, :] * Z / c0**2
 
     # -- finite models ------------------------------------------------------------------------
     def truncated(self, n_modes: int, *, method: str = "craig-bampton",
