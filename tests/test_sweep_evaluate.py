@@ -126,3 +126,22 @@ def test_exact_frequencies_of_a_sample_that_once_failed():
     exact = Spacecraft(hub, [Mount(beam, (0.5, 0.0), 0.0)]).natural_frequencies(3, exact=True)
     truncated = Spacecraft(hub, [Mount(beam.truncated(40), (0.5, 0.0), 0.0)])
     np.testing.assert_allclose(exact, truncated.natural_frequencies(3), rtol=1e-8)
+
+
+def test_margin_brackets_follow_the_margin_rules():
+    """The intervals the exact verdict refines (:func:`_margin_brackets`) on a loop gain given
+    point by point: the grid minimum of |1 + L|; the gain crossovers whose phase margin (at
+    the end nearer |L| = 1) is within 10 deg of the smallest (40 and 45 deg in, 80 deg out);
+    the phase crossovers (Im L changes sign, Re L < 0) whose gain margin is within 3 dB of
+    the smallest (10.5 dB in; 20 and 26 dB out)."""
+    from spacecraft.sweep.evaluate import REFINE_POINTS, _margin_brackets, _refinement
+
+    magnitude = np.array([10, 5, 2, 0.9, 0.8, 1.2, 1.5, 0.5, 0.3, 0.1, 0.05, 0.02])
+    phase = np.radians([-120, -130, -140, -140, -135, -135, -100, -175, -185, -175, -185, -90])
+    L = magnitude * np.exp(1j * phase)
+    minimum = int(np.argmin(np.abs(1 + L)))
+    assert sorted(_margin_brackets(L)) == sorted([(minimum, minimum), (2, 3), (4, 5), (7, 8)])
+    omega = np.geomspace(0.1, 10.0, L.size)
+    new = _refinement(omega, [(4, 5)], 2)
+    assert new.size == REFINE_POINTS and not np.isin(new, omega).any()
+    assert new.min() > omega[3] and new.max() < omega[6]
