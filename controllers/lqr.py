@@ -12,7 +12,12 @@ The design model is the plant without the modes the loop cannot influence
 stability sigma = 4 alpha (Anderson & Moore, sec. 3.5: the LQR of A + sigma I places every
 closed-loop pole at Re(s) < -sigma), alpha the stability margin of :mod:`controllers.stability`,
 so the guarantee holds by construction and is checked on the computed poles with room for
-round-off (Re <= -alpha).
+round-off (Re <= -alpha): the regulator's and estimator's spectra, and then the loop's own poles
+on the plant. High-gain designs put regulator and estimator poles on the same transmission zeros,
+where the loop's computed poles can sit further right than either spectrum by more than 3 alpha;
+sigma is then raised above the round-off measured on the loop (adding at most a damping ratio of
+SIGMA_CAP to any mode), or the design is refused naming the mode, estimator_speed and
+attitude_weight.
 """
 from __future__ import annotations
 
@@ -30,11 +35,21 @@ from .pd import _check_sampling, _positive, _rigid_crossover
 from .riccati import _modal_correction, _solve_care
 from .signals import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant, _short,
                       channels, tip_outputs)
-from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _warn_removed
+from .loop import close_loop
+from .stability import (MARGIN, MAX_SCALE_RATIO, RemovedMode, _continuous_poles,
+                        _warn_removed)
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["lqr", "KalmanNoise", "LQRDesign", "lqr_design", "reference_state",
-           "PRESCRIBED_STABILITY"]
+           "PRESCRIBED_STABILITY", "ROUND_OFF_ATTEMPTS", "SIGMA_CAP"]
+
+#: Redesigns with a higher degree of stability when round-off puts a pole of the loop itself
+#: at Re > -alpha (see _loop_round_off); then the design is refused, naming the mode.
+ROUND_OFF_ATTEMPTS = 3
+#: The degree of stability sigma raised against round-off stays below this fraction of the
+#: lowest flexible mode and of the rigid-body bandwidths [rad/s]: it adds a damping ratio of at
+#: most 1e-4 to a mode, beyond which it would change the design rather than resolve it.
+SIGMA_CAP = 1e-4
 
 #: The Riccati equations are solved for A + sigma I with sigma = PRESCRIBED_STABILITY * alpha
 #: (alpha the stability margin): every designed pole lies at Re(s) < -4 alpha, so the computed
@@ -381,22 +396,49 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
     Q, N, R, r0 = _cost(design_plant, q_theta, q_omega, r, tip_names, W_tip)
     x_ref = reference_state(design_plant)
     L_fixed = None if noise is not None else L_given
-    for digital in ([False, True] if T is not None else [False]):
-        try:
-            with np.errstate(all="ignore"):
-                design = _design(design_plant, Q, N, R, r0, Jd, x_ref, noise, L_fixed, sigma,
-                                 T if digital else None)
-        except (np.linalg.LinAlgError, ValueError, FloatingPointError, ZeroDivisionError) as exc:
+
+    def designed(sigma):
+        for digital in ([False, True] if T is not None else [False]):
+            try:
+                with np.errstate(all="ignore"):
+                    design = _design(design_plant, Q, N, R, r0, Jd, x_ref, noise, L_fixed,
+                                     sigma, T if digital else None)
+            except (np.linalg.LinAlgError, ValueError, FloatingPointError,
+                    ZeroDivisionError) as exc:
+                raise ValueError(
+                    f"lqr: the {'digital ' if digital else ''}design failed numerically for "
+                    f"these weights ({_short(str(exc))}); the rigid-body bandwidth is "
+                    f"{_short(np.round(w_r, 4)) if m > 1 else f'{w_r[0]:.3g}'} rad/s "
+                    f"against plant modes up to {w_plant:.4g} rad/s: choose weights that put "
+                    f"it within a few decades of the modes; got {weights}") from None
+            if T is not None and not digital:
+                # the sampling rule on the continuous design loop's rigid-body crossover
+                _check_sampling(T, _rigid_crossover(design_plant, design.controller), "lqr")
+        return _checked(design, alpha, T, weights, estimator)
+
+    # the guarantee is on the loop's own poles, which round-off can put further right than the
+    # separate regulator and estimator spectra (see _loop_round_off): checked on the whole plant
+    # (the design plant's loop and the removed modes, exactly), and the degree of stability
+    # raised above the round-off measured on the loop (at most ROUND_OFF_ATTEMPTS times)
+    sigma_cap = SIGMA_CAP * min(w_low, w_r.min(), w_e.min())
+    for attempt in range(ROUND_OFF_ATTEMPTS + 1):
+        design = designed(sigma)
+        worst, excess = _loop_round_off(plant, design, alpha, removed_eigs if removed else (),
+                                        T)
+        if worst is None:
+            break
+        sigma = max(2.0 * sigma, sigma + PRESCRIBED_STABILITY * excess)
+        if attempt == ROUND_OFF_ATTEMPTS or not sigma <= sigma_cap:
+            speed_text = f"{speed:.3g}"
             raise ValueError(
-                f"lqr: the {'digital ' if digital else ''}design failed numerically for these "
-                f"weights ({_short(str(exc))}); the rigid-body bandwidth is "
-                f"{_short(np.round(w_r, 4)) if m > 1 else f'{w_r[0]:.3g}'} rad/s "
-                f"against plant modes up to {w_plant:.4g} rad/s: choose weights that put it "
-                f"within a few decades of the modes; got {weights}") from None
-        if T is not None and not digital:
-            # the sampling rule on the continuous design loop's rigid-body crossover
-            _check_sampling(T, _rigid_crossover(design_plant, design.controller), "lqr")
-    design = _checked(design, alpha, T, weights, estimator)
+                f"lqr: the closed loop on the design plant has a pole at {worst.real:.3g} "
+                f"{'+' if worst.imag >= 0 else '-'} {abs(worst.imag):.6g}j "
+                f"({abs(worst):.6g} rad/s), Re(s) > -{alpha:.2g} 1/s (the stability margin): "
+                f"the gains of a regulator at {w_r.max():.3g} rad/s and an estimator at "
+                f"{w_e.max():.3g} rad/s are too high for double precision to resolve the "
+                "damping of this mode (round-off moves it by "
+                f"{excess:.2g} 1/s); lower estimator_speed (now {speed_text}) or "
+                f"attitude_weight; got {weights}")
     if removed:
         # the removed modes must keep their places in the loop on the whole plant
         _verify_loop(plant, design.controller, J=J, what="lqr", removed_eigs=removed_eigs,
@@ -528,6 +570,42 @@ def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T) -> LQRDesig
                      regulator_poles, estimator_poles)
 
 
+def _loop_round_off(plant, design: LQRDesign, alpha: float, removed_eigs, T):
+    """(worst pole, excess) of the loop on ``plant``, or (None, 0.0) if every pole has
+    Re(s) <= -alpha (s = log(z) / T for a digital loop) other than those within alpha of a
+    removed mode's eigenvalue ``removed_eigs`` (aliased for a digital loop); excess =
+    Re(worst) + alpha [1/s].
+
+    The loop's poles are, exactly, the regulator's and the estimator's (separation), and
+    those each meet Re <= -2 alpha (_checked). But a high-gain regulator and estimator place
+    poles near the same transmission zero (the antiresonances of a collocated plant, where
+    cheap-control LQ poles converge), and in the loop the nearly coincident pair, coupled by
+    B K, is computed with an error of about eps ||L C|| / gap-type sensitivity: measured
+    2.4e-7 1/s for an estimator at 1e5 rad/s (gains L ~ 4 w_e^2 = 4e10), 20 times the margin,
+    while the estimator pole itself was at -4e-8. The check is on the loop the guarantee is
+    about, as a user (close_loop(...).poles()) computes it.
+
+    References
+    ----------
+    J. H. Wilkinson, The Algebraic Eigenvalue Problem, 1965, ch. 2 (perturbation of close
+    eigenvalues); B. D. O. Anderson, J. B. Moore, Optimal Control, 1990, sec. 7.4 (LQ poles
+    at the transmission zeros as the control weight goes to zero).
+    """
+    with np.errstate(all="ignore"):
+        poles = _continuous_poles(close_loop(plant, design.controller))
+        kept = np.asarray(removed_eigs, dtype=complex).reshape(-1)
+        if T is not None:
+            kept = np.log(np.exp(kept * T)) / T
+    if not np.all(np.isfinite(poles)):
+        return complex(np.inf), np.inf
+    if kept.size:
+        poles = poles[np.min(np.abs(poles[:, None] - kept[None, :]), axis=1) > alpha]
+    if not poles.size or poles.real.max() <= -alpha:
+        return None, 0.0
+    worst = complex(poles[np.argmax(poles.real)])
+    return worst, worst.real + alpha
+
+
 def _checked(design: LQRDesign, alpha: float, T, weights: str, estimator) -> LQRDesign:
     """Check the guarantee on the computed poles: Re(s) <= -alpha (|z| <= exp(-alpha T))."""
     for name, poles in (("regulator", design.regulator_poles),
@@ -616,6 +694,11 @@ def lqr(plant: control.StateSpace, *, attitude_weight, rate_weight, torque_weigh
     of stability), which moves a pole the cost barely sees (a high, weakly excited beam mode,
     left by the plain LQR at Re ~ -1e-10 or, in round-off, +3e-13) to Re < -sigma at a cost of
     gains O(sigma / participation); the rigid-body poles move by O(sigma / w_r), ~1e-12.
+    The loop's own poles are then computed on the plant: where round-off puts one at
+    Re > -alpha (nearly coincident regulator and estimator poles at a transmission zero of a
+    high-gain design), sigma is raised above the measured round-off, at most
+    ``ROUND_OFF_ATTEMPTS`` times and to ``SIGMA_CAP`` times the lowest flexible mode and
+    rigid-body bandwidth (a damping ratio of at most 1e-4 added).
 
     Raises
     ------
@@ -623,7 +706,9 @@ def lqr(plant: control.StateSpace, *, attitude_weight, rate_weight, torque_weigh
         Negative or non-finite weights, R not > 0, Q not PSD, a design whose rigid-body
         bandwidth is too low or too high for the plant (the message names the weights), nearly
         repeated undamped modes that one torque cannot all reach, a Luenberger gain that does not
-        stabilise the estimator (names ``estimator``), a sample time too long.
+        stabilise the estimator (names ``estimator``), a sample time too long, gains too
+        high for double precision to resolve a mode's damping in the loop (names the mode,
+        ``estimator_speed`` and ``attitude_weight``).
 
     Three axes: the Riccati equations are those of the multi-input problem (R diagonal,
     B with three columns); each torque is scaled by its axis's inertia J_ii and the cost by the

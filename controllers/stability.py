@@ -13,6 +13,11 @@ Stability margin of a design
     damping by the loop is at round-off (Re ~ +-1e-13 rad/s on hub + 40-mode beam plants) is not
     mistaken for a stable one. alpha is a numerical margin, not a robustness margin: the
     damping the loop really adds is what the design (weights, natural frequency) asks for.
+    ||A|| ~ omega_s fails for high-gain loops (estimator gains ~ w_e^2 = 4e10 at w_e = 1e5
+    rad/s): there a regulator and an estimator pole nearly coincide on a transmission zero
+    and the loop's computed pair moves by ~1e-7 1/s, far above alpha. The designs therefore
+    check the loop's own poles, and :func:`controllers.lqr` raises its degree of stability
+    above the round-off it measures there (or refuses, naming the mode).
 
 References
 ----------

@@ -373,3 +373,34 @@ def test_200_body_chain_tip_mode_is_the_only_removed_one():
     assert design.design_plant.nstates == plant.nstates - 2
     assert design.regulator_poles.real.max() <= -design.margin
     assert design.estimator_poles.real.max() <= -design.margin
+
+
+# undamped, collocated: the two modes' antiresonances (transmission zeros) lie at 1.69 and
+# 10.63 rad/s, where high-gain regulator and estimator poles both converge
+UNDAMPED = modal_plant(J, [(2.0, 0.0, 0.04, 0.04), (11.0, 0.0, 0.02, 0.02)],
+                       tips=[("wing_tip_deflection", [0.5, -0.2])])
+# as UNDAMPED's first mode, plus a 30 rad/s mode the torque cannot reach (removed)
+STUCK = modal_plant(J, [(2.0, 0.0, 0.04, 0.04), (30.0, 0.0, 0.0, 0.02)])
+
+
+@pytest.mark.parametrize("plant, bandwidth, speed", [
+    (UNDAMPED, 100.0, 1000.0), (UNDAMPED, 300.0, 100.0), (UNDAMPED, 300.0, 1000.0),
+    (UNDAMPED, 1000.0, 1000.0), (STUCK, 100.0, 1000.0), (STUCK, 1000.0, 100.0)])
+def test_high_gain_loops_meet_the_margin_on_the_loop_itself(plant, bandwidth, speed):
+    """Finding of the issue-9 review: at a 100 rad/s bandwidth with estimator_speed = 1000 the
+    regulator and estimator spectra each met Re <= -margin (the estimator's poles near the
+    1.69 rad/s antiresonance at -sigma = -4e-8, put there by the modal correction), but the
+    loop's own computed poles had +1.47e-7 + 1.69j against a margin of 1e-8, with no error.
+    High-gain regulator and estimator poles converge on the same transmission zero, and the
+    nearly coincident pair in a loop whose matrices hold gains of 4e10 (L ~ 4 w_e^2) is
+    computed with an error of ~2e-7 (~0.03 eps ||L||); on the STUCK plant the same showed as
+    an error naming no parameter. Now the design checks the loop and raises its degree of
+    stability above that round-off; every pole meets the margin, or the error names
+    estimator_speed."""
+    try:
+        design = lqr_design(plant, attitude_weight=J ** 2 * bandwidth ** 4, rate_weight=0.0,
+                            torque_weight=1.0, estimator_speed=speed)
+    except ValueError as error:
+        assert "estimator_speed" in str(error) and "attitude_weight" in str(error)
+        return
+    _assert_guarantee(plant, design)
