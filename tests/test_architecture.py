@@ -42,3 +42,22 @@ def test_every_module_declares_all(package):
         names = {t.id for node in tree.body if isinstance(node, ast.Assign) for t in node.targets
                  if isinstance(t, ast.Name)}
         assert "__all__" in names, f"{source.relative_to(ROOT)} has no __all__"
+
+
+def test_every_module_is_imported_before_the_tests_run():
+    """tests/conftest.py imports every module of the packages, so that hypothesis's pool of
+    constants from loaded modules (and so the examples of a derandomised test) is the same for
+    any order or subset of the tests (issue-9 review: test_lqr_fuzz failed only after
+    tests/test_extremes.py)."""
+    import importlib
+    import pkgutil
+    import sys
+
+    missing = []
+    for name in ("appendages", "controllers", "fmu", "spacecraft"):
+        package = importlib.import_module(name)
+        for module in pkgutil.walk_packages(package.__path__, f"{name}.",
+                                            onerror=lambda _: None):
+            if module.name not in sys.modules:
+                missing.append(module.name)
+    assert not missing

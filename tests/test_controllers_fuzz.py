@@ -7,7 +7,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 import controllers
 from controllers.lqr import lqr_design
@@ -26,7 +26,7 @@ PLANTS = {
 PD_PARAMETERS = ("natural_frequency", "bandwidth", "damping", "roll_off", "notch", "sample_time")
 LQR_PARAMETERS = ("attitude_weight", "rate_weight", "torque_weight", "deflection_weight",
                   "estimator_speed", "sample_time")
-FUZZ = settings(derandomize=True, max_examples=60, deadline=None,
+FUZZ = settings(derandomize=True, database=None, max_examples=60, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow])
 
 
@@ -95,6 +95,13 @@ def weight(r, w, power):
 @given(plant=st.sampled_from(sorted(PLANTS)), r=decades(-300, 300), w_r=decades(-40, 40),
        w_rate=st.one_of(st.none(), decades(-40, 40)), speed=decades(-3, 3),
        tip=st.one_of(st.none(), decades(-300, 300)), digital=st.booleans())
+# found by this fuzz in one test order (issue-9 review): the loop's own pole at +1.47e-7 + 1.69j
+# against the margin 1e-8, and the same at 300 rad/s with estimator_speed 100
+@example(plant="undamped", r=1.0, w_r=100.0, w_rate=None, speed=1000.0, tip=None,
+         digital=False)
+@example(plant="undamped", r=1.0, w_r=300.0, w_rate=None, speed=100.0, tip=None,
+         digital=False)
+@example(plant="stuck", r=1.0, w_r=1000.0, w_rate=None, speed=100.0, tip=None, digital=True)
 def test_lqr_fuzz(plant, r, w_r, w_rate, speed, tip, digital):
     """Weights over hundreds of decades, drawn as the bandwidths they set: attitude_weight
     q = r J^2 w_r^4 (rigid-body bandwidth w_r), rate_weight r J^2 w_rate^2 or 0."""

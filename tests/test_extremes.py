@@ -24,7 +24,7 @@ from appendages import Beam, HingedChain
 from appendages.interface import RANGES
 from spacecraft import Hub, Mount, Spacecraft
 
-SWEEP = settings(derandomize=True, max_examples=25, deadline=None,
+SWEEP = settings(derandomize=True, database=None, max_examples=25, deadline=None,
                  suppress_health_check=[HealthCheck.too_slow])
 
 ROD = dict(length=10.0, diameter=0.01, density=7800.0, youngs_modulus=2.06e11)

@@ -17,9 +17,9 @@ from appendages.chain import HingedChain
 from spacecraft import Hub, Mount, Spacecraft
 
 # derandomize: the same examples on every run (CI-stable); few examples: each one is cheap
-FAST = settings(derandomize=True, max_examples=40, deadline=None,
+FAST = settings(derandomize=True, database=None, max_examples=40, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow])
-SLOW = settings(derandomize=True, max_examples=8, deadline=None,
+SLOW = settings(derandomize=True, database=None, max_examples=8, deadline=None,
                 suppress_health_check=[HealthCheck.too_slow])
 
 
@@ -135,7 +135,7 @@ def test_frequency_fit_converges_or_says_so(L, EJ, rho, n_bodies):
                                [beam.mass, beam.length, beam.inertia], rtol=1e-10)
 
 
-@settings(derandomize=True, max_examples=3, deadline=None)
+@settings(derandomize=True, database=None, max_examples=3, deadline=None)
 @given(L=log_uniform(1.0, 50.0), EJ=log_uniform(1.0, 1e5), rho=log_uniform(0.1, 10.0))
 def test_poles_and_zeros_fit_returns_physical_chain_or_says_so(L, EJ, rho):
     """A small evaluation budget: the fit returns a chain (perhaps with a FitWarning) with the
