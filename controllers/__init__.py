@@ -13,6 +13,7 @@ from .modes import INFLUENCE_TOL, FlexibleMode, flexible_modes, rigid_body_inert
 from .timeresp import (METRIC_UNITS, disturbance_response, metrics, slew, slew_profile,
                        step_response)
 from .compare import Comparison, compare
+from .discretise import DiscretisationOverflowWarning
 from .lqr import KalmanNoise, LQRDesign, lqr, lqr_design, reference_state
 from .pd import natural_frequency_from_bandwidth, pd, pd_gains, principal_axes
 from .simulate import Simulator, simulate
@@ -21,6 +22,7 @@ from .testing import assert_closed_loops_close, compare_metrics
 
 __all__ = [
     "Comparison",
+    "DiscretisationOverflowWarning",
     "INFLUENCE_TOL",
     "MARGIN",
     "RemovedMode",

@@ -17,12 +17,23 @@ References
 
 from __future__ import annotations
 
+import math
+import warnings
+
 import numpy as np
 import scipy.linalg
 import scipy.sparse
 import scipy.sparse.csgraph
 
-__all__ = ["discretise", "discretise_blocks", "expm_2x2"]
+from .stability import _stacklevel_outside
+
+__all__ = ["DiscretisationOverflowWarning", "discretise", "discretise_blocks", "expm_2x2"]
+
+
+class DiscretisationOverflowWarning(UserWarning):
+    """The exact discrete matrices of one step leave the float64 range: the system grows by
+    more than ~1e308 within one step dt (a simulation on that grid diverges at its first
+    step; the matrices hold inf or NaN)."""
 
 def discretise(A, B, dt, hold):
     """Exact discrete matrices, block by block of A (see discretise_blocks).
@@ -114,6 +125,25 @@ def discretise_blocks(A, B, dt, hold):
     round-off).  A 1 x 1 A, or a 2 x 2 A with zero trace, takes Ad from the
     closed form (exp, expm_2x2), which keeps |lambda| exact.
     """
+    with np.errstate(over="ignore", invalid="ignore"):
+        # an unstable block can grow beyond float64 within one step: numpy's warnings from
+        # expm's squarings are replaced by one of ours (below)
+        Ad, Bd0, Bd1 = _exact_blocks(A, B, dt, hold)
+    if not (np.isfinite(Ad).all() and np.isfinite(Bd0).all() and np.isfinite(Bd1).all()):
+        with np.errstate(all="ignore"):
+            lam = np.linalg.eigvals(np.where(np.isfinite(A), A, 0.0)) if A.size else A
+        growth = float(np.max(lam.real, initial=0.0))
+        warnings.warn(
+            f"exact discretisation: the transition matrix e^(A dt) over one step dt = {dt:.3g} "
+            f"s leaves the float64 range (growth rate max Re(lambda) = {growth:.3g} 1/s, "
+            f"e^({growth * dt:.3g}) per step, above e^{math.log(np.finfo(float).max):.1f}); a "
+            "simulation on this grid diverges at its first step: shorten dt to follow the "
+            "growth", DiscretisationOverflowWarning, stacklevel=_stacklevel_outside())
+    return Ad, Bd0, Bd1
+
+
+def _exact_blocks(A, B, dt, hold):
+    """The matrices of discretise_blocks (its docstring), without the overflow check."""
     K, n, m = B.shape                  # a stack of K blocks
     if hold == "zero":
         M = np.zeros((K, n + m, n + m))

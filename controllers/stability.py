@@ -98,12 +98,19 @@ def _warn_removed(what: str, modes, detail: str) -> None:
     """Warn (RemovedModesWarning) at the caller's line outside this package."""
     if not modes:
         return
-    frame, level = sys._getframe(1), 2
+    warnings.warn(f"{what}: {len(modes)} mode(s) out of the loop's reach {detail}: "
+                  f"{_describe_modes(modes)}", RemovedModesWarning,
+                  stacklevel=_stacklevel_outside())
+
+
+def _stacklevel_outside() -> int:
+    """The ``stacklevel`` for a warnings.warn in the caller of this function that points at
+    the first frame outside the controllers package (the user's line)."""
+    frame, level = sys._getframe(2), 2
     package = os.path.dirname(os.path.abspath(__file__))
     while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
         frame, level = frame.f_back, level + 1
-    warnings.warn(f"{what}: {len(modes)} mode(s) out of the loop's reach {detail}: "
-                  f"{_describe_modes(modes)}", RemovedModesWarning, stacklevel=level)
+    return level
 
 
 def _continuous_poles(system) -> np.ndarray:

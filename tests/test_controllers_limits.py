@@ -135,3 +135,29 @@ def test_no_runtime_warning_leaks_from_designs_and_analysis():
                 controllers.spillover(plant, K)
                 controllers.compare(RIGID, plant, K, angle=0.1, duration=20.0,
                                     t_final=3000.0)
+
+
+@pytest.mark.parametrize("hold", ["zero", "linear"])
+def test_a_step_whose_transition_matrix_overflows_warns_in_our_words(hold):
+    """Finding of the issue-9 review: simulate() of x' = [[0.02, 1], [-1, 0.02]] x on a 2e5 s
+    grid printed scipy's "RuntimeWarning: overflow encountered in matmul" from expm: the
+    growth over one step is e^(0.02 x 2e5) = e^4000, beyond float64 (e^709.8). Now no numpy
+    or scipy warning: a DiscretisationOverflowWarning names dt and the growth rate, and the
+    response is a result (on_overflow="stop": it ends at t = 0, diverged at the first step) or
+    our FloatingPointError."""
+    growing = control.ss([[0.02, 1.0], [-1.0, 0.02]], [[0.0], [1.0]], [[1.0, 0.0]], 0.0,
+                         inputs=["u"], outputs=["y"])
+    T = np.array([0.0, 2e5, 4e5])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        response = controllers.simulate(growing, T, np.ones((1, T.size)), hold=hold,
+                                        on_overflow="stop")
+        with pytest.raises(FloatingPointError, match="overflowed"):
+            controllers.simulate(growing, T, np.ones((1, T.size)), hold=hold)
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)], \
+        [str(w.message) for w in caught]
+    ours = [w for w in caught
+            if issubclass(w.category, controllers.DiscretisationOverflowWarning)]
+    assert ours and all("dt = 2e+05 s" in str(w.message) and "0.02 1/s" in str(w.message)
+                        for w in ours)
+    assert response.diverged_at == 2e5 and np.asarray(response.t).tolist() == [0.0]
