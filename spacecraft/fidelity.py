@@ -43,7 +43,10 @@ from appendages.interface import describe
 
 __all__ = ["FidelityChoice", "choose_n_modes", "low_band", "transfer_theta_torque"]
 
-#: Largest number of modes tried per beam before giving up.
+#: Largest number of modes per beam the search from a tolerance tries (also within the scene's
+#: limits.modes), whatever limits.modes allows: Craig-Bampton frequency errors fall like n**-4,
+#: so a tolerance that 40 modes miss needs ten times the modes for 1e-4 of it, beyond a search
+#: that builds one plant per n (about a second for all 40); give fidelity.n_modes for more.
 MAX_MODES = 40
 
 
@@ -179,8 +182,10 @@ def choose_n_modes(truncated_plant: Callable[[int], tuple], exact_frequencies: C
     omega = np.geomspace(band[0], band[1], 40)
     exact = exact_response(omega)
     trials = []
+    n_have = 0
     for n in range(n_min, n_max + 1):
         frequencies, plant = truncated_plant(n)
+        n_have = frequencies.size
         if frequencies.size < n_ref:
             trials.append({"n_modes": n, "frequency_error": math.inf, "gain_error": math.inf})
             continue
@@ -191,6 +196,16 @@ def choose_n_modes(truncated_plant: Callable[[int], tuple], exact_frequencies: C
         trials.append({"n_modes": n, "frequency_error": f_err, "gain_error": g_err})
         if f_err <= tolerance and g_err <= tolerance:
             return FidelityChoice(n, method, float(tolerance), band, reference, trials)
+    if n_have < n_ref:
+        # no truncation had the frequencies to compare: a looser tolerance cannot help
+        needed = math.ceil(n_ref * n_max / max(n_have, 1))
+        raise ValueError(
+            f"no truncation with up to {n_max} modes per beam ({method}) can meet any tolerance: "
+            f"the bandwidth {bandwidth:.4g} rad/s x fidelity.bandwidth_factor "
+            f"{bandwidth_factor:g} asks for the first {n_ref} coupled frequencies (up to "
+            f"{w_top:.4g} rad/s and the first above it), and {n_max} modes per beam give "
+            f"{n_have}; lower the controller's bandwidth or fidelity.bandwidth_factor, or give "
+            f"fidelity.n_modes (about {needed} or more)")
     best = min(trials, key=lambda t: max(t["frequency_error"], t["gain_error"]))
     raise ValueError(
         f"no truncation with up to {n_max} modes per beam ({method}) meets the tolerance "

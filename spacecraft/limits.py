@@ -15,8 +15,9 @@ machine (2 cores, load average 2-3; medians of single runs, noisy):
 ============== ============ ============================================================
 limit          default      what it bounds, and the cost at the limit
 ============== ============ ============================================================
-modes          500          ``fidelity.n_modes`` (bending modes per truncated beam); also
-                            the cap of the search from ``fidelity.tolerance``
+modes          500          ``fidelity.n_modes`` (bending modes per truncated beam); the
+                            search from ``fidelity.tolerance`` tries at most 40 (fewer if
+                            this limit is lower; ``spacecraft.fidelity.MAX_MODES`` says why)
 bodies         500          bodies of an explicit or ``from_beam`` chain (a 500-body
                             truth chain: 998 states, 7 s, 1.4 GB)
 fit_bodies     12           ``fit.n_bodies``: a "poles-and-zeros" fit is an optimisation

@@ -224,6 +224,8 @@ Raise one explicitly where you really want more: a ``[limits]`` table in the sce
 limit           default      bounds
 ==============  ===========  ==================================================================
 modes           500          ``fidelity.n_modes``; the search from ``fidelity.tolerance``
+                             tries at most 40 modes, or this limit if lower (see
+                             ``spacecraft.fidelity.MAX_MODES``)
 bodies          500          bodies per chain (arrays, ``chain.n_bodies``)
 fit_bodies      12           ``fit.n_bodies`` (a fit is an optimisation: 15 bodies take ~40 s)
 appendages      64           ``appendages`` entries

@@ -3,6 +3,7 @@ refuses is a SceneError naming the scene key; trouble inside numpy stays an inte
 loop that diverges is a result (the report says where the simulation stopped); warnings are
 collected into the results instead of reaching the terminal."""
 import math
+import re
 import warnings
 
 import control
@@ -35,6 +36,23 @@ def test_an_unreachable_tolerance_is_a_scene_error_naming_the_key():
     with pytest.raises(SceneError, match=r"<dict>: fidelity\.tolerance: no truncation with up to "
                                          r"40 modes .* raise fidelity\.tolerance"):
         run(data)
+
+
+def test_a_bandwidth_above_what_40_modes_reach_says_what_can_help():
+    """Issue-9 review: pd.natural_frequency = 1e3 rad/s (inside its documented range) gave
+    "best n_modes = 1 with frequency error inf and gain error inf; raise fidelity.tolerance":
+    the 5000 rad/s band needs 64 coupled frequencies of the paper's rod, 40 modes give 40, so
+    no tolerance can help. The message says so, with no inf, and names what can."""
+    data = scene_with(**{"fidelity.n_modes": None, "fidelity.tolerance": 1e-3,
+                         "controller.types": ["pd"], "controller.pd.natural_frequency": 1e3})
+    with pytest.raises(SceneError) as error:
+        run(data)
+    message = str(error.value)
+    assert "inf" not in message.split() and "raise fidelity.tolerance" not in message
+    assert re.search(r"fidelity\.tolerance: no truncation with up to 40 modes .* can meet any "
+                     r"tolerance: .* asks for the first 64 coupled frequencies .* give 40; "
+                     r"lower the controller's bandwidth or fidelity\.bandwidth_factor, or give "
+                     r"fidelity\.n_modes \(about 64 or more\)", message), message
 
 
 def test_a_diverging_loop_is_reported_not_raised():

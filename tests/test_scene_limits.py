@@ -232,3 +232,15 @@ def test_scene_files_larger_than_the_limit_are_refused_before_parsing(tmp_path):
 def test_a_folder_is_not_a_scene_file(tmp_path):
     with pytest.raises(SceneError, match="is a folder, not a scene file"):
         load_scene(tmp_path)
+
+
+def test_the_limits_docs_state_the_cap_of_the_tolerance_search():
+    """Issue-9 review: the tables said limits.modes is "also the cap of the search from
+    fidelity.tolerance", but the search stops at fidelity.MAX_MODES = 40 whatever the limit.
+    Both tables now state that number."""
+    from spacecraft import limits as limits_module
+    from spacecraft.fidelity import MAX_MODES
+
+    for doc in (spacecraft.scene.__doc__, limits_module.__doc__):
+        table = " ".join(doc[doc.index("\nmodes "):].split("\nbodies ")[0].split())
+        assert f"tries at most {MAX_MODES}" in table, table
