@@ -35,7 +35,7 @@ from .description3 import RESERVED_NAMES, model_description3_xml
 from .documentation import documentation_html, icon_png, licence_text
 from .errors import FMUBuildError
 from .files import write_atomically
-from .limits import MAX_REFERENCE_SAMPLES, check_reference_cost, reference_cost
+from .limits import MAX_REFERENCE_SAMPLES, check_length, check_reference_cost, reference_cost
 from .reference import write_reference_files
 from .system import LinearModel, linear_model_from, state_nominals, zoh_matrices
 from .verify import probe_input, verify_library
@@ -165,8 +165,10 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         only one) for a sampled one. An FMI 2.0 binary provides exactly these; an FMI 3.0
         binary defines every function and refuses those of other interfaces.
     model_name : str, optional
-        modelName and modelIdentifier (a C identifier). Default: the file name's stem, or
-        the system's name when ``path`` is a folder, with illegal characters replaced by "_".
+        modelName and modelIdentifier (a C identifier of at most
+        :data:`fmu.limits.MAX_MODEL_NAME_LENGTH` = 200 characters). Default: the file name's
+        stem, or the system's name when ``path`` is a folder, with illegal characters
+        replaced by "_".
     step : float, optional, s
         Default communication step (DefaultExperiment stepSize) whose transition matrices
         are precomputed. Default :data:`DEFAULT_STEP` (0.01 s), or the sample period of a
@@ -192,7 +194,8 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         C compiler to use; default ``$CC``, else gcc or cc on PATH.
     description : str, optional
         Text of the modelDescription's description attribute (any Unicode text that XML 1.0
-        allows: no control characters other than tab, newline and carriage return).
+        allows: no control characters other than tab, newline and carriage return), at most
+        :data:`fmu.limits.MAX_DESCRIPTION_LENGTH` (4096) characters.
     max_reference_samples : float, optional
         Raise (or lower) the limit on the samples of the reference files; default
         :data:`fmu.limits.MAX_REFERENCE_SAMPLES` (10^6).
@@ -239,7 +242,8 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         interfaces = _interfaces(interfaces)
     sources_only = _flag("sources_only", sources_only)
     if model_name is not None:
-        c_identifier("model_name", model_name)
+        check_length("model_name", c_identifier("model_name", model_name),
+                     "MAX_MODEL_NAME_LENGTH")
     if step is not None:
         step = positive_finite("step", step)
     stop_time = positive_finite("stop_time", stop_time)
@@ -248,7 +252,8 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         raise TypeError(f"compiler must be a str or os.PathLike (the C compiler); got "
                         f"{type(compiler).__name__} {shorten(compiler)}")
     if description is not None:
-        xml_text("description", description)
+        check_length("description", xml_text("description", description),
+                     "MAX_DESCRIPTION_LENGTH")
     if max_reference_samples is None:
         max_reference_samples = MAX_REFERENCE_SAMPLES
     elif not real_number("max_reference_samples", max_reference_samples, "samples") >= 1:
@@ -286,12 +291,14 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
         if target.suffix != ".fmu":
             raise ValueError(f"path must be a .fmu file or an existing folder; got {shorten(str(path))}")
         identifier = model_name if model_name is not None else _sanitise_identifier(target.stem)
-    c_identifier("model_name", identifier)
+    check_length("model_name", c_identifier("model_name", identifier), "MAX_MODEL_NAME_LENGTH")
     if description is None:
         xml_text("system.name (part of the default description)", model.name)
         kind = (f"Discrete-time LTI system (sampled every {model.sample_period!r} s)"
                 if model.discrete else "Continuous-time LTI system")
         description = f"{kind} {model.name or identifier} exported by flexsat.fmu"
+        check_length("the default description (it quotes system.name)", description,
+                     "MAX_DESCRIPTION_LENGTH")
 
     guid = _guid(model, identifier, step, interfaces, fmi_version)
     folder, suffix = platform_folder(fmi_version)

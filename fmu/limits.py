@@ -26,6 +26,12 @@ code):
 - :data:`MAX_REFERENCE_MEMORY` = 4 GiB, the estimated peak memory of the reference
   simulation (see :func:`reference_cost`), so that a large model cannot reach a
   sixth of the machine's memory even within the sample limit.
+- :data:`MAX_DESCRIPTION_LENGTH` = 4096 characters of ``description``, the attribute of
+  modelDescription.xml that importing tools show beside the model (the scene's limit on its
+  title, ``limits.string_length``, is the same): an attribute, not a document.
+- :data:`MAX_MODEL_NAME_LENGTH` = 200 characters of ``model_name``: it names files,
+  ``<model_name>.so`` in the FMU and ``<model_name>_ref.csv`` beside it, and a file name has
+  at most 255 bytes on Linux, macOS and Windows file systems.
 - :data:`MAX_COSIMULATION_STEPS` = 10^7 communication steps of :func:`fmu.cosimulate`:
   each step is a handful of FMU calls through ctypes (2 * 10^4 steps per second measured
   for a 4-state plant and a PD controller), so 10^7 steps take about 10 minutes, and the
@@ -38,8 +44,9 @@ import math
 from dataclasses import dataclass
 
 __all__ = ["MAX_STATES", "MAX_SIGNALS", "MAX_REFERENCE_SAMPLES", "MAX_REFERENCE_MEMORY",
-           "MAX_COSIMULATION_STEPS", "ReferenceCost", "reference_cost", "check_model_size",
-           "check_reference_cost", "check_cosimulation_steps"]
+           "MAX_COSIMULATION_STEPS", "MAX_DESCRIPTION_LENGTH", "MAX_MODEL_NAME_LENGTH",
+           "ReferenceCost", "reference_cost", "check_model_size", "check_reference_cost",
+           "check_cosimulation_steps", "check_length"]
 
 #: Most states an exported system may have.
 MAX_STATES = 1000
@@ -51,6 +58,10 @@ MAX_REFERENCE_SAMPLES = 1_000_000
 MAX_REFERENCE_MEMORY = 4 * 2**30
 #: Most communication steps of one co-simulation.
 MAX_COSIMULATION_STEPS = 10_000_000
+#: Most characters of an FMU's description.
+MAX_DESCRIPTION_LENGTH = 4096
+#: Most characters of an FMU's model_name (a file name, with suffixes, within 255 bytes).
+MAX_MODEL_NAME_LENGTH = 200
 
 # Estimated bytes per value written to a CSV file: repr of a double is at most 24
 # characters ("-1.2345678901234567e-300") plus the comma.
@@ -130,6 +141,16 @@ def check_model_size(n_states: int, n_inputs: int, n_outputs: int) -> None:
             f"system must have at most fmu.limits.MAX_SIGNALS = {MAX_SIGNALS} inputs plus "
             f"outputs; got {n_inputs} + {n_outputs}. Export fewer signals or raise "
             "fmu.limits.MAX_SIGNALS.")
+
+
+def check_length(name: str, text: str, limit_name: str) -> str:
+    """``text`` if it has at most ``fmu.limits.<limit_name>`` characters, else ValueError
+    naming ``name``, the limit, the length and the text's first characters."""
+    limit = globals()[limit_name]
+    if len(text) > limit:
+        raise ValueError(f"{name} must have at most fmu.limits.{limit_name} = {limit} "
+                         f"characters; got {len(text)} ({text[:40]!r}...)")
+    return text
 
 
 def check_reference_cost(cost: ReferenceCost, step: float, stop_time: float,

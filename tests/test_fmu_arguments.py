@@ -104,6 +104,27 @@ def test_xml_illegal_characters_in_the_system_name_are_refused(tmp_path):
         export(body("body\x07"), tmp_path / "b.fmu")
 
 
+def test_a_description_or_model_name_over_its_limit_is_refused_before_any_work(tmp_path):
+    """Issue-9 review: a 200,000-character description was accepted (and written into
+    modelDescription.xml); a 100,000-character model_name reached gcc, which failed on the
+    file name ("a bug in flexsat.fmu"). Both are refused by name with their documented limits
+    (fmu.limits), before any file is written; the limit itself is accepted."""
+    with pytest.raises(ValueError, match=r"description must have at most "
+                                         r"fmu\.limits\.MAX_DESCRIPTION_LENGTH = 4096 "
+                                         r"characters; got 200000 \('xxxx"):
+        export(body(), tmp_path / "b.fmu", description="x" * 200_000)
+    with pytest.raises(ValueError, match=r"model_name must have at most "
+                                         r"fmu\.limits\.MAX_MODEL_NAME_LENGTH = 200 "
+                                         r"characters; got 100000"):
+        export(body(), tmp_path / "b.fmu", model_name="a" * 100_000)
+    assert list(tmp_path.iterdir()) == []
+    text = "y" * fmu.limits.MAX_DESCRIPTION_LENGTH
+    name = "m" * fmu.limits.MAX_MODEL_NAME_LENGTH
+    path = export(body(), tmp_path / "b.fmu", description=text, model_name=name,
+                  sources_only=True)
+    assert read_model_description(str(path)).description == text
+
+
 def test_tab_newline_and_unicode_are_fine_in_a_description(tmp_path):
     text = "Nutzlast\twith a\nnew line and ΔT → 😀"
     description = read_model_description(str(export(body(), tmp_path / "b.fmu", description=text)))
