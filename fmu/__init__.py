@@ -21,11 +21,11 @@ Object files of the fixed C templates are cached on disk (``$FLEXSAT_CACHE_DIR``
 
 from . import limits
 from .cosim import Signal, cosimulate
-from .errors import CosimulationError, FMUBuildError, FMUError
+from .errors import CosimulationError, FMUBuildError, FMUCompilerError, FMUError
 from .export import DEFAULT_STEP, DEFAULT_STOP_TIME, FMI_VERSIONS, export
 from .ssp import cosimulate_ssp, write_ssp
 from .units import SI_UNITS, guess_unit
 
-__all__ = ["export", "cosimulate", "write_ssp", "cosimulate_ssp", "Signal", "FMUError",
+__all__ = ["export", "cosimulate", "write_ssp", "cosimulate_ssp", "Signal", "FMUError", "FMUCompilerError",
            "FMUBuildError", "CosimulationError", "DEFAULT_STEP", "DEFAULT_STOP_TIME",
            "FMI_VERSIONS", "SI_UNITS", "guess_unit", "limits"]

@@ -40,7 +40,7 @@ from pathlib import Path
 
 from .cache import ObjectCache, compiler_identity, object_key
 from .checks import shorten
-from .errors import FMUBuildError
+from .errors import FMUBuildError, FMUCompilerError
 
 __all__ = ["COMPILE_FLAGS", "STALE_BUILD_AGE", "platform_folder", "find_compiler",
            "build_directory", "remove_stale_build_dirs", "SharedLibraryBuild",
@@ -211,6 +211,9 @@ class SharedLibraryBuild:
     def __init__(self, output: Path, include_dirs: list[Path], work_dir: Path,
                  compiler: str | os.PathLike | None = None, cache: ObjectCache | None = None):
         self.cc = find_compiler(compiler)
+        self.origin = ("passed as compiler=" if compiler is not None else
+                       "from $CC" if os.environ.get("CC")
+                       and shutil.which(os.environ["CC"]) == self.cc else "found on PATH")
         self.output = output
         self.includes = [f"-I{d}" for d in include_dirs]
         self.work_dir = work_dir
@@ -248,7 +251,7 @@ class SharedLibraryBuild:
         except BaseException:
             _stop(process)
             raise
-        _check(command, process.returncode, stderr)
+        self._check(command, process.returncode, stderr)
 
     def compile_cached(self, source: Path, headers: list[Path]) -> None:
         """Add the object of a template (a file the same in every FMU) from the cache.
@@ -291,7 +294,7 @@ class SharedLibraryBuild:
         """
         for command, process in self.processes:
             _, stderr = process.communicate()
-            _check(command, process.returncode, stderr)
+            self._check(command, process.returncode, stderr)
         self.output.parent.mkdir(parents=True, exist_ok=True)
         command = [self.cc, *COMPILE_FLAGS, "-o", str(self.output),
                    *(str(o) for o in self.objects), "-lm"]
@@ -301,6 +304,34 @@ class SharedLibraryBuild:
             for key, obj, source, headers in self.cached:
                 self.cache.fetch(key, obj, lambda path, source=source: self._compile_now(source, path))
             code, stderr = self._link(command)
+        self._check(command, code, stderr)
+
+    def _check(self, command: list[str], code: int, stderr: str) -> None:
+        """Raise if a compiler run failed: FMUCompilerError if the compiler fails a trivial
+        C file too (the environment's fault), else FMUBuildError (ours: the compiler's
+        messages on our code, and a request to report it)."""
+        if code == 0:
+            return
+        probe = self.work_dir / "probe"
+        probe.mkdir(exist_ok=True)
+        (probe / "trivial.c").write_text("int flexsat_probe(void) { return 0; }\n")
+        try:
+            done = subprocess.run([self.cc, *COMPILE_FLAGS, "-o", str(probe / "trivial.so"),
+                                   str(probe / "trivial.c")], capture_output=True, text=True,
+                                  errors="replace", timeout=120, check=False)
+            works, detail = done.returncode == 0, f"exit code {done.returncode}"
+            said = " ".join(done.stderr.split())
+        except (OSError, subprocess.TimeoutExpired) as error:
+            works, detail, said = False, type(error).__name__, " ".join(str(error).split())
+        if not works:
+            def cut(text):
+                return text if len(text) <= 100 else text[:97] + "..."
+
+            raise FMUCompilerError(
+                f"the C compiler {cut(self.cc)} ({self.origin}) does not work: it fails on a "
+                f"trivial C file too ({detail}{': ' + cut(said) if said else ''}); "
+                "install a working C compiler and set CC to it (or pass compiler=... to "
+                "fmu.export)")
         _check(command, code, stderr)
 
     def _link(self, command: list[str]) -> tuple[int, str]:

@@ -4,7 +4,7 @@ The package defines its own small hierarchy rather than importing one from anoth
 package (the fmu package imports no other package of ours).
 """
 
-__all__ = ["FMUError", "FMUBuildError", "CosimulationError"]
+__all__ = ["FMUError", "FMUBuildError", "FMUCompilerError", "CosimulationError"]
 
 
 class FMUError(Exception):
@@ -19,6 +19,12 @@ class FMUBuildError(FMUError):
     compiler, a compiler error, a binary that fails the check every FMU undergoes before it
     is written, see :mod:`fmu.verify`). The message says what to do.
     """
+
+
+class FMUCompilerError(FMUBuildError):
+    """The C compiler does not work: it fails on a trivial C file too (an error of the
+    environment, not of the exported code). The message names the compiler and where it came
+    from (``compiler=``, ``$CC`` or PATH)."""
 
 
 class CosimulationError(FMUError):

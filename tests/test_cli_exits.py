@@ -247,6 +247,20 @@ def test_fmu_errors_are_classified(scene_file, tmp_path, capsys, monkeypatch, me
     assert "FMU export failed: " + message.split(":")[0] in one_line(capsys)
 
 
+def test_a_broken_compiler_exits_2_naming_it_and_cc(scene_file, tmp_path, capsys,
+                                                   monkeypatch):
+    """Issue-9 review: CC=/bin/false gave "internal error ... This is a bug in flexsat.fmu if
+    the compiler itself works", exit 1. A compiler that fails on a trivial C file is an
+    environment error: exit 2, one line naming it and CC."""
+    monkeypatch.setenv("CC", "/bin/false")
+    assert flexsat("export", scene_file, "--out", tmp_path / "o", "--quiet") == 2
+    line = one_line(capsys)
+    assert line.startswith("flexsat: error: FMU export failed: the C compiler /bin/false "
+                           "(from $CC) does not work"), line
+    assert "bug" not in line and "set CC" in line
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_folder_being_written_by_a_live_run_exits_2(scene_file, tmp_path, capsys,
                                                       monkeypatch):
     import socket

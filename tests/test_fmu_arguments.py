@@ -125,6 +125,24 @@ def test_a_description_or_model_name_over_its_limit_is_refused_before_any_work(t
     assert read_model_description(str(path)).description == text
 
 
+def test_a_compiler_that_cannot_compile_anything_is_named_not_called_a_bug(tmp_path):
+    """A compiler that fails a trivial C file (here /bin/false) is an environment error,
+    FMUCompilerError, one line naming it; one that compiles a trivial file but fails on our
+    model.c stays a build error that says it is ours to fix (with the compiler's output)."""
+    with pytest.raises(fmu.FMUCompilerError, match=r"^the C compiler /bin/false \(passed as "
+                                                   r"compiler=\) does not work: [^\n]*$"):
+        export(body(), tmp_path / "b.fmu", compiler="/bin/false")
+    picky = tmp_path / "picky-cc"
+    picky.write_text('#!/bin/sh\ncase "$*" in *model.c*) echo "model.c:1: error: boom" >&2; '
+                     'exit 1;; esac\nexec gcc "$@"\n')
+    picky.chmod(0o755)
+    with pytest.raises(FMUBuildError, match=r"(?s)model\.c:1: error: boom.*This is a bug in "
+                                            r"flexsat\.fmu") as error:
+        export(body(), tmp_path / "b.fmu", compiler=str(picky))
+    assert not isinstance(error.value, fmu.FMUCompilerError)
+    assert not (tmp_path / "b.fmu").exists()
+
+
 def test_tab_newline_and_unicode_are_fine_in_a_description(tmp_path):
     text = "Nutzlast\twith a\nnew line and ΔT → 😀"
     description = read_model_description(str(export(body(), tmp_path / "b.fmu", description=text)))
