@@ -24,6 +24,7 @@ Build folders
 
 from __future__ import annotations
 
+import errno
 import os
 import platform
 import re
@@ -47,6 +48,10 @@ __all__ = ["COMPILE_FLAGS", "STALE_BUILD_AGE", "platform_folder", "find_compiler
            "compile_shared_library"]
 
 COMPILE_FLAGS = ("-shared", "-fPIC", "-std=c99", "-O2", "-fvisibility=hidden", "-pthread")
+
+#: A compiler that failed where less than this is free [bytes] is taken to have found the
+#: disk full (the objects of one FMU take about 1 MiB).
+_LEAST_FREE = 16 * 2**20
 
 #: Age after which the build folder of a dead process is removed [s].
 STALE_BUILD_AGE = 86400.0
@@ -312,6 +317,16 @@ class SharedLibraryBuild:
         messages on our code, and a request to report it)."""
         if code == 0:
             return
+        written = Path(command[command.index("-o") + 1]).parent
+        try:
+            status = os.statvfs(written)
+            free = status.f_bavail * status.f_frsize
+        except OSError:
+            free = None
+        if free is not None and free < _LEAST_FREE:
+            # the compiler could not write its output: the disk's fault, not the compiler's
+            raise OSError(errno.ENOSPC, f"{os.strerror(errno.ENOSPC)} ({free} bytes free "
+                          "after the compiler failed)", str(written))
         probe = self.work_dir / "probe"
         probe.mkdir(exist_ok=True)
         (probe / "trivial.c").write_text("int flexsat_probe(void) { return 0; }\n")

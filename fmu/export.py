@@ -12,10 +12,12 @@ writer (:mod:`fmu.description`, :mod:`fmu.description3`).
 from __future__ import annotations
 
 import dataclasses
+import errno
 import hashlib
 import os
 import re
 import shutil
+import tempfile
 import uuid
 import zipfile
 from collections.abc import Mapping, Sequence
@@ -25,6 +27,7 @@ import control
 import numpy as np
 
 from .build import SharedLibraryBuild, build_directory, platform_folder
+from .cache import cache_root
 from .build_description import build_description_xml
 from .checks import c_identifier, positive_finite, real_number, shorten, xml_text
 from .codegen import (FMI_VERSIONS, INTERFACES_HEADER, TEMPLATE_HEADERS, header_folder,
@@ -305,6 +308,55 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
     templates_c = template_sources(fmi_version)
     source_files = (*templates_c, "model.c")
 
+    try:
+        _build_and_write(model, target, identifier, guid, folder, suffix, templates_c,
+                         source_files, fmi_version, interfaces, step, stop_time, description,
+                         sources_only, compiler)
+    except OSError as error:
+        raise _where_the_disk_failed(error, target) from error
+    if reference:
+        write_reference_files(model, identifier, target.parent, step, stop_time)
+    return target
+
+
+#: errno values of an OSError that the machine causes (no space, no permission, read-only).
+_ENVIRONMENT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES,
+                                 errno.EPERM, errno.EIO, errno.EMFILE, errno.ENFILE})
+
+
+def _where_the_disk_failed(error: OSError, target: Path) -> OSError | FMUBuildError:
+    """The error to raise for an OSError of an export: unchanged if it concerns the target
+    folder (the caller's) or is not the machine's doing; else an FMUBuildError naming the
+    folder that failed, the build folder in $TMPDIR or the object cache, and what to do.
+    (shutil.copyfile names the source file of a copy that failed, so a path under neither
+    folder means the build folder, where every copy goes.)"""
+    if error.errno not in _ENVIRONMENT_ERRNOS:
+        return error
+    named = [Path(os.path.abspath(p)) for p in (error.filename, error.filename2)
+             if isinstance(p, (str, os.PathLike))]
+    temporary = Path(os.path.abspath(tempfile.gettempdir()))
+    try:
+        cache = Path(os.path.abspath(cache_root() / "fmu-objects"))
+    except RuntimeError:  # no home directory: the cache is a temporary folder
+        cache = temporary
+
+    def under(folder: Path) -> bool:
+        return any(folder == p or folder in p.parents for p in named)
+
+    if under(Path(os.path.abspath(target.parent))) and not under(temporary):
+        return error
+    if under(cache) and not under(temporary):
+        return FMUBuildError(f"cannot write the FMU object cache {cache} ({error.strerror}); "
+                             "free some space there or set FLEXSAT_CACHE_DIR to a folder "
+                             "with room")
+    return FMUBuildError(f"cannot write the FMU build folder in {temporary} ({error.strerror}); "
+                         "free some space there or set TMPDIR to a folder with room")
+
+
+def _build_and_write(model, target, identifier, guid, folder, suffix, templates_c, source_files,
+                     fmi_version, interfaces, step, stop_time, description, sources_only,
+                     compiler) -> None:
+    """Build the FMU in a private folder of $TMPDIR and write it to ``target`` (see export)."""
     with build_directory() as root:
         sources = root / "sources"
         sources.mkdir()
@@ -390,7 +442,3 @@ def export(system: control.StateSpace, path: str | os.PathLike, *,
                     archive.write(file, file.relative_to(root).as_posix())
 
         write_atomically(target, write_zip)
-
-    if reference:
-        write_reference_files(model, identifier, target.parent, step, stop_time)
-    return target

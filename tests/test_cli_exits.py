@@ -225,6 +225,34 @@ def test_disk_full_exits_2_and_removes_the_partial_folder(scene_file, tmp_path, 
     assert sorted(p.name for p in tmp_path.iterdir()) == ["boom.toml"]
 
 
+def test_a_full_tmpdir_is_blamed_on_tmpdir_not_on_out(scene_file, tmp_path, capsys,
+                                                    monkeypatch):
+    """Issue-9 review: with $TMPDIR on a full 16 KiB tmpfs, `flexsat export` said "<out>:
+    cannot write the output (No space left on device: .../fmu/c/fmi2Functions.c) ... choose
+    another --out": the FMU build folder in $TMPDIR was full, not --out. (shutil.copyfile
+    names the source file in that error, as here.)"""
+    import shutil
+    import tempfile
+
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    original = shutil.copyfile
+
+    def full(src, dst, *args, **kwargs):
+        if str(dst).startswith(str(scratch)):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(src))
+        return original(src, dst, *args, **kwargs)
+    monkeypatch.setattr(shutil, "copyfile", full)
+    out = tmp_path / "o"
+    assert flexsat("export", scene_file, "--out", out, "--quiet") == 2
+    line = one_line(capsys)
+    assert (f"FMU export failed: cannot write the FMU build folder in {scratch} (No space left "
+            "on device); free some space there or set TMPDIR to a folder with room") in line
+    assert "--out" not in line
+    assert not out.exists()
+
+
 def test_out_of_memory_exits_2(scene_file, tmp_path, capsys, monkeypatch):
     def hungry(*args, **kwargs):
         raise MemoryError()
