@@ -163,9 +163,9 @@ def _one_line(text: str) -> str:
 
 
 class _Parser(argparse.ArgumentParser):
-    def error(self, message):  # argparse's own errors: usage + one line, exit 2
-        self.print_usage(sys.stderr)
-        print(f"flexsat: error: {message}", file=sys.stderr)
+    def error(self, message):  # argparse's own errors: one line (no usage), exit 2
+        print(_one_line(f"flexsat: error: {message} (see '{self.prog} --help')"),
+              file=sys.stderr)
         raise SystemExit(2)
 
 

@@ -137,9 +137,22 @@ def test_limit_option_raises_and_lowers_limits(scene_file, tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         flexsat("run", scene_file, "--limit", "modes")
     assert exc.value.code == 2
-    assert "expected NAME=VALUE" in capsys.readouterr().err
+    assert "expected NAME=VALUE" in one_line(capsys)
     assert flexsat("run", scene_file, "--limit", "modez=3") == 2
     assert "--limit: limits.modez: unknown key" in one_line(capsys)
+
+
+@pytest.mark.parametrize("value, message", [
+    ("modes=abc", "argument --limit: modes: expected a number; got 'abc'"),
+    ("=3", "argument --limit: expected NAME=VALUE (e.g. modes=800); got '=3'"),
+    ("modes=", "argument --limit: modes: expected a number; got ''")])
+def test_bad_limit_values_are_one_line(scene_file, capsys, value, message):
+    """Issue-9 review: `--limit modes=abc` printed argparse's usage (3 lines) before the
+    error; now one line that says where the help is."""
+    with pytest.raises(SystemExit) as exc:
+        flexsat("run", scene_file, "--limit", value)
+    assert exc.value.code == 2
+    assert one_line(capsys) == (f"flexsat: error: {message} (see 'flexsat run --help')")
 
 
 @pytest.mark.parametrize("command", ["table", "fit"])
