@@ -105,6 +105,10 @@ def test_digital_pd_with_filters_is_zoh_of_continuous():
     Kc = controllers.pd(FLEX, natural_frequency=wn, roll_off=3.0)
     Kd = controllers.pd(FLEX, natural_frequency=wn, roll_off=3.0, sample_time=T)
     ref = control.c2d(Kc, T, method="zoh")
+    # both are expm of the Van Loan block [[A T, B T], [0, 0]] with ||A T|| <= 0.1 (no
+    # squaring: Pade error below eps), within ~10 eps ||e^{AT}|| = 2e-15 absolute of exact on
+    # entries of size <= 1 (Higham, Functions of Matrices, 2008, sec. 10.3): atol 1e-14;
+    # rtol 1e-12 for the small entries of B (~T)
     np.testing.assert_allclose(Kd.A, ref.A, rtol=1e-12, atol=1e-14)
     np.testing.assert_allclose(Kd.B, ref.B, rtol=1e-12, atol=1e-14)
     assert controllers.spillover(FLEX, Kd).stable
