@@ -110,6 +110,9 @@ def test_layout_keeps_mass_centre_of_mass_and_inertia(root):
                                       Mount(right, (-0.5, 0.1), math.radians(170), name="right")])
     lay = sb.layout(sc)
     mass, centre, inertia = _layout_mass_properties(lay)
+    # mass: a sum of ~10 positive terms both ways, gamma_10 ~ 10 eps relative (rel 45 eps);
+    # centre: sum m_i x_i / m, within ~gamma_10 max|x_i| ~ 10 eps x a few metres = 1e-14 m
+    # of exact both ways; atol 1e-13 m
     assert mass == pytest.approx(sc.mass, rel=1e-14)
     np.testing.assert_allclose(centre[:2], sc.center_of_mass, rtol=0, atol=1e-13)
     assert inertia == pytest.approx(sc.inertia, rel=1e-12)
