@@ -441,10 +441,18 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                 f"attitude_weight; got {weights}")
     if removed:
         # the removed modes must keep their places in the loop on the whole plant
+        def advise(pole, _alpha, _scale):
+            if pole == 0j or not np.isfinite(pole):  # the loop's scale, or non-finite poles
+                return ("lower attitude_weight and estimator_speed (or raise torque_weight) "
+                        f"for a slower loop; got {weights}")
+            # a removed mode is out of the loop's reach by construction: what moves it is
+            # round-off of high gains, or a plant whose mode is only nearly decoupled
+            return ("a mode left out of the design model is moved by the loop after all; "
+                    "lower estimator_speed or attitude_weight (round-off of high gains), or "
+                    f"prune the mode from the plant (Spacecraft.plant(prune=True)); got {weights}")
+
         _verify_loop(plant, design.controller, J=J, what="lqr", removed_eigs=removed_eigs,
-                     scale_floor=scale, advise=lambda *_: (
-                         "a mode left out of the design model is moved by the loop after all; "
-                         "prune it from the plant (Spacecraft.plant(prune=True)) or damp it"))
+                     scale_floor=scale, advise=advise)
         _warn_removed("lqr", removed, "(left out of the design model; they keep their "
                       "open-loop eigenvalues in the closed loop)")
     return LQRDesign(design.controller, design.K, design.L, design.Q, design.R, design.N,

@@ -1,5 +1,6 @@
 """LQR + estimator: rigid-body closed form, output feedback, tracking, digital design, errors."""
 import math
+import warnings
 
 import control
 import numpy as np
@@ -403,9 +404,15 @@ def test_high_gain_loops_meet_the_margin_on_the_loop_itself(plant, bandwidth, sp
     stability above that round-off; every pole meets the margin, or the error names
     estimator_speed."""
     try:
-        design = lqr_design(plant, attitude_weight=J ** 2 * bandwidth ** 4, rate_weight=0.0,
-                            torque_weight=1.0, estimator_speed=speed)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            design = lqr_design(plant, attitude_weight=J ** 2 * bandwidth ** 4, rate_weight=0.0,
+                                torque_weight=1.0, estimator_speed=speed)
     except ValueError as error:
         assert "estimator_speed" in str(error) and "attitude_weight" in str(error)
         return
+    removed = [str(w.message) for w in caught
+               if issubclass(w.category, controllers.RemovedModesWarning)]
+    assert len(removed) == (0 if plant is UNDAMPED else 1), removed
+    assert plant is UNDAMPED or "30 rad/s" in removed[0]
     _assert_guarantee(plant, design)
