@@ -33,7 +33,8 @@ from pathlib import Path
 import numpy as np
 
 from .naming import (DESIGN_STYLE, EXACT_COLOUR, REFERENCE_COLOUR, TRUTH_STYLE,
-                     UNSTABLE_COLOUR, controller_label, design_label, variant_colour)
+                     UNSTABLE_COLOUR, controller_label, design_label, plural,
+                     variant_colour)
 from .responses import trace
 
 __all__ = ["plot_slew", "plot_loop", "plot_poles", "plot_W", "draw", "PLOT_FILES",
@@ -596,7 +597,7 @@ def _model_name(model) -> str:
     name = type(model).__name__
     if hasattr(model, "n_modes"):
         method = getattr(model, "method", None)
-        return f"beam, {model.n_modes} {method or ''} modes".replace("  ", " ")
+        return f"beam, {plural(model.n_modes, (method + ' mode') if method else 'mode')}"
     if hasattr(model, "n_bodies"):
         return f"{model.n_bodies}-body chain"
     return name

@@ -444,7 +444,9 @@ def _controllers(data: dict) -> list:
                           f"{_fmt(c['estimator_speed'])} x faster",
                           f"controller states: {c['n_states']} (the estimate of the design "
                           "model's states)",
-                          "regulator poles [1/s]: " + _poles_text(c["regulator_poles"]),
+                          "regulator poles [1/s]: " + _poles_text(c["regulator_poles"])
+                          + (" (mapped from the z-plane by s = ln(z)/T)"
+                             if c.get("sample_time") else ""),
                           "estimator poles [1/s]: " + _poles_text(c["estimator_poles"])]
             facts = digital.get((variant, kind))
             if facts:
@@ -452,7 +454,9 @@ def _controllers(data: dict) -> list:
                              f"{_fmt(facts['sample_time'])} s), Nyquist frequency pi/T = "
                              f"{_fmt(facts['nyquist_frequency'], 4)} rad/s"
                              + (f"; the zero-order hold lags {_fmt(facts['hold_phase_lag_at_crossover'], 3)}"
-                                " deg at the crossover" if "hold_phase_lag_at_crossover" in facts
+                                f" deg at the rigid-body crossover "
+                                f"{_fmt(facts['crossover_frequency'], 3)} rad/s"
+                                if "hold_phase_lag_at_crossover" in facts
                                 else ""))
             else:
                 items.append("continuous-time")
@@ -512,7 +516,7 @@ def _closed_loops(data: dict) -> list:
     from .verdicts import MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN, MIN_PHASE_MARGIN
 
     b.append(("p", f"Margins below gain {MIN_GAIN_MARGIN:g} dB, phase {MIN_PHASE_MARGIN:g} deg "
-                   f"or modulus {MIN_MODULUS_MARGIN:g} are marked (Skogestad & Postlethwaite, "
+                   f"or modulus {MIN_MODULUS_MARGIN:g} are marked (Skogestad and Postlethwaite, "
                    "Multivariable Feedback Control, sec. 2.4.3); an unstable loop's time "
                    "metrics are withheld: it diverges."))
     return b

@@ -35,7 +35,7 @@ from .responses import (appendage_peaks, diverged_at, outputs_until_overflow,
                         simulate_manoeuvre, trace)
 from .scene import Scene, load_scene, scene_dict
 from .tables import describe_model, equivalence_table
-from .tuning import digital_facts, tune
+from .tuning import digital_facts, rigid_crossover, tune
 from .verdicts import (closed_loop_poles, design_warnings, loop_status, resolved_frequency,
                        withheld_metrics)
 
@@ -257,8 +257,10 @@ class _Runner(ModelBuilder):
             verdict = controllers.spillover(truth_verdict, K)
         row["design_margins"] = _margins(design_margins)
         row["verdict"] = _verdict(verdict)
-        digital = digital_facts(scene.controller.sample_time,
-                                design_margins.gain_crossover_frequency)
+        digital = None
+        if scene.controller.sample_time is not None:
+            digital = digital_facts(scene.controller.sample_time,
+                                    rigid_crossover(d["plant"], K))
         if digital is not None:
             row["digital"] = digital
         if exact_frd is not None:

@@ -20,7 +20,7 @@ import numpy as np
 
 import controllers
 
-__all__ = ["Tuned", "tune", "digital_facts"]
+__all__ = ["Tuned", "tune", "digital_facts", "rigid_crossover"]
 
 
 @dataclasses.dataclass
@@ -44,8 +44,14 @@ class Tuned:
     removed_modes: list
 
 
-def _poles(values) -> list:
-    return [{"re": float(z.real), "im": float(z.imag)} for z in np.asarray(values, complex)]
+def _poles(values, sample_time: float | None = None) -> list:
+    """Poles as ``{"re", "im"}`` [1/s]; a digital design's z-plane poles mapped to the s-plane
+    by s = ln(z) / T (poles at z = 0, deadbeat, left out: they have no s-plane image)."""
+    p = np.asarray(values, complex).reshape(-1)
+    if sample_time is not None:
+        p = p[np.abs(p) > 1e-300]
+        p = np.log(p) / sample_time
+    return [{"re": float(z.real), "im": float(z.imag)} for z in p]
 
 
 def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
@@ -140,21 +146,48 @@ def _lqr(plant, spec) -> Tuned:
         "L": np.asarray(design.L, dtype=float).tolist(),
         "states": list(design.design_plant.state_labels) if design.design_plant is not None
         else [f"x{i}" for i in range(n)],
-        "regulator_poles": _poles(design.regulator_poles),
-        "estimator_poles": _poles(design.estimator_poles),
+        # [1/s]: a digital design's z-plane poles mapped by s = ln(z) / T
+        "regulator_poles": _poles(design.regulator_poles, spec.sample_time),
+        "estimator_poles": _poles(design.estimator_poles, spec.sample_time),
     }
     removed = [f"{m} - {m.reason}" for m in design.removed_modes]
     return Tuned(design.controller, description, removed)
 
 
+def rigid_crossover(plant, controller) -> float | None:
+    """The loop's rigid-body gain crossover [rad/s]: the lowest frequency where |L(j omega)|
+    falls through 1 (interpolated linearly in log |L| against log omega between grid points),
+    None if |L| never does.
+
+    Where a lightly damped mode lifts |L| above 1 again, :func:`controllers.margins` may report
+    that resonance crossing (the worst phase margin); the bandwidth a sample rate must support
+    is this one (Franklin, Powell & Workman, Digital Control of Dynamic Systems, 3rd ed.,
+    ch. 11, sample-rate selection).
+    """
+    with np.errstate(all="ignore"):
+        omega, L = controllers.loop_frequency_response(plant, controller)
+        g = np.log(np.abs(np.asarray(L).reshape(omega.size, -1)[:, 0]))
+    finite = np.isfinite(g)
+    omega, g = omega[finite], g[finite]
+    down = np.nonzero((g[:-1] > 0.0) & (g[1:] <= 0.0))[0]
+    if down.size == 0:
+        return None
+    k = int(down[0])
+    t = g[k] / (g[k] - g[k + 1])
+    return float(math.exp(math.log(omega[k]) + t * (math.log(omega[k + 1]) -
+                                                    math.log(omega[k]))))
+
+
 def digital_facts(sample_time: float | None, crossover: float | None) -> dict | None:
     """Sample rate [Hz], Nyquist frequency [rad/s] and the zero-order hold's phase lag
-    omega_c T / 2 [deg] at the loop's crossover omega_c [rad/s] (Franklin, Powell & Workman,
+    omega_c T / 2 [deg] at the loop's rigid-body crossover omega_c [rad/s]
+    (:func:`rigid_crossover`; Franklin, Powell & Workman,
     Digital Control of Dynamic Systems, 3rd ed., sec. 6.3); None for a continuous loop."""
     if sample_time is None:
         return None
     out = {"sample_time": sample_time, "sample_rate": 1.0 / sample_time,
            "nyquist_frequency": math.pi / sample_time}
     if crossover is not None and math.isfinite(crossover) and crossover > 0:
+        out["crossover_frequency"] = crossover
         out["hold_phase_lag_at_crossover"] = math.degrees(crossover * sample_time / 2.0)
     return out
