@@ -198,6 +198,10 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--no-fmu", action="store_true", help="skip FMU export")
     run.add_argument("--no-plots", action="store_true", help="skip plots")
     run.add_argument("--quiet", action="store_true", help="no progress display")
+    _add_export_options(run)
+    run.add_argument("--simulator", choices=("flexsat", "basilisk"),
+                     help="also run the manoeuvre in Basilisk (needs flexsat[basilisk]); "
+                          "overrides the scene's simulator.name")
     _add_limit(run)
 
     export = command("export", help="export FMUs only",
@@ -207,6 +211,7 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("scene", nargs="?", help="scene file or embedded scene name")
     export.add_argument("--out", type=Path, help="output folder (default: a new folder here)")
     export.add_argument("--quiet", action="store_true", help="no progress display")
+    _add_export_options(export)
     _add_limit(export)
 
     for name, helptext, description in (
@@ -262,6 +267,46 @@ def _version() -> str:
         return version("flexsat")
     except Exception:  # not installed
         return "unknown"
+
+
+def _add_export_options(parser) -> None:
+    """FMU options that override the scene's [export] table (and turn the export on)."""
+    parser.add_argument("--fmi-version", choices=("2.0", "3.0", "both"),
+                        help="FMI version of the FMUs (both: a set of each); overrides "
+                             "export.fmi_version")
+    parser.add_argument("--sources-only", action="store_true",
+                        help="FMUs with C sources and build description, no binary")
+    parser.add_argument("--ssp", action="store_true",
+                        help="also an SSP file per controller connecting plant and controller "
+                             "FMUs")
+
+
+def _with_options(scene, args):
+    """The scene with the command line's export and simulator options applied."""
+    import dataclasses
+
+    changes = {}
+    version = getattr(args, "fmi_version", None)
+    if version is not None:
+        changes["fmi_versions"] = ("2.0", "3.0") if version == "both" else (version,)
+    if getattr(args, "sources_only", False):
+        changes["sources_only"] = True
+    if getattr(args, "ssp", False):
+        missing = [s for s in ("plant", "controller") if s not in scene.export.systems]
+        if missing:
+            raise _UserError(f"--ssp: needs 'plant' and 'controller' FMUs; the scene's "
+                             f"export.systems lacks {', '.join(map(repr, missing))}")
+        changes["ssp"] = True
+    if changes:
+        if getattr(args, "no_fmu", False):
+            raise _UserError("--no-fmu contradicts --fmi-version, --sources-only and --ssp")
+        scene = scene.replace(export=dataclasses.replace(scene.export, fmu=True, **changes))
+    simulator = getattr(args, "simulator", None)
+    if simulator is not None:
+        from .scene import with_simulator
+
+        scene = with_simulator(scene, simulator)
+    return scene
 
 
 def _add_limit(parser) -> None:
@@ -328,7 +373,7 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
     from .runner import run
 
     progress = _Progress(args.quiet)
-    scene = _scene(args.scene, _limits(args))
+    scene = _with_options(_scene(args.scene, _limits(args)), args)
     if export_only and not scene.export.fmu:
         import dataclasses
 

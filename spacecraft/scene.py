@@ -291,6 +291,7 @@ __all__ = [
     "scene_path",
     "scene_dict",
     "read_limits",
+    "with_simulator",
     "RANGES",
     "BEAM_FREQUENCY_RANGE",
     "NAME_LENGTH",
@@ -865,23 +866,7 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) ->
             and not outputs.tip_deflection):
         raise r.error("controller.lqr.deflection_weight", "needs tip-deflection outputs: set "
                       "outputs.tip_deflection = true")
-    if simulator.name == "basilisk":
-        if manoeuvre is None:
-            raise r.error("simulator.name", "'basilisk' simulates the manoeuvre: the scene needs "
-                          "a manoeuvre table")
-        beams = [k for k, a in enumerate(appendages) if a.design == "truth" and a.truth == "beam"]
-        if beams:
-            raise r.error(f"appendages[{beams[0]}].design", "Basilisk simulates the design "
-                          "chains, and this appendage's design model is the distributed beam "
-                          "(design = 'truth'); give it a chain design (design = 'fit' or "
-                          "'chain') or drop simulator.name = 'basilisk'")
-        if (manoeuvre.disturbance is not None
-                and manoeuvre.disturbance.input.endswith("_tip_force")):
-            raise r.error("manoeuvre.disturbance.input", "a tip force is not applied by the "
-                          "Basilisk model (it applies disturbance_torque, force_x, force_y); "
-                          "choose one of those or drop simulator.name = 'basilisk'")
-        if simulator.sample_time is None and controller.sample_time is not None:
-            simulator = dataclasses.replace(simulator, sample_time=controller.sample_time)
+    simulator = _checked_simulator(simulator, appendages, manoeuvre, controller, r.error)
     if export.fmu and manoeuvre is None and export.step is None:
         raise r.error("export.step", "missing: without a manoeuvre table the FMU step must be "
                       "given [s]")
@@ -894,6 +879,56 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) ->
                   simulator=simulator)
     _check_cost(r, scene)
     return scene
+
+
+def _checked_simulator(simulator: SimulatorSpec, appendages, manoeuvre, controller,
+                       error) -> SimulatorSpec:
+    """A Basilisk run needs a manoeuvre, chain design models and disturbances Basilisk
+    applies; it samples at the controller's rate unless told otherwise. ``error(key,
+    message)`` makes the exception to raise."""
+    if simulator.name != "basilisk":
+        return simulator
+    if manoeuvre is None:
+        raise error("simulator.name", "'basilisk' simulates the manoeuvre: the scene needs "
+                    "a manoeuvre table")
+    beams = [k for k, a in enumerate(appendages) if a.design == "truth" and a.truth == "beam"]
+    if beams:
+        raise error(f"appendages[{beams[0]}].design", "Basilisk simulates the design "
+                    "chains, and this appendage's design model is the distributed beam "
+                    "(design = 'truth'); give it a chain design (design = 'fit' or "
+                    "'chain') or drop simulator.name = 'basilisk'")
+    if (manoeuvre.disturbance is not None
+            and manoeuvre.disturbance.input.endswith("_tip_force")):
+        raise error("manoeuvre.disturbance.input", "a tip force is not applied by the "
+                    "Basilisk model (it applies disturbance_torque, force_x, force_y); "
+                    "choose one of those or drop simulator.name = 'basilisk'")
+    if simulator.sample_time is None and controller.sample_time is not None:
+        simulator = dataclasses.replace(simulator, sample_time=controller.sample_time)
+    return simulator
+
+
+def with_simulator(scene: Scene, name: str) -> Scene:
+    """The scene with ``simulator.name`` replaced (the command line's ``--simulator``),
+    checked as the scene file's key is.
+
+    Raises
+    ------
+    SceneError
+        If the scene cannot be run by that simulator.
+    """
+    if name not in SIMULATORS:
+        raise SceneError(f"simulator must be one of {', '.join(map(repr, SIMULATORS))}; got "
+                         f"{_short(repr(name))}")
+    if name == scene.simulator.name:
+        return scene
+    simulator = (SimulatorSpec() if name == "flexsat"
+                 else dataclasses.replace(scene.simulator, name=name))
+
+    def error(key, message):
+        return SceneError(f"{scene.source}: {key}: {message} (--simulator {name})")
+    simulator = _checked_simulator(simulator, scene.appendages, scene.manoeuvre,
+                                   scene.controller, error)
+    return scene.replace(simulator=simulator)
 
 
 def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = None, *,

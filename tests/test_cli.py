@@ -334,3 +334,62 @@ def test_fit_shows_progress_on_stderr_unless_quiet(capsys):
     json.loads(captured.out)   # stdout stays pure JSON
     assert flexsat("table", "--quiet") == 0
     assert capsys.readouterr().err == ""
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 15 wired into the command: FMI 2.0 and 3.0, SSP, digital controllers
+# ---------------------------------------------------------------------------------------------
+DIGITAL_LQR = SCENE.replace('types = ["pd"]', 'types = ["lqr"]\nsample_rate = 5.0').replace(
+    "[controller.pd]\nnatural_frequency = 0.1",
+    "[controller.lqr]\nattitude_weight = 7.6\ntorque_weight = 1.0").replace(
+    "step = 0.5\n", "").replace('match = "frequencies"', 'match = "poles-and-zeros"').replace(
+    "n_modes = 3", "n_modes = 2").replace("duration = 120.0", "duration = 30.0")
+
+
+@pytest.mark.slow
+def test_a_digital_lqr_exports_fmi2_fmi3_and_ssp_through_run(tmp_path, capsys):
+    """Acceptance of issue 15 at the command line: plant, controller and loop as FMI 2.0 and
+    3.0 FMUs, valid for fmpy, and an SSP per version whose co-simulation (plant FMU stepped
+    at the sample time T with the sampled controller FMU) is the sampled loop of the run."""
+    import fmpy
+    from fmpy.validation import validate_fmu
+
+    from fmu import cosimulate_ssp
+
+    scene = tmp_path / "dlqr.toml"
+    scene.write_text(DIGITAL_LQR)
+    out = tmp_path / "o"
+    assert flexsat("run", scene, "--fmi-version", "both", "--ssp", "--no-plots", "--quiet",
+                   "--out", out) == 0
+    data = json.loads((out / "results.json").read_text())
+    fmus = {f["path"]: f for f in data["files"]["fmu"]}
+    for name in ("plant", "lqr", "closed_loop_lqr"):
+        for suffix, version in (("", "2.0"), ("_fmi3", "3.0")):
+            path = out / "fmu" / f"{name}{suffix}.fmu"
+            assert fmus[f"fmu/{path.name}"]["fmi_version"] == version
+            assert validate_fmu(str(path)) == []
+            assert fmpy.read_model_description(str(path)).fmiVersion == version
+    assert fmus["fmu/lqr.fmu"]["sample_time"] == pytest.approx(0.2)
+    ssps = [f["path"] for f in data["files"]["ssp"]]
+    assert ssps == ["fmu/loop_lqr.ssp", "fmu/loop_lqr_fmi3.ssp"]
+    # the run's sampled loop on the truth plant, at the sample times
+    result = run(str(scene))
+    reference = result.responses[("poles-and-zeros", "lqr", "truth")]
+    t = np.asarray(reference.t).reshape(-1)
+    theta = np.asarray(reference.y)[list(reference.output_labels).index("theta")].reshape(-1)
+    ref_input = np.asarray(reference.u)[list(reference.input_labels).index("theta_ref")]
+    for ssp in ssps:
+        table = cosimulate_ssp(out / ssp, 30.0, 0.2,
+                               inputs={"theta_ref": (t, ref_input.reshape(-1))})
+        got = np.interp(t, table["time"], table["theta"])
+        # both are the exactly discretised sampled-data loop; the FMUs' C arithmetic and
+        # python-control's differ by round-off growing with the steps: 1e-9 of the range
+        np.testing.assert_allclose(got, theta, rtol=0, atol=1e-9 * np.abs(theta).max())
+
+
+def test_export_options_refuse_contradictions(scene_file, tmp_path, capsys):
+    assert flexsat("run", scene_file, "--ssp", "--no-fmu", "--out", tmp_path / "o") == 2
+    assert "--no-fmu contradicts" in capsys.readouterr().err
+    scene_file.write_text(SCENE + '\n[export]\nfmu = true\nsystems = ["plant"]\n')
+    assert flexsat("run", scene_file, "--ssp", "--out", tmp_path / "p") == 2
+    assert "--ssp: needs 'plant' and 'controller' FMUs" in capsys.readouterr().err
