@@ -374,6 +374,10 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
 
     progress = _Progress(args.quiet)
     scene = _with_options(_scene(args.scene, _limits(args)), args)
+    if scene.simulator.name == "basilisk" and not export_only:
+        from .basilisk import require_basilisk
+
+        require_basilisk()   # before any work: one line saying how to install the extra
     if export_only and not scene.export.fmu:
         import dataclasses
 

@@ -86,6 +86,8 @@ class RunStats:
         Modes of the truth plant kept and dropped by pruning (elastic and rigid).
     cache_hits : int
         Requests answered from the run's caches.
+    basilisk_runs : int
+        Manoeuvres run in Basilisk.
     seconds : dict
         Wall time per stage [s] (informative, never asserted).
     """
@@ -105,6 +107,7 @@ class RunStats:
     modes_kept: int = 0
     modes_dropped: int = 0
     cache_hits: int = 0
+    basilisk_runs: int = 0
     seconds: dict = dataclasses.field(default_factory=dict)
 
     def as_dict(self) -> dict:

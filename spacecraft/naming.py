@@ -12,7 +12,7 @@ from __future__ import annotations
 
 __all__ = ["FIT_LABELS", "design_label", "controller_label", "loop_label", "variant_colour",
            "UNSTABLE_COLOUR", "EXACT_COLOUR", "REFERENCE_COLOUR", "TRUTH_STYLE", "DESIGN_STYLE",
-           "BASILISK_STYLE", "plural"]
+           "BASILISK_STYLE", "BASILISK_COLOUR", "plural"]
 
 #: Names of the design models by fit criterion (and of a scene's own design model).
 FIT_LABELS = {"poles-and-zeros": "chain, flexsat fit", "frequencies": "chain, paper's fit",
@@ -26,6 +26,8 @@ _VARIANT_ORDER = ("poles-and-zeros", "frequencies", "design")
 UNSTABLE_COLOUR = "#d62728"
 #: Colour of the exact distributed beam.
 EXACT_COLOUR = "black"
+#: Colour of Basilisk's curves (dotted, BASILISK_STYLE).
+BASILISK_COLOUR = "#222222"
 #: Colour of the reference theta_ref and of guide lines.
 REFERENCE_COLOUR = "0.45"
 #: Line styles: loop closed on the truth model, on the design model, Basilisk's run.

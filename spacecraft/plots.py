@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .naming import (DESIGN_STYLE, EXACT_COLOUR, REFERENCE_COLOUR, TRUTH_STYLE,
+from .naming import (BASILISK_COLOUR, BASILISK_STYLE, DESIGN_STYLE, EXACT_COLOUR, REFERENCE_COLOUR, TRUTH_STYLE,
                      UNSTABLE_COLOUR, controller_label, design_label, plural,
                      variant_colour)
 from .responses import trace
@@ -172,6 +172,18 @@ def plot_slew(result, path: Path) -> str:
                 curves.append((variant, which, np.asarray(resp.t, float).reshape(-1), y,
                                row is not None and _unstable(row, which)))
             _draw_curves(ax, curves, handles, log=signal == "error", note=row_index == 0)
+            comparison = result.basilisk.get(kind)
+            if comparison is not None and signal != "disturbance":
+                resp = comparison.basilisk.response
+                y = _slew_signal(resp, signal)
+                if y is not None:
+                    variant = result.data["basilisk"][kind]["design"]
+                    t = np.asarray(resp.t, float).reshape(-1)
+                    if signal == "error":
+                        y = np.maximum(y, 1e-9)
+                    handles += (ax.semilogy if signal == "error" else ax.plot)(
+                        *envelope(t, y), BASILISK_STYLE, color=BASILISK_COLOUR, lw=1.6,
+                        label=f"Basilisk: {design_label(variant)}, nonlinear", zorder=3)
             if signal == "theta":
                 t = np.asarray(first.t, float).reshape(-1)
                 import controllers
@@ -198,6 +210,9 @@ def plot_slew(result, path: Path) -> str:
                "band; torque; tip deflection of each appendage")
     if result.disturbance_responses:
         caption += "; the attitude response to the disturbance alone"
+    if result.basilisk:
+        caption += ("; dotted black: Basilisk's nonlinear run of the design chains (the whole "
+                    "manoeuvre, flight software at its sample time)")
     return caption + (". Solid: loop on the truth model, dashed: on the design model; one "
                       "colour per design model; red: unstable.")
 

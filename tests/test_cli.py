@@ -393,3 +393,56 @@ def test_export_options_refuse_contradictions(scene_file, tmp_path, capsys):
     scene_file.write_text(SCENE + '\n[export]\nfmu = true\nsystems = ["plant"]\n')
     assert flexsat("run", scene_file, "--ssp", "--out", tmp_path / "p") == 2
     assert "--ssp: needs 'plant' and 'controller' FMUs" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------------------------------------
+# issue 12, items 3-4: flexsat run --simulator basilisk
+# ---------------------------------------------------------------------------------------------
+def test_simulator_basilisk_adds_basilisks_run_to_report_json_and_time_series(scene_file,
+                                                                              tmp_path, capsys):
+    pytest.importorskip("Basilisk", reason="bsk (flexsat[basilisk]) is not installed")
+    out = tmp_path / "o"
+    assert flexsat("run", scene_file, "--simulator", "basilisk", "--no-fmu", "--quiet",
+                   "--out", out) == 0
+    said = capsys.readouterr().out
+    assert "Basilisk, PD: theta [rad] differs from the distributed beam (truth) by" in said
+    data = json.loads((out / "results.json").read_text())
+    entry = data["basilisk"]["pd"]
+    assert entry["design"] == "frequencies" and entry["sample_time"] > 0
+    d = entry["differences"]
+    for name in ("theta", "rod_tip_deflection"):
+        b_truth = d["basilisk_vs_truth"][name]["peak_difference"]
+        b_chain = d["basilisk_vs_chain"][name]["peak_difference"]
+        c_truth = d["chain_vs_truth"][name]["peak_difference"]
+        # peaks of |difference| on the same instants obey the triangle inequality
+        assert abs(b_truth - c_truth) <= b_chain * (1 + 1e-9) + 1e-15
+        # a 10 deg slew: the nonlinearity is small against the chain's modelling error
+        assert b_chain < 0.1 * b_truth
+    assert data["stats"]["basilisk_runs"] == 1
+    md = (out / "report.md").read_text()
+    assert "## Basilisk: the manoeuvre in a nonlinear multibody simulator" in md
+    files = [f["path"] for f in data["files"]["timeseries"] if f["model"] == "basilisk"]
+    assert files == ["timeseries/pd_basilisk.csv"] and (out / files[0]).is_file()
+
+
+def test_simulator_basilisk_without_bsk_is_one_line_exit_2(scene_file, tmp_path, capsys,
+                                                          monkeypatch):
+    import spacecraft.basilisk
+    from spacecraft.basilisk import INSTALL_HINT, BasiliskNotInstalled
+
+    def missing():
+        raise BasiliskNotInstalled(INSTALL_HINT)
+    monkeypatch.setattr(spacecraft.basilisk, "require_basilisk", missing)
+    out = tmp_path / "o"
+    assert flexsat("run", scene_file, "--simulator", "basilisk", "--out", out) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"flexsat: error: {INSTALL_HINT}"
+    assert not out.exists()   # refused before any work
+
+
+def test_simulator_basilisk_refuses_a_scene_it_cannot_run(scene_file, tmp_path, capsys):
+    scene_file.write_text(SCENE.replace("step = 0.5\n", 'step = 0.5\n\n[manoeuvre.disturbance]\n'
+                                        'input = "rod_tip_force"\namplitude = 1.0\n'))
+    assert flexsat("run", scene_file, "--simulator", "basilisk", "--out", tmp_path / "o") == 2
+    assert "manoeuvre.disturbance.input: a tip force is not applied by the Basilisk model" \
+        in capsys.readouterr().err
