@@ -150,7 +150,9 @@ def _lqr(plant, spec) -> Tuned:
         "regulator_poles": _poles(design.regulator_poles, spec.sample_time),
         "estimator_poles": _poles(design.estimator_poles, spec.sample_time),
     }
-    removed = [f"{m} - {m.reason}" for m in design.removed_modes]
+    # the reason says "<=": words read the same in the Markdown, HTML and the terminal
+    removed = [f"{m}: left out ({m.reason.replace('<=', 'at most')})"
+               for m in design.removed_modes]
     return Tuned(design.controller, description, removed)
 
 

@@ -324,3 +324,25 @@ def test_one_mode_is_singular_in_the_W_legend():
     assert _model_name(beam.truncated(1, method="craig-bampton")) == \
         "beam, 1 craig-bampton mode"
     assert _model_name(beam.truncated(3, method="residual")) == "beam, 3 residual modes"
+
+
+def test_modes_left_out_of_the_design_are_listed_with_the_reason(tmp_path):
+    """Undamped mirror-image wings, unpruned: torque cannot reach their symmetric bending
+    (participation ~1e-30); PD and LQR leave those modes out and the report says which."""
+    scene = _wings(**{"fidelity.prune": False, "manoeuvre.disturbance": None,
+                      "outputs.root_loads": False, "report.plots": False})
+    del scene["controller"]["sample_rate"]
+    del scene["controller"]["pd"]["roll_off"]
+    for a in scene["appendages"]:
+        a["beam"]["damping_ratio"] = 0.0
+    result = run(scene)
+    write_report(result, tmp_path, fmus=False, plots=False)
+    md = (tmp_path / "report.md").read_text()
+    pd = result.data["controllers"]["poles-and-zeros"]["pd"]["removed_modes"]
+    lqr = result.data["controllers"]["poles-and-zeros"]["lqr"]["removed_modes"]
+    assert len(pd) == 1 and "2 mode(s) out of the loop's reach" in pd[0]
+    assert len(lqr) == 2 and all("left out (participation at most INFLUENCE_TOL)" in m
+                                 for m in lqr)
+    section = md[md.index("### Modes left out of the design and why"):]
+    assert "None: every mode" not in section.split("##")[0]
+    assert "- LQR tuned on chain, flexsat fit: " in section
