@@ -169,8 +169,13 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``flexsat`` command."""
+def build_parser(*, sweep_arguments: bool = True) -> argparse.ArgumentParser:
+    """The argument parser of the ``flexsat`` command.
+
+    ``sweep_arguments=False`` leaves the options of ``flexsat sweep`` out (they come from
+    :mod:`spacecraft.sweep`, whose import loads the whole runner): :func:`main` adds them only
+    when the command line asks for the sweep, so that ``flexsat --help`` stays fast.
+    """
     parser = _Parser(prog="flexsat", description=(
         "Attitude control design for spacecraft with flexible appendages: exact beams, "
         "equivalent hinged chains, PD/LQR tuned on the chain and checked on the beam, FMUs."))
@@ -235,14 +240,16 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--quiet", action="store_true", help="no progress display")
         _add_limit(p)
 
-    from .sweep.command import add_arguments as add_sweep_arguments
-
-    add_sweep_arguments(command(
+    sweep = command(
         "sweep", help="sweep a scene on Dask: probability of instability, worst case",
         description="Sweep the numbers of a scene's [sweep] table (Monte Carlo, Latin hypercube "
                     "or grid) on Dask; every sample is a design-loop evaluation checked on the "
                     "exact beam. Writes the samples (Parquet), summary.json, report.md, "
-                    "report.html, plots and worst.toml into a folder."))
+                    "report.html, plots and worst.toml into a folder.")
+    if sweep_arguments:
+        from .sweep.command import add_arguments as add_sweep_arguments
+
+        add_sweep_arguments(sweep)
 
     scenes = command("scenes", help="list the embedded scenes",
                             description="List the embedded scenes (usable as 'flexsat run "
@@ -580,7 +587,8 @@ def _classify(exc: BaseException) -> tuple[int, str]:
 def main(argv=None) -> int:
     """Entry point of the ``flexsat`` console script; returns the exit code (see the module
     docstring for each)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(sweep_arguments="sweep" in argv)
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help(sys.stderr)

@@ -80,6 +80,12 @@ def _legend(fig, handles: list, top: float | None = None) -> None:
     fig.subplots_adjust(top=1.0 - (0.12 + 0.2 * rows + 0.4) / height)
 
 
+def _save(fig, path: Path) -> None:
+    """Write the PNG. zlib level 1 instead of 6: a fifth of the encoding time for files about
+    a third larger (line plots compress well at any level)."""
+    fig.savefig(path, dpi=_DPI, pil_kwargs={"compress_level": 1})
+
+
 def _line(**style):
     from matplotlib.lines import Line2D
 
@@ -204,7 +210,7 @@ def plot_slew(result, path: Path) -> str:
             ax.tick_params(labelsize="small")
         axes[-1, col].set_xlabel("time [s]")
     _legend(fig, handles, top)
-    fig.savefig(path, dpi=_DPI)
+    _save(fig, path)
     caption = (f"Slew of {angle:g} deg in {m.slew_time:g} s, simulated {m.duration:g} s: "
                "theta and theta_ref; the attitude error on a log scale with the 2 % settling "
                "band; torque; tip deflection of each appendage")
@@ -408,7 +414,7 @@ def plot_loop(result, path: Path) -> str:
     handles.append(_line(color=REFERENCE_COLOUR, lw=3, alpha=0.6,
                          label="margins: phase at the gain crossover, gain at the phase crossover"))
     _legend(fig, handles, top)
-    fig.savefig(path, dpi=_DPI)
+    _save(fig, path)
     return ("Open-loop transfer L(j omega), loop broken at the torque (unstable at L = -1), of "
             "each controller on its design model (dashed), on the truth model (solid) and on "
             "the exact beam (dotted, when computed): magnitude and phase with the gain "
@@ -511,7 +517,7 @@ def plot_poles(result, path: Path) -> str:
         for ax in (near, spread):
             ax.grid(True, alpha=0.4)
     _legend(fig, handles, top)
-    fig.savefig(path, dpi=_DPI)
+    _save(fig, path)
     return ("Closed-loop poles of each controller on its design model (crosses) and on the "
             "truth model (circles), one colour per design model: top, the s-plane near the "
             "loop's bandwidth with lines of constant damping ratio; bottom, damping ratio "
@@ -600,7 +606,7 @@ def plot_W(result, path: Path, stats, exact: bool) -> str:
         handles.append(_line(color=REFERENCE_COLOUR, lw=0.8, ls="-.",
                              label="top of the loops' band (bandwidth_factor x crossover)"))
     _legend(fig, handles, top)
-    fig.savefig(path, dpi=_DPI)
+    _save(fig, path)
     return ("W(s) of each appendage at its attachment end (free appendage, rigid-body term "
             "included): magnitudes of W1, W2 = W3 and W4 of the exact distributed beam, the "
             "truth model and the design chains; the phase of these lightly damped models is 0 "
