@@ -424,18 +424,20 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
     return 0
 
 
-def _check_n_bodies(args) -> None:
+def _check_n_bodies(args):
     """--n-bodies of table and fit: at least 2, at most limits.fit_bodies."""
     from .limits import Limits
     from .scene import read_limits
 
     if args.n_bodies < 2:
         raise _UserError(f"--n-bodies must be at least 2; got {args.n_bodies}")
-    bound = Limits(**read_limits(_limits(args), "--limit")).fit_bodies
+    limits = Limits(**read_limits(_limits(args), "--limit"))
+    bound = limits.fit_bodies
     if args.n_bodies > bound:
         raise _UserError(f"--n-bodies {args.n_bodies}: over the limit {bound} (limits."
-                         f"fit_bodies: a fit is an optimisation whose time grows fast with the "
-                         f"bodies); ask for fewer, or raise it with --limit fit_bodies=N")
+                         f"fit_bodies: from 15 bodies the fit ends in poor minima); ask for "
+                         f"fewer, or raise it with --limit fit_bodies=N")
+    return limits
 
 
 def _equivalence(args):
@@ -445,9 +447,11 @@ def _equivalence(args):
     from appendages.equivalence import fit_chain
     import warnings
 
+    from .limits import library_limits
+
     progress = _Progress(args.quiet)
     fits = {}
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), library_limits(args.checked_limits):
         warnings.simplefilter("ignore", RuntimeWarning)
         for match in ("poles-and-zeros", "frequencies"):
             progress(_fit_message(args.n_bodies, match))
@@ -464,7 +468,7 @@ def _fit_message(n_bodies: int, match: str) -> str:
 def _cmd_table(args) -> int:
     from .report import equivalence_markdown, to_json
 
-    _check_n_bodies(args)
+    args.checked_limits = _check_n_bodies(args)
     beam, source, table = _equivalence(args)
     if args.json:
         print(to_json({"beam": _beam_dict(beam), "source": source, **table}))
@@ -496,11 +500,13 @@ def _cmd_fit(args) -> int:
     from .report import to_json
     from .tables import describe_model as _describe
 
-    _check_n_bodies(args)
+    from .limits import library_limits
+
+    limits = _check_n_bodies(args)
     beam, source = _beam_from(args)
     progress = _Progress(args.quiet)
     progress(_fit_message(args.n_bodies, args.match))
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), library_limits(limits):
         warnings.simplefilter("ignore", RuntimeWarning)
         chain = fit_chain(beam, args.n_bodies, match=args.match)
     progress("done")

@@ -20,9 +20,11 @@ modes          500          ``fidelity.n_modes`` (bending modes per truncated be
                             this limit is lower; ``spacecraft.fidelity.MAX_MODES`` says why)
 bodies         500          bodies of an explicit or ``from_beam`` chain (a 500-body
                             truth chain: 998 states, 7 s, 1.4 GB)
-fit_bodies     12           ``fit.n_bodies``: a "poles-and-zeros" fit is an optimisation
-                            whose time grows fast and irregularly with the bodies (5: 1 s,
-                            10: 17 s, 12: 4 s, 15: 41 s, 20: 81 s)
+fit_bodies     14           ``fit.n_bodies``: appendages' own limit (``appendages.limits``),
+                            set by the fit's quality: from 15 bodies its start leads the
+                            "poles-and-zeros" fit to poor minima. Cold fits 0.14 s at 3
+                            bodies, 2.0 s at 10, 3.7 s at 14 (load 14;
+                            benchmarks/results/fit.md); raising it raises appendages' too
 appendages     64           mounted appendages
 states         1200         states of the largest closed loop (upper bound: truth plant
                             plus controller). A 1202-state loop (600 modes, PD) took 20 s
@@ -44,7 +46,7 @@ from __future__ import annotations
 import dataclasses
 
 __all__ = ["Limits", "LIMIT_UNITS", "SceneCost", "estimate_cost", "appendage_dof",
-           "DIGITAL_SAMPLE_COST"]
+           "DIGITAL_SAMPLE_COST", "library_limits"]
 
 #: Unit and meaning of each limit (for messages and ``--help``).
 LIMIT_UNITS = {
@@ -62,6 +64,10 @@ LIMIT_UNITS = {
 # Bytes per float64.
 _FLOAT = 8
 
+# the fit's limit is appendages.limits.DEFAULTS["fit_bodies"] (one number for the scene, the
+# command line and the library; a test checks they agree; not imported: appendages loads scipy)
+_LIBRARY_FIT_BODIES = 14
+
 #: Continuous-loop samples one sample of a digital (sampled-data) loop costs as much as.
 DIGITAL_SAMPLE_COST = 20
 
@@ -75,7 +81,7 @@ class Limits:
 
     modes: int = 500
     bodies: int = 500
-    fit_bodies: int = 12
+    fit_bodies: int = _LIBRARY_FIT_BODIES
     appendages: int = 64
     states: int = 1200
     samples: int = 10_000_000
@@ -220,3 +226,14 @@ def estimate_cost(scene) -> SceneCost:
     work = loop_states + 4 * inputs + 2 * outputs
     memory = float(_FLOAT) * samples * (kept + work)
     return SceneCost(samples, simulations, plant_states, loop_states, loop_key, memory)
+
+
+def library_limits(limits: Limits):
+    """A context in which :mod:`appendages.limits` allows what ``limits`` allows: a scene or
+    ``--limit`` that raises ``modes``, ``bodies`` or ``fit_bodies`` above appendages' own
+    defaults raises those too (never lowers them: the scene's check came first)."""
+    from appendages import limits as library
+
+    raised = {name: getattr(limits, name) for name in ("modes", "bodies", "fit_bodies")
+              if getattr(limits, name) > library.current(name)}
+    return library.raised(**raised)

@@ -28,6 +28,7 @@ import numpy as np
 
 import controllers
 
+from .limits import library_limits
 from .models import (LQR_FREQUENCY_RANGE, ModelBuilder, ProgressCallback, RunStats,
                      raised_by_flexsat)
 from .naming import FIT_LABELS
@@ -416,7 +417,7 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     stats = RunStats() if stats is None else stats
     if scene.three_axis:
         return _run_three_axis(scene, progress, stats, time_responses)
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, library_limits(scene.limits):
         warnings.simplefilter("default")
         result = _Runner(scene, progress, stats, time_responses).run()
     result.data["warnings"] = warning_lines(caught)
@@ -428,7 +429,7 @@ def _run_three_axis(scene, progress, stats, time_responses) -> RunResult:
     numbers, ``loops``/``responses``/``designs`` its systems."""
     from .three_axis_run import run_three_axis
 
-    with warnings.catch_warnings(record=True) as caught:
+    with warnings.catch_warnings(record=True) as caught, library_limits(scene.limits):
         warnings.simplefilter("default")
         out = run_three_axis(scene, progress=progress, time_responses=time_responses)
     out["data"]["warnings"] = out["data"]["warnings"] + warning_lines(caught)

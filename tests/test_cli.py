@@ -446,3 +446,25 @@ def test_simulator_basilisk_refuses_a_scene_it_cannot_run(scene_file, tmp_path, 
     assert flexsat("run", scene_file, "--simulator", "basilisk", "--out", tmp_path / "o") == 2
     assert "manoeuvre.disturbance.input: a tip force is not applied by the Basilisk model" \
         in capsys.readouterr().err
+
+
+def test_help_imports_no_numerical_library():
+    """flexsat --help must stay fast (issue 10): neither the package nor the parser import
+    numpy, scipy, python-control, matplotlib, fmpy, numba or Dask."""
+    code = ("import sys; from spacecraft import cli; cli.build_parser(sweep_arguments=False); "
+            "print(' '.join(m for m in ('numpy', 'scipy', 'control', 'matplotlib', 'fmpy', "
+            "'numba', 'dask') if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120, check=True)
+    assert done.stdout.strip() == ""
+
+
+def test_package_names_resolve_on_first_use():
+    import spacecraft
+    import spacecraft.runner
+
+    assert spacecraft.run is spacecraft.runner.run
+    assert callable(spacecraft.sweep) and spacecraft.sweep.__name__ == "spacecraft.sweep"
+    assert set(spacecraft.__all__) <= set(dir(spacecraft))
+    with pytest.raises(AttributeError, match="no attribute 'nope'"):
+        spacecraft.nope

@@ -244,3 +244,17 @@ def test_the_limits_docs_state_the_cap_of_the_tolerance_search():
     for doc in (spacecraft.scene.__doc__, limits_module.__doc__):
         table = " ".join(doc[doc.index("\nmodes "):].split("\nbodies ")[0].split())
         assert f"tries at most {MAX_MODES}" in table, table
+
+
+def test_fit_bodies_is_appendages_limit_and_raising_it_raises_appendages():
+    """Before: the scene allowed 12 bodies and appendages 14, and a scene or --limit that
+    raised fit_bodies past 14 still met appendages' LimitError."""
+    from appendages import limits as library
+    from spacecraft.limits import Limits, library_limits
+
+    assert Limits().fit_bodies == library.DEFAULTS["fit_bodies"]
+    with library_limits(Limits(fit_bodies=20, modes=10)):
+        assert library.current("fit_bodies") == 20
+        # never lowered: the scene's own check came first
+        assert library.current("modes") == library.DEFAULTS["modes"]
+    assert library.current("fit_bodies") == library.DEFAULTS["fit_bodies"]
