@@ -939,8 +939,10 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
     Parameters
     ----------
     scene : path, dict, Scene or None
-        A TOML file, a dict with the same structure (units of the file: deg, Hz), an already
-        validated Scene (returned as is) or None for the embedded default scene.
+        A TOML file, the name of an embedded scene (``"two_wings"``, see
+        :func:`example_scenes`; when no file of that name exists), a dict with the same
+        structure (units of the file: deg, Hz), an already validated Scene (returned as is) or
+        None for the embedded default scene.
     source : str, optional
         Name used in error messages for a dict (default ``"<dict>"``).
     limits : mapping, optional
@@ -969,6 +971,19 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         raise SceneError(f"scene must be a TOML file path, a dict or a Scene; got "
                          f"{_short(type(scene).__name__)}")
     path = Path(scene)
+    if (isinstance(scene, str) and not path.exists() and path.suffix == ""
+            and path.parent == Path(".")):
+        # an embedded scene's name ("two_wings"), as on the command line
+        names = example_scenes()
+        if scene in names:
+            return load_scene(scene_path(scene), source=source or f"{scene} (embedded scene)",
+                              limits=limits)
+        import difflib
+
+        close = difflib.get_close_matches(scene, names, n=1)
+        raise SceneError(f"{_short(scene)}: no such scene file or embedded scene (embedded: "
+                         f"{', '.join(names)})" + (f"; did you mean {close[0]!r}?" if close
+                                                   else ""))
     shown = _short(str(path)) if str(path).isprintable() else _shown(str(path))
     file_size = overrides.get("file_size", Limits().file_size)
     try:

@@ -213,3 +213,17 @@ def test_resolved_scene_is_json_ready():
     assert back["manoeuvre"]["slew_angle"] == pytest.approx(math.radians(10.0), rel=1e-15)
     assert back["appendages"][0]["beam"]["dimensions"] == {"diameter": 0.01}
     assert back["controller"]["types"] == ["pd", "lqr"] and "SI" in back["units"]
+
+
+def test_an_embedded_scene_loads_by_name_and_a_typo_suggests_it(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)   # no file of that name here
+    scene = load_scene("two_wings")
+    assert scene.source == "two_wings (embedded scene)"
+    assert [a.name for a in scene.appendages] == [a.name for a in
+                                                  load_scene(scene_path("two_wings")).appendages]
+    with pytest.raises(SceneError, match=r"two_wing: no such scene file or embedded scene .*did "
+                                         r"you mean 'two_wings'\?"):
+        load_scene("two_wing")
+    # a path that looks like a file keeps the file's message
+    with pytest.raises(SceneError, match=r"two_wings\.toml: no such scene file"):
+        load_scene("two_wings.toml")
