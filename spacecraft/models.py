@@ -27,7 +27,6 @@ import numpy as np
 
 import appendages
 import controllers
-import fmu
 from appendages.interface import FlexsatError
 
 from .coupling import Spacecraft
@@ -45,8 +44,9 @@ LQR_FREQUENCY_RANGE = (1e-5, 1e3)
 
 # Folders of flexsat's packages: an exception raised by code in them is a checked condition of
 # our API (its message names the parameter), one raised deeper (numpy, scipy) is not.
-_OUR_FOLDERS = tuple(Path(p.__file__).resolve().parent
-                     for p in (appendages, controllers, fmu)) + (Path(__file__).resolve().parent,)
+# (fmu located without importing it: a run without FMUs does not load the FMU toolchain)
+_OUR_FOLDERS = tuple(Path(p.__file__).resolve().parent for p in (appendages, controllers)) + (
+    Path(__file__).resolve().parents[1] / "fmu", Path(__file__).resolve().parent)
 
 ProgressCallback = Callable[[str], None]
 

@@ -278,3 +278,17 @@ def test_report_peaks_of_mirror_image_wings_are_equal_with_root_loads():
     assert peaks["wing_px"]["peak_root_moment"] == pytest.approx(
         peaks["wing_mx"]["peak_root_moment"], rel=1e-8)
     assert peaks["boom"]["peak_root_force"] > 0
+
+
+def test_a_run_without_fmus_loads_no_fmu_toolchain_nor_dask():
+    """issue 10: fmpy and the FMU exporter only when FMUs are built, Dask only for sweeps."""
+    import subprocess
+    import sys
+
+    code = ("import sys, json; sys.path.insert(0, 'tests'); from test_scene import scene_with; "
+            "import spacecraft; spacecraft.run(scene_with(**{'report.equivalence': False})); "
+            "print(' '.join(m for m in ('fmu', 'fmpy', 'dask', 'distributed', 'pyarrow') "
+            "if m in sys.modules))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, check=True)
+    assert done.stdout.strip() == ""
