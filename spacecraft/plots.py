@@ -435,11 +435,11 @@ def plot_loop(result, path: Path) -> str:
             ax.grid(True, alpha=0.4)
             ax.minorticks_off()   # hundreds of minor log ticks cost time to draw
         nyq.grid(True, alpha=0.4)
-        # top right, two lines a loop: |L| falls from the top left, and the resonance peaks
-        # there stay below the box
+        # top right, two lines a loop (|L| falls from the top left); translucent: a resonance
+        # peak under it stays visible
         mag.text(0.98, 0.97, "\n".join(notes), transform=mag.transAxes, fontsize="x-small",
                  va="top", ha="right",
-                 bbox=dict(facecolor="white", edgecolor="0.8", alpha=0.6, lw=0.5))  # peaks show through
+                 bbox=dict(facecolor="white", edgecolor="0.8", alpha=0.6, lw=0.5))
     handles.append(_line(color=REFERENCE_COLOUR, lw=3, alpha=0.6,
                          label="margins: phase at the gain crossover, gain at the phase crossover"))
     _legend(fig, handles, top)
