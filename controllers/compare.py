@@ -8,6 +8,7 @@ plots.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -138,15 +139,23 @@ class Comparison:
                              "(left the float64 range; its time metrics are not given)")
         return "\n".join(lines + [str(self.verdict)])
 
-    def plot(self):
+    def plot(self, path=None):
         """Figure of both slew responses, their difference and both open-loop responses.
+
+        Parameters
+        ----------
+        path : str or os.PathLike, optional
+            Save the figure there (PNG, PDF, SVG... by the suffix) and return the path.
 
         Returns
         -------
-        matplotlib.figure.Figure
-            Built on the Agg canvas (no display needed). Left: theta (with theta_ref), torque,
-            tip deflection (or omega); right: |L(j omega)| [dB], arg L [deg] of both loops,
-            theta_truth - theta_design. Degrees and Hz-free axes as DESIGN.md allows in plots.
+        matplotlib.figure.Figure or pathlib.Path
+            The figure (on the Agg canvas: no display needed; ``fig.savefig(...)`` saves it,
+            and in a notebook it shows itself), or the path it was saved to. Left: theta (with
+            theta_ref), torque, tip deflection (or omega); right: |L(j omega)| [dB] and arg L
+            [deg] (wrapped into (-270, 90]) of both loops over the frequencies that matter (a
+            decade and a half below the gain crossover to a decade above the fastest plant or
+            controller pole), theta_truth - theta_design.
         """
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
@@ -181,19 +190,25 @@ class Comparison:
             ax.legend(loc="best", fontsize="small")
             ax.grid(True)
         axes[-1, 0].set_xlabel("time [s]")
+        band = []
         for label, plant, style in (("design", self.design_plant, "-"),
                                     ("truth", self.truth_plant, "--")):
             omega, L = loop_frequency_response(plant, self.controller)
+            band.append(_frequency_band(omega, L, plant, self.controller))
             if L.ndim == 3:  # three axes: the diagonal of L
                 for i, a in enumerate(ch.axes):
                     axes[0, 1].semilogx(omega, 20 * np.log10(np.abs(L[:, i, i])), style,
                                         label=f"L_{a}{a} ({label})")
-                    axes[1, 1].semilogx(omega, np.degrees(np.unwrap(np.angle(L[:, i, i]))),
+                    axes[1, 1].semilogx(omega, _wrapped_degrees(L[:, i, i]),
                                         style, label=f"L_{a}{a} ({label})")
                 continue
             axes[0, 1].semilogx(omega, 20 * np.log10(np.abs(L)), style, label=f"L ({label})")
-            axes[1, 1].semilogx(omega, np.degrees(np.unwrap(np.angle(L))), style,
-                                label=f"L ({label})")
+            axes[1, 1].semilogx(omega, _wrapped_degrees(L), style, label=f"L ({label})")
+        lo, hi = min(b[0] for b in band), max(b[1] for b in band)
+        for ax in axes[:2, 1]:
+            ax.set_xlim(lo, hi)
+        axes[1, 1].set_ylim(-270.0, 90.0)
+        axes[1, 1].set_yticks([-270, -180, -90, 0, 90])
         axes[0, 1].axhline(0.0, color="gray", lw=0.5)
         axes[0, 1].set_ylabel("|L| [dB]")
         axes[1, 1].set_ylabel("arg L [deg]")
@@ -208,13 +223,42 @@ class Comparison:
         axes[2, 1].grid(True)
         fig.suptitle("design vs truth: " + ("stable" if self.verdict.stable else "UNSTABLE")
                      + " on truth")
+        if path is not None:
+            from pathlib import Path
+
+            fig.savefig(path)
+            return Path(path)
         return fig
 
 
+def _wrapped_degrees(L: np.ndarray) -> np.ndarray:
+    """arg L in (-270, 90] deg (the rigid-body loop's -180 mid-range), NaN where it wraps so
+    that no vertical line is drawn across: a lightly damped mode's phase swing stays on the
+    axis instead of being unwrapped to thousands of degrees."""
+    phase = 90.0 - np.mod(90.0 - np.degrees(np.angle(L)), 360.0)
+    phase[1:][np.abs(np.diff(phase)) > 180.0] = np.nan
+    return phase
+
+
+def _frequency_band(omega: np.ndarray, L: np.ndarray, plant, controller) -> tuple[float, float]:
+    """[rad/s] from 1/30 of the lowest gain crossover of |L| to 10 x the fastest pole of plant
+    and controller, inside the grid of ``omega``."""
+    gain = np.abs(L) if L.ndim == 1 else np.abs(np.diagonal(L, axis1=1, axis2=2)).max(axis=1)
+    down = np.nonzero((gain[:-1] >= 1.0) & (gain[1:] < 1.0))[0]
+    lo = omega[down[0]] / 30.0 if down.size else omega[0]
+    poles = np.concatenate([np.linalg.eigvals(np.asarray(m.A, dtype=float)) for m in
+                            (plant, controller) if m.nstates and not m.isdtime(strict=True)]
+                           or [np.zeros(0)])
+    size = np.abs(poles)
+    hi = 10.0 * size.max() if size.size and size.max() > 0 else omega[-1]
+    return max(lo, omega[0]), min(max(hi, 10.0 * lo), omega[-1])
+
+
 def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
-            controller: control.StateSpace, *, angle: float, duration: float,
+            controller: control.StateSpace, *, angle: float, slew_time: float | None = None,
             t_final: float | None = None, dt: float | None = None,
-            max_samples: int | None = None, axis=None) -> Comparison:
+            max_samples: int | None = None, axis=None,
+            duration: float | None = None) -> Comparison:
     """Close one controller around a design plant and a truth plant and compare.
 
     Parameters
@@ -228,12 +272,16 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
         Continuous or digital controller (output ``'torque'``).
     angle : float, rad
         Slew angle.
-    duration : float, s
-        Slew duration (cycloidal profile, :func:`controllers.slew_profile`).
+    slew_time : float, s
+        Duration of the slew (cycloidal profile, :func:`controllers.slew_profile`): a scene's
+        ``manoeuvre.slew_time``.
     t_final : float, s, optional
-        Simulation length; default 3 * duration.
+        Simulation length (a scene's ``manoeuvre.duration``); default 3 * slew_time.
     dt : float, s, optional
-        Output step; default duration / 500 (the controller's dt if digital).
+        Output step; default slew_time / 500 (the controller's dt if digital).
+    duration : float, s, optional
+        Deprecated name of ``slew_time`` (a DeprecationWarning): in a scene ``duration`` is the
+        simulated time.
 
     max_samples : int, optional
         Most samples per response (default :data:`controllers.timeresp.MAX_SAMPLES`); more
@@ -256,7 +304,16 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
                         "FrequencyResponseData truth use controllers.spillover / margins")
     _check_plant(truth_plant, "truth_plant")
     _check_controller(controller)
-    angle, duration = _check_slew(angle, duration)
+    if duration is not None:
+        if slew_time is not None:
+            raise TypeError("give slew_time [s] only (duration is its deprecated name)")
+        warnings.warn("compare(duration=...) is the slew time: use slew_time=... (a scene's "
+                      "duration is the simulated time, compare's t_final)", DeprecationWarning,
+                      stacklevel=2)
+        slew_time = duration
+    if slew_time is None:
+        raise TypeError("compare() needs slew_time [s], the duration of the slew")
+    angle, duration = _check_slew(angle, slew_time)
     design_loop = close_loop(design_plant, controller)
     truth_loop = close_loop(truth_plant, controller)
     # the time grid (and its size limit) first: refuse before any simulation

@@ -50,7 +50,7 @@ def test_a_diverging_loop_is_a_result_not_a_crash(unstable_on_truth, sample_time
     step = 0.5 if sample_time is None else sample_time
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no RuntimeWarning from the overflow either
-        result = controllers.compare(RIGID, FLEXIBLE, K, angle=0.1, duration=20.0,
+        result = controllers.compare(RIGID, FLEXIBLE, K, angle=0.1, slew_time=20.0,
                                      t_final=t_final, dt=step)
     truth = result.truth_metrics
     assert result.diverged and not result.verdict.stable
