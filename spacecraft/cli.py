@@ -416,10 +416,14 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
     for line in summary_lines(data):
         print(line)
     what = ["report.md", "report.html", "results.json"]
+    from .naming import plural
+
     if data["files"].get("plots"):
-        what.append(f"{len(data['files']['plots'])} plots")
+        what.append(plural(len(data["files"]["plots"]), "plot"))
     if fmus:
-        what.append(f"{len(fmus)} FMUs")
+        what.append(plural(len(fmus), "FMU"))
+    if data["files"].get("ssp"):
+        what.append(plural(len(data["files"]["ssp"]), "SSP file"))
     print(f"wrote {', '.join(what)} to {out}")
     return 0
 

@@ -468,3 +468,12 @@ def test_package_names_resolve_on_first_use():
     assert set(spacecraft.__all__) <= set(dir(spacecraft))
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
         spacecraft.nope
+
+
+def test_the_last_line_counts_in_words(scene_file, tmp_path, capsys):
+    """Before: 'wrote report.md, report.html, results.json, 1 plots to ...'."""
+    scene_file.write_text(SCENE.replace("equivalence = false",
+                                        'equivalence = false\nplots = ["slew"]'))
+    assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet") == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert last == f"wrote report.md, report.html, results.json, 1 plot to {tmp_path / 'o'}"
