@@ -477,3 +477,16 @@ def test_the_last_line_counts_in_words(scene_file, tmp_path, capsys):
     assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet") == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last == f"wrote report.md, report.html, results.json, 1 plot to {tmp_path / 'o'}"
+
+
+def test_basilisk_table_keeps_small_relative_differences_visible():
+    from spacecraft.report import _basilisk
+
+    entry = {"design": "frequencies", "bsk_version": "2.12.1", "sample_time": 0.05,
+             "dt": 0.05, "summary": "s",
+             "differences": {"basilisk_vs_chain": {"theta": {
+                 "peak": 0.17, "peak_difference": 1.9e-8, "relative": 1.1e-7}}}}
+    blocks = _basilisk({"basilisk": {"pd": entry}})
+    table = [b for b in blocks if b[0] == "table"][0]
+    # before: "1.9e-08 (0.00 %)"
+    assert table[2][0][3] == "1.9e-08 (1.1e-05 %)"
