@@ -158,7 +158,7 @@ def test_bad_limit_values_are_one_line(scene_file, capsys, value, message):
 @pytest.mark.parametrize("command", ["table", "fit"])
 def test_n_bodies_of_table_and_fit_is_bounded(command, capsys):
     assert flexsat(command, "--n-bodies", "1000") == 2
-    assert "--n-bodies 1000: over the limit 12 (limits.fit_bodies" in one_line(capsys)
+    assert "--n-bodies 1000: over the limit 14 (limits.fit_bodies" in one_line(capsys)
 
 
 # ---------------------------------------------------------------------------------------------
