@@ -299,6 +299,9 @@ def _with_options(scene, args):
     if getattr(args, "sources_only", False):
         changes["sources_only"] = True
     if getattr(args, "ssp", False):
+        if scene.three_axis:
+            raise _UserError(f"{scene.source}: --ssp is planar for now (the SSP connects "
+                             "torque, theta and omega)")
         missing = [s for s in ("plant", "controller") if s not in scene.export.systems]
         if missing:
             raise _UserError(f"--ssp: needs 'plant' and 'controller' FMUs; the scene's "

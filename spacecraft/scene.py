@@ -927,6 +927,9 @@ def with_simulator(scene: Scene, name: str) -> Scene:
 
     def error(key, message):
         return SceneError(f"{scene.source}: {key}: {message} (--simulator {name})")
+    if scene.three_axis and name != "flexsat":
+        raise error("simulator.name", f"{name!r} is planar; a three-axis scene is simulated by "
+                    "flexsat")
     simulator = _checked_simulator(simulator, scene.appendages, scene.manoeuvre,
                                    scene.controller, error)
     return scene.replace(simulator=simulator)
