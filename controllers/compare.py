@@ -310,10 +310,12 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
         warnings.warn("compare(duration=...) is the slew time: use slew_time=... (a scene's "
                       "duration is the simulated time, compare's t_final)", DeprecationWarning,
                       stacklevel=2)
-        slew_time = duration
+        slew_time, keyword = duration, "duration"
+    else:
+        keyword = "slew_time"
     if slew_time is None:
         raise TypeError("compare() needs slew_time [s], the duration of the slew")
-    angle, duration = _check_slew(angle, slew_time)
+    angle, duration = _check_slew(angle, slew_time, keyword)
     design_loop = close_loop(design_plant, controller)
     truth_loop = close_loop(truth_plant, controller)
     # the time grid (and its size limit) first: refuse before any simulation

@@ -157,13 +157,14 @@ def _axis_vector(axis, ch: Channels) -> np.ndarray:
     return e / np.linalg.norm(e)
 
 
-def _check_slew(angle, duration) -> tuple[float, float]:
+def _check_slew(angle, duration, name: str = "duration") -> tuple[float, float]:
+    """Validated (angle [rad], slew duration [s]); ``name`` is the caller's keyword for it."""
     angle = _real_number(angle, "angle", "rad")
-    duration = _real_number(duration, "duration", "s")
+    duration = _real_number(duration, name, "s")
     if not (np.isfinite(angle) and angle != 0):
         raise ValueError(f"angle must be non-zero and finite [rad]; got {angle:.6g}")
     if not (np.isfinite(duration) and duration > 0):
-        raise ValueError(f"duration must be positive and finite [s]; got {duration:.6g}")
+        raise ValueError(f"{name} must be positive and finite [s]; got {duration:.6g}")
     return angle, duration
 
 

@@ -375,7 +375,7 @@ def test_compare_design_vs_truth():
     design = modal_plant(J, [(2.0, 0.005, 1.0, 0.004)])
     truth = modal_plant(J, [(2.1, 0.005, 1.0, 0.0042), (12.0, 0.005, 1.0, 0.001)])
     K = controllers.lqr(design, attitude_weight=400.0, rate_weight=1000.0, torque_weight=1.0)
-    result = controllers.compare(design, truth, K, angle=0.2, duration=20.0)
+    result = controllers.compare(design, truth, K, angle=0.2, slew_time=20.0)
     assert result.verdict.stable
     names = [row[0] for row in result.rows]
     assert names[:2] == ["peak_torque", "peak_attitude_error"]
@@ -389,7 +389,7 @@ def test_compare_design_vs_truth():
     fig = result.plot()
     assert len(fig.axes) == 6
     with pytest.raises(TypeError, match="truth_plant must be a control.StateSpace"):
-        controllers.compare(design, control.frd(truth, [1.0]), K, angle=0.2, duration=20.0)
+        controllers.compare(design, control.frd(truth, [1.0]), K, angle=0.2, slew_time=20.0)
 
 
 def test_controllers_import_no_other_flexsat_package():

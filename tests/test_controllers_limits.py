@@ -26,7 +26,7 @@ def test_compare_refuses_a_huge_sample_count_before_allocating(unstable_on_truth
     """compare(dt=1e-9, t_final=1e3) tried to allocate 1e12 samples (MemoryError after a long
     wait); now a ValueError names the estimate and the limit, and max_samples raises it."""
     with pytest.raises(ValueError, match=r"1e\+12 samples .*max_samples = 1e\+07"):
-        controllers.compare(RIGID, RIGID, unstable_on_truth, angle=0.1, duration=20.0,
+        controllers.compare(RIGID, RIGID, unstable_on_truth, angle=0.1, slew_time=20.0,
                             t_final=1e3, dt=1e-9)
     assert MAX_SAMPLES == 10_000_000
     with pytest.raises(ValueError, match=r"1001 samples .*max_samples = 100\b"):
@@ -83,9 +83,9 @@ def test_metrics_of_a_loop_that_never_settles_are_none_not_inf(unstable_on_truth
 
 def test_type_errors_name_the_parameter_and_unit(unstable_on_truth):
     with pytest.raises(TypeError, match=r"angle must be a real number \[rad\]; got str '1'"):
-        controllers.compare(RIGID, RIGID, unstable_on_truth, angle="1", duration=20.0)
-    with pytest.raises(TypeError, match=r"duration must be a real number \[s\]"):
-        controllers.compare(RIGID, RIGID, unstable_on_truth, angle=0.1, duration=[20.0])
+        controllers.compare(RIGID, RIGID, unstable_on_truth, angle="1", slew_time=20.0)
+    with pytest.raises(TypeError, match=r"slew_time must be a real number \[s\]"):
+        controllers.compare(RIGID, RIGID, unstable_on_truth, angle=0.1, slew_time=[20.0])
     loop = controllers.close_loop(RIGID, unstable_on_truth)
     with pytest.raises(TypeError, match=r"t_final must be a real number \[s\]"):
         controllers.step_response(loop, t_final="10")
@@ -133,7 +133,7 @@ def test_no_runtime_warning_leaks_from_designs_and_analysis():
                                       torque_weight=1.0, sample_time=50.0)):
                 controllers.margins(plant, K)
                 controllers.spillover(plant, K)
-                controllers.compare(RIGID, plant, K, angle=0.1, duration=20.0,
+                controllers.compare(RIGID, plant, K, angle=0.1, slew_time=20.0,
                                     t_final=3000.0)
 
 

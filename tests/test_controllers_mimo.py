@@ -316,7 +316,7 @@ def test_compare_and_assert_closed_loops_close_on_three_axes():
     Jd = np.diag(J3)
     K = controllers.lqr(FLEX3, attitude_weight=(Jd * RATE ** 2) ** 2, rate_weight=0.0,
                         torque_weight=1.0)
-    comparison = controllers.compare(FLEX3, TRUTH3, K, angle=0.1, duration=60.0, axis="y")
+    comparison = controllers.compare(FLEX3, TRUTH3, K, angle=0.1, slew_time=60.0, axis="y")
     assert comparison.verdict.stable
     assert {"peak_torque_y", "peak_wing_tip_deflection_z", "disk_margin",
             "phase_margin_x"} <= set(comparison.truth_metrics)
@@ -386,5 +386,5 @@ def test_no_runtime_warning_leaks_from_three_axis_designs_and_analysis():
             assert m.disk_margin > 0 and all(np.isfinite(v.modulus_margin)
                                              for v in m.loop_at_a_time.values())
             controllers.spillover(TRUTH3, K)
-        controllers.compare(FLEX3, TRUTH3, K, angle=0.05, duration=30.0, axis="z",
+        controllers.compare(FLEX3, TRUTH3, K, angle=0.05, slew_time=30.0, axis="z",
                             t_final=60.0)
