@@ -410,8 +410,11 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
                     f"the margin: raise {spec} or damping (the margin scales with the loop's "
                     f"fastest pole or mode, {scale:.4g} rad/s)")
         if T is not None:
-            alias = (" and aliases (it lies above the Nyquist frequency)"
-                     if any(m.frequency > math.pi / T for m in _safe_modes(plant)) else "")
+            above = sorted(m.frequency for m in _safe_modes(plant) if m.frequency > math.pi / T)
+            alias = (f" (the plant's modes above the Nyquist frequency, "
+                     f"{', '.join(f'{f:.4g}' for f in above[:3])}"
+                     f"{' ...' if len(above) > 3 else ''} rad/s, alias into the loop's band)"
+                     if above else "")
             return (f"the sampled loop at sample_time = {T:.4g} s (Nyquist frequency "
                     f"pi/T = {math.pi / T:.4g} rad/s) does not damp this mode{alias}: shorten "
                     "sample_time, or roll it off / notch it")
