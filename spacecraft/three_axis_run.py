@@ -160,13 +160,9 @@ def run_three_axis(scene, *, progress=None, time_responses: bool = True) -> dict
 
 
 def _fmt(value) -> str:
-    if isinstance(value, (bool, np.bool_)):
-        return "yes" if value else "no"
-    if isinstance(value, (int, np.integer)):
-        return str(int(value))
-    if isinstance(value, float) or isinstance(value, np.floating):
-        return f"{value:.4g}" if math.isfinite(value) else str(value)
-    return str(value)
+    """The report's number format (4 significant digits; None as "n/a", booleans as yes/no)."""
+    from .report import _fmt as report_format  # report imports this module
+    return report_format(value.item() if isinstance(value, np.generic) else value, 4)
 
 
 def three_axis_summary(data: dict) -> list:
