@@ -367,7 +367,10 @@ def test_disturbances_are_held_as_in_the_sampled_loop():
     pulse = {"disturbance_torque": lambda t: np.where((t >= 5.0) & (t < 7.0), 1e-3, 0.0),
              "force_y": lambda t: np.where(t >= 12.0, -2e-4, 0.0)}
     plant = sc.plant(tip_deflection=True, disturbances=True)
-    K = controllers.pd(plant, natural_frequency=0.3, damping=0.7, sample_time=SAMPLE_TIME)
+    # the force inputs bring the free translation of the whole spacecraft into the plant: rigid
+    # motion no torque reaches, which pd leaves out of its guarantee and says so
+    with pytest.warns(controllers.RemovedModesWarning, match=r"rigid-body motion, 4 states"):
+        K = controllers.pd(plant, natural_frequency=0.3, damping=0.7, sample_time=SAMPLE_TIME)
     relative, _ = relative_differences(sc, K, SMALL, disturbances=pulse)
     assert max(relative.values()) <= 1e-4
     with pytest.raises(sb.BasiliskModelError, match=r"'wing_tip_force' is not applied"):
