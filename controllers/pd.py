@@ -187,6 +187,11 @@ def _rigid_crossover(plant, controller) -> float:
     return float(roots[0]) if roots.size else float(omega[i])
 
 
+#: |sin(omega T)| at or below which a sample time is refused as pathological for a mode omega
+#: (the two sampled eigenvalues exp(+-j omega T) are then 2 |sin(omega T)| apart).
+PATHOLOGICAL_SAMPLING = 1e-6
+
+
 def _check_sampling(sample_time: float, omega_c: float, what: str) -> None:
     """ValueError unless 2 pi / sample_time >= MIN_SAMPLES_PER_CROSSOVER * omega_c."""
     omega_s = 2.0 * math.pi / sample_time
@@ -218,6 +223,16 @@ def check_sample_time(sample_time: float, plant, continuous_controller) -> float
     sample_time = _positive(sample_time, "sample_time", "s")
     omega_c = _rigid_crossover(plant, continuous_controller)
     _check_sampling(sample_time, omega_c, "sample time")
+    for mode in _safe_modes(plant):
+        # omega T = k pi puts the pair exp(+-j omega T) on one point z = +-1: the sampled plant
+        # loses that mode's controllability (pathological sampling; Kalman, Ho and Narendra
+        # 1963), whatever the gains. sin(omega T) is computed to ~eps omega T, far below the bound.
+        if abs(math.sin(mode.frequency * sample_time)) <= PATHOLOGICAL_SAMPLING:
+            k = round(mode.frequency * sample_time / math.pi)
+            raise ValueError(
+                f"sample_time {sample_time:.6g} s samples the {mode.frequency:.6g} rad/s mode at "
+                f"a multiple of half its period (omega T = {k} pi): pathological sampling, the "
+                "sampled loop cannot control that mode; change sample_time by a few per cent")
     return omega_c
 
 

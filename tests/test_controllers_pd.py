@@ -295,3 +295,22 @@ def _assert_margin_digital(plant, K):
     s = np.log(z) / K.dt
     alpha = controllers.MARGIN * np.abs(s).max()
     assert s.real.max() <= -alpha
+
+
+def test_pathological_sample_time_is_refused():
+    """omega T = k pi puts exp(+-j omega T) on one point of the unit circle and the sampled
+    plant cannot control the mode (pathological sampling; Kalman, Ho and Narendra 1963). Found
+    by the design fuzz: natural_frequency 1e-4 rad/s and sample_time 2 pi / 1e-2 s put the
+    modes of 2 and 30 rad/s (omega T = 400 pi, 6000 pi) on z = 1, and pd returned a loop with
+    poles at -6e-16 and no warning. A sample time 0.37 % longer (omega T = 401.48 pi and
+    6022.2 pi) is not pathological: the sampled loop's own check judges it (here the aliased
+    2 rad/s mode is destabilised, and named)."""
+    plant = modal_plant(250.0, [(2.0, 0.0, 0.04, 0.04), (30.0, 0.0, 0.0, 0.02)])
+    T = 2.0 * math.pi / 1e-2
+    with pytest.raises(ValueError, match=r"sample_time 628\.3\d* s samples the 2 rad/s mode .*"
+                                         r"omega T = 400 pi.*pathological"):
+        controllers.pd(plant, natural_frequency=1e-4, damping=1.0, sample_time=T)
+    with pytest.raises(ValueError, match=r"pole at .*modes above the Nyquist frequency, 2 rad/s"
+                       ) as refusal:
+        controllers.pd(plant, natural_frequency=1e-4, damping=1.0, sample_time=1.0037 * T)
+    assert "pathological" not in str(refusal.value)
