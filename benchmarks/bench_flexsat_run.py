@@ -11,7 +11,15 @@ average before the case. Medians of the repetitions. Cases:
   templates' object files already in ``$FLEXSAT_CACHE_DIR``;
 - ``run`` (first run on a machine): the same with an empty ``$FLEXSAT_CACHE_DIR``.
 
-Also the import time of the modules a run needs, in-process (the floor of every run).
+Also the import time of the modules a run needs, in-process, and the wall time of a process that
+only imports python-control (``python -c "import control"``): the floor of every ``flexsat run``,
+whatever flexsat does, since its plants, controllers and loops are python-control objects.
+
+Bytecode: a user's ``pip install .`` writes the ``.pyc`` files of flexsat's modules; a checkout
+run with ``PYTHONDONTWRITEBYTECODE=1`` (set in some shells and CI images) would compile every
+module from source at every start (about 0.25 s here). The children therefore run without that
+variable, with ``PYTHONPYCACHEPREFIX`` in the benchmark's scratch folder (filled by the warm-up
+run, removed at the end), as an installed flexsat runs.
 
 Not a test: timings depend on the machine and on whatever else runs on it. Writes
 ``benchmarks/results/flexsat_run.json`` and ``.md``.
@@ -79,12 +87,22 @@ def import_floor(env: dict) -> dict:
     return {"control_cpu": control_cpu, "cpu": cpu, "wall": wall}
 
 
+def process_wall(code: str, env: dict) -> float:
+    """Wall seconds of ``python -c code`` (a fresh process: interpreter start included)."""
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True,
+                   stdout=subprocess.DEVNULL)
+    return time.perf_counter() - t0
+
+
 def main(quick: bool) -> None:
     repetitions = 5 if quick else 9
     base = {k: v for k, v in os.environ.items()
-            if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+            if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+                         "PYTHONDONTWRITEBYTECODE")}
     base["PYTHONPATH"] = str(ROOT)
     scratch = Path(tempfile.mkdtemp(prefix="flexsat-bench-"))
+    base["PYTHONPYCACHEPREFIX"] = str(scratch / "pycache")
     warm_cache = scratch / "cache"
     env_warm = {**base, "FLEXSAT_CACHE_DIR": str(warm_cache)}
     try:
@@ -94,6 +112,13 @@ def main(quick: bool) -> None:
         floor = {key: statistics.median(f[key] for f in floors) for key in floors[0]}
         print(f"{'imports (control; all a run needs)':42s} cpu {floor['control_cpu']:.3f} s; "
               f"{floor['cpu']:.3f} s (wall {floor['wall']:.3f} s)")
+        floor["python_wall"] = statistics.median(process_wall("pass", base)
+                                                 for _ in range(repetitions))
+        floor["control_process_wall"] = statistics.median(
+            process_wall("import control", base) for _ in range(repetitions))
+        label = "python -c pass; python -c 'import control'"
+        print(f"{label:42s} wall "
+              f"{floor['python_wall']:.3f} s; {floor['control_process_wall']:.3f} s")
         cases = [
             case("flexsat --help", lambda k: ["--help"], repetitions, lambda k: base),
             case("flexsat run --no-fmu --no-plots",
@@ -123,7 +148,9 @@ def main(quick: bool) -> None:
                      f"{statistics.median(c['load_average_1min']):.2f} | {c['repetitions']} |")
     lines += ["", f"Imports a run needs: {floor['cpu']:.3f} s CPU, of which python-control "
                   f"(scipy.signal, scipy.stats, matplotlib.pyplot) {floor['control_cpu']:.3f} s.",
-              ""]
+              "", f"Floor of any run: `python -c \"import control\"` takes "
+                  f"{floor['control_process_wall']:.3f} s wall (`python -c pass`: "
+                  f"{floor['python_wall']:.3f} s), medians of {repetitions}.", ""]
     (RESULTS / "flexsat_run.md").write_text("\n".join(lines))
     print(f"wrote {RESULTS / 'flexsat_run.json'} and .md")
 
