@@ -145,6 +145,19 @@ def test_loop_plot_has_magnitude_phase_and_nyquist_of_L_per_controller(default):
     assert np.nanmin(values) >= -270.0 and np.nanmax(values) <= 90.0
 
 
+def test_no_figure_sets_a_tick_label_in_mathtext(default):
+    """Tick labels are plain numbers ("0.01", "-0.1"): a mathtext label ("$10^{-2}$", the
+    default of log and symlog axes) makes matplotlib build its TeX parser, about 0.15 s of
+    every run that draws it (the pole map's symlog damping axis did)."""
+    _, _, _, figures = default
+    assert set(figures) == {"slew.png", "loop.png", "poles.png", "W.png"}
+    for name, fig in figures.items():
+        for ax in fig.axes:
+            for axis in (ax.xaxis, ax.yaxis):
+                labels = [t.get_text() for t in axis.get_ticklabels()]
+                assert labels and not any("$" in t for t in labels), (name, labels)
+
+
 def test_pole_map_is_of_the_closed_loop_with_damping_lines_and_unstable_poles(default):
     _, result, _, figures = default
     fig = figures["poles.png"]
