@@ -404,7 +404,7 @@ def plot(result: dict, path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.5))
+    fig, axes = plt.subplots(1, 2, figsize=(13, 7.5))
     families = []
     for row in result["rows"]:
         if row["family"] not in families and "errors" in row:
@@ -460,7 +460,9 @@ def plot(result: dict, path) -> None:
     axes[1].set_title("Appendage poles and zeros vs exact beam")
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=7)
+        # below the panel: inside it, the legend hid the peers' curves
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2,
+                  frameon=False)
     fig.suptitle(f"flexsat run time vs error ({result['machine']['date_utc']} UTC, "
                  f"{result['machine']['cpu']}, {result['machine']['nproc']} cores)", fontsize=9)
     fig.tight_layout()
