@@ -112,19 +112,25 @@ from .beam import characteristic_roots
 from .chain import HingedChain, _assemble, _proportional_damping
 from .interface import ConvergenceError
 
-__all__ = ["DimensionlessChain", "FitWarning", "clear_memo", "fit_frequencies",
-           "fit_poles_and_zeros"]
+__all__ = ["DimensionlessChain", "FitWarning", "clear_memo", "evaluation_budget",
+           "fit_frequencies", "fit_poles_and_zeros"]
 
 #: Changes whenever a change of the algorithm may change a fitted chain (part of the memo key).
-FIT_VERSION = 3
+FIT_VERSION = 4
 
-# Stage 1 (equal weights): x_scale="jac", tolerance 1e-5, budget 60 evaluations per parameter.
-# Stage 2 (poles weighted): x_scale=1, tolerance 1e-8, budget 5 per parameter (module docstring).
-_STAGES = (("jac", 1e-5, 60), (1.0, 1e-8, 5))
+# Stage 1 (equal weights): x_scale per path, tolerance 1e-5. Stage 2 (poles weighted): x_scale=1,
+# tolerance 1e-8, at most 5 evaluations per parameter (module docstring, "The optimisation").
+_STAGE_TOLERANCES = (1e-5, 1e-8)
+_STAGE2_PER_PARAMETER = 5
 
-# From this many bodies on, stage 1 also runs with the start's column scaling held fixed, and
-# the better of the two fits is kept (module docstring).
-_TWO_PATHS_FROM = 7
+# The work schedule: a fit spends this many residual evaluations per parameter and per body,
+# 3 n (5 n - 5) in all, on a fixed sequence of paths (module docstring, "The work schedule").
+_EVALUATIONS_PER_PARAMETER_AND_BODY = 3
+
+# A later path's chain replaces the best one only if its cost is lower by more than this
+# fraction: paths that end in one minimum agree to about stage 2's tolerance (1e-8 of the
+# cost), and the first path's chain is kept then.
+_BETTER = 1e-6
 
 
 class FitWarning(RuntimeWarning):
@@ -465,7 +471,9 @@ class DimensionlessChain:
     stopped : bool
         Whether a stage stopped at its evaluation budget before its tolerances were met.
     max_nfev : int or None
-        The budget per stage asked for (None: the defaults).
+        The budget of the fit asked for (None: the default).
+    nfev : int
+        Residual evaluations spent.
     """
 
     lengths: np.ndarray
@@ -477,6 +485,7 @@ class DimensionlessChain:
     start_cost: float
     stopped: bool
     max_nfev: int | None = None
+    nfev: int = 0
 
     def __post_init__(self):
         for name in ("lengths", "masses", "inertias", "com_offsets", "hinge_stiffnesses"):
@@ -545,11 +554,45 @@ def clear_memo() -> None:
 # ---------------------------------------------------------------------------------------------
 # flexsat's fit: poles and zeros
 # ---------------------------------------------------------------------------------------------
+def _uniform_arrays(n: int, end_fraction: float):
+    """A chain of frozen pieces for L = EJ = rho = 1: inner rods H, end rods ``end_fraction``
+    H (H = 1/(n - 2 + 2 end_fraction)), hinge stiffnesses 1/H (EJ/H)."""
+    units = n - 2 + 2.0 * end_fraction  # L/H
+    lengths = np.full(n, 1.0 / units)
+    lengths[0] = lengths[-1] = end_fraction / units
+    return lengths, lengths.copy(), lengths**3 / 12.0, 0.5 * lengths, np.full(n - 1, units)
+
+
 def _rfem_arrays(n: int):
     """The RFEM chain (end rods H/2, inner rods H = 1/(n - 1), c = 1/H) for L = EJ = rho = 1."""
-    lengths = np.full(n, 1.0 / (n - 1))
-    lengths[0] = lengths[-1] = 0.5 / (n - 1)
-    return lengths, lengths.copy(), lengths**3 / 12.0, 0.5 * lengths, np.full(n - 1, n - 1.0)
+    return _uniform_arrays(n, 0.5)
+
+
+def _paths():
+    """The fit's paths in order, endlessly: (end fraction of the start, stage-1 scaling).
+
+    The RFEM chain (end rods H/2) with the updated column scaling ("jac"), the chain of n equal
+    bodies with the start's column norms held fixed ("fixed"), the RFEM chain fixed, the equal
+    chain updated, then end fractions 3/4, 5/8, 7/8, 9/16, ... (the binary midpoints of
+    (1/2, 1), coarse to fine), fixed then updated (module docstring, "The work schedule").
+    """
+    yield 0.5, "jac"
+    yield 1.0, "fixed"
+    yield 0.5, "fixed"
+    yield 1.0, "jac"
+    level = 1
+    while True:
+        level += 1
+        for odd in range(1, 2**level, 2):
+            fraction = 0.5 + 0.5 * odd / 2**level
+            yield fraction, "fixed"
+            yield fraction, "jac"
+
+
+def evaluation_budget(n_bodies: int) -> int:
+    """Residual evaluations of one poles-and-zeros fit: 3 n (5 n - 5) (module docstring, "The
+    work schedule"); strictly increasing in n."""
+    return _EVALUATIONS_PER_PARAMETER_AND_BODY * n_bodies * _Layout(n_bodies).size
 
 
 def fit_poles_and_zeros(n_bodies: int, *, pole_weight: float = 10.0,
@@ -558,15 +601,16 @@ def fit_poles_and_zeros(n_bodies: int, *, pole_weight: float = 10.0,
 
     Least squares in log-frequency over a :class:`_Layout`: the first n - 1 natural frequencies
     and zeros of W1, W2 (= W3) and W4 against the exact beam's, the poles weighted by
-    ``pole_weight``, from the RFEM chain, with the exact Jacobian (module docstring). Memoised
-    by its arguments (and :data:`FIT_VERSION`); the result is immutable.
+    ``pole_weight``, with the exact Jacobian (module docstring). Memoised by its arguments (and
+    :data:`FIT_VERSION`); the result is immutable.
 
-    Two stages (module docstring, "The optimisation"): all targets weighted equally with
-    column-scaled parameters to tolerance 1e-5, then the poles weighted with unscaled
-    parameters to tolerance 1e-8 or a budget of 5 evaluations per parameter, which ends the
-    creep along the valley of this rank-deficient problem (not a failure: no FitWarning).
-    ``max_nfev``, if given, is the budget of each stage, and a stage that exhausts it is
-    reported by ``stopped``.
+    A fixed budget of residual evaluations (:func:`evaluation_budget`) is spent on a fixed
+    sequence of paths (:func:`_paths`), each from a uniform chain in two stages: all targets
+    weighted equally to tolerance 1e-5, then the poles weighted with unscaled parameters to
+    tolerance 1e-8 or 5 evaluations per parameter, which ends the creep along the valley of
+    this rank-deficient problem (not a failure). The path that the budget reaches last is cut
+    short (by design: its chain competes like the others); the chain of lowest cost is kept
+    (module docstring, "The work schedule").
 
     Parameters
     ----------
@@ -575,11 +619,13 @@ def fit_poles_and_zeros(n_bodies: int, *, pole_weight: float = 10.0,
     pole_weight : float
         Weight of the poles relative to the zeros (> 0).
     max_nfev : int, optional
-        Budget of residual evaluations of each stage (default 60 and 5 per parameter).
+        Budget of residual evaluations of the whole fit instead of :func:`evaluation_budget`.
 
     Returns
     -------
     DimensionlessChain
+        ``stopped`` when the budget cut the first path (the RFEM start) short; ``nfev`` the
+        evaluations spent (the budget, unless it exceeds what every path can use).
 
     Raises
     ------
@@ -596,35 +642,41 @@ def _fit_poles_and_zeros(n: int, pole_weight: float, max_nfev, version: int):
     layout = _Layout(n)
     k = n - 1
     lo, hi = layout.bounds()
-    start = layout.from_arrays(*_rfem_arrays(n))
     flat = _Problem(layout, np.ones(4 * k))
     weighted = _Problem(layout, np.concatenate([np.full(k, pole_weight), np.ones(3 * k)]))
+    budget = evaluation_budget(n) if max_nfev is None else max_nfev
+    start = layout.from_arrays(*_rfem_arrays(n))
+    used, best, stopped = 0, None, False
     with _one_blas_thread():
-        paths = ["jac"]
-        if n >= _TWO_PATHS_FROM:
-            # the start's column norms, fixed (module docstring, "The optimisation")
-            paths.append(1.0 / np.maximum(np.linalg.norm(flat.jacobian(start), axis=0),
-                                          np.finfo(float).tiny))
-        best = None
-        for first_scale in paths:
-            x, stopped = start, False
-            for problem, (x_scale, tol, per_parameter) in zip((flat, weighted), _STAGES):
-                if problem is weighted and pole_weight == 1.0:
-                    break
-                budget = max_nfev if max_nfev is not None else per_parameter * layout.size
-                result = scipy.optimize.least_squares(
-                    problem.residual, x, jac=problem.jacobian, bounds=(lo, hi),
-                    x_scale=first_scale if problem is flat else x_scale,
-                    xtol=tol, ftol=tol, gtol=tol, max_nfev=budget)
-                x = result.x
-                # the default budget of stage 2 is its designed end (see above), not a failure
-                stopped = stopped or (result.status == 0
-                                      and (problem is flat or max_nfev is not None))
-            cost = weighted.cost(x)
-            if best is None or cost < best[0]:      # ties: the first path's chain
-                best = (cost, x, stopped)
-        cost, x, stopped = best
         start_cost = weighted.cost(start)
+        for path, (end_fraction, scaling) in enumerate(_paths()):
+            if used >= budget:
+                break
+            x = start if path == 0 else layout.from_arrays(*_uniform_arrays(n, end_fraction))
+            if scaling == "fixed":  # the start's column norms (module docstring)
+                scaling = 1.0 / np.maximum(np.linalg.norm(flat.jacobian(x), axis=0),
+                                           np.finfo(float).tiny)
+            stages = [(flat, scaling, _STAGE_TOLERANCES[0], budget)]
+            if pole_weight != 1.0:
+                stages.append((weighted, 1.0, _STAGE_TOLERANCES[1],
+                               _STAGE2_PER_PARAMETER * layout.size))
+            for problem, x_scale, tol, stage_budget in stages:
+                left = budget - used
+                if left <= 0:
+                    break
+                result = scipy.optimize.least_squares(
+                    problem.residual, x, jac=problem.jacobian, bounds=(lo, hi), x_scale=x_scale,
+                    xtol=tol, ftol=tol, gtol=tol, max_nfev=min(stage_budget, left))
+                x = result.x
+                used += result.nfev
+                # stage 2's own budget is its designed end; the fit's budget ending the first
+                # path is not (FitWarning): the later paths are the ones it is meant to cut
+                if path == 0 and result.status == 0 and left <= stage_budget:
+                    stopped = True
+            cost = weighted.cost(x)
+            if best is None or cost < best[0] * (1.0 - _BETTER):
+                best = (cost, x)
+        cost, x = best
         arrays = layout.arrays(x)
     penalty = arrays[5]
     if penalty > 0.0 or not math.isfinite(cost) or cost >= start_cost:
@@ -633,7 +685,7 @@ def _fit_poles_and_zeros(n: int, pole_weight: float, max_nfev, version: int):
             f"chain better than the RFEM start (cost {cost:.3e} vs {start_cost:.3e}, layout "
             f"penalty {penalty:.2e})")
     return DimensionlessChain(*arrays[:5], cost=cost, start_cost=start_cost, stopped=stopped,
-                              max_nfev=max_nfev)
+                              max_nfev=max_nfev, nfev=used)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -709,4 +761,4 @@ def _fit_frequencies(n: int, targets, version: int):
             f"largest relative mismatch {worst:.2e} after {result.nfev} evaluations "
             f"({result.message})")
     return DimensionlessChain(*_frequencies_arrays(result.x, n), cost=float(result.cost),
-                              start_cost=math.nan, stopped=False)
+                              start_cost=math.nan, stopped=False, nfev=result.nfev)
