@@ -507,8 +507,10 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         centre of mass (L/2) kept exactly equal to the beam's; least squares in log-frequency
         of the first n - 1 natural frequencies and the first n - 1 zeros of W1, W2 (= W3) and
         W4 against the *exact* distributed beam (4 n - 4 targets, the poles weighted by
-        ``pole_weight``), from the RFEM chain, within bounds that keep the chain physical
-        (:func:`appendages.fitting.fit_poles_and_zeros`: exact Jacobian, two stages).
+        ``pole_weight``), from the RFEM chain and other uniform chains, within bounds that
+        keep the chain physical (:func:`appendages.fitting.fit_poles_and_zeros`: exact
+        Jacobian, a fixed budget of 15 n (n - 1) residual evaluations, so the cost grows with
+        n).
     frequencies : sequence of float, rad/s, optional
         ``match="frequencies"`` only: the n - 1 target frequencies instead of the beam's exact
         ones (e.g. the paper's printed 2.8744, 7.9231, which give its k_L = 0.26989 and
@@ -519,8 +521,9 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         zeros lose almost nothing (three bodies: poles 6e-5, zeros 1.7 %; with weight 1:
         0.56 % and 1.6 %).
     max_nfev : int, optional
-        ``match="poles-and-zeros"`` only: budget of residual evaluations of each of the fit's
-        two stages (default 60 and 10 times the number of parameters).
+        ``match="poles-and-zeros"`` only: budget of residual evaluations of the whole fit
+        (default :func:`appendages.fitting.evaluation_budget`, 15 n (n - 1): 90 for 3 bodies,
+        1350 for 10).
 
     Returns
     -------
@@ -538,7 +541,8 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     Warns
     -----
     FitWarning
-        If the poles-and-zeros fit stops at its evaluation budget (the chain is returned).
+        If the evaluation budget of the poles-and-zeros fit cuts its first path (from the RFEM
+        chain) short (the best chain found is returned).
 
     Notes
     -----
@@ -584,9 +588,10 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         if fit.stopped:
             warnings.warn(
                 f"fit_chain(match='poles-and-zeros', n_bodies={n}) stopped at max_nfev="
-                f"{max_nfev if max_nfev is not None else 'default'} evaluations before its "
-                f"tolerances were met; returning the best chain found (cost {fit.cost:.3e}, "
-                f"RFEM start {fit.start_cost:.3e})", FitWarning, stacklevel=2)
+                f"{max_nfev if max_nfev is not None else fit.nfev} evaluations before its "
+                f"first path (from the RFEM chain) met its tolerances; returning the best chain "
+                f"found (cost {fit.cost:.3e}, RFEM start {fit.start_cost:.3e})", FitWarning,
+                stacklevel=2)
     try:
         return fit.to_chain(beam)
     except ValueError as exc:
