@@ -1,30 +1,40 @@
 """Speed and accuracy of fit_chain (issue 10): cold and memoised fits, BLAS threads unset and one.
 
 For n = 3 .. ``--max-bodies`` (the ``fit_bodies`` limit of appendages.limits) the paper's rod is
-fitted with ``fit_chain(rod, n)`` (match="poles-and-zeros", the default).
+fitted with ``fit_chain(rod, n)`` (match="poles-and-zeros", the default), and for the cold
+timings also the unit beam (L = EJ = rho = 1).
 
 Timings run in one subprocess per BLAS setting: OPENBLAS/OMP/MKL_NUM_THREADS unset (as a user has
 them; the machine has 2 cores) and all set to 1. In each subprocess:
 
 - the first fit of the process (3 bodies; it also imports threadpoolctl and finds the BLAS
   libraries, once per process);
-- per n, *cold*: ``appendages.fitting.clear_memo()`` then ``fit_chain(rod, n)``, median of
-  ``--repeats``; *memoised*: ``fit_chain(other_beam, n)`` served from the memo (a steel tube of
+- per n and beam, *cold*: ``appendages.fitting.clear_memo()`` then ``fit_chain(beam, n)``,
+  median of ``--repeats`` (three times as many up to 6 bodies, whose short fits are noisier);
+  *memoised*: ``fit_chain(other_beam, n)`` served from the memo (a steel tube of
   another size: the memo is per options, not per beam), median of at least 50 calls;
 - wall time (perf_counter) and the process's CPU time (process_time), and the 1-min load average
   before and after each n: wall time on a shared machine is CPU time stretched by the load.
+
+Whether the cold CPU time increases with n (issue 10: the cost monotonic in the number of
+bodies; appendages.fitting, "The work schedule") is printed and recorded, with the smallest step
+ratio between consecutive n and whether every step is at least +10 % (a margin that survives
+the noise of a shared machine).
 
 Accuracy, in the main process, per n: the fit's own objective (the weighted least-squares cost,
 ``appendages.fitting``: it is the same for every beam), the largest relative error of the first
 two poles ("p2"), of the first two zeros of W1, W2, W4 ("z2"), of every pole and zero the chain has
 ("all"), and the band error of ``criterion`` ("band"), beside today's fit: ``fit_chain`` of
 commit f575039 on the same rod (``TODAY``, measured with ``--today DIR`` where DIR holds that
-commit's ``appendages``: ``git archive f575039 appendages | tar -x -C DIR``). Beyond the limit
-(``--beyond``), one cold fit each shows why the limit stops where it does.
+commit's ``appendages``: ``git archive f575039 appendages | tar -x -C DIR``), and the relative
+change of each against the fit before its work schedule (fit version 3, ``BEFORE``). Beyond the
+limit (``--beyond``), one cold fit each shows why the limit stops where it does.
 
 Run: python benchmarks/bench_fit.py [--repeats 5] [--max-bodies 14] [--beyond 16]
-                                    [--today DIR]
-Writes benchmarks/results/fit.json and fit.md.
+                                    [--today DIR] [--quick]
+Writes benchmarks/results/fit.json and fit.md (full mode: about 5 minutes on a quiet machine),
+or with ``--quick`` (3 to 7 bodies, 3 repeats, nothing beyond the limit: about 1 minute)
+fit_quick.json and fit_quick.md.
 """
 
 from __future__ import annotations
@@ -77,13 +87,61 @@ TODAY = {
         "band": 2.214e-02, "cpu_s": 17.96},
 }
 
+# The fit before its work schedule (FIT_VERSION 3, commit e513dca) on the paper's rod:
+# benchmarks/results/fit.json of that commit (2026-11-22 12:22 UTC), full precision. The
+# accuracy columns of this script; "bound" the modal bound there.
+BEFORE = {
+    3: {"cost": 0.0003600042046783274, "p2": 5.7413861241917274e-05,
+        "z2": 0.017079622571755104, "all": 0.017079622571755104,
+        "band": 1.5660147787251002, "bound": 0.00036000420379936647},
+    4: {"cost": 0.00022684407154242975, "p2": 1.6562299354205834e-07,
+        "z2": 0.007096030016213617, "all": 0.012703323343255746,
+        "band": 0.3580709079347346, "bound": 0.0002268440714874071},
+    5: {"cost": 0.00015679168121607968, "p2": 3.716886822768828e-07,
+        "z2": 0.003890984261844088, "all": 0.010624913876574382,
+        "band": 0.195980695468315, "bound": 0.00015679168020698545},
+    6: {"cost": 0.00011531830503696168, "p2": 1.6050527618105548e-07,
+        "z2": 0.0024347289268216166, "all": 0.009156467441754579,
+        "band": 0.1224265462556318, "bound": 0.00011531810070894603},
+    7: {"cost": 9.038251092105213e-05, "p2": 1.3433458081468785e-06,
+        "z2": 0.0016549998714054936, "all": 0.00782053537749694,
+        "band": 0.08311917311819621, "bound": 8.862770716076777e-05},
+    8: {"cost": 7.434075823661093e-05, "p2": 3.9344651419082055e-06,
+        "z2": 0.0011893652600669657, "all": 0.006731050679171124,
+        "band": 0.05968801633770113, "bound": 7.039168202777555e-05},
+    9: {"cost": 6.364554381939553e-05, "p2": 5.5199184565424275e-06,
+        "z2": 0.0008905953720895754, "all": 0.005773253954486135,
+        "band": 0.044671822385806456, "bound": 5.7353387250577055e-05},
+    10: {"cost": 4.769596720042224e-05, "p2": 3.9318871492000085e-08,
+        "z2": 0.0006872393321071257, "all": 0.005976933384891137,
+        "band": 0.03446019433595437, "bound": 4.769299890119515e-05},
+    11: {"cost": 4.033131114900258e-05, "p2": 6.199649993376966e-08,
+        "z2": 0.000545169775243437, "all": 0.0055107653285544345,
+        "band": 0.027330007649106237, "bound": 4.0326578054644746e-05},
+    12: {"cost": 3.458375019865121e-05, "p2": 1.1110444964046451e-07,
+        "z2": 0.0004416342570511267, "all": 0.0051151518517735806,
+        "band": 0.022135923034156364, "bound": 3.4574741495202076e-05},
+    13: {"cost": 3.0008217192080352e-05, "p2": 1.6637839705957447e-07,
+        "z2": 0.000363998915685948, "all": 0.004775278522650028,
+        "band": 0.01824236860107962, "bound": 2.9993531620386383e-05},
+    14: {"cost": 2.6295206107819286e-05, "p2": 1.1685351619661333e-07,
+        "z2": 0.0003045415041751376, "all": 0.004477848186054345,
+        "band": 0.015261142273484431, "bound": 2.6282560657771718e-05},
+    15: {"cost": 0.00011289370171536128, "p2": 1.1646111930829761e-05,
+        "z2": 0.0008378060209458527, "all": 0.00825994243082806,
+        "band": 0.041915270131437754, "bound": 2.3232499379465674e-05},
+    16: {"cost": 0.008129725405723907, "p2": 2.578832611010995e-06,
+        "z2": 0.001144638298429923, "all": 0.09416252516544754,
+        "band": 0.057317886552340484, "bound": 2.069373410522177e-05},
+}
+
 _WORKER = r"""
 import json, os, statistics, sys, time
 sys.path.insert(0, {root!r})
 from appendages import fitting, limits
 from appendages.beam import Beam
 from appendages.equivalence import fit_chain
-rod = Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11)
+beams = {{"rod": Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11), "unit": Beam(1.0, 1.0, 1.0)}}
 other = Beam.tube(3.0, 0.05, 0.002, 2700.0, 7.0e10)
 repeats = {repeats}
 
@@ -94,20 +152,24 @@ def timed(function):
 
 out = {{"first_fit": None, "rows": []}}
 with limits.raised(fit_bodies=max({bodies})):
-    out["first_fit"] = timed(lambda: fit_chain(rod, 3))
+    out["first_fit"] = timed(lambda: fit_chain(beams["rod"], 3))
     for n in {bodies}:
         load_before = os.getloadavg()[0]
-        cold = []
-        for _ in range(repeats):
-            fitting.clear_memo()
-            cold.append(timed(lambda: fit_chain(rod, n)))
+        row = {{"n_bodies": n}}
+        for name, beam in beams.items():
+            cold = []
+            for _ in range(3 * repeats if n <= 6 else repeats):  # short fits: noisier
+                fitting.clear_memo()
+                cold.append(timed(lambda: fit_chain(beam, n)))
+            prefix = "" if name == "rod" else name + "_"
+            row[prefix + "cold_wall_s"] = statistics.median(w for w, _ in cold)
+            row[prefix + "cold_cpu_s"] = statistics.median(c for _, c in cold)
+            row[prefix + "cold_cpu_all_s"] = [c for _, c in cold]
         memo = [timed(lambda: fit_chain(other, n)) for _ in range(max(50, repeats))]
-        out["rows"].append({{
-            "n_bodies": n, "cold_wall_s": statistics.median(w for w, _ in cold),
-            "cold_cpu_s": statistics.median(c for _, c in cold),
-            "cold_wall_all_s": [w for w, _ in cold],
-            "memo_wall_s": statistics.median(w for w, _ in memo),
-            "load_before": load_before, "load_after": os.getloadavg()[0]}})
+        row.update(memo_wall_s=statistics.median(w for w, _ in memo),
+                   nfev=fitting.fit_poles_and_zeros(n).nfev, load_before=load_before,
+                   load_after=os.getloadavg()[0])
+        out["rows"].append(row)
 print(json.dumps(out))
 """
 
@@ -240,7 +302,12 @@ def main(argv=None) -> dict:
                         help="also one cold fit each up to this many bodies")
     parser.add_argument("--today", type=Path, default=None,
                         help="directory with today's appendages package: re-measure TODAY")
+    parser.add_argument("--quick", action="store_true",
+                        help="3 to 7 bodies, 3 repeats, nothing beyond the limit; writes "
+                             "fit_quick.{json,md} (a smoke run, about 1 min)")
     args = parser.parse_args(argv)
+    if args.quick:
+        args.repeats, args.max_bodies, args.beyond = 3, min(args.max_bodies, 7), 0
     bodies = list(range(3, args.max_bodies + 1))
     info = _common.machine_info()
     today = TODAY
@@ -251,9 +318,11 @@ def main(argv=None) -> dict:
     timings = {}
     for label, threads in (("threads unset", None), ("OPENBLAS_NUM_THREADS=1", "1")):
         timings[label] = run_worker(bodies, args.repeats, threads)
-        print(f"{label}: first fit {timings[label]['first_fit'][0]:.3f} s; " + ", ".join(
-            f"{r['n_bodies']}: {r['cold_wall_s']:.3f} s" for r in timings[label]["rows"]),
-            flush=True)
+        rows = timings[label]["rows"]
+        print(f"{label}: first fit {timings[label]['first_fit'][0]:.3f} s; cold CPU " + ", ".join(
+            f"{r['n_bodies']}: {r['cold_cpu_s']:.3f} s" for r in rows), flush=True)
+        for key, beam in (("cold_cpu_s", "rod"), ("unit_cold_cpu_s", "unit beam")):
+            print(f"  {beam}: " + _monotonic_text(steps([r[key] for r in rows])), flush=True)
 
     rod = _common.paper_rod()
     rows = []
@@ -269,49 +338,81 @@ def main(argv=None) -> dict:
                    "modal_bound": modal_bound(n)}
             if n in today:
                 row["today"] = today[n]
+            if n in BEFORE:
+                row["before"] = BEFORE[n]
             rows.append(row)
             print(f"{n} bodies: cost {row['cost']:.4e}"
                   + (f" (today {today[n]['cost']:.4e})" if n in today else ""), flush=True)
 
     out = {"machine": info, "repeats": args.repeats, "fit_bodies_limit": args.max_bodies,
-           "timings": timings, "accuracy": rows, "fit_version": fitting.FIT_VERSION,
-           "load_average_end": list(os.getloadavg())}
-    _common.write_json("fit.json", out)
+           "quick": args.quick, "timings": timings, "accuracy": rows,
+           "fit_version": fitting.FIT_VERSION, "load_average_end": list(os.getloadavg())}
+    for data in timings.values():
+        for key in ("cold_cpu", "unit_cold_cpu", "cold_wall"):
+            data[key + "_steps"] = steps([r[key + "_s"] for r in data["rows"]])
+    stem = "fit_quick" if args.quick else "fit"
+    _common.write_json(f"{stem}.json", out)
     markdown = to_markdown(out)
-    (_common.RESULTS / "fit.md").write_text(markdown)
+    (_common.RESULTS / f"{stem}.md").write_text(markdown)
     print(markdown)
     return out
 
 
-def _monotonic(values) -> str:
-    return "yes" if all(b >= a for a, b in zip(values, values[1:])) else "no"
+def steps(values) -> dict:
+    """Whether ``values`` (one per n, n increasing) increase, and their smallest step ratio."""
+    ratios = [b / a for a, b in zip(values, values[1:])]
+    if not ratios:
+        return {"increasing": True, "smallest_ratio": None, "at": None}
+    at = min(range(len(ratios)), key=ratios.__getitem__)
+    return {"increasing": all(r > 1.0 for r in ratios), "smallest_ratio": ratios[at], "at": at}
+
+
+def _monotonic_text(step: dict, first_n: int = 3) -> str:
+    if step["smallest_ratio"] is None:
+        return "one n only"
+    n = first_n + step["at"]
+    return (f"increasing in n: {'yes' if step['increasing'] else 'no'}; smallest step "
+            f"{step['smallest_ratio'] - 1:+.0%} ({n} -> {n + 1} bodies), each step >= +10 %: "
+            f"{'yes' if step['smallest_ratio'] >= 1.1 else 'no'}")
 
 
 def to_markdown(out: dict) -> str:
     info = out["machine"]
     lines = ["# fit_chain: speed and accuracy (issue 10)", "",
-             "Generated by `benchmarks/bench_fit.py`: the paper's rod, "
-             "`fit_chain(rod, n)` (match=\"poles-and-zeros\"). "
+             "Generated by `benchmarks/bench_fit.py`"
+             + (" --quick" if out.get("quick") else "") + ": the paper's rod, "
+             "`fit_chain(rod, n)` (match=\"poles-and-zeros\", fit version "
+             f"{out['fit_version']}), and the unit beam (L = EJ = rho = 1). "
              f"{info['date_utc']} UTC, {info['cpu']}, {info['nproc']} cores (shared), numpy "
              f"{info['numpy']}, scipy {info['scipy']}; load average (1 min) per row.", "",
              "## Time per fit", "",
              f"Cold: memo cleared, median of {out['repeats']}; memoised: a fit of another beam "
-             "with the same options (median of 50). Wall and CPU time of the process [s].", ""]
+             "with the same options (median of 50). Wall and CPU time of the process [s]; "
+             "evaluations: residual evaluations of one fit (`evaluation_budget`); step: cold "
+             "CPU time over the previous row's. The fit's work does not depend on the beam "
+             "(appendages.fitting, scale invariance): the unit beam's column measures the "
+             "same work again.", ""]
     for label, data in out["timings"].items():
         first = data["first_fit"]
+        rows = data["rows"]
         lines += [f"### {label}", "",
                   f"First fit of a process (3 bodies, imports threadpoolctl): {first[0]:.3f} s "
                   f"wall, {first[1]:.3f} s CPU.", ""]
-        header = ["bodies", "cold wall [s]", "cold CPU [s]", "memoised [ms]",
-                  "load before / after"]
-        body = [[r["n_bodies"], f"{r['cold_wall_s']:.3f}", f"{r['cold_cpu_s']:.3f}",
-                 f"{1e3 * r['memo_wall_s']:.3f}",
-                 f"{r['load_before']:.1f} / {r['load_after']:.1f}"] for r in data["rows"]]
+        header = ["bodies", "evaluations", "cold wall [s]", "cold CPU [s]", "step",
+                  "unit beam: cold CPU [s]", "step", "memoised [ms]", "load before / after"]
+        body = []
+        for i, r in enumerate(rows):
+            cells = [r["n_bodies"], r["nfev"], f"{r['cold_wall_s']:.3f}"]
+            for key in ("cold_cpu_s", "unit_cold_cpu_s"):
+                cells += [f"{r[key]:.3f}",
+                          "-" if i == 0 else f"{r[key] / rows[i - 1][key] - 1:+.0%}"]
+            cells += [f"{1e3 * r['memo_wall_s']:.3f}",
+                      f"{r['load_before']:.1f} / {r['load_after']:.1f}"]
+            body.append(cells)
         lines += [_common.markdown_table(header, body), "",
-                  "Cold wall time monotonic in n: "
-                  + _monotonic([r["cold_wall_s"] for r in data["rows"]])
-                  + "; cold CPU time: " + _monotonic([r["cold_cpu_s"] for r in data["rows"]])
-                  + ".", ""]
+                  "Cold CPU time, rod: " + _monotonic_text(data["cold_cpu_steps"])
+                  + ". Unit beam: " + _monotonic_text(data["unit_cold_cpu_steps"])
+                  + ". Cold wall time: " + _monotonic_text(data["cold_wall_steps"]) + ".", ""]
     lines += ["## Accuracy against the exact beam, beside today's fit", "",
               "cost: the fit's objective (weighted least squares in log-frequency, the same for "
               "every beam); bound: the same objective minimised over modal models (the "
@@ -335,6 +436,23 @@ def to_markdown(out: dict) -> str:
                 cells += [f"{bound:.4g}", f"{r['cost'] / bound - 1:+.1%} / "
                           + ("-" if t is None else f"{t['cost'] / bound - 1:+.1%}")]
         cells += [f"{r['one_fit_cpu_s']:.2f}", "-" if t is None else f"{t['cpu_s']:.2f}"]
+        body.append(cells)
+    lines += [_common.markdown_table(header, body), ""]
+    lines += ["## Against the fit before its work schedule", "",
+              "Relative change of each accuracy column against fit version 3 (commit e513dca, "
+              "`BEFORE`: the previous fit.json), negative = better; \"=\" within 1e-6. "
+              "above bound: before -> now.", ""]
+    header = ["bodies", "above bound", "cost", "p2", "z2", "all", "band"]
+    body = []
+    for r in out["accuracy"]:
+        b = r.get("before")
+        if b is None:
+            continue
+        cells = [f"{r['n_bodies']}" + ("" if r["within_limit"] else " (beyond limit)"),
+                 f"{b['cost'] / b['bound'] - 1:+.2%} -> {r['cost'] / r['modal_bound'] - 1:+.2%}"]
+        for key in ("cost", "p2", "z2", "all", "band"):
+            change = r[key] / b[key] - 1
+            cells.append("=" if abs(change) <= 1e-6 else f"{change:+.2%}")
         body.append(cells)
     lines += [_common.markdown_table(header, body), ""]
     return "\n".join(lines) + "\n"
