@@ -158,8 +158,8 @@ _STAGE2_PER_PARAMETER = 5
 _EVALUATIONS_PER_PARAMETER_AND_BODY = 3
 
 # A later path's chain replaces the best one only if its cost is lower by more than this
-# fraction: paths that end in one minimum agree to about stage 2's tolerance (1e-8 of the
-# cost), and the first path's chain is kept then.
+# fraction; smaller differences count as ties, kept by the earlier path (module docstring, "The
+# work schedule").
 _BETTER = 1e-5
 
 
@@ -499,7 +499,8 @@ class DimensionlessChain:
     start_cost : float
         Cost of the fit's start (the RFEM chain) [-]; nan for the frequency fit.
     stopped : bool
-        Whether a stage stopped at its evaluation budget before its tolerances were met.
+        Whether the fit's evaluation budget cut its first path (from the RFEM chain) short
+        before its tolerances were met.
     max_nfev : int or None
         The budget of the fit asked for (None: the default).
     nfev : int
@@ -655,7 +656,7 @@ def fit_poles_and_zeros(n_bodies: int, *, pole_weight: float = 10.0,
     -------
     DimensionlessChain
         ``stopped`` when the budget cut the first path (the RFEM start) short; ``nfev`` the
-        evaluations spent (the budget, unless it exceeds what every path can use).
+        evaluations spent: the budget (the sequence of paths is endless).
 
     Raises
     ------
