@@ -10,11 +10,13 @@ them; the machine has 2 cores) and all set to 1. In each subprocess:
 - the first fit of the process (3 bodies; it also imports threadpoolctl and finds the BLAS
   libraries, once per process);
 - per n and beam, *cold*: ``appendages.fitting.clear_memo()`` then ``fit_chain(beam, n)``,
-  median of ``--repeats`` (three times as many up to 6 bodies, whose short fits are noisier);
+  median of ``--repeats`` (three times as many up to 6 bodies, whose short fits are noisier),
+  measured in rounds over every n and beam (a burst of load stretches several n alike);
   *memoised*: ``fit_chain(other_beam, n)`` served from the memo (a steel tube of
   another size: the memo is per options, not per beam), median of at least 50 calls;
-- wall time (perf_counter) and the process's CPU time (process_time), and the 1-min load average
-  before and after each n: wall time on a shared machine is CPU time stretched by the load.
+- wall time (perf_counter) and the process's CPU time (process_time), and the lowest and
+  highest 1-min load average seen before the rounds' fits of each n: wall time on a shared
+  machine is CPU time stretched by the load.
 
 Whether the cold CPU time increases with n (issue 10: the cost monotonic in the number of
 bodies; appendages.fitting, "The work schedule") is printed and recorded, with the smallest step
@@ -153,22 +155,29 @@ def timed(function):
 out = {{"first_fit": None, "rows": []}}
 with limits.raised(fit_bodies=max({bodies})):
     out["first_fit"] = timed(lambda: fit_chain(beams["rod"], 3))
-    for n in {bodies}:
-        load_before = os.getloadavg()[0]
-        row = {{"n_bodies": n}}
-        for name, beam in beams.items():
-            cold = []
-            for _ in range(3 * repeats if n <= 6 else repeats):  # short fits: noisier
+    # rounds over every n and beam, so that a burst of load on the shared machine stretches
+    # several n alike instead of all the repeats of one n
+    cold = {{(n, name): [] for n in {bodies} for name in beams}}
+    loads = {{n: [] for n in {bodies}}}
+    for round_ in range(3 * repeats):
+        for n in {bodies}:
+            if round_ >= repeats and n > 6:  # short fits (<= 6 bodies): three times as many
+                continue
+            loads[n].append(os.getloadavg()[0])
+            for name, beam in beams.items():
                 fitting.clear_memo()
-                cold.append(timed(lambda: fit_chain(beam, n)))
+                cold[n, name].append(timed(lambda: fit_chain(beam, n)))
+    for n in {bodies}:
+        row = {{"n_bodies": n}}
+        for name in beams:
             prefix = "" if name == "rod" else name + "_"
-            row[prefix + "cold_wall_s"] = statistics.median(w for w, _ in cold)
-            row[prefix + "cold_cpu_s"] = statistics.median(c for _, c in cold)
-            row[prefix + "cold_cpu_all_s"] = [c for _, c in cold]
+            row[prefix + "cold_wall_s"] = statistics.median(w for w, _ in cold[n, name])
+            row[prefix + "cold_cpu_s"] = statistics.median(c for _, c in cold[n, name])
+            row[prefix + "cold_cpu_all_s"] = [c for _, c in cold[n, name]]
         memo = [timed(lambda: fit_chain(other, n)) for _ in range(max(50, repeats))]
         row.update(memo_wall_s=statistics.median(w for w, _ in memo),
-                   nfev=fitting.fit_poles_and_zeros(n).nfev, load_before=load_before,
-                   load_after=os.getloadavg()[0])
+                   nfev=fitting.fit_poles_and_zeros(n).nfev, load_min=min(loads[n]),
+                   load_max=max(loads[n]))
         out["rows"].append(row)
 print(json.dumps(out))
 """
@@ -399,7 +408,7 @@ def to_markdown(out: dict) -> str:
                   f"First fit of a process (3 bodies, imports threadpoolctl): {first[0]:.3f} s "
                   f"wall, {first[1]:.3f} s CPU.", ""]
         header = ["bodies", "evaluations", "cold wall [s]", "cold CPU [s]", "step",
-                  "unit beam: cold CPU [s]", "step", "memoised [ms]", "load before / after"]
+                  "unit beam: cold CPU [s]", "step", "memoised [ms]", "load min / max"]
         body = []
         for i, r in enumerate(rows):
             cells = [r["n_bodies"], r["nfev"], f"{r['cold_wall_s']:.3f}"]
@@ -407,7 +416,7 @@ def to_markdown(out: dict) -> str:
                 cells += [f"{r[key]:.3f}",
                           "-" if i == 0 else f"{r[key] / rows[i - 1][key] - 1:+.0%}"]
             cells += [f"{1e3 * r['memo_wall_s']:.3f}",
-                      f"{r['load_before']:.1f} / {r['load_after']:.1f}"]
+                      f"{r['load_min']:.1f} / {r['load_max']:.1f}"]
             body.append(cells)
         lines += [_common.markdown_table(header, body), "",
                   "Cold CPU time, rod: " + _monotonic_text(data["cold_cpu_steps"])
