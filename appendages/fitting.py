@@ -95,15 +95,15 @@ kept ends with 19 % (10 bodies) to 220 % to spare, except at 13 bodies, where th
 path's chain is 0.02 % lower than the first's. Every fit ends within 0.02 % of the bound (the
 cost at 7, 8, 9 bodies 1.9 %, 5.3 %, 9.9 % lower than before; the largest error of any pole or
 zero there 3 %, 7 %, 13 % higher: the fit spreads its errors evenly over the modes, as it does
-from 10 bodies on); the cold CPU time grows by 19 % or more per body (3 bodies 0.04 s, 10
-bodies 1.0 s, 14 bodies 2.5 s, single-threaded BLAS at load 1.5). If the budget
+from 10 bodies on); the cold CPU time grows by 20 % or more per body (3 bodies 0.04 s, 10
+bodies 0.95 s, 14 bodies 2.5 s, single-threaded BLAS at load 1.6 to 2.3). If the budget
 (``max_nfev``) cuts the first path short, the fit says so (``stopped``, and
 :func:`~appendages.equivalence.fit_chain` warns). The result is deterministic: the same chain
 for every beam and every BLAS thread count.
 
 Beyond the ``fit_bodies`` limit of :mod:`appendages.limits` (14): before this schedule the RFEM
 paths ended in poor basins at 15 and 16 bodies (4.9 and 390 times the bound); with it both end
-within 0.02 % of the bound (the equal chain's path), at 3.4 and 4.3 s of CPU.
+within 0.02 % of the bound, at about 3 and 4 s of CPU (the limit is not this module's).
 
 Measured and rejected: a warm start from the (n - 1)-body fit (one body split in two: it reached
 the bound at 7 and 8 bodies, then poor basins from 9 on); a homotopy of the targets from the
