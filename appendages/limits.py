@@ -20,12 +20,12 @@ name               default  what it bounds
                             13 MB)
 ``bodies``         500      bodies of a :class:`~appendages.chain.HingedChain` (also through
                             ``HingedChain.rfem``, ``superelements``: 2 n + 1 bodies)
-``fit_bodies``     14       bodies of ``fit_chain(match="poles-and-zeros")``, set by the fit's
-                            quality, not its time: from 15 bodies its start leads it to poor
-                            minima (cost 6.7 and 390 times the modal bound at 15 and 16,
-                            appendages.fitting). Cold fits, medians of 5 at load 14-15:
-                            0.14 s (0.06 s CPU) at 3 bodies, 2.0 s (0.7 s) at 10, 3.7 s
-                            (1.2 s) at 14; memoised 0.2 ms (benchmarks/results/fit.md)
+``fit_bodies``     14       bodies of ``fit_chain(match="poles-and-zeros")``: the range the fit
+                            is benchmarked and tested on (3 to 14 bodies end within 0.02 % of
+                            the modal bound, appendages.fitting; 15 and 16 measured there too,
+                            at 3 and 4 s CPU). Cold fits, CPU medians of 5 at load 1.6-2.7:
+                            0.04 s at 3 bodies, 0.95 s at 10, 2.5 s at 14, growing by at least
+                            20 % per body; memoised 0.1 ms (benchmarks/results/fit.md)
 ``roots``          1e6      frequencies or zeros of a distributed beam asked at once
                             (``Beam.natural_frequencies(n)`` etc.: O(n), ~1 s and 40 MB at 1e6)
 ``frequencies``    100000   exact coupled frequencies asked of

@@ -442,7 +442,7 @@ def _check_n_bodies(args):
     bound = limits.fit_bodies
     if args.n_bodies > bound:
         raise _UserError(f"--n-bodies {args.n_bodies}: over the limit {bound} (limits."
-                         f"fit_bodies: from 15 bodies the fit ends in poor minima); ask for "
+                         f"fit_bodies: the range the fit is tested on); ask for "
                          f"fewer, or raise it with --limit fit_bodies=N")
     return limits
 

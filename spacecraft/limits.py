@@ -21,10 +21,10 @@ modes          500          ``fidelity.n_modes`` (bending modes per truncated be
 bodies         500          bodies of an explicit or ``from_beam`` chain (a 500-body
                             truth chain: 998 states, 7 s, 1.4 GB)
 fit_bodies     14           ``fit.n_bodies``: appendages' own limit (``appendages.limits``),
-                            set by the fit's quality: from 15 bodies its start leads the
-                            "poles-and-zeros" fit to poor minima. Cold fits 0.14 s at 3
-                            bodies, 2.0 s at 10, 3.7 s at 14 (load 14;
-                            benchmarks/results/fit.md); raising it raises appendages' too
+                            the range the "poles-and-zeros" fit is benchmarked and tested on.
+                            Cold fits 0.04 s CPU at 3 bodies, 0.95 s at 10, 2.5 s at 14
+                            (load 1.6-2.7; benchmarks/results/fit.md); raising it raises
+                            appendages' too
 appendages     64           mounted appendages
 states         1200         states of the largest closed loop (upper bound: truth plant
                             plus controller). A 1202-state loop (600 modes, PD) took 20 s

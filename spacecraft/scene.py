@@ -227,8 +227,8 @@ modes           500          ``fidelity.n_modes``; the search from ``fidelity.to
                              tries at most 40 modes, or this limit if lower (see
                              ``spacecraft.fidelity.MAX_MODES``)
 bodies          500          bodies per chain (arrays, ``chain.n_bodies``)
-fit_bodies      14           ``fit.n_bodies`` (appendages' limit: from 15 bodies the fit ends in
-                             poor minima)
+fit_bodies      14           ``fit.n_bodies`` (appendages' limit: the range the fit is
+                             benchmarked and tested on)
 appendages      64           ``appendages`` entries
 states          1200         states of the largest closed loop (estimated upper bound)
 samples         1e7          samples per simulation, ``duration / step + 1`` (and of FMU
