@@ -145,3 +145,82 @@ def test_errors(A, match):
         block_diagonal_form(A)
     with pytest.raises(ValueError, match="max_coupling must be positive"):
         block_diagonal_form(np.eye(2), max_coupling=-1.0)
+
+
+# --------------------------------------------------------------------------
+# Accurate products and the refined cluster blocks (against exact arithmetic)
+# --------------------------------------------------------------------------
+
+def exact_product(X, Y):
+    """X @ Y in exact rational arithmetic, rounded once to float64."""
+    from fractions import Fraction
+    Xf = [[Fraction(float(v)) for v in row] for row in X]
+    Yf = [[Fraction(float(v)) for v in col] for col in np.asarray(Y).T]
+    return np.array([[float(sum(a * b for a, b in zip(row, col))) for col in Yf]
+                     for row in Xf])
+
+
+@pytest.mark.parametrize("k", [3, 50, 400])
+def test_accurate_product_first_part_is_exact(k):
+    """P1 of the error-free splitting is X1 @ Y1 exactly (every product and partial sum
+    representable), and P1 + P2 is X @ Y to ~2 k eps 2^-bits |X| |Y| (the remainder's
+    float64 products), far below one float64 product's k eps |X| |Y|: checked on a product
+    that cancels (rows of X orthogonal to columns of Y up to 1e-12) with entries over 12
+    decades."""
+    from controllers.modal_form import _accurate_product, _split
+    rng = np.random.default_rng(k)
+    X = rng.standard_normal((4, k)) * 10.0 ** rng.uniform(-6, 6, (4, 1))
+    Y = rng.standard_normal((k, 3)) * 10.0 ** rng.uniform(-6, 6, (1, 3))
+    Y -= X.T @ np.linalg.lstsq(X.T, Y, rcond=None)[0]    # X @ Y ~ 1e-12 |X| |Y|
+    P1, P2 = _accurate_product(X, Y)
+    bits = (53 - int(np.ceil(np.log2(k)))) // 2
+    X1, X2 = _split(X, 1, bits)
+    Y1, Y2 = _split(Y, 0, bits)
+    assert np.array_equal(X1 + X2, X) and np.array_equal(Y1 + Y2, Y)
+    np.testing.assert_array_equal(P1, exact_product(X1, Y1))
+    bound = 4 * k * EPS * 2.0 ** -bits * (np.abs(X) @ np.abs(Y))
+    assert np.all(np.abs(P1 + P2 - exact_product(X, Y)) <= bound + EPS * np.abs(P1 + P2))
+
+
+def stiff_system_with_rigid_bodies(seed):
+    """Two free rigid bodies, modes from 0.3 to 1000 rad/s: ||A|| ~ 1e3, the rigid bodies'
+    blocks ~1."""
+    rng = np.random.default_rng(seed)
+    return oscillators(rng, [0.3, 2.0, 40.0, 1000.0], [0.01, 0.02, 0.005, 0.001], n_rigid=2)
+
+
+def exact_diagonal_block(A, V, a, b):
+    """(V^-1 A V)[a:b, a:b] for the float64 A and V, in 60-digit arithmetic."""
+    import mpmath
+    with mpmath.workdps(60):
+        Vm = mpmath.matrix(V.tolist())
+        M = mpmath.inverse(Vm) * mpmath.matrix(A.tolist()) * Vm
+        return np.array([[float(M[i, j]) for j in range(a, b)] for i in range(a, b)])
+
+
+@pytest.mark.parametrize("seed", [0, 3])
+def test_rigid_blocks_are_the_exact_blocks_of_the_transformation(monkeypatch, seed):
+    """Seed 0: the two rigid bodies form one 4 x 4 cluster; seed 3: two near-defective
+    2 x 2 blocks (eigenvalues ~1e-7 next to entries ~1).  Each rigid-body block equals the diagonal block of V^-1 A V (the exact
+    similarity of the float64 V) to ~eps |T_c|: its rounding (eps) plus the rounding of the
+    correction through V^-1 (cond(V) eps times the correction ~ n eps ||A|| cond(V)).
+    Without the refinement it carries the Schur form's backward error ~eps ||A|| cond(V),
+    ~1e3 times more here: checked too, so that this test can fail."""
+    import controllers.modal_form as modal_form
+    A = stiff_system_with_rigid_bodies(seed)
+    n = A.shape[0]
+    form = block_diagonal_form(A)
+    monkeypatch.setattr(modal_form, "_refine_blocks", lambda *args: None)
+    raw = block_diagonal_form(A)
+    np.testing.assert_array_equal(raw.V, form.V)
+    rigid = [j for j, block in enumerate(raw.blocks)
+             if np.abs(np.linalg.eigvals(block)).max() < 1e-4]
+    assert sum(raw.sizes[rigid]) == 4 and len(rigid) == (1 if seed == 0 else 2)
+    correction = n * EPS * np.abs(A).max() * form.condition
+    for j in rigid:
+        a, b = form.starts[j], form.starts[j + 1]
+        exact = exact_diagonal_block(A, form.V, a, b)
+        tolerance = 4 * EPS * np.abs(exact).max() + 4 * form.condition * EPS * correction
+        assert np.abs(form.blocks[j] - exact).max() <= tolerance
+        assert np.abs(raw.blocks[j] - exact).max() > 10 * tolerance
+    check_factorisation(A, form)
