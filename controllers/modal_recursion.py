@@ -27,7 +27,6 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import scipy.linalg
 
 from .discretise import discretise_blocks
 from .modal_form import BlockDiagonalForm, block_diagonal_form
@@ -92,10 +91,6 @@ class ModalRecursion:
     def __init__(self, A, B, C, D, dt, hold, *, form: BlockDiagonalForm | None = None):
         self.form = form if form is not None else block_diagonal_form(A)
         V = self.form.V
-        # z = V^-1 x by an LU solve, not the explicit inverse: backward stable, so that the
-        # inputs and the initial state seen in x (V z) are B and x0 to ~eps, where the
-        # explicit inverse leaves ~cond(V) eps.
-        self._lu = scipy.linalg.lu_factor(V)
         n, m = B.shape
         p = C.shape[0]
         sizes = self.form.sizes
@@ -120,7 +115,10 @@ class ModalRecursion:
 
         # Exact discretisation, block by block (stacked by size).
         # Through the corrected transformation V (I + Z) (modal_form's refined blocks).
-        Bz = self.form.left(scipy.linalg.lu_solve(self._lu, B))
+        # z = V^-1 x by the form's LU solve, not an explicit inverse: backward stable, so
+        # that the inputs and the initial state seen in x (V z) are B and x0 to ~eps, where
+        # the explicit inverse leaves ~cond(V) eps.
+        Bz = self.form.left(self.form.solve(B))
         Phi = [None] * len(starts)
         G0z = np.zeros((n, m))
         G1z = np.zeros((n, m))
@@ -201,7 +199,7 @@ class ModalRecursion:
         U_rows = np.zeros((N + 1, m))
         U_rows[:N] = U.T
         z0 = np.zeros(nz)
-        z0[self._position] = self.form.left(scipy.linalg.lu_solve(self._lu, x0))
+        z0[self._position] = self.form.left(self.form.solve(x0))
         Y = np.empty((N, p))
         Z = np.empty((N, nz + m)) if store else np.empty((0, nz + m))
         f00, f01, f10, f11 = self._f

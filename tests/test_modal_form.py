@@ -213,8 +213,8 @@ def test_rigid_blocks_are_the_exact_blocks_of_the_transformation(monkeypatch, se
     n = A.shape[0]
     form = block_diagonal_form(A)
     monkeypatch.setattr(modal_form, "_refine_blocks",
-                        lambda A, V, V_inv, starts, blocks:
-                        (starts, blocks, V, V_inv, np.zeros(0, dtype=int), None, None))
+                        lambda A, V, inverse, starts, blocks:
+                        (starts, blocks, None, np.zeros(0, dtype=int), None, None))
     raw = block_diagonal_form(A)
 
     def rigid(f):
@@ -278,3 +278,36 @@ def test_refined_blocks_are_decoupled_from_the_others(seed):
     coupling_after = np.abs(after[mask]).max()
     assert coupling_before > 10 * EPS          # present: eps ||A|| cond(V) ~ 1e-12
     assert coupling_after <= 1e-3 * coupling_before
+
+
+def test_blocks_too_close_to_decouple_are_merged_and_made_contiguous():
+    """Two near-defective rigid blocks (eigenvalues +-1e-7, +-2e-7) coupled by 1e-10, with
+    an oscillator between them: decoupling them would need |Z| ~ 1e-10 / 1e-7 = 1e-3, not a
+    first-order correction, so _refine_blocks merges them into one 4 x 4 block placed first
+    (V's columns permuted to [0, 1, 4, 5, 2, 3]); the merged block is the exact
+    (V^-1 A V) block of the permuted V (to ~eps |T| plus cond(V) eps times the correction),
+    and the corrected form reproduces A (check_factorisation's bound)."""
+    import scipy.linalg
+    from controllers.modal_form import BlockDiagonalForm, _Inverse, _refine_blocks
+    T0 = np.zeros((6, 6))
+    T0[0:2, 0:2] = [[1e-7, 1.0], [0.0, -1e-7]]
+    T0[2:4, 2:4] = [[-0.01, 5.0], [-5.0, -0.01]]
+    T0[4:6, 4:6] = [[2e-7, 0.8], [0.0, -2e-7]]
+    T0[0:2, 4:6] = 1e-10
+    rng = np.random.default_rng(11)
+    V = np.eye(6) + 0.3 * rng.standard_normal((6, 6))
+    A = V @ T0 @ np.linalg.inv(V)
+    blocks = [T0[0:2, 0:2].copy(), T0[2:4, 2:4].copy(), T0[4:6, 4:6].copy()]
+    lu = scipy.linalg.lu_factor(V)
+    starts, blocks, perm, *coupling = _refine_blocks(
+        A, V, _Inverse(lu, np.ones(6), None), np.array([0, 2, 4, 6]), blocks)
+    assert list(np.diff(starts)) == [4, 2]
+    np.testing.assert_array_equal(perm, [0, 1, 4, 5, 2, 3])
+    form = BlockDiagonalForm(starts, blocks, V[:, perm], float(np.linalg.cond(V, 1)),
+                             *coupling, _inverse=_Inverse(lu, np.ones(6), perm))
+    exact = exact_diagonal_block(A, form.V, 0, 4)
+    correction = 6 * EPS * np.abs(A).max() * form.condition
+    tolerance = 4 * EPS * np.abs(exact).max() + 4 * form.condition * EPS * correction
+    assert np.abs(form.blocks[0] - exact).max() <= tolerance
+    assert abs(form.blocks[0][0, 2] - 1e-10) < 1e-14          # the coupling is kept
+    check_factorisation(A, form)
