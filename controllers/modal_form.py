@@ -17,8 +17,8 @@ diagonal; if ``max |X_ij|`` exceeds the bound (or the equation is singular), the
 block of ``T22`` nearest to the eigenvalues of ``T11`` is moved next to it by an orthogonal
 swap (LAPACK ``trexc``) and the enlarged block is tried again.
 
-Last, the blocks whose round-off matters most (clusters, rigid bodies, slow blocks: those
-whose eigenvalues are small next to ||A||) are refined to the exact diagonal blocks of
+Last, the blocks whose round-off matters most (clusters, rigid bodies, integrators: defective
+blocks and eigenvalues zero to the Schur form's accuracy) are refined to the exact diagonal blocks of
 ``V^-1 A V`` for the float64 V and decoupled from the other blocks to first order, from
 residuals computed with error-free products (``_refine_blocks``): the Schur form's backward
 error ~eps ||A|| would otherwise accumulate in a rigid body's drift.
@@ -60,9 +60,10 @@ class BlockDiagonalForm:
     starts : numpy.ndarray of int, shape (r + 1,)
         Block j occupies rows and columns ``starts[j]:starts[j + 1]``.
     blocks : list of numpy.ndarray
-        The diagonal blocks ``A_j`` (real; in real Schur form, except the clusters (larger
-        than 2 x 2) and the blocks of small eigenvalues, which are the accurately computed
-        diagonal blocks of ``V^-1 A V``, dense: see ``_refine_blocks``).
+        The diagonal blocks ``A_j`` (real; in real Schur form, except the refined ones
+        (clusters larger than 2 x 2, near-defective and zero-eigenvalue blocks), which are
+        the accurately computed diagonal blocks of ``V^-1 A V``, dense: see
+        ``_refine_blocks``).
     V : numpy.ndarray, shape (n, n)
         The transformation (columns of V span the blocks' invariant subspaces).  Its
         inverse is applied by :meth:`solve` (an LU factorisation) and formed on request
@@ -309,23 +310,28 @@ def _bits(k: int) -> int:
     return (53 - int(np.ceil(np.log2(max(k, 2))))) // 2
 
 
-# Blocks whose spectral radius is below this fraction of max |A| (or of their own max |A_j|)
-# are refined by _refine_blocks, as are all blocks larger than 2 x 2.
-_REFINE_BELOW = 1e-3
+# A 2 x 2 block whose spectral radius is below this fraction of its largest entry is
+# near-defective (a free rigid body split off on its own) and is refined by _refine_blocks.
+_NEAR_DEFECTIVE = 1e-3
 
 
 def _refined(block: np.ndarray, norm_A: float) -> bool:
     """Whether a diagonal block is refined (see :func:`_refine_blocks`): a cluster (larger
-    than 2 x 2), or a block whose eigenvalues are small next to max |A| or to its own
-    entries (a near-defective 2 x 2 block: a free rigid body split off on its own)."""
+    than 2 x 2: defective or close eigenvalues), a block whose eigenvalues are zero to the
+    Schur form's accuracy (spectral radius below sqrt(eps) max |A|: integrators, rigid
+    bodies split apart), or a near-defective 2 x 2 block (radius below 1e-3 of its largest
+    entry).  Slow but well-separated modes are not refined: measured on issue 10's systems,
+    refining those too (eigenvalues below 1e-3 max |A|) cut the remaining error by up to
+    4x at 50 states but cost 0.6 to 1.5 ms of set-up at 20 to 200 states, for errors
+    already 10 to 30 times below forced_response's."""
     if block.shape[0] > 2:
         return True
+    zero = np.sqrt(np.finfo(float).eps) * max(norm_A, np.finfo(float).tiny)
     if block.shape[0] == 1:
-        return abs(block[0, 0]) < _REFINE_BELOW * max(norm_A, np.finfo(float).tiny)
+        return abs(block[0, 0]) < zero
     (a, b), (c, d) = block.tolist()
     radius = abs(a * d - b * c) ** 0.5
-    return radius < _REFINE_BELOW * max(norm_A, np.finfo(float).tiny, abs(a), abs(b),
-                                        abs(c), abs(d))
+    return radius < zero or radius < _NEAR_DEFECTIVE * max(abs(a), abs(b), abs(c), abs(d))
 
 
 def _refine_blocks(A, V, inverse, starts, blocks):
@@ -342,7 +348,7 @@ def _refine_blocks(A, V, inverse, starts, blocks):
 
     The Schur form leaves every block with a backward error ~eps ||A||: for a cluster of
     defective or close eigenvalues (a free rigid body's double integrator, ||T_c|| ~ 1 in a
-    system whose ||A|| is its stiffest mode's frequency) or a slow block that is an error of
+    system whose ||A|| is its stiffest mode's frequency) that is an error of
     ~eps ||A|| / ||T_c|| relative, and the polynomially growing motion of a defective block
     (a rigid body's position drifts ~t^1.5 under random inputs) carries it into the outputs
     over a long run.  With ``R_c = A V_c - V_c T_c`` computed accurately (error-free
@@ -363,12 +369,13 @@ def _refine_blocks(A, V, inverse, starts, blocks):
     their own, ~sqrt(eps ||A||) apart) become one block, their exact coupling E included.
 
     Measured on issue 10's general systems (``benchmarks/issue10.py``: 20 to 400 states,
-    two rigid bodies): the outputs' error against an extended-precision solution fell 1.4
-    to 90 times (3.7e-11 to 4.1e-13 at 20 states over 1e4 samples; 9.0e-13 to 3.7e-13 at
-    400 states over 2000), to 0.02 to 0.7 times forced_response's, at a cost of O(n^2 k)
-    for k refined states.  The other blocks are left alone: refining all of them (O(n^3),
-    three more products of order n) changed the errors by under 20 % (their round-off does
-    not grow polynomially).
+    two rigid bodies): the outputs' error against an extended-precision solution fell 2.4
+    to 90 times (3.7e-11 to 4.2e-13 at 20 states over 1e4 samples; 9.0e-13 to 3.7e-13 at
+    400 states over 2000), to 0.04 to 0.7 times forced_response's, at a cost of O(n^2 k)
+    for k refined states (0.3 to 6 ms of set-up at 20 to 400 states).  The other blocks
+    are left alone (see :func:`_refined`): refining all of them (O(n^3), three more
+    products of order n) changed the errors by under 20 % (their round-off does not grow
+    polynomially).
     """
     n = A.shape[0]
     nothing = (starts, blocks, None, np.zeros(0, dtype=int), None, None)
@@ -389,11 +396,12 @@ def _refine_blocks(A, V, inverse, starts, blocks):
     bits = _bits(n)
     A_parts, V_parts = _parts(A, bits), _parts(V, bits)
     P1, P2 = _pair(A_parts, tuple(part[:, columns] for part in V_parts))
-    residual = np.empty((n, columns.size))
+    T_chosen = np.zeros((columns.size, columns.size))
     for j in chosen:
-        Q1, Q2 = _accurate_product(V[:, spans[j]], blocks[j])
-        # P1 - Q1: two exact values of one product that nearly cancel, one rounding.
-        residual[:, rows[j]] = (P1[:, rows[j]] - Q1) + (P2[:, rows[j]] - Q2)
+        T_chosen[rows[j], rows[j]] = blocks[j]
+    Q1, Q2 = _accurate_product(V[:, columns], T_chosen)
+    # P1 - Q1: two exact values of one product that nearly cancel, one rounding.
+    residual = (P1 - Q1) + (P2 - Q2)
     # E's columns of the refined blocks (their diagonal blocks refine the blocks), and its
     # rows: L_c (A V - V T) for the float64 L_c = V^-1[c, :].
     E_cols = inverse.solve(residual)

@@ -249,8 +249,8 @@ def exact_similarity(A, V, Z_right, Z_left):
 
 @pytest.mark.parametrize("seed", [0, 3])
 def test_refined_blocks_are_decoupled_from_the_others(seed):
-    """The off-diagonal couplings of the refined blocks (the rigid bodies' and the 0.3 rad/s
-    mode's: eigenvalues below 1e-3 max |A|): ~eps ||A|| cond(V) in the exact V^-1 A V of
+    """The off-diagonal couplings of the refined blocks (the rigid bodies'): ~eps ||A||
+    cond(V) in the exact V^-1 A V of
     the float64 V (the Schur form's round-off, which the rigid bodies integrate), removed to
     first order by the corrected transformation V (I + Z): in the exact
     (I - Z) V^-1 A V (I + Z) they are O(|E| |Z|) plus the rounding of Z's entries (eps |Z|
