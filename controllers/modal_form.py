@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg
+import scipy.linalg.blas
 import scipy.linalg.lapack
 
 __all__ = ["BlockDiagonalForm", "block_diagonal_form", "DEFAULT_MAX_COUPLING"]
@@ -208,7 +209,7 @@ def block_diagonal_form(A, *, max_coupling: float = DEFAULT_MAX_COUPLING
     starts = np.array(sorted(form.starts) + [n])
     # The condition number that matters for round-off is that of V without its (exact)
     # diagonal scaling: W = Q Y (one product, used for both).
-    W = Q @ form.Y
+    W = _times_block_triangular(Q, form.Y)
     V = np.ascontiguousarray(scaling[:, None] * W)
     T = form.T
     lu = scipy.linalg.lu_factor(W, check_finite=False)
@@ -221,6 +222,19 @@ def block_diagonal_form(A, *, max_coupling: float = DEFAULT_MAX_COUPLING
         V = np.ascontiguousarray(V[:, perm])
         inverse = _Inverse(lu, scaling, perm)
     return BlockDiagonalForm(starts, blocks, V, condition, *coupling, _inverse=inverse)
+
+
+def _times_block_triangular(Q: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """``Q @ Y`` for the decoupling's Y: upper triangular (identity plus the Sylvester
+    steps' blocks above the diagonal) but for the few columns that the swaps of diagonal
+    blocks rotated: one triangular product (BLAS trmm, half a general product's work) plus
+    the columns with entries below the diagonal (any Y gives Q @ Y)."""
+    lower = np.tril(Y, -1)
+    W = scipy.linalg.blas.dtrmm(1.0, Y, Q, side=1, lower=0)
+    columns = np.flatnonzero(np.any(lower, axis=0))
+    if columns.size:
+        W[:, columns] += Q @ lower[:, columns]
+    return W
 
 
 class _Inverse:

@@ -95,19 +95,19 @@ class ModalRecursion:
         p = C.shape[0]
         sizes = self.form.sizes
         starts = self.form.starts[:-1]
-        singles = [int(i) for i, s in zip(starts, sizes) if s == 1]
-        doubles = [int(i) for i, s in zip(starts, sizes) if s == 2]
+        singles = starts[sizes == 1]
+        doubles = starts[sizes == 2]
         clusters = [(int(i), int(s)) for i, s in zip(starts, sizes) if s > 2]
         # Pairs: the 2 x 2 blocks, then the 1 x 1 blocks two by two (the last one with a
         # zero dummy state if their number is odd).
-        n_pairs = len(doubles) + (len(singles) + 1) // 2
+        n_pairs = doubles.size + (singles.size + 1) // 2
         nz = 2 * n_pairs + sum(s for _, s in clusters)
         position = np.empty(n, dtype=np.int64)       # modal index -> position in z
-        for j, i in enumerate(doubles):
-            position[i], position[i + 1] = j, n_pairs + j
-        for q, i in enumerate(singles):
-            j = len(doubles) + q // 2
-            position[i] = j if q % 2 == 0 else n_pairs + j
+        position[doubles] = np.arange(doubles.size)
+        position[doubles + 1] = n_pairs + np.arange(doubles.size)
+        pair_of_single = doubles.size + np.arange(singles.size) // 2
+        position[singles[0::2]] = pair_of_single[0::2]
+        position[singles[1::2]] = n_pairs + pair_of_single[1::2]
         cl_starts = [2 * n_pairs]
         for i, s in clusters:
             position[i:i + s] = cl_starts[-1] + np.arange(s)
@@ -119,32 +119,29 @@ class ModalRecursion:
         # that the inputs and the initial state seen in x (V z) are B and x0 to ~eps, where
         # the explicit inverse leaves ~cond(V) eps.
         Bz = self.form.left(self.form.solve(B))
-        Phi = [None] * len(starts)
         G0z = np.zeros((n, m))
         G1z = np.zeros((n, m))
-        by_size: dict[int, list[int]] = {}
-        for b, s in enumerate(sizes):
-            by_size.setdefault(int(s), []).append(b)
-        for s, bs in by_size.items():
-            rows = np.array([np.arange(starts[b], starts[b] + s) for b in bs])   # (K, s)
+        f = np.zeros((4, n_pairs))
+        cl_Phi = {}
+        for s in np.unique(sizes):
+            bs = np.flatnonzero(sizes == s)                               # in order of start
+            rows = starts[bs][:, None] + np.arange(s)                     # (K, s)
             Ablk = np.array([self.form.blocks[b] for b in bs])
             if dt is None:
-                Ad, Bd0, Bd1 = Ablk, Bz[rows], np.zeros((len(bs), s, m))
+                Ad, Bd0, Bd1 = Ablk, Bz[rows], np.zeros((bs.size, s, m))
             else:
                 Ad, Bd0, Bd1 = discretise_blocks(Ablk, Bz[rows], dt, hold)
-            for q, b in enumerate(bs):
-                Phi[b] = Ad[q]
-                G0z[rows[q]] = Bd0[q]
-                G1z[rows[q]] = Bd1[q]
-        f = np.zeros((4, n_pairs))
-        for j, i in enumerate(doubles):
-            f[:, j] = Phi[int(np.searchsorted(starts, i))].ravel()
-        for q, i in enumerate(singles):
-            j = len(doubles) + q // 2
-            f[0 if q % 2 == 0 else 3, j] = Phi[int(np.searchsorted(starts, i))][0, 0]
+            G0z[rows] = Bd0
+            G1z[rows] = Bd1
+            if s == 2:
+                f[:, :doubles.size] = Ad.reshape(-1, 4).T
+            elif s == 1:
+                f[0, pair_of_single[0::2]] = Ad[0::2, 0, 0]
+                f[3, pair_of_single[1::2]] = Ad[1::2, 0, 0]
+            else:
+                cl_Phi.update(zip(starts[bs].tolist(), Ad))
         self._f = [np.ascontiguousarray(r) for r in f]
-        block_of = {int(i): b for b, i in enumerate(starts)}
-        cl_phi = [Phi[block_of[i]].ravel() for i, _ in clusters]
+        cl_phi = [cl_Phi[i].ravel() for i, _ in clusters]
         self._cl_starts = np.array(cl_starts, dtype=np.int64)
         self._cl_offsets = np.concatenate([[0], np.cumsum([s * s for _, s in clusters])]
                                           ).astype(np.int64)

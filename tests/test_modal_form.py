@@ -338,3 +338,19 @@ def test_recursive_sylvester_solves_like_trsyl(m, n):
     # residuals over the smallest eigenvalue gap (both are ~eps-sized).
     gap = np.abs(np.linalg.eigvals(T11)[:, None] - np.linalg.eigvals(T22)[None, :]).min()
     assert np.abs(X - X_lapack).max() <= 1e3 * (m + n) * EPS * (size + 1) / gap
+
+
+def test_times_block_triangular_is_the_product():
+    """Q @ Y through trmm plus the columns with entries below the diagonal equals the plain
+    product to round-off (n eps |Q| |Y| per entry), for an upper triangular Y with a few
+    rotated columns, a full one and a strictly triangular one."""
+    from controllers.modal_form import _times_block_triangular
+    rng = np.random.default_rng(2)
+    n = 60
+    Q = rng.standard_normal((n, n))
+    upper = np.triu(rng.standard_normal((n, n)))
+    rotated = upper.copy()
+    rotated[:, [7, 30, 31]] = rng.standard_normal((n, 3))
+    for Y in (upper, rotated, rng.standard_normal((n, n))):
+        bound = n * EPS * (np.abs(Q) @ np.abs(Y))
+        assert np.all(np.abs(_times_block_triangular(Q, Y) - Q @ Y) <= bound)
