@@ -217,7 +217,7 @@ def block_diagonal_form(A, *, max_coupling: float = DEFAULT_MAX_COUPLING
     condition = float(1.0 / rcond) if rcond > 0 else np.inf
     inverse = _Inverse(lu, scaling, None)
     blocks = [np.array(T[a:b, a:b]) for a, b in zip(starts[:-1], starts[1:])]
-    starts, blocks, perm, *coupling = _refine_blocks(A, V, inverse, starts, blocks)
+    starts, blocks, perm, *coupling = _refine_blocks(A, V, inverse, starts, blocks, T)
     if perm is not None:
         V = np.ascontiguousarray(V[:, perm])
         inverse = _Inverse(lu, scaling, perm)
@@ -329,26 +329,27 @@ def _bits(k: int) -> int:
 _NEAR_DEFECTIVE = 1e-3
 
 
-def _refined(block: np.ndarray, norm_A: float) -> bool:
-    """Whether a diagonal block is refined (see :func:`_refine_blocks`): a cluster (larger
-    than 2 x 2: defective or close eigenvalues), a block whose eigenvalues are zero to the
-    Schur form's accuracy (spectral radius below sqrt(eps) max |A|: integrators, rigid
-    bodies split apart), or a near-defective 2 x 2 block (radius below 1e-3 of its largest
-    entry).  Slow but well-separated modes are not refined: measured on issue 10's systems,
-    refining those too (eigenvalues below 1e-3 max |A|) cut the remaining error by up to
-    4x at 50 states but cost 0.6 to 1.5 ms of set-up at 20 to 200 states, for errors
-    already 10 to 30 times below forced_response's."""
-    if block.shape[0] > 2:
-        return True
+def _refined(T: np.ndarray, starts: np.ndarray, norm_A: float) -> np.ndarray:
+    """Which diagonal blocks of the block-diagonal T (rows ``starts[j]:starts[j + 1]``) are
+    refined (see :func:`_refine_blocks`): a cluster (larger than 2 x 2: defective or close
+    eigenvalues), a block whose eigenvalues are zero to the Schur form's accuracy (spectral
+    radius below sqrt(eps) max |A|: integrators, rigid bodies split apart), or a
+    near-defective 2 x 2 block (radius below 1e-3 of its largest entry).  Slow but
+    well-separated modes are not refined: measured on issue 10's systems, refining those
+    too (eigenvalues below 1e-3 max |A|) cut the remaining error by up to 4x at 50 states
+    but cost 0.6 to 1.5 ms of set-up at 20 to 200 states, for errors already 10 to 30
+    times below forced_response's."""
+    first, sizes = starts[:-1], np.diff(starts)
+    second = np.minimum(first + 1, T.shape[0] - 1)
+    a, b = T[first, first], np.where(sizes == 2, T[first, second], 0.0)
+    c, d = np.where(sizes == 2, T[second, first], 0.0), np.where(sizes == 2, T[second, second], 0.0)
+    radius = np.where(sizes == 2, np.sqrt(np.abs(a * d - b * c)), np.abs(a))
+    largest = np.maximum(np.maximum(np.abs(a), np.abs(b)), np.maximum(np.abs(c), np.abs(d)))
     zero = np.sqrt(np.finfo(float).eps) * max(norm_A, np.finfo(float).tiny)
-    if block.shape[0] == 1:
-        return abs(block[0, 0]) < zero
-    (a, b), (c, d) = block.tolist()
-    radius = abs(a * d - b * c) ** 0.5
-    return radius < zero or radius < _NEAR_DEFECTIVE * max(abs(a), abs(b), abs(c), abs(d))
+    return (sizes > 2) | (radius < zero) | ((sizes == 2) & (radius < _NEAR_DEFECTIVE * largest))
 
 
-def _refine_blocks(A, V, inverse, starts, blocks):
+def _refine_blocks(A, V, inverse, starts, blocks, T):
     """Refine the diagonal blocks that need it (:func:`_refined`) to the diagonal blocks of
     ``V^-1 A V`` for the float64 V, computed accurately, and decouple them from the others
     to first order.
@@ -358,7 +359,8 @@ def _refine_blocks(A, V, inverse, starts, blocks):
     the blocks permuted so that each merged block is contiguous: V's columns permuted by
     ``perm``, None if none is), and the correction as :class:`BlockDiagonalForm` holds it,
     in the permuted order (``coupled`` empty and Z None when nothing is refined).
-    ``inverse`` applies V^-1 (:class:`_Inverse`, before the permutation).
+    ``inverse`` applies V^-1 (:class:`_Inverse`, before the permutation); T is the
+    block-diagonal matrix of the blocks (updated in place).
 
     The Schur form leaves every block with a backward error ~eps ||A||: for a cluster of
     defective or close eigenvalues (a free rigid body's double integrator, ||T_c|| ~ 1 in a
@@ -394,7 +396,7 @@ def _refine_blocks(A, V, inverse, starts, blocks):
     n = A.shape[0]
     nothing = (starts, blocks, None, np.zeros(0, dtype=int), None, None)
     norm_A = np.abs(A).max()
-    chosen = [j for j in range(len(blocks)) if _refined(blocks[j], norm_A)]
+    chosen = np.flatnonzero(_refined(T, starts, norm_A)).tolist()
     # Far beyond any physical system; sigma of _split would overflow near 2^970.
     if not chosen or max(norm_A, np.abs(V).max()) > 2.0 ** 900:
         return nothing
@@ -420,11 +422,8 @@ def _refine_blocks(A, V, inverse, starts, blocks):
     # rows: L_c (A V - V T) for the float64 L_c = V^-1[c, :].
     E_cols = inverse.solve(residual)
     blocks = list(blocks)
-    T = np.zeros((n, n))
-    for j, block in enumerate(blocks):
-        if j in rows:
-            blocks[j] = block = block + E_cols[spans[j], rows[j]]
-        T[spans[j], spans[j]] = block
+    for j in chosen:
+        blocks[j] = T[spans[j], spans[j]] = blocks[j] + E_cols[spans[j], rows[j]]
     # E[c, :] = (L_c A) V - (L_c V) T; L_c V = J + delta (J selects the states c, delta
     # ~cond(V) eps), so (L_c V) T = T[c, :] + delta T, delta T to eps |delta| |T|.
     L_parts = _parts(inverse.rows(columns), bits, 1)

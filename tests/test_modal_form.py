@@ -213,7 +213,7 @@ def test_rigid_blocks_are_the_exact_blocks_of_the_transformation(monkeypatch, se
     n = A.shape[0]
     form = block_diagonal_form(A)
     monkeypatch.setattr(modal_form, "_refine_blocks",
-                        lambda A, V, inverse, starts, blocks:
+                        lambda A, V, inverse, starts, blocks, T:
                         (starts, blocks, None, np.zeros(0, dtype=int), None, None))
     raw = block_diagonal_form(A)
 
@@ -300,7 +300,8 @@ def test_blocks_too_close_to_decouple_are_merged_and_made_contiguous():
     blocks = [T0[0:2, 0:2].copy(), T0[2:4, 2:4].copy(), T0[4:6, 4:6].copy()]
     lu = scipy.linalg.lu_factor(V)
     starts, blocks, perm, *coupling = _refine_blocks(
-        A, V, _Inverse(lu, np.ones(6), None), np.array([0, 2, 4, 6]), blocks)
+        A, V, _Inverse(lu, np.ones(6), None), np.array([0, 2, 4, 6]), blocks,
+        scipy.linalg.block_diag(*blocks))
     assert list(np.diff(starts)) == [4, 2]
     np.testing.assert_array_equal(perm, [0, 1, 4, 5, 2, 3])
     form = BlockDiagonalForm(starts, blocks, V[:, perm], float(np.linalg.cond(V, 1)),
