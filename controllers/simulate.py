@@ -15,14 +15,16 @@ Two ways to run the recursion, chosen per system and run (see :class:`Simulator`
   discretised exactly, the recursion in a compiled loop (numba): O(n) per sample for the
   outputs, one matrix product x = V z for the states.  Measured on issue 10's general
   systems (20 to 400 states, 1e4 and 1e5 samples, both holds, one BLAS thread, CPU time;
-  ``benchmarks/results/performance.md``): outputs 26 to 77 times faster than forced_response
-  once set up, 27 to 40 times in one shot at 1e5 samples; in one shot at 1e4 samples the
-  O(n^3) set-up (balanced Schur form, decoupling, exact discretisation: about twice the
-  Schur form alone) bounds the gain, 12 to 19 times at 20 to 50 states, 3 to 9 times at 100
-  to 400; states 2.6 to 24 times once set up, bounded by their O(n^2)-per-sample product (a
-  hand-written C loop with the same product is no faster); errors against an
-  extended-precision solution of the order of forced_response's (0.5 to 3.6 times them: the
-  free rigid bodies' drift dominates both);
+  ``benchmarks/results/performance.md``, a shared machine at load 1.7 to 2.7): outputs 27
+  to 60 times faster than forced_response once set up, 19 to 40 times in one shot at 1e5
+  samples; in one shot at 1e4 samples the O(n^3) set-up (balanced Schur form, decoupling,
+  refinement of the rigid-body blocks, exact discretisation: 1.8 to 2.2 times the Schur
+  form alone at 100 to 400 states) bounds the gain, 10 to 16 times at 20 to 50 states, 4
+  to 7 times at 100 to 400; states 2.8 to 27 times once set up, bounded by their
+  O(n^2)-per-sample product (a hand-written C loop with the same product is no faster);
+  errors against an extended-precision solution 0.03 to 0.72 times forced_response's for
+  the outputs, 0.01 to 0.32 times for the states (the rigid bodies' blocks refined, see
+  :mod:`.modal_form`; what remains is the recursion's round-off);
 - the chunked recursion (:mod:`.chunked`): block processing of the dense discrete system,
   when the modal transformation would be ill-conditioned (strongly non-normal systems),
   when numba is not installed, and for short runs, where loading the compiled loop (once
@@ -446,8 +448,8 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
 
     A drop-in replacement for :func:`control.forced_response` on state-space systems: same
     arguments ``T, U, X0``, same interpretation of the input (``hold="linear"``), same
-    returned shapes and signal names, results equal to round-off (measured closer to an
-    extended-precision solution); several to 60 times faster, most when only the outputs
+    returned shapes and signal names, results equal to round-off (measured 1.4 to 30 times
+    closer to an extended-precision solution); several to 60 times faster, most when only the outputs
     are read and on long runs (``benchmarks/issue10.py``).  Uses one :class:`Simulator`; build one yourself to
     simulate the same system repeatedly.
 
