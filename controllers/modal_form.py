@@ -37,6 +37,7 @@ References
 from __future__ import annotations
 
 import functools
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -525,8 +526,37 @@ def _sylvester(T1: np.ndarray, T2: np.ndarray, E: np.ndarray
                ) -> tuple[np.ndarray, np.ndarray]:
     """Z with ``T1 Z - Z T2 = -E`` for stacks T1 (K, s, s), T2 (K, t, t), E (K, s, t): the
     Kronecker form ``(I_t (x) T1 - T2^T (x) I_s) vec(Z) = -vec(E)`` (column-major vec), one
-    batched solve of (s t) x (s t) systems.  Returns Z and, per pair, whether its solution
+    batched solve of (s t) x (s t) systems (Bartels-Stewart per pair beyond
+    s t = _KRONECKER_MAX).  Returns Z and, per pair, whether its solution
     is a small first-order correction (entries below sqrt(eps)); Z is zero where not."""
+    K, s, t = E.shape
+    if s * t > _KRONECKER_MAX:
+        # Two large units (clusters): Bartels-Stewart per pair, O(s^3 + t^3 + s t (s + t))
+        # instead of the Kronecker system's O(s^3 t^3).
+        Z = np.empty((K, s, t))
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            for k in range(K):
+                try:
+                    Z[k] = scipy.linalg.solve_sylvester(T1[k], -T2[k], -E[k])
+                except (np.linalg.LinAlgError, ValueError):
+                    Z[k] = np.inf
+    else:
+        Z = _sylvester_kronecker(T1, T2, E)
+    # A first-order correction is kept where its square is below round-off (|Z| ~ |E| /
+    # sep, ~1e-12 between well-separated blocks); a pair too close for it (two rigid bodies
+    # split into blocks of their own: sep ~ sqrt(eps ||A||)) keeps its coupling.
+    ok = np.abs(Z).max(axis=(1, 2), initial=0.0) < _FIRST_ORDER      # False for NaN too
+    Z[~ok] = 0.0
+    return Z, ok
+
+
+# Pairs of units with more than this product of sizes are solved by Bartels-Stewart.
+_KRONECKER_MAX = 64
+
+
+def _sylvester_kronecker(T1: np.ndarray, T2: np.ndarray, E: np.ndarray) -> np.ndarray:
+    """The Kronecker solve of :func:`_sylvester` (small units)."""
     K, s, t = E.shape
     kron = (np.einsum("ij,bkl->bikjl", np.eye(t), T1)
             - np.einsum("bji,kl->bikjl", T2, np.eye(s))).reshape(K, s * t, s * t)
@@ -536,13 +566,7 @@ def _sylvester(T1: np.ndarray, T2: np.ndarray, E: np.ndarray
             x = np.linalg.solve(kron, rhs[..., None])[..., 0]
         except np.linalg.LinAlgError:        # an exactly singular pair: solve one by one
             x = np.array([np.linalg.lstsq(k, r, rcond=None)[0] for k, r in zip(kron, rhs)])
-    Z = x.reshape(K, t, s).transpose(0, 2, 1)
-    # A first-order correction is kept where its square is below round-off (|Z| ~ |E| /
-    # sep, ~1e-12 between well-separated blocks); a pair too close for it (two rigid bodies
-    # split into blocks of their own: sep ~ sqrt(eps ||A||)) keeps its coupling.
-    ok = np.abs(Z).max(axis=(1, 2), initial=0.0) < _FIRST_ORDER      # False for NaN too
-    Z[~ok] = 0.0
-    return Z, ok
+    return x.reshape(K, t, s).transpose(0, 2, 1)
 
 
 # Leaves of the recursive Sylvester solver: LAPACK's trsyl on at most this many rows and

@@ -355,3 +355,30 @@ def test_times_block_triangular_is_the_product():
     for Y in (upper, rotated, rng.standard_normal((n, n))):
         bound = n * EPS * (np.abs(Q) @ np.abs(Y))
         assert np.all(np.abs(_times_block_triangular(Q, Y) - Q @ Y) <= bound)
+
+
+def test_large_clusters_decouple_by_bartels_stewart(monkeypatch):
+    """Ten rigid bodies and ten double poles at -1 (two defective clusters of 20 states) and
+    three oscillators: the two clusters' coupling is solved by Bartels-Stewart (20 x 20
+    pairs; a Kronecker system would be 400 x 400), and gives the Kronecker solve's Z to
+    round-off (the same linear system: cond ~ 1 / sep(T_c1, T_c2) ~ 1 here, so ~1e3 eps
+    relative to |Z| covers both solvers' backward errors); the form reproduces A."""
+    import scipy.linalg
+    import controllers.modal_form as modal_form
+    rng = np.random.default_rng(1)
+    blocks = ([np.array([[0.0, 1.0], [0.0, 0.0]])] * 10
+              + [np.array([[-1.0, 1.0], [0.0, -1.0]])] * 10
+              + [np.array([[-0.01, 3.0], [-3.0, -0.01]])] * 3)
+    A = scipy.linalg.block_diag(*blocks)
+    n = A.shape[0]
+    S = np.linalg.qr(rng.standard_normal((n, n)))[0] @ np.diag(np.geomspace(1.0, 4.0, n))
+    A = S @ A @ np.linalg.inv(S)
+    form = block_diagonal_form(A)
+    assert sorted(form.sizes)[-2:] == [20, 20] and form.coupled.size == 40
+    check_factorisation(A, form)
+    monkeypatch.setattr(modal_form, "_KRONECKER_MAX", 10 ** 6)
+    kronecker = block_diagonal_form(A)
+    np.testing.assert_array_equal(kronecker.V, form.V)
+    for Z, Z_k in ((form.Z_rows, kronecker.Z_rows), (form.Z_cols, kronecker.Z_cols)):
+        assert np.abs(Z).max() > 0
+        assert np.abs(Z - Z_k).max() <= 1e3 * EPS * np.abs(Z_k).max() + 1e-30
