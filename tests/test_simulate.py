@@ -474,6 +474,19 @@ def hidden_modal_system(rng, n_modes, n_rigid, condition=4.0):
                       rng.standard_normal((3, n)) @ np.linalg.inv(S), 0)
 
 
+def general_system_run(rng, n_samples):
+    """Issue 10's general system with 20 states (two rigid bodies), random inputs at
+    dt = 0.01 s, and the error of outputs against its extended-precision solution:
+    ``(sys, T, U, error)``, error(y) = max |y - y_exact| / range(y_exact) over the outputs."""
+    sys = hidden_modal_system(rng, 8, 2)
+    dt = 0.01
+    U = rng.standard_normal((2, n_samples))
+    T = np.arange(n_samples) * dt
+    y_exact = extended_precision_outputs(sys, dt, U)
+    scale = signal_range(y_exact)[:, None]
+    return sys, T, U, lambda y: float(np.max(np.abs(y - y_exact) / scale))
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_general_system_against_extended_precision(method):
     """Issue 10's general system (20 states, two rigid bodies) over 3000 samples, inputs
@@ -482,15 +495,8 @@ def test_general_system_against_extended_precision(method):
     the transformation's condition (V: 30 here) and by the rigid bodies, which integrate
     their rate errors.  Seen: modal 1.3e-12, chunked 1.2e-12, forced_response 1.3e-12 of
     the output range; required: 1e-10 (a margin of 100)."""
-    rng = np.random.default_rng(44)
-    sys = hidden_modal_system(rng, 8, 2)
-    dt = 0.01
-    U = rng.standard_normal((2, 3000))
-    T = np.arange(U.shape[1]) * dt
-    y_exact = extended_precision_outputs(sys, dt, U)
-    scale = signal_range(y_exact)[:, None]
-    y = simulate(sys, T, U, method=method).y
-    assert np.max(np.abs(y - y_exact) / scale) < 1e-10
+    sys, T, U, error = general_system_run(np.random.default_rng(44), 3000)
+    assert error(simulate(sys, T, U, method=method).y) < 1e-10
 
 
 @needs_numba
@@ -506,17 +512,10 @@ def test_rigid_bodies_drift_without_the_schur_forms_round_off(seed):
     seen 2.2e-13 and 6.6e-13, against 2.8e-12 and 3.4e-11 for forced_response.  Required:
     2e-12 (a margin of 3 over the worse seed; the unrefined form fails it by 8x or more),
     and no worse than forced_response (issue 10's criterion) on the same inputs."""
-    rng = np.random.default_rng(seed)
-    sys = hidden_modal_system(rng, 8, 2)
-    dt = 0.01
-    U = rng.standard_normal((2, 10_000))
-    T = np.arange(U.shape[1]) * dt
-    y_exact = extended_precision_outputs(sys, dt, U)
-    scale = signal_range(y_exact)[:, None]
-    error = np.max(np.abs(simulate(sys, T, U, method="modal").y - y_exact) / scale)
-    reference = np.max(np.abs(control.forced_response(sys, T, U).y - y_exact) / scale)
-    assert error < 2e-12
-    assert error <= reference
+    sys, T, U, error = general_system_run(np.random.default_rng(seed), 10_000)
+    modal = error(simulate(sys, T, U, method="modal").y)
+    assert modal < 2e-12
+    assert modal <= error(control.forced_response(sys, T, U).y)
 
 
 def attitude_loop(n_modes, *, inertia=50.0, zeta=0.005, bandwidth=0.5):
