@@ -204,7 +204,7 @@ def block_diagonal_form(A, *, max_coupling: float = DEFAULT_MAX_COUPLING
     # their eigenvalues w_max times more accurately.
     A_balanced, scaling = scipy.linalg.matrix_balance(A, permute=False, separate=True)
     scaling = scaling[0]
-    T, Q = scipy.linalg.schur(A_balanced, output="real")
+    T, Q = scipy.linalg.schur(A_balanced, output="real", overwrite_a=True, check_finite=False)
     form = _Decoupling(np.asfortranarray(T), max_coupling)
     form.split(0, n)
     starts = np.array(sorted(form.starts) + [n])
