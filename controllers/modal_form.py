@@ -17,11 +17,11 @@ diagonal; if ``max |X_ij|`` exceeds the bound (or the equation is singular), the
 block of ``T22`` nearest to the eigenvalues of ``T11`` is moved next to it by an orthogonal
 swap (LAPACK ``trexc``) and the enlarged block is tried again.
 
-Last, the blocks whose round-off matters most (clusters, rigid bodies, integrators: defective
-blocks and eigenvalues zero to the Schur form's accuracy) are refined to the exact diagonal blocks of
-``V^-1 A V`` for the float64 V and decoupled from the other blocks to first order, from
-residuals computed with error-free products (``_refine_blocks``): the Schur form's backward
-error ~eps ||A|| would otherwise accumulate in a rigid body's drift.
+Last, the blocks whose round-off matters most (clusters, rigid bodies, integrators:
+defective blocks and eigenvalues zero to the Schur form's accuracy) are refined to the exact
+diagonal blocks of ``V^-1 A V`` for the float64 V and decoupled from the other blocks to
+first order, from residuals computed with error-free products (``_refine_blocks``): the
+Schur form's backward error ~eps ||A|| would otherwise accumulate in a rigid body's drift.
 
 References
 ----------
