@@ -449,9 +449,9 @@ def simulate(system: control.StateSpace, T, U=None, X0=None, *,
     A drop-in replacement for :func:`control.forced_response` on state-space systems: same
     arguments ``T, U, X0``, same interpretation of the input (``hold="linear"``), same
     returned shapes and signal names, results equal to round-off (measured 1.4 to 30 times
-    closer to an extended-precision solution); several to 60 times faster, most when only the outputs
-    are read and on long runs (``benchmarks/issue10.py``).  Uses one :class:`Simulator`; build one yourself to
-    simulate the same system repeatedly.
+    closer to an extended-precision solution); several to 60 times faster, most when only
+    the outputs are read and on long runs (``benchmarks/issue10.py``).  Uses one
+    :class:`Simulator`; build one yourself to simulate the same system repeatedly.
 
     Parameters
     ----------
