@@ -849,3 +849,25 @@ def test_overflow_stops_the_response_at_the_last_sample_in_range(n_states, metho
                     on_overflow="stop", method=method).diverged_at is None
     with pytest.raises(ValueError, match="on_overflow must be one of"):
         simulate(sys, T, on_overflow="ignore", method=method)
+
+
+@needs_numba
+def test_refined_modal_form_does_not_depend_on_the_callers_threads():
+    """Issue 10's general system with 200 states and two rigid bodies (refined blocks and
+    their decoupling: error-free products whose remainders round in float64, Sylvester and
+    LU solves): the same outputs and states, bit for bit, with one or two BLAS threads
+    allowed by the caller (the simulator runs every product on one thread)."""
+    from threadpoolctl import threadpool_limits
+    rng = np.random.default_rng(8)
+    sys = hidden_modal_system(rng, 98, 2)
+    T = np.arange(2000) * 0.01
+    U = rng.standard_normal((2, T.size))
+    results = []
+    for n_threads in (1, 2):
+        with threadpool_limits(limits=n_threads, user_api="blas"):
+            simulator = Simulator(sys, 0.01, method="modal")
+            response = simulator.run(T, U)
+            results.append((response.y, response.x, simulator._modal.form.coupled.size))
+    assert results[0][2] >= 4                  # the rigid bodies' blocks were refined
+    np.testing.assert_array_equal(results[0][0], results[1][0])
+    np.testing.assert_array_equal(results[0][1], results[1][1])
