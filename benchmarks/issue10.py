@@ -917,7 +917,10 @@ def markdown(results: dict) -> str:
                   "rigid bodies' block and in their couplings to the other blocks, which "
                   "flexsat removes by refining those blocks from residuals computed with "
                   "error-free products (controllers/modal_form.py, _refine_blocks); what "
-                  "remains is the recursion's own round-off. The C limit runs flexsat's "
+                  "remains is the other blocks' round-off, within a few times that of the "
+                  "long-double reference itself (its round-off integrated by the drift, "
+                  "~1e-13 over 1e4 samples; benchmarks/simulate_error_budget.py). The C "
+                  "limit runs flexsat's "
                   "modal data (the same corrections), hence its equal errors.", ""]
         body = []
         for r in sim_rows:

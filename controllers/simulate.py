@@ -24,7 +24,8 @@ Two ways to run the recursion, chosen per system and run (see :class:`Simulator`
   O(n^2)-per-sample product (a hand-written C loop with the same product is no faster);
   errors against an extended-precision solution 0.03 to 0.72 times forced_response's for
   the outputs, 0.01 to 0.32 times for the states (the rigid bodies' blocks refined, see
-  :mod:`.modal_form`; what remains is the recursion's round-off);
+  :mod:`.modal_form`; what remains is the other blocks' round-off, within a few times the
+  long-double reference's own, ``benchmarks/simulate_error_budget.py``);
 - the chunked recursion (:mod:`.chunked`): block processing of the dense discrete system,
   when the modal transformation would be ill-conditioned (strongly non-normal systems),
   when numba is not installed, and for short runs, where loading the compiled loop (once

@@ -508,7 +508,7 @@ def test_rigid_bodies_drift_without_the_schur_forms_round_off(seed):
     and in their couplings to the modes) gave the modal recursion 1.6e-11 (seed 0) and
     6.8e-11 (seed 1, where the Schur form splits the rigid bodies into two blocks) of the
     output range; with the blocks refined and decoupled from an accurate residual
-    (controllers.modal_form._refine_blocks) what remains is the recursion's own round-off:
+    (controllers.modal_form._refine_blocks) what remains is the other blocks' round-off:
     seen 2.2e-13 and 6.6e-13, against 2.8e-12 and 3.4e-11 for forced_response.  Required:
     2e-12 (a margin of 3 over the worse seed; the unrefined form fails it by 8x or more),
     and no worse than forced_response (issue 10's criterion) on the same inputs."""
