@@ -43,7 +43,7 @@ import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_limits  # noqa: E402
 
 from _common import machine_info, write_json  # noqa: E402
-from issue10 import (exact_response, general_system, long_double_expm,  # noqa: E402
+from issue10 import (exact_response, general_system, long_double_response,  # noqa: E402
                      relative_error)
 
 from controllers.simulate import Simulator  # noqa: E402
@@ -87,23 +87,6 @@ def recursion_in_long_double(modal, U: np.ndarray) -> np.ndarray:
     return (np.concatenate([Z, U_rows[:-1]], axis=1) @ HD).T.astype(float)
 
 
-def modal_in_long_double(M, Bz, H, dt, U, hold):
-    """Outputs of z' = M z + Bz u, y = H z (long double, exact discretisation)."""
-    n, m = Bz.shape
-    E = np.zeros((n + 2 * m, n + 2 * m), LD)
-    E[:n, :n], E[:n, n:n + m] = M * LD(dt), Bz * LD(dt)
-    E[n:n + m, n + m:] = np.eye(m, dtype=LD)
-    E = long_double_expm(E)
-    Ad, G1, G2 = E[:n, :n], E[:n, n:n + m], E[:n, n + m:]
-    Bd0, Bd1 = (G1 - G2, G2) if hold == "linear" else (G1, 0 * G2)
-    U = U.astype(LD)
-    W = Bd0 @ U[:, :-1] + Bd1 @ U[:, 1:]
-    Z = np.zeros((n, U.shape[1]), LD)
-    for k in range(U.shape[1] - 1):
-        Z[:, k + 1] = Ad @ Z[:, k] + W[:, k]
-    return (H @ Z).astype(float)
-
-
 def budget(n: int, hold: str = "linear") -> dict:
     dt = 0.01
     system = general_system(n)
@@ -125,6 +108,7 @@ def budget(n: int, hold: str = "linear") -> dict:
     V_inv = long_double_inverse(form.V)
     M = V_inv @ np.asarray(system.A, LD) @ V
     Bz, H = V_inv @ np.asarray(system.B, LD), np.asarray(system.C, LD) @ V
+    m = Bz.shape[1]
     blocks = np.zeros((n, n), bool)
     for a, b in zip(form.starts[:-1], form.starts[1:]):
         blocks[a:b, a:b] = True
@@ -134,7 +118,8 @@ def budget(n: int, hold: str = "linear") -> dict:
                        ("form exact in long double, blocks and refined rows, columns",
                         blocks | refined[:, None] | refined[None, :]),
                        ("form exact in long double, full", np.ones((n, n), bool))):
-        y = modal_in_long_double(np.where(mask, M, 0), Bz, H, dt, U, hold)
+        y, _ = long_double_response(np.where(mask, M, 0), Bz, H, np.zeros((H.shape[0], m)),
+                                    dt, U, hold)
         errors[name] = relative_error(y, y_exact)
     return {"n": n, "hold": hold, "samples": N, "refined_states": int(refined.sum()),
             "condition": form.condition, "errors": errors}
