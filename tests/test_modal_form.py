@@ -388,11 +388,10 @@ def test_many_integrators_stay_apart():
     """Forty integrators (eigenvalue 0, forty 1 x 1 blocks after the decoupling) and twenty
     oscillators in a random basis: the integrators' mutual couplings are not first-order
     corrections (they share s = 0), but merging them would make one 40-state block whose
-    k^2 work a sample the recursion pays; a group beyond _MAX_MERGED states stays apart
+    k^2 work a sample the recursion pays; a group beyond 8 states stays apart
     (their blocks refined, the couplings to the oscillators corrected), and the form still
     reproduces A."""
     import scipy.linalg
-    from controllers.modal_form import _MAX_MERGED
     rng = np.random.default_rng(0)
     blocks = [np.zeros((40, 40))] + [np.array([[-0.01, w], [-w, -0.01]])
                                      for w in np.geomspace(1.0, 100.0, 20)]
@@ -400,6 +399,6 @@ def test_many_integrators_stay_apart():
     S = rng.standard_normal(A.shape)
     A = S @ A @ np.linalg.inv(S)
     form = block_diagonal_form(A)
-    assert max(form.sizes) <= max(2, _MAX_MERGED)
+    assert max(form.sizes) <= 8
     assert form.coupled.size >= 40
     check_factorisation(A, form)
