@@ -217,9 +217,9 @@ void modal(int N, int np_, int nz, int m, int p, const double *f00, const double
             long i0 = cls[c], s = cls[c + 1] - cls[c];
             double tmp[256];
             for (long i = 0; i < s; i++) {
-                double acc = w[i0 + i];
+                double acc = w[i0 + i];                      /* clphi holds Phi - I */
                 for (long l = 0; l < s; l++) acc += clphi[clo[c] + i * s + l] * z[i0 + l];
-                tmp[i] = acc;
+                tmp[i] = acc + z[i0 + i];
             }
             for (long i = 0; i < s; i++) z[i0 + i] = tmp[i];
         }

@@ -82,7 +82,9 @@ def recursion_in_long_double(modal, U: np.ndarray) -> np.ndarray:
         new[:pairs], new[pairs:2 * pairs] = f00 * a + f01 * b, f10 * a + f11 * b
         for c in range(len(starts) - 1):
             i0, i1 = starts[c], starts[c + 1]
-            new[i0:i1] = cl_phi[offsets[c]:offsets[c + 1]].reshape(i1 - i0, i1 - i0) @ z[i0:i1]
+            # cl_phi holds Phi - I (see controllers/_modal_kernel.py)
+            new[i0:i1] = z[i0:i1] + cl_phi[offsets[c]:offsets[c + 1]].reshape(
+                i1 - i0, i1 - i0) @ z[i0:i1]
         z = new + W[k]
     return (np.concatenate([Z, U_rows[:-1]], axis=1) @ HD).T.astype(float)
 

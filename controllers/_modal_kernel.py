@@ -83,7 +83,9 @@ def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, u
     cl_starts : int64 (n_clusters + 1,)
         Dense blocks ("clusters") occupy z[cl_starts[c]:cl_starts[c + 1]] (after the pairs).
     cl_offsets : int64 (n_clusters + 1,)
-        cl_phi[cl_offsets[c]:cl_offsets[c + 1]] is cluster c's Phi, row-major.
+        cl_phi[cl_offsets[c]:cl_offsets[c + 1]] is cluster c's ``Phi - I``, row-major (the
+        identity is added exactly: a rigid body's Phi ~ I + A dt keeps its small part to
+        round-off, see modal_recursion._transition_minus_identity).
     G0, G1 : (m, nz)
         Input maps (G1 used only if use_G1).
     HD : (nz + m, p)
@@ -159,9 +161,12 @@ def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, u
                 size = cl_starts[c + 1] - i0
                 off = cl_offsets[c]
                 for i in range(size):
+                    # cl_phi holds Phi - I: the small increment first, then the state (one
+                    # rounding at the state's magnitude a step, not one a term)
                     acc = Wv[t, i0 + i]
                     for l in range(size):
                         acc += cl_phi[off + i * size + l] * Zv[t, i0 + l]
+                    acc += Zv[t, i0 + i]
                     if last:
                         z[i0 + i] = acc
                     else:
