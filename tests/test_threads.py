@@ -115,3 +115,24 @@ def test_design_entry_points_limit_threads(name):
     entry = getattr(controllers, name)
     assert hasattr(entry, "__wrapped__") and entry.__name__ == name
     assert entry.__doc__ == entry.__wrapped__.__doc__
+
+
+def test_a_small_scene_runs_single_threaded_outside_the_controllers_too(two_threads,
+                                                                         monkeypatch):
+    """spacecraft.run sizes the whole run like its largest loop: the models' and tables' own
+    products (appendages, plant assembly, tuning, tables) run on one thread as the
+    controllers' entry points do, so a run's numbers and CPU time do not depend on the
+    caller's setting."""
+    import spacecraft.runner as runner
+
+    seen = []
+    original = runner.tune
+
+    def recording(*args, **kwargs):
+        seen.append(set(blas_threads()))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(runner, "tune", recording)
+    runner.run(None, time_responses=False)
+    assert seen and all(s == {1} for s in seen)
+    assert set(blas_threads()) == {2}            # the caller's setting restored
