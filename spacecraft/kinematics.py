@@ -29,7 +29,8 @@ import numpy as np
 
 from appendages.interface import RANGES, describe
 
-__all__ = ["ORTHONORMALITY_TOLERANCE", "SYMMETRY_TOLERANCE", "check_inertia_tensor",
+__all__ = ["ORTHONORMALITY_TOLERANCE", "SYMMETRY_TOLERANCE", "TRIANGLE_TOLERANCE",
+           "check_inertia_tensor",
            "check_rotation", "cross_matrix", "euler_orientation", "mount_transformation",
            "orientation_from_axis", "planar_orientation", "real_vector3"]
 
@@ -38,6 +39,9 @@ __all__ = ["ORTHONORMALITY_TOLERANCE", "SYMMETRY_TOLERANCE", "check_inertia_tens
 ORTHONORMALITY_TOLERANCE = 1e-9
 #: Largest |J - J^T| accepted for an inertia tensor, relative to its largest entry.
 SYMMETRY_TOLERANCE = 1e-9
+#: Largest excess of the largest principal moment over the sum of the other two accepted,
+#: relative to that sum (a flat plate has equality; eigvalsh is exact to ~1e-16 of |J|).
+TRIANGLE_TOLERANCE = 1e-9
 
 
 def cross_matrix(r) -> np.ndarray:
@@ -103,15 +107,25 @@ def check_inertia_tensor(name: str, value) -> np.ndarray:
     """A symmetric positive-definite 3x3 inertia tensor [kg*m**2], symmetrised, as float64.
 
     Symmetric to :data:`SYMMETRY_TOLERANCE` of its largest entry; every principal moment in
-    the ``inertia`` range of :data:`appendages.interface.RANGES` (1e-20 to 1e20 kg*m**2).
+    the ``inertia`` range of :data:`appendages.interface.RANGES` (1e-20 to 1e20 kg*m**2); and
+    the tensor of a body: its principal moments j1 <= j2 <= j3 obey the triangle inequality
+    j3 <= j1 + j2 (to :data:`TRIANGLE_TOLERANCE`). In principal axes j1 + j2 - j3 is twice the
+    integral of the squared coordinate along the axis of j3 over the mass, never negative;
+    equality is a flat plate. ``diag(1, 1, 100)`` is no body's.
 
     Raises
     ------
     TypeError
         Not a real 3x3 array.
     ValueError
-        Not finite, not symmetric, or a principal moment not positive (indefinite) or out of
-        range; the message gives the asymmetry or the principal moments.
+        Not finite, not symmetric, or a principal moment not positive (indefinite), out of
+        range or larger than the sum of the other two; the message gives the asymmetry or the
+        principal moments.
+
+    References
+    ----------
+    .. [1] H. Goldstein, C. Poole, J. Safko, "Classical Mechanics", 3rd ed., 2002, sec. 5.3
+       (principal moments; the triangle inequality of a rigid body's moments).
     """
     J = _real_matrix(name, value, "kg*m^2", (3, 3))
     scale = float(np.max(np.abs(J)))
@@ -130,6 +144,12 @@ def check_inertia_tensor(name: str, value) -> np.ndarray:
         raise ValueError(f"{name} must have principal moments in [{low:g}, {high:g}] "
                          f"[kg*m^2] (appendages.interface.RANGES); got "
                          f"{describe(tuple(float(m) for m in moments))}")
+    if moments[2] > (moments[0] + moments[1]) * (1.0 + TRIANGLE_TOLERANCE):
+        raise ValueError(
+            f"{name} must be the inertia of a body [kg*m^2]: its largest principal moment at "
+            f"most the sum of the other two (triangle inequality; equality for a flat plate); "
+            f"got principal moments {describe(tuple(float(m) for m in moments))}, "
+            f"{moments[2]:.6g} > {moments[0]:.6g} + {moments[1]:.6g}")
     return J
 
 

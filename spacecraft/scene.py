@@ -145,8 +145,10 @@ key                                    unit       meaning
 ``limits.<name>``                      -          raise (or lower) a work limit (table "Limits")
 **three axes** (``hub.inertia`` a 3x3)
 ``hub.inertia``                        kg m^2     ``[[Jxx, Jxy, Jxz], [..], [..]]``: symmetric
-                                                  positive definite, about the hub's centre of
-                                                  mass, hub axes; makes the scene three-axis
+                                                  positive definite, a body's (largest
+                                                  principal moment <= sum of the other two),
+                                                  about the hub's centre of mass, hub axes;
+                                                  makes the scene three-axis
 ``appendages[i].position``             m          ``[x, y, z]``; default [0, 0, 0]
 ``appendages[i].orientation``          deg        Euler angles of the appendage's axes (x along
                                                   it); default [0, 0, 0]; replaces direction
@@ -505,7 +507,8 @@ def _check_three_axis_scene(r: _Reader, simulator, outputs, export, plots) -> No
 
 
 def _read_inertia_tensor(r: _Reader, value, full: str) -> tuple:
-    """A 3x3 symmetric positive definite inertia tensor [kg m^2], rows as tuples."""
+    """A 3x3 symmetric positive definite inertia tensor of a body [kg m^2] (the checks of
+    :func:`spacecraft.kinematics.check_inertia_tensor`), rows as tuples."""
     import numpy as np
 
     from .hub import Hub

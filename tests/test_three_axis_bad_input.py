@@ -27,10 +27,39 @@ J3 = np.array([[950.0, 12.0, -8.0], [12.0, 780.0, 15.0], [-8.0, 15.0, 640.0]])
     ([[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
      r"hub inertia must be positive definite \[kg\*m\^2\]"),
     (np.diag([1.0, np.nan, 1.0]), r"hub inertia must be finite \[kg\*m\^2\]"),
+    # positive definite but no body's: the largest principal moment exceeds the sum of the
+    # other two (a body's j1 + j2 - j3 = 2 * integral of z^2 dm >= 0 in principal axes)
+    (np.diag([1.0, 1.0, 100.0]),
+     r"hub inertia must be the inertia of a body \[kg\*m\^2\].*triangle inequality.*got "
+     r"principal moments \(1\.0, 1\.0, 100\.0\), 100 > 1 \+ 1"),
+    # the same in rotated axes (the check is on the principal moments, not the diagonal)
+    (euler_orientation("ZYX", (0.3, 0.2, 0.1)) @ np.diag([1.0, 2.0, 3.5])
+     @ euler_orientation("ZYX", (0.3, 0.2, 0.1)).T,
+     r"hub inertia must be the inertia of a body.*3\.5 > 1 \+ 2"),
 ])
 def test_inertia_tensor(inertia, match):
     with pytest.raises(ValueError, match=match):
         Hub(820.0, inertia)
+
+
+@pytest.mark.parametrize("moments", [(1.0, 1.0, 2.0), (1.0, 2.0, 3.0), (3.0, 2.0, 1.0)])
+def test_flat_plate_inertia_is_accepted(moments):
+    """Equality in the triangle inequality is a flat plate (j3 = j1 + j2), a real body."""
+    R = euler_orientation("ZYX", (0.3, 0.2, 0.1))
+    assert Hub(820.0, R @ np.diag(moments) @ R.T).three_axis
+
+
+def test_inertia_of_no_body_in_a_scene_is_refused_by_key():
+    from spacecraft import SceneError, load_scene
+    from spacecraft.scene import scene_path
+    import tomllib
+
+    with open(scene_path("three_axis"), "rb") as stream:
+        data = tomllib.load(stream)
+    data["hub"]["inertia"] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 100.0]]
+    with pytest.raises(SceneError, match=r"hub\.inertia: must be the inertia of a body "
+                                         r"\[kg\*m\^2\].*100 > 1 \+ 1"):
+        load_scene(data)
 
 
 def test_inertia_of_a_wrong_shape_is_not_echoed_in_full():
