@@ -422,7 +422,9 @@ def _controllers(data: dict) -> list:
             who = f"{controller_label(kind)} tuned on {_label(variant)}"
             b.append(("h3", who))
             items = [f"control law: {c['structure']}"]
-            if c["kind"] == "pd":
+            if c.get("given"):
+                items.append("the controller's matrices are in results.json (controllers)")
+            elif c["kind"] == "pd":
                 items += [f"design inertia J = {_fmt(c['inertia'])} kg m^2 (rigid-body limit of "
                           "the design plant)",
                           f"natural frequency wn = {_fmt(c['natural_frequency'])} rad/s, damping "
@@ -461,7 +463,7 @@ def _controllers(data: dict) -> list:
             else:
                 items.append("continuous-time")
             b.append(("ul", items))
-            if c["kind"] == "lqr":
+            if c["kind"] == "lqr" and not c.get("given"):
                 rows = [[state, _fmt(k, 4), _fmt(l_[0], 4), _fmt(l_[1], 4)]
                         for state, k, l_ in zip(c["states"], c["K"], c["L"])]
                 b.append(("table", ["design-model state", "K (torque per state)",

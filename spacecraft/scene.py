@@ -92,6 +92,10 @@ key                                    unit       meaning
 ``controller.lqr.deflection_weight``   1/m^2      weight on each tip deflection (needs
                                                   ``outputs.tip_deflection``)
 ``controller.lqr.estimator_speed``     -          estimator / regulator bandwidth; default 3
+``controller.given``                   -          one controller given as state-space numbers
+                                                  instead of tuned (``kind``, ``A``, ``B``,
+                                                  ``C``, ``D``; units and shapes in
+                                                  :mod:`spacecraft.given_controller`)
 ``manoeuvre.slew_angle`` *             deg        slew angle (non-zero)
 ``manoeuvre.slew_time`` *              s          duration of the cycloidal slew profile
 ``manoeuvre.duration``                 s          simulated time; default 3 x slew_time
@@ -263,6 +267,7 @@ import numpy as np
 from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, Limits, estimate_cost
 from .scene_reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
                            _NAME, _Reader, _kind, _quoted, _short, _shown)
+from .given_controller import read_given
 from .scene_specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLOT_ALIASES,
                           PLOTS, SECTIONS, SIMULATORS, AppendageSpec, BeamSpec, ChainSpec,
                           ControllerSpec, DisturbanceSpec, ExportSpec, FidelitySpec, FitSpec,
@@ -565,8 +570,9 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
     t = r.table(data, path)
     # unknown keys first: a misspelt table ([controller.pid]) is named as such, not taken for
     # a missing [controller.pd]
-    r.done({k: v for k, v in t.items() if k not in ("types", "sample_rate", *CONTROLLERS)},
-           path, {"types", "sample_rate", *CONTROLLERS})
+    r.done({k: v for k, v in t.items() if k not in ("types", "sample_rate", "given",
+                                                    *CONTROLLERS)},
+           path, {"types", "sample_rate", "given", *CONTROLLERS})
     present = tuple(c for c in CONTROLLERS if c in t)
     types = r.choices(t, "types", path, CONTROLLERS, default=list(present or ("pd",)))
     if not types:
@@ -606,8 +612,12 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
                        "estimator_speed"})
     elif "lqr" in t:
         raise r.error(f"{path}.lqr", "is given but 'lqr' is not in controller.types")
+    given = None
+    if "given" in t:
+        given = read_given(t.pop("given"), f"{path}.given", types, r.error,
+                           three_axis=getattr(r, "three_axis", False), max_states=r.limits.states)
     r.done(t, path, {"types", "sample_rate", "pd", "lqr"})
-    return ControllerSpec(types, pd_spec, lqr_spec, None if rate is None else 1.0 / rate)
+    return ControllerSpec(types, pd_spec, lqr_spec, None if rate is None else 1.0 / rate, given)
 
 
 def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> ManoeuvreSpec:

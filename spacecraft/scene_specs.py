@@ -160,12 +160,14 @@ class LQRSpec:
 
 @dataclasses.dataclass(frozen=True)
 class ControllerSpec:
-    """Controllers to tune on the design model and their sample time [s] (None: continuous)."""
+    """Controllers to tune on the design model and their sample time [s] (None: continuous);
+    ``given``: one of them given as numbers instead of tuned (:mod:`spacecraft.given_controller`)."""
 
     types: tuple
     pd: PDSpec | None
     lqr: LQRSpec | None
     sample_time: float | None = None
+    given: object = None
 
 
 @dataclasses.dataclass(frozen=True)

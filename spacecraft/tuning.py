@@ -55,7 +55,8 @@ def _poles(values, sample_time: float | None = None) -> list:
 
 
 def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
-    """Tune the controller ``kind`` ("pd" or "lqr") of a scene's controller table on a plant.
+    """Tune the controller ``kind`` ("pd" or "lqr") of a scene's controller table on a plant
+    (or take it as given: ``spec.given`` of that kind, :mod:`spacecraft.given_controller`).
 
     Parameters
     ----------
@@ -73,6 +74,9 @@ def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
     ValueError, TypeError
         From controllers (the runner turns them into a SceneError naming the key).
     """
+    given = getattr(spec, "given", None)
+    if given is not None and given.kind == kind:
+        return _given(given, spec.sample_time)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", controllers.RemovedModesWarning)
         if kind == "pd":
@@ -98,6 +102,20 @@ def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
     tuned.description["n_states"] = int(K.nstates)
     tuned.description["sample_time"] = spec.sample_time
     return tuned
+
+
+def _given(given, sample_time: float | None) -> Tuned:
+    """The scene's given controller (:mod:`spacecraft.given_controller`): not tuned."""
+    from .given_controller import given_state_space
+
+    K = given_state_space(given, sample_time)
+    description = {"kind": given.kind, "given": True,
+                   "structure": (f"given in the scene (controller.given): {K.nstates} states, "
+                                 "torque from theta_ref, theta and omega; not tuned"),
+                   "A": [list(r) for r in given.A], "B": [list(r) for r in given.B],
+                   "C": [list(r) for r in given.C], "D": [list(r) for r in given.D],
+                   "n_states": int(K.nstates), "sample_time": sample_time}
+    return Tuned(K, description, [])
 
 
 def _pd(plant, spec) -> Tuned:
