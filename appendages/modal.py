@@ -75,7 +75,7 @@ from . import limits
 from .interface import (FiniteAppendage, RootModel, as_frequency_array, describe, inverse_2x2,
                         three_axis_root_model)
 
-__all__ = ["ModalBeam", "METHODS", "MOTION_NAMES"]
+__all__ = ["ModalBeam", "METHODS", "MOTION_NAMES", "ModalStiffness", "fixed_root_model"]
 
 METHODS = ("craig-bampton", "residual", "free-free")
 
@@ -93,7 +93,7 @@ def _chunks(size: int, width: int):
         yield slice(start, min(start + step, size))
 
 
-class _ModalStiffness:
+class ModalStiffness:
     r"""Attachment-end dynamic stiffness of a Craig-Bampton model in O(n) per frequency.
 
     The model ``[[M_rr, L^T], [L, I]] [q_r; eta]'' + [[0, 0], [0, C]] [..]' +
@@ -192,9 +192,15 @@ def _free_root_model(b_rigid, tip_rigid, rigid_line, b_modes, stiffness_modes, d
     return RootModel(mass, damping, stiffness, tip, names, n_root=n_root)
 
 
-def _fixed_root_model(M_rr, participation, w, damping, tip_modes, rigid_line, names,
-                      n_root) -> RootModel:
-    """Craig-Bampton model: constraint modes (rigid motion of the root) + cantilever modes."""
+def fixed_root_model(M_rr, participation, w, damping, tip_modes, rigid_line, names,
+                     n_root) -> RootModel:
+    """Craig-Bampton model: constraint modes (rigid motion of the root) + cantilever modes.
+
+    ``M = [[M_rr, G^T], [G, I]]``, ``K = diag(0, w**2)``, ``C = blockdiag(0, damping)`` in the
+    coordinates ``[q_r, eta]`` (root motions, mass-normalised cantilever coordinates), with
+    ``participation`` G of shape (n, n_root) and ``damping`` (n, n) or None; the tip row is
+    ``[0, tip_modes]``. Shared by the beam truncations and :class:`appendages.ModalAppendage`.
+    """
     n, r = w.size, n_root
     mass = np.eye(n + r)
     mass[:r, :r] = M_rr
@@ -284,8 +290,8 @@ class _Bending:
                                     stiffness_modes, damping_modes, tip_modes, names, 2)
         M_rr, participation, w, damping = self.craig_bampton_data()
         tip_modes = beam._cantilever_tip_values(n) if n else np.zeros(0)
-        return _fixed_root_model(M_rr, participation, w, damping, tip_modes,
-                                 np.array([1.0, L]), names, 2)
+        return fixed_root_model(M_rr, participation, w, damping, tip_modes,
+                                np.array([1.0, L]), names, 2)
 
     def residual_modes(self):
         cached = getattr(self, "_residual", None)
@@ -309,11 +315,11 @@ class _Bending:
             cached = self._cb = (M_rr, participation, w, damping)
         return cached
 
-    def stiffness_operator(self) -> _ModalStiffness:
+    def stiffness_operator(self) -> ModalStiffness:
         cached = getattr(self, "_stiffness", None)
         if cached is None:
             M_rr, participation, w, damping = self.craig_bampton_data()
-            cached = self._stiffness = _ModalStiffness(
+            cached = self._stiffness = ModalStiffness(
                 M_rr, participation, w, damping, self.beam.cantilever_participation_tail(self.n))
         return cached
 
@@ -391,8 +397,8 @@ class _RodMotion:
                                     b_modes, stiffness_modes, damping_modes, tip_modes, names, 1)
         M_rr, participation, w, damping = self.craig_bampton_data()
         _, tip_modes, _ = rod.cantilever_modes(n)
-        return _fixed_root_model(M_rr, participation, w, damping, tip_modes, np.array([1.0]),
-                                 names, 1)
+        return fixed_root_model(M_rr, participation, w, damping, tip_modes, np.array([1.0]),
+                                names, 1)
 
     def residual_mode(self):
         """(root value, squared frequency, damping, tip value) of the one residual mode:
@@ -441,7 +447,7 @@ class _RodMotion:
             if cached is None:
                 M_rr, participation, w, damping = self.craig_bampton_data()
                 tail = np.array([[self.rod.cantilever_participation_tail(self.n)]])
-                cached = self._stiffness = _ModalStiffness(M_rr, participation, w, damping, tail)
+                cached = self._stiffness = ModalStiffness(M_rr, participation, w, damping, tail)
             return cached(s)
         D = np.zeros(s.shape + (1, 1), dtype=np.complex128)
         nonzero = s != 0
@@ -597,7 +603,7 @@ class ModalBeam(FiniteAppendage):
         Free-free and residual models are summed mode by mode (the residual modes' 2x2 block
         as ``B^T (s**2 I + s C + Lambda)^-1 B``), which keeps the rigid-body term 1/s**2 and
         the static flexibility apart near s = 0; Craig-Bampton models invert their
-        attachment-end dynamic stiffness in its modal form (:class:`_ModalStiffness`). Both
+        attachment-end dynamic stiffness in its modal form (:class:`ModalStiffness`). Both
         cost O(n_modes) per frequency and evaluate the frequencies in chunks, so memory stays
         bounded (about 32 MB of temporaries) for any number of points.
         """
@@ -614,7 +620,7 @@ class ModalBeam(FiniteAppendage):
     def dynamic_stiffness(self, s) -> np.ndarray:
         """Attachment-end dynamic stiffness D(s) = W(s)^-1 [N/m, N; N, N*m], O(n) per frequency.
 
-        Craig-Bampton: the modal form of :class:`_ModalStiffness`, infinite exactly at the
+        Craig-Bampton: the modal form of :class:`ModalStiffness`, infinite exactly at the
         model's clamped frequencies (undamped); the others: the inverse of :meth:`W`.
         s = 0 gives 0.
         """
