@@ -7,8 +7,8 @@ Works on any python-control LTI plant with input ``'torque'`` and outputs ``'the
 """
 from .frequency import frequency_response_data
 from .loop import close_loop, loop_frequency_response
-from .margins import (Margins, ModeSpillover, MultiLoopMargins, SpilloverVerdict, margins,
-                      spillover)
+from .margins import (Margins, ModeSpillover, MultiLoopMargins, SpilloverVerdict, loop_margins,
+                      margins, spillover)
 from .modes import INFLUENCE_TOL, FlexibleMode, flexible_modes, rigid_body_inertia
 from .timeresp import (METRIC_UNITS, disturbance_response, metrics, slew, slew_profile,
                        step_response)
@@ -44,6 +44,7 @@ __all__ = [
     "flexible_modes",
     "frequency_response_data",
     "loop_frequency_response",
+    "loop_margins",
     "lqr",
     "lqr_design",
     "margins",

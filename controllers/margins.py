@@ -16,7 +16,7 @@ from .stability import _continuous_poles
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "margins",
-           "spillover", "disk_margin_gain", "disk_margin_phase"]
+           "spillover", "disk_margin_gain", "disk_margin_phase", "loop_margins"]
 
 
 @dataclass(frozen=True)
@@ -288,7 +288,7 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     if omega.size < 2 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
         raise ValueError("omega must hold at least two positive finite frequencies [rad/s]")
     if not loop.ch.mimo:
-        return _siso_margins(loop, omega)
+        return loop_margins(loop, omega)
     m = loop.ch.n_axes
     # L on the grid once: the loop-at-a-time functions and the singular values all follow from
     # S = (I + L)^-1 there; only the refinements evaluate L again
@@ -386,10 +386,33 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
     return best, w_best
 
 
-def _siso_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
-                  L: np.ndarray | None = None) -> Margins:
-    """Gain, phase and modulus margins of a scalar loop function L(omega) on a grid, refined
-    (L: its values on the grid, if already known)."""
+def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
+                 L: np.ndarray | None = None) -> Margins:
+    """Gain, phase and modulus margins of a scalar loop function, found on the function itself.
+
+    The grid only brackets them: every crossing of |L| = 1 and of the negative real axis is
+    refined on ``loop`` to 1e-13 relative in frequency (regula falsi, :func:`_crossings`), the
+    minimum of |1 + L| by a bounded scalar search between the grid neighbours of its grid
+    minimum; the margins are the values of ``loop`` there. A loop known exactly (the exact
+    distributed beam's response through W(s)) gives its margins to the accuracy of its
+    evaluation, not of a grid.
+
+    Parameters
+    ----------
+    loop : callable
+        ``loop(omega)`` -> L(j omega), complex array of the shape of ``omega`` (1-D, rad/s),
+        negative-feedback convention (the loop is unstable at L = -1).
+    omega : ndarray, rad/s
+        Increasing grid that resolves L (every crossing and the minimum of |1 + L| between two
+        of its points).
+    L : ndarray, optional
+        ``loop(omega)``, if already known.
+
+    Returns
+    -------
+    Margins
+    """
+    omega = np.asarray(omega, dtype=float).reshape(-1)
     if L is None:
         with np.errstate(divide="ignore", invalid="ignore"):
             L = loop(omega)
@@ -399,7 +422,7 @@ def _siso_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
 def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], omega: np.ndarray,
                    L: np.ndarray) -> list[Margins]:
     """Margins of m scalar loop functions L_j at once (the loop-at-a-time functions of a
-    three-axis loop), each as :func:`_siso_margins` finds them: ``L`` (m, f) on the grid,
+    three-axis loop), each as :func:`loop_margins` finds them: ``L`` (m, f) on the grid,
     ``evaluate(w, owner)`` the value of L_owner[k] at w[k] (one evaluation of the loop serves
     every function, so the crossings of all of them are refined together)."""
     grids = []

@@ -38,8 +38,8 @@ from .responses import (appendage_peaks, diverged_at, outputs_until_overflow,
 from .scene import Scene, load_scene, scene_dict
 from .tables import describe_model, equivalence_table
 from .tuning import digital_facts, rigid_crossover, tune
-from .verdicts import (closed_loop_poles, design_warnings, loop_status, resolved_frequency,
-                       withheld_metrics)
+from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, loop_status,
+                       resolved_frequency, withheld_metrics)
 
 __all__ = ["RunStats", "RunResult", "run", "ProgressCallback", "equivalence_table", "FIT_LABELS",
            "raised_by_flexsat", "LQR_FREQUENCY_RANGE", "diverged_at", "warning_lines"]
@@ -269,7 +269,9 @@ class _Runner(ModelBuilder):
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 try:
-                    row["exact_verdict"] = _verdict(controllers.spillover(exact_frd, K))
+                    row["exact_verdict"] = _verdict(exact_loop_verdict(
+                        self.exact_spacecraft(), K, exact_frd.omega,
+                        theta=np.asarray(exact_frd.frdata)[0, 0]))
                 except ValueError as exc:
                     row["exact_verdict"] = {"error": str(exc)}
         plants = (("design", d["sim_plant"]), ("truth", truth_sim))
