@@ -15,9 +15,10 @@ three-axis
 
 Either may have other inputs (``'disturbance_torque'``, forces) and outputs (tip deflections,
 ``'*tip_deflection'`` [m], or any other tip motion). torque = controller(inputs): no hidden minus
-sign. Reference inputs are the controller inputs whose names contain ``'ref'``. A controller with
-``dt`` set is a digital controller: its loop with a continuous plant is the sampled-data loop
-(zero-order hold on the torque, sampled measurements).
+sign. Reference inputs are the controller inputs whose names contain ``'ref'`` or ``'ff'``
+(``'theta_ref'``; with feedforward also ``'omega_ref'`` [rad/s] and ``'torque_ff'`` [N*m]). A
+controller with ``dt`` set is a digital controller: its loop with a continuous plant is the
+sampled-data loop (zero-order hold on the torque, sampled measurements).
 """
 from __future__ import annotations
 
@@ -27,7 +28,8 @@ from typing import Sequence
 import control
 import numpy as np
 
-__all__ = ["TORQUE", "THETA", "OMEGA", "THETA_REF", "TIP_SUFFIX", "AXES", "Channels",
+__all__ = ["TORQUE", "THETA", "OMEGA", "THETA_REF", "OMEGA_REF", "TORQUE_FF", "TIP_SUFFIX",
+           "AXES", "Channels",
            "PLANAR", "THREE_AXIS", "channels", "tip_outputs"]
 
 #: Longest echo of a user's value in an error message [characters].
@@ -37,6 +39,10 @@ TORQUE = "torque"
 THETA = "theta"
 OMEGA = "omega"
 THETA_REF = "theta_ref"
+#: Rate reference input of a controller with feedforward (three axes: ``omega_ref_x`` ...).
+OMEGA_REF = "omega_ref"
+#: Feedforward torque input of a controller with feedforward (three axes: ``torque_ff_x`` ...).
+TORQUE_FF = "torque_ff"
 TIP_SUFFIX = "tip_deflection"
 #: Hub axes of a three-axis plant, in the order of its signals.
 AXES = ("x", "y", "z")
@@ -74,6 +80,16 @@ class Channels:
     def measurements(self) -> tuple[str, ...]:
         """The thetas, then the omegas."""
         return self.thetas + self.omegas
+
+    @property
+    def omega_refs(self) -> tuple[str, ...]:
+        """Rate references, one per axis (``'omega_ref'`` or ``'omega_ref_x'``...)."""
+        return tuple(OMEGA_REF + self.suffix(i) for i in range(self.n_axes))
+
+    @property
+    def feedforwards(self) -> tuple[str, ...]:
+        """Feedforward torques, one per axis (``'torque_ff'`` or ``'torque_ff_x'``...)."""
+        return tuple(TORQUE_FF + self.suffix(i) for i in range(self.n_axes))
 
     def suffix(self, i: int) -> str:
         """'' (planar) or '_x', '_y', '_z': the ending of axis i's metric names."""
@@ -213,10 +229,10 @@ def _measurements(plant, controller) -> list[str]:
 
 def _reference_inputs(controller, plant_outputs: Sequence[str]) -> list[str]:
     others = [n for n in controller.input_labels if n not in plant_outputs]
-    bad = [n for n in others if "ref" not in n]
+    bad = [n for n in others if "ref" not in n and "ff" not in n]
     if bad:
         raise ValueError(f"controller inputs {_short(bad)} are neither plant outputs nor "
-                         "reference inputs (names containing 'ref')")
+                         "reference inputs (names containing 'ref' or 'ff')")
     return others
 
 
