@@ -507,14 +507,18 @@ def plot_poles(result, path: Path) -> str:
             w = np.abs(s)
             zeta = np.where(w > 0, -s.real / np.where(w > 0, w, 1.0), 0.0)
             growing = s.real > 1e-10 * np.maximum(1.0, w)
+            # the colour set explicitly (a marker-only line otherwise takes the next colour
+            # of the axes' cycle as its own, which says nothing and may even be red)
             style = dict(marker=marker, ls="none", ms=6 if which == "truth" else 7,
-                         mfc="none" if which == "truth" else colour, mec=colour, mew=1.3)
+                         color=colour, mfc="none" if which == "truth" else colour, mec=colour,
+                         mew=1.3)
             label = f"{design_label(variant)}: poles of the loop on the {which} model"
             sel = (w <= radius) & ~growing
             handles += near.plot(s.real[sel], s.imag[sel], label=label, **style)
             spread.semilogx(w[~growing & (w > 0)], zeta[~growing & (w > 0)], **style)
             if growing.any():
-                bad = dict(style, mfc=UNSTABLE_COLOUR, mec=UNSTABLE_COLOUR, ms=8)
+                bad = dict(style, color=UNSTABLE_COLOUR, mfc=UNSTABLE_COLOUR,
+                           mec=UNSTABLE_COLOUR, ms=8)
                 handles += near.plot(s.real[growing & (w <= radius)],
                                      s.imag[growing & (w <= radius)],
                                      label="unstable poles (Re s > 0)", **bad)

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from matplotlib.colors import same_color
 from matplotlib.figure import Figure
 
 from spacecraft.naming import UNSTABLE_COLOUR, design_label
@@ -169,9 +170,18 @@ def test_pole_map_is_of_the_closed_loop_with_damping_lines_and_unstable_poles(de
     poles = result.poles[("frequencies", "lqr", "truth")]
     growing = poles[poles.real > 0]
     assert growing.size == 2
-    marked = [line for ax in fig.axes for line in ax.get_lines()
-              if line.get_color() == UNSTABLE_COLOUR and line.get_marker() == "o"]
-    assert marked
+    # Every pole marker carries its colour as the line's own (not the axes' colour cycle,
+    # whose fourth colour is this red under matplotlib <= 3.10 and whose colours 3.11 returns
+    # as RGB tuples); the red ones on the s-plane are exactly the growing pair.
+    markers = [line for ax in fig.axes for line in ax.get_lines()
+               if line.get_marker() in ("o", "x")]
+    for line in markers:
+        assert same_color(line.get_color(), line.get_markeredgecolor()), line.get_label()
+    red = [line for ax in s_plane for line in ax.get_lines() if line in markers
+           and same_color(line.get_markeredgecolor(), UNSTABLE_COLOUR)]
+    drawn = np.concatenate([np.asarray(line.get_xdata(), float)
+                            + 1j * np.asarray(line.get_ydata(), float) for line in red])
+    np.testing.assert_array_equal(np.sort_complex(drawn), np.sort_complex(growing))
     legend = [t.get_text() for t in fig.legends[0].get_texts()]
     for variant in ("poles-and-zeros", "frequencies"):
         assert any(t.startswith(design_label(variant)) for t in legend)
