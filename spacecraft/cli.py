@@ -21,7 +21,8 @@ Subcommands
 
 ``--limit NAME=VALUE`` (run, export, table, fit; repeatable) raises or lowers a work limit of
 :mod:`spacecraft.limits` (``modes``, ``bodies``, ``fit_bodies``, ``appendages``, ``states``,
-``samples``, ``memory``, ``string_length``, ``file_size``) over the scene's own ``[limits]``.
+``samples``, ``memory``, ``string_length``, ``file_size``, ``basilisk_seconds``) over the
+scene's own ``[limits]``.
 
 Exit codes
 ----------
@@ -324,7 +325,8 @@ def _add_limit(parser) -> None:
                         metavar="NAME=VALUE",
                         help="raise (or lower) a work limit, e.g. --limit modes=800 (names: "
                              "modes, bodies, fit_bodies, appendages, states, samples, memory "
-                             "[bytes], string_length, file_size [bytes]); repeatable")
+                             "[bytes], string_length, file_size [bytes], basilisk_seconds "
+                             "[s]); repeatable")
 
 
 def _limits(args) -> dict:

@@ -12,40 +12,45 @@ the limit, whatever exceeds one. A user who really wants more raises the limit e
 Defaults (the table of ``spacecraft/scene.py`` and the README), measured on the development
 machine (2 cores, load average 2-3; medians of single runs, noisy):
 
-============== ============ ============================================================
-limit          default      what it bounds, and the cost at the limit
-============== ============ ============================================================
-modes          500          ``fidelity.n_modes`` (bending modes per truncated beam); the
-                            search from ``fidelity.tolerance`` tries at most 40 (fewer if
-                            this limit is lower; ``spacecraft.fidelity.MAX_MODES`` says why)
-bodies         500          bodies of an explicit or ``from_beam`` chain (a 500-body
-                            truth chain: 998 states, 7 s, 1.4 GB)
-fit_bodies     14           ``fit.n_bodies``: appendages' own limit (``appendages.limits``),
-                            the range the "poles-and-zeros" fit is benchmarked and tested on.
-                            Cold fits 0.04 s CPU at 3 bodies, 0.95 s at 10, 2.5 s at 14
-                            (load 1.6-2.7; benchmarks/results/fit.md); raising it raises
-                            appendages' too
-appendages     64           mounted appendages
-states         1200         states of the largest closed loop (upper bound: truth plant
-                            plus controller). A 1202-state loop (600 modes, PD) took 20 s
-                            and 2.0 GB; an LQR on a 502-state design model 27 s, 0.9 GB
-samples        10,000,000   samples of one simulation (duration / step + 1); a sample
-                            of a digital loop counts 20 (scipy's dlsim steps in
-                            Python: 21 us a sample against 0.7 us for the continuous
-                            simulator, measured at load 10), so 500,000 there
-memory         2 GiB        bytes held by the time responses (upper bound: every response
-                            kept, plus one simulation's work arrays)
-string_length  4096         characters of a free-text value (``title``)
-file_size      1 MiB        bytes of a scene file (``--limit file_size=...`` only: the
-                            file's own [limits] table is read after the file)
-============== ============ ============================================================
+================= ============ ============================================================
+limit             default      what it bounds, and the cost at the limit
+================= ============ ============================================================
+modes             500          ``fidelity.n_modes`` (bending modes per truncated beam); the
+                               search from ``fidelity.tolerance`` tries at most 40 (fewer if
+                               this limit is lower; ``spacecraft.fidelity.MAX_MODES`` says why)
+bodies            500          bodies of an explicit or ``from_beam`` chain (a 500-body
+                               truth chain: 998 states, 7 s, 1.4 GB)
+fit_bodies        14           ``fit.n_bodies``: appendages' own limit (``appendages.limits``),
+                               the range the "poles-and-zeros" fit is benchmarked and tested on.
+                               Cold fits 0.04 s CPU at 3 bodies, 0.95 s at 10, 2.5 s at 14
+                               (load 1.6-2.7; benchmarks/results/fit.md); raising it raises
+                               appendages' too
+appendages        64           mounted appendages
+states            1200         states of the largest closed loop (upper bound: truth plant
+                               plus controller). A 1202-state loop (600 modes, PD) took 20 s
+                               and 2.0 GB; an LQR on a 502-state design model 27 s, 0.9 GB
+samples           10,000,000   samples of one simulation (duration / step + 1); a sample
+                               of a digital loop counts 20 (scipy's dlsim steps in
+                               Python: 21 us a sample against 0.7 us for the continuous
+                               simulator, measured at load 10), so 500,000 there
+memory            2 GiB        bytes held by the time responses (upper bound: every response
+                               kept, plus one simulation's work arrays)
+string_length     4096         characters of a free-text value (``title``)
+file_size         1 MiB        bytes of a scene file (``--limit file_size=...`` only: the
+                               file's own [limits] table is read after the file)
+basilisk_seconds  600 s        estimated wall time of one Basilisk run (``simulator.name =
+                               "basilisk"``; the work model of
+                               ``spacecraft.basilisk.simulation.STEP_SECONDS``: RK4 steps times
+                               the chain's bodies cubed): a 30-body chain at its default step
+                               takes minutes, a 40-body chain hours
+================= ============ ============================================================
 """
 
 from __future__ import annotations
 
 import dataclasses
 
-__all__ = ["Limits", "LIMIT_UNITS", "SceneCost", "estimate_cost", "appendage_dof",
+__all__ = ["Limits", "LIMIT_UNITS", "REAL_LIMITS", "SceneCost", "estimate_cost", "appendage_dof",
            "DIGITAL_SAMPLE_COST", "library_limits"]
 
 #: Unit and meaning of each limit (for messages and ``--help``).
@@ -59,7 +64,10 @@ LIMIT_UNITS = {
     "memory": ("bytes", "memory of the time responses"),
     "string_length": ("characters", "length of a free-text value"),
     "file_size": ("bytes", "size of a scene file"),
+    "basilisk_seconds": ("s", "estimated wall time of a Basilisk run"),
 }
+#: Limits that are real numbers; the others are whole numbers.
+REAL_LIMITS = ("memory", "basilisk_seconds")
 
 # Bytes per float64.
 _FLOAT = 8
@@ -76,7 +84,16 @@ DIGITAL_SAMPLE_COST = 20
 class Limits:
     """Documented bounds on the work of one scene run (see the module table).
 
-    Every field is a positive number; ``memory`` and ``file_size`` are in bytes.
+    Every field is a finite number >= 1 (:data:`LIMIT_UNITS` gives the units), a whole number
+    except those of :data:`REAL_LIMITS`; ``memory`` and ``file_size`` are in bytes,
+    ``basilisk_seconds`` in seconds.
+
+    Raises
+    ------
+    TypeError
+        A field that is not a real number (None, a string, a bool).
+    ValueError
+        A field that is not finite, below 1, or not whole where it must be.
     """
 
     modes: int = 500
@@ -88,6 +105,11 @@ class Limits:
     memory: float = 2.0 * 1024**3
     string_length: int = 4096
     file_size: int = 1024**2
+    basilisk_seconds: float = 600.0
+
+    def __post_init__(self):
+        for field in dataclasses.fields(self):
+            object.__setattr__(self, field.name, _limit(field.name, getattr(self, field.name)))
 
     def replace(self, **changes) -> "Limits":
         """A copy with some limits changed."""
@@ -97,6 +119,29 @@ class Limits:
     def names() -> tuple:
         """Names of the limits (the keys of a scene's ``[limits]`` table)."""
         return tuple(f.name for f in dataclasses.fields(Limits))
+
+
+def _limit(name: str, value):
+    """A limit's value checked (:class:`Limits`): int, or float for :data:`REAL_LIMITS`."""
+    import math
+    import numbers
+
+    unit = LIMIT_UNITS[name][0]
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"limit {name} must be a number >= 1 [{unit}]; got "
+                        f"{type(value).__name__} {value!r}"[:200])
+    try:
+        number = float(value)
+    except OverflowError:  # an int beyond the float range
+        number = math.inf
+    if not (math.isfinite(number) and number >= 1):
+        raise ValueError(f"limit {name} must be a finite number >= 1 [{unit}]; got {value!r}"
+                         [:200])
+    if name in REAL_LIMITS:
+        return number
+    if number != math.floor(number):
+        raise ValueError(f"limit {name} must be a whole number [{unit}]; got {value!r}")
+    return int(number)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -536,7 +536,7 @@ def _basilisk(data: dict) -> list:
                    f"{_fmt(first['dt'])} s); flexsat predicts the same sampled-data loop on the "
                    "linear chain and on the truth model (exact at the samples). Peak "
                    "differences over the manoeuvre, relative to the reference's peak:"))
-    header = ["controller", "signal", "Basilisk - flexsat beam (truth model)",
+    header = ["controller", "signal", f"Basilisk - flexsat: {first.get('truth', 'truth model')}",
               "Basilisk - flexsat linear chain (nonlinearity)",
               "flexsat: linear chain - truth (the chain's cost)"]
     out = []

@@ -226,23 +226,25 @@ Limits (work a scene may ask for; :mod:`spacecraft.limits` has the measurements 
 Raise one explicitly where you really want more: a ``[limits]`` table in the scene
 (``[limits]`` / ``modes = 800``) or ``--limit modes=800`` on the command line (which wins).
 
-==============  ===========  ==================================================================
-limit           default      bounds
-==============  ===========  ==================================================================
-modes           500          ``fidelity.n_modes``; the search from ``fidelity.tolerance``
-                             tries at most 40 modes, or this limit if lower (see
-                             ``spacecraft.fidelity.MAX_MODES``)
-bodies          500          bodies per chain (arrays, ``chain.n_bodies``)
-fit_bodies      14           ``fit.n_bodies`` (appendages' limit: the range the fit is
-                             benchmarked and tested on)
-appendages      64           ``appendages`` entries
-states          1200         states of the largest closed loop (estimated upper bound)
-samples         1e7          samples per simulation, ``duration / step + 1`` (and of FMU
-                             reference files); a digital loop's count 20 each
-memory          2 GiB        bytes held by the time responses (estimated upper bound)
-string_length   4096         characters of ``title``
-file_size       1 MiB        bytes of a scene file (``--limit`` only)
-==============  ===========  ==================================================================
+=================  ===========  ==================================================================
+limit              default      bounds
+=================  ===========  ==================================================================
+modes              500          ``fidelity.n_modes``; the search from ``fidelity.tolerance``
+                                tries at most 40 modes, or this limit if lower (see
+                                ``spacecraft.fidelity.MAX_MODES``)
+bodies             500          bodies per chain (arrays, ``chain.n_bodies``)
+fit_bodies         14           ``fit.n_bodies`` (appendages' limit: the range the fit is
+                                benchmarked and tested on)
+appendages         64           ``appendages`` entries
+states             1200         states of the largest closed loop (estimated upper bound)
+samples            1e7          samples per simulation, ``duration / step + 1`` (and of FMU
+                                reference files); a digital loop's count 20 each
+memory             2 GiB        bytes held by the time responses (estimated upper bound)
+string_length      4096         characters of ``title``
+file_size          1 MiB        bytes of a scene file (``--limit`` only)
+basilisk_seconds   600 s        estimated wall time of one Basilisk run (``simulator.name =
+                                "basilisk"``; RK4 steps times the chain's bodies cubed)
+=================  ===========  ==================================================================
 
 References
 ----------
@@ -264,7 +266,7 @@ from typing import Any
 
 import numpy as np
 
-from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, Limits, estimate_cost
+from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, estimate_cost
 from .scene_reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
                            _NAME, _Reader, _kind, _quoted, _short, _shown)
 from .given_controller import read_given
@@ -700,11 +702,20 @@ def _read_simulator(r: _Reader, data, path: str) -> SimulatorSpec:
     if dt is not None and sample_time is not None and dt > sample_time * (1 + 1e-12):
         raise r.error(f"{path}.dt", f"must not exceed the flight-software sample time "
                       f"1/sample_rate = {sample_time:g} [s]; got {dt:g}")
+    if dt is not None and sample_time is not None:
+        # Basilisk's clock counts whole nanoseconds: dt must divide T in them (the RK4 step
+        # against the chain's modes is checked when the run is built)
+        period, k = round(sample_time * 1e9), round(sample_time / dt)
+        if k < 1 or period % k or abs(k * dt - sample_time) > 1e-9 * sample_time:
+            raise r.error(f"{path}.dt", f"must divide the flight-software sample time "
+                          f"1/sample_rate = {sample_time:g} s into a whole number of "
+                          f"whole-nanosecond steps [s]; got {dt:g} (T / dt = "
+                          f"{sample_time / dt:.6g})")
     return SimulatorSpec(name, sample_time, dt, wheel)
 
 
 def _limit_value(r: _Reader, value, full: str, name: str):
-    """A limit: a positive integer (``memory``: a positive number of bytes)."""
+    """A limit: a positive integer (``memory``, ``basilisk_seconds``: a positive number)."""
     unit = LIMIT_UNITS[name][0]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise r.error(full, f"must be a positive number [{unit}]; got {_kind(value)}")
@@ -714,7 +725,7 @@ def _limit_value(r: _Reader, value, full: str, name: str):
         raise r.error(full, f"must be finite [{unit}]; got {_shown(value)}") from None
     if not (math.isfinite(number) and number >= 1):
         raise r.error(full, f"must be a finite number >= 1 [{unit}]; got {_shown(value)}")
-    if name == "memory":
+    if name in REAL_LIMITS:
         return number
     if number != math.floor(number):
         raise r.error(full, f"must be a whole number [{unit}]; got {_shown(value)}")
@@ -916,6 +927,12 @@ def _checked_simulator(simulator: SimulatorSpec, appendages, manoeuvre, controll
         raise error("manoeuvre.disturbance.input", "a tip force is not applied by the "
                     "Basilisk model (it applies disturbance_torque, force_x, force_y); "
                     "choose one of those or drop simulator.name = 'basilisk'")
+    if (simulator.sample_time is not None and controller.sample_time is not None
+            and not math.isclose(simulator.sample_time, controller.sample_time, rel_tol=1e-9)):
+        raise error("simulator.sample_rate", f"must equal controller.sample_rate = "
+                    f"{1.0 / controller.sample_time:.6g} Hz: a digital controller runs as flight "
+                    f"software at its own rate; got {1.0 / simulator.sample_time:.6g} Hz (remove "
+                    "simulator.sample_rate)")
     if simulator.sample_time is None and controller.sample_time is not None:
         simulator = dataclasses.replace(simulator, sample_time=controller.sample_time)
     return simulator

@@ -15,16 +15,40 @@ distributed beams, truncated to the modes the scene's tolerance needs). The diff
 
 Basilisk's results are JSON-ready in ``data["basilisk"]`` (results.json), its responses beside
 flexsat's in the report, the slew plot and the time series.
+
+Before Basilisk runs, the scene's flight-software rate and RK4 step are checked against what
+the comparison needs and Basilisk integrates accurately, and refused by scene key
+(``simulator.sample_rate``, ``simulator.dt``, ``limits.basilisk_seconds``): a rate below the
+sampled loop's rule (:func:`controllers.pd.check_sample_time`) or giving fewer than
+:data:`MIN_SAMPLES` samples, a step that does not divide the sample time or lies beyond RK4's
+stability limit for the chain's highest mode (a step past :data:`ACCURATE_STEP` is warned
+about: RK4's phase error there is (w dt)**5 / 120 per step), a run estimated to take longer
+than the limit. A reaction wheel that spins faster than :data:`WHEEL_SPEED_WARNING` is warned
+about by key (``simulator.reaction_wheel.spin_inertia``): no real wheel does.
 """
 
 from __future__ import annotations
 
+import math
+import warnings
+
 import numpy as np
 
-__all__ = ["basilisk_runs", "basilisk_disturbances", "summary", "SIGNALS"]
+__all__ = ["basilisk_runs", "basilisk_disturbances", "summary", "SIGNALS", "MIN_SAMPLES",
+           "ACCURATE_STEP", "WHEEL_SPEED_WARNING"]
 
 #: Signals compared, in the report's order (those both responses have).
 SIGNALS = ("theta", "omega", "torque")
+#: Fewest flight-software samples a comparison is made on (two samples compared the initial
+#: and one late state, and called the runs equal).
+MIN_SAMPLES = 20
+#: w_max * dt above which a user's RK4 step is warned about: RK4's phase error per step on the
+#: highest mode is (w dt)**5 / 120 (8e-3 rad at 1), its numerical damping (w dt)**5 / 144;
+#: the default step has w_max dt <= 1/2 (:mod:`spacecraft.basilisk.simulation`).
+ACCURATE_STEP = 1.0
+#: Peak wheel speed [rad/s] above which a reaction wheel is warned about (about 95,000 rpm,
+#: ten times the fastest reaction wheels flown, 6,000-10,000 rpm).
+WHEEL_SPEED_WARNING = 1e4
 
 
 def basilisk_disturbances(manoeuvre) -> dict | None:
@@ -47,6 +71,82 @@ def _differences(comparison) -> dict:
     return out
 
 
+def _scene_error(scene, key: str, message: str):
+    from .scene import SceneError
+
+    return SceneError(f"{scene.source}: {key}: {message}")
+
+
+def _checked_steps(scene, plant, controller, kind: str, spacecraft) -> float:
+    """The flight-software sample time of a run, with the scene's rate and RK4 step checked
+    (module docstring); SceneError naming the key."""
+    from controllers.pd import check_sample_time
+
+    from .basilisk import default_sample_time, dynamics_step
+
+    m, sim = scene.manoeuvre, scene.simulator
+    digital = controller.dt not in (None, 0, True)
+    given = sim.sample_time is not None
+    T = sim.sample_time or default_sample_time(plant, controller)
+    source = ("simulator.sample_rate" if given and not digital else
+              "the controller's sample rate" if digital else
+              f"flexsat's default for this loop, {default_rate_note()}")
+    if given and not digital:
+        try:
+            check_sample_time(T, plant, controller)
+        except ValueError as exc:
+            raise _scene_error(scene, "simulator.sample_rate", f"{1.0 / T:.6g} Hz (sample time "
+                               f"{T:.6g} s) cannot run the {kind} loop as flight software: "
+                               f"{str(exc).removeprefix('sample time: ')}; raise the rate, or remove simulator.sample_rate for "
+                               f"{default_rate_note()}") from None
+    n_samples = int(math.floor(m.duration / T + 1e-9)) + 1
+    if n_samples < MIN_SAMPLES:
+        key = "simulator.sample_rate" if given else "manoeuvre.duration"
+        raise _scene_error(scene, key, f"the Basilisk run would be compared on {n_samples} "
+                           f"flight-software samples (manoeuvre.duration {m.duration:g} s at a "
+                           f"sample time of {T:.6g} s, {source}); a comparison needs at least "
+                           f"{MIN_SAMPLES}: raise the rate or lengthen the manoeuvre")
+    if sim.dt is not None:
+        modes = spacecraft.modes()[0]
+        w_max = float(np.max(modes)) if np.size(modes) else 0.0
+        try:
+            dynamics_step(w_max, T, sim.dt)
+        except ValueError as exc:
+            raise _scene_error(scene, "simulator.dt", f"{exc} (sample time from {source})"
+                               ) from None
+        if w_max * sim.dt > ACCURATE_STEP:
+            y = w_max * sim.dt
+            warnings.warn(
+                f"simulator.dt = {sim.dt:g} s gives w*dt = {y:.3g} on the chain's highest mode "
+                f"{w_max:.4g} rad/s: RK4's phase error there is about {y**5 / 120:.2g} rad per "
+                f"step, so Basilisk's run differs from flexsat's by integration error too; the "
+                f"default step has w*dt <= 0.5 (remove simulator.dt)", UserWarning, stacklevel=2)
+    return T
+
+
+def default_rate_note() -> str:
+    from .basilisk import SAMPLES_PER_CROSSOVER
+
+    return (f"{SAMPLES_PER_CROSSOVER:g} samples per period of the loop's fastest crossover or "
+            "controller pole")
+
+
+def _check_wheel_speed(scene, response) -> None:
+    """Warn, by key, about a wheel spinning faster than any real one."""
+    labels = list(response.output_labels)
+    if "wheel_speed" not in labels:
+        return
+    peak = float(np.max(np.abs(np.asarray(response.outputs)[labels.index("wheel_speed")])))
+    if peak > WHEEL_SPEED_WARNING:
+        J = scene.simulator.reaction_wheel.spin_inertia
+        warnings.warn(
+            f"simulator.reaction_wheel.spin_inertia = {J:g} kg m^2 spins the wheel up to "
+            f"{peak:.3g} rad/s ({peak * 30 / math.pi:.3g} rpm) in this manoeuvre, beyond any "
+            f"real reaction wheel (6,000-10,000 rpm); a wheel storing the same momentum at "
+            f"{WHEEL_SPEED_WARNING:g} rad/s has {J * peak / WHEEL_SPEED_WARNING:.3g} kg m^2: "
+            "check the unit of spin_inertia [kg m^2]", UserWarning, stacklevel=2)
+
+
 def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
     """Run the manoeuvre in Basilisk for every controller of the first design model.
 
@@ -66,16 +166,22 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
         JSON-ready, per controller kind: ``design`` (the variant simulated), ``bsk_version``,
         ``sample_time`` [s], ``dt`` [s], ``seconds`` (Basilisk's build and run wall time),
         ``out_of_plane``, ``differences`` (``basilisk_vs_truth``, ``basilisk_vs_chain``,
-        ``chain_vs_truth``: per signal ``peak``, ``peak_difference``, ``relative``) and
-        ``summary`` (:func:`summary`).
+        ``chain_vs_truth``: per signal ``peak``, ``peak_difference``, ``relative``),
+        ``truth`` (what the truth model is, :func:`truth_label`) and ``summary``
+        (:func:`summary`).
+
+    Raises
+    ------
+    SceneError
+        A flight-software rate, RK4 step or run time the scene cannot have (module docstring),
+        naming the key.
 
     Raises
     ------
     spacecraft.basilisk.BasiliskNotInstalled
         Without the ``bsk`` package (one line: how to install the extra).
     """
-    from .basilisk import (ReactionWheel, default_sample_time, require_basilisk,
-                           slew_comparison)
+    from .basilisk import BasiliskRunTooLong, ReactionWheel, require_basilisk, slew_comparison
 
     version = require_basilisk()
     scene = runner.scene
@@ -91,17 +197,29 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
         runner.stats.basilisk_runs += 1
         # the scene's rate, else the controller's own (digital), else 30 samples per period
         # of the loop's fastest crossover or the controller's fastest pole
-        sample_time = sim.sample_time or default_sample_time(d["plant"], K)
-        comparison = slew_comparison(
-            d["spacecraft"], K, m.slew_angle, m.slew_time, duration=m.duration,
-            sample_time=sample_time, dt=sim.dt, truth_plant=truth_sim,
-            disturbances=basilisk_disturbances(m), reaction_wheel=wheel)
+        sample_time = _checked_steps(scene, d["plant"], K, kind, d["spacecraft"])
+        try:
+            comparison = slew_comparison(
+                d["spacecraft"], K, m.slew_angle, m.slew_time, duration=m.duration,
+                sample_time=sample_time, dt=sim.dt, truth_plant=truth_sim,
+                disturbances=basilisk_disturbances(m), reaction_wheel=wheel,
+                max_seconds=scene.limits.basilisk_seconds)
+        except BasiliskRunTooLong as exc:
+            raise _scene_error(scene, "simulator.name", f"{exc.work}, over the limit "
+                               f"{exc.limit:g} s (limits.basilisk_seconds, estimated wall time "
+                               "of a Basilisk run); use design chains with fewer or softer "
+                               "bodies or a shorter manoeuvre.duration, or if you really want "
+                               "it raise the limit: [limits] basilisk_seconds = N in the scene, "
+                               "or --limit basilisk_seconds=N") from None
         comparisons[kind] = comparison
         b = comparison.basilisk
+        _check_wheel_speed(scene, b.response)
         differences = _differences(comparison)
+        truth = truth_label(scene)
         data[kind] = {"design": variant, "bsk_version": version, "sample_time": b.sample_time,
                       "dt": b.dt, "seconds": dict(b.seconds), "out_of_plane": b.out_of_plane,
-                      "differences": differences, "summary": summary(differences)}
+                      "differences": differences, "truth": truth,
+                      "summary": summary(differences, truth)}
     return comparisons, data
 
 
@@ -113,9 +231,31 @@ def _part(entry) -> str:
     return f"{entry['peak_difference']:.3g} ({100.0 * entry['relative']:.3g} % of its peak)"
 
 
-def summary(differences: dict) -> str:
-    """One sentence: how far Basilisk's nonlinear chain is from flexsat's beam (truth) and
-    from flexsat's linear chain, in theta and the tip deflections."""
+def truth_label(scene) -> str:
+    """What the scene's truth model is, for a sentence: ``"the distributed beam (truth)"``,
+    ``"the 20-body truth chain"``, or both kinds for a mix."""
+    beams = [a for a in scene.appendages if a.truth == "beam"]
+    if len(beams) == len(scene.appendages):
+        return ("the distributed beam (truth)" if len(beams) == 1
+                else "the distributed beams (truth)")
+    if not beams:
+        sizes = sorted({_truth_bodies(a) for a in scene.appendages})
+        if len(sizes) == 1:
+            chains = "chain" if len(scene.appendages) == 1 else "chains"
+            return f"the {sizes[0]}-body truth {chains}"
+        return "the truth chains"
+    return "the truth model (beams and chains)"
+
+
+def _truth_bodies(spec) -> int:
+    chain = spec.truth_chain or spec.chain
+    return chain.n_bodies if chain.from_beam is not None else len(chain.lengths)
+
+
+def summary(differences: dict, truth_name: str = "the distributed beam (truth)") -> str:
+    """One sentence: how far Basilisk's nonlinear chain is from flexsat's truth model (named by
+    ``truth_name``, :func:`truth_label`) and from flexsat's linear chain, in theta and the tip
+    deflections."""
     truth = differences.get("basilisk_vs_truth", {})
     chain = differences.get("basilisk_vs_chain", {})
     names = ["theta"] + sorted(n for n in chain if n.endswith("_tip_deflection"))
@@ -124,7 +264,7 @@ def summary(differences: dict) -> str:
         if name not in chain:
             continue
         unit = "rad" if name == "theta" else "m"
-        parts.append(f"{name} [{unit}] differs from the distributed beam (truth) by "
+        parts.append(f"{name} [{unit}] differs from {truth_name} by "
                      f"{_part(truth.get(name))} and from the linear chain by "
                      f"{_part(chain.get(name))}")
     return "; ".join(parts) if parts else "no common signals"

@@ -411,16 +411,20 @@ def test_large_slew_documents_the_nonlinear_difference():
 
 
 @needs_bsk
-def test_reaction_wheel_applies_the_commanded_torque():
+@pytest.mark.parametrize("spin_inertia", [1e-9, 1e-8, 0.05, 1e3])
+def test_reaction_wheel_applies_the_commanded_torque(spin_inertia):
     # A balanced wheel about z gives the hub exactly the commanded torque (its gyroscopic term
     # vanishes for planar motion): the same loop as the external torque; the wheel's state does
     # not feed back into the hub's, so RK4 gives the same hub trajectory up to round-off
     # (1e-15 of the peaks measured; 1e-12 allows for ~1e4 steps). Its absolute momentum J_s (Omega + omega) is minus
     # the impulse the hub received, sum of torque_j T over the held samples: a linear equation
     # with a constant derivative on each step, which RK4 integrates to round-off.
+    # Whatever the wheel: 1e-9 and 1e-8 kg*m^2 reach Basilisk's default wheel-acceleration guard
+    # (1e6 rad/s^2, where it used to clip the torque: 47 % off in theta); 1e3 kg*m^2, above the
+    # hub's 50, made the hub's tensor plus J_s about z no body's, which Basilisk refused.
     sc = winged(tapered_chain(3))
     K = digital_pd(sc)
-    wheel = sb.ReactionWheel(spin_inertia=0.05)
+    wheel = sb.ReactionWheel(spin_inertia=spin_inertia)
     external = sb.simulate_slew(sc, K, SMALL, SLEW_TIME, duration=DURATION)
     wheeled = sb.simulate_slew(sc, K, SMALL, SLEW_TIME, duration=DURATION, reaction_wheel=wheel)
     differences = sb.compare(wheeled.response, external.response)
@@ -496,3 +500,108 @@ def test_a_diverging_step_is_refused_before_the_run():
     with pytest.raises(ValueError, match=r"beyond RK4's stability limit"):
         sb.simulate_slew(sc, digital_pd(sc), SMALL, SLEW_TIME, dt=SAMPLE_TIME / 2)
     assert w_max * SAMPLE_TIME / 2 > sb.simulation.RK4_STABILITY_LIMIT
+
+
+# -- a scene's Basilisk keys: checked by name against what the comparison and RK4 need ----------
+def hinged_wing(**simulator):
+    """The embedded hinged_wing scene (3-body design chain) run in Basilisk, with
+    ``simulator`` keys and no plots."""
+    import tomllib
+
+    from spacecraft.scene import scene_path
+
+    with open(scene_path("hinged_wing"), "rb") as stream:
+        data = tomllib.load(stream)
+    data["report"] = {"plots": False}
+    data["simulator"] = {"name": "basilisk", **simulator}
+    return data
+
+
+@needs_bsk
+def test_a_flight_software_rate_too_slow_for_the_loop_is_refused_by_key():
+    """0.01 Hz on a loop crossing over at 0.23 rad/s: Basilisk ran it on 2 samples and reported
+    "differs by 0". The sampled loop's rule (2 pi / T >= 10 crossovers) names the key."""
+    from spacecraft import SceneError, run
+
+    with pytest.raises(SceneError, match=r"simulator\.sample_rate: 0\.01 Hz \(sample time 100 s\) "
+                                         r"cannot run the pd loop as flight software: .*"
+                                         r"sample_time <= 2\.7\d* s"):
+        run(hinged_wing(sample_rate=0.01))
+    # fast enough for the loop, too few samples to compare: 30 s at 0.5 Hz is 16
+    data = hinged_wing(sample_rate=0.5)
+    data["manoeuvre"]["duration"] = 30.0
+    with pytest.raises(SceneError, match=r"simulator\.sample_rate: the Basilisk run would be "
+                                         r"compared on 16 flight-software samples.*at least 20"):
+        run(data)
+
+
+@needs_bsk
+def test_a_step_that_does_not_divide_the_default_sample_time_is_refused_by_key():
+    """The default flight-software rate is only known once the loop is designed: the step is
+    checked then, naming simulator.dt and the nearest steps that divide it (was exit 1, a
+    ValueError)."""
+    from spacecraft import SceneError, run
+
+    with pytest.raises(SceneError, match=r"simulator\.dt: dt must divide the flight-software "
+                                         r"sample time 0\.02 s .*got 0\.003 .*the nearest that "
+                                         r"do: 0\.0025 or 0\.004 \(sample time from flexsat's "
+                                         r"default"):
+        run(hinged_wing(dt=0.003))
+
+
+def test_a_step_that_does_not_divide_the_given_rate_is_refused_when_read():
+    from spacecraft import SceneError, load_scene
+
+    with pytest.raises(SceneError, match=r"simulator\.dt: must divide the flight-software sample "
+                                         r"time 1/sample_rate = 0\.1 s .*got 0\.003 "
+                                         r"\(T / dt = 33\.3333\)"):
+        load_scene(hinged_wing(sample_rate=10.0, dt=0.003))
+    data = hinged_wing(sample_rate=10.0)
+    data["controller"]["sample_rate"] = 20.0
+    del data["manoeuvre"]["step"]
+    with pytest.raises(SceneError, match=r"simulator\.sample_rate: must equal "
+                                         r"controller\.sample_rate = 20 Hz.*got 10 Hz"):
+        load_scene(data)
+
+
+@needs_bsk
+def test_a_basilisk_run_over_its_time_limit_names_the_limit():
+    """Was "raise max_seconds", neither a scene key nor a --limit."""
+    from spacecraft import SceneError, run
+
+    data = hinged_wing()
+    data["limits"] = {"basilisk_seconds": 1}
+    with pytest.raises(SceneError, match=r"simulator\.name: the Basilisk run would take about "
+                                         r".* s \(3 spinning bodies.*over the limit 1 s "
+                                         r"\(limits\.basilisk_seconds.*--limit "
+                                         r"basilisk_seconds=N"):
+        run(data)
+
+
+def test_the_summary_names_the_truth_model_it_compares_with():
+    """hinged_wing's truth is a 20-body chain, not "the distributed beam"."""
+    from spacecraft import load_scene
+    from spacecraft.simulators import summary, truth_label
+
+    assert truth_label(load_scene("hinged_wing")) == "the 20-body truth chain"
+    assert truth_label(load_scene("single_boom")) == "the distributed beam (truth)"
+    differences = {name: {"theta": {"peak": 1.0, "peak_difference": 0.5, "relative": 0.5}}
+                   for name in ("basilisk_vs_truth", "basilisk_vs_chain")}
+    said = summary(differences, truth_label(load_scene("hinged_wing")))
+    assert "theta [rad] differs from the 20-body truth chain by 0.5" in said
+    assert "beam" not in said
+
+
+@needs_bsk
+def test_a_wheel_no_motor_could_spin_is_warned_about_by_key():
+    """1e-8 kg m^2: Basilisk now follows flexsat (its wheel-acceleration guard is lifted), and
+    the wheel's 1e7 rad/s is named as no real wheel's."""
+    from spacecraft import run
+
+    result = run(hinged_wing(reaction_wheel={"spin_inertia": 1e-8}))
+    assert result.data["basilisk"]["pd"]["differences"]["basilisk_vs_chain"]["theta"][
+        "relative"] < 1e-7
+    said = " ".join(result.data["warnings"])
+    assert "simulator.reaction_wheel.spin_inertia = 1e-08 kg m^2 spins the wheel up to" in said
+    clean = run(hinged_wing(reaction_wheel={"spin_inertia": 0.1}))
+    assert not [w for w in clean.data["warnings"] if "spin_inertia" in w]

@@ -258,3 +258,37 @@ def test_fit_bodies_is_appendages_limit_and_raising_it_raises_appendages():
         # never lowered: the scene's own check came first
         assert library.current("modes") == library.DEFAULTS["modes"]
     assert library.current("fit_bodies") == library.DEFAULTS["fit_bodies"]
+
+
+@pytest.mark.parametrize("value, error, match", [
+    (None, TypeError, r"limit {name} must be a number >= 1 \[{unit}\]; got NoneType None"),
+    ("x", TypeError, r"limit {name} must be a number >= 1 \[{unit}\]; got str 'x'"),
+    (True, TypeError, r"limit {name} must be a number >= 1 \[{unit}\]; got bool True"),
+    (math.nan, ValueError, r"limit {name} must be a finite number >= 1 \[{unit}\]; got nan"),
+    (math.inf, ValueError, r"limit {name} must be a finite number >= 1 \[{unit}\]; got inf"),
+    (0, ValueError, r"limit {name} must be a finite number >= 1 \[{unit}\]; got 0"),
+    (-5, ValueError, r"limit {name} must be a finite number >= 1 \[{unit}\]; got -5"),
+    (10**400, ValueError, r"limit {name} must be a finite number >= 1"),
+])
+@pytest.mark.parametrize("name", [f.name for f in dataclasses.fields(Limits)])
+def test_limits_refuse_what_is_not_a_limit_by_name(name, value, error, match):
+    """Limits accepted None, "x" and NaN for every field (and compared them later)."""
+    from spacecraft.limits import LIMIT_UNITS
+
+    unit = re.escape(LIMIT_UNITS[name][0])
+    with pytest.raises(error, match=match.format(name=name, unit=unit)):
+        Limits(**{name: value})
+    with pytest.raises(error, match=match.format(name=name, unit=unit)):
+        Limits().replace(**{name: value})
+
+
+def test_limits_are_whole_numbers_except_memory_and_basilisk_seconds():
+    from spacecraft.limits import REAL_LIMITS
+
+    for f in dataclasses.fields(Limits):
+        if f.name in REAL_LIMITS:
+            assert Limits(**{f.name: 2.5}).__getattribute__(f.name) == 2.5
+        else:
+            with pytest.raises(ValueError, match=rf"limit {f.name} must be a whole number"):
+                Limits(**{f.name: 2.5})
+            assert type(getattr(Limits(**{f.name: 7.0}), f.name)) is int

@@ -18,7 +18,8 @@ from .comparison import SlewComparison, compare, linear_slew, slew_comparison
 from .flight_software import (SAMPLES_PER_CROSSOVER, FlightSoftwareLaw, default_sample_time,
                               flight_software_law)
 from .install import (INSTALL_HINT, TESTED_VERSIONS, BasiliskIntegrationError,
-                      BasiliskModelError, BasiliskNotInstalled, BasiliskVersionWarning,
+                      BasiliskModelError, BasiliskNotInstalled, BasiliskRunTooLong,
+                      BasiliskVersionWarning,
                       require_basilisk)
 from .layout import (AppendageLayout, BodyLayout, HubLayout, SpacecraftLayout, chain_spacecraft,
                      layout)
@@ -27,7 +28,7 @@ from .simulation import (MAX_SECONDS, BasiliskResult, dynamics_step, estimated_s
 
 __all__ = [
     "AppendageLayout", "BasiliskIntegrationError", "BasiliskModelError", "BasiliskNotInstalled",
-    "BasiliskResult", "BasiliskVersionWarning", "BodyLayout", "FlightSoftwareLaw", "HubLayout",
+    "BasiliskResult", "BasiliskRunTooLong", "BasiliskVersionWarning", "BodyLayout", "FlightSoftwareLaw", "HubLayout",
     "INSTALL_HINT", "MAX_SECONDS", "ReactionWheel", "SAMPLES_PER_CROSSOVER", "SlewComparison",
     "SpacecraftLayout", "TESTED_VERSIONS", "chain_spacecraft", "compare", "default_sample_time", "dynamics_step", "estimated_seconds",
     "flight_software_law", "layout", "linear_slew", "require_basilisk", "simulate",

@@ -30,9 +30,15 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import numpy as np
+
 from appendages.interface import check_positive
 
-__all__ = ["ReactionWheel", "wheel_config"]
+__all__ = ["ReactionWheel", "WHEEL_ACCELERATION_GUARD", "rotor_inertia", "wheel_config"]
+
+#: Basilisk's ``maxWheelAcceleration`` [rad/s**2] set by the adapter: no clipping (module
+#: docstring, "Basilisk's wheel-acceleration guard").
+WHEEL_ACCELERATION_GUARD = math.inf
 
 
 def _optional(value, name: str, unit: str) -> float | None:
@@ -71,6 +77,12 @@ class ReactionWheel:
                             ("max_speed", _optional(self.max_speed, "max_speed", "rad/s")),
                             ("initial_speed", float(speed))):
             object.__setattr__(self, name, value)
+
+
+def rotor_inertia(wheel: ReactionWheel) -> np.ndarray:
+    """The rotor as a thin disc about its centre [kg*m**2] (3, 3), hub axes: J_s about the
+    spin axis z, J_s / 2 about x and y (``Jt = Jg`` of :func:`wheel_config`)."""
+    return np.diag([0.5, 0.5, 1.0]) * wheel.spin_inertia
 
 
 def wheel_config(wheel: ReactionWheel):

@@ -16,6 +16,7 @@ from appendages.interface import FlexsatError
 __all__ = [
     "BasiliskNotInstalled",
     "BasiliskModelError",
+    "BasiliskRunTooLong",
     "BasiliskIntegrationError",
     "BasiliskVersionWarning",
     "INSTALL_HINT",
@@ -38,6 +39,22 @@ class BasiliskNotInstalled(FlexsatError, ImportError):
 
 class BasiliskModelError(FlexsatError, ValueError):
     """A spacecraft, chain or controller that the Basilisk model cannot represent."""
+
+
+class BasiliskRunTooLong(BasiliskModelError):
+    """A run whose estimated wall time exceeds its limit (``max_seconds``).
+
+    Attributes
+    ----------
+    work : str
+        What the run would cost (seconds, bodies, RK4 steps), for a message of the caller's.
+    estimate, limit : float, s
+        The estimated wall time and the limit it exceeds.
+    """
+
+    def __init__(self, message: str, *, work: str, estimate: float, limit: float):
+        super().__init__(message)
+        self.work, self.estimate, self.limit = work, estimate, limit
 
 
 class BasiliskIntegrationError(FlexsatError, ArithmeticError):

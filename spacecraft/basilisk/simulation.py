@@ -52,9 +52,11 @@ import numpy as np
 from appendages.interface import check_positive
 
 from ..coupling import Spacecraft
-from .actuators import ReactionWheel, wheel_config
+from ..limits import Limits
+from .actuators import WHEEL_ACCELERATION_GUARD, ReactionWheel, rotor_inertia, wheel_config
 from .flight_software import FlightSoftwareLaw, flight_software_class, flight_software_law
-from .install import BasiliskIntegrationError, BasiliskModelError, require_basilisk
+from .install import (BasiliskIntegrationError, BasiliskModelError, BasiliskRunTooLong,
+                      require_basilisk)
 from .layout import SpacecraftLayout, layout
 
 __all__ = ["BasiliskResult", "simulate", "simulate_slew", "dynamics_step", "estimated_seconds", "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR",
@@ -71,8 +73,9 @@ DISTURBANCES = ("disturbance_torque", "force_x", "force_y")
 #: flight-software sample SAMPLE_SECONDS (the Python law). Measured with bsk 2.12.1 on a shared
 #: 2-core AMD EPYC (load 5-6): 110 us/step at 3 bodies, 350 at 10, 1.3 ms at 20, 12 ms at 40.
 STEP_SECONDS, BODY_SECONDS, SAMPLE_SECONDS = 1.0e-4, 1.8e-7, 1.0e-4
-#: Default limit on the estimated run time [s] (``max_seconds``).
-MAX_SECONDS = 600.0
+#: Default limit on the estimated run time [s] (``max_seconds``; a scene's
+#: ``limits.basilisk_seconds``).
+MAX_SECONDS = Limits().basilisk_seconds
 
 _NANO = 1e-9
 
@@ -155,7 +158,8 @@ def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None
         k = round(T / dt)
         if k < 1 or period % k or abs(k * dt - T) > 1e-9 * T:
             raise ValueError(f"dt must divide the flight-software sample time {T!r} s into a whole "
-                             f"number of whole-nanosecond steps [s]; got {dt!r}")
+                             f"number of whole-nanosecond steps [s]; got {dt!r} (T / dt = "
+                             f"{T / dt:.6g}){_dividing_steps(period, dt)}")
         if highest_frequency * dt > RK4_STABILITY_LIMIT:
             raise ValueError(
                 f"dt = {dt!r} s is beyond RK4's stability limit for the chain's highest mode "
@@ -169,6 +173,21 @@ def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None
             return period // candidate * _NANO
     raise ValueError(f"no dynamics step divides the sample time {T!r} s into between {k} and "
                      f"{4 * k} whole-nanosecond steps; choose a rounder sample time [s]")
+
+
+def _dividing_steps(period: int, dt: float) -> str:
+    """``"; the nearest that do: ..."``: the steps T/k (whole nanoseconds) next to ``dt``."""
+    k = period * _NANO / dt
+    found = []
+    for candidates in (range(max(1, math.floor(k)), 0, -1),
+                       range(max(1, math.ceil(k)), 4 * max(1, math.ceil(k)) + 2)):
+        for n in candidates:
+            if period % n == 0:
+                found.append(period // n * _NANO)
+                break
+    steps = sorted(set(found))
+    return ("; the nearest that do: " + " or ".join(f"{step:.9g}" for step in steps)
+            if steps else "")
 
 
 def estimated_seconds(n_bodies: int, duration: float, dt: float, sample_time: float) -> float:
@@ -270,8 +289,9 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
     BasiliskNotInstalled
         Without the ``bsk`` package (message: how to install the extra).
     BasiliskModelError
-        A spacecraft or controller Basilisk cannot represent (the message names it and why), or
-        a run estimated to take longer than ``max_seconds``.
+        A spacecraft or controller Basilisk cannot represent (the message names it and why).
+    BasiliskRunTooLong
+        A run estimated to take longer than ``max_seconds`` (a BasiliskModelError).
     BasiliskIntegrationError
         Non-finite states during the run.
     """
@@ -295,11 +315,13 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
     max_seconds = check_positive("max_seconds", max_seconds, "s")
     estimate = estimated_seconds(lay.n_bodies, duration, step, T)
     if estimate > max_seconds:
-        raise BasiliskModelError(
-            f"the Basilisk run would take about {estimate:.3g} s ({lay.n_bodies} spinning bodies, "
-            f"{duration / step:.3g} RK4 steps of {step:.3g} s for the highest mode "
-            f"{w_max:.4g} rad/s), above max_seconds = {max_seconds:g} s: use a chain with fewer "
-            "or softer bodies, a shorter duration, or raise max_seconds")
+        work = (f"the Basilisk run would take about {estimate:.3g} s ({lay.n_bodies} spinning "
+                f"bodies, {duration / step:.3g} RK4 steps of {step:.3g} s for the highest mode "
+                f"{w_max:.4g} rad/s)")
+        raise BasiliskRunTooLong(
+            f"{work}, above max_seconds = {max_seconds:g} s: use a chain with fewer or softer "
+            "bodies, a shorter duration, or raise max_seconds", work=work, estimate=estimate,
+            limit=max_seconds)
     initial_rate = _finite(initial_rate, "initial_rate", "rad/s")
     angles = _initial_angles(lay, initial_angles)
     times = np.arange(n_samples) * (nanoseconds(T, "sample_time") * _NANO)
@@ -349,8 +371,9 @@ class _BasiliskRun:
         inertia = hub.IHubPntBc_B.copy()
         if wheel is not None:
             # Basilisk's balanced wheel expects its rotor's spin inertia inside the hub's and
-            # removes J_s g g^T itself (matrixD -= Js gsHat gsHat^T): add it (see .actuators)
-            inertia[2, 2] += wheel.spin_inertia
+            # removes J_s g g^T itself (matrixD -= Js gsHat gsHat^T): add the rotor, a disc
+            # (see .actuators)
+            inertia += rotor_inertia(wheel)
         craft.hub.IHubPntBc_B = inertia.tolist()
         craft.hub.omega_BN_BInit = [[0.0], [0.0], [initial_rate]]
         self.effectors, self.bodies = [], []
@@ -395,6 +418,8 @@ class _BasiliskRun:
                 self.wheel = reactionWheelStateEffector.ReactionWheelStateEffector()
                 self.wheel.ModelTag = "flexsat_reaction_wheel"
                 self.wheel.addReactionWheel(self.wheel_config)
+                if hasattr(self.wheel, "setMaxWheelAcceleration"):
+                    self.wheel.setMaxWheelAcceleration(WHEEL_ACCELERATION_GUARD)
                 craft.addStateEffector(self.wheel)
                 self.wheel.rwMotorCmdInMsg.subscribeTo(self.fsw.motorTorqueOutMsg)
                 sim.AddModelToTask("flight_software", self.wheel, 20)
