@@ -10,12 +10,14 @@ from .interface import (Appendage, ConvergenceError, FiniteAppendage, FlexsatErr
                         three_axis_root_model)
 from .limits import LimitError
 from .modal import ModalBeam
+from .modal_data import ModalAppendage
 from .rod import Rod
 from .selection import ModelChoice, cheapest_model
 
 __all__ = [
     "Appendage", "Beam", "ConvergenceError", "EquivalenceResult", "FiniteAppendage",
-    "FitWarning", "FlexsatError", "HingedChain", "LimitError", "MOLENAAR_K", "ModalBeam", "ModelChoice",
+    "FitWarning", "FlexsatError", "HingedChain", "LimitError", "MOLENAAR_K", "ModalAppendage",
+    "ModalBeam", "ModelChoice",
     "ModelQuantities", "Rod", "RootModel", "characteristic_roots", "cheapest_model", "criterion",
     "equivalence", "fit_chain", "fit_chain_3d", "limits", "spectral_errors",
     "three_axis_root_model",
