@@ -10,11 +10,12 @@ from .loop import close_loop, loop_frequency_response
 from .margins import (Margins, ModeSpillover, MultiLoopMargins, SpilloverVerdict, loop_margins,
                       margins, spillover)
 from .modes import INFLUENCE_TOL, FlexibleMode, flexible_modes, rigid_body_inertia
-from .timeresp import (METRIC_UNITS, disturbance_response, metrics, slew, slew_profile,
-                       step_response)
+from .timeresp import (METRIC_UNITS, disturbance_response, manoeuvre_metrics, metrics,
+                       profile_response, slew, slew_profile, step_response)
 from .compare import Comparison, compare
 from .discretise import DiscretisationOverflowWarning
-from .lqr import KalmanNoise, LQRDesign, lqr, lqr_design, reference_state
+from .lqr import (KalmanNoise, LQRDesign, lqr, lqr_design, rate_reference_state,
+                  reference_state)
 from .pd import natural_frequency_from_bandwidth, pd, pd_gains, principal_axes
 from .profiles import (PROFILE_KINDS, Profile, Shaper, bang_coast_bang, jerk_limited,
                        minimum_time, mode_shaper, reference_profile, shaped, step_reference,
@@ -55,6 +56,7 @@ __all__ = [
     "loop_margins",
     "lqr",
     "lqr_design",
+    "manoeuvre_metrics",
     "margins",
     "metrics",
     "minimum_time",
@@ -63,6 +65,8 @@ __all__ = [
     "pd",
     "pd_gains",
     "principal_axes",
+    "profile_response",
+    "rate_reference_state",
     "reference_profile",
     "reference_state",
     "rigid_body_inertia",

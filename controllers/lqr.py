@@ -41,6 +41,7 @@ from .stability import (MARGIN, MAX_SCALE_RATIO, RemovedMode, _continuous_poles,
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["lqr", "KalmanNoise", "LQRDesign", "lqr_design", "reference_state",
+           "rate_reference_state",
            "PRESCRIBED_STABILITY", "ROUND_OFF_ATTEMPTS", "SIGMA_CAP"]
 
 #: Redesigns with a higher degree of stability when round-off puts a pole of the loop itself
@@ -169,6 +170,9 @@ class LQRDesign:
     margin : float, 1/s
         The stability margin alpha: every closed-loop pole of the controller on the design
         plant, other than the removed modes, has Re(s) <= -margin (|z| <= exp(-margin T)).
+    x_rate : ndarray, shape (n_states,) or (n_states, 3), or None
+        With feedforward: the state of a unit rigid rate (:func:`rate_reference_state`), the
+        regulator's target x_ref theta_ref + x_rate omega_ref; None without.
     """
 
     controller: control.StateSpace
@@ -183,6 +187,7 @@ class LQRDesign:
     design_plant: control.StateSpace = field(repr=False, default=None)
     removed_modes: tuple[RemovedMode, ...] = ()
     margin: float = 0.0
+    x_rate: np.ndarray | None = None
 
 
 def _nonneg(value, name: str, unit: str) -> float:
@@ -256,6 +261,43 @@ def reference_state(plant: control.StateSpace) -> np.ndarray:
     return x[:, 0] if not ch.mimo else x
 
 
+def rate_reference_state(plant: control.StateSpace) -> np.ndarray:
+    """State x_rate of a unit rigid rate: A x_rate = x_ref, theta(x_rate) = 0, omega(x_rate) = 1.
+
+    A rigid rotation at constant rate w is x(t) = x_ref w t + x_rate w, an exact motion of a
+    free-floating plant with zero torque (A x_ref = 0); a slew reference with rate omega_ref
+    moves the regulator's state target to x_ref theta_ref + x_rate omega_ref, with no
+    deformation of the appendages (which the feedforward torque's acceleration then causes and
+    the loop regulates).
+
+    Returns
+    -------
+    ndarray, shape (n_states,) (planar) or (n_states, 3) (three-axis: column i a unit rate about
+    hub axis i)
+
+    Raises
+    ------
+    ValueError
+        If no such state exists (the plant is not free-floating).
+    """
+    ch = _check_plant(plant)
+    x_ref = reference_state(plant).reshape(plant.nstates, ch.n_axes)
+    labels = list(plant.output_labels)
+    C_theta = plant.C[[labels.index(n) for n in ch.thetas]]
+    C_omega = plant.C[[labels.index(n) for n in ch.omegas]]
+    n, m = plant.nstates, ch.n_axes
+    M = np.vstack([plant.A, C_theta, C_omega])
+    rhs = np.zeros((n + 2 * m, m))
+    rhs[:n] = x_ref
+    rhs[n + m:] = np.eye(m)
+    x, *_ = np.linalg.lstsq(M, rhs, rcond=None)
+    residual = np.linalg.norm(M @ x - rhs)
+    if residual > 1e-8 * max(1.0, np.linalg.norm(M) * np.linalg.norm(x), np.linalg.norm(rhs)):
+        raise ValueError("plant has no rigid-rate motion (A x = x_ref with theta = 0, omega = 1 "
+                         f"rad/s): it is not free-floating (residual {residual:.3g})")
+    return x[:, 0] if not ch.mimo else x
+
+
 def _weight_array(value, name: str, unit: str, n_axes: int, *, positive: bool) -> np.ndarray:
     """A weight per axis: a real number (every axis) or, for three axes, 3 of them."""
     check = _positive_weight if positive else _nonneg
@@ -320,9 +362,12 @@ def _rigid_bandwidths(q_theta, r, Jd, speed, weights) -> tuple[np.ndarray, np.nd
 @limits_blas_threads(total_states)
 def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torque_weight,
                deflection_weight=None, estimator: str | KalmanNoise | np.ndarray = "kalman",
-               estimator_speed: float = 3.0, sample_time: float | None = None) -> LQRDesign:
+               estimator_speed: float = 3.0, sample_time: float | None = None,
+               feedforward: bool = False) -> LQRDesign:
     """LQR + estimator design; see :func:`lqr` (which returns only the controller)."""
     ch = _check_plant(plant)
+    if not isinstance(feedforward, (bool, np.bool_)):
+        raise TypeError(f"feedforward must be True or False; got {_short(feedforward)}")
     m = ch.n_axes
     if sample_time is not None and not isinstance(estimator, (str, KalmanNoise)):
         raise ValueError("a Luenberger gain array is a continuous-time estimator; with sample_time "
@@ -395,6 +440,7 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                              f"(states x {what}){detail}; got {L_given.shape}")
     Q, N, R, r0 = _cost(design_plant, q_theta, q_omega, r, tip_names, W_tip)
     x_ref = reference_state(design_plant)
+    x_rate = rate_reference_state(design_plant) if feedforward else None
     L_fixed = None if noise is not None else L_given
 
     def designed(sigma):
@@ -402,7 +448,7 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
             try:
                 with np.errstate(all="ignore"):
                     design = _design(design_plant, Q, N, R, r0, Jd, x_ref, noise, L_fixed,
-                                     sigma, T if digital else None)
+                                     sigma, T if digital else None, x_rate)
             except (np.linalg.LinAlgError, ValueError, FloatingPointError,
                     ZeroDivisionError) as exc:
                 raise ValueError(
@@ -457,7 +503,7 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                       "open-loop eigenvalues in the closed loop)")
     return LQRDesign(design.controller, design.K, design.L, design.Q, design.R, design.N,
                      design.x_ref, design.regulator_poles, design.estimator_poles,
-                     design_plant, tuple(removed), alpha)
+                     design_plant, tuple(removed), alpha, x_rate)
 
 
 def _cost(plant, q_theta, q_omega, r, tip_names, W_tip):
@@ -491,9 +537,11 @@ def _cost(plant, q_theta, q_omega, r, tip_names, W_tip):
     return Q, N, R, r0
 
 
-def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T) -> LQRDesign:
+def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T, x_rate=None
+            ) -> LQRDesign:
     """The LQR + estimator on the design model with prescribed degree of stability sigma
-    (cost Q, N, R divided by r0); digital (ZOH, predictor estimator) if T is given."""
+    (cost Q, N, R divided by r0); digital (ZOH, predictor estimator) if T is given; with
+    x_rate (feedforward) also the inputs omega_ref and torque_ff."""
     ch = channels(plant)
     m = ch.n_axes
     labels = list(plant.output_labels)
@@ -569,10 +617,16 @@ def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T) -> LQRDesig
     Ac = Phi - L @ Cm - Bm @ K
     X_ref = x_ref.reshape(n, m)
     g = K @ X_ref  # torque per rad of reference (a rigid rotation needs no torque)
-    Bc = np.hstack([Bm @ g, L])
-    controller = control.ss(Ac, Bc, -K, np.hstack([g, np.zeros((m, 2 * m))]),
+    refs, G = ch.refs, [g]
+    if x_rate is not None:
+        # torque = -K (x_hat - x_ref theta_ref - x_rate omega_ref) + torque_ff; the estimator
+        # sees the whole torque (B u), feedforward included
+        refs = ch.refs + ch.omega_refs + ch.feedforwards
+        G = [g, K @ x_rate.reshape(n, m), np.eye(m)]
+    Bc = np.hstack([Bm @ gi for gi in G] + [L])
+    controller = control.ss(Ac, Bc, -K, np.hstack(G + [np.zeros((m, 2 * m))]),
                             0 if T is None else T,
-                            inputs=list(ch.refs + ch.thetas + ch.omegas),
+                            inputs=list(refs + ch.thetas + ch.omegas),
                             outputs=list(ch.torques), name="lqr")
     return LQRDesign(controller, K, L, Q * r0, R * r0, N * r0, x_ref,
                      regulator_poles, estimator_poles)
@@ -651,7 +705,7 @@ def _checked(design: LQRDesign, alpha: float, T, weights: str, estimator) -> LQR
 def lqr(plant: control.StateSpace, *, attitude_weight, rate_weight, torque_weight,
         deflection_weight=None,
         estimator: str | KalmanNoise | np.ndarray = "kalman", estimator_speed: float = 3.0,
-        sample_time: float | None = None) -> control.StateSpace:
+        sample_time: float | None = None, feedforward: bool = False) -> control.StateSpace:
     """LQR attitude controller with a state estimator, as a dynamic output-feedback controller.
 
     Parameters
@@ -685,6 +739,12 @@ def lqr(plant: control.StateSpace, *, attitude_weight, rate_weight, torque_weigh
         on the zero-order-hold discretisation of the design model; the controller has ``dt =
         sample_time``. The sampling frequency must be at least 10 times the continuous design
         loop's rigid-body gain crossover (:func:`controllers.pd.check_sample_time`).
+    feedforward : bool
+        Also take a rate reference and a feedforward torque (a slew profile's omega_ref and
+        torque_ff, :mod:`controllers.profiles`): torque = -K (x_hat - x_ref theta_ref -
+        x_rate omega_ref) + torque_ff (:func:`rate_reference_state`), the estimator driven by
+        the whole torque. With omega_ref = torque_ff = 0 the controller is the one without
+        feedforward (the same matrices, more input columns). Default False.
 
     Returns
     -------
@@ -745,4 +805,4 @@ def lqr(plant: control.StateSpace, *, attitude_weight, rate_weight, torque_weigh
     return lqr_design(plant, attitude_weight=attitude_weight, rate_weight=rate_weight,
                       torque_weight=torque_weight, deflection_weight=deflection_weight,
                       estimator=estimator, estimator_speed=estimator_speed,
-                      sample_time=sample_time).controller
+                      sample_time=sample_time, feedforward=feedforward).controller

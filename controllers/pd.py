@@ -244,7 +244,8 @@ def _second_order(numerator: tuple[float, float, float], w: float, zeta: float):
 @limits_blas_threads(total_states)
 def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, damping=0.7,
        roll_off: float | None = None, notch: float | str | None = None,
-       sample_time: float | None = None, axes: str = "principal") -> control.StateSpace:
+       sample_time: float | None = None, axes: str = "principal",
+       feedforward: bool = False) -> control.StateSpace:
     """PD attitude controller tuned on a free-floating design plant.
 
     The control law is torque = F(s) N(s) [Kp (theta_ref - theta) - Kd omega] with
@@ -287,13 +288,21 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
     axes : {"principal", "hub"}
         Three-axis plants: the axes of the per-axis specification (module docstring); ignored
         for a planar plant.
+    feedforward : bool
+        Also take a rate reference and a feedforward torque (a slew profile's omega_ref and
+        torque_ff, :mod:`controllers.profiles`): torque = F N [Kp (theta_ref - theta) +
+        Kd (omega_ref - omega)] + torque_ff, the feedforward added after the filters (they shape
+        the feedback, not the command). With omega_ref = torque_ff = 0 the controller is the
+        one without feedforward. Default False: the inputs of the law above.
 
     Returns
     -------
     control.StateSpace
         Inputs ``['theta_ref', 'theta', 'omega']``, output ``['torque']``; three-axis: inputs
         ``theta_ref_x, theta_ref_y, theta_ref_z, theta_x, ..., omega_z``, outputs
-        ``torque_x, torque_y, torque_z`` (the filters act on each torque alike). Continuous, or
+        ``torque_x, torque_y, torque_z`` (the filters act on each torque alike). With
+        feedforward the inputs ``omega_ref`` [rad/s] and ``torque_ff`` [N*m] follow
+        ``theta_ref`` (three axes: ``omega_ref_x..z``, ``torque_ff_x..z``). Continuous, or
         discrete with ``dt = sample_time``. The gains themselves are given by :func:`pd_gains`.
 
     Notes
@@ -361,10 +370,15 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
                          f"Kp = J wn^2 = {_short(Kp)} N*m/rad, Kd = 2 zeta wn J = {_short(Kd)} "
                          f"N*m*s/rad outside the floating-point range; choose a {spec} within a "
                          "few decades of the plant's modes")
+    if not isinstance(feedforward, (bool, np.bool_)):
+        raise TypeError(f"feedforward must be True or False; got {_short(feedforward)}")
+    # the feedback law on [theta_ref (, omega_ref), theta, omega]; torque_ff joins after the
+    # filters (below)
+    blocks = [Kp] + ([Kd] if feedforward else []) + [-Kp, -Kd]
     if ch.mimo:
-        gains = np.hstack([Kp, -Kp, -Kd])
+        gains = np.hstack(blocks)
     else:
-        gains = [[Kp, -Kp, -Kd]]
+        gains = [blocks]
     controller = control.ss([], [], [], gains)
     wn_max = float(np.max(wn))
     filters = []
@@ -395,9 +409,19 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
         controller = _per_output(_second_order((0.0, 0.0, wr * wr), wr, ROLL_OFF_DAMPING),
                                  ch.n_axes) * controller
         filters.append(f"roll_off = {wr:.4g} rad/s")
-    signals = dict(inputs=list(ch.refs + ch.thetas + ch.omegas), outputs=list(ch.torques),
+    refs = ch.refs + (ch.omega_refs + ch.feedforwards if feedforward else ())
+    signals = dict(inputs=list(refs + ch.thetas + ch.omegas), outputs=list(ch.torques),
                    name="pd")
-    controller = control.ss(controller.A, controller.B, controller.C, controller.D, 0, **signals)
+    A, B, C, D = (np.asarray(M, dtype=float).reshape(shape) for M, shape in zip(
+        (controller.A, controller.B, controller.C, controller.D),
+        ((controller.nstates,) * 2, (controller.nstates, controller.ninputs),
+         (ch.n_axes, controller.nstates), (ch.n_axes, controller.ninputs))))
+    if feedforward:
+        # torque_ff straight to the torque: zero columns of B, identity columns of D
+        k = 2 * ch.n_axes  # after theta_ref and omega_ref
+        B = np.hstack([B[:, :k], np.zeros((B.shape[0], ch.n_axes)), B[:, k:]])
+        D = np.hstack([D[:, :k], np.eye(ch.n_axes), D[:, k:]])
+    controller = control.ss(A, B, C, D, 0, **signals)
     T = None
     if sample_time is not None:
         T = _positive(_real_number(sample_time, "sample_time", "s"), "sample_time", "s")

@@ -713,6 +713,52 @@ class Profile:
                           outputs=names, states=[f"profile_s{i}" for i in range(n)],
                           name="profile")
 
+    def driving(self, closed_loop: control.StateSpace, inertia=None) -> control.StateSpace:
+        """The closed loop driven by this profile's :meth:`generator`: the generator's outputs
+        feed the loop's inputs of the same names (theta_ref...; omega_ref... and torque_ff...
+        where the loop has them), the loop's other inputs stay inputs.
+
+        Returns
+        -------
+        control.StateSpace
+            Inputs ``['profile_input']`` then the loop's non-reference inputs; the loop's
+            outputs; states: the generator's, then the loop's. Simulate it with
+            ``hold="zero"`` and :meth:`generator_input` (continuous loop): exact on a grid
+            through every breakpoint.
+        """
+        if not isinstance(closed_loop, control.StateSpace) or closed_loop.isdtime(strict=True):
+            raise TypeError("closed_loop must be a continuous control.StateSpace (from "
+                            f"close_loop); got {type(closed_loop).__name__}")
+        labels = list(closed_loop.input_labels)
+        wants_ff = any(n.startswith(TORQUE_FF) for n in labels)
+        if wants_ff and inertia is None:
+            raise ValueError("inertia [kg*m^2] must be given: the closed loop has feedforward "
+                             "torque inputs")
+        gen = self.generator(inertia if wants_ff else None)
+        fed = [n for n in gen.output_labels if n in labels]
+        names = (THETA_REF,) if self.axis is None else tuple(f"{THETA_REF}_{a}" for a in AXES)
+        missing = [n for n in names if n not in labels]
+        if missing:
+            raise ValueError(f"closed_loop must have the reference inputs {list(names)}; "
+                             f"missing {missing}")
+        others = [n for n in labels if n not in fed]
+        i_fed = [labels.index(n) for n in fed]
+        i_other = [labels.index(n) for n in others]
+        rows = [list(gen.output_labels).index(n) for n in fed]
+        Ag, Bg, Cg, Dg = gen.A, gen.B, gen.C[rows], gen.D[rows]
+        Al, Bl, Cl, Dl = (np.asarray(M, dtype=float) for M in (closed_loop.A, closed_loop.B,
+                                                               closed_loop.C, closed_loop.D))
+        ng, nl = Ag.shape[0], Al.shape[0]
+        A = np.block([[Ag, np.zeros((ng, nl))], [Bl[:, i_fed] @ Cg, Al]])
+        B = np.block([[Bg, np.zeros((ng, len(i_other)))],
+                      [Bl[:, i_fed] @ Dg, Bl[:, i_other]]])
+        C = np.hstack([Dl[:, i_fed] @ Cg, Cl])
+        D = np.hstack([Dl[:, i_fed] @ Dg, Dl[:, i_other]])
+        return control.ss(A, B, C, D, 0, inputs=["profile_input"] + others,
+                          outputs=list(closed_loop.output_labels),
+                          states=list(gen.state_labels) + list(closed_loop.state_labels),
+                          name="driven_loop")
+
     def generator_input(self, t) -> np.ndarray:
         """The generator's input for a zero-order hold on the grid t (evenly spaced): on each
         step [t_k, t_k+1) the mean of the piecewise-constant highest derivative over the step

@@ -22,7 +22,7 @@ from .signals import (AXES, PLANAR, THETA, THETA_REF, THREE_AXIS, TIP_SUFFIX, TO
 from .simulate import _OVERFLOW, simulate
 
 __all__ = ["METRIC_UNITS", "MAX_SAMPLES", "slew_profile", "slew", "step_response",
-           "disturbance_response", "metrics"]
+           "disturbance_response", "metrics", "profile_response", "manoeuvre_metrics"]
 
 #: Units of the metrics returned by :func:`metrics` and :func:`margins` (for tables).
 METRIC_UNITS: dict[str, str] = {
@@ -41,11 +41,18 @@ METRIC_UNITS: dict[str, str] = {
     "disk_gain_margin": "dB",
     "disk_phase_margin": "deg",
     "min_singular_value": "1",
+    "profile_end": "s",
+    "settling_time_after_end": "s",
+    "residual_attitude_error": "rad",
+    "residual_tip_deflection": "m",
+    "peak_attitude_error_during": "rad",
+    "peak_torque_during": "N*m",
 }
 # three-axis metrics per hub axis carry the unit of their planar name
 METRIC_UNITS.update({f"{name}_{axis}": METRIC_UNITS[name] for axis in AXES for name in (
     "peak_torque", "peak_attitude_error", "final_attitude_error", "gain_margin", "phase_margin",
-    "modulus_margin")})
+    "modulus_margin", "residual_attitude_error", "peak_attitude_error_during",
+    "peak_torque_during")})
 
 #: Most samples a time response may have unless the caller raises ``max_samples``: 1e7
 #: samples of a loop with 10 outputs and inputs hold 0.8 GB of float64.
@@ -482,5 +489,193 @@ def _three_axis_metrics(response, t: np.ndarray, settling_band: float) -> dict:
         out[f"peak_attitude_error_{a}"] = float(np.max(np.abs(error[i])))
         out[f"final_attitude_error_{a}"] = float(abs(error[i, -1]))
     out.update({f"peak_{n}": v for n, v in peaks.items()})
+    out["diverged"] = False
+    return out
+
+
+def profile_response(closed_loop: control.StateSpace, profile, *, inertia=None,
+                     t_final: float | None = None, dt: float | None = None,
+                     hold: str = "linear", gyroscopic: bool = False,
+                     max_samples: int | None = None) -> control.TimeResponseData:
+    """Response of a closed loop to a slew profile (:mod:`controllers.profiles`).
+
+    The loop's reference inputs are fed from the profile sampled on the grid: ``theta_ref``
+    always, ``omega_ref`` and ``torque_ff`` where the loop has them (a controller designed with
+    ``feedforward=True``); a loop without them sees the attitude reference alone.
+
+    Parameters
+    ----------
+    closed_loop : control.StateSpace
+        From :func:`close_loop`.
+    profile : controllers.Profile
+        Planar for a planar loop; three-axis (an axis) for a three-axis loop.
+    inertia : float or (3, 3) array, kg*m^2, optional
+        The rigid-body inertia of the feedforward torque (:func:`rigid_body_inertia` of the
+        design plant); required when the loop has ``torque_ff`` inputs.
+    t_final : float, s, optional
+        End of the simulation; default twice the profile's end.
+    dt : float, s, optional
+        Sample step; default profile.end_time / 500 (the loop's own for a digital loop).
+    hold : {"linear", "zero", "generator"}
+        How a continuous loop sees the profile: its samples interpolated linearly or held, the
+        difference from the exact profile bounded by ``profile.hold_error(dt, hold=hold,
+        inertia=inertia)``; or ``"generator"``: the loop driven by the profile's generator
+        (:meth:`Profile.driving`) whose piecewise-constant input is held, exact on a grid
+        through every breakpoint of the profile (the gyroscopic term left out). A digital loop
+        reads the samples.
+    gyroscopic : bool
+        Feed the gyroscopic term omega_ref x J omega_ref of a three-axis feedforward. Default
+        False: flexsat's plants are linearised about rest and do not have it.
+    max_samples : int, optional
+        Most samples allowed (default MAX_SAMPLES).
+
+    Returns
+    -------
+    control.TimeResponseData
+        As :func:`slew`, with attribute ``profile_end`` [s], the profile's end time (for
+        :func:`manoeuvre_metrics`).
+    """
+    if not (hasattr(profile, "references") and hasattr(profile, "end_time")):
+        raise TypeError(f"profile must be a controllers.Profile; got {type(profile).__name__}")
+    ch = _check_closed_loop(closed_loop) or PLANAR
+    if ch.mimo != (profile.axis is not None):
+        raise ValueError(f"profile must be {'three-axis (with an axis)' if ch.mimo else 'planar'}"
+                         f" for this {'three-axis' if ch.mimo else 'planar'} closed loop")
+    if hold not in ("linear", "zero", "generator"):
+        raise ValueError(f"hold must be 'linear', 'zero' or 'generator'; got {_short(hold)}")
+    labels = list(closed_loop.input_labels)
+    for name in ch.refs:
+        _require_signal(closed_loop, name, "input", "closed_loop")
+    wants_ff = any(name in labels for name in ch.feedforwards)
+    if wants_ff and inertia is None:
+        raise ValueError("inertia [kg*m^2] must be given: the closed loop has feedforward torque "
+                         f"inputs {_short(list(ch.feedforwards))}")
+    end = float(profile.end_time)
+    t_final = 2.0 * end if t_final is None else t_final
+    T = _time_grid(closed_loop, t_final, dt, end / 500.0, max_samples)
+    references = profile.references(T, inertia if wants_ff else None, gyroscopic=gyroscopic)
+    U = _inputs(closed_loop, T.size, **{name: values for name, values in references.items()
+                                        if name in labels})
+    if closed_loop.isdtime(strict=True):
+        response = _simulate(closed_loop, T, U)
+    elif hold == "generator":
+        driven = profile.driving(closed_loop, inertia)
+        fed = [labels.index(n) for n in labels if n in driven.input_labels]
+        Ud = np.vstack([profile.generator_input(T)[None, :], U[fed]])
+        run = simulate(driven, T, Ud, hold="zero", on_overflow="stop")
+        # the loop's inputs as the samples of the references (what the generator produced)
+        response = control.TimeResponseData(
+            run.t, run.y, None, U[:, :run.t.size], issiso=False,
+            output_labels=list(closed_loop.output_labels), input_labels=labels, sysname=closed_loop.name,
+            title="Simulated response for " + closed_loop.name, trace_types=["forced"],
+            plot_inputs=True, squeeze=False)
+        response.diverged_at = run.diverged_at
+    else:
+        response = simulate(closed_loop, T, U, hold=hold, on_overflow="stop")
+    response.profile_end = end
+    return response
+
+
+def manoeuvre_metrics(response: control.TimeResponseData, end_time: float | None = None, *,
+                      settling_band: float = 0.02) -> dict[str, float | bool | None]:
+    """Metrics of a slew measured against the end of its profile.
+
+    During the manoeuvre (t <= end_time) the peak attitude error |theta - theta_ref| and the
+    peak torque; after it (t >= end_time) the residual vibration: the peak attitude error and
+    peak tip deflection left, and the settling time counted from the end of the profile.
+
+    Parameters
+    ----------
+    response : control.TimeResponseData
+        From :func:`profile_response` (or any response with outputs theta, torque and input
+        theta_ref; three-axis names likewise).
+    end_time : float, s, optional
+        End of the profile; default ``response.profile_end``.
+    settling_band : float
+        Band as a fraction of the final reference (default 2 %).
+
+    Returns
+    -------
+    dict of str to float, bool or None
+        ``profile_end`` [s]; ``peak_attitude_error_during`` [rad] and ``peak_torque_during``
+        [N*m] (t <= end); ``residual_attitude_error`` [rad] (max |theta - theta_ref| for
+        t >= end) and, with tip outputs, ``residual_tip_deflection`` [m] (max |tip deflection|
+        over them for t >= end); ``settling_time_after_end`` [s], the time after the end of the
+        profile from which |theta - r_f| <= settling_band |r_f| up to the end of the response
+        (0 if already settled; None if the last sample is outside: simulate longer);
+        ``diverged`` (bool). Three axes: norms as :func:`metrics` takes them, then
+        ``residual_attitude_error_x``, ``peak_attitude_error_during_x``,
+        ``peak_torque_during_x``... per hub axis. A diverged response gives None for every
+        metric with ``diverged_at`` [s]. Never NaN.
+
+    Raises
+    ------
+    ValueError
+        An end time outside the response, a settling band outside (0, 1), missing signals.
+    """
+    if not isinstance(response, control.TimeResponseData):
+        raise TypeError(f"response must be a control.TimeResponseData; got "
+                        f"{type(response).__name__}")
+    if end_time is None:
+        end_time = getattr(response, "profile_end", None)
+        if end_time is None:
+            raise ValueError("end_time [s] must be given for a response that does not carry "
+                             "profile_end (from profile_response)")
+    end_time = _real_number(end_time, "end_time", "s")
+    settling_band = _real_number(settling_band, "settling_band", "1")
+    if not (0 < settling_band < 1):
+        raise ValueError(f"settling_band must be in (0, 1) [fraction of the reference]; "
+                         f"got {settling_band:.6g}")
+    t = np.asarray(response.t, dtype=float).reshape(-1)
+    ch = _response_channels(list(response.output_labels))
+    if ch is None:
+        raise ValueError("response must have outputs 'theta' and 'torque' (or theta_x..z and "
+                         f"torque_x..z); got {_short(list(response.output_labels))}")
+    if not (np.isfinite(end_time) and t[0] <= end_time <= t[-1]):
+        raise ValueError(f"end_time must lie within the response [{t[0]:.6g}, {t[-1]:.6g}] s; "
+                         f"got {end_time:.6g}")
+    theta = np.array([_trace(response, n) for n in ch.thetas])
+    torque = np.array([_trace(response, n) for n in ch.torques])
+    refs = [_trace(response, n, "input") for n in ch.refs]
+    ref = np.array([np.zeros(t.size) if r is None else r for r in refs])
+    tips = tip_outputs(response.output_labels)
+    tip = np.array([_trace(response, n) for n in tips]).reshape(len(tips), t.size)
+    names = ["profile_end", "peak_attitude_error_during", "peak_torque_during",
+             "residual_attitude_error", "settling_time_after_end"]
+    names += ["residual_tip_deflection"] if tips else []
+    if ch.mimo:
+        names += [f"{n}_{a}" for a in ch.axes for n in
+                  ("peak_attitude_error_during", "peak_torque_during", "residual_attitude_error")]
+    diverged_at = _divergence(response, t, list(theta) + list(torque) + list(ref) + list(tip))
+    if diverged_at is not None:
+        return {**{n: None for n in names}, "profile_end": end_time, "diverged": True,
+                "diverged_at": diverged_at}
+    during = t <= end_time
+    after = t >= end_time
+    error = theta - ref
+    norm = np.sqrt(np.sum(error * error, axis=0))
+    torque_peak = np.max(np.abs(torque), axis=0)
+    out: dict[str, float | bool | None] = {
+        "profile_end": end_time,
+        "peak_attitude_error_during": float(np.max(norm[during])),
+        "peak_torque_during": float(np.max(torque_peak[during])),
+        "residual_attitude_error": float(np.max(norm[after]))}
+    r_f = ref[:, -1]
+    scale = float(np.linalg.norm(r_f))
+    miss = np.sqrt(np.sum((theta - r_f[:, None]) ** 2, axis=0))
+    outside = np.nonzero(after & (miss > settling_band * scale))[0]
+    if outside.size == 0:
+        out["settling_time_after_end"] = 0.0
+    elif outside[-1] == t.size - 1:
+        out["settling_time_after_end"] = None
+    else:
+        out["settling_time_after_end"] = float(t[outside[-1] + 1] - end_time)
+    if tips:
+        out["residual_tip_deflection"] = float(np.max(np.abs(tip[:, after])))
+    if ch.mimo:
+        for i, a in enumerate(ch.axes):
+            out[f"peak_attitude_error_during_{a}"] = float(np.max(np.abs(error[i, during])))
+            out[f"peak_torque_during_{a}"] = float(np.max(np.abs(torque[i, during])))
+            out[f"residual_attitude_error_{a}"] = float(np.max(np.abs(error[i, after])))
     out["diverged"] = False
     return out
