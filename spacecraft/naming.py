@@ -11,7 +11,7 @@ unstable red.
 from __future__ import annotations
 
 __all__ = ["FIT_LABELS", "design_label", "controller_label", "loop_label", "variant_colour",
-           "UNSTABLE_COLOUR", "EXACT_COLOUR", "REFERENCE_COLOUR", "TRUTH_STYLE", "DESIGN_STYLE",
+           "UNSTABLE_COLOUR", "CAUTION_COLOUR", "EXACT_COLOUR", "REFERENCE_COLOUR", "TRUTH_STYLE", "DESIGN_STYLE",
            "BASILISK_STYLE", "BASILISK_COLOUR", "plural"]
 
 #: Names of the design models by fit criterion (and of a scene's own design model).
@@ -24,6 +24,9 @@ _VARIANT_ORDER = ("poles-and-zeros", "frequencies", "design")
 
 #: Colour of anything unstable (a diverging response, an unstable pole, an UNSTABLE verdict).
 UNSTABLE_COLOUR = "#d62728"
+#: Colour of a caution on a stable loop (low margins, light or lowered damping): the report's
+#: orange.
+CAUTION_COLOUR = "#a04800"
 #: Colour of the exact distributed beam.
 EXACT_COLOUR = "black"
 #: Colour of Basilisk's curves (dotted, BASILISK_STYLE).

@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .naming import (BASILISK_COLOUR, BASILISK_STYLE, DESIGN_STYLE, EXACT_COLOUR, REFERENCE_COLOUR, TRUTH_STYLE,
-                     UNSTABLE_COLOUR, controller_label, design_label, plural,
+from .naming import (BASILISK_COLOUR, BASILISK_STYLE, CAUTION_COLOUR, DESIGN_STYLE, EXACT_COLOUR,
+                     REFERENCE_COLOUR, TRUTH_STYLE, UNSTABLE_COLOUR, controller_label, design_label, plural,
                      variant_colour)
 from .responses import trace
 
@@ -161,6 +161,16 @@ def _unstable(row, which: str = "truth") -> bool:
     return which == "truth" and not row["verdict"]["stable"]
 
 
+def _cautions(result, kind: str) -> str:
+    """The cautions of a controller's loops (low margins, lowered or light damping: the design
+    warnings of :mod:`spacecraft.verdicts`), as a title says them; "" when none."""
+    from .verdicts import CAUTIONS
+
+    codes = [w["code"] for w in result.data.get("design_warnings", [])
+             if w.get("controller") == kind and w["code"] in CAUTIONS]
+    return ", ".join(CAUTIONS[c] for c in dict.fromkeys(codes))
+
+
 # ---------------------------------------------------------------------------------------------
 # slew
 # ---------------------------------------------------------------------------------------------
@@ -187,11 +197,13 @@ def plot_slew(result, path: Path) -> str:
     for col, kind in enumerate(kinds):
         rows = {r["design"]: r for r in _rows(result, kind)}
         bad = [v for v, r in rows.items() if _unstable(r)]
+        cautions = _cautions(result, kind)
         title = f"{controller_label(kind)}: " + (
             "UNSTABLE on the truth model when tuned on " + ", ".join(map(design_label, bad))
-            if bad else "stable on the truth model")
+            if bad else "stable on the truth model" + (f"; {cautions}" if cautions else ""))
         axes[0, col].set_title(title, fontsize="medium",
-                               color=UNSTABLE_COLOUR if bad else "black")
+                               color=UNSTABLE_COLOUR if bad else
+                               CAUTION_COLOUR if cautions else "black")
         for row_index, (signal, label) in enumerate(panels):
             ax = axes[row_index, col]
             curves = []

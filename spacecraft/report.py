@@ -157,23 +157,48 @@ def metric_rows(rows: list, controller: str, table: str = "metrics") -> tuple[li
             d, t = r["design_margins"].get(name), r["verdict"].get(name)
             diff = None if d is None or t is None or not (math.isfinite(d) and math.isfinite(t)) \
                 else t - d
-            row += [_fmt(d, 4), _margin_cell(name, t), _fmt(diff, 3)]
+            row += [_fmt(d, 4), _margin_cell(name, t, r["verdict"].get("margin_flags")),
+                    _fmt(diff, 3)]
         out.append(row)
     return header, out
 
 
-def _margin_cell(name: str, value):
-    from .verdicts import MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN, MIN_PHASE_MARGIN
-
+def _margin_cell(name: str, value, flags: dict | None = None):
+    """A margin's cell: red for a margin of an unstable loop (it guarantees nothing), orange
+    below its threshold (:func:`spacecraft.verdicts.margin_flags`)."""
     text = _fmt(value, 4)
-    if value is None or not math.isfinite(value):
-        return text
-    low = ((name == "gain_margin" and abs(value) < MIN_GAIN_MARGIN)
-           or (name == "phase_margin" and value < MIN_PHASE_MARGIN)
-           or (name == "modulus_margin" and value < MIN_MODULUS_MARGIN))
-    if name == "phase_margin" and value < 0:
-        return bad(text)
-    return warn(text) if low else text
+    flag = (flags or {}).get(name)
+    if flag == "unstable":
+        return bad(f"{text} (unstable: no margin)")
+    return warn(text) if flag == "low" else text
+
+
+def _damping_cell(verdict: dict):
+    """The least closed-loop damping ratio, orange below MIN_DAMPING on a loop that does not
+    diverge (one that does is red already)."""
+    from .verdicts import MIN_DAMPING
+
+    zeta = verdict.get("least_damping_ratio")
+    text = _fmt(zeta, 3)
+    return warn(text) if zeta is not None and 0 <= zeta < MIN_DAMPING else text
+
+
+def _loop_cautions(row: dict, warnings: list) -> list[str]:
+    """Short texts of the cautions on a loop that does not diverge (low margins, lowered or
+    light damping, unstable on the exact beam), from its design warnings."""
+    from .verdicts import CAUTIONS as texts
+
+    out = []
+    for w in warnings:
+        if (w.get("design"), w.get("controller")) == (row["design"], row["controller"]) \
+                and w["code"] in texts:
+            text = texts[w["code"]]
+            if w["code"] == "light_damping":
+                v = row["verdict"]
+                text += (f" (zeta {_fmt(v['least_damping_ratio'], 2)} at "
+                         f"{_fmt(v['least_damped_frequency'], 3)} rad/s)")
+            out.append(text)
+    return out
 
 
 def _appendage_rows(rows: list, names: list) -> tuple[list, list]:
@@ -204,7 +229,9 @@ def _appendage_rows(rows: list, names: list) -> tuple[list, list]:
     return header, out
 
 
-def _verdict_rows(rows: list) -> tuple[list, list]:
+def _verdict_rows(rows: list, warnings: list = ()) -> tuple[list, list]:
+    from .verdicts import growing
+
     exact = any("exact_verdict" in r for r in rows)
     header = ["design model", "controller", "on truth model", "least damping [-]",
               "at [rad/s]", "gain margin [dB]", "phase margin [deg]", "modulus margin [-]"]
@@ -214,17 +241,20 @@ def _verdict_rows(rows: list) -> tuple[list, list]:
     for r in rows:
         v = r["verdict"]
         status = (r.get("status") or {}).get("truth")
-        if v["stable"]:
-            state = "stable"
-        elif status is not None and status["status"] in ("unstable", "diverges"):
-            state = bad(status["text"])
+        cautions = _loop_cautions(r, warnings)
+        if growing(v, status):
+            state = bad(status["text"] if status is not None else
+                        f"UNSTABLE ({plural(v['n_unstable_poles'], 'pole')})")
         else:
-            state = bad(f"UNSTABLE ({plural(v['n_unstable_poles'], 'pole')})")
+            state = "stable" if v["stable"] else "marginally stable"
+            if cautions:
+                state = warn(f"{state}; " + ", ".join(cautions))
+        flags = v.get("margin_flags")
         row = [_label(r["design"]), controller_label(r["controller"]), state,
-               _fmt(v["least_damping_ratio"], 3), _fmt(v["least_damped_frequency"], 4),
-               _margin_cell("gain_margin", v["gain_margin"]),
-               _margin_cell("phase_margin", v["phase_margin"]),
-               _margin_cell("modulus_margin", v["modulus_margin"])]
+               _damping_cell(v), _fmt(v["least_damped_frequency"], 4),
+               _margin_cell("gain_margin", v["gain_margin"], flags),
+               _margin_cell("phase_margin", v["phase_margin"], flags),
+               _margin_cell("modulus_margin", v["modulus_margin"], flags)]
         if exact:
             e = r.get("exact_verdict", {})
             row.append("n/a" if "stable" not in e else
@@ -249,19 +279,27 @@ def _fidelity_line(data: dict) -> str:
     return f"truth model: the chains as given; plant {plural(truth['n_states'], 'state')}"
 
 
-def _loop_line(r: dict) -> str | Tone:
+def _loop_line(r: dict, warnings: list = ()) -> str | Tone:
+    from .verdicts import growing
+
     who = f"{controller_label(r['controller'])} tuned on {_label(r['design'])}"
     v = r["verdict"]
     status = (r.get("status") or {}).get("truth")
     margins = (f"gain margin {_fmt(v['gain_margin'], 3)} dB, phase margin "
                f"{_fmt(v['phase_margin'], 3)} deg, modulus margin "
                f"{_fmt(v['modulus_margin'], 3)}")
-    if status is not None and status["status"] in ("unstable", "diverges"):
-        return bad(f"{who}: {status['text']} on the truth model; {margins}")
-    if status is None and not v["stable"]:
-        return bad(f"{who}: UNSTABLE on the truth model "
-                   f"({plural(v['n_unstable_poles'], 'pole')}); {margins}")
-    text = f"{who}: stable on the truth model; {margins}"
+    if growing(v, status):
+        # the classical numbers of a diverging loop are no margins: said so, never as margins
+        figures = (f"no margins: it diverges unperturbed (the margin figures, gain "
+                   f"{_fmt(v['gain_margin'], 3)} dB, phase {_fmt(v['phase_margin'], 3)} deg, "
+                   f"modulus {_fmt(v['modulus_margin'], 3)}, guarantee nothing)")
+        what = (status["text"] if status is not None else
+                f"UNSTABLE ({plural(v['n_unstable_poles'], 'pole')})")
+        return bad(f"{who}: {what} on the truth model; {figures}")
+    cautions = _loop_cautions(r, warnings)
+    state = "stable" if v["stable"] else "marginally stable"
+    text = (f"{who}: {state} on the truth model"
+            + (f" ({', '.join(cautions)})" if cautions else "") + f"; {margins}")
     if status is not None:
         m = r["metrics"]["truth"]
         if status["status"] == "slew unfinished":
@@ -279,7 +317,8 @@ def _loop_line(r: dict) -> str | Tone:
         if tips:
             text += "; peak tip deflection " + ", ".join(
                 f"{_fmt(value, 3)} m ({name})" for name, value in tips)
-    return warn(text) if status is not None and status["status"] != "settles" else text
+    caution = cautions or (status is not None and status["status"] != "settles")
+    return warn(text) if caution else text
 
 
 def summary_lines(data: dict) -> list:
@@ -290,7 +329,8 @@ def summary_lines(data: dict) -> list:
 
         return three_axis_summary(data)
     lines: list = [_fidelity_line(data)]
-    lines += [_loop_line(r) for r in data.get("closed_loops", [])]
+    lines += [_loop_line(r, data.get("design_warnings", []))
+              for r in data.get("closed_loops", [])]
     b = data.get("basilisk")
     if b:
         for kind, entry in b.items():
@@ -513,15 +553,25 @@ def _closed_loops(data: dict) -> list:
         b.append(("h3", "Peaks per appendage during the slew"))
         b.append(("table", header, arows))
     b.append(("h3", "Verdicts: spillover and margins on the truth model"))
-    header, vrows = _verdict_rows(rows)
+    header, vrows = _verdict_rows(rows, data.get("design_warnings", []))
     b.append(("table", header, vrows))
-    from .verdicts import MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN, MIN_PHASE_MARGIN
-
-    b.append(("p", f"Margins below gain {MIN_GAIN_MARGIN:g} dB, phase {MIN_PHASE_MARGIN:g} deg "
-                   f"or modulus {MIN_MODULUS_MARGIN:g} are marked (Skogestad and Postlethwaite, "
-                   "Multivariable Feedback Control, sec. 2.4.3); an unstable loop's time "
-                   "metrics are withheld: it diverges."))
+    b.append(("p", _marking_rules()))
     return b
+
+
+def _marking_rules() -> str:
+    """What the colours of the margin and damping cells mean."""
+    from .verdicts import (DAMPING_DROP, MIN_DAMPING, MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN,
+                           MIN_PHASE_MARGIN)
+
+    return (f"Margins below gain {MIN_GAIN_MARGIN:g} dB, phase {MIN_PHASE_MARGIN:g} deg or "
+            f"modulus {MIN_MODULUS_MARGIN:g} are marked orange, a negative one included "
+            "(Skogestad and Postlethwaite, Multivariable Feedback Control, sec. 2.4.3); the "
+            "margins of an unstable loop are red: they guarantee nothing, the loop diverges "
+            f"unperturbed. A closed-loop damping ratio below {MIN_DAMPING:g}, and a loop that "
+            f"lowers a flexible mode's damping ratio by more than {100 * DAMPING_DROP:g} % of "
+            "its open-loop value, are marked orange. An unstable loop's time metrics are "
+            "withheld: it diverges.")
 
 
 def _basilisk(data: dict) -> list:

@@ -38,8 +38,9 @@ from .responses import (appendage_peaks, diverged_at, outputs_until_overflow,
 from .scene import Scene, load_scene, scene_dict
 from .tables import describe_model, equivalence_table
 from .tuning import digital_facts, rigid_crossover, tune
-from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, loop_status,
-                       resolved_frequency, withheld_metrics)
+from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, growing,
+                       loop_status, margin_flags, resolved_frequency, verdict_dict,
+                       withheld_metrics)
 
 __all__ = ["RunStats", "RunResult", "run", "ProgressCallback", "equivalence_table", "FIT_LABELS",
            "raised_by_flexsat", "LQR_FREQUENCY_RANGE", "diverged_at", "warning_lines"]
@@ -100,13 +101,6 @@ class RunResult:
     poles: dict = dataclasses.field(default_factory=dict)
     basilisk: dict = dataclasses.field(default_factory=dict)
     three_axis: dict = dataclasses.field(default_factory=dict)
-
-
-def _verdict(v) -> dict:
-    return {"stable": bool(v.stable), "n_unstable_poles": int(v.n_unstable_poles),
-            "least_damping_ratio": v.least_damping_ratio,
-            "least_damped_frequency": v.least_damped_frequency,
-            "method": v.method, **_margins(v.margins)}
 
 
 def _margins(m) -> dict:
@@ -258,7 +252,7 @@ class _Runner(ModelBuilder):
             design_margins = controllers.margins(d["plant"], K)
             verdict = controllers.spillover(truth_verdict, K)
         row["design_margins"] = _margins(design_margins)
-        row["verdict"] = _verdict(verdict)
+        row["verdict"] = verdict_dict(verdict)
         digital = None
         if scene.controller.sample_time is not None:
             digital = digital_facts(scene.controller.sample_time,
@@ -269,7 +263,7 @@ class _Runner(ModelBuilder):
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 try:
-                    row["exact_verdict"] = _verdict(exact_loop_verdict(
+                    row["exact_verdict"] = verdict_dict(exact_loop_verdict(
                         self.exact_spacecraft(), K, exact_frd.omega,
                         theta=np.asarray(exact_frd.frdata)[0, 0]))
                 except ValueError as exc:
@@ -295,6 +289,11 @@ class _Runner(ModelBuilder):
                 metrics = controllers.metrics(slew)
             status = loop_status(poles[key], slew, m, metrics)
             row["status"][which] = status
+            if which == "truth":
+                # the slew's status decides (its poles): a loop with undamped modes it does not
+                # reach is marginal, its margins hold
+                row["verdict"]["margin_flags"] = margin_flags(
+                    row["verdict"], not growing(row["verdict"], status))
             row["metrics"][which], row["metric_flags"][which] = withheld_metrics(metrics,
                                                                                  status)
             peaks = appendage_peaks(slew, names)

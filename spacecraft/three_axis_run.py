@@ -37,9 +37,10 @@ from appendages import fit_chain_3d
 
 from .coupling import Spacecraft
 from .hub import Hub, Mount
-from .pages import bad, markdown, render_html
+from .pages import Tone, bad, markdown, render_html, warn
 from .scene_reader import SceneError
 from .scene_specs import scene_dict
+from .verdicts import CAUTIONS, growing, loop_warnings, verdict_dict
 
 __all__ = ["run_three_axis", "write_three_axis_report", "three_axis_summary", "DEFAULT_MODES"]
 
@@ -124,7 +125,7 @@ def run_three_axis(scene, *, progress=None, time_responses: bool = True) -> dict
         "truth_frequencies_rad_s": truth_craft.natural_frequencies(n_freq).tolist(),
         "design_frequencies_rad_s": design_craft.natural_frequencies(
             min(n_freq, design.nstates // 2 - 3)).tolist(),
-        "closed_loops": [], "warnings": [], "scene": scene_dict(scene),
+        "closed_loops": [], "design_warnings": [], "warnings": [], "scene": scene_dict(scene),
     }
     out = {"data": data, "plants": {"truth": truth, "design": design}, "controllers": {},
            "loops": {}, "responses": {}}
@@ -154,9 +155,25 @@ def run_three_axis(scene, *, progress=None, time_responses: bool = True) -> dict
                 out["responses"][kind, model] = response
                 row[f"{model}_metrics"] = controllers.metrics(response)
         progress(f"margins of the {kind.upper()} loop")
-        row["truth_margins"] = controllers.margins(truth, K).as_dict()
+        verdict = verdict_dict(controllers.spillover(truth, K))
+        row["verdict"] = verdict
+        row["truth_margins"] = _margins_of(verdict)
         data["closed_loops"].append(row)
+        data["design_warnings"] += [
+            {**w, "controller": kind} for w in loop_warnings(_who(row), verdict)]
     return out
+
+
+def _who(row: dict) -> str:
+    return f"{row['controller'].upper()}{' (digital)' if row['digital'] else ''}"
+
+
+def _margins_of(verdict: dict) -> dict:
+    """The margins of a three-axis verdict (per axis, disk, return difference), as the report
+    lists them."""
+    names = [f"{k}_{a}" for a in AXES for k in ("gain_margin", "phase_margin", "modulus_margin")]
+    names += ["disk_margin", "disk_gain_margin", "disk_phase_margin", "min_singular_value"]
+    return {k: verdict[k] for k in names if k in verdict}
 
 
 def _fmt(value) -> str:
@@ -165,18 +182,49 @@ def _fmt(value) -> str:
     return report_format(value.item() if isinstance(value, np.generic) else value, 4)
 
 
+def _state(row: dict, warnings: list) -> str | Tone:
+    """A loop's verdict on the truth model, toned: red when it diverges (its margin figures
+    then guarantee nothing and are not given as margins), orange with a caution (low margins,
+    lowered or light damping), else plain."""
+    v = row["verdict"]
+    if growing(v):
+        zeta, w = v.get("least_damping_ratio"), v.get("least_damped_frequency")
+        where = (f" (growing pole at {w:.4g} rad/s, damping ratio {zeta:.3g})"
+                 if zeta is not None and w is not None else "")
+        return bad(f"UNSTABLE{where}: no margins, it diverges unperturbed")
+    state = "stable" if row["truth_stable"] else "marginally stable"
+    text = (f"{state}, disk margin {v['disk_margin']:.3g} (gain {v['disk_gain_margin']:.3g} "
+            f"dB, phase {v['disk_phase_margin']:.3g} deg in every channel at once)")
+    mine = [w["code"] for w in warnings if w.get("controller") == row["controller"]]
+    if mine:
+        return warn(text + "; " + ", ".join(dict.fromkeys(CAUTIONS.get(c, c) for c in mine)))
+    return text
+
+
 def three_axis_summary(data: dict) -> list:
-    """Short summary lines of a three-axis run (the command line prints them)."""
-    lines = [f"truth: {data['truth_model']} ({data['truth_states']} states); design: "
-             f"{data['design_model']}"]
+    """Short summary lines of a three-axis run (the command line prints them): the models, one
+    line per loop, one per design warning (``warning: ...``)."""
+    lines: list = [f"truth: {data['truth_model']} ({data['truth_states']} states); design: "
+                   f"{data['design_model']}"]
+    warnings = data.get("design_warnings", [])
     for row in data["closed_loops"]:
-        margins = row["truth_margins"]
-        stable = "stable" if row["truth_stable"] else "UNSTABLE"
-        lines.append(f"{row['controller'].upper()}{' (digital)' if row['digital'] else ''} on "
-                     f"the truth model: {stable}, disk margin {margins['disk_margin']:.3g} "
-                     f"(gain {margins['disk_gain_margin']:.3g} dB, phase "
-                     f"{margins['disk_phase_margin']:.3g} deg)")
+        state = _state(row, warnings)
+        line = f"{_who(row)} on the truth model: {state}"
+        lines.append(Tone(line, state.tone) if isinstance(state, Tone) else line)
+    lines += [warn(f"warning: {w['message']}") for w in warnings]
     return lines
+
+
+def _margin_rows(row: dict) -> list:
+    """The margins table of a loop: red when the loop diverges, orange below a threshold."""
+    flags = row["verdict"].get("margin_flags", {})
+    out = []
+    for k, value in row["truth_margins"].items():
+        text = _fmt(value)
+        flag = flags.get(k)
+        out.append([k, bad(f"{text} (unstable: no margin)") if flag == "unstable"
+                    else warn(text) if flag == "low" else text])
+    return out
 
 
 def _blocks(scene, data: dict, images: list) -> list:
@@ -200,8 +248,9 @@ def _blocks(scene, data: dict, images: list) -> list:
     for row in data["closed_loops"]:
         kind = row["controller"].upper() + (" (digital)" if row["digital"] else "")
         blocks.append(("h2", f"{kind} loop"))
-        stable = [f"{model}: " + ("stable" if row[f"{model}_stable"] else bad("UNSTABLE"))
-                  for model in ("design", "truth")]
+        stable = [f"design: " + ("stable" if row["design_stable"] else bad("UNSTABLE")),
+                  Tone("truth: " + _state(row, data.get("design_warnings", [])),
+                       getattr(_state(row, data.get("design_warnings", [])), "tone", ""))]
         blocks.append(("ul", stable))
         metrics = {model: row.get(f"{model}_metrics") for model in ("design", "truth")}
         if metrics["truth"]:
@@ -213,15 +262,28 @@ def _blocks(scene, data: dict, images: list) -> list:
             blocks.append(("table", ["metric", "design", "truth"],
                            [[k, _fmt(metrics["design"].get(k)), _fmt(metrics["truth"][k])]
                             for k in keys]))
-        margins = row["truth_margins"]
-        blocks.append(("p", "Margins on the truth model: loop-at-a-time per axis (gain in dB, "
-                            "phase in deg), the multivariable disk margin (alpha, and the gain "
-                            "[dB] and phase [deg] it guarantees in all loops at once) and the "
-                            "smallest singular value of the return difference I + L."))
-        blocks.append(("table", ["margin", "value"],
-                       [[k, _fmt(v)] for k, v in margins.items()]))
-    if data["warnings"]:
-        blocks += [("h2", "Warnings"), ("ul", data["warnings"])]
+        if growing(row["verdict"]):
+            blocks.append(("p", bad("The loop is UNSTABLE on the truth model: it diverges "
+                                    "without any perturbation, so the figures below are no "
+                                    "margins and guarantee nothing (loop-at-a-time per axis, "
+                                    "the disk margin alpha with its gain [dB] and phase [deg], "
+                                    "the smallest singular value of I + L).")))
+        else:
+            blocks.append(("p", "Margins on the truth model: loop-at-a-time per axis (gain in "
+                                "dB, phase in deg), the multivariable disk margin (alpha, and "
+                                "the gain [dB] and phase [deg] it guarantees in all loops at "
+                                "once) and the smallest singular value of the return "
+                                "difference I + L; below the thresholds of "
+                                "spacecraft.verdicts (6 dB, 30 deg, 0.5, alpha 2/3) in "
+                                "orange."))
+        blocks.append(("table", ["margin", "value"], _margin_rows(row)))
+        v = row["verdict"]
+        blocks.append(("p", f"Least-damped closed-loop pole: {_fmt(v['least_damped_frequency'])} "
+                            f"rad/s, damping ratio {_fmt(v['least_damping_ratio'])}."))
+    if data.get("design_warnings") or data["warnings"]:
+        blocks += [("h2", "Warnings"),
+                   ("ul", [warn(w["message"]) for w in data.get("design_warnings", [])]
+                    + list(data["warnings"]))]
     for path, caption in images:
         blocks.append(("img", path, caption))
     return blocks

@@ -17,25 +17,48 @@ settles. A pole with |Re(s)| <= 1e-10 max(1, |s|) (an undamped mode the loop doe
 e.g. a symmetric mode of symmetric wings when pruning is off) is marginal: it neither grows nor
 decays, and the status says so without withholding the metrics.
 
-Warnings (:func:`design_warnings`): every one has a ``code``, the loop it concerns and a
-message that says what to change. Thresholds (classical robustness targets, Skogestad &
-Postlethwaite [1]_ sec. 2.4.3: "typically we require GM > 2 and PM > 30 deg", and a peak
-sensitivity below 2, i.e. a modulus margin above 0.5):
+Warnings (:func:`design_warnings`, :func:`loop_warnings`): every one has a ``code``, the loop
+it concerns and a message that says what to change. Thresholds (classical robustness targets,
+Skogestad & Postlethwaite [1]_ sec. 2.4.3: "typically we require GM > 2 and PM > 30 deg", and a
+peak sensitivity below 2, i.e. a modulus margin above 0.5):
 
 ==============================  ===========  ==================================================
-check                           threshold    on
+check (code)                    threshold    on
 ==============================  ===========  ==================================================
-gain margin                     6 dB         |GM| on the truth model (a negative GM of a
-                                             conditionally stable loop counts by its size)
-phase margin                    30 deg       on the truth model
-modulus margin                  0.5          min |1 + L| on the truth model
-unstable on the truth model     -            closed-loop poles with Re(s) > 0
+gain margin (margins)           6 dB         GM < 6 dB on the truth model, signed: a negative
+                                             GM (a conditionally stable loop, destabilised by a
+                                             gain reduction, e.g. actuator saturation) is below
+phase margin (margins)          30 deg       PM < 30 deg on the truth model, signed
+modulus margin (margins)        0.5          min |1 + L| on the truth model
+three axes (margins)            the same     each axis' loop-at-a-time margins; the disk
+                                             margin's gain (6 dB, alpha = 2/3) and phase
+                                             (30 deg); min sigma(I + L) (0.5)
+unstable on the truth model     -            closed-loop poles with Re(s) > 0; its classical
+(unstable)                                   "margins" are then no margins (the loop needs no
+                                             perturbation to diverge): flagged, never shown as
+                                             guarantees
+damping lowered                 0.1 %        a flexible mode of the truth plant whose nearest
+(damping_lowered)                            closed-loop pole has a damping ratio below
+                                             (1 - 1e-3) x the mode's open-loop one: the loop
+                                             takes damping from the structure (spillover)
+lightly damped closed loop      zeta 1e-3    a closed-loop pole of a stable loop with damping
+(light_damping)                              ratio below 1e-3: it rings for more than
+                                             1/(2 pi zeta) = 160 cycles (the lower end of the
+                                             structural damping, 0.1-0.5 %, that deployed
+                                             appendages are credited with); a marginal
+                                             (undamped) pole is below it
 unstable on the exact beam      -            Nyquist count on W(s) of the distributed beam
 manoeuvre ends before the slew  -            manoeuvre.duration < slew_time
 not settled                     2 % band     still outside at the end of the simulated time
 truth model misses modes        1 %          a coupled mode below bandwidth_factor x the loop's
                                              crossover that the truth model does not resolve
+truth model not converged       tolerance    the closed-loop rule of :mod:`spacecraft.fidelity`
+                                             stopped at its largest number of modes
 ==============================  ===========  ==================================================
+
+:func:`margin_flags` marks each margin a report shows: ``"unstable"`` for every margin of an
+unstable loop, ``"low"`` for a margin below its threshold; the report colours them and
+results.json carries the flags beside the numbers.
 
 References
 ----------
@@ -51,9 +74,11 @@ import math
 
 import numpy as np
 
-__all__ = ["MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "MIN_MODULUS_MARGIN", "MODE_ERROR",
-           "MARGINAL", "STATUS_TEXT", "closed_loop_poles", "loop_status", "withheld_metrics",
-           "design_warnings", "resolved_frequency", "TIME_METRICS", "exact_loop_verdict"]
+__all__ = ["MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "MIN_MODULUS_MARGIN", "MIN_DISK_MARGIN",
+           "MIN_DAMPING", "DAMPING_DROP", "CAUTIONS", "MODE_ERROR", "MARGINAL", "STATUS_TEXT",
+           "closed_loop_poles", "loop_status", "withheld_metrics", "design_warnings",
+           "loop_warnings", "margin_flags", "verdict_dict", "growing", "resolved_frequency", "TIME_METRICS",
+           "exact_loop_verdict"]
 
 #: Smallest acceptable |gain margin| on the truth model [dB] (a factor of 2).
 MIN_GAIN_MARGIN = 6.0
@@ -61,6 +86,17 @@ MIN_GAIN_MARGIN = 6.0
 MIN_PHASE_MARGIN = 30.0
 #: Smallest acceptable modulus margin min |1 + L| on the truth model [-] (peak |S| <= 2).
 MIN_MODULUS_MARGIN = 0.5
+#: Smallest acceptable balanced disk margin alpha of a three-axis loop (it guarantees the
+#: 6 dB of MIN_GAIN_MARGIN in every channel at once: (1 + alpha/2)/(1 - alpha/2) = 2).
+MIN_DISK_MARGIN = 2.0 / 3.0
+#: Closed-loop damping ratio below which a pole of a stable loop is warned about [-].
+MIN_DAMPING = 1e-3
+#: Relative fall of a flexible mode's damping ratio, closed loop against open loop, above which
+#: the loop is said to lower it (far above the eigenvalues' rounding, ~1e-10 here).
+DAMPING_DROP = 1e-3
+#: Warning codes that qualify a loop that does not diverge (the report and plots mark it).
+CAUTIONS = {"margins": "low margins", "damping_lowered": "lowers a mode's damping",
+            "light_damping": "lightly damped", "unstable_exact": "UNSTABLE on the exact beam"}
 #: Relative frequency error above which a coupled mode counts as missed by the truth model.
 MODE_ERROR = 0.01
 #: |Re(s)| <= MARGINAL max(1, |s|) [1/s]: a pole on the imaginary axis (neither grows nor
@@ -301,6 +337,77 @@ def _measurement_gains(controller):
     return gains
 
 
+#: Threshold of each margin a report shows, by name (a three-axis loop's per-axis margins
+#: ``gain_margin_x``... by their stem): value < threshold is low.
+_THRESHOLDS = {"gain_margin": MIN_GAIN_MARGIN, "phase_margin": MIN_PHASE_MARGIN,
+               "modulus_margin": MIN_MODULUS_MARGIN, "disk_margin": MIN_DISK_MARGIN,
+               "disk_gain_margin": MIN_GAIN_MARGIN, "disk_phase_margin": MIN_PHASE_MARGIN,
+               "min_singular_value": MIN_MODULUS_MARGIN}
+
+
+def _threshold(name: str) -> float | None:
+    if name in _THRESHOLDS:
+        return _THRESHOLDS[name]
+    stem, _, axis = name.rpartition("_")
+    return _THRESHOLDS.get(stem) if axis in ("x", "y", "z") else None
+
+
+def margin_flags(margins: dict, stable: bool) -> dict:
+    """The flag of each margin in ``margins`` (name -> value) that deserves one.
+
+    Parameters
+    ----------
+    margins : dict
+        Margins by name: ``gain_margin`` [dB], ``phase_margin`` [deg], ``modulus_margin``;
+        three axes ``gain_margin_x``..., ``disk_margin``, ``disk_gain_margin``,
+        ``disk_phase_margin``, ``min_singular_value``. Other keys (frequencies) are ignored.
+    stable : bool
+        The loop's verdict.
+
+    Returns
+    -------
+    dict
+        name -> ``"unstable"`` for every margin of an unstable loop (it guarantees nothing: the
+        loop diverges unperturbed), else ``"low"`` for a finite margin below its threshold
+        (module docstring; signed: a negative gain or phase margin is below).
+    """
+    out = {}
+    for name, value in margins.items():
+        threshold = _threshold(name)
+        if threshold is None or isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue
+        if not stable:
+            out[name] = "unstable"
+        elif math.isfinite(value) and value < threshold:
+            out[name] = "low"
+    return out
+
+
+def verdict_dict(verdict) -> dict:
+    """A :class:`controllers.SpilloverVerdict` as the JSON-ready ``verdict`` of a loop: stable,
+    unstable poles, least-damped pole, method, the margins (planar: gain, phase, modulus and
+    their frequencies; three axes: per axis and the disk margin), the flexible modes' open-
+    and closed-loop damping (``modes``) and the margins' flags (:func:`margin_flags`)."""
+    m = verdict.margins
+    margins = dict(m.as_dict())
+    if hasattr(m, "gain_crossover_frequency"):
+        margins.update(gain_crossover_frequency=m.gain_crossover_frequency,
+                       phase_crossover_frequency=m.phase_crossover_frequency,
+                       modulus_margin_frequency=m.modulus_margin_frequency)
+    else:
+        margins.update(disk_margin_frequency=m.disk_margin_frequency,
+                       min_singular_value_frequency=m.min_singular_value_frequency)
+    out = {"stable": bool(verdict.stable), "n_unstable_poles": int(verdict.n_unstable_poles),
+           "least_damping_ratio": verdict.least_damping_ratio,
+           "least_damped_frequency": verdict.least_damped_frequency,
+           "method": verdict.method, **margins,
+           "modes": [{"frequency": x.frequency, "open_loop_damping": x.open_loop_damping,
+                      "closed_loop_frequency": x.closed_loop_frequency,
+                      "closed_loop_damping": x.closed_loop_damping} for x in verdict.modes]}
+    out["margin_flags"] = margin_flags(margins, not growing(out))
+    return out
+
+
 def resolved_frequency(beam, n_modes: int, method: str) -> float:
     """Highest frequency [rad/s] up to which a truncation of ``beam`` to ``n_modes`` modes
     represents it: its n-th clamped (cantilever) frequency for Craig-Bampton (fixed-interface
@@ -321,6 +428,113 @@ def _warning(code: str, message: str, row=None) -> dict:
     out = {"code": code, "message": message}
     if row is not None:
         out["design"], out["controller"] = row["design"], row["controller"]
+    return out
+
+
+def growing(verdict: dict, status: dict | None = None) -> bool:
+    """True if a loop diverges: its status (:func:`loop_status`) says so, or, without one, its
+    verdict is not stable and its least-damped pole grows faster than a marginal one
+    (-Re(s) = zeta |s| < -MARGINAL max(1, |s|)); a loop whose only poles on the boundary are
+    undamped modes it does not reach is marginal, not growing. A verdict without poles (a
+    Nyquist count) grows when it is not stable."""
+    if status is not None:
+        return status.get("status") in ("unstable", "diverges")
+    if verdict.get("stable", True):
+        return False
+    zeta, w = verdict.get("least_damping_ratio"), verdict.get("least_damped_frequency")
+    if zeta is None or w is None:
+        return True
+    return -zeta * w > MARGINAL * max(1.0, w)
+
+
+#: How a margin reads in a warning: (label, unit) by name stem.
+_MARGIN_TEXT = {"gain_margin": ("gain margin", " dB"), "phase_margin": ("phase margin", " deg"),
+                "modulus_margin": ("modulus margin", ""), "disk_margin": ("disk margin", ""),
+                "disk_gain_margin": ("disk gain margin", " dB"),
+                "disk_phase_margin": ("disk phase margin", " deg"),
+                "min_singular_value": ("min singular value of I + L", "")}
+
+
+#: The margins an unstable loop's warning quotes (to say they are none).
+_HEADLINE = ("gain_margin", "phase_margin", "modulus_margin", "disk_gain_margin",
+             "disk_phase_margin")
+
+
+def _margin_text(name: str, value: float, *, threshold: bool = False) -> str:
+    """``gain margin (x) 4.2 dB``; with ``threshold``, `` (< 6 dB)`` after it."""
+    stem, axis = name, ""
+    if name not in _MARGIN_TEXT:
+        stem, _, axis = name.rpartition("_")
+    label, unit = _MARGIN_TEXT[stem]
+    text = f"{label}{f' ({axis})' if axis else ''} {value:.3g}{unit}"
+    return text + (f" (< {_threshold(name):.3g}{unit})" if threshold else "")
+
+
+def loop_warnings(who: str, verdict: dict, *, status: dict | None = None, row=None
+                  ) -> list[dict]:
+    """The warnings of one loop on its truth model (module docstring: unstable, margins,
+    damping lowered, lightly damped), planar or three-axis.
+
+    Parameters
+    ----------
+    who : str
+        The loop as the message names it ("LQR tuned on chain, flexsat fit").
+    verdict : dict
+        :func:`verdict_dict` of its truth verdict (margins under their names, ``modes``).
+    status : dict, optional
+        :func:`loop_status` of its slew on the truth model.
+    row : dict, optional
+        Its ``closed_loops`` row (``design``, ``controller`` recorded in the warnings).
+
+    Returns
+    -------
+    list of dict
+        ``code``, ``message`` (and ``design``, ``controller`` with a row).
+    """
+    out = []
+    margins = {k: value for k, value in verdict.items() if _threshold(k) is not None
+               and isinstance(value, (int, float)) and not isinstance(value, bool)}
+    zeta, w = verdict.get("least_damping_ratio"), verdict.get("least_damped_frequency")
+    if growing(verdict, status):
+        where = (f": poles at {w:.4g} rad/s with damping ratio {zeta:.3g}"
+                 if zeta is not None and w is not None else "")
+        # the headline figures (planar margins, three axes' disk margin), not every axis'
+        shown = ", ".join(_margin_text(k, value) for k, value in margins.items()
+                          if math.isfinite(value) and k in _HEADLINE)
+        out.append(_warning("unstable", f"{who} is UNSTABLE on the truth model{where}; "
+                            + (f"its margin figures ({shown}) guarantee nothing: the loop diverges "
+                               "unperturbed; " if shown else "")
+                            + "retune it (lower bandwidth, a roll-off or notch at the mode) "
+                            "or design on a better model", row))
+        return out
+    low = [_margin_text(k, margins[k], threshold=True)
+           + (" (negative: a gain reduction by that much destabilises it)"
+              if k.startswith("gain_margin") and margins[k] < 0 else "")
+           for k in margin_flags(margins, True)]
+    if low:
+        out.append(_warning("margins", f"{who}: low robustness on the truth model: "
+                            + ", ".join(low) + "; a small change of the plant can "
+                            "destabilise it (lower the bandwidth, add damping or a "
+                            "roll-off)", row))
+    lowered = [m for m in verdict.get("modes", [])
+               if m["closed_loop_damping"] < (1.0 - DAMPING_DROP) * m["open_loop_damping"]]
+    if lowered:
+        text = ", ".join(f"{m['frequency']:.4g} rad/s from {m['open_loop_damping']:.3g} to "
+                         f"{m['closed_loop_damping']:.3g}" for m in lowered[:4])
+        more = f" and {len(lowered) - 4} more" if len(lowered) > 4 else ""
+        out.append(_warning("damping_lowered", f"{who} lowers the damping ratio of flexible "
+                            f"modes below their open-loop values: {text}{more} (the loop "
+                            "drives the structure: spillover); roll the controller off "
+                            "below the mode, notch it, or design on a model that has it",
+                            row))
+    if zeta is not None and w is not None and zeta < MIN_DAMPING:
+        out.append(_warning("light_damping", f"{who}: lightly damped closed loop on the truth "
+                            f"model: a pole at {w:.4g} rad/s with damping ratio {zeta:.3g} "
+                            f"(< {MIN_DAMPING:g}; it rings for about "
+                            + (f"{1.0 / (zeta * w):.3g} s per e-fold" if zeta > 0
+                               else "ever: undamped")
+                            + "); add damping at that mode (rate feedback, a notch) or "
+                            "check the structure's damping", row))
     return out
 
 
@@ -348,30 +562,8 @@ def design_warnings(data: dict, *, loop_band: float | None, resolved: dict) -> l
         who = _who(row)
         v = row["verdict"]
         status = row.get("status", {}).get("truth")
-        unstable = (status or {}).get("status") in ("unstable", "diverges") or (
-            status is None and not v["stable"] and v.get("least_damping_ratio") is not None
-            and v["least_damping_ratio"] < 0)
-        if unstable:
-            zeta, w = v.get("least_damping_ratio"), v.get("least_damped_frequency")
-            where = (f": poles at {w:.4g} rad/s with damping ratio {zeta:.3g}"
-                     if zeta is not None and w is not None else "")
-            out.append(_warning("unstable", f"{who} is UNSTABLE on the truth model{where}; "
-                                "retune it (lower bandwidth, a roll-off or notch at the mode) "
-                                "or design on a better model", row))
-        else:
-            low = []
-            gm, pm, mm = v.get("gain_margin"), v.get("phase_margin"), v.get("modulus_margin")
-            if gm is not None and math.isfinite(gm) and abs(gm) < MIN_GAIN_MARGIN:
-                low.append(f"gain margin {gm:.3g} dB (< {MIN_GAIN_MARGIN:g} dB)")
-            if pm is not None and math.isfinite(pm) and pm < MIN_PHASE_MARGIN:
-                low.append(f"phase margin {pm:.3g} deg (< {MIN_PHASE_MARGIN:g} deg)")
-            if mm is not None and math.isfinite(mm) and mm < MIN_MODULUS_MARGIN:
-                low.append(f"modulus margin {mm:.3g} (< {MIN_MODULUS_MARGIN:g})")
-            if low:
-                out.append(_warning("margins", f"{who}: low robustness on the truth model: "
-                                    + ", ".join(low) + "; a small change of the plant can "
-                                    "destabilise it (lower the bandwidth, add damping or a "
-                                    "roll-off)", row))
+        unstable = growing(v, status)
+        out += loop_warnings(who, v, status=status, row=row)
         e = row.get("exact_verdict") or {}
         if "stable" in e and not e["stable"] and not unstable:
             out.append(_warning("unstable_exact", f"{who} is stable on the truncated truth model "
