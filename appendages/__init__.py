@@ -11,6 +11,8 @@ from .interface import (Appendage, ConvergenceError, FiniteAppendage, FlexsatErr
 from .limits import LimitError
 from .modal import ModalBeam
 from .modal_data import ModalAppendage
+from .modal_file import read_modal_data, write_modal_data
+from .nastran import read_nastran
 from .rod import Rod
 from .selection import ModelChoice, cheapest_model
 
@@ -19,6 +21,6 @@ __all__ = [
     "FitWarning", "FlexsatError", "HingedChain", "LimitError", "MOLENAAR_K", "ModalAppendage",
     "ModalBeam", "ModelChoice",
     "ModelQuantities", "Rod", "RootModel", "characteristic_roots", "cheapest_model", "criterion",
-    "equivalence", "fit_chain", "fit_chain_3d", "limits", "spectral_errors",
-    "three_axis_root_model",
+    "equivalence", "fit_chain", "fit_chain_3d", "limits", "read_modal_data", "read_nastran",
+    "spectral_errors", "three_axis_root_model", "write_modal_data",
 ]
