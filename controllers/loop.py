@@ -4,6 +4,11 @@ The loop transfer function is taken with the loop broken at the plant's torque i
 negative-feedback convention, L(s) = -sum_i K_i(s) P_i(s), where P_i is the transfer from torque to
 the i-th measured plant output and K_i the controller's transfer from that measurement to torque.
 For a PD controller on a rigid hub, L(s) = (Kp + Kd s) / (J s^2).
+
+A loop delay tau (the torque the plant receives is the command of tau earlier,
+:mod:`controllers.delay`) multiplies L by e^(-j omega tau) exactly; for a digital controller on a
+state-space plant the sampled plant with the delayed hold is used instead (the modified
+z-transform, exact at the samples).
 """
 from __future__ import annotations
 
@@ -12,6 +17,7 @@ import math
 import control
 import numpy as np
 
+from .delay import DelayedSampledPlant, delayed_closed_loop, total_delay
 from .frequency import _evaluator, _poles_of, _siso_zeros
 from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_pair, _check_plant,
                       _is_digital, _labels, _measurements, _reference_inputs, _short)
@@ -20,7 +26,8 @@ from .threads import limits_blas_threads, total_states
 __all__ = ["close_loop", "loop_frequency_response"]
 
 
-def close_loop(plant, controller: control.StateSpace):
+def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
+               computation_delay: bool = False, dt: float | None = None):
     """Close the attitude loop by signal names.
 
     Parameters
@@ -39,6 +46,18 @@ def close_loop(plant, controller: control.StateSpace):
         result is the exact sampled-data loop at the sampling instants (every plant input,
         including disturbances, is then held constant over a sample). FRD plants need a
         continuous controller.
+    delay : float, s
+        Loop delay: the plant receives the torque commanded ``delay`` earlier (0: none). A
+        digital controller gives the exact delayed sampled-data loop (delay-line states; see
+        :func:`controllers.delay.delayed_closed_loop`); a continuous one needs ``dt``: its
+        delayed loop is infinite-dimensional and is returned discretised on the step dt, the
+        command held and delayed by delay - dt/2 (error O(dt^2), dt <= 2 delay). An FRD plant
+        gets the factor e^(-j omega delay) exactly.
+    computation_delay : bool
+        Add one sample of a digital controller to the delay (its command applied one sample
+        after the measurements it is computed from).
+    dt : float, s, optional
+        Step of the delayed loop of a continuous controller (only then).
 
     Returns
     -------
@@ -47,11 +66,25 @@ def close_loop(plant, controller: control.StateSpace):
         torques. Outputs: every plant output, then the torque(s). States: plant states,
         controller states. With u the torque(s), y_m the measurements and d the other plant
         inputs: u = (I - K_y D_mt)^-1 (K_r r + K_y (C_m x + D_md d)), the algebraic loop through
-        the feedthroughs solved exactly (an error if I - K_y D_mt is singular).
+        the feedthroughs solved exactly (an error if I - K_y D_mt is singular). With a delay the
+        torque outputs are the torques the plant receives (the delayed commands) and the
+        states end with the delay line.
     """
-    if isinstance(plant, control.FrequencyResponseData):
-        return _close_loop_frd(plant, controller)
-    ch = _check_pair(plant, controller)
+    frd = isinstance(plant, control.FrequencyResponseData)
+    if frd:
+        _check_plant(plant, allow_frd=True)
+        _check_controller(controller)
+    else:
+        ch = _check_pair(plant, controller)
+    tau = total_delay(controller, delay, computation_delay)
+    if dt is not None and (tau == 0.0 or _is_digital(controller) or frd):
+        raise ValueError("dt [s] is the step of the delayed loop of a continuous controller on a "
+                         "state-space plant; got dt with "
+                         + ("no delay" if tau == 0.0 else "a digital controller or an FRD plant"))
+    if frd:
+        return _close_loop_frd(plant, controller, tau)
+    if tau > 0.0:
+        return delayed_closed_loop(plant, controller, tau, dt=dt)
     measured = _measurements(plant, controller)
     refs = _reference_inputs(controller, _labels(plant, "output"))
     p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
@@ -100,14 +133,22 @@ def close_loop(plant, controller: control.StateSpace):
                       inputs=inputs, outputs=outputs, states=states, name="closed_loop")
 
 
-def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.StateSpace
-                    ) -> control.FrequencyResponseData:
+def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.StateSpace,
+                    delay: float = 0.0) -> control.FrequencyResponseData:
     """Closed-loop frequency response on an FRD plant's grid (see :func:`close_loop`)."""
     _check_plant(plant, allow_frd=True)
     _check_controller(controller)
     if _is_digital(controller):
         raise ValueError("close_loop on a FrequencyResponseData plant needs a continuous "
                          f"controller; got dt={controller.dt}")
+    if delay > 0.0:
+        # the plant receives the delayed torque: its torque column times e^(-j omega delay)
+        # (the torque outputs below are then the received torques, delayed likewise)
+        data = np.array(plant.frdata, dtype=complex)
+        i_t = list(plant.input_labels).index(TORQUE)
+        data[:, i_t, :] *= np.exp(-1j * np.asarray(plant.omega, dtype=float) * delay)
+        plant = control.frd(data, plant.omega, inputs=list(plant.input_labels),
+                            outputs=list(plant.output_labels), name=plant.name)
     loop = _Loop(plant, controller)  # measured rows of the plant (theta/omega derived)
     p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
     refs = _reference_inputs(controller, sorted(set(p_out) | set(loop.measured)))
@@ -141,8 +182,10 @@ def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.St
         omega.size, len(p_out), len(disturbances))
     y_r = Pt[:, :, None] * torque_r[:, None, :]
     y_d = Pt[:, :, None] * torque_d[:, None, :] + Pd
+    received = np.exp(-1j * omega * delay)[:, None] if delay > 0.0 else 1.0
     response = np.concatenate([np.concatenate([y_r, y_d], axis=2),
-                               np.concatenate([torque_r, torque_d], axis=1)[:, None, :]], axis=1)
+                               (np.concatenate([torque_r, torque_d], axis=1)
+                                * received)[:, None, :]], axis=1)
     return control.frd(np.moveaxis(response, 0, 2), omega, inputs=refs + disturbances,
                        outputs=p_out + [TORQUE], name="closed_loop")
 
@@ -150,8 +193,9 @@ def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.St
 class _Loop:
     """L(omega) = -sum_i K_i P_i at real frequencies omega [rad/s] (see module docstring)."""
 
-    def __init__(self, plant, controller):
+    def __init__(self, plant, controller, delay: float = 0.0):
         self.ch = ch = _check_pair(plant, controller, allow_frd=True)
+        self.delay = float(delay)
         if ch.mimo and isinstance(plant, control.FrequencyResponseData):
             raise ValueError("three-axis loops need a StateSpace plant (a FrequencyResponseData "
                              "plant is supported for the planar loop only)")
@@ -188,7 +232,13 @@ class _Loop:
         self.controller_ev = _evaluator(controller, self.measured, list(ch.torques))
         if not self.frd:
             p = control.c2d(plant, self.dt, method="zoh") if self.digital else plant
-            self.plant_ev = _evaluator(p, list(ch.torques), self.measured)
+            if self.digital and self.delay > 0.0:
+                # the exact sampled plant with the delayed hold (its zeros for the grid are
+                # taken without the delay)
+                self.plant_ev = DelayedSampledPlant(plant, self.dt, self.delay,
+                                                    list(ch.torques), self.measured)
+            else:
+                self.plant_ev = _evaluator(p, list(ch.torques), self.measured)
             self._plant_discretised = p
         self.plant = plant
         self.controller = controller
@@ -212,8 +262,13 @@ class _Loop:
                 # H(jw) = (1 - exp(-jwT)) / (jwT) (Franklin, Powell & Workman, sec. 6.3)
                 wT = omega * self.dt
                 P = P * ((1 - np.exp(-1j * wT)) / (1j * wT))[:, None]
+            if self.delay > 0.0:
+                P = P * np.exp(-1j * omega * self.delay)[:, None]
             return -np.sum(K[:, 0, :] * P, axis=1)[:, None, None]
-        return -(K @ self.plant_ev(z))
+        L = -(K @ self.plant_ev(z))
+        if self.delay > 0.0 and not self.digital:
+            L = L * np.exp(-1j * omega * self.delay)[:, None, None]
+        return L
 
     def __call__(self, omega) -> np.ndarray:
         """L(j omega): shape (f,) for the planar loop, (f, m, m) for a three-axis one."""
@@ -358,7 +413,8 @@ class _Loop:
 
 
 @limits_blas_threads(total_states)
-def loop_frequency_response(plant, controller, omega: np.ndarray | None = None
+def loop_frequency_response(plant, controller, omega: np.ndarray | None = None, *,
+                            delay: float = 0.0, computation_delay: bool = False
                             ) -> tuple[np.ndarray, np.ndarray]:
     """Open-loop transfer L(j omega) with the loop broken at the torque input.
 
@@ -372,6 +428,11 @@ def loop_frequency_response(plant, controller, omega: np.ndarray | None = None
     omega : array of float, rad/s, optional
         Frequencies; default a logarithmic grid refined around the lightly damped poles and
         zeros (for an FRD plant its own grid plus the controller's resonances).
+    delay : float, s
+        Loop delay: L e^(-j omega delay) (a digital controller on a state-space plant: the
+        sampled plant with the delayed hold, exact).
+    computation_delay : bool
+        Add one sample of a digital controller to the delay.
 
     Returns
     -------
@@ -381,7 +442,8 @@ def loop_frequency_response(plant, controller, omega: np.ndarray | None = None
         three axes: L = -K P broken at the three torque inputs (row: torque output, column:
         torque input).
     """
-    loop = _Loop(plant, controller)
+    _check_controller(controller)
+    loop = _Loop(plant, controller, total_delay(controller, delay, computation_delay))
     if omega is None:
         omega = loop.grid()
     omega = np.asarray(omega, dtype=float).reshape(-1)

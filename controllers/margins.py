@@ -1,7 +1,39 @@
-"""Stability margins of a loop and the spillover verdict of a controller on a truth model."""
+"""Stability margins of a loop and the spillover verdict of a controller on a truth model.
+
+Loop delay
+----------
+A delay tau [s] (computation plus transport, :mod:`controllers.delay`) multiplies the loop by
+e^(-j omega tau): it leaves every |L| and so the gain crossovers where they are and lowers the
+phase there by omega_c tau. The frequency grid is refined until omega tau changes by at most
+pi/4 between points wherever |L| >= 1e-9 (the crossings of the negative real axis it adds are
+then all bracketed).
+
+Delay margin: the smallest extra delay Delta that puts L e^(-j omega Delta) through -1, i.e.
+min over the gain crossovers omega_c of PM / omega_c with PM in [0, 360) deg (a negative margin
+of a conditionally stable crossover taken as 360 deg + PM). For a loop that is stable with its
+delay this is the delay that destabilises it: as the delay grows, closed-loop roots cross the
+imaginary axis only at j omega_c where |L(j omega_c)| = 1, and only at the delays
+tau_k = (PM_0 + 2 pi k) / omega_c (PM_0 the margin without delay); a root crosses to the right
+where |L| falls through 1 and to the left where it rises (Cooke & van den Driessche), so the
+first crossing of a stable loop destabilises it whether or not the open loop is stable. Three
+axes (the same delay on each torque): the same with the eigenvalues lambda of L(j omega) on the
+unit circle, det(I + e^(-j omega tau) L) = 0 <=> -e^(j omega tau) is an eigenvalue of L.
+:func:`spillover` counts the closed-loop roots in the right half-plane at the loop's delay exactly
+this way: those of the loop without delay (eigenvalues, or the Nyquist count of an FRD) plus two
+per destabilising crossing below the delay, minus two per stabilising one.
+
+References
+----------
+K. L. Cooke, P. van den Driessche, "On zeroes of some transcendental equations", Funkcialaj
+Ekvacioj 29, 1986 (direction of the imaginary-axis crossings of the roots of
+P(s) + Q(s) e^(-s tau)); K. Gu, V. L. Kharitonov, J. Chen, Stability of Time-Delay Systems,
+Birkhauser 2003, sec. 2.3 (delay margin from the gain crossovers); S. Skogestad, I. Postlethwaite,
+Multivariable Feedback Control, 2nd ed., sec. 2.4.3 (delay margin PM / omega_c).
+"""
 from __future__ import annotations
 
 import cmath
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Callable
@@ -10,13 +42,21 @@ import control
 import numpy as np
 import scipy.optimize
 
+from .delay import check_delay, total_delay
 from .loop import _Loop, close_loop, loop_frequency_response
 from .signals import _check_controller, _check_pair, _check_plant, _is_digital
 from .stability import _continuous_poles
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "margins",
-           "spillover", "disk_margin_gain", "disk_margin_phase", "loop_margins"]
+           "spillover", "disk_margin_gain", "disk_margin_phase", "loop_margins",
+           "MAX_DELAY_GRID"]
+
+#: Most frequencies a delayed loop's grid may hold (omega tau resolved to pi/4 up to the grid's
+#: top): beyond, margins() refuses the delay by name before evaluating anything.
+MAX_DELAY_GRID = 2_000_000
+# below this |L| a crossing of the negative real axis is no margin (as in _loops_margins)
+_NEGLIGIBLE_GAIN = 1e-9
 
 
 @dataclass(frozen=True)
@@ -37,6 +77,14 @@ class Margins:
         1/max|S|).
     gain_crossover_frequency, phase_crossover_frequency, modulus_margin_frequency : float, rad/s
         Where those margins are attained (nan-free: +inf when there is no crossover).
+    delay : float, s
+        The loop delay included in L (0: none).
+    delay_margin : float, s
+        The smallest extra delay that puts L through -1: min over every gain crossover of
+        PM / omega_c, PM in [0, 360) deg (module docstring); the delay margin of a loop that is
+        stable with its delay (+inf without gain crossover). :func:`spillover` reports it
+        against the loop's stability: 0 or negative (the delay beyond the margin) for a loop
+        that its delay destabilised.
     """
 
     gain_margin: float
@@ -45,6 +93,8 @@ class Margins:
     gain_crossover_frequency: float
     phase_crossover_frequency: float
     modulus_margin_frequency: float
+    delay: float = 0.0
+    delay_margin: float = math.inf
 
     def as_dict(self) -> dict[str, float]:
         """The three margins under their metric names (gain_margin, phase_margin, modulus_margin)."""
@@ -101,6 +151,13 @@ class MultiLoopMargins:
         1 / ||S||_inf); any multiplicative input perturbation I + Delta with
         sigma_max(Delta) < min_singular_value keeps the loop stable.
     min_singular_value_frequency : float, rad/s
+    delay : float, s
+        The loop delay (the same on each torque) included in L.
+    delay_margin : float, s
+        The smallest extra delay on all three torques that makes det(I + L e^(-j omega Delta))
+        vanish: min over the frequencies where an eigenvalue lambda of L(j omega) has
+        |lambda| = 1 of ((180 deg + arg lambda) mod 360 deg) / omega (module docstring); each
+        loop-at-a-time entry has its own (an extra delay on that torque alone).
     """
 
     loop_at_a_time: dict
@@ -110,6 +167,8 @@ class MultiLoopMargins:
     disk_margin_frequency: float
     min_singular_value: float
     min_singular_value_frequency: float
+    delay: float = 0.0
+    delay_margin: float = math.inf
 
     @property
     def gain_margin(self) -> float:
@@ -240,7 +299,8 @@ def _crossings_of_many(f: Callable[[np.ndarray, np.ndarray], np.ndarray],
 
 
 @limits_blas_threads(total_states)
-def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
+def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float = 0.0,
+            computation_delay: bool = False) -> Margins:
     """Gain, phase and modulus margins of the loop plant-controller.
 
     Parameters
@@ -260,7 +320,17 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
         Frequency grid; default: logarithmic, 1e-3 x the lowest to 1e3 x the highest
         characteristic frequency, refined with 41 points across the half-power band of every
         pole with damping ratio below 0.3 (lightly damped modes of plant and controller).
-        Crossings and the minimum of |1 + L| are then refined on the exact L.
+        Crossings and the minimum of |1 + L| are then refined on the exact L. With a delay the
+        default grid is refined so that omega delay changes by at most pi/4 between points
+        where |L| >= 1e-9 (at most MAX_DELAY_GRID points); a given grid is used as it is.
+    delay : float, s
+        Loop delay: L e^(-j omega delay) exactly (a digital controller on a state-space plant:
+        the sampled plant with the delayed hold, the modified z-transform). The margins then
+        include it and ``delay_margin`` is the extra delay the loop tolerates (exact for a
+        continuous loop; for a digital one exact in whole samples, a fractional extra delay
+        taken as its phase -omega Delta).
+    computation_delay : bool
+        Add one sample of a digital controller to the delay.
 
     Returns
     -------
@@ -281,14 +351,19 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     margins); P. Seiler, A. Packard, P. Gahinet, "An introduction to disk margins", IEEE Control
     Systems Magazine 40(5), 2020 (disk margins, balanced sigma = 0, multiloop).
     """
-    loop = _Loop(plant, controller)
+    _check_controller(controller)
+    tau = total_delay(controller, delay, computation_delay)
+    loop = _Loop(plant, controller, tau)
+    refine = omega is None
     if omega is None:
         omega = loop.grid()
     omega = np.unique(np.asarray(omega, dtype=float).reshape(-1))
     if omega.size < 2 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
         raise ValueError("omega must hold at least two positive finite frequencies [rad/s]")
+    if refine and tau > 0.0:
+        omega = _delay_grid(lambda w: _gain(loop.matrix(w)), omega, tau)
     if not loop.ch.mimo:
-        return loop_margins(loop, omega)
+        return dataclasses.replace(loop_margins(loop, omega), delay=tau)
     m = loop.ch.n_axes
     # L on the grid once: the loop-at-a-time functions and the singular values all follow from
     # S = (I + L)^-1 there; only the refinements evaluate L again
@@ -297,7 +372,7 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
         S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
         per_axis = dict(zip(loop.ch.axes, _loops_margins(
             lambda w, owner: loop.broken_all(w)[np.arange(w.size), owner], omega,
-            1.0 / np.diagonal(S, axis1=1, axis2=2).T - 1.0)))
+            1.0 / np.diagonal(S, axis1=1, axis2=2).T - 1.0, delay=tau)))
 
     def singular_values(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(sigma_max(S - I/2), sigma_min(I + L)) at each frequency."""
@@ -322,8 +397,9 @@ def margins(plant, controller, *, omega: np.ndarray | None = None) -> Margins:
     sigma, w_sigma = _refined_extremum(lambda w: singular_values(w)[1], omega[ok], smallest[ok],
                                        maximum=False)
     alpha = 1.0 / disk_peak if disk_peak > 0 else math.inf
+    crossings = _unit_crossings(loop.matrix, omega)
     return MultiLoopMargins(per_axis, alpha, disk_margin_gain(alpha), disk_margin_phase(alpha),
-                            w_disk, sigma, w_sigma)
+                            w_disk, sigma, w_sigma, tau, _first_event(crossings, 0.0))
 
 
 def _largest_singular_values(A: np.ndarray) -> np.ndarray:
@@ -387,7 +463,7 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
 
 
 def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
-                 L: np.ndarray | None = None) -> Margins:
+                 L: np.ndarray | None = None, *, delay: float = 0.0) -> Margins:
     """Gain, phase and modulus margins of a scalar loop function, found on the function itself.
 
     The grid only brackets them: every crossing of |L| = 1 and of the negative real axis is
@@ -407,12 +483,37 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
         of its points).
     L : ndarray, optional
         ``loop(omega)``, if already known.
+    delay : float, s
+        A loop delay not in ``loop``: the margins are those of loop(omega) e^(-j omega delay),
+        the grid refined for it as :func:`margins` refines its own.
 
     Returns
     -------
     Margins
+        With ``delay_margin``, the extra delay it tolerates (see :class:`Margins`).
     """
     omega = np.asarray(omega, dtype=float).reshape(-1)
+    delay = check_delay(delay)
+    if delay > 0.0:
+        bare, given = loop, L
+
+        def loop(w):
+            w = np.asarray(w, dtype=float).reshape(-1)
+            return bare(w) * np.exp(-1j * w * delay)
+
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            values = bare(omega) if given is None else np.asarray(given).reshape(-1)
+        refined = _delay_grid(None, omega, delay, np.abs(values))
+        new = ~np.isin(refined, omega)
+        L = np.empty(refined.size, dtype=complex)
+        L[~new] = values[np.searchsorted(omega, refined[~new])]
+        if new.any():
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                L[new] = bare(refined[new])
+        omega = refined
+        L = L * np.exp(-1j * omega * delay)
+        out = _loops_margins(lambda w, owner: loop(w), omega, L[None, :], delay=delay)[0]
+        return out
     if L is None:
         with np.errstate(divide="ignore", invalid="ignore"):
             L = loop(omega)
@@ -420,7 +521,7 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
 
 
 def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], omega: np.ndarray,
-                   L: np.ndarray) -> list[Margins]:
+                   L: np.ndarray, *, delay: float = 0.0) -> list[Margins]:
     """Margins of m scalar loop functions L_j at once (the loop-at-a-time functions of a
     three-axis loop), each as :func:`loop_margins` finds them: ``L`` (m, f) on the grid,
     ``evaluate(w, owner)`` the value of L_owner[k] at w[k] (one evaluation of the loop serves
@@ -457,8 +558,11 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
                 if abs(gm) < abs(gain_margin):
                     gain_margin, w_pc = gm, float(w)
         phase_margin, w_gc = math.inf, math.inf
+        delay_margin = math.inf
         for w, Lw in zip(gain_roots[j], L_gain[j]):
             pm = 180.0 + math.degrees(cmath.phase(Lw))  # in (0, 360]
+            # the extra delay that turns this crossover onto -1: PM in [0, 2 pi) over omega_c
+            delay_margin = min(delay_margin, (math.pi + cmath.phase(Lw)) % (2.0 * math.pi) / w)
             pm = pm - 360.0 if pm > 180.0 else pm
             if abs(pm) < abs(phase_margin):
                 phase_margin, w_gc = pm, float(w)
@@ -475,8 +579,144 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
             if res.fun < mm:
                 mm, w_mm = float(res.fun), float(math.exp(res.x))
         out.append(Margins(float(gain_margin), float(phase_margin), mm, float(w_gc), float(w_pc),
-                           w_mm))
+                           w_mm, float(delay), float(delay_margin)))
     return out
+
+
+def _gain(L: np.ndarray) -> np.ndarray:
+    """Largest |entry| of L(j omega) at each frequency, (f,) (non-finite: inf)."""
+    L = np.asarray(L)
+    with np.errstate(invalid="ignore"):
+        g = np.abs(L.reshape(L.shape[0], -1)).max(axis=1)
+    return np.where(np.isfinite(g), g, np.inf)
+
+
+def _delay_grid(gain: Callable[[np.ndarray], np.ndarray] | None, omega: np.ndarray,
+                delay: float, values: np.ndarray | None = None) -> np.ndarray:
+    """``omega`` with points added where omega delay changes by more than pi/4 between two grid
+    points at which |L| (``gain(omega)`` or ``values``) reaches 1e-9: the phase -omega delay is
+    then resolved wherever a crossing of the negative real axis can be a margin."""
+    if values is None:
+        with np.errstate(all="ignore"):
+            values = gain(omega)
+    values = np.where(np.isfinite(values), values, np.inf)
+    step = 0.25 * math.pi / delay
+    width = np.diff(omega)
+    relevant = np.maximum(values[:-1], values[1:]) >= _NEGLIGIBLE_GAIN
+    counts = np.where(relevant, np.ceil(width / step).astype(np.int64) - 1, 0)
+    counts = np.maximum(counts, 0)
+    total = int(counts.sum()) + omega.size
+    if total > MAX_DELAY_GRID:
+        raise ValueError(
+            f"delay {delay:.4g} s needs {total:.3g} frequencies to resolve its phase omega delay up "
+            f"to {omega[-1]:.4g} rad/s (pi/4 per step), more than MAX_DELAY_GRID = "
+            f"{MAX_DELAY_GRID:.3g}: the delay is too long for the loop's frequency range (check "
+            "its unit: seconds)")
+    if total == omega.size:
+        return omega
+    starts = np.repeat(omega[:-1], counts)
+    steps = np.repeat(width / (counts + 1), counts)
+    offsets = np.arange(starts.size) - np.repeat(np.cumsum(counts) - counts, counts) + 1
+    return np.unique(np.concatenate([omega, starts + steps * offsets]))
+
+
+def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarray
+                    ) -> list[tuple[float, complex, int]]:
+    """Where an eigenvalue of L(j omega) crosses the unit circle: (omega_c [rad/s], lambda_c,
+    direction), direction +1 where |lambda| falls through 1 (a closed-loop root then crosses
+    to the right as the delay grows), -1 where it rises.
+
+    Found from the number of eigenvalues outside the unit circle on the grid (no tracking of
+    eigenvalues needed), each change bisected to 1e-13 relative in frequency. ``matrix(w)``
+    gives L, shape (f, m, m); a planar loop is the m = 1 case (|L| = 1: the gain crossovers).
+    """
+    def count_at(w):
+        with np.errstate(all="ignore"):
+            L = matrix(w)
+        finite = np.all(np.isfinite(L), axis=(1, 2))
+        lam = np.full(L.shape[:2], np.inf, dtype=complex)
+        if finite.any():
+            lam[finite] = np.linalg.eigvals(L[finite])
+        return np.sum(np.abs(lam) > 1.0, axis=1), lam, finite
+
+    count, _, finite = count_at(omega)
+    grid, count = omega[finite], count[finite]
+    i = np.nonzero(count[:-1] != count[1:])[0]
+    if i.size == 0:
+        return []
+    a, b, ca, cb = grid[i].astype(float), grid[i + 1].astype(float), count[i], count[i + 1]
+    for _ in range(100):
+        active = (b - a) > 1e-13 * b
+        if not active.any():
+            break
+        mid = 0.5 * (a + b)
+        cm, _, ok = count_at(mid[active])
+        idx = np.nonzero(active)[0]
+        # a midpoint on an undamped pole (non-finite L): keep the bracket's ends apart from it
+        cm = np.where(ok, cm, ca[idx])
+        same = cm == ca[idx]
+        a[idx[same]] = mid[active][same]
+        b[idx[~same]] = mid[active][~same]
+        cb[idx[~same]] = cm[~same]
+    w = 0.5 * (a + b)
+    _, lam, ok = count_at(w)
+    out = []
+    for k in range(w.size):
+        if not ok[k]:
+            continue
+        change = int(cb[k]) - int(ca[k])
+        closest = np.argsort(np.abs(np.abs(lam[k]) - 1.0))[:abs(change)]
+        for j in closest:
+            out.append((float(w[k]), complex(lam[k, j]), -1 if change > 0 else 1))
+    return out
+
+
+def _event_delays(crossing: tuple[float, complex, int], delay: float) -> tuple[float, float]:
+    """(first delay at which the crossing puts a root on the imaginary axis, its period 2 pi /
+    omega_c) for a crossing found on a loop that already includes ``delay``: the events are at
+    delay + (pi + arg lambda_c mod 2 pi) / omega_c + k 2 pi / omega_c, k an integer (those below
+    delay at negative k)."""
+    w, lam, _ = crossing
+    return delay + ((math.pi + cmath.phase(lam)) % (2.0 * math.pi)) / w, 2.0 * math.pi / w
+
+
+def _first_event(crossings, delay: float) -> float:
+    """The smallest extra delay [s] at which a crossing puts a root on the imaginary axis
+    (+inf without crossings)."""
+    return min((_event_delays(c, delay)[0] - delay for c in crossings), default=math.inf)
+
+
+def _roots_at_delay(n_unstable_0: int, crossings, delay: float) -> tuple[int, float]:
+    """(closed-loop roots in the closed right half-plane at ``delay``, delay margin [s]) from
+    those without delay and the crossings of the loop without delay: two roots per event below
+    or at the delay, in the crossing's direction. The margin: the extra delay to the next event
+    for a stable loop; for an unstable one, minus how far the delay is beyond the smallest delay
+    of the current unstable run (0 if the loop is unstable without delay)."""
+    events = []
+    for c in crossings:
+        first, period = _event_delays(c, 0.0)
+        k = 0
+        while first + k * period <= delay:
+            events.append((first + k * period, c[2]))
+            k += 1
+    events.sort()
+    count = n_unstable_0
+    start = 0.0 if count > 0 else None
+    for at, direction in events:
+        before = count
+        count = max(count + 2 * direction, 0)
+        if before == 0 and count > 0:
+            start = at
+        elif count == 0:
+            start = None
+    if count > 0:
+        return count, start - delay
+    following = math.inf
+    for c in crossings:
+        first, period = _event_delays(c, 0.0)
+        k = 0 if first > delay else math.floor((delay - first) / period) + 1
+        following = min(following, first + k * period)
+    return 0, following - delay
 
 
 @dataclass(frozen=True)
@@ -569,7 +809,8 @@ def _mode_spillover(plant, closed_poles: np.ndarray) -> tuple[ModeSpillover, ...
 
 
 @limits_blas_threads(total_states)
-def spillover(truth_plant, controller) -> SpilloverVerdict:
+def spillover(truth_plant, controller, *, delay: float = 0.0,
+              computation_delay: bool = False) -> SpilloverVerdict:
     """Stability verdict of a controller on a truth model (never raises for an unstable loop).
 
     Parameters
@@ -593,6 +834,21 @@ def spillover(truth_plant, controller) -> SpilloverVerdict:
         the FRD grid and P the controller's open right-half-plane poles. This needs |L| > 10 at the
         lowest and < 0.1 at the highest grid frequency, and a continuous controller.
 
+        With a delay (a result, never an error: a delay at or beyond the delay margin gives an
+        unstable verdict): a digital loop's poles are those of the exact delayed sampled-data
+        loop (:func:`close_loop` with the delay). A continuous loop has infinitely many roots;
+        those in the closed right half-plane are counted exactly from the loop without delay
+        (its eigenvalues, or the Nyquist count of an FRD) and the imaginary-axis crossings the
+        delay causes (module docstring), ``method`` then ``'eigenvalues+delay'`` (no pole
+        damping or mode list: the roots are not all computed) or ``'nyquist+delay'``. The
+        margins include the delay; their ``delay_margin`` is the extra delay the loop
+        tolerates, or for a loop the delay destabilised minus how far the delay lies beyond
+        the smallest destabilising one (0 for a digital loop).
+    delay : float, s
+        Loop delay (see :func:`margins`).
+    computation_delay : bool
+        Add one sample of a digital controller to the delay.
+
     References
     ----------
     M. J. Balas, "Feedback control of flexible systems", IEEE Trans. Automatic Control 23(4),
@@ -601,12 +857,24 @@ def spillover(truth_plant, controller) -> SpilloverVerdict:
     """
     _check_plant(truth_plant, "truth_plant", allow_frd=True)
     _check_controller(controller)
-    mg = margins(truth_plant, controller)
+    tau = total_delay(controller, delay, computation_delay)
+    mg = margins(truth_plant, controller, delay=tau)
+    continuous_delay = tau > 0.0 and not _is_digital(controller)
     if isinstance(truth_plant, control.StateSpace):
-        loop = close_loop(truth_plant, controller)
+        loop = close_loop(truth_plant, controller, delay=0.0 if continuous_delay else tau)
         s = _continuous_poles(loop)
         w = np.abs(s)
         unstable = s.real >= -1e-10 * np.maximum(1.0, w)
+        if continuous_delay:
+            n_unstable, margin = _roots_at_delay(int(unstable.sum()),
+                                                 _delay_free_crossings(truth_plant, controller),
+                                                 tau)
+            return SpilloverVerdict(
+                stable=n_unstable == 0, n_unstable_poles=n_unstable, least_damping_ratio=None,
+                least_damped_frequency=None, margins=dataclasses.replace(mg, delay_margin=margin),
+                method="eigenvalues+delay")
+        if tau > 0.0 and unstable.any():
+            mg = dataclasses.replace(mg, delay_margin=min(mg.delay_margin, 0.0))
         zeta = np.where(w > 0, -s.real / np.where(w > 0, w, 1.0), 0.0)  # a pole at 0: zeta 0
         i = int(np.argmin(zeta)) if s.size else None
         return SpilloverVerdict(
@@ -632,6 +900,30 @@ def spillover(truth_plant, controller) -> SpilloverVerdict:
     p_rhp = int(np.sum(lam_c.real > 1e-10 * np.maximum(1.0, np.abs(lam_c))))
     z = p_rhp - (2.0 * delta - n0 * math.pi) / (2.0 * math.pi)
     n_unstable = int(round(z))
+    if continuous_delay:
+        n_unstable, margin = _roots_at_delay(max(n_unstable, 0), _delay_free_crossings(
+            truth_plant, controller), tau)
+        return SpilloverVerdict(stable=n_unstable == 0, n_unstable_poles=n_unstable,
+                                least_damping_ratio=None, least_damped_frequency=None,
+                                margins=dataclasses.replace(mg, delay_margin=margin),
+                                method="nyquist+delay")
     return SpilloverVerdict(stable=n_unstable == 0, n_unstable_poles=max(n_unstable, 0),
                             least_damping_ratio=None, least_damped_frequency=None,
                             margins=mg, method="nyquist")
+
+
+def _delay_free_crossings(plant, controller) -> list[tuple[float, complex, int]]:
+    """The unit-circle crossings of the loop's eigenvalues without delay (see
+    :func:`_unit_crossings`), on the loop's default grid. ValueError if |L| does not fall
+    below 1 at the grid's top: the delayed loop would then be of neutral type, whose roots the
+    crossings do not account for."""
+    loop = _Loop(plant, controller)
+    omega = loop.grid()
+    with np.errstate(all="ignore"):
+        top = _gain(loop.matrix(omega[-1:]))[0]
+    if not top < 1.0:
+        raise ValueError(f"delay: the loop gain |L| = {top:.3g} at {omega[-1]:.4g} rad/s does not "
+                         "fall below 1 at high frequency (a controller and plant feedthrough); "
+                         "with a delay such a loop is of neutral type and its stability is not "
+                         "decided here")
+    return _unit_crossings(loop.matrix, omega)
