@@ -14,6 +14,20 @@ builds a :class:`~appendages.chain.HingedChain` equivalent to a beam: the paper'
 mass among the bodies (keeping m, J, L and the centre of mass) so that the zeros of every W_r come
 close to those of the exact distributed beam.
 
+Any appendage
+-------------
+Both work from the W-matrix interface, so they take any appendage that gives W: a uniform
+:class:`~appendages.beam.Beam`, a beam with a tip body, a stepped beam, a
+:class:`~appendages.modal_data.ModalAppendage` from finite-element data, a truncation or a
+chain. The poles-and-zeros fit of an appendage other than a uniform beam
+(:func:`fit_targets`) keeps its mass m, centre of mass c (its first moment) and central inertia
+J exactly (tip body included) and fits the same 4 (n - 1) log-frequency targets, the
+appendage's own first natural frequencies and zeros of W1, W2, W4, by the same schedule
+(:func:`appendages.fitting.fit_poles_and_zeros_to`) in units of its length, its mass and a
+frequency unit that puts its first pole where the uniform beam's is; the result is memoised by
+those dimensionless targets. The paper's frequency fit (frozen pieces of a uniform rod) stays
+the uniform beam's.
+
 Frequency-domain error
 ----------------------
 On the imaginary axis the error of W_r is infinite at every pole or zero that the two models do
@@ -51,20 +65,33 @@ from collections.abc import Sequence
 import numpy as np
 
 from . import fitting, limits
+from .beam import Beam, characteristic_roots
 from .chain import HingedChain
 from .fitting import FitWarning
 from .interface import FiniteAppendage, as_frequency_array, describe
 
 __all__ = [
+    "ANY_APPENDAGE_BUDGET",
     "EquivalenceResult",
     "FitWarning",
     "ModelQuantities",
     "criterion",
+    "damping_ratio_of",
     "fit_chain",
+    "fit_targets",
+    "is_uniform_beam",
     "spectral_errors",
 ]
 
 MATCHES = ("poles-and-zeros", "frequencies")
+
+#: The poles-and-zeros fit of an appendage other than a uniform beam spends this many times the
+#: uniform beam's budget (:func:`appendages.fitting.evaluation_budget`): its RFEM start lies
+#: farther from the fit (a stepped boom with a tip body: start cost 150, against 6.2 for the
+#: uniform beam at 4 bodies), and its first path needed 181 to 540 evaluations where the
+#: uniform budget is 180 (benchmarks/results/modal_appendage.md); not memoised across
+#: appendages, so each fit pays it.
+ANY_APPENDAGE_BUDGET = 3
 
 # (label, unit) of the rows of the paper's table, in the paper's order.
 _ROWS = (
@@ -474,6 +501,11 @@ def spectral_errors(reference, candidate, n: int | None = None) -> dict:
 # ---------------------------------------------------------------------------------------------
 # fits
 # ---------------------------------------------------------------------------------------------
+def is_uniform_beam(model) -> bool:
+    """A uniform beam (no tip body, one section): the fits' scale-invariant, memoised path."""
+    return isinstance(model, Beam) and getattr(model, "tip", None) is None
+
+
 def _beam_data(beam):
     try:
         L, EJ, rho = float(beam.length), float(beam.bending_stiffness), float(beam.linear_density)
@@ -483,16 +515,78 @@ def _beam_data(beam):
     return L, EJ, rho
 
 
+def damping_ratio_of(appendage) -> float:
+    """The damping ratio [-] a chain fitted to ``appendage`` gives its first mode.
+
+    ``damping_ratio`` (beams: one ratio for every mode) or the first of ``damping_ratios``
+    (modal data: the first cantilever mode's); 0 when the appendage has neither.
+    """
+    zeta = getattr(appendage, "damping_ratio", None)
+    if zeta is None:
+        ratios = getattr(appendage, "damping_ratios", None)
+        zeta = ratios[0] if ratios is not None and len(ratios) else 0.0
+    return float(zeta)
+
+
+def fit_targets(appendage, n_bodies: int):
+    """What the poles-and-zeros fit needs of any appendage that gives W (module docstring).
+
+    Returns
+    -------
+    dict
+        ``targets`` (4, n - 1): the first n - 1 natural frequencies and zeros of W1, W2, W4
+        [rad/s]; ``mass`` [kg], ``length`` [m], ``center`` (centre of mass from the root over
+        the length), ``inertia`` (central inertia over m L**2) [-].
+
+    Raises
+    ------
+    ValueError
+        Fewer than n - 1 poles or zeros of some kind (a modal appendage with too few modes), or
+        rigid properties that no chain of the appendage's length can hold (a centre of mass
+        outside it, an inertia above m c (L - c)).
+    """
+    _check_model("appendage", appendage)
+    n = int(n_bodies)
+    rows = []
+    for what, label in ((0, "natural frequencies"), (1, "zeros of W1"), (2, "zeros of W2"),
+                        (4, "zeros of W4")):
+        values = _model_frequencies(appendage, what, n - 1)
+        if values.size < n - 1:
+            raise ValueError(
+                f"fit_chain(n_bodies={n}) needs the appendage's first {n - 1} {label}; "
+                f"{describe(appendage)} has {values.size}: fit fewer bodies (or give more "
+                "modes)")
+        rows.append(values)
+    m, L = float(appendage.mass), float(appendage.length)
+    center = getattr(appendage, "center_of_mass", None)
+    center = 0.5 * L if center is None else float(center)
+    c = center / L
+    J = float(appendage.inertia) / (m * L**2)
+    if not 0.0 < c < 1.0:
+        raise ValueError(f"the appendage's centre of mass lies at {center:.6g} m from the root, "
+                         f"outside (0, length = {L:.6g} m): no chain of that length holds it")
+    if not 0.0 < J < c * (1.0 - c):
+        raise ValueError(
+            f"the appendage's central inertia {appendage.inertia:.6g} kg*m^2 exceeds m c (L - c) "
+            f"= {m * c * (1.0 - c) * L**2:.6g} kg*m^2, the most a chain of length L = {L:.6g} m "
+            "with its centre of mass at c can have: is length the appendage's extent [m]?")
+    return {"targets": np.vstack(rows), "mass": m, "length": L, "center": c, "inertia": J}
+
+
 def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
               frequencies: Sequence[float] | None = None, pole_weight: float = 10.0,
               max_nfev: int | None = None) -> HingedChain:
-    """A hinged chain dynamically equivalent to a uniform beam.
+    """A hinged chain dynamically equivalent to a beam or any other appendage that gives W.
 
     Parameters
     ----------
-    beam : Beam
+    beam : Beam or any appendage model
         The uniform beam (``length``, ``bending_stiffness``, ``linear_density``, and
-        optionally ``damping_ratio``).
+        optionally ``damping_ratio``), or any appendage with W, its poles and zeros, ``mass``,
+        ``length``, ``inertia`` and ``center_of_mass`` (a beam with a tip body, a stepped beam,
+        a :class:`~appendages.modal_data.ModalAppendage`...): flexsat's fit only (module
+        docstring, "Any appendage"), with hinge dampings ``2 zeta c_h / w_1`` for the damping
+        ratio of the appendage's first mode (:func:`damping_ratio_of`).
     n_bodies : int
         Number of rigid bodies (>= 2); the chain has n_bodies - 1 hinges and
         n_bodies + 1 degrees of freedom.
@@ -563,6 +657,8 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         raise ValueError(f"n_bodies must be at least 2 (a chain needs a hinge); got {n_bodies}")
     if not isinstance(match, str) or match not in MATCHES:
         raise ValueError(f"match must be one of {MATCHES}; got {describe(match)}")
+    if not is_uniform_beam(beam):
+        return _fit_any(beam, int(n_bodies), match, frequencies, pole_weight, max_nfev)
     L, EJ, rho = _beam_data(beam)
     n = int(n_bodies)
     if match == "frequencies":
@@ -600,3 +696,46 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         raise ValueError(f"fit_chain(beam, n_bodies={n}, match={match!r}) of {describe(beam)}: "
                          f"a chain built from these arguments is outside the documented "
                          f"ranges: {exc}") from None
+
+
+def _check_fit_options(n: int, pole_weight, max_nfev) -> float:
+    limits.check("n_bodies", n, "fit_bodies", "bodies of a chain fitted to poles and zeros")
+    pole_weight = _check_real("pole_weight", pole_weight, "-", low=0.0)
+    if max_nfev is not None and (isinstance(max_nfev, bool) or not isinstance(max_nfev, int)
+                                 or max_nfev < 1):
+        raise ValueError(f"max_nfev must be a positive integer; got {describe(max_nfev)}")
+    return pole_weight
+
+
+def _fit_any(appendage, n: int, match: str, frequencies, pole_weight, max_nfev) -> HingedChain:
+    """flexsat's fit of any appendage that gives W (:func:`fit_chain`, "Any appendage")."""
+    if match == "frequencies":
+        raise ValueError(
+            "match='frequencies' (the paper's fit: a symmetric chain of frozen pieces of a "
+            f"uniform rod) needs a uniform Beam; got {describe(appendage)}: use "
+            "match='poles-and-zeros'")
+    if frequencies is not None:
+        raise ValueError("frequencies [rad/s] applies to match='frequencies' only")
+    pole_weight = _check_fit_options(n, pole_weight, max_nfev)
+    data = fit_targets(appendage, n)
+    # the frequency unit in which the appendage's first pole is the uniform beam's (the starts
+    # are uniform chains): a unit of the problem, not an approximation
+    unit = float(data["targets"][0, 0]) / float(characteristic_roots("free-free", 1)[0]) ** 2
+    budget = max_nfev if max_nfev is not None else \
+        ANY_APPENDAGE_BUDGET * fitting.evaluation_budget(n)
+    fit = fitting.fit_poles_and_zeros_to(data["targets"] / unit, n, inertia=data["inertia"],
+                                         center=data["center"], pole_weight=pole_weight,
+                                         max_nfev=budget)
+    if fit.stopped:
+        warnings.warn(
+            f"fit_chain(match='poles-and-zeros', n_bodies={n}) stopped at max_nfev={budget} "
+            f"evaluations before its first path met its tolerances; returning the best chain "
+            f"found (cost {fit.cost:.3e}, RFEM start {fit.start_cost:.3e})", FitWarning,
+            stacklevel=3)
+    try:
+        return fit.scaled(data["length"], data["mass"], unit,
+                          damping_ratio=damping_ratio_of(appendage),
+                          first_frequency=float(data["targets"][0, 0]))
+    except ValueError as exc:
+        raise ValueError(f"fit_chain(n_bodies={n}) of {describe(appendage)}: the fitted chain is "
+                         f"outside the documented ranges: {exc}") from None

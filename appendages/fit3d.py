@@ -41,6 +41,20 @@ Torsion and axial motion: their own criterion
       pole is matched and the zero is as close as alpha allows; :func:`rod_chain_errors`
       reports both.
 
+Any appendage
+    A three-axis appendage other than a uniform beam (a
+    :class:`~appendages.modal_data.ModalAppendage`, a beam with a tip body) gives its planes
+    as planar appendages (``planar_view("xy")``, ``planar_view("xz")``, the root's other
+    motions held) and its torsion and axial motion as rods (``torsion_rod()``,
+    ``axial_rod()``: first free and clamped frequencies, rigid inertia; None when rigid). The
+    x-y plane is fitted by flexsat's fit of any appendage (mass, centre of mass and inertia
+    exact); the x-z plane need not be a scaled copy of it, so its bodies' inertias about y and
+    its hinges are refitted on the same bodies to the x-z plane's own poles and zeros, with
+    its inertia held (:func:`appendages.fitting.fit_plane_on_layout`); torsion and axial
+    motion by the rod criterion below, the torsional inertias summing to the inertia about
+    the appendage's axis. Couplings between the motions (an off-axis tip body) are outside
+    what a straight chain holds: each motion is fitted with the others held.
+
 Damping
     A damped beam (modal damping ratio zeta) gives every joint stiffness-proportional damping
     ``2 zeta k/w_1`` with w_1 that motion's first free-free chain frequency: ratio zeta at the
@@ -133,7 +147,8 @@ def _fit_rod_chain(masses: np.ndarray, total_inertia: float | None, centres: np.
     root: 1), tilting springs not always (module docstring).
     """
     spacing = np.diff(centres)
-    base = rod.stiffness / spacing
+    # any positive scale (beta rescales the springs to the pole); a Rod's own keeps its bits
+    base = getattr(rod, "stiffness", 1.0) / spacing
     xi = joints / length - 0.5
     zeta = centres / length - 0.5
 
@@ -184,8 +199,10 @@ def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     ConvergenceError
         If the rod criterion gives non-finite springs.
     """
-    from .equivalence import fit_chain  # here: equivalence imports the chain module
+    from .equivalence import is_uniform_beam, fit_chain  # here: equivalence imports chain
 
+    if not is_uniform_beam(beam):
+        return _fit_any_3d(beam, n_bodies, match, fit_options)
     if not getattr(beam, "three_axis", False):
         raise ValueError(
             "fit_chain_3d needs a three-axis beam: torsional_inertia [kg*m] (rho*I_p per unit "
@@ -227,6 +244,69 @@ def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     return HingedChain(planar.lengths, planar.masses, planar.inertias, planar.hinge_stiffnesses,
                        com_offsets=planar.com_offsets, inertias_y=planar.inertias,
                        hinge_stiffnesses_y=stiffnesses_y,
+                       torsional_inertias=torsional_inertias,
+                       torsion_stiffnesses=springs["torsion"],
+                       axial_stiffnesses=springs["axial"], **dampings)
+
+
+def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> HingedChain:
+    """:func:`fit_chain_3d` of a three-axis appendage other than a uniform beam (module
+    docstring, "Any appendage")."""
+    from . import fitting
+    from .equivalence import damping_ratio_of, fit_chain, fit_targets
+
+    for attribute in ("planar_view", "inertia_tensor", "torsion_rod", "axial_rod"):
+        if not hasattr(appendage, attribute):
+            raise TypeError(f"fit_chain_3d needs a three-axis appendage (planar_view, "
+                            f"inertia_tensor, torsion_rod, axial_rod); got "
+                            f"{type(appendage).__name__} without '{attribute}'")
+    if not getattr(appendage, "three_axis", False):
+        raise ValueError(f"fit_chain_3d needs three-axis data; {describe(appendage)} is planar")
+    xy, xz = appendage.planar_view("xy"), appendage.planar_view("xz")
+    planar = fit_chain(xy, n_bodies, match=match, **fit_options)
+    n = planar.n_bodies
+    masses = np.asarray(planar.masses)
+    centres = planar.body_starts + planar.com_offsets
+    joints = np.cumsum(planar.lengths)[:-1]
+    pole_weight = fit_options.get("pole_weight", 10.0)
+    data_xz = fit_targets(xz, n)
+    inertias_y, stiffnesses_y = fitting.fit_plane_on_layout(
+        planar.lengths, masses, planar.com_offsets, planar.inertias, planar.hinge_stiffnesses,
+        data_xz["targets"], float(xz.inertia), pole_weight=pole_weight)
+    # the inertia about the appendage's x axis (the chain lies on it)
+    center = np.asarray(getattr(appendage, "center_of_mass_vector", np.zeros(3)), dtype=float)
+    about_axis = float(appendage.inertia_tensor[0, 0]) + appendage.mass * float(
+        center[1] ** 2 + center[2] ** 2)
+    torsional_inertias = masses * (about_axis / appendage.mass)
+    springs, rods = {}, {"torsion": appendage.torsion_rod(), "axial": appendage.axial_rod()}
+    for motion, total in (("torsion", about_axis), ("axial", None)):
+        rod = rods[motion]
+        if rod is None:
+            springs[motion] = None
+            continue
+        inertias, values = _fit_rod_chain(masses, total, centres, joints, planar.length, rod)
+        if not np.all(np.isfinite(values)) or np.any(values <= 0) \
+                or not np.all(np.isfinite(inertias)) or np.any(inertias <= 0):
+            raise ConvergenceError(f"fit_chain_3d: the {motion} chain of {describe(appendage)} "
+                                   f"came out non-finite or non-positive: springs "
+                                   f"{describe(values)}, inertias {describe(inertias)}")
+        springs[motion] = values
+        if motion == "torsion":
+            torsional_inertias = inertias
+    dampings = {}
+    zeta_xz = damping_ratio_of(xz)
+    if zeta_xz > 0.0:
+        dampings["hinge_dampings_y"] = (2.0 * zeta_xz * stiffnesses_y
+                                        / float(data_xz["targets"][0, 0]))
+    for motion, inertias in (("torsion", torsional_inertias), ("axial", masses)):
+        rod = rods[motion]
+        if springs[motion] is not None and rod.damping_ratio > 0.0:
+            w1, _ = rod_chain_frequencies(inertias, springs[motion])
+            dampings[f"{motion}_dampings"] = 2.0 * rod.damping_ratio * springs[motion] / w1
+    del n
+    return HingedChain(planar.lengths, planar.masses, planar.inertias, planar.hinge_stiffnesses,
+                       hinge_dampings=planar.hinge_dampings, com_offsets=planar.com_offsets,
+                       inertias_y=inertias_y, hinge_stiffnesses_y=stiffnesses_y,
                        torsional_inertias=torsional_inertias,
                        torsion_stiffnesses=springs["torsion"],
                        axial_stiffnesses=springs["axial"], **dampings)

@@ -146,7 +146,8 @@ from .chain import HingedChain, _assemble, _proportional_damping
 from .interface import ConvergenceError
 
 __all__ = ["DimensionlessChain", "FitWarning", "clear_memo", "evaluation_budget",
-           "fit_frequencies", "fit_poles_and_zeros"]
+           "fit_frequencies", "fit_plane_on_layout", "fit_poles_and_zeros",
+           "fit_poles_and_zeros_to"]
 
 #: Changes whenever a change of the algorithm may change a fitted chain (part of the memo key).
 FIT_VERSION = 4
@@ -175,7 +176,8 @@ class FitWarning(RuntimeWarning):
 # ---------------------------------------------------------------------------------------------
 class _Layout:
     """Parametrisation of a dimensionless chain (L = EJ = rho = 1) with exact m, J, L and
-    centre of mass at L/2.
+    centre of mass at L/2 (or, for any other appendage, L = m = 1 with the given central
+    inertia J/(m L**2) and centre of mass c/L).
 
     x = [u (n-1), s (n), v (n-2), g (n-1), c (n-1)]:
 
@@ -183,7 +185,8 @@ class _Layout:
     * centre-of-mass fractions ``a_i = s_i l_i``, s_i in [0, 1];
     * masses: frozen pieces ``l_i`` times ``e^v`` (v_1 = v_n = 0), then *tilted*,
       ``m_i ~ e^(v_i + tau d_i)`` with d_i the distance of body i's centre of mass from 1/2 and
-      tau the root of ``sum m_i d_i = 0`` (a monotone equation: its derivative is a variance),
+      tau the root of ``sum m_i d_i = 0`` (a monotone equation: its derivative is a variance;
+      d_i measured from the centre of mass when it is not at 1/2),
       scaled to the total mass 1: this keeps m and the centre of mass exact;
     * inertias: frozen ``m_i l_i**2/12`` times ``e^g`` (g_n = 0), scaled by the one factor that
       makes ``sum J_i + m_i d_i**2 = 1/12`` (parallel-axis theorem): J exact;
@@ -193,10 +196,11 @@ class _Layout:
     (forward mode through each step above; tau by the implicit function theorem).
     """
 
-    def __init__(self, n: int):
+    def __init__(self, n: int, inertia: float = 1.0 / 12.0, center: float = 0.5):
         self.n = n
         self.mass = 1.0
-        self.inertia = 1.0 / 12.0
+        self.inertia = inertia
+        self.center = center
         self.sizes = (n - 1, n, n - 2, n - 1, n - 1)
         self.size = sum(self.sizes)
         self.offsets = np.cumsum((0,) + self.sizes)
@@ -236,7 +240,7 @@ class _Layout:
         lengths = weights / weights.sum()
         offsets = s * lengths
         starts = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
-        d = starts + offsets - 0.5
+        d = starts + offsets - self.center
         logm = np.log(lengths) + np.concatenate([[0.0], v, [0.0]])
         penalty = 0.0
         spans = d.min() < 0.0 < d.max()
@@ -448,12 +452,16 @@ def _targets(n_values: int) -> np.ndarray:
 
 
 class _Problem:
-    """Residuals ``weights * ln(values/targets)`` and the layout penalty, with their Jacobian."""
+    """Residuals ``weights * ln(values/targets)`` and the layout penalty, with their Jacobian.
 
-    def __init__(self, layout: _Layout, weights: np.ndarray):
+    ``log_target``: the logarithms of the 4 (n - 1) targets (poles, zeros of W1, W2, W4);
+    default the uniform beam's (:func:`_targets`).
+    """
+
+    def __init__(self, layout: _Layout, weights: np.ndarray, log_target=None):
         self.layout = layout
         self.k = layout.n - 1
-        self.log_target = np.log(_targets(self.k))
+        self.log_target = np.log(_targets(self.k)) if log_target is None else log_target
         self.weights = weights
         self._cache = (None, None)
 
@@ -543,6 +551,25 @@ class DimensionlessChain:
                            com_offsets=self.com_offsets * L,
                            hinge_dampings=_proportional_damping(beam, stiffnesses))
 
+    def scaled(self, length: float, mass: float, frequency_unit: float, *,
+               damping_ratio: float = 0.0, first_frequency: float | None = None) -> HingedChain:
+        """The chain in SI from a fit in units of ``length`` [m], ``mass`` [kg] and
+        ``frequency_unit`` [rad/s] (:func:`fit_poles_and_zeros_to`): inertias in
+        ``mass length**2``, hinge stiffnesses in ``mass length**2 frequency_unit**2``; hinge
+        dampings ``2 zeta c_h / w_1`` (ratio zeta at the chain's first mode, w_1 =
+        ``first_frequency`` [rad/s], the appendage's) when ``damping_ratio`` > 0.
+
+        Raises ValueError (from :class:`HingedChain`) when a scaled value leaves the documented
+        ranges.
+        """
+        stiffnesses = self.hinge_stiffnesses * (mass * length**2 * frequency_unit**2)
+        dampings = None
+        if damping_ratio > 0.0:
+            dampings = 2.0 * damping_ratio * stiffnesses / float(first_frequency)
+        return HingedChain(self.lengths * length, self.masses * mass,
+                           self.inertias * (mass * length**2), stiffnesses,
+                           com_offsets=self.com_offsets * length, hinge_dampings=dampings)
+
 
 _THREADS_LOCK = threading.Lock()
 _THREADS = {"controller": None, "limiter": None, "depth": 0}
@@ -582,6 +609,7 @@ def _one_blas_thread():
 def clear_memo() -> None:
     """Forget every memoised fit (the next fits are computed afresh)."""
     _fit_poles_and_zeros.cache_clear()
+    _fit_poles_and_zeros_to.cache_clear()
     _fit_frequencies.cache_clear()
 
 
@@ -673,11 +701,67 @@ def fit_poles_and_zeros(n_bodies: int, *, pole_weight: float = 10.0,
 @functools.lru_cache(maxsize=256)
 def _fit_poles_and_zeros(n: int, pole_weight: float, max_nfev, version: int):
     del version  # part of the memo key only
-    layout = _Layout(n)
+    return _run_fit(_Layout(n), None, pole_weight, max_nfev)
+
+
+def fit_poles_and_zeros_to(targets, n_bodies: int, *, inertia: float, center: float,
+                           pole_weight: float = 10.0,
+                           max_nfev: int | None = None) -> DimensionlessChain:
+    """flexsat's chain fit to any appendage's poles and zeros, in dimensionless form.
+
+    The problem of :func:`fit_poles_and_zeros` with other targets and rigid properties: a chain
+    of length 1 and mass 1 whose central inertia is ``inertia`` and centre of mass ``center``,
+    exactly, fitted by the same schedule (the same paths from the same uniform starts, the same
+    budget) to ``targets``. Memoised by its arguments.
+
+    Parameters
+    ----------
+    targets : array_like, shape (4, n_bodies - 1)
+        The first n - 1 natural frequencies and zeros of W1, W2 (= W3) and W4, rows in that
+        order, in a frequency unit in which a uniform beam's first natural frequency would be
+        about 22.4 (the starts are uniform chains with hinges EJ/H in that unit).
+    n_bodies : int
+        Number of bodies (>= 2; validated by the caller).
+    inertia : float
+        Central moment of inertia over m L**2, in (0, center (1 - center)).
+    center : float
+        Centre of mass over L, in (0, 1).
+    pole_weight, max_nfev
+        As :func:`fit_poles_and_zeros`.
+
+    Returns
+    -------
+    DimensionlessChain
+        In units of L, m, m L**2, L and (m L**2) times the frequency unit squared
+        (:meth:`DimensionlessChain.scaled`).
+
+    Raises
+    ------
+    ConvergenceError
+        If the fit ends outside the physical layout or no better than its start.
+    """
+    values = np.asarray(targets, dtype=np.float64)
+    return _fit_poles_and_zeros_to(tuple(values.ravel().tolist()), int(n_bodies),
+                                   float(inertia), float(center), float(pole_weight),
+                                   None if max_nfev is None else int(max_nfev), FIT_VERSION)
+
+
+@functools.lru_cache(maxsize=256)
+def _fit_poles_and_zeros_to(targets: tuple, n: int, inertia: float, center: float,
+                            pole_weight: float, max_nfev, version: int):
+    del version  # part of the memo key only
+    log_target = np.log(np.asarray(targets, dtype=np.float64))
+    return _run_fit(_Layout(n, inertia, center), log_target, pole_weight, max_nfev)
+
+
+def _run_fit(layout: _Layout, log_target, pole_weight: float, max_nfev) -> DimensionlessChain:
+    """The work schedule of :func:`fit_poles_and_zeros` on a layout and targets."""
+    n = layout.n
     k = n - 1
     lo, hi = layout.bounds()
-    flat = _Problem(layout, np.ones(4 * k))
-    weighted = _Problem(layout, np.concatenate([np.full(k, pole_weight), np.ones(3 * k)]))
+    flat = _Problem(layout, np.ones(4 * k), log_target)
+    weighted = _Problem(layout, np.concatenate([np.full(k, pole_weight), np.ones(3 * k)]),
+                        log_target)
     budget = evaluation_budget(n) if max_nfev is None else max_nfev
     start = layout.from_arrays(*_rfem_arrays(n))
     used, best, stopped = 0, None, False
@@ -720,6 +804,116 @@ def _fit_poles_and_zeros(n: int, pole_weight: float, max_nfev, version: int):
             f"penalty {penalty:.2e})")
     return DimensionlessChain(*arrays[:5], cost=cost, start_cost=start_cost, stopped=stopped,
                               max_nfev=max_nfev, nfev=used)
+
+
+def fit_plane_on_layout(lengths, masses, com_offsets, inertias, hinge_stiffnesses, targets,
+                        inertia: float, *, pole_weight: float = 10.0):
+    """A chain's other bending plane: its bodies kept, their inertias and hinges refitted.
+
+    A three-axis chain has one set of bodies (lengths, masses, centres of mass) for both
+    bending planes; what the x-z plane alone sees are the bodies' inertias about y and the
+    hinges' springs in that plane. For an appendage whose x-z plane is not a scaled copy of its
+    x-y plane (:mod:`appendages.fit3d`), these 2 n - 2 numbers are fitted, from the x-y fit's,
+    to the x-z plane's 4 (n - 1) poles and zeros (log-frequency least squares, the poles
+    weighted by ``pole_weight``, exact Jacobian by eq. (1) of the module docstring), with the
+    plane's central inertia held exactly: ``J_i = r_i (J - sum m_i d_i**2)/sum r`` with
+    ``r_i = J0_i e^(g_i)`` (g_n = 0) and d_i the bodies' centres from the centre of mass.
+
+    Parameters
+    ----------
+    lengths, masses, com_offsets : array_like, (n,)
+        The bodies [m, kg, m], kept.
+    inertias : array_like, (n,)
+        Their inertias in the x-y plane [kg*m^2], the start.
+    hinge_stiffnesses : array_like, (n - 1,)
+        The x-y plane's hinges [N*m/rad], the start (scaled to the first target).
+    targets : array_like, (4, n - 1)
+        The x-z plane's first poles and zeros of W1, W2, W4 [rad/s].
+    inertia : float
+        The x-z plane's central inertia [kg*m^2] (about y through the centre of mass).
+    pole_weight : float
+
+    Returns
+    -------
+    (inertias, hinge_stiffnesses) : ndarray
+        Of the x-z plane [kg*m^2, N*m/rad].
+
+    Raises
+    ------
+    ValueError
+        If the bodies' masses alone exceed the plane's inertia (no inertias can hold it).
+    ConvergenceError
+        If the fit ends no better than its start or with a failed chain.
+    """
+    lengths, masses, offsets = (np.asarray(a, dtype=np.float64) for a in
+                                (lengths, masses, com_offsets))
+    J0, k0 = np.asarray(inertias, dtype=np.float64), np.asarray(hinge_stiffnesses, np.float64)
+    targets = np.asarray(targets, dtype=np.float64)
+    n = lengths.size
+    L, m = float(lengths.sum()), float(masses.sum())
+    unit = float(targets[0, 0]) / float(characteristic_roots("free-free", 1)[0]) ** 2
+    scale_J, scale_k = m * L**2, m * L**2 * unit**2
+    lengths, masses, offsets = lengths / L, masses / m, offsets / L
+    J0, k0 = J0 / scale_J, k0 / scale_k
+    centres = np.concatenate([[0.0], np.cumsum(lengths)[:-1]]) + offsets
+    d = centres - float(masses @ centres)
+    rest = inertia / scale_J - float(masses @ d**2)
+    if not rest > 0.0:
+        raise ValueError(f"the x-z plane's central inertia {inertia:.6g} kg*m^2 is below what "
+                         f"the bodies' masses alone give ({(inertia / scale_J - rest) * scale_J:.6g} "
+                         "kg*m^2): no inertias about y can hold it")
+    k = n - 1
+    log_target = np.log(targets.ravel() / unit)
+    weights = np.concatenate([np.full(k, pole_weight), np.ones(3 * k)])
+    cache = {}
+
+    def layout(x):
+        raw = J0 * np.exp(np.concatenate([x[:k], [0.0]]))
+        return raw, raw * (rest / raw.sum()), k0 * np.exp(x[k:])
+
+    def evaluate(x):
+        key = x.tobytes()
+        if key not in cache:
+            raw, J, c = layout(x)
+            out = (np.full(4 * k, 10.0), np.zeros((4 * k, x.size)), False)  # a failed chain
+            with np.errstate(all="ignore"):
+                spectrum, dspectrum = _spectrum((lengths, masses, J, offsets, c), k,
+                                                jacobian=True)
+            if spectrum is not None:
+                dJ = J[:, None] * (np.eye(n)[:, :k] - (raw / raw.sum())[:k][None, :])
+                jac = np.hstack([dspectrum[:, 2 * n:3 * n] @ dJ, dspectrum[:, 4 * n:] * c])
+                residual = weights * (np.log(spectrum) - log_target)
+                if np.all(np.isfinite(residual)) and np.all(np.isfinite(jac)):
+                    out = (residual, weights[:, None] * jac, True)
+            cache.clear()
+            cache[key] = out
+        return cache[key]
+
+    x0 = np.zeros(2 * k)
+    x0[k:] = 2.0 * math.log(float(targets[0, 0]) / unit
+                            / max(_first_pole(lengths, masses, J0 * (rest / J0.sum()),
+                                              offsets, k0), 1e-300))
+    lo = np.concatenate([np.full(k, -8.0), np.full(k, -6.0 + x0[k])])
+    hi = np.concatenate([np.full(k, 4.0), np.full(k, 6.0 + x0[k])])
+    x0 = np.clip(x0, lo + 1e-9, hi - 1e-9)
+    start_cost = 0.5 * float(np.sum(evaluate(x0)[0] ** 2))
+    with _one_blas_thread():
+        result = scipy.optimize.least_squares(lambda x: evaluate(x)[0], x0,
+                                              jac=lambda x: evaluate(x)[1], bounds=(lo, hi),
+                                              x_scale="jac", xtol=1e-10, ftol=1e-10, gtol=1e-10,
+                                              max_nfev=50 * x0.size)
+    cost = 0.5 * float(np.sum(evaluate(result.x)[0] ** 2))
+    if not math.isfinite(cost) or cost > start_cost or not evaluate(result.x)[2]:
+        raise ConvergenceError(f"the x-z plane's inertias and hinges did not converge (cost "
+                               f"{cost:.3e} from {start_cost:.3e})")
+    _, J, c = layout(result.x)
+    return J * scale_J, c * scale_k
+
+
+def _first_pole(lengths, masses, inertias, offsets, stiffnesses) -> float:
+    M, _, K, _ = _assemble(lengths, masses, inertias, offsets, stiffnesses, None, False)
+    lam = np.sort(scipy.linalg.eigvalsh(K, M))
+    return math.sqrt(max(lam[2], 0.0)) if lam.size > 2 else 0.0
 
 
 # ---------------------------------------------------------------------------------------------

@@ -89,7 +89,7 @@ from .interface import (ROOT_LOADS, ROOT_MOTIONS, FiniteAppendage, RootModel,
                         inverse_symmetric)
 from .modal import ModalStiffness, fixed_root_model
 
-__all__ = ["ModalAppendage", "PLANES", "RESIDUAL_TOLERANCE"]
+__all__ = ["ModalAppendage", "ModalRod", "NEGLIGIBLE_FRACTION", "PLANES", "RESIDUAL_TOLERANCE"]
 
 #: Planes of a three-axis appendage and their root coordinates in the planar convention:
 #: (rows/columns of the 6x6 data, signs). The x-z plane's rotation is ``dw/dx = -theta_y``.
@@ -100,6 +100,15 @@ PLANES = {"xy": ((1, 5), (1.0, 1.0)), "xz": ((2, 4), (1.0, -1.0))}
 #: 6 to 8 digits that finite-element output files print leave ~1e-7 in a residual that a
 #: complete set of modes makes zero.
 RESIDUAL_TOLERANCE = 1e-6
+
+#: Effective-mass fraction below which a mode is taken as not seen by a motion (a planar or rod
+#: view): the cross-talk that round-off leaves in a decoupled model's data is ~1e-14 (single-
+#: precision output), a mode coupled that weakly makes a pole-zero pair that W does not show.
+NEGLIGIBLE_FRACTION = 1e-12
+
+# Modes whose frequencies agree to this (relative) are one degenerate group (a round boom's two
+# bending planes): a solver prints them equal, or mixes them.
+_DEGENERATE_RTOL = 1e-9
 
 # Relative tolerance of the structure checks of the rigid mass matrix (symmetry; in three axes
 # the isotropic mass and skew first-moment blocks): printed data carry 6 to 8 digits.
@@ -519,10 +528,59 @@ class ModalAppendage(FiniteAppendage):
             return None
         return np.diag(2.0 * self._damping * self._frequencies)
 
+    def _motion_modes(self, columns, signs, tip_column: int | None):
+        """The modes one motion sees, the root's other motions held: (frequencies,
+        participation (k, len(columns)), damping ratios, tip motion or None).
+
+        Modes of equal frequency and damping span an invariant subspace, in which any
+        orthonormal basis is as good: each such group is rotated (SVD of its participation
+        block, the tip motion with it) so that the motion's participation sits in as few modes
+        as possible; then the modes whose effective-mass fraction in every one of the columns
+        is below :data:`NEGLIGIBLE_FRACTION` are left out. Without this, a round boom's twin
+        (the other plane's mode at the same frequency, or a solver's mix of the two) or a mode
+        of another motion would stay in the view as an uncoupled coordinate, a spurious pole
+        and zero at its frequency.
+        """
+        columns = np.asarray(columns)
+        G = self._participation[:, columns] * np.asarray(signs)
+        w, zeta = self._frequencies, self._damping
+        tip = None if self._tip is None or tip_column is None else (
+            self._tip if self._tip.ndim == 1 else self._tip[:, tip_column])
+        scale = np.diag(self._rigid_mass)[columns]
+        keep_w, keep_G, keep_z, keep_tip = [], [], [], []
+        start, n = 0, w.size
+        while start < n:
+            stop = start + 1
+            while stop < n and w[stop] - w[start] <= _DEGENERATE_RTOL * w[start] \
+                    and zeta[stop] == zeta[start]:
+                stop += 1
+            block = G[start:stop]
+            tips = None if tip is None else tip[start:stop]
+            if stop - start > 1:
+                U = np.linalg.svd(block, full_matrices=True)[0]
+                block = U.T @ block
+                tips = None if tips is None else U.T @ tips
+            seen = np.max(block**2 / scale, axis=1) >= NEGLIGIBLE_FRACTION
+            keep_w.append(w[start:stop][seen])
+            keep_G.append(block[seen])
+            keep_z.append(zeta[start:stop][seen])
+            if tips is not None:
+                keep_tip.append(tips[seen])
+            start = stop
+        return (np.concatenate(keep_w), np.concatenate(keep_G), np.concatenate(keep_z),
+                np.concatenate(keep_tip) if tip is not None else None)
+
     def planar_view(self, plane: str = "xy") -> "ModalAppendage":
         """The planar modal appendage of one plane of three-axis data, the root's other motions
         held (Notes of the class). ``"xy"``: (y, theta_z); ``"xz"``: (z, dw/dx = -theta_y)
-        in the planar convention. A planar appendage's "xy" view is itself."""
+        in the planar convention. Modes the plane does not see are left out
+        (:meth:`_motion_modes`). A planar appendage's "xy" view is itself.
+
+        Raises
+        ------
+        ValueError
+            A plane that no mode moves (rigid in that plane: no planar view).
+        """
         if plane not in PLANES:
             raise ValueError(f"plane must be one of {tuple(PLANES)}; got {describe(plane)}")
         if not self.three_axis:
@@ -534,15 +592,37 @@ class ModalAppendage(FiniteAppendage):
             index, sign = PLANES[plane]
             flip = np.asarray(sign)
             idx = np.asarray(index)
-            tip = None if self._tip is None else self._tip[:, 0 if plane == "xy" else 1]
+            w, G, zeta, tip = self._motion_modes(idx, flip, 0 if plane == "xy" else 1)
+            if w.size == 0:
+                raise ValueError(f"no mode of this appendage moves in the {plane} plane (it is "
+                                 "rigid there): it has no planar view")
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # the three-axis data were checked already
-                cached = ModalAppendage(self._frequencies, self._participation[:, idx] * flip,
-                                        self._rigid_mass[np.ix_(idx, idx)] * np.outer(flip, flip),
-                                        damping=self._damping, length=self._length,
-                                        tip_motion=tip)
+                cached = ModalAppendage(w, G, self._rigid_mass[np.ix_(idx, idx)]
+                                        * np.outer(flip, flip), damping=zeta,
+                                        length=self._length, tip_motion=tip)
             self._cache[("planar", plane)] = cached
         return cached
+
+    def torsion_rod(self) -> "ModalRod | None":
+        """The torsion about x, the root's other motions held (:class:`ModalRod`), or None
+        when no mode twists the root (torsionally rigid data)."""
+        return self._rod("torsion", 3)
+
+    def axial_rod(self) -> "ModalRod | None":
+        """The axial motion along x, the root's other motions held (:class:`ModalRod`), or
+        None when no mode moves the root along x (axially rigid data)."""
+        return self._rod("axial", 0)
+
+    def _rod(self, motion: str, column: int):
+        self._require_three_axis(f"{motion}_rod()")
+        key = ("rod", motion)
+        if key not in self._cache:
+            w, G, zeta, tip = self._motion_modes([column], [1.0],
+                                                 2 if motion == "torsion" else None)
+            self._cache[key] = (ModalRod(w, G[:, 0], float(self._rigid_mass[column, column]),
+                                         zeta, motion) if w.size else None)
+        return self._cache[key]
 
     def undamped(self) -> "ModalAppendage":
         """The same data without damping (itself when undamped)."""
@@ -733,3 +813,75 @@ class ModalAppendage(FiniteAppendage):
                 "direction's mass, and a free state-space model of this appendage has no "
                 "mass matrix; couple it to a hub (root_model) or drop the last modes "
                 "(truncated(n_modes))")
+
+
+class ModalRod:
+    """Torsion or axial motion of three-axis modal data, the root's other motions held.
+
+    What a three-axis chain fit needs of a motion (:func:`appendages.fit3d.fit_chain_3d`),
+    as :class:`~appendages.rod.Rod` gives it for a uniform beam: the free and clamped
+    frequencies and the rigid inertia. Built by :meth:`ModalAppendage.torsion_rod` and
+    :meth:`ModalAppendage.axial_rod`.
+
+    Parameters
+    ----------
+    frequencies : ndarray, (k,), rad/s
+        The cantilever modes that move this motion's root coordinate.
+    participation : ndarray, (k,)
+        Their participation in it [sqrt(kg) or sqrt(kg)*m].
+    rigid_inertia : float
+        The rigid mass [kg] (axial) or moment of inertia about x [kg*m^2] (torsion) about the
+        root.
+    damping_ratios : ndarray, (k,)
+    motion : {"torsion", "axial"}
+    """
+
+    def __init__(self, frequencies, participation, rigid_inertia: float, damping_ratios,
+                 motion: str):
+        self.motion = motion
+        self._w = np.asarray(frequencies, dtype=float)
+        self._g = np.asarray(participation, dtype=float)
+        self._zeta = np.asarray(damping_ratios, dtype=float)
+        self._inertia = float(rigid_inertia)
+
+    def __repr__(self) -> str:
+        return (f"ModalRod({self.motion}, {self._w.size} modes, rigid inertia "
+                f"{self._inertia:.6g})")
+
+    @property
+    def rigid_inertia(self) -> float:
+        """The motion's rigid mass [kg] or moment of inertia about x [kg*m^2]."""
+        return self._inertia
+
+    @property
+    def damping_ratio(self) -> float:
+        """The damping ratio of its first mode [-]."""
+        return float(self._zeta[0])
+
+    def _check_n(self, n) -> int:
+        if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise ValueError(f"n must be a non-negative integer; got {describe(n)}")
+        if n > self._w.size:
+            raise ValueError(f"n = {n}: the {self.motion} of these data has {self._w.size} "
+                             "modes")
+        return int(n)
+
+    def cantilever_frequencies(self, n: int) -> np.ndarray:
+        """The first n frequencies with the root clamped [rad/s] (zeros of its W)."""
+        return self._w[:self._check_n(n)].copy()
+
+    def natural_frequencies(self, n: int) -> np.ndarray:
+        """The first n frequencies of the free motion [rad/s] (poles of its W): the roots of
+        its dynamic mass ``M(s) = I - sum_i g_i**2 s**2/(s**2 + w_i**2)``, the eigenvalues of
+        ``K v = w**2 M v`` with ``M = [[I, g^T], [g, 1]]``, ``K = diag(0, w_i**2)``, the
+        rigid mode left out."""
+        n = self._check_n(n)
+        k = self._w.size
+        M = np.eye(k + 1)
+        M[0, 0] = self._inertia
+        M[0, 1:] = M[1:, 0] = self._g
+        K = np.diag(np.concatenate([[0.0], self._w**2]))
+        d = equilibrate(K, M)
+        lam = scipy.linalg.eigvals(K * np.outer(d, d), M * np.outer(d, d)).real
+        lam = np.sort(lam[np.isfinite(lam)])  # a zero residual inertia: infinite ones
+        return np.sqrt(np.maximum(lam[1:], 0.0))[:n]

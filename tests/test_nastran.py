@@ -284,3 +284,26 @@ def test_a_missing_pynastran_is_named(monkeypatch):
     monkeypatch.setattr(builtins, "__import__", no_pynastran)
     with pytest.raises(ImportError, match=r"needs pyNastran \(pip install \"flexsat\[nastran\]\""):
         nastran.read_nastran(DATA / "beam_modes.op2", root=1, units=("in", "slinch"))
+
+
+def test_planar_views_of_twin_modes(boom):
+    # The round rod's bending modes come in equal-frequency twins that the solver mixes
+    # (mode 1 moves along y and z). A plane's view turns each twin so that one mode carries the
+    # plane: 4 bending modes per plane, no spurious pole-zero pair at a cantilever frequency,
+    # and W unchanged (the view's W is the inverse of D6's block of the plane).
+    for plane, index in (("xy", [1, 5]), ("xz", [2, 4])):
+        view = boom.planar_view(plane)
+        np.testing.assert_array_equal(view.frequencies, boom.frequencies[[0, 2, 6, 8]])
+        poles, zeros = view.poles(), view.zeros(1)
+        assert poles.size == 4 and zeros.size == 4
+        assert np.all(zeros < poles)  # pinned below free, interlaced
+        assert np.all(poles[:-1] < zeros[1:])
+        s = np.array([500.0j, 3e3 + 2e4j])
+        block = np.linalg.inv(boom.dynamic_stiffness6(s)[:, index][:, :, index])
+        flip = np.diag([1.0, 1.0 if plane == "xy" else -1.0])
+        np.testing.assert_allclose(view.W(s), flip @ block @ flip, rtol=1e-9)
+    torsion, axial = boom.torsion_rod(), boom.axial_rod()
+    np.testing.assert_array_equal(torsion.cantilever_frequencies(1), boom.frequencies[[4]])
+    np.testing.assert_array_equal(axial.cantilever_frequencies(1), boom.frequencies[[5]])
+    # free torsion: the tip's CONM2 inertia, far out on a light rod, sets its frequency high
+    assert torsion.natural_frequencies(1)[0] > 10.0 * torsion.cantilever_frequencies(1)[0]
