@@ -43,20 +43,25 @@ sec. 2.3 (sampling a system with a time delay).
 from __future__ import annotations
 
 import math
+import warnings
 
 import control
 import numpy as np
 
-from .discretise import discretise
+from .discretise import DiscretisationOverflowWarning, discretise
 from .frequency import _ModalEvaluator
 from .signals import _check_pair, _is_digital, _labels, _measurements, _reference_inputs
 
 __all__ = ["split_delay", "delayed_discretisation", "DelayedSampledPlant",
-           "delayed_closed_loop", "check_delay", "total_delay", "DELAY_SNAP"]
+           "delayed_closed_loop", "check_delay", "total_delay", "DELAY_SNAP",
+           "MAX_DELAY_STATES"]
 
 #: A fractional part of the delay within this many samples of 0 or 1 is taken as 0 (the
 #: delay a whole number of samples: round-off of tau / T).
 DELAY_SNAP = 1e-9
+#: Most delay-line states a delayed loop may hold ((delay / dt + 1) x the torques): beyond, the
+#: loop is refused by name before it is built.
+MAX_DELAY_STATES = 10_000
 
 
 def check_delay(delay, name: str = "delay") -> float:
@@ -73,6 +78,9 @@ def check_delay(delay, name: str = "delay") -> float:
 def total_delay(controller, delay, computation_delay) -> float:
     """The loop's delay [s]: ``delay`` plus, with ``computation_delay``, one sample of a digital
     controller (its command computed from the samples at t_n and applied at t_n+1)."""
+    if not isinstance(controller, control.StateSpace):
+        raise TypeError(f"controller must be a control.StateSpace; got "
+                        f"{type(controller).__name__}")
     delay = check_delay(delay)
     if not isinstance(computation_delay, (bool, np.bool_)):
         raise TypeError(f"computation_delay must be True or False; got "
@@ -88,7 +96,10 @@ def total_delay(controller, delay, computation_delay) -> float:
 def split_delay(delay: float, dt: float) -> tuple[int, float]:
     """tau = (k + f) dt with k a non-negative integer and 0 <= f < 1 (f within DELAY_SNAP of 0
     or 1 taken as 0)."""
-    ratio = delay / dt
+    ratio = check_delay(delay) / _check_dt(dt)
+    if not ratio <= 1e15:
+        raise ValueError(f"delay / dt = {ratio:.3g} steps is beyond 1e15 (the fraction of a step "
+                         "is lost to round-off): check the delay's unit [s] and dt [s]")
     k = math.floor(ratio)
     f = ratio - k
     if f > 1.0 - DELAY_SNAP:
@@ -110,16 +121,32 @@ def delayed_discretisation(A, B, dt: float, delay: float):
     f : float
         delay = (k + f) dt.
     """
-    A = np.asarray(A, dtype=float)
-    B = np.asarray(B, dtype=float)
+    try:
+        A = np.asarray(A, dtype=float)
+        B = np.asarray(B, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError("A and B must be real arrays") from None
+    if A.ndim != 2 or A.shape[0] != A.shape[1] or B.ndim != 2 or B.shape[0] != A.shape[0]:
+        raise ValueError(f"A must be square (n, n) and B (n, m); got A {A.shape}, B {B.shape}")
+    if not (np.all(np.isfinite(A)) and np.all(np.isfinite(B))):
+        raise ValueError("A and B must be finite; got NaN or inf")
     k, f = split_delay(delay, dt)
-    if f == 0.0:
-        Phi, Gamma0, _ = discretise(A, B, dt, "zero")
-        return Phi, Gamma0, np.zeros_like(Gamma0), k, f
-    # the late part of the step [f T, T) and the early part [0, f T) (Van Loan, exactly)
-    Phi_late, Gamma0, _ = discretise(A, B, (1.0 - f) * dt, "zero")
-    Phi_early, G_early, _ = discretise(A, B, f * dt, "zero")
-    return Phi_late @ Phi_early, Gamma0, Phi_late @ G_early, k, f
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DiscretisationOverflowWarning)
+        with np.errstate(all="ignore"):
+            if f == 0.0:
+                Phi, Gamma0, _ = discretise(A, B, dt, "zero")
+                Gamma1 = np.zeros_like(Gamma0)
+            else:
+                # the late part of the step [f T, T) and the early part [0, f T) (Van Loan)
+                Phi_late, Gamma0, _ = discretise(A, B, (1.0 - f) * dt, "zero")
+                Phi_early, G_early, _ = discretise(A, B, f * dt, "zero")
+                Phi, Gamma1 = Phi_late @ Phi_early, Phi_late @ G_early
+    if not all(np.all(np.isfinite(M)) for M in (Phi, Gamma0, Gamma1)):
+        raise ValueError(f"dt {float(dt):.4g} s: the exact discretisation over one step leaves the "
+                         "floating-point range (the system grows too much in a step, or the step "
+                         "is far too long); shorten dt")
+    return Phi, Gamma0, Gamma1, k, f
 
 
 class DelayedSampledPlant:
@@ -141,6 +168,15 @@ class DelayedSampledPlant:
     """
 
     def __init__(self, plant: control.StateSpace, dt: float, delay: float, inputs, outputs):
+        if not isinstance(plant, control.StateSpace) or not plant.isctime(strict=True):
+            raise TypeError("plant must be a continuous control.StateSpace; got "
+                            f"{type(plant).__name__}")
+        for kind, names, labels in (("inputs", inputs, plant.input_labels),
+                                    ("outputs", outputs, plant.output_labels)):
+            unknown = [n for n in names if n not in labels]
+            if unknown or not list(names):
+                raise ValueError(f"{kind} must name the plant's signals {list(labels)[:8]}; got "
+                                 f"{list(names)[:8]}")
         i_in = [list(plant.input_labels).index(n) for n in inputs]
         i_out = [list(plant.output_labels).index(n) for n in outputs]
         Phi, G0, G1, k, f = delayed_discretisation(plant.A, plant.B[:, i_in], dt, delay)
@@ -243,6 +279,11 @@ def delayed_closed_loop(plant: control.StateSpace, controller: control.StateSpac
     Cm, Dmt, Dmd = Cp[i_m], Dp[np.ix_(i_m, i_t)], Dp[np.ix_(i_m, i_d)]
     Bcm, Bcr, Dcm, Dcr = Bc[:, j_m], Bc[:, j_r], Dc[:, j_m], Dc[:, j_r]
     n_r, n_d = len(j_r), len(i_d)
+    if (shift / T + 2.0) * ch.n_axes > MAX_DELAY_STATES:
+        raise ValueError(f"delay / dt = {shift / T:.4g} steps of {ch.n_axes} torque(s) would need "
+                         f"more than MAX_DELAY_STATES = {MAX_DELAY_STATES} delay-line states: use "
+                         f"a longer dt (now {T:.4g} s) or check the delay's unit (s; got "
+                         f"{delay:.4g})")
     k, f = split_delay(shift, T)
     lag_v = k + 1 if f > 0 else k  # the command the plant receives at a sample
     # "lag form": x_{n+1} = Phi x + sum_l Gam[l] u_{n-l} + Gw w, u_n = Cu x + sum_l Du[l]

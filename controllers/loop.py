@@ -253,6 +253,10 @@ class _Loop:
         """L(j omega) = -K P, shape (f, m, m) for m torque channels (loop broken at the plant's
         torque inputs, negative-feedback convention)."""
         omega = np.atleast_1d(np.asarray(omega, dtype=float))
+        if self.delay > 0.0 and not np.max(np.abs(omega), initial=0.0) <= 1e15 / self.delay:
+            raise ValueError(f"delay {self.delay:.4g} s at {np.max(omega):.4g} rad/s turns the phase "
+                             "by more than 1e15 rad, lost to round-off: check the delay's unit "
+                             "[s]")
         z = self._point(omega)
         K = self.controller_ev(z)  # (f, m, n_meas)
         if self.frd:

@@ -603,10 +603,10 @@ def _delay_grid(gain: Callable[[np.ndarray], np.ndarray] | None, omega: np.ndarr
     step = 0.25 * math.pi / delay
     width = np.diff(omega)
     relevant = np.maximum(values[:-1], values[1:]) >= _NEGLIGIBLE_GAIN
-    counts = np.where(relevant, np.ceil(width / step).astype(np.int64) - 1, 0)
-    counts = np.maximum(counts, 0)
-    total = int(counts.sum()) + omega.size
-    if total > MAX_DELAY_GRID:
+    with np.errstate(over="ignore", invalid="ignore"):
+        needed = np.where(relevant, np.ceil(width / step) - 1.0, 0.0)
+    total = float(np.sum(np.maximum(needed, 0.0))) + omega.size
+    if not total <= MAX_DELAY_GRID:
         raise ValueError(
             f"delay {delay:.4g} s needs {total:.3g} frequencies to resolve its phase omega delay up "
             f"to {omega[-1]:.4g} rad/s (pi/4 per step), more than MAX_DELAY_GRID = "
@@ -614,6 +614,7 @@ def _delay_grid(gain: Callable[[np.ndarray], np.ndarray] | None, omega: np.ndarr
             "its unit: seconds)")
     if total == omega.size:
         return omega
+    counts = np.maximum(needed, 0.0).astype(np.int64)
     starts = np.repeat(omega[:-1], counts)
     steps = np.repeat(width / (counts + 1), counts)
     offsets = np.arange(starts.size) - np.repeat(np.cumsum(counts) - counts, counts) + 1

@@ -73,6 +73,7 @@ review of the first 50 years", Int. J. Precision Eng. and Manufacturing 10(4), 2
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -114,6 +115,39 @@ def _positive(value, name: str, unit: str) -> float:
 def _limit(value, name: str, unit: str) -> float:
     """A positive finite limit, or inf for None (no limit)."""
     return math.inf if value is None else _positive(value, name, unit)
+
+
+#: A rate limit above this [rad/s] (57 deg/s) is accepted with a warning: a spacecraft slew
+#: rate in degrees per second given as radians per second, most likely.
+PLAUSIBLE_RATE = 1.0
+
+
+def _rate_limit(value) -> float:
+    W = _limit(value, "rate_limit", "rad/s")
+    if math.isfinite(W) and W > PLAUSIBLE_RATE:
+        warnings.warn(f"rate_limit {W:.4g} rad/s is {math.degrees(W):.4g} deg/s, fast for a "
+                      "spacecraft slew: degrees per second given as rad/s?", UserWarning,
+                      stacklevel=3)
+    return W
+
+
+def _flag(value, name: str) -> bool:
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be True or False; got {type(value).__name__}")
+    return bool(value)
+
+
+def _times(t, name: str = "t") -> np.ndarray:
+    """Finite real times [s] as a float array."""
+    if t is None or isinstance(t, (str, bytes)) or np.iscomplexobj(t):
+        raise TypeError(f"{name} must be real numbers [s]; got {type(t).__name__}")
+    try:
+        t = np.asarray(t, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be real numbers [s]; got {type(t).__name__}") from None
+    if not np.all(np.isfinite(t)):
+        raise ValueError(f"{name} must be finite [s]; got NaN or inf")
+    return t
 
 
 def _angle(value) -> float:
@@ -210,6 +244,26 @@ class Shaper:
     modes: tuple = ()
     kind: str = "zv"
 
+    def __post_init__(self):
+        try:
+            A = np.asarray(self.amplitudes, dtype=float).reshape(-1)
+            t = np.asarray(self.times, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise TypeError("amplitudes and times must be real arrays") from None
+        if A.size == 0 or A.shape != t.shape:
+            raise ValueError(f"amplitudes and times must be non-empty and of one length; got "
+                             f"{A.size} amplitudes and {t.size} times")
+        if not (np.all(np.isfinite(A)) and np.all(A > 0)
+                and abs(A.sum() - 1.0) <= 1e-12 * A.size):
+            raise ValueError("amplitudes must be positive and sum to 1 (a unit-gain shaper); got "
+                             f"{np.array2string(A[:6], precision=6)}")
+        if not (np.all(np.isfinite(t)) and t[0] == 0.0 and np.all(np.diff(t) >= 0)):
+            raise ValueError("times must be finite and non-decreasing from 0 [s]; got "
+                             f"{np.array2string(t[:6], precision=6)}")
+        for name, value in (("amplitudes", A), ("times", t)):
+            value.setflags(write=False)
+            object.__setattr__(self, name, value)
+
     @property
     def duration(self) -> float:
         """Time of the last impulse [s]: what the shaper adds to a profile's duration."""
@@ -242,10 +296,20 @@ class Shaper:
         -------
         ndarray, shape np.shape(frequency)
         """
-        w = np.asarray(frequency, dtype=float)
+        if isinstance(frequency, (str, bytes, bool)) or np.iscomplexobj(frequency):
+            raise TypeError(f"frequency must be real [rad/s]; got {type(frequency).__name__}")
+        try:
+            w = np.asarray(frequency, dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError(f"frequency must be real [rad/s]; got "
+                            f"{type(frequency).__name__}") from None
         if not (np.all(np.isfinite(w)) and np.all(w > 0)):
             raise ValueError("frequency must be positive and finite [rad/s]")
         zeta = _damping(damping)
+        if np.max(w, initial=0.0) > 1e15 / max(self.duration, 1e-300):
+            raise ValueError(f"frequency up to {np.max(w):.3g} rad/s over the shaper's "
+                             f"{self.duration:.3g} s is beyond 1e15 rad of phase (lost to "
+                             "round-off)")
         wd = w * math.sqrt(1.0 - zeta * zeta)
         t = self.times
         decay = np.exp(-zeta * w[..., None] * (t[-1] - t))
@@ -268,6 +332,9 @@ class Shaper:
             raise ValueError(f"tolerance must be in (0, 1) [fraction of the unshaped vibration]; "
                              f"got {tol:.6g}")
         zeta = _damping(damping)
+        if w0 * self.duration > 1e14:
+            raise ValueError(f"frequency {w0:.3g} rad/s over the shaper's {self.duration:.3g} s "
+                             "is beyond 1e14 rad of phase (lost to round-off)")
 
         def excess(ratio):
             return float(self.residual_vibration(w0 * ratio, zeta)) - tol
@@ -326,6 +393,9 @@ def zv_shaper(frequency: float, damping: float = 0.0) -> Shaper:
     root = math.sqrt(1.0 - zeta * zeta)
     K = math.exp(-zeta * math.pi / root)
     half = math.pi / (w * root)
+    if not (math.isfinite(half) and half > 0):
+        raise ValueError(f"frequency {w:.6g} rad/s gives a half period of {half:.6g} s, outside "
+                         "the floating-point range")
     return Shaper(np.array([1.0, K]) / (1.0 + K), np.array([0.0, half]), ((w, zeta),), "zv")
 
 
@@ -457,10 +527,23 @@ class Profile:
         if kind not in PROFILE_KINDS:
             raise ValueError(f"kind must be one of {PROFILE_KINDS}; got {str(kind)[:40]!r}")
         self.kind = kind
-        self.angle = float(angle)
-        self.axis = None if axis is None else np.asarray(axis, dtype=float)
-        self.breakpoints = np.asarray(breakpoints, dtype=float)
-        self.coefficients = np.asarray(coefficients, dtype=float).reshape(-1, 4)
+        self.angle = _angle(angle)
+        self.axis = _unit_axis(axis)
+        self.breakpoints = _times(breakpoints, "breakpoints").reshape(-1)
+        try:
+            self.coefficients = np.asarray(coefficients, dtype=float).reshape(-1, 4)
+        except (TypeError, ValueError):
+            raise ValueError("coefficients must be real, shape (K, 4) (cubic pieces)") from None
+        if (self.breakpoints.size != self.coefficients.shape[0] + 1
+                or self.breakpoints[0] != 0.0 or np.any(np.diff(self.breakpoints) <= 0)
+                or not np.all(np.isfinite(self.coefficients))):
+            raise ValueError("breakpoints must increase from 0 [s], one more than the finite "
+                             f"coefficient rows (K, 4); got {self.breakpoints.size} breakpoints "
+                             f"and {self.coefficients.shape[0]} rows")
+        if shaper is not None and not isinstance(shaper, Shaper):
+            raise TypeError(f"shaper must be a Shaper; got {type(shaper).__name__}")
+        if base is not None and not isinstance(base, Profile):
+            raise TypeError(f"base must be a Profile; got {type(base).__name__}")
         for array in (self.breakpoints, self.coefficients):
             array.setflags(write=False)
         if self.axis is not None:
@@ -482,9 +565,9 @@ class Profile:
     def path(self, t, derivative: int = 0) -> np.ndarray:
         """s^(d)(t): the angle [rad] (d = 0) along the axis, its rate [rad/s] (1), acceleration
         [rad/s^2] (2) or jerk [rad/s^3] (3; 0 where the acceleration jumps), same shape as t."""
-        t = np.asarray(t, dtype=float)
-        if derivative not in (0, 1, 2, 3):
-            raise ValueError(f"derivative must be 0, 1, 2 or 3; got {derivative!r}")
+        t = _times(t)
+        if isinstance(derivative, bool) or derivative not in (0, 1, 2, 3):
+            raise ValueError(f"derivative must be 0, 1, 2 or 3; got {str(derivative)[:20]}")
         flat = t.reshape(-1)
         k = np.searchsorted(self.breakpoints, flat, side="right") - 1
         inside = (k >= 0) & (k < self.coefficients.shape[0])
@@ -516,6 +599,7 @@ class Profile:
         (three axes; without the second term if ``gyroscopic`` is False), shaped as
         :meth:`theta_ref`."""
         J = _inertia(inertia, self.axis)
+        gyroscopic = _flag(gyroscopic, "gyroscopic")
         if self.axis is None:
             return J * self.path(t, 2)
         e = self.axis
@@ -533,7 +617,8 @@ class Profile:
             ``theta_ref``, ``omega_ref`` and, with an inertia, ``torque_ff`` (three axes:
             ``theta_ref_x`` ... ``torque_ff_z``), each of the shape of t.
         """
-        t = np.asarray(t, dtype=float)
+        t = _times(t)
+        _flag(gyroscopic, "gyroscopic")
         signals = [(THETA_REF, self.theta_ref(t)), (OMEGA_REF, self.omega_ref(t))]
         if inertia is not None:
             signals.append((TORQUE_FF, self.torque_ff(t, inertia, gyroscopic=gyroscopic)))
@@ -583,6 +668,7 @@ class Profile:
         """max over t (and hub axes) of |torque_ff| [N*m], exact for the piecewise-polynomial
         path (planar: J max |s''|)."""
         J = _inertia(inertia, self.axis)
+        gyroscopic = _flag(gyroscopic, "gyroscopic")
         if self.axis is None:
             return J * self.peak_acceleration
         b, g = J @ self.axis, np.cross(self.axis, J @ self.axis)
@@ -641,8 +727,13 @@ class Profile:
             raise ValueError(f"hold must be 'linear' or 'zero'; got {str(hold)[:40]!r}")
         if norm not in ("sup", "integral"):
             raise ValueError(f"norm must be 'sup' or 'integral'; got {str(norm)[:40]!r}")
-        position = self.breakpoints / dt
-        off_grid = np.abs(position - np.round(position)) > 1e-9
+        if dt > self.end_time:
+            raise ValueError(f"dt must be at most the profile's end time {self.end_time:.6g} s; "
+                             f"got {dt:.6g}")
+        with np.errstate(over="ignore", invalid="ignore"):
+            position = self.breakpoints / dt
+            # beyond 1e15 steps the grid cannot be told apart: off it (the larger bound)
+            off_grid = ~(np.abs(position - np.round(position)) <= 1e-9) | (position > 1e15)
         errors = [self._path_hold_error(d, dt, hold, norm, off_grid) for d in range(3)]
         scales = [np.ones(1) if self.axis is None else np.abs(self.axis)] * 2
         names = [THETA_REF, OMEGA_REF]
@@ -764,9 +855,9 @@ class Profile:
         step [t_k, t_k+1) the mean of the piecewise-constant highest derivative over the step
         (the value itself where no breakpoint falls inside), the last sample's value held
         after. Exact when every breakpoint lies on the grid."""
-        t = np.asarray(t, dtype=float).reshape(-1)
-        if t.size < 2:
-            raise ValueError("t must hold at least 2 evenly spaced samples [s]")
+        t = _times(t).reshape(-1)
+        if t.size < 2 or np.any(np.diff(t) <= 0):
+            raise ValueError("t must hold at least 2 increasing samples [s]")
         n = self.order
         # the integral of the top derivative: s^(n-1), continuous, evaluated exactly
         F = self.path(t, n - 1)
@@ -784,9 +875,9 @@ class _StepProfile(Profile):
         self.duration = duration
 
     def path(self, t, derivative: int = 0) -> np.ndarray:
-        if derivative not in (0, 1, 2, 3):
-            raise ValueError(f"derivative must be 0, 1, 2 or 3; got {derivative!r}")
-        t = np.asarray(t, dtype=float)
+        t = _times(t)
+        if isinstance(derivative, bool) or derivative not in (0, 1, 2, 3):
+            raise ValueError(f"derivative must be 0, 1, 2 or 3; got {str(derivative)[:20]}")
         if derivative == 0:
             return slew_profile(t, self.angle, self.duration)
         return np.zeros(t.shape)  # the reference feeds no rate or acceleration
@@ -818,6 +909,7 @@ class _StepProfile(Profile):
 
     def peak_torque(self, inertia, *, gyroscopic: bool = True) -> float:
         _inertia(inertia, self.axis)
+        _flag(gyroscopic, "gyroscopic")
         return 0.0
 
     def _path_hold_error(self, d, dt, hold, norm, off_grid) -> float:
@@ -892,7 +984,7 @@ def _jerk_minimum_time(theta: float, A: float, W: float, Jm: float) -> float:
     if math.isfinite(A):
         tj = A / Jm
         # w (w / A + A / Jm) = theta, in the form without cancellation
-        w = 2.0 * theta / (A / Jm + math.sqrt((A / Jm) ** 2 + 4.0 * theta / A))
+        w = 2.0 * theta / (A / Jm + math.hypot(A / Jm, math.sqrt(4.0 * theta / A)))
         tc = w / A - tj
         if tc >= 0.0:
             return 4.0 * tj + 2.0 * tc
@@ -902,7 +994,9 @@ def _jerk_minimum_time(theta: float, A: float, W: float, Jm: float) -> float:
 def _limits_text(A, W, Jm, torque_limit, inertia) -> str:
     parts = []
     if torque_limit is not None:
-        parts.append(f"torque_limit {torque_limit:.4g} N*m (acceleration {A:.4g} rad/s^2)")
+        parts.append(f"torque_limit {torque_limit:.4g} N*m with inertia "
+                     f"{inertia if np.ndim(inertia) == 0 else 'J'} kg*m^2 (acceleration "
+                     f"{A:.4g} rad/s^2)")
     if math.isfinite(W):
         parts.append(f"rate_limit {W:.4g} rad/s")
     if math.isfinite(Jm):
@@ -919,7 +1013,7 @@ def minimum_time(kind: str, angle: float, *, inertia=None, torque_limit=None, ra
     theta = abs(_angle(angle))
     e = _unit_axis(axis)
     A, _ = _acceleration_limit(torque_limit, inertia, e)
-    W = _limit(rate_limit, "rate_limit", "rad/s")
+    W = _rate_limit(rate_limit)
     if kind == "bang-coast-bang":
         return _bcb_minimum_time(theta, A, W)
     return _jerk_minimum_time(theta, A, W, _limit(jerk_limit, "jerk_limit", "rad/s^3"))
@@ -963,7 +1057,7 @@ def bang_coast_bang(angle: float, duration: float | None = None, *, inertia=None
     angle = _angle(angle)
     e = _unit_axis(axis)
     A, J = _acceleration_limit(torque_limit, inertia, e)
-    W = _limit(rate_limit, "rate_limit", "rad/s")
+    W = _rate_limit(rate_limit)
     theta = abs(angle)
     t_min = _bcb_minimum_time(theta, A, W)
     if duration is None:
@@ -1026,7 +1120,7 @@ def jerk_limited(angle: float, duration: float | None = None, *, inertia=None,
     angle = _angle(angle)
     e = _unit_axis(axis)
     A, J = _acceleration_limit(torque_limit, inertia, e)
-    W = _limit(rate_limit, "rate_limit", "rad/s")
+    W = _rate_limit(rate_limit)
     Jm = _limit(jerk_limit, "jerk_limit", "rad/s^3")
     theta = abs(angle)
     t_min = _jerk_minimum_time(theta, A, W, Jm)

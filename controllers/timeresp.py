@@ -119,7 +119,8 @@ def _time_grid(system, t_final, dt, default_dt: float, max_samples) -> np.ndarra
             "larger dt or a shorter t_final, or raise max_samples explicitly")
     n = int(math.floor(t_final / step + 1e-9)) + 1
     if n < 2:
-        raise ValueError(f"t_final {t_final:.6g} [s] must exceed one time step {step:.6g} [s]")
+        raise ValueError(f"t_final {t_final:.6g} [s] must exceed one time step dt = {step:.6g} "
+                         "[s]")
     return np.arange(n, dtype=float) * step
 
 
@@ -554,6 +555,10 @@ def profile_response(closed_loop: control.StateSpace, profile, *, inertia=None,
     t_final = 2.0 * end if t_final is None else t_final
     T = _time_grid(closed_loop, t_final, dt, end / 500.0, max_samples)
     references = profile.references(T, inertia if wants_ff else None, gyroscopic=gyroscopic)
+    with np.errstate(invalid="ignore"):
+        if any(not np.all(np.abs(v) < _OVERFLOW) for v in references.values()):
+            raise ValueError("the feedforward torque J s'' leaves the float64 range: check "
+                             "inertia [kg*m^2]")
     U = _inputs(closed_loop, T.size, **{name: values for name, values in references.items()
                                         if name in labels})
     if closed_loop.isdtime(strict=True):
