@@ -23,6 +23,8 @@ from .profiles import (PROFILE_KINDS, Profile, Shaper, bang_coast_bang, jerk_lim
 from .simulate import Simulator, simulate
 from .stability import MARGIN, RemovedMode, RemovedModesWarning
 from .testing import assert_closed_loops_close, compare_metrics
+from .wheel_loop import WheelLoop, WheelResponse, simulate_wheels
+from .wheels import ReactionWheel, WheelSet, check_slew_time, shortest_slew_time
 
 __all__ = [
     "Comparison",
@@ -30,6 +32,7 @@ __all__ = [
     "INFLUENCE_TOL",
     "MARGIN",
     "RemovedMode",
+    "ReactionWheel",
     "RemovedModesWarning",
     "FlexibleMode",
     "KalmanNoise",
@@ -43,8 +46,12 @@ __all__ = [
     "MultiLoopMargins",
     "Simulator",
     "SpilloverVerdict",
+    "WheelLoop",
+    "WheelResponse",
+    "WheelSet",
     "assert_closed_loops_close",
     "bang_coast_bang",
+    "check_slew_time",
     "close_loop",
     "compare",
     "compare_metrics",
@@ -71,7 +78,9 @@ __all__ = [
     "reference_state",
     "rigid_body_inertia",
     "shaped",
+    "shortest_slew_time",
     "simulate",
+    "simulate_wheels",
     "slew",
     "slew_profile",
     "spillover",
