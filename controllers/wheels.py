@@ -56,6 +56,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from .arguments import describe, finite_vector, non_negative, optional_positive, real_number
+from .profiles import minimum_time
 
 __all__ = ["ReactionWheel", "WheelSet", "SATURATION_MODES", "MIN_SPAN_RATIO",
            "WEAK_SPAN_RATIO", "PLAUSIBLE_TORQUE_LIMIT", "shortest_slew_time",
@@ -465,16 +466,20 @@ def _check_names(names, n: int) -> tuple[str, ...]:
 def shortest_slew_time(wheels: WheelSet, angle: float, inertia, *, axis=None) -> float:
     r"""Shortest rest-to-rest slew time [s] the wheels' torque and momentum limits allow.
 
-    A rigid body of inertia J about the slew axis e, torque |tau| <= tau_m and momentum
-    |J omega| <= H_m (the set's capacities along e, :meth:`WheelSet.torque_capacity`, and
-    the momentum the wheels can still take from their initial momenta), slews by |angle| in
-    the least time with bang-bang torque, coasting at omega_m = H_m / J if it is reached [1]_:
+    An eigen-axis slew by ``angle`` about the unit axis e of a rigid body of inertia J needs the
+    hub torque J e a for an acceleration a, and leaves the body with the momentum J e omega,
+    which the wheels take from their initial momenta h_0 (minimum-norm distribution: each wheel
+    h_0 - (G^+ J e)_i omega). With u = J e / |J e|, the wheels' limits bound the acceleration by
+    a_m = (torque capacity along u) / |J e| (:meth:`WheelSet.torque_capacity`) and the rate by
+    omega_m = (momentum room along u) / |J e|; the least time under both is the bang-coast-bang
+    one [1]_ (:func:`.profiles.minimum_time`):
 
-        t = 2 sqrt(|angle| J / tau_m)                  if |angle| <= J omega_m^2 / tau_m,
-        t = |angle| / omega_m + J omega_m / tau_m      otherwise.
+        t = 2 sqrt(|angle| / a_m)                   if |angle| <= omega_m^2 / a_m,
+        t = |angle| / omega_m + omega_m / a_m        otherwise.
 
     Every profile under the same limits takes at least this long (a lower bound for the
-    flexible spacecraft, whose appendages store part of the momentum on the way).
+    flexible spacecraft, whose appendages store part of the momentum on the way; friction,
+    which the motor must also overcome, is left out).
 
     Parameters
     ----------
@@ -482,45 +487,30 @@ def shortest_slew_time(wheels: WheelSet, angle: float, inertia, *, axis=None) ->
     angle : float, rad
         Slew angle (non-zero).
     inertia : float or array_like (3, 3), kg*m**2
-        The whole spacecraft's rigid-body inertia: about the planar axis, or the 3 x 3 tensor
-        (hub axes) for a three-axis set.
+        The whole spacecraft's rigid-body inertia (``controllers.rigid_body_inertia(plant)``):
+        about the planar axis, or the 3 x 3 tensor (hub axes) for a three-axis set.
     axis : array_like (3,), optional
         Three-axis sets: the slew's eigen-axis (hub axes), required.
 
     Returns
     -------
     float, s
-        0 for unlimited torque; inf if no momentum can be stored along e.
+        0 without limits; inf if the wheels can store no momentum in the needed direction.
 
     References
     ----------
     .. [1] B. Wie, *Space Vehicle Dynamics and Control*, 2nd ed., AIAA, 2008, sec. 7.3
        (rest-to-rest time-optimal manoeuvres with rate limits).
     """
-    if not isinstance(wheels, WheelSet):
-        raise TypeError(f"wheels must be a controllers.WheelSet; got {type(wheels).__name__}")
-    angle = real_number(angle, "angle", "rad")
-    if not (math.isfinite(angle) and angle != 0.0):
-        raise ValueError(f"angle must be non-zero and finite [rad]; got {describe(angle)}")
-    e = wheels._unit_direction(axis)
-    J = _axis_inertia(inertia, e, wheels.planar)
-    a = wheels.allocation @ e * math.copysign(1.0, angle)   # wheel momentum per unit of H
-    tau_m = _capacity(a, wheels._torque_limits)
-    h0 = np.array([w.initial_momentum for w in wheels.wheels])
-    # wheel momenta during the slew: h0 - a H, H from 0 to J omega_m (>= 0 along the slew)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        room = np.where(a > 0, (h0 + wheels._momentum_limits) / a,
-                        np.where(a < 0, (wheels._momentum_limits - h0) / -a, math.inf))
-    H_m = float(np.min(room))
-    theta = abs(angle)
-    if H_m <= 0.0:
+    limits = _slew_limits(wheels, angle, inertia, axis)
+    if limits["momentum_room"] <= 0.0:
         return math.inf
-    if math.isinf(tau_m):
-        return 0.0
-    omega_m = H_m / J
-    if math.isinf(omega_m) or theta <= J * omega_m ** 2 / tau_m:
-        return 2.0 * math.sqrt(theta * J / tau_m)
-    return theta / omega_m + J * omega_m / tau_m
+    A, W = limits["acceleration"], limits["rate"]
+    # the bang-coast-bang time for acceleration A and rate W: a unit inertia makes the torque
+    # limit the acceleration limit
+    return minimum_time("bang-coast-bang", limits["angle"], inertia=1.0,
+                        torque_limit=A if math.isfinite(A) else None,
+                        rate_limit=W if math.isfinite(W) else None)
 
 
 def check_slew_time(wheels: WheelSet, angle: float, duration: float, inertia, *,
@@ -538,19 +528,44 @@ def check_slew_time(wheels: WheelSet, angle: float, duration: float, inertia, *,
         raise ValueError(f"duration must be positive and finite [s]; got {describe(duration)}")
     shortest = shortest_slew_time(wheels, angle, inertia, axis=axis)
     if duration_s < shortest:
-        e = wheels._unit_direction(axis)
-        about = "" if wheels.planar else f" about {np.array2string(e, precision=4)}"
+        limits = _slew_limits(wheels, angle, inertia, axis)
+        about = "" if wheels.planar else f" about {np.array2string(limits['axis'], precision=4)}"
         raise ValueError(
             f"duration {duration_s:.6g} s is too short for a {math.degrees(angle):.6g} deg "
-            f"slew{about} with these wheels: their torque capacity "
-            f"{wheels.torque_capacity(axis):.4g} N*m and momentum capacity "
-            f"{wheels.momentum_capacity(axis):.4g} N*m*s (inertia "
-            f"{_axis_inertia(inertia, e, wheels.planar):.6g} kg*m^2) allow it in no less than "
+            f"slew{about} with these wheels: their torque capacity {limits['torque']:.4g} N*m "
+            f"and momentum room {limits['momentum_room']:.4g} N*m*s (for the inertia "
+            f"{limits['inertia']:.6g} kg*m^2 about the slew axis) allow it in no less than "
             f"{shortest:.4g} s")
     return shortest
 
 
-def _axis_inertia(inertia, e: np.ndarray, planar: bool) -> float:
+def _slew_limits(wheels: WheelSet, angle, inertia, axis) -> dict:
+    """The wheels' torque and momentum capacities for an eigen-axis slew, and the acceleration
+    and rate limits they set (see :func:`shortest_slew_time`)."""
+    if not isinstance(wheels, WheelSet):
+        raise TypeError(f"wheels must be a controllers.WheelSet; got {type(wheels).__name__}")
+    angle = real_number(angle, "angle", "rad")
+    if not (math.isfinite(angle) and angle != 0.0):
+        raise ValueError(f"angle must be non-zero and finite [rad]; got {describe(angle)}")
+    e = wheels._unit_direction(axis)
+    Je = np.atleast_1d(_inertia_times(inertia, e, wheels.planar))
+    size = float(np.linalg.norm(Je))
+    u = Je / size
+    a = wheels.allocation @ u * math.copysign(1.0, angle)   # wheel momentum per unit of H
+    tau_m = _capacity(a, wheels._torque_limits)
+    h0 = np.array([w.initial_momentum for w in wheels.wheels])
+    # wheel momenta during the slew: h0 - a H, H from 0 to |J e| omega_m (>= 0 along the slew)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        room = np.where(a > 0, (h0 + wheels._momentum_limits) / a,
+                        np.where(a < 0, (wheels._momentum_limits - h0) / -a, math.inf))
+    H_m = float(np.min(room))
+    return {"angle": angle, "axis": e, "inertia": float(e @ Je) if e.size == 3 else size,
+            "torque": tau_m, "momentum_room": H_m, "acceleration": tau_m / size,
+            "rate": H_m / size}
+
+
+def _inertia_times(inertia, e: np.ndarray, planar: bool):
+    """J e for the checked inertia (a float J for the planar set)."""
     if planar:
         J = real_number(inertia, "inertia", "kg*m^2")
         if not (math.isfinite(J) and J > 0):
@@ -565,9 +580,8 @@ def _axis_inertia(inertia, e: np.ndarray, planar: bool) -> float:
     if M.shape != (3, 3) or not np.all(np.isfinite(M)):
         raise ValueError(f"inertia must be a finite 3 x 3 tensor [kg*m^2] (hub axes); got "
                          f"{describe(inertia)}")
-    J = float(e @ M @ e)
     symmetric = np.allclose(M, M.T, rtol=1e-9, atol=0.0)
     if not (symmetric and np.all(np.linalg.eigvalsh(0.5 * (M + M.T)) > 0)):
         raise ValueError(f"inertia must be symmetric positive definite [kg*m^2]; got "
                          f"{describe(inertia)}")
-    return J
+    return M @ e

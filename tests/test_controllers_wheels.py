@@ -254,6 +254,16 @@ def test_three_axis_shortest_slew_needs_the_axis_and_a_tensor():
         controllers.shortest_slew_time(ws, 0.1, inertia)
     with pytest.raises(ValueError, match="inertia must be symmetric positive definite"):
         controllers.shortest_slew_time(ws, 0.1, -inertia, axis=[1, 0, 0])
+    # off a principal axis the torque J e a and momentum J e omega point along J e, not e
+    full = np.array([[300.0, 40.0, 0.0], [40.0, 200.0, 0.0], [0.0, 0.0, 100.0]])
+    e = np.array([1.0, 0.0, 0.0])
+    Je = full @ e
+    u = Je / np.linalg.norm(Je)
+    A = ws.torque_capacity(u) / np.linalg.norm(Je)
+    W = ws.momentum_capacity(u) / np.linalg.norm(Je)
+    assert 0.5 > W * W / A
+    assert controllers.shortest_slew_time(ws, 0.5, full, axis=e) == pytest.approx(
+        0.5 / W + W / A, rel=1e-13)
 
 
 # -- the loop: where no limit acts, the linear loop ---------------------------------------
