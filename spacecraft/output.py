@@ -37,12 +37,15 @@ from pathlib import Path
 from appendages.interface import FlexsatError
 
 __all__ = ["OutputError", "OutputFolder", "output_folder", "default_output_folder",
-           "ENVIRONMENT_ERRNOS", "MARKER", "OWNER", "is_environment_error"]
+           "ENVIRONMENT_ERRNOS", "MARKER", "OWNER", "LOCK", "FolderLock", "is_environment_error"]
 
 #: File that marks a completed report folder.
 MARKER = ".flexsat-complete"
 #: File in a partial folder naming the process that writes it.
 OWNER = ".flexsat-owner"
+#: Folder inside a folder that flexsat writes in place (a sweep's), claimed as a partial folder
+#: is: it holds the owner record while the writer runs (:class:`FolderLock`).
+LOCK = ".flexsat-lock"
 #: An owner-less partial folder younger than this [s] may still be starting up.
 _YOUNG = 60.0
 #: Tries at claiming one name (a stale partial folder removed by a concurrent run).
@@ -91,11 +94,19 @@ def _start_time(pid: int) -> str | None:
     return fields[19] if len(fields) > 19 else None
 
 
-def _owner_record() -> dict:
+def _owner_record(command: str = "flexsat run") -> dict:
     pid = os.getpid()
-    return {"program": "flexsat", "pid": pid, "host": socket.gethostname(),
-            "start": _start_time(pid),
+    return {"program": "flexsat", "command": command, "pid": pid,
+            "host": socket.gethostname(), "start": _start_time(pid),
             "since": datetime.datetime.now().isoformat(timespec="seconds")}
+
+
+def _who(record: dict | None, default: str) -> str:
+    """The writer of a claimed folder, in words (its owner record may not be written yet)."""
+    if not record:
+        return default
+    return (f"{record.get('command', default)} (pid {record['pid']} on {record['host']}, since "
+            f"{record.get('since', '?')})")
 
 
 def _read_owner(partial: Path) -> dict | None:
@@ -311,10 +322,7 @@ class OutputFolder:
                     continue
                 if state == "absent":
                     continue
-                who = (f"flexsat run (pid {record['pid']} on {record['host']}, since "
-                       f"{record.get('since', '?')})" if record else
-                       # claimed a moment ago: its owner record is not written yet
-                       "flexsat run")
+                who = _who(record, "flexsat run")
                 if state == "alive":
                     raise _Busy(f"{_shown(path)}: another {who} is writing this folder; wait "
                                 "for it or choose another --out")
@@ -383,6 +391,72 @@ class OutputFolder:
     def _discard(self) -> None:
         if self.partial is not None:
             shutil.rmtree(self.partial, ignore_errors=True)
+
+
+class FolderLock:
+    """Context manager: exclusive writing of a folder that is written in place (a sweep's, whose
+    parts stay for a resume), claimed as :class:`OutputFolder` claims a partial folder.
+
+    On entering, the lock folder :data:`LOCK` is made inside ``folder`` with one atomic
+    ``mkdir`` and the owner record is written into it; a lock of a live process is refused
+    naming that process, a stale one (its process is gone: killed, or the machine stopped) is
+    removed and taken. On leaving, the lock is removed.
+
+    Parameters
+    ----------
+    folder : path
+        An existing folder.
+    command : str
+        What writes it, for the message another writer gets (``"flexsat sweep"``).
+
+    Raises
+    ------
+    OutputError
+        The folder is being written by another live process (named), or the lock cannot be
+        made (read-only, no permission).
+    """
+
+    def __init__(self, folder: str | os.PathLike, command: str = "flexsat"):
+        self.folder = Path(folder)
+        self.command = command
+        self.lock = self.folder / LOCK
+
+    def __enter__(self) -> Path:
+        for _ in range(_TRIES):
+            try:
+                os.mkdir(self.lock)
+                break
+            except FileExistsError:
+                state, record = _state(self.lock)
+                if state == "stale":
+                    _remove_stale(self.lock)
+                    continue
+                if state == "absent":
+                    continue
+                raise OutputError(f"{_shown(self.folder)}: another {_who(record, 'flexsat')} "
+                                  "is writing this folder; wait for it to finish, or choose "
+                                  "another --out")
+            except OSError as exc:
+                raise OutputError(f"{_shown(self.folder)}: cannot lock the folder for writing "
+                                  f"({_why(exc)}); give another --out") from None
+        else:
+            raise OutputError(f"{_shown(self.folder)}: could not lock the folder (other "
+                              "processes keep taking it); choose another --out")
+        try:
+            (self.lock / OWNER).write_text(json.dumps(_owner_record(self.command)),
+                                           encoding="utf-8")
+        except BaseException as exc:
+            shutil.rmtree(self.lock, ignore_errors=True)
+            if isinstance(exc, OSError):
+                raise OutputError(f"{_shown(self.folder)}: cannot write the folder "
+                                  f"({_why(exc)}); free some space or give another --out"
+                                  ) from None
+            raise
+        return self.folder
+
+    def __exit__(self, kind, exc, tb) -> bool:
+        shutil.rmtree(self.lock, ignore_errors=True)
+        return False
 
 
 def output_folder(path: str | os.PathLike | None) -> OutputFolder:

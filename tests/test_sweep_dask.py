@@ -201,3 +201,43 @@ def test_the_package_is_callable_and_returns_a_table(client):
     summary = json.loads(table.schema.metadata[b"flexsat.summary"])
     assert summary["samples"]["total"] == 3
     assert np.all(np.diff(table.column("sample").to_numpy()) == 1)
+
+
+def test_a_scheduler_given_by_address_runs_the_sweep(client):
+    """--scheduler ADDRESS: the scheduler is asked who it is (a deadline on the answer), then
+    the sweep runs on its workers."""
+    result = run_sweep(None, samples=2, seed=11, worst_case=False,
+                       scheduler=client.scheduler.address, progress=False)
+    assert result.summary["executor"] == "scheduler, 2 workers"
+    assert result.summary["samples"]["evaluated"] == 2
+
+
+def test_a_sweep_survives_its_workers_being_killed(client, tmp_path):
+    """Both worker processes killed (SIGKILL) while the sweep runs: their nannies start new
+    ones and Dask runs the lost batches again (each task carries its context: nothing the
+    dead workers held is needed). Every sample comes back once, none failed."""
+    import threading
+
+    out = tmp_path / "sweep"
+    box = {}
+
+    def sweep():
+        box["result"] = run_sweep(None, samples=8, seed=7, worst_case=False, client=client,
+                                  out=out, batch=1, progress=False, plots=False)
+
+    thread = threading.Thread(target=sweep)
+    thread.start()
+    deadline = time.monotonic() + 180
+    while not list((out / "samples").glob("part-*.parquet")):
+        assert thread.is_alive() and time.monotonic() < deadline
+        time.sleep(0.02)
+    for pid in client.run(os.getpid).values():
+        os.kill(pid, signal.SIGKILL)
+    thread.join(300)
+    assert not thread.is_alive()
+    summary = box["result"].summary
+    assert summary["samples"]["failed"] == 0
+    samples = [i for p in (out / "samples").glob("part-*.parquet")
+               for i in pq.read_table(p).column("sample").to_pylist()]
+    assert sorted(samples) == list(range(8))
+    client.wait_for_workers(2, timeout=120)

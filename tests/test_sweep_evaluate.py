@@ -1,4 +1,5 @@
 """One sweep sample: the runner's design loop reduced to numbers (spacecraft/sweep/evaluate.py)."""
+import json
 import math
 
 import numpy as np
@@ -45,29 +46,34 @@ def test_a_sample_is_the_runners_design_loop():
     result = run(load_scene(apply_values(context.base, context.parameters, values)))
     loop = result.data["closed_loops"][0]
     truth, exact = loop["verdict"], loop["exact_verdict"]
-    # the report withholds the settling metrics of an unstable loop (None, flagged); the sweep
-    # records them: compare with the metrics of the runner's own response
+    # the sweep withholds the time metrics as the report does (None where the report has
+    # None); the others equal the metrics of the runner's own response
     key = (loop["design"], loop["controller"], "truth")
     with np.errstate(all="ignore"):
         metrics = controllers.metrics(result.responses[key])
     assert row["truth_stable"] == truth["stable"]
-    # same models and controller: margins refined to 1e-12 relative in frequency; the
-    # simulations agree to round-off
+    # same models and controller: margins refined to 1e-12 relative in frequency (the sweep's
+    # signed by the verdict); the simulations agree to round-off
+    sign = 1.0 if truth["stable"] else -1.0
     for name in ("gain_margin", "phase_margin", "modulus_margin"):
-        assert row[f"truth_{name}"] == pytest.approx(truth[name], rel=1e-9), name
+        assert row[f"truth_{name}"] == pytest.approx(sign * abs(truth[name]), rel=1e-9), name
+    reported = loop["metrics"]["truth"]
     for name in ("overshoot", "settling_time", "peak_tip_deflection", "peak_torque",
                  "peak_attitude_error"):
-        assert row[name] == pytest.approx(metrics[name], rel=1e-9, abs=1e-15), name
+        if reported[name] is None or not row["stable"]:
+            assert row[name] is None, name
+        else:
+            assert row[name] == pytest.approx(metrics[name], rel=1e-9, abs=1e-15), name
     assert row["exact_stable"] == exact["stable"]
     # Margins on the exact beam interpolate the plant between grid points. Against a dense
     # grid (600 points a mode, 400 a decade; converged to 1e-6 by doubling), the sweep's
     # refined grid is within 5e-4 (measured 1.2e-4), the runner's 60 points a mode within
     # 5e-3 (measured 3e-3).
     import spacecraft.sweep.evaluate as module
-    from spacecraft.sweep.evaluate import _SampleRunner, _design_controller, exact_verdict
+    from spacecraft.sweep.evaluate import SampleRunner, design_controller, exact_verdict
 
-    runner = _SampleRunner(load_scene(apply_values(context.base, context.parameters, values)))
-    K = _design_controller(runner, context)
+    runner = SampleRunner(load_scene(apply_values(context.base, context.parameters, values)))
+    K = design_controller(runner, context).controller
     saved = module.POINTS_PER_DECADE, module.POINTS_PER_MODE
     module.POINTS_PER_DECADE, module.POINTS_PER_MODE = 400, 600
     try:
@@ -75,9 +81,10 @@ def test_a_sample_is_the_runners_design_loop():
     finally:
         module.POINTS_PER_DECADE, module.POINTS_PER_MODE = saved
     assert dense.stable == row["exact_stable"]
+    sign = 1.0 if dense.stable else -1.0
     for name in ("modulus_margin", "phase_margin", "gain_margin"):
         reference = getattr(dense.margins, name)
-        assert row[f"exact_{name}"] == pytest.approx(reference, rel=5e-4), name
+        assert row[f"exact_{name}"] == pytest.approx(sign * abs(reference), rel=5e-4), name
         assert exact[name] == pytest.approx(reference, rel=5e-3), name
     assert row["n_modes"] == result.data["fidelity"]["n_modes"]
 
@@ -88,9 +95,13 @@ def test_nominal_and_per_sample_designs_coincide_at_the_nominal_point():
     nominal, _ = context_of(raw, design="nominal")
     a = evaluate(per_sample, spec.nominal)
     b = evaluate(nominal, spec.nominal)
-    for name in per_sample.columns():
+    for name in nominal.columns():
         if name != "seconds":
             assert a[name] == b[name], name
+    # the per-sample row records its controller: at the nominal point the nominal one
+    assert "controller" in per_sample.columns() and "controller" not in nominal.columns()
+    record = json.loads(a["controller"])
+    assert record == {k: nominal.nominal_record[k] for k in ("kind", "A", "B", "C", "D")}
     # away from it they differ: the held controller does not follow the hub
     c = evaluate(per_sample, [58.0, 0.004])
     d = evaluate(nominal, [58.0, 0.004])

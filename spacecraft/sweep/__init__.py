@@ -6,6 +6,12 @@ verdict); the samples run in batches on Dask and stream to Parquet; a differenti
 search finds the worst stability margin over the box; a report shows histograms, margins against
 parameters, a stability map, the probability of instability and the worst case.
 
+Every sample counts: a slew that does not settle or diverges is a result (its time metrics
+withheld as the run's report withholds them), a sample that fails is counted apart, as a bound
+on the probability of instability; margins are signed (negative: unstable) everywhere; each
+design's controller is recorded, and ``worst.toml`` runs that very controller again
+(``[controller.given]``).
+
 Modules: :mod:`.parameters` (key paths, distributions, sampling), :mod:`.evaluate` (one
 sample), :mod:`.execute` (Dask, batches, Parquet, resume, progress), :mod:`.worst` (worst-case
 search, ``worst.toml``), :mod:`.report` (statistics, plots, files), :mod:`.runner` (the whole

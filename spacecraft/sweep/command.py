@@ -49,36 +49,39 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="print summary.json to stdout")
 
 
-def _fmt(value, digits: int = 4) -> str:
-    if value is None:
-        return "n/a"
-    if isinstance(value, float) and not math.isfinite(value):
-        return "inf" if value > 0 else ("-inf" if value < 0 else "n/a")
-    return f"{value:.{digits}g}" if isinstance(value, float) else str(value)
-
-
 def summary_lines(summary: dict) -> list[str]:
     """Short summary of a sweep (printed by the command)."""
+    from .report import format_number as _fmt, instability_text
+
     s = summary
     inst = s["instability"]
-    lines = [f"{s['samples']['total']} samples ({s['samples']['failed']} failed) on "
+    failed = s["samples"]["failed"]
+    lines = [f"{s['samples']['total']} samples ({failed} failed) on "
              f"{s['executor']}, {_fmt(s['timings'].get('samples'), 3)} s; "
              f"{_fmt(1e3 * (s['timings'].get('per_sample_median') or math.nan), 3)} ms per "
              "sample (median)",
-             f"probability of instability ({inst['verdict']} verdict): {_fmt(inst['probability'])}"
-             f" ({inst['unstable']} of {inst['of']}; {100 * inst['confidence']:.0f} % interval "
-             f"{_fmt(inst['interval'][0])} to {_fmt(inst['interval'][1])})"]
+             f"probability of instability ({inst['verdict']} verdict): " + instability_text(s)]
+    statuses = s["samples"].get("status") or {}
+    if statuses:
+        lines.append("slews on the truth model: " + ", ".join(f"{k} {v}"
+                                                             for k, v in statuses.items()))
     ranking = s["sensitivity"]["ranking"]
     if ranking:
         lines.append("most influential: " + ", ".join(
             f"{r['parameter']} ({_fmt(r['spearman'], 2)})" for r in ranking[:3]))
     for w in s["worst_case"]:
-        ver = (w.get("verification") or {}).get("exact_reference", {})
-        check = (f"; exact beam: {_fmt(ver.get(w['metric']))}, "
-                 f"{'stable' if ver.get('stable') else 'unstable'}" if "stable" in ver else "")
-        lines.append(f"worst {w['metric'].replace('_', ' ')}: {_fmt(w['objective'])} (signed) at "
-                     + ", ".join(f"{k} = {_fmt(v, 6)}" for k, v in w["values"].items())
-                     + f"{check} [{(w.get('verification') or {}).get('scene', '')}]")
+        ver = w.get("verification") or {}
+        exact = ver.get("exact_reference", {})
+        check = (f"; exact beam: {_fmt(exact.get(w['metric']))}, "
+                 f"{'stable' if exact.get('stable') else 'UNSTABLE'}" if "stable" in exact
+                 else "")
+        verdict = "stable" if w["row"].get("stable") else "UNSTABLE"
+        lines.append(f"worst {w['metric'].replace('_', ' ')}: {_fmt(w['objective'])} (signed; "
+                     f"{verdict}) at " + ", ".join(f"{k} = {_fmt(v, 6)}"
+                                                   for k, v in w["values"].items())
+                     + f"{check} [{ver.get('scene') or ver.get('note', '')}]")
+    if s.get("worst_case_skipped"):
+        lines.append(f"worst case: not searched ({s['worst_case_skipped']})")
     return lines
 
 
@@ -100,11 +103,23 @@ def run_command(args) -> int:
     log(f"done in {time.perf_counter() - log.t0:.1f} s")
     if args.json:
         print(to_json(result.summary))
-        return 0
+        return _all_failed(result.summary, out)
     for line in summary_lines(result.summary):
         print(line)
     print(f"wrote summary.json, report.md, report.html and samples/*.parquet to {out}")
-    return 0
+    return _all_failed(result.summary, out)
+
+
+def _all_failed(summary: dict, out) -> int:
+    """0, or a SweepError when no sample could be evaluated (the report says why)."""
+    from .parameters import SweepError
+
+    if summary["instability"]["of"]:
+        return 0
+    first = summary["failures"][0]["error"] if summary["failures"] else "?"
+    raise SweepError(f"every one of the {summary['samples']['total']} samples failed, so the "
+                     f"sweep has no verdict (most common error: {first[:200]}); "
+                     f"{out}/report.md lists the errors")
 
 
 def main(argv=None) -> int:

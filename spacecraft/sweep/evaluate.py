@@ -33,9 +33,27 @@ runner's rule, and held: every sample's truth model has as many modes. Where the
 is on, the report gives the largest difference between the truth model's and the exact beam's
 modulus margins over the samples, and the number of verdicts they disagree on.
 
-A sample that fails (a scene the scene reader refuses, a controller that cannot be tuned, any
-numerical failure) is recorded with its error message and NaN metrics; warnings raised while it
-ran are recorded too (the first one), never printed.
+What a sample records, so that every verdict can be read and checked:
+
+* margins signed by the verdict (:func:`signed_margin`): ``|m|`` for a stable loop, ``-|m|`` for
+  an unstable one, so that every unstable sample ranks below every stable one in any table,
+  plot, ranking or search (a stable loop's gain or phase margin counted by its size, as the
+  run's warnings count a conditionally stable loop's negative gain margin);
+* ``status``: the slew of the truth loop as the run reports it (:func:`spacecraft.verdicts.
+  loop_status`: settles, not settled, slew unfinished, unstable, diverges), ``"unstable"`` also
+  where the truth loop settles but the exact beam's verdict is unstable; without a manoeuvre
+  ``"stable"`` or ``"unstable"``. A slew that does not settle or diverges is a result: its
+  settling time (and, for an unstable loop, every time metric) is withheld (null), as the run's
+  report withholds it (:func:`spacecraft.verdicts.withheld_metrics`);
+* the controller: with ``design = "per-sample"`` each sample's in the column ``controller``
+  (JSON: kind and state-space matrices, :func:`spacecraft.given_controller.controller_record`;
+  a PD's gains also in ``pd_kp``, ``pd_kd``); with ``design = "nominal"`` the one controller in
+  :attr:`Context.nominal_record` (the sweep's ``sweep.json`` and ``summary.json``).
+
+A sample that genuinely fails (a scene the scene reader refuses, a controller that cannot be
+tuned, any numerical failure) is recorded with its error message, status ``"failed"`` and no
+verdict or margin (null booleans, NaN numbers); the report counts it apart. Warnings raised
+while it ran are recorded too (the first one), never printed.
 """
 
 from __future__ import annotations
@@ -47,42 +65,63 @@ import warnings
 
 import numpy as np
 
+from ..given_controller import controller_record
 from ..runner import RunStats, _Runner
 from ..scene import SceneError, load_scene
+from ..tuning import tune
+from ..verdicts import TIME_METRICS, closed_loop_poles, loop_status, withheld_metrics
 from .parameters import SweepError, SweepSpec, apply_values
 
-__all__ = ["Context", "METRICS", "prepare", "evaluate", "evaluate_batch", "exact_grid",
-           "exact_verdict", "tune", "columns"]
+__all__ = ["Context", "METRICS", "STATUSES", "prepare", "evaluate", "evaluate_batch",
+           "exact_grid", "exact_verdict", "design_controller", "SampleRunner", "columns",
+           "signed_margin"]
 
 #: Columns of a sample's result: name -> (kind, unit, meaning). Kinds: "float", "int", "bool",
 #: "str". "truth_*": hub + truncated beams (eigenvalue verdict); "exact_*": hub + exact beams
 #: (Nyquist verdict); the time metrics are those of the slew on the truth loop.
 METRICS: dict[str, tuple[str, str, str]] = {
     "stable": ("bool", "-", "closed loop stable (exact beam if computed, else truth model)"),
+    "status": ("str", "-", "the truth loop's slew: settles, not settled, slew unfinished, "
+                           "unstable, diverges (stable or unstable without a manoeuvre); failed"),
     "truth_stable": ("bool", "-", "stable on the truth model (eigenvalues)"),
     "truth_n_unstable_poles": ("int", "-", "unstable closed-loop poles on the truth model"),
     "truth_least_damping_ratio": ("float", "-", "least closed-loop damping ratio"),
-    "truth_gain_margin": ("float", "dB", "gain margin on the truth model"),
-    "truth_phase_margin": ("float", "deg", "phase margin on the truth model"),
-    "truth_modulus_margin": ("float", "-", "modulus margin min|1 + L| on the truth model"),
+    "truth_gain_margin": ("float", "dB", "gain margin on the truth model, signed: |GM| if "
+                                         "stable, -|GM| if unstable"),
+    "truth_phase_margin": ("float", "deg", "phase margin on the truth model, signed: |PM| if "
+                                           "stable, -|PM| if unstable"),
+    "truth_modulus_margin": ("float", "-", "modulus margin min|1 + L| on the truth model, "
+                                           "signed: negative if unstable"),
     "exact_stable": ("bool", "-", "stable on the exact beam (Nyquist)"),
     "exact_n_unstable_poles": ("int", "-", "unstable closed-loop poles on the exact beam"),
-    "exact_gain_margin": ("float", "dB", "gain margin on the exact beam"),
-    "exact_phase_margin": ("float", "deg", "phase margin on the exact beam"),
-    "exact_modulus_margin": ("float", "-", "modulus margin min|1 + L| on the exact beam"),
-    "overshoot": ("float", "%", "slew overshoot"),
-    "settling_time": ("float", "s", "2 % settling time of the slew"),
+    "exact_gain_margin": ("float", "dB", "gain margin on the exact beam, signed: |GM| if "
+                                         "stable, -|GM| if unstable"),
+    "exact_phase_margin": ("float", "deg", "phase margin on the exact beam, signed: |PM| if "
+                                           "stable, -|PM| if unstable"),
+    "exact_modulus_margin": ("float", "-", "modulus margin min|1 + L| on the exact beam, "
+                                           "signed: negative if unstable"),
+    "overshoot": ("float", "%", "slew overshoot (null where withheld: see status)"),
+    "settling_time": ("float", "s", "2 % settling time of the slew (null where withheld: "
+                                    "not settled, unstable)"),
     "peak_tip_deflection": ("float", "m", "peak tip deflection during the slew"),
     "peak_torque": ("float", "N*m", "peak torque during the slew"),
     "peak_attitude_error": ("float", "rad", "peak |theta - theta_ref| during the slew"),
     "final_attitude_error": ("float", "rad", "|theta - theta_ref| at the end of the slew"),
     "n_modes": ("int", "-", "bending modes per truncated beam of the truth model"),
+    "controller": ("str", "-", "the sample's controller (design = per-sample): JSON of kind, "
+                               "A, B, C, D (spacecraft.given_controller)"),
+    "pd_kp": ("float", "N*m/rad", "the sample's PD proportional gain Kp (design = per-sample)"),
+    "pd_kd": ("float", "N*m*s/rad", "the sample's PD derivative gain Kd (design = per-sample)"),
     "error": ("str", "-", "why the sample failed (empty: it did not)"),
     "warning": ("str", "-", "first warning raised while evaluating it (empty: none)"),
     "seconds": ("float", "s", "evaluation time"),
 }
-_TIME_METRICS = ("overshoot", "settling_time", "peak_tip_deflection", "peak_torque",
-                 "peak_attitude_error", "final_attitude_error")
+#: Values of the ``status`` column.
+STATUSES = ("settles", "not settled", "slew unfinished", "unstable", "diverges", "stable",
+            "failed")
+_TIME_METRICS = TIME_METRICS
+_PER_SAMPLE = ("controller",)
+_PD = ("pd_kp", "pd_kd")
 _EXACT = tuple(k for k in METRICS if k.startswith("exact_"))
 
 #: The exact reference grid: points per decade, points across each mode's half-power band, and
@@ -122,6 +161,9 @@ class Context:
         Bending modes per truncated beam (None: no beam truth).
     nominal_controller : control.StateSpace or None
         ``design = "nominal"``: the controller tuned on the nominal scene.
+    nominal_record : dict or None
+        Its numbers (:func:`spacecraft.given_controller.controller_record`) and, for a PD, its
+        gains ``Kp`` [N m/rad], ``Kd`` [N m s/rad].
     exact : bool
         Close the loop on the exact beams too.
     time_responses : bool
@@ -138,19 +180,33 @@ class Context:
     nominal_controller: object = None
     exact: bool = False
     time_responses: bool = False
+    nominal_record: dict | None = None
 
     def columns(self) -> list[str]:
         """The metric columns this sweep records."""
-        return columns(self.exact, self.time_responses)
+        return columns(self.exact, self.time_responses, per_sample=self.design == "per-sample",
+                       controller=self.controller)
 
 
-def columns(exact: bool, time_responses: bool) -> list[str]:
-    """Metric columns of a sweep with/without the exact reference and the slew."""
+def columns(exact: bool, time_responses: bool, *, per_sample: bool = False,
+            controller: str = "lqr") -> list[str]:
+    """Metric columns of a sweep with/without the exact reference and the slew; the
+    controller's columns with ``design = "per-sample"`` (the PD's gains for a PD)."""
     return [k for k in METRICS if (exact or k not in _EXACT)
-            and (time_responses or k not in _TIME_METRICS)]
+            and (time_responses or k not in _TIME_METRICS)
+            and (per_sample or k not in _PER_SAMPLE + _PD)
+            and (controller == "pd" or k not in _PD)]
 
 
-class _SampleRunner(_Runner):
+def signed_margin(value, stable) -> float:
+    """A margin signed by the verdict: ``|value|`` if stable, ``-|value|`` if not (NaN where
+    there is no verdict or no value; an infinite margin keeps its size)."""
+    if stable is None or value is None or math.isnan(value):
+        return math.nan
+    return abs(float(value)) if stable else -abs(float(value))
+
+
+class SampleRunner(_Runner):
     """The runner's model builders for one sample (time responses on, no output folder).
 
     Chains come from the runner's own fit (:meth:`_Runner.fit`): ``fit_chain`` memoises the
@@ -162,43 +218,19 @@ class _SampleRunner(_Runner):
         super().__init__(scene, None, RunStats(), time_responses=True)
 
 
-def tune(plant, controller_spec, kind: str):
-    """The controller of kind ``"pd"`` or ``"lqr"`` tuned on a design plant as the runner does.
+def design_controller(runner: SampleRunner, context: Context):
+    """The controller of a sample tuned on its design model as the runner tunes it
+    (:func:`spacecraft.tuning.tune`).
+
+    Returns
+    -------
+    spacecraft.tuning.Tuned
 
     Raises
     ------
     SceneError
-        If it cannot be tuned on this plant.
+        If it cannot be tuned on this design model.
     """
-    import control
-    import controllers
-
-    c = controller_spec
-    try:
-        if kind == "pd":
-            K = controllers.pd(plant, natural_frequency=c.pd.natural_frequency,
-                               bandwidth=c.pd.bandwidth, damping=c.pd.damping,
-                               roll_off=c.pd.roll_off, notch=c.pd.notch,
-                               sample_time=c.sample_time)
-        else:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                K = controllers.lqr(plant, attitude_weight=c.lqr.attitude_weight,
-                                    rate_weight=c.lqr.rate_weight,
-                                    torque_weight=c.lqr.torque_weight,
-                                    deflection_weight=c.lqr.deflection_weight,
-                                    estimator_speed=c.lqr.estimator_speed,
-                                    sample_time=c.sample_time)
-    except ValueError as exc:
-        raise SceneError(f"controller.{kind}: cannot tune on the design model: {exc}") from None
-    if K.dt is None:
-        # a static gain gets dt=None from python-control: it is a continuous-time controller
-        K = control.ss(K.A, K.B, K.C, K.D, 0, inputs=list(K.input_labels),
-                       outputs=list(K.output_labels), name=K.name)
-    return K
-
-
-def _design_controller(runner: _SampleRunner, context: Context):
     scene = runner.scene
     models = [runner.design_model(a, context.variant, context.n_modes) for a in scene.appendages]
     sc = runner.spacecraft(("design", context.variant), models)
@@ -206,7 +238,20 @@ def _design_controller(runner: _SampleRunner, context: Context):
         scene.controller.lqr.deflection_weight is not None and context.controller == "lqr"
     plant, _ = runner.plant(sc, ("design", context.variant), tip=needs_tip,
                             prune=scene.fidelity.prune)
-    return tune(plant, scene.controller, context.controller)
+    try:
+        return tune(context.controller, plant, scene.controller)
+    except ValueError as exc:
+        raise SceneError(f"controller.{context.controller}: cannot tune on the design model: "
+                         f"{exc}") from None
+
+
+def controller_description(tuned, kind: str) -> dict:
+    """The record of a tuned controller: its numbers, and a PD's gains ``Kp``, ``Kd``."""
+    record = controller_record(tuned.controller, kind)
+    if kind == "pd" and "Kp" in tuned.description:
+        record["Kp"] = float(tuned.description["Kp"])
+        record["Kd"] = float(tuned.description["Kd"])
+    return record
 
 
 def _grid_parts(runner: _Runner) -> tuple[np.ndarray, np.ndarray, float]:
@@ -395,45 +440,67 @@ def exact_verdict(runner: _Runner, controller):
 
 def _margins(prefix: str, verdict) -> dict:
     m = verdict.margins
-    out = {f"{prefix}_stable": bool(verdict.stable),
+    stable = bool(verdict.stable)
+    out = {f"{prefix}_stable": stable,
            f"{prefix}_n_unstable_poles": int(verdict.n_unstable_poles),
-           f"{prefix}_gain_margin": float(m.gain_margin),
-           f"{prefix}_phase_margin": float(m.phase_margin),
-           f"{prefix}_modulus_margin": float(m.modulus_margin)}
+           f"{prefix}_gain_margin": signed_margin(m.gain_margin, stable),
+           f"{prefix}_phase_margin": signed_margin(m.phase_margin, stable),
+           f"{prefix}_modulus_margin": signed_margin(m.modulus_margin, stable)}
     if verdict.least_damping_ratio is not None:
         out[f"{prefix}_least_damping_ratio"] = float(verdict.least_damping_ratio)
     return out
 
 
 def _evaluate_scene(context: Context, scene) -> dict:
+    import json
+
     import controllers
 
-    runner = _SampleRunner(scene)
+    runner = SampleRunner(scene)
     n = context.n_modes
     prune = scene.fidelity.prune
     truth_models = [runner.truth_model(a, n) for a in scene.appendages]
     truth_sc = runner.spacecraft(("truth", n), truth_models)
     m = scene.manoeuvre
     truth_verdict, _ = runner.plant(truth_sc, ("truth", n), prune=prune)
+    out: dict = {"n_modes": -1 if n is None else int(n)}
     K = context.nominal_controller
     if K is None:
-        K = _design_controller(runner, context)
-    out: dict = {"n_modes": -1 if n is None else int(n)}
+        tuned = design_controller(runner, context)
+        K = tuned.controller
+        record = controller_description(tuned, context.controller)
+        out["controller"] = json.dumps({k: v for k, v in record.items()
+                                        if k not in ("Kp", "Kd")})
+        if "Kp" in record:
+            out["pd_kp"], out["pd_kd"] = record["Kp"], record["Kd"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         truth = controllers.spillover(truth_verdict, K)
     out.update(_margins("truth", truth))
+    stable = out["truth_stable"]
+    if context.exact:
+        out.update(_margins("exact", exact_verdict(runner, K)))
+        stable = out["exact_stable"]
+    out["stable"] = stable
     if context.time_responses and m is not None:
         truth_sim, _ = runner.plant(truth_sc, ("truth", n), tip=scene.outputs.tip_deflection,
                                     root_loads=scene.outputs.root_loads,
                                     disturbances=m.disturbance is not None, prune=prune)
-        response = runner.simulate(controllers.close_loop(truth_sim, K))
-        metrics = controllers.metrics(response)
-        out.update({k: float(metrics[k]) for k in _TIME_METRICS if k in metrics})
-    out["stable"] = out["truth_stable"]
-    if context.exact:
-        out.update(_margins("exact", exact_verdict(runner, K)))
-        out["stable"] = out["exact_stable"]
+        loop = controllers.close_loop(truth_sim, K)
+        response = runner.simulate(loop)
+        with np.errstate(all="ignore"):
+            metrics = controllers.metrics(response)
+        status = loop_status(closed_loop_poles(loop), response, m, metrics)
+        if not stable and status["status"] not in ("unstable", "diverges"):
+            # settles on the truth model, unstable on the exact beam: the verdict is the
+            # exact beam's, and a slew's numbers are not those of an unstable loop
+            status = {**status, "status": "unstable"}
+        values, _ = withheld_metrics(metrics, status)
+        out.update({k: None if values[k] is None else float(values[k])
+                    for k in _TIME_METRICS if k in values})
+        out["status"] = status["status"]
+    else:
+        out["status"] = "stable" if stable else "unstable"
     return out
 
 
@@ -452,7 +519,8 @@ def evaluate(context: Context, values, *, index: int | None = None) -> dict:
     -------
     dict
         Every column of :meth:`Context.columns`: NaN (float), -1 (int) or None (bool) where
-        not computed; ``error`` and ``warning`` texts ("" if none); ``seconds``.
+        not computed, None (null) where withheld (the time metrics, by ``status``); ``error``
+        and ``warning`` texts ("" if none); ``seconds``.
     """
     t0 = time.perf_counter()
     row = {k: _missing(METRICS[k][0]) for k in context.columns()}
@@ -464,7 +532,9 @@ def evaluate(context: Context, values, *, index: int | None = None) -> dict:
                                source=source)
             row.update({k: v for k, v in _evaluate_scene(context, scene).items() if k in row})
         except Exception as exc:  # a failed sample is recorded; the sweep goes on
+            row = {k: _missing(METRICS[k][0]) for k in context.columns()}
             row["error"] = _short(f"{type(exc).__name__}: {exc}")
+            row["status"] = "failed"
     if caught:
         w = caught[0]
         row["warning"] = _short(f"{w.category.__name__}: {w.message}")
@@ -567,6 +637,11 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
     # a swept key the scene leaves out is nominally the centre of its distribution
     raw = apply_values(raw, spec.parameters, spec.nominal)
     scene = load_scene(raw, source=source)
+    if scene.three_axis:
+        raise SweepError(f"{source}: hub.inertia is a 3 x 3 tensor: a three-axis scene cannot "
+                         "be swept yet (a sample is the planar design loop: one torque, theta "
+                         "and omega about z); sweep a planar scene, or run this one with "
+                         "flexsat run")
     n_modes = None
     if scene.has_beam_truth:
         if scene.fidelity.n_modes is not None:
@@ -584,6 +659,7 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
                              and trimmed.controller.sample_time is None),
                       time_responses=trimmed.manoeuvre is not None)
     if spec.design == "nominal":
-        runner = _SampleRunner(trimmed)
-        context.nominal_controller = _design_controller(runner, context)
+        tuned = design_controller(SampleRunner(trimmed), context)
+        context.nominal_controller = tuned.controller
+        context.nominal_record = controller_description(tuned, kind)
     return context

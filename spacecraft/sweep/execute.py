@@ -2,7 +2,10 @@
 
 Where the samples run
     * a Dask cluster you give: ``client=`` (a ``distributed.Client``) or ``scheduler=ADDRESS``
-      (``--scheduler tcp://host:8786``); its workers need flexsat installed;
+      (``--scheduler tcp://host:8786``); its workers need flexsat installed. An address is
+      reached before any work or file (:func:`connect`): a wrong one, a refused connection or a
+      service that does not answer as a Dask scheduler within :data:`SCHEDULER_TIMEOUT` is
+      one line naming the problem;
     * otherwise a ``LocalCluster`` of worker processes, one single-threaded worker per core
       (``workers=`` / ``--workers`` to choose; Dask gives each worker process one BLAS thread);
     * a tiny sweep (one worker asked, or less than :data:`LOCAL_CLUSTER_SECONDS` of work) runs
@@ -20,18 +23,25 @@ Batches
     of 2 workers takes about 7 % of one core (scheduler, client, heartbeats:
     :data:`_LOCAL_CLUSTER_CONFIG`). At most
     ``2 x workers + 1`` tasks are in flight; a finished batch is written before another is sent.
+    A worker lost mid-task (killed, out of memory) costs its batch's time: each task carries
+    its context and is run again elsewhere (:meth:`Executor.run`).
 
 Output folder (``out``)
-    ``sweep.json``: the sweep's settings and the trimmed scene (a resume must match them);
+    ``sweep.json``: the sweep's settings, the trimmed scene's fingerprint and the nominal
+    controller (a resume must match them);
     ``samples/part-<first>-<last>.parquet``: one file per finished batch, columns ``sample``,
     the parameters' key paths (file units), then the metrics (:data:`.evaluate.METRICS`).
     Each part is written to a temporary name and renamed, so a killed sweep leaves only whole
-    parts. Read them all with ``pyarrow.parquet.read_table(out / "samples")``.
+    parts, and carries the SHA-256 of its content. Read them all with
+    ``pyarrow.parquet.read_table(out / "samples")``. While a sweep writes the folder it holds
+    its lock (:class:`SampleStore`): another sweep on the same folder is refused, naming it.
 
 Resume
     ``resume=True`` (``--resume``) on a folder of the same sweep skips every sample of its
     parts and runs the rest: nothing finished is lost or repeated. Samples are decided by their
     index alone (:mod:`.parameters`), so the resumed results are those of an uninterrupted run.
+    A damaged part (truncated, bit-flipped, empty) is set aside as ``<name>.damaged`` and its
+    samples are run again; the report lists it.
 """
 
 from __future__ import annotations
@@ -40,6 +50,7 @@ import dataclasses
 import json
 import math
 import os
+import re
 import sys
 import time
 from collections.abc import Iterator
@@ -50,13 +61,20 @@ import numpy as np
 from .evaluate import METRICS, Context, evaluate, evaluate_batch
 from .parameters import SweepError, SweepSpec
 
-__all__ = ["TASK_SECONDS", "LOCAL_CLUSTER_SECONDS", "Progress", "Executor", "open_executor",
-           "SampleStore", "table_from_columns", "schema", "run_samples", "batch_size"]
+__all__ = ["TASK_SECONDS", "LOCAL_CLUSTER_SECONDS", "SCHEDULER_TIMEOUT", "TASK_RETRIES",
+           "Progress", "Executor", "open_executor", "connect", "check_workers", "SampleStore",
+           "table_from_columns", "schema", "run_samples", "batch_size"]
 
 #: Target duration of one Dask task [s].
 TASK_SECONDS = 2.0
 #: Below this much estimated work [s] a sweep runs in-process (synchronous scheduler).
 LOCAL_CLUSTER_SECONDS = 10.0
+#: Time [s] a scheduler given by address has to answer (:func:`connect`).
+SCHEDULER_TIMEOUT = 10.0
+#: Times Dask runs a batch again whose run failed (the task raised: its worker lost its
+#: connection mid-task); a worker that dies under a task is the scheduler's matter (it
+#: re-runs the task elsewhere, up to ``distributed.scheduler.allowed-failures`` times).
+TASK_RETRIES = 2
 #: Dask settings of the LocalCluster a sweep starts (not of a cluster given to it): no
 #: statistical profiler in the workers (it samples the running task's stack every 10 ms) and a
 #: system monitor every 5 s instead of 0.5 s. An idle worker then uses 1.6 % of a core
@@ -65,6 +83,8 @@ _LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
                          "distributed.admin.system-monitor.interval": "5s"}
 _PARTS = "samples"
 _SETTINGS = "sweep.json"
+#: Key of a part's Parquet metadata holding the SHA-256 of its content (:func:`_digest`).
+DIGEST_KEY = b"flexsat.sha256"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -168,24 +188,22 @@ class Executor:
     client: object = None
     n_workers: int = 1
     owned: list = dataclasses.field(default_factory=list)
-    _context_future: object = None
-    _context: object = None
 
     def describe(self) -> str:
         """Short text for reports: ``local-cluster, 2 workers``."""
         return f"{self.kind}, {self.n_workers} worker{'s' if self.n_workers != 1 else ''}"
 
-    def _context_ref(self, context: Context):
-        if self.client is None:
-            return context
-        if self._context is not context:
-            self._context = context
-            self._context_future = self.client.scatter(context, broadcast=True, hash=False)
-        return self._context_future
-
     def run(self, context: Context, batches: list) -> Iterator[tuple[list, dict]]:
         """Evaluate batches ``[(indices, values), ...]``; yield ``(indices, columns)`` as each
-        finishes (in-process: in order)."""
+        finishes (in-process: in order).
+
+        On a cluster each task carries the context itself (a few kB), not a reference to data
+        held by the workers, and may be run again (:data:`TASK_RETRIES`): a worker lost
+        mid-task (killed, out of memory) costs its batch's time, and its nanny's new worker
+        or the others take the batch again. A batch lost for good (every attempt's worker
+        died) stops the sweep with a :class:`SweepError` saying so; the parts written stay
+        for ``--resume``.
+        """
         if self.client is None:
             import dask
 
@@ -196,14 +214,14 @@ class Executor:
             return
         from distributed import as_completed
 
-        ref = self._context_ref(context)
         pending = list(batches)
         window = 2 * self.n_workers + 1
         futures = {}
 
         def submit():
             indices, values = pending.pop(0)
-            future = self.client.submit(evaluate_batch, ref, indices, values, pure=False)
+            future = self.client.submit(evaluate_batch, context, indices, values, pure=False,
+                                        retries=TASK_RETRIES)
             futures[future.key] = indices
             return future
 
@@ -211,7 +229,10 @@ class Executor:
                                loop=self.client.loop)
         for future in running:
             indices = futures.pop(future.key)
-            columns = future.result()
+            try:
+                columns = future.result()
+            except Exception as exc:
+                raise _lost(exc, indices) from None
             future.release()
             if pending:
                 running.add(submit())
@@ -235,12 +256,120 @@ class Executor:
 
     def close(self) -> None:
         """Close what this executor started (not a client given by the caller)."""
-        for thing in reversed(self.owned):
-            try:
-                thing.close()
-            except Exception:  # closing a cluster that is already gone
-                pass
+        import logging
+
+        # a cluster whose workers were killed logs their loss while it closes: not news
+        quiet = [logging.getLogger(name) for name in ("distributed", "tornado", "asyncio")]
+        levels = [q.level for q in quiet]
+        for q in quiet:
+            q.setLevel(logging.CRITICAL)
+        try:
+            for thing in reversed(self.owned):
+                try:
+                    thing.close()
+                except Exception:  # closing a cluster that is already gone
+                    pass
+        finally:
+            for q, level in zip(quiet, levels):
+                q.setLevel(level)
         self.owned.clear()
+
+
+def _lost(exc: BaseException, indices) -> SweepError:
+    """The error of a batch that did not come back from the cluster."""
+    what = f"samples {indices[0]} to {indices[-1]}" if len(indices) > 1 else \
+        f"sample {indices[0]}"
+    name = type(exc).__name__
+    if name == "KilledWorker":
+        why = ("the workers running it died every time Dask tried it (killed, out of memory; "
+               "distributed.scheduler.allowed-failures)")
+    elif "Cancelled" in name or "cancelled" in str(exc).lower():
+        why = "the cluster cancelled it (its workers or scheduler went away)"
+    else:
+        why = f"{name}: {' '.join(str(exc).split())[:200]}"
+    return SweepError(f"the Dask cluster lost the batch of {what}: {why}; the finished "
+                      "batches are kept: run again with --resume to finish the sweep")
+
+
+def check_workers(workers) -> None:
+    """Refuse a bad worker count (before anything is started or written)."""
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
+                                or workers < 1):
+        raise SweepError(f"workers must be a positive integer (local worker processes; 1 "
+                         f"runs in this process); got {workers!r}")
+
+
+def connect(scheduler: str, timeout: float = SCHEDULER_TIMEOUT):
+    """A client of the Dask scheduler at ``scheduler``, or a :class:`SweepError` within
+    ``timeout`` [s] naming what is wrong.
+
+    The address is checked first (a scheme Dask knows, a host and a port), then the scheduler
+    is asked who it is through Dask's own protocol with a deadline: an address that refuses
+    the connection fails at once, one that accepts but never answers (not a Dask scheduler, or
+    a hung one) after ``timeout``, never later; only then is the client made.
+    """
+    import asyncio
+    import socket
+
+    from distributed.comm import parse_address
+    from distributed.comm.registry import backends
+
+    text = " ".join(str(scheduler).split())[:200]
+    where = f"--scheduler {text}"
+    try:
+        scheme, location = parse_address(str(scheduler))
+    except (ValueError, TypeError) as exc:
+        raise SweepError(f"{where}: not a Dask scheduler address ({exc}); expected e.g. "
+                         "tcp://host:8786") from None
+    if scheme not in backends:
+        raise SweepError(f"{where}: unknown scheme {scheme!r}; Dask knows "
+                         f"{', '.join(sorted(backends))} (e.g. tcp://host:8786)")
+    if scheme in ("tcp", "tls"):
+        host, _, port = location.rpartition(":")
+        host = host.strip("[]")
+        if not host or not port.isdigit() or not 0 < int(port) < 65536:
+            raise SweepError(f"{where}: expected {scheme}://host:port (e.g. tcp://host:8786); "
+                             f"got {location!r}")
+        try:
+            with socket.create_connection((host, int(port)), timeout=timeout):
+                pass
+        except OSError as exc:
+            reason = exc.strerror or type(exc).__name__
+            raise SweepError(f"{where}: cannot reach a Dask scheduler there ({reason})"
+                             ) from None
+
+    async def identity():
+        from distributed.comm import connect as dask_connect
+
+        comm = await dask_connect(str(scheduler), timeout=timeout)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    try:
+        reply = asyncio.run(asyncio.wait_for(identity(), timeout))
+    except (TimeoutError, asyncio.TimeoutError):
+        raise SweepError(f"{where}: no answer from a Dask scheduler within {timeout:g} s (the "
+                         "address accepts connections but does not speak Dask's protocol, or "
+                         "the scheduler is hung)") from None
+    except (OSError, ValueError, TypeError, EOFError) as exc:
+        raise SweepError(f"{where}: cannot reach a Dask scheduler there "
+                         f"({type(exc).__name__}: {' '.join(str(exc).split())[:120]})"
+                         ) from None
+    kind = reply.get("type") if isinstance(reply, dict) else None
+    if not isinstance(kind, str) or "Scheduler" not in kind:
+        raise SweepError(f"{where}: the service there is not a Dask scheduler"
+                         + (f" (it is a {kind})" if isinstance(kind, str) else ""))
+    from distributed import Client
+
+    try:
+        return Client(str(scheduler), timeout=f"{timeout}s", set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise SweepError(f"{where}: cannot reach a Dask scheduler there "
+                         f"({type(exc).__name__}: {' '.join(str(exc).split())[:120]})"
+                         ) from None
 
 
 def open_executor(*, client=None, scheduler: str | None = None, workers: int | None = None,
@@ -252,7 +381,8 @@ def open_executor(*, client=None, scheduler: str | None = None, workers: int | N
     client : distributed.Client, optional
         A client of a running cluster (the caller keeps and closes it).
     scheduler : str, optional
-        Address of a running Dask scheduler (``tcp://host:8786``).
+        Address of a running Dask scheduler (``tcp://host:8786``), reached within
+        :data:`SCHEDULER_TIMEOUT` (:func:`connect`).
     workers : int, optional
         Local worker processes (default: the machine's cores); 1 runs in-process.
     estimated_seconds : float
@@ -266,20 +396,11 @@ def open_executor(*, client=None, scheduler: str | None = None, workers: int | N
     """
     if client is not None and scheduler is not None:
         raise SweepError("give a client or a scheduler address, not both")
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)
-                                or workers < 1):
-        raise SweepError(f"workers must be a positive integer; got {workers!r}")
+    check_workers(workers)
     if client is not None:
         return Executor("client", client, max(1, sum(client.nthreads().values())))
     if scheduler is not None:
-        from distributed import Client
-
-        try:
-            client = Client(scheduler, timeout="10s", set_as_default=False)
-        except (OSError, TimeoutError, ValueError) as exc:
-            raise SweepError(f"--scheduler {scheduler}: cannot reach a Dask scheduler there "
-                             f"({type(exc).__name__}: {' '.join(str(exc).split())[:120]})"
-                             ) from None
+        client = connect(scheduler)
         n = sum(client.nthreads().values())
         if n == 0:
             client.close()
@@ -294,6 +415,7 @@ def open_executor(*, client=None, scheduler: str | None = None, workers: int | N
     from distributed import Client, LocalCluster
 
     with dask.config.set(_LOCAL_CLUSTER_CONFIG):
+        # no dashboard: nothing listens on 8787, so nothing warns that it is taken
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                dashboard_address=None, silence_logs=logging.ERROR)
     client = Client(cluster, set_as_default=False)
@@ -312,30 +434,103 @@ def batch_size(seconds_per_sample: float, n_todo: int, n_workers: int) -> int:
 # the output folder
 # ---------------------------------------------------------------------------------------------
 class SampleStore:
-    """The Parquet parts of a sweep's output folder (module docstring).
+    """The Parquet parts of a sweep's output folder (module docstring); a context manager that
+    holds the folder's lock while the sweep writes it.
 
     Parameters
     ----------
     folder : path
-    settings : dict
-        The sweep's settings; recorded in ``sweep.json`` and compared on resume.
     resume : bool
-        Continue the sweep in ``folder`` (its settings must match).
+        Continue the sweep in ``folder`` (its settings must match: :meth:`start`).
 
     Raises
     ------
-    SweepError
-        A non-empty folder without ``resume``; ``resume`` on a folder of another sweep.
+    SweepError, OutputError
+        On entering: a non-empty folder without ``resume``, a folder without a sweep with
+        ``resume``, a folder another flexsat process is writing (named).
+
+    Notes
+    -----
+    Locking: entering takes the folder's lock (:class:`spacecraft.output.FolderLock`, the
+    claim of run folders: one atomic ``mkdir`` with the owner's process recorded; the lock of
+    a process that is gone is taken over), so a second sweep, or a ``--resume`` of it, started
+    on a folder another sweep is writing stops at once naming that sweep's process. A fresh
+    sweep that stops before its first part leaves no folder behind (nor files in an empty
+    folder it was given), so the corrected run needs no ``--resume``.
+
+    Integrity: a part carries the SHA-256 of its content in its metadata
+    (:data:`DIGEST_KEY`) and Parquet's page checksums. On resume every part is read whole and
+    checked (readable, the sweep's columns, the samples its name says, the digest); a damaged
+    one (truncated, bit-flipped, empty) is renamed ``<name>.damaged`` and its samples are run
+    again, and the report says so. Reading the finished sweep checks every part the same way
+    and refuses a damaged one naming it.
     """
 
-    def __init__(self, folder, settings: dict, *, resume: bool):
+    def __init__(self, folder, *, resume: bool):
         self.folder = Path(folder)
         self.parts = self.folder / _PARTS
-        record = self.folder / _SETTINGS
-        if resume:
-            if not record.is_file():
+        self.resume = resume
+        self.settings: dict | None = None
+        self.schema = None
+        self.recomputed: list[str] = []
+        self._lock = None
+        self._created: list[Path] = []
+        self._written = False
+
+    # -- entering and leaving --------------------------------------------------------------
+    def __enter__(self) -> "SampleStore":
+        """Check the folder and lock it (before the sweep does any work)."""
+        from ..output import LOCK, FolderLock
+
+        if self.resume:
+            if not (self.folder / _SETTINGS).is_file():
                 raise SweepError(f"{self.folder}: --resume needs the folder of an earlier sweep "
                                  f"(no {_SETTINGS} there)")
+        else:
+            if self.folder.exists() and (not self.folder.is_dir() or any(self.folder.iterdir())):
+                raise SweepError(f"{self.folder}: output folder exists and is not empty; use "
+                                 "--resume to continue its sweep, or choose another --out")
+            missing = [p for p in [self.folder, *self.folder.parents] if not p.exists()]
+            try:
+                self.folder.mkdir(parents=True, exist_ok=True)
+            except OSError as exc:
+                raise SweepError(f"{self.folder}: cannot create the output folder "
+                                 f"({exc.strerror or type(exc).__name__}); give another --out"
+                                 ) from None
+            self._created = missing
+        lock = FolderLock(self.folder, "flexsat sweep")
+        try:
+            lock.__enter__()     # refused: another process's lock, left alone
+            self._lock = lock
+            # another process may have written here between the check and the lock
+            if not self.resume and any(p.name != LOCK for p in self.folder.iterdir()):
+                raise SweepError(f"{self.folder}: output folder exists and is not empty; use "
+                                 "--resume to continue its sweep, or choose another --out")
+        except BaseException:
+            self.__exit__(*sys.exc_info())
+            raise
+        return self
+
+    def start(self, settings: dict, schema) -> None:
+        """Record the sweep's settings (fresh) or compare them and check every part (resume).
+
+        Parameters
+        ----------
+        settings : dict
+            The sweep's settings (``sweep.json``).
+        schema : pyarrow.Schema
+            The columns every part must have.
+
+        Raises
+        ------
+        SweepError
+            ``resume`` on a folder of another sweep.
+        """
+        from fmu.files import write_text_atomically
+
+        self.settings, self.schema = settings, schema
+        record = self.folder / _SETTINGS
+        if self.resume:
             try:
                 old = json.loads(record.read_text())
             except (OSError, ValueError) as exc:
@@ -346,48 +541,126 @@ class SampleStore:
                                  f"(its {', '.join(differs[:3])} differ"
                                  f"{'s' if len(differs) == 1 else ''}); run the same scene and "
                                  "settings, or choose another --out")
+            self.parts.mkdir(parents=True, exist_ok=True)
             for stale in self.parts.glob("*.tmp"):
                 stale.unlink()
+            for path in self._part_paths():
+                try:
+                    self._check(path)
+                except SweepError:
+                    path.rename(path.with_name(path.name + ".damaged"))
+                    self.recomputed.append(path.name)
         else:
-            if self.folder.exists() and (not self.folder.is_dir() or any(self.folder.iterdir())):
-                raise SweepError(f"{self.folder}: output folder exists and is not empty; use "
-                                 "--resume to continue its sweep, or choose another --out")
+            write_text_atomically(record, json.dumps(settings, indent=2, allow_nan=False)
+                                  + "\n")
             self.parts.mkdir(parents=True, exist_ok=True)
-            text = json.dumps(settings, indent=2, allow_nan=False)
-            tmp = record.with_suffix(".tmp")
-            tmp.write_text(text + "\n")
-            os.replace(tmp, record)
-        self.parts.mkdir(parents=True, exist_ok=True)
 
-    def completed(self) -> np.ndarray:
-        """Sample indices already in the folder (sorted)."""
-        import pyarrow.parquet as pq
+    def __exit__(self, kind, exc, tb) -> bool:
+        # a fresh sweep that stops before its first part takes back what it made (only if
+        # it held the lock: never another process's files)
+        undo = exc is not None and self._lock is not None and not self.resume \
+            and not self._written
+        if undo:
+            self._discard()
+        if self._lock is not None:
+            self._lock.__exit__(None, None, None)
+            self._lock = None
+        if undo:
+            for path in self._created:   # the folders it made, the deepest first, if empty
+                try:
+                    path.rmdir()
+                except OSError:
+                    break
+        return False
 
-        done = [pq.read_table(p, columns=["sample"]).column("sample").to_numpy()
-                for p in sorted(self.parts.glob("part-*.parquet"))]
-        return np.sort(np.concatenate(done)) if done else np.zeros(0, dtype=np.int64)
+    def _discard(self) -> None:
+        """Remove what a fresh sweep wrote before its first part."""
+        (self.folder / _SETTINGS).unlink(missing_ok=True)
+        try:
+            self.parts.rmdir()
+        except OSError:
+            pass
 
-    def write(self, table) -> Path:
-        """Write one batch's table as a part (atomically)."""
-        import pyarrow.parquet as pq
+    # -- parts -------------------------------------------------------------------------------
+    def _part_paths(self) -> list[Path]:
+        return sorted(self.parts.glob("part-*.parquet"))
 
-        samples = table.column("sample").to_numpy()
-        path = self.parts / f"part-{samples.min():09d}-{samples.max():09d}.parquet"
-        tmp = path.with_name(path.name + ".tmp")
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
-        return path
-
-    def read(self):
-        """Every sample of the folder as one table, sorted by sample."""
+    def _check(self, path: Path):
+        """The table of a part, or a SweepError naming it and what is wrong."""
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        tables = [pq.read_table(p) for p in sorted(self.parts.glob("part-*.parquet"))]
+        def damaged(why: str) -> SweepError:
+            return SweepError(f"{path}: damaged Parquet part of the sweep ({why}); run the "
+                              "sweep with --resume to compute its samples again")
+
+        try:
+            table = pq.read_table(path, page_checksum_verification=True)
+        except (OSError, pa.ArrowException, ValueError) as exc:
+            raise damaged(" ".join(str(exc).split())[:160] or type(exc).__name__) from None
+        meta = dict(table.schema.metadata or {})
+        stored = meta.pop(DIGEST_KEY, None)
+        table = table.replace_schema_metadata(meta or None)
+        if self.schema is not None and not table.schema.equals(self.schema):
+            raise damaged("its columns are not this sweep's")
+        if stored is None or stored.decode("ascii", "replace") != _digest(table):
+            raise damaged("its content does not match its checksum")
+        samples = table.column("sample").to_numpy()
+        m = re.fullmatch(r"part-(\d+)-(\d+)\.parquet", path.name)
+        if (not samples.size or m is None or samples.min() != int(m.group(1))
+                or samples.max() != int(m.group(2))):
+            raise damaged("its samples are not those its name says")
+        return table
+
+    def completed(self) -> np.ndarray:
+        """Sample indices already in the folder (sorted)."""
+        done = [self._check(p).column("sample").to_numpy() for p in self._part_paths()]
+        return np.sort(np.concatenate(done)) if done else np.zeros(0, dtype=np.int64)
+
+    def write(self, table) -> Path:
+        """Write one batch's table as a part (atomically, with its digest)."""
+        import pyarrow.parquet as pq
+        from fmu.files import write_atomically
+
+        samples = table.column("sample").to_numpy()
+        path = self.parts / f"part-{samples.min():09d}-{samples.max():09d}.parquet"
+        meta = dict(table.schema.metadata or {})
+        meta[DIGEST_KEY] = _digest(table).encode("ascii")
+        stamped = table.replace_schema_metadata(meta)
+        write_atomically(path, lambda handle: pq.write_table(stamped, handle,
+                                                              write_page_checksum=True))
+        self._written = True
+        return path
+
+    def read(self):
+        """Every sample of the folder as one table, sorted by sample (every part checked;
+        a sample in two parts refused)."""
+        import pyarrow as pa
+
+        tables, seen = [], {}
+        for path in self._part_paths():
+            table = self._check(path)
+            for i in table.column("sample").to_pylist():
+                if i in seen:
+                    raise SweepError(f"{path}: sample {i} is also in {seen[i]}: two sweeps "
+                                     "wrote this folder; run the sweep again in a new folder")
+                seen[i] = path.name
+            tables.append(table)
         if not tables:
             return None
         table = pa.concat_tables(tables)
         return table.take(np.argsort(table.column("sample").to_numpy(), kind="stable"))
+
+
+def _digest(table) -> str:
+    """SHA-256 of a table's content: its column names, types and values (not its layout)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for field, column in zip(table.schema, table.columns):
+        h.update(json.dumps([field.name, str(field.type), column.to_pylist()],
+                            allow_nan=True).encode())
+    return h.hexdigest()
 
 
 def _differences(old, new, prefix: str = "") -> list[str]:

@@ -103,7 +103,7 @@ BOX_SIGMAS = 3.0
 #: Sections of a scene whose numbers may not be swept (the sweep fixes the fidelity on the
 #: nominal scene; the rest is not part of the design loop).
 _FIXED_SECTIONS = ("fidelity", "export", "report", "outputs", "title", "sweep")
-_TOKEN = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d+)\])?$")
+_TOKEN = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)$")
 _DEFAULT_SAMPLES = 1000
 _DEFAULT_LEVELS = 5
 _DEFAULT_EVALUATIONS = 600
@@ -195,8 +195,9 @@ def resolve_key(key: str, raw: Mapping, source: str = "<dict>") -> tuple:
     for token in tokens:
         m = _TOKEN.match(token)
         if m is None:
-            raise _unknown(source, key, f"{token!r} is not a key or key[index]", raw)
-        parsed.append((m.group(1), None if m.group(2) is None else int(m.group(2))))
+            raise _unknown(source, key, f"{_fmt(token)} is not a key, key[index] or "
+                                        "key[index][index]", raw)
+        parsed.append((m.group(1), [int(i) for i in re.findall(r"\d+", m.group(2))]))
     if parsed[0][0] in _FIXED_SECTIONS:
         raise SweepError(f"{source}: sweep.parameters.{key!r}: {parsed[0][0]} settings cannot "
                          "be swept (the sweep fixes the fidelity on the nominal scene; exports, "
@@ -204,12 +205,12 @@ def resolve_key(key: str, raw: Mapping, source: str = "<dict>") -> tuple:
     path: list = []
     node = raw
     k = 0
-    if parsed[0] == ("appendages", None):
+    if parsed[0] == ("appendages", []):
         names = _appendage_names(raw)
         if len(parsed) < 3:
             raise _unknown(source, key, "needs appendages.<name>.<key>", raw)
-        name, index = parsed[1]
-        if index is not None or name not in names:
+        name, indices = parsed[1]
+        if indices or name not in names:
             close = difflib.get_close_matches(name, names, n=1, cutoff=0.5)
             hint = f"; did you mean {close[0]!r}?" if close else ""
             raise SweepError(f"{source}: sweep.parameters.{key!r}: no appendage named {name!r} "
@@ -217,23 +218,33 @@ def resolve_key(key: str, raw: Mapping, source: str = "<dict>") -> tuple:
         path = ["appendages", names.index(name)]
         node = raw["appendages"][names.index(name)]
         k = 2
-    for j, (name, index) in enumerate(parsed[k:], start=k):
+    for j, (name, indices) in enumerate(parsed[k:], start=k):
         last = j == len(parsed) - 1
         if not isinstance(node, Mapping):
             raise _unknown(source, key, f"{'.'.join(tokens[:j])} is not a table", raw)
         if name not in node:
-            if last and index is None:
+            if last and not indices:
                 path.append(name)   # a key left at its default: load_scene decides
                 return tuple(path)
             raise _unknown(source, key, f"the scene has no {'.'.join(tokens[:j + 1])}", raw)
         path.append(name)
         node = node[name]
-        if index is not None:
+        for index in indices:
             if not isinstance(node, list) or not 0 <= index < len(node):
-                size = len(node) if isinstance(node, list) else "no"
-                raise _unknown(source, key, f"index {index} out of range ({size} entries)", raw)
+                what = (f"{len(node)} entries" if isinstance(node, list) else
+                        f"{_kind(node)} is not an array")
+                raise _unknown(source, key, f"index {index} out of range ({what})", raw)
             path.append(index)
             node = node[index]
+    if isinstance(node, list):
+        # an array: its first number is the key the reader accepts
+        first = key
+        while isinstance(node, list) and node:
+            first, node = f"{first}[0]", node[0]
+        hint = (f"; its entries are numbers: e.g. {first!r}" if isinstance(node, (int, float))
+                and not isinstance(node, bool) else "")
+        raise SweepError(f"{source}: sweep.parameters.{key!r}: names {_kind(_get(raw, path))}, "
+                         f"not a number{hint}")
     if isinstance(node, bool) or not isinstance(node, (int, float)):
         raise _unknown(source, key, f"names {_kind(node)}, not a number", raw)
     return tuple(path)
@@ -466,22 +477,28 @@ def _read_parameter(key: str, spec, raw: Mapping, source: str) -> Parameter:
     parameter = Parameter(key, path, d, low, high, mean, std,
                           None if values is None else tuple(float(v) for v in values), levels,
                           nominal, integer)
-    if current is None:
-        # a key the scene leaves out: the scene reader decides whether it is one of its keys
-        try:
-            load_scene(apply_values(raw, [parameter], [nominal]), source=source)
-        except SceneError as exc:
-            if _raw_path(path) in str(exc):
-                raise _unknown(source, key, "is not a key the scene knows", raw) from None
     return parameter
 
 
-def _raw_path(path: tuple) -> str:
-    """The scene reader's spelling of a path: ``appendages[0].beam.length``."""
-    out = ""
-    for p in path:
-        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else p)
-    return out
+def _check_alone(parameter: "Parameter", raw: Mapping, source: str,
+                 scene_error: str | None) -> None:
+    """The scene with this one parameter at its nominal value: an error the scene alone does
+    not have is this key's (a key the scene does not know, a value of the wrong kind)."""
+    try:
+        load_scene(apply_values(raw, [parameter], [parameter.nominal]), source=source)
+    except SceneError as exc:
+        if str(exc) == scene_error:
+            return
+        problem = str(exc).split(": ", 1)[-1]
+        if _get(raw, parameter.path) is None:
+            raise _unknown(source, parameter.key, f"is not a key the scene knows ({problem})",
+                           raw) from None
+        raise SweepError(f"{source}: sweep.parameters.{parameter.key!r} "
+                         f"({parameter.describe()}): at its nominal value "
+                         f"{_fmt(parameter.nominal)} the scene refuses it: {problem}"
+                         + ("; a key that takes integers is swept with distribution = "
+                            "\"discrete\" and integer values" if "integer" in problem else "")
+                         ) from None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -505,10 +522,11 @@ class SweepSpec:
 
     @property
     def n_samples(self) -> int:
-        """Samples of the plan (the grid's product for a grid)."""
+        """Samples of the plan (the grid's product for a grid, in Python integers: a product
+        of levels beyond int64 is a number too large, not a wrapped one)."""
         if self.method == "grid":
-            return int(np.prod([p.levels or self.levels if p.distribution != "discrete"
-                                else len(p.values) for p in self.parameters]))
+            return math.prod(int(p.levels or self.levels) if p.distribution != "discrete"
+                             else len(p.values) for p in self.parameters)
         return self.samples
 
     @property
@@ -640,6 +658,14 @@ def read_sweep(table, raw: Mapping, source: str = "<dict>", *,
         raise SweepError(f"{where}.parameters: missing: give at least one key path with its "
                          "distribution")
     params = tuple(_read_parameter(k, v, raw, source) for k, v in parameters.items())
+    # blame each key for what it alone breaks, before any combination is tried
+    try:
+        load_scene(raw, source=source)
+        scene_error = None
+    except SceneError as exc:
+        scene_error = str(exc)
+    for p in params:
+        _check_alone(p, raw, source, scene_error)
     if design == "nominal":
         for p in params:
             if p.path[0] == "controller":

@@ -1,19 +1,26 @@
 """The sweep's report: statistics, probability of instability, sensitivities, plots, files.
 
 ``summary.json`` holds every figure of the report; ``report.md`` and ``report.html`` show them
-with the plots (``plots/*.png``):
+with the plots (``plots/*.png``), in colour as the run's report (:mod:`spacecraft.pages`: what
+is unstable or failed in red, warnings in orange):
 
-* a histogram of each metric (failed samples left out, infinite values counted apart);
-* each margin against each parameter (scatter), the worst cases marked;
+* a histogram of each metric (failed samples and withheld values left out, infinite values
+  counted apart);
+* each margin against each parameter (scatter), the worst cases marked; the margins are
+  signed (:func:`.evaluate.signed_margin`), so an unstable sample lies below zero, below every
+  stable one;
 * the stability map: the samples over the two most influential parameters, coloured by the
-  modulus margin, unstable ones crossed, the worst case marked;
+  signed modulus margin (red below zero), unstable ones crossed, the worst case marked;
 * the probability of instability with its 95 % Clopper-Pearson interval (exact binomial:
-  the interval of p for which the observed count is not in either 2.5 % tail), over the samples
-  that did not fail;
-* the sensitivity ranking: Spearman's rank correlation of each parameter with the modulus margin
-  (with the signed margin, negative when unstable: :func:`.worst.signed_margin`), largest
-  magnitude first; rank correlation is blind to monotone re-scaling, so a log-uniform stiffness
-  and a uniform inertia are compared fairly.
+  the interval of p for which the observed count is not in either 2.5 % tail) over the samples
+  evaluated, and, when some samples failed, the bound that counts every failed sample as
+  unstable (a failed sample has no verdict: it is neither counted stable nor left to chance);
+* the sensitivity ranking: Spearman's rank correlation of each parameter with the signed
+  modulus margin, largest magnitude first; rank correlation is blind to monotone re-scaling,
+  so a log-uniform stiffness and a uniform inertia are compared fairly.
+
+Every file is written to a temporary name and renamed (:func:`fmu.files.write_text_atomically`):
+a reader sees the previous file or the complete new one.
 
 References
 ----------
@@ -30,11 +37,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..report import _fmt, markdown, render_html, to_json
-from .evaluate import METRICS
-from .worst import signed_margin
+from fmu.files import write_text_atomically
 
-__all__ = ["clopper_pearson", "summarise", "write_report", "spearman", "CONFIDENCE"]
+from ..pages import bad, markdown, render_html, warn
+from ..results import to_json
+from .evaluate import METRICS
+
+__all__ = ["clopper_pearson", "summarise", "write_report", "spearman", "CONFIDENCE",
+           "format_number", "instability", "instability_text"]
 
 #: Confidence level of the interval on the probability of instability.
 CONFIDENCE = 0.95
@@ -68,13 +78,63 @@ def spearman(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.corrcoef(rx, ry)[0, 1])
 
 
-def _stats(values: np.ndarray) -> dict:
-    finite = values[np.isfinite(values)]
-    out = {"count": int(values.size), "infinite": int(np.sum(np.isinf(values)))}
+def format_number(value, digits: int = 4) -> str:
+    """A number as the report and the command print it ("n/a" for None or NaN)."""
+    if value is None:
+        return "n/a"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "n/a"
+        if math.isinf(value):
+            return "inf" if value > 0 else "-inf"
+        return f"{value:.{digits}g}"
+    return str(value)
+
+
+def _values(column) -> tuple[np.ndarray, int]:
+    """A column as floats (NaN where there is no value) and the count of withheld (null)
+    values."""
+    withheld = sum(1 for v in column if v is None)
+    return np.array([math.nan if v is None else v for v in column], dtype=float), withheld
+
+
+def _stats(values: np.ndarray, withheld: int) -> dict:
+    has = values[~np.isnan(values)]
+    finite = has[np.isfinite(has)]
+    out = {"count": int(has.size), "infinite": int(np.sum(np.isinf(has))),
+           "withheld": int(withheld)}
     if finite.size:
         q = np.percentile(finite, [0, 5, 50, 95, 100])
         out.update(min=float(q[0]), p5=float(q[1]), median=float(q[2]), p95=float(q[3]),
                    max=float(q[4]), mean=float(finite.mean()))
+    return out
+
+
+def instability(n_unstable: int, n_evaluated: int, n_failed: int) -> dict:
+    """The probability of instability and how failures are counted (module docstring).
+
+    Returns
+    -------
+    dict
+        ``probability`` (unstable / evaluated; None if none was evaluated) with its
+        ``interval``; ``bound``: the probability and the upper end of its interval when every
+        failed sample is counted as unstable (None without failures).
+    """
+    lo, hi = clopper_pearson(n_unstable, n_evaluated)
+    total = n_evaluated + n_failed
+    out = {"unstable": n_unstable, "of": n_evaluated, "failed": n_failed, "total": total,
+           "probability": n_unstable / n_evaluated if n_evaluated else None,
+           "confidence": CONFIDENCE, "interval": [lo, hi], "method": "Clopper-Pearson",
+           "counting": "over the samples evaluated; failed samples (no verdict) left out, "
+                       "and counted as unstable in 'bound'", "bound": None}
+    if n_failed:
+        out["bound"] = {"unstable": n_unstable + n_failed, "of": total,
+                        "probability": (n_unstable + n_failed) / total,
+                        "upper": clopper_pearson(n_unstable + n_failed, total)[1]}
     return out
 
 
@@ -105,10 +165,8 @@ def summarise(table, context, spec, *, nominal: dict, worst: list, timings: dict
     stable = np.array([bool(s) if s is not None else False for s in cols["stable"]])
     n_ok = int(ok.sum())
     n_unstable = int(np.sum(ok & ~stable))
-    lo, hi = clopper_pearson(n_unstable, n_ok)
     prefix = "exact" if context.exact else "truth"
-    margin = np.array([signed_margin({k: cols[k][i] for k in cols}, "modulus_margin",
-                                     context.exact) for i in range(n)])
+    margin, _ = _values(cols[f"{prefix}_modulus_margin"])
     ranking = []
     for p in spec.parameters:
         x = np.asarray(cols[p.key], dtype=float)
@@ -119,11 +177,15 @@ def summarise(table, context, spec, *, nominal: dict, worst: list, timings: dict
     for name in context.columns():
         kind = METRICS[name][0]
         if kind == "float" and name != "seconds":
+            values, withheld = _values([v for v, good in zip(cols[name], ok) if good])
             metrics[name] = {"unit": METRICS[name][1], "meaning": METRICS[name][2],
-                             **_stats(np.asarray(cols[name], dtype=float)[ok])}
+                             **_stats(values, withheld)}
+    statuses: dict = {}
+    for status in cols["status"]:
+        statuses[status] = statuses.get(status, 0) + 1
     seconds = np.asarray(cols["seconds"], dtype=float)
     fidelity = None
-    if context.exact:
+    if context.exact and n_ok:
         a = np.asarray(cols["exact_modulus_margin"], dtype=float)[ok]
         b = np.asarray(cols["truth_modulus_margin"], dtype=float)[ok]
         both = np.isfinite(a) & np.isfinite(b)
@@ -141,17 +203,16 @@ def summarise(table, context, spec, *, nominal: dict, worst: list, timings: dict
         "settings": spec.as_dict(),
         "loop": {"controller": context.controller, "design_model": context.variant,
                  "design": context.design, "n_modes": context.n_modes,
-                 "exact_reference": context.exact},
+                 "exact_reference": context.exact,
+                 "nominal_controller": context.nominal_record},
         "executor": executor,
-        "samples": {"total": n, "failed": int(errors.sum()), "evaluated_now": info["evaluated"],
+        "samples": {"total": n, "evaluated": n_ok, "failed": int(errors.sum()),
+                    "status": statuses, "evaluated_now": info["evaluated"],
                     "resumed_from_folder": info["skipped"], "batch": info["batch"],
-                    "tasks": info["tasks"]},
-        "instability": {"verdict": prefix, "unstable": n_unstable, "of": n_ok,
-                        "probability": n_unstable / n_ok if n_ok else None,
-                        "confidence": CONFIDENCE, "interval": [lo, hi],
-                        "method": "Clopper-Pearson"},
+                    "tasks": info["tasks"], "recomputed_parts": info.get("recomputed", [])},
+        "instability": {"verdict": prefix, **instability(n_unstable, n_ok, int(errors.sum()))},
         "sensitivity": {"measure": f"Spearman rank correlation with the signed {prefix} "
-                                   "modulus margin", "ranking": ranking},
+                                   "modulus margin", "ranking": ranking if n_ok else []},
         "metrics": metrics,
         "nominal": nominal,
         "worst_case": [w.as_dict() for w in worst],
@@ -178,6 +239,12 @@ def _figure(rows: int, cols: int, size):
 _WORST_STYLE = {"modulus_margin": ("*", "black"), "phase_margin": ("D", "tab:purple")}
 
 
+def _save(fig, path: Path) -> None:
+    from fmu.files import write_atomically
+
+    write_atomically(path, lambda handle: fig.savefig(handle, format="png", dpi=90))
+
+
 def _worst_marker(ax, w, x, y, size):
     """Mark a worst case (its own marker per margin; a red edge when it is unstable)."""
     marker, colour = _WORST_STYLE.get(w["metric"], ("*", "black"))
@@ -195,7 +262,8 @@ def _log_axis(axis) -> None:
 
 def _label(name: str) -> str:
     unit = METRICS[name][1] if name in METRICS else ""
-    return f"{name} [{unit}]" if unit and unit != "-" else name
+    signed = " (signed)" if name.endswith("_margin") else ""
+    return f"{name}{signed} [{unit}]" if unit and unit != "-" else f"{name}{signed}"
 
 
 def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
@@ -212,16 +280,18 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
     ncol = 3
     fig, axes = _figure(math.ceil(k / ncol), ncol, (12, 3.0 * math.ceil(k / ncol)))
     for ax, name in zip(axes.flat, names):
-        v = np.asarray(cols[name], dtype=float)[ok]
+        v, withheld = _values([x for x, good in zip(cols[name], ok) if good])
+        v = v[~np.isnan(v)]
         finite = v[np.isfinite(v)]
         if finite.size:
             ax.hist(finite, bins=min(40, max(5, int(math.sqrt(finite.size)))), color="tab:blue")
-        extra = f" ({int(np.sum(np.isinf(v)))} infinite)" if np.isinf(v).any() else ""
-        ax.set_xlabel(_label(name) + extra)
+        extra = [f"{int(np.sum(np.isinf(v)))} infinite"] if np.isinf(v).any() else []
+        extra += [f"{withheld} withheld"] if withheld else []
+        ax.set_xlabel(_label(name) + (f" ({', '.join(extra)})" if extra else ""))
         ax.set_ylabel("samples")
     for ax in list(axes.flat)[k:]:
         ax.set_visible(False)
-    fig.savefig(folder / "histograms.png", dpi=90)
+    _save(fig, folder / "histograms.png")
     files.append({"path": "plots/histograms.png", "description": "histogram of each metric"})
     # margins against parameters
     prefix = "exact" if context.exact else "truth"
@@ -234,10 +304,11 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
         for j, p in enumerate(spec.parameters):
             ax = axes[i, j]
             x = np.asarray(cols[p.key], dtype=float)[ok]
+            ax.axhline(0.0, color="tab:red", linewidth=0.8, zorder=1)
             ax.scatter(x[stable], y[stable], s=4, color="tab:blue", label="stable")
             if (~stable).any():
                 ax.scatter(x[~stable], y[~stable], s=10, marker="x", color="tab:red",
-                           label="unstable")
+                           label="unstable (margin < 0)")
             for w in worst:
                 if w["row"].get(m) is not None and math.isfinite(w["row"][m]):
                     _worst_marker(ax, w, w["values"][p.key], w["row"][m], 80)
@@ -247,12 +318,15 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
             ax.set_xlabel(p.key)
             ax.set_ylabel(_label(m))
     axes[0, 0].legend(fontsize=7)
-    fig.savefig(folder / "margins.png", dpi=90)
+    _save(fig, folder / "margins.png")
     files.append({"path": "plots/margins.png",
-                  "description": "modulus and phase margins against each parameter"})
+                  "description": "signed modulus and phase margins against each parameter "
+                                 "(negative: unstable)"})
     # stability map over the two most influential parameters
     ranking = [r["parameter"] for r in summary["sensitivity"]["ranking"]]
     if len(ranking) >= 2:
+        from matplotlib.colors import TwoSlopeNorm
+
         a, b = ranking[0], ranking[1]
         pa = next(p for p in spec.parameters if p.key == a)
         pb = next(p for p in spec.parameters if p.key == b)
@@ -261,11 +335,15 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
         x = np.asarray(cols[a], dtype=float)[ok]
         y = np.asarray(cols[b], dtype=float)[ok]
         mm = np.asarray(cols[f"{prefix}_modulus_margin"], dtype=float)[ok]
-        sc = ax.scatter(x[stable], y[stable], c=mm[stable], s=8, cmap="viridis")
+        finite = mm[np.isfinite(mm)]
+        lo = min(float(finite.min()), -1e-3) if finite.size else -1.0
+        hi = max(float(finite.max()), 1e-3) if finite.size else 1.0
+        # red below zero (unstable), green above: the least stable corner reads at a glance
+        sc = ax.scatter(x, y, c=mm, s=10, cmap="RdYlGn", norm=TwoSlopeNorm(0.0, lo, hi))
         fig.colorbar(sc, ax=ax, label=_label(f"{prefix}_modulus_margin"))
         if (~stable).any():
-            ax.scatter(x[~stable], y[~stable], marker="x", s=16, color="tab:red",
-                       label="unstable")
+            ax.scatter(x[~stable], y[~stable], marker="x", s=16, color="black",
+                       label="unstable", linewidths=0.8)
         for w in worst:
             _worst_marker(ax, w, w["values"][a], w["values"][b], 160)
         if pa.distribution == "loguniform":
@@ -279,80 +357,145 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
         ax.set_title("stability map (two most influential parameters)")
         if (~stable).any() or worst:
             ax.legend(fontsize=7)
-        fig.savefig(folder / "stability_map.png", dpi=90)
+        _save(fig, folder / "stability_map.png")
         files.append({"path": "plots/stability_map.png",
-                      "description": f"stability map over {a} and {b}"})
+                      "description": f"stability map over {a} and {b}, coloured by the signed "
+                                     "modulus margin (red: unstable)"})
     return files
 
 
 # ---------------------------------------------------------------------------------------------
 # pages
 # ---------------------------------------------------------------------------------------------
-def _f(value, digits: int = 4) -> str:
-    return _fmt(value, digits)
+_f = format_number
+_verdicts = {"exact": "exact beam (Nyquist verdict)", "truth": "truth model (eigenvalues)"}
+
+
+def instability_text(summary: dict) -> str:
+    """The probability of instability in words, failures counted as the summary says."""
+    inst = summary["instability"]
+    ci = f"{100 * inst['confidence']:.0f} %"
+    if not inst["of"]:
+        text = (f"unknown: every one of the {inst['total']} samples failed (no verdict); see "
+                "the failed samples")
+    else:
+        text = (f"{_f(inst['probability'])} ({inst['unstable']} unstable of {inst['of']} "
+                f"evaluated; {ci} interval {_f(inst['interval'][0])} to "
+                f"{_f(inst['interval'][1])})")
+    bound = inst.get("bound")
+    if bound:
+        text += (f"; counting the {inst['failed']} failed sample"
+                 f"{'s' if inst['failed'] != 1 else ''} as unstable: {_f(bound['probability'])} "
+                 f"({bound['unstable']} of {bound['of']}; {ci} upper bound "
+                 f"{_f(bound['upper'])})")
+    return text
 
 
 def _blocks(summary: dict, images: list) -> list:
     s = summary
     inst = s["instability"]
     loop = s["loop"]
+    failed = s["samples"]["failed"]
     b: list = [("h1", s["title"]),
                ("p", f"{s['samples']['total']} samples ({s['settings']['method']}, seed "
-                     f"{s['settings']['seed']}), {s['samples']['failed']} failed; controller "
+                     f"{s['settings']['seed']}); controller "
                      f"{loop['controller']} tuned on the {loop['design_model']} design model, "
                      f"design = {loop['design']}; truth: {loop['n_modes']} modes per beam"
                      + ("; every sample also closed on the exact beam" if loop["exact_reference"]
                         else "") + f". Ran on {s['executor']}.")]
+    if failed:
+        text = (f"{failed} of {s['samples']['total']} samples failed: they have no verdict and "
+                "no margin, and are counted apart (section Failed samples).")
+        b.append(("p", bad(text) if failed == s["samples"]["total"] else warn(text)))
     b.append(("h2", "Parameters"))
     b.append(("table", ["key path", "distribution", "nominal"],
               [[p["key"], _describe(p), _f(p["nominal"], 6)] for p in s["settings"]["parameters"]]))
     b.append(("h2", "Probability of instability"))
-    prob = inst["probability"]
-    b.append(("p", f"{inst['unstable']} unstable of {inst['of']} ({inst['verdict']} verdict): "
-                   f"p = {_f(prob)}, {100 * inst['confidence']:.0f} % interval "
-                   f"[{_f(inst['interval'][0])}, {_f(inst['interval'][1])}] "
-                   f"({inst['method']})."))
-    b.append(("h2", "Sensitivity"))
-    b.append(("p", s["sensitivity"]["measure"] + ", largest first."))
-    b.append(("table", ["parameter", "Spearman rho"],
-              [[r["parameter"], _f(r["spearman"], 3)] for r in s["sensitivity"]["ranking"]]))
+    text = f"On the {_verdicts[inst['verdict']]}: " + instability_text(s)
+    b.append(("p", bad(text) if inst["unstable"] or not inst["of"] else text))
+    b.append(("p", f"Counted {inst['counting']} ({inst['method']} intervals)."))
+    statuses = s["samples"].get("status") or {}
+    if statuses:
+        b.append(("table", ["the slew on the truth model", "samples"],
+                  [[bad(k) if k in ("unstable", "diverges", "failed") else
+                    warn(k) if k in ("not settled", "slew unfinished") else k, str(v)]
+                   for k, v in statuses.items()]))
+    if s["sensitivity"]["ranking"]:
+        b.append(("h2", "Sensitivity"))
+        b.append(("p", s["sensitivity"]["measure"] + ", largest first."))
+        b.append(("table", ["parameter", "Spearman rho"],
+                  [[r["parameter"], _f(r["spearman"], 3)] for r in s["sensitivity"]["ranking"]]))
+    if loop.get("nominal_controller"):
+        c = loop["nominal_controller"]
+        gains = (f": Kp = {_f(c['Kp'], 6)} N m/rad, Kd = {_f(c['Kd'], 6)} N m s/rad"
+                 if "Kp" in c else "")
+        b.append(("h2", "Controller"))
+        b.append(("p", f"The nominal {c['kind']} controller held for every sample, "
+                       f"{len(c['A'])} states{gains}; its matrices are in summary.json "
+                       "(loop.nominal_controller) and sweep.json."))
+    elif loop["design"] == "per-sample":
+        b.append(("h2", "Controller"))
+        b.append(("p", "Each sample's controller is in its row of the Parquet table (column "
+                       "controller: kind and state-space matrices"
+                       + ("; pd_kp, pd_kd: the PD's gains" if loop["controller"] == "pd" else "")
+                       + ")."))
     if s["worst_case"]:
         b.append(("h2", "Worst case"))
         rows = []
         for w in s["worst_case"]:
             ver = w.get("verification") or {}
             exact = ver.get("exact_reference", {})
+            objective = w["objective"]
             rows.append([w["metric"], ", ".join(f"{k} = {_f(v, 6)}" for k, v in w["values"].items()),
-                         _f(w["objective"]), str(w["evaluations"]),
+                         bad(_f(objective)) if objective < 0 else _f(objective),
+                         str(w["evaluations"]) + (f" ({w['failed']} failed)" if w.get("failed")
+                                                  else ""),
                          _f(exact.get(w["metric"])) if exact else "n/a",
-                         _f(exact.get("stable")) if exact else "n/a"])
+                         (_f(exact.get("stable")) if exact.get("stable") else
+                          bad("no: UNSTABLE")) if "stable" in exact else "n/a"])
         b.append(("table", ["margin", "worst parameters", "signed margin (sweep)",
-                            "evaluations", "verified on the exact beam", "stable"], rows))
+                            "evaluations", "signed margin on the runner's exact grid",
+                            "stable"], rows))
         for w in s["worst_case"]:
             ver = w.get("verification") or {}
             r = ver.get("runner", {})
             if "error" in r:
-                text = f"the runner failed on it: {r['error']}"
-            else:
+                text = warn(f"{w['metric']}: flexsat run {ver.get('scene', '')}: the runner "
+                            f"failed on it: {r['error']}")
+            elif r:
                 e = r.get("exact", r.get("truth", {}))
-                text = (f"the runner gives {w['metric']} {_f(e.get(w['metric']))}, stable "
-                        f"{_f(e.get('stable'))}")
-            note = f" ({ver['note']})" if ver.get("note") else ""
-            b.append(("p", f"{w['metric']}: flexsat run {ver.get('scene', '')}: {text}{note}."))
+                text = (f"{w['metric']}: flexsat run {ver.get('scene', '')} (the same "
+                        f"controller, given in the scene) gives {w['metric']} "
+                        f"{_f(e.get(w['metric']))} (signed), "
+                        + ("stable" if e.get("stable") else "UNSTABLE") + ".")
+                text = text if e.get("stable") else bad(text)
+            else:
+                text = warn(f"{w['metric']}: {ver.get('note', 'not verified')}.")
+            b.append(("p", text))
     b.append(("h2", "Metrics"))
-    b.append(("table", ["metric", "unit", "min", "5 %", "median", "95 %", "max", "infinite"],
-              [[k, v["unit"], _f(v.get("min")), _f(v.get("p5")), _f(v.get("median")),
-                _f(v.get("p95")), _f(v.get("max")), str(v["infinite"])]
+    b.append(("p", "Over the samples evaluated. Margins are signed (negative: unstable); "
+                   "withheld: time metrics of slews that do not settle (settling time) or of "
+                   "unstable loops (all), as the run's report withholds them."))
+    b.append(("table", ["metric", "unit", "min", "5 %", "median", "95 %", "max", "infinite",
+                        "withheld"],
+              [[k, v["unit"], bad(_f(v.get("min"))) if k.endswith("_margin") and
+                v.get("min") is not None and v["min"] < 0 else _f(v.get("min")),
+                _f(v.get("p5")), _f(v.get("median")), _f(v.get("p95")), _f(v.get("max")),
+                str(v["infinite"]), str(v["withheld"])]
                for k, v in s["metrics"].items()]))
     if s.get("fidelity_check"):
         fc = s["fidelity_check"]
-        b.append(("p", f"Truth model against the exact beam: modulus margins differ by at most "
-                       f"{_f(fc['max_modulus_margin_difference'])}; verdicts disagree in "
-                       f"{fc['verdicts_disagree']} samples."))
+        text = (f"Truth model against the exact beam: modulus margins differ by at most "
+                f"{_f(fc['max_modulus_margin_difference'])}; verdicts disagree in "
+                f"{fc['verdicts_disagree']} samples.")
+        b.append(("p", warn(text) if fc["verdicts_disagree"] else text))
     if s["failures"]:
         b.append(("h2", "Failed samples"))
-        b.append(("table", ["error", "samples"], [[f["error"], str(f["count"])]
+        b.append(("table", ["error", "samples"], [[bad(f["error"]), str(f["count"])]
                                                   for f in s["failures"]]))
+    if s["samples"].get("recomputed_parts"):
+        b.append(("p", warn("Damaged Parquet parts recomputed on resume: "
+                            + ", ".join(s["samples"]["recomputed_parts"]))))
     t = s["timings"]
     b.append(("h2", "Timings"))
     b.append(("table", ["stage", "seconds"], [[k, _f(v)] for k, v in t.items()]))
@@ -371,7 +514,8 @@ def _describe(p: dict) -> str:
 
 
 def write_report(folder, table, context, spec, summary: dict, *, plots: bool = True) -> dict:
-    """Write ``summary.json``, ``report.md``, ``report.html`` and the plots into ``folder``.
+    """Write ``summary.json``, ``report.md``, ``report.html`` and the plots into ``folder``,
+    each atomically.
 
     Returns
     -------
@@ -383,7 +527,7 @@ def write_report(folder, table, context, spec, summary: dict, *, plots: bool = T
     summary = {**summary, "files": {"plots": files}}
     images = [(f["path"], f["description"]) for f in files]
     blocks = _blocks(summary, images)
-    (folder / "report.md").write_text(markdown(blocks))
-    (folder / "report.html").write_text(render_html(blocks, summary["title"]))
-    (folder / "summary.json").write_text(to_json(summary) + "\n")
+    write_text_atomically(folder / "report.md", markdown(blocks))
+    write_text_atomically(folder / "report.html", render_html(blocks, summary["title"]))
+    write_text_atomically(folder / "summary.json", to_json(summary) + "\n")
     return summary

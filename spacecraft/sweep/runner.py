@@ -7,6 +7,7 @@ write the report.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import datetime
@@ -18,9 +19,11 @@ import tomllib
 from collections.abc import Mapping
 from pathlib import Path
 
+from fmu.files import write_text_atomically
+
 from ..scene import SceneError
 from .evaluate import Context, evaluate, prepare
-from .execute import SampleStore, open_executor, run_samples
+from .execute import SampleStore, check_workers, open_executor, run_samples, schema
 from .parameters import SweepError, SweepSpec, check_box, read_sweep
 from .report import summarise, write_report
 from .worst import search, to_toml, verify, worst_scene
@@ -74,20 +77,28 @@ def sweep_scene_path(name: str) -> Path:
 
 
 def _read(scene) -> tuple[dict, str]:
+    """The scene mapping and its name: a file, an embedded sweep scene, an embedded scene
+    (``flexsat scenes``: its ``[sweep]`` table, if any, or the parameters given), a dict."""
+    from ..scene import example_scenes, scene_path
+
     if scene is None:
-        scene = sweep_scene_path("default")
-        source = "default sweep scene"
-    elif isinstance(scene, Mapping):
+        return _read_file(sweep_scene_path("default"), "default sweep scene")
+    if isinstance(scene, Mapping):
         return copy.deepcopy(dict(scene)), "<dict>"
-    elif isinstance(scene, (str, os.PathLike)):
+    if isinstance(scene, (str, os.PathLike)):
         path = Path(scene)
-        if not path.exists() and isinstance(scene, str) and scene in sweep_scenes():
-            return _read_file(sweep_scene_path(scene), f"{scene} (embedded sweep scene)")
+        if not path.exists() and isinstance(scene, str):
+            if scene in sweep_scenes():
+                return _read_file(sweep_scene_path(scene), f"{scene} (embedded sweep scene)")
+            if scene in example_scenes():
+                return _read_file(scene_path(scene), f"{scene} (embedded scene)")
+            if path.suffix == "" and path.parent == Path("."):
+                raise SweepError(f"{' '.join(scene.split())[:100]}: no such scene file or "
+                                 f"embedded scene (sweep scenes: {', '.join(sweep_scenes())}; "
+                                 f"scenes: {', '.join(example_scenes())})")
         return _read_file(path, str(path))
-    else:
-        raise SweepError(f"scene must be a TOML file path, an embedded sweep scene name or a "
-                         f"dict; got {type(scene).__name__}")
-    return _read_file(scene, source)
+    raise SweepError(f"scene must be a TOML file path, an embedded scene name or a dict; got "
+                     f"{type(scene).__name__}")
 
 
 def _read_file(path: Path, source: str) -> tuple[dict, str]:
@@ -128,9 +139,14 @@ def load_sweep(scene=None, *, parameters: Mapping | None = None, max_samples: in
     source : str
     """
     raw, source = _read(scene)
-    table = dict(raw.pop("sweep", None) or {})
+    table = raw.pop("sweep", None)
+    if table is not None and not isinstance(table, Mapping):
+        raise SweepError(f"{source}: sweep: must be a table ([sweep] with parameters, samples, "
+                         f"method...); got {type(table).__name__} {table!r:.60}")
+    table = dict(table or {})
     if not table and parameters is None:
-        raise SweepError(f"{source}: no [sweep] table and no parameters given: nothing to sweep")
+        raise SweepError(f"{source}: no [sweep] table and no parameters given: nothing to "
+                         "sweep (add a [sweep] table: see the embedded sweep scene 'default')")
     if parameters is not None:
         table["parameters"] = dict(parameters)
     table.update({k: v for k, v in settings.items() if v is not None})
@@ -191,11 +207,31 @@ def run_sweep(scene=None, *, out=None, client=None, scheduler: str | None = None
                                    **settings)
     if resume and out is None:
         raise SweepError("--resume needs the output folder of the interrupted sweep (--out)")
+    check_workers(workers)
     if out is not None and not resume:
         folder = Path(out)
         if folder.exists() and (not folder.is_dir() or any(folder.iterdir())):
             raise SweepError(f"{folder}: output folder exists and is not empty; use --resume "
                              "to continue its sweep, or choose another --out")
+    executor = None
+    if scheduler is not None or client is not None:
+        # before any work or file: an unreachable scheduler is reported at once
+        say(f"connecting to the Dask scheduler{'' if scheduler is None else ' ' + scheduler}")
+        executor = open_executor(client=client, scheduler=scheduler, workers=workers)
+    try:
+        # the folder is claimed (locked) before the work: another sweep writing it is named
+        # at once
+        with (SampleStore(out, resume=resume) if out is not None
+              else contextlib.nullcontext()) as store:
+            return _run(raw, spec, source, store, executor, workers, progress, plots, batch,
+                        say, timings, t)
+    finally:
+        if executor is not None:
+            executor.close()
+
+
+def _run(raw, spec, source, store, executor, workers, progress, plots, batch, say,
+         timings, t) -> SweepResult:
     say(f"{spec.n_samples} samples of {len(spec.parameters)} parameters ({spec.method})")
     values = spec.values()
     check_box(spec, raw, source, values)
@@ -209,51 +245,72 @@ def run_sweep(scene=None, *, out=None, client=None, scheduler: str | None = None
     timings["nominal_evaluation"] = time.perf_counter() - t
     if nominal["error"]:
         raise SceneError(f"{source}: the nominal scene's design loop fails: {nominal['error']}")
-    store = None
-    if out is not None:
-        settings_record = {"scene": source, "sweep": spec.as_dict(),
-                           "scene_fingerprint": _fingerprint(context),
-                           "n_modes": context.n_modes,
-                           "started": datetime.datetime.now().isoformat(timespec="seconds")}
-        store = SampleStore(out, settings_record, resume=resume)
+    if store is not None:
+        store.start({"scene": source, "sweep": spec.as_dict(),
+                     "scene_fingerprint": _fingerprint(context), "n_modes": context.n_modes,
+                     "nominal_controller": context.nominal_record,
+                     "started": datetime.datetime.now().isoformat(timespec="seconds")},
+                    schema(context))
+        if store.recomputed:
+            say(f"damaged parts set aside (renamed *.damaged), their samples computed again: "
+                f"{', '.join(store.recomputed)}")
+    return _samples_and_report(context, spec, source, store, executor, workers, values,
+                               nominal, progress, plots, batch, say, timings)
+
+
+def _samples_and_report(context, spec, source, store, executor, workers, values, nominal,
+                        progress, plots, batch, say, timings) -> SweepResult:
+    out = None if store is None else store.folder
     n_todo = spec.n_samples - (store.completed().size if store is not None else 0)
-    executor = open_executor(client=client, scheduler=scheduler, workers=workers,
-                             estimated_seconds=n_todo * timings["nominal_evaluation"])
+    owned = executor is None
+    if owned:
+        executor = open_executor(workers=workers,
+                                 estimated_seconds=n_todo * timings["nominal_evaluation"])
     worst = []
+    skipped = None
     try:
         say(f"running {n_todo} samples on {executor.describe()}")
         t = time.perf_counter()
         table, info = run_samples(context, spec, executor, store=store, values=values,
                                   seconds_per_sample=timings["nominal_evaluation"],
                                   progress=progress, batch=batch)
+        info["recomputed"] = [] if store is None else list(store.recomputed)
         timings["samples"] = time.perf_counter() - t
-        for metric in spec.worst_case:
+        evaluated = sum(1 for e in table.column("error").to_pylist() if not e)
+        if spec.worst_case and not evaluated:
+            skipped = "every sample failed: no margin to start the worst-case search from"
+        for metric in spec.worst_case if evaluated else ():
             say(f"worst case of the {metric.replace('_', ' ')}")
             t = time.perf_counter()
             w = search(context, spec, executor, table, metric, batch=info["batch"])
             timings[f"worst_{metric}"] = time.perf_counter() - t
             worst.append(w)
     finally:
-        executor.close()
+        if owned:
+            executor.close()
     for w in worst:
         t = time.perf_counter()
-        scene_raw, note = worst_scene(context, w.values)
         name = "worst.toml" if w.metric == "modulus_margin" else f"worst_{w.metric}.toml"
+        try:
+            scene_raw = worst_scene(context, w.values, w.row)
+        except ValueError as exc:
+            w.verification = {"scene": None, "note": str(exc)}
+            continue
         say(f"verifying the worst {w.metric.replace('_', ' ')} on the exact beam")
         w.verification = verify(context, w.values, scene_raw, f"{name} of {source}")
-        if note:
-            w.verification["note"] = note
         w.verification["scene"] = name
         timings[f"verify_{w.metric}"] = time.perf_counter() - t
         if out is not None:
             header = (f"Worst {w.metric.replace('_', ' ')} of the sweep of {source}: signed margin "
                       f"{w.objective:.6g}\n"
                       + "\n".join(f"{k} = {v!r}" for k, v in w.values.items())
-                      + (f"\n{note}" if note else "")
-                      + "\nRun it with: flexsat run " + name)
-            (Path(out) / name).write_text(to_toml(scene_raw, header))
+                      + "\nThe controller the sweep closed there is given as numbers "
+                        "([controller.given]).\nRun it with: flexsat run " + name)
+            write_text_atomically(Path(out) / name, to_toml(scene_raw, header))
     summary = summarise(table, context, spec, nominal=nominal, worst=worst, timings=timings,
                         executor=executor.describe(), info=info)
+    if skipped:
+        summary["worst_case_skipped"] = skipped
     if out is not None:
         say("writing the report")
         summary = write_report(out, table, context, spec, summary, plots=plots)

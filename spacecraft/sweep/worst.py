@@ -3,11 +3,13 @@
 Objective
     For margin m (modulus margin min|1 + L(jw)|, or phase margin [deg]) of the loop on the exact
     beams (on the truth model where the scene has no exact reference), the *signed margin*
-    ``s = |m|`` if the loop is stable and ``s = -|m|`` if it is not. It is continuous where the
-    Nyquist curve crosses the critical point (there m = 0 and the verdict changes), so
-    minimising it finds the least stable point of the box: the smallest margin if every point
-    is stable, the most unstable one otherwise. A failed evaluation counts as
-    :data:`CAP` (never the worst); an infinite phase margin (|L| never crosses 1) too.
+    ``s = |m|`` if the loop is stable and ``s = -|m|`` if it is not, as every sample records it
+    (:func:`.evaluate.signed_margin`). It is continuous where the Nyquist curve crosses the
+    critical point (there m = 0 and the verdict changes), so minimising it finds the least
+    stable point of the box: the smallest margin if every point is stable, the most unstable
+    one otherwise. An infinite margin (|L| never crosses 1) counts as :data:`CAP` with its sign.
+    A failed evaluation has no margin: it is never the worst and never seeds the search (its
+    objective is +inf), and the failures are counted (``failed``).
 
 Method
     Differential evolution (``scipy.optimize.differential_evolution``, the ``best1bin``
@@ -23,11 +25,12 @@ Method
 
 Verification
     The worst parameter set is written as a scene (``worst.toml``: the sweep's scene with those
-    numbers, without ``[sweep]``, the exact reference on) and run by :func:`spacecraft.runner.run`
-    itself, whose exact-beam verdict (its own dense grid through W(s), exact coupled frequencies)
-    is reported beside the sweep's. With ``design = "nominal"`` the scene pins the design chains
-    to the nominal fit (``design = "chain"``), so the runner tunes the nominal controller again
-    unless the swept numbers change the design model itself (hub, mounts): then it says so.
+    numbers, without ``[sweep]``, the exact reference on, and the very controller the sweep
+    closed there as ``[controller.given]``, :mod:`spacecraft.given_controller`: the nominal one,
+    or the one tuned on that sample) and run by :func:`spacecraft.runner.run` itself, whose
+    verdict and margins on the exact beam (its own dense grid through W(s), exact coupled
+    frequencies) are reported beside the sweep's: ``flexsat run worst.toml`` gives the sweep's
+    verdict.
 
 References
 ----------
@@ -48,23 +51,23 @@ import re
 import numpy as np
 
 from ..scene import SceneError
+from .evaluate import SampleRunner, signed_margin
 from .parameters import SweepSpec, apply_values
 
-__all__ = ["CAP", "WorstCase", "signed_margin", "search", "worst_scene", "to_toml", "verify"]
+__all__ = ["CAP", "WorstCase", "objective", "search", "worst_scene", "to_toml", "verify"]
 
-#: Objective of a failed evaluation or an infinite margin (never the worst).
+#: Size of the objective of an infinite margin (its sign is the verdict's).
 CAP = {"modulus_margin": 10.0, "phase_margin": 180.0}
 
 
-def signed_margin(row: dict, metric: str, exact: bool) -> float:
-    """The signed margin of an evaluated sample (module docstring)."""
+def objective(row: dict, metric: str, exact: bool) -> float:
+    """The objective of an evaluated sample (module docstring): its signed margin, at most
+    :data:`CAP` in size; +inf for a failed sample (no margin)."""
     prefix = "exact" if exact else "truth"
     value = row.get(f"{prefix}_{metric}")
-    stable = row.get(f"{prefix}_stable")
-    if row.get("error") or stable is None or value is None or math.isnan(value):
-        return CAP[metric]
-    value = min(abs(float(value)), CAP[metric])
-    return value if stable else -value
+    if row.get("error") or value is None or math.isnan(value):
+        return math.inf
+    return max(-CAP[metric], min(float(value), CAP[metric]))
 
 
 @dataclasses.dataclass
@@ -87,6 +90,8 @@ class WorstCase:
         The sweep's own sample of lowest objective: ``sample``, ``objective``.
     message : str
         Why DE stopped.
+    failed : int
+        Evaluations of the search that failed (no margin; never the worst).
     verification : dict or None
         The runner's verdict on ``worst.toml`` (:func:`verify`).
     """
@@ -98,6 +103,7 @@ class WorstCase:
     evaluations: int
     best_sample: dict
     message: str
+    failed: int = 0
     verification: dict | None = None
 
     def as_dict(self) -> dict:
@@ -192,13 +198,16 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
     best_sample = {"sample": None, "objective": None}
     if table is not None and table.num_rows:
         columns = table.to_pydict()
-        objective = np.array([signed_margin({k: columns[k][i] for k in columns}, metric, exact)
-                              for i in range(table.num_rows)])
+        objective_of_sample = np.array([objective({k: columns[k][i] for k in columns}, metric,
+                                                   exact) for i in range(table.num_rows)])
         values = np.column_stack([columns[p.key] for p in spec.parameters])
         x = coords.point(values)
-        order = np.argsort(objective, kind="stable")
-        i0 = int(order[0])
-        best_sample = {"sample": int(columns["sample"][i0]), "objective": float(objective[i0])}
+        order = np.argsort(objective_of_sample, kind="stable")
+        order = order[np.isfinite(objective_of_sample[order])]   # failed samples seed nothing
+        if order.size:
+            i0 = int(order[0])
+            best_sample = {"sample": int(columns["sample"][i0]),
+                           "objective": float(objective_of_sample[i0])}
         chosen, seen = [], set()
         for i in order:
             if coords.inside(x[i:i + 1])[0] and x[i].tobytes() not in seen:
@@ -212,7 +221,7 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
             n_pop - seeds.shape[0])
         seeds = np.vstack([seeds, coords.lo + fill * (coords.hi - coords.lo)])
     cache: dict = {}
-    count = [0]
+    count = [0, 0]
     width = coords.hi - coords.lo
 
     def snap(x):
@@ -229,7 +238,8 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
             rows = executor.evaluate_rows(context, coords.values(np.array(fresh)), batch)
             count[0] += len(fresh)
             for x, row in zip(fresh, rows):
-                cache[x.tobytes()] = (signed_margin(row, metric, exact), row)
+                cache[x.tobytes()] = (objective(row, metric, exact), row)
+                count[1] += bool(row.get("error"))
         return [func(x) for x in xs]
 
     def objective_of(x):
@@ -247,53 +257,52 @@ def search(context, spec: SweepSpec, executor, table, metric: str, *, batch: int
     if key not in cache:
         evaluate_population(lambda z: None, [x])
     value, row = cache[key]
+    if not math.isfinite(value):
+        # DE keeps a failed point only where every point failed; the least stable point
+        # evaluated is the worst found
+        finite = [(v, k) for k, (v, _) in cache.items() if math.isfinite(v)]
+        if finite:
+            value, key = min(finite)
+            x = np.frombuffer(key, dtype=float)
+            row = cache[key][1]
     worst = coords.values(x)[0]
     return WorstCase(metric, {p.key: float(v) for p, v in zip(spec.parameters, worst)}, row,
-                     float(value), count[0], best_sample, str(result.message))
+                     float(value), count[0], best_sample, str(result.message), count[1])
 
 
 # ---------------------------------------------------------------------------------------------
 # worst.toml and its verification
 # ---------------------------------------------------------------------------------------------
-def worst_scene(context, values: dict) -> tuple[dict, str | None]:
-    """The scene mapping of a worst case, and why the runner may not reproduce it (or None).
+def worst_scene(context, values: dict, row: dict) -> dict:
+    """The scene mapping of a worst case: the sweep's scene with its numbers, the exact
+    reference on, and the controller the sweep closed there given as numbers.
 
     Parameters
     ----------
     context : .evaluate.Context
     values : dict
         Key path -> value (file units).
-    """
-    from ..scene import load_scene
-    from .evaluate import _SampleRunner
+    row : dict
+        Its evaluation (``controller``: the sample's controller with ``design =
+        "per-sample"``).
 
+    Raises
+    ------
+    ValueError
+        If the controller of that point is not known (a failed evaluation).
+    """
     params = context.parameters
     raw = apply_values(context.base, params, [values[p.key] for p in params])
     raw.setdefault("outputs", {})["exact_reference"] = True
-    note = None
-    if context.design == "nominal":
-        nominal = load_scene(context.base, source=context.source)
-        runner = _SampleRunner(nominal)
-        for k, (item, a) in enumerate(zip(raw["appendages"], nominal.appendages)):
-            if a.design != "fit":
-                continue
-            chain = runner.design_model(a, context.variant, context.n_modes)
-            item.pop("fit", None)
-            item["design"] = "chain"
-            item["chain"] = {
-                "lengths": chain.lengths.tolist(), "masses": chain.masses.tolist(),
-                "inertias": chain.inertias.tolist(),
-                "hinge_stiffnesses": chain.hinge_stiffnesses.tolist(),
-                "com_offsets": chain.com_offsets.tolist()}
-            if chain.hinge_dampings is not None:
-                item["chain"]["hinge_dampings"] = np.asarray(chain.hinge_dampings).tolist()
-        design_keys = [p.key for p in params if p.path[0] in ("hub", "appendages") and not (
-            p.path[0] == "appendages" and p.path[2] in ("beam", "truth_chain"))]
-        if design_keys:
-            note = ("design = \"nominal\": the runner tunes the controller on this scene's design "
-                    f"model, whose {', '.join(design_keys)} differ from the nominal scene's, so "
-                    "its controller is not the sweep's nominal one")
-    return raw, note
+    if context.nominal_record is not None:
+        record = context.nominal_record
+    elif row.get("controller"):
+        record = json.loads(row["controller"])
+    else:
+        raise ValueError("the worst point's controller is not known (its evaluation failed)")
+    raw.setdefault("controller", {})["given"] = {k: record[k] for k in ("kind", "A", "B", "C",
+                                                                       "D")}
+    return raw
 
 
 def _key(name: str) -> str:
@@ -347,9 +356,10 @@ def to_toml(mapping: dict, header: str = "") -> str:
 
 def _verdict(v) -> dict:
     m = v.margins
-    return {"stable": bool(v.stable), "n_unstable_poles": int(v.n_unstable_poles),
-            "gain_margin": float(m.gain_margin), "phase_margin": float(m.phase_margin),
-            "modulus_margin": float(m.modulus_margin)}
+    stable = bool(v.stable)
+    return {"stable": stable, "n_unstable_poles": int(v.n_unstable_poles),
+            **{k: signed_margin(getattr(m, k), stable)
+               for k in ("gain_margin", "phase_margin", "modulus_margin")}}
 
 
 def verify(context, values: dict, raw: dict, source: str) -> dict:
@@ -358,27 +368,23 @@ def verify(context, values: dict, raw: dict, source: str) -> dict:
     ``exact_reference``: the sweep's own loop (the same controller) closed on the runner's exact
     reference (:meth:`spacecraft.runner._Runner.exact_reference_frd`: its dense grid placed at
     the exact coupled frequencies), independent of the sweep's lighter grid. ``runner``: the
-    scene ``raw`` (``worst.toml``) run by :func:`spacecraft.runner.run`: what a user re-running
-    it gets. Failures are recorded as ``error`` texts.
+    scene ``raw`` (``worst.toml``, the same controller given) run by
+    :func:`spacecraft.runner.run`: what a user re-running it gets, its margins signed as the
+    sweep's. Failures are recorded as ``error`` texts.
     """
     import warnings
 
     import controllers
 
+    from ..given_controller import given_state_space
     from ..runner import run
     from ..scene import load_scene
-    from .evaluate import _SampleRunner, _design_controller
 
     out: dict = {}
-    params = context.parameters
     try:
-        base = apply_values(context.base, params, [values[p.key] for p in params])
-        base.setdefault("outputs", {})["exact_reference"] = True
-        scene = load_scene(base, source=source)
-        runner = _SampleRunner(scene)
-        K = context.nominal_controller
-        if K is None:
-            K = _design_controller(runner, context)
+        scene = load_scene(copy.deepcopy(raw), source=source)
+        runner = SampleRunner(scene)
+        K = given_state_space(scene.controller.given, scene.controller.sample_time)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             out["exact_reference"] = _verdict(controllers.spillover(
@@ -390,13 +396,17 @@ def verify(context, values: dict, raw: dict, source: str) -> dict:
             warnings.simplefilter("ignore", RuntimeWarning)
             result = run(load_scene(copy.deepcopy(raw), source=source), time_responses=True)
         row = result.data["closed_loops"][0]
-        runner_out = {"truth": {k: row["verdict"].get(k) for k in (
-            "stable", "gain_margin", "phase_margin", "modulus_margin")}}
+        runner_out = {"truth": _signed(row["verdict"])}
         if "exact_verdict" in row:
-            runner_out["exact"] = {k: row["exact_verdict"].get(k) for k in (
-                "stable", "gain_margin", "phase_margin", "modulus_margin", "error")
-                if k in row["exact_verdict"]}
+            runner_out["exact"] = (_signed(row["exact_verdict"]) if "error" not in
+                                   row["exact_verdict"] else dict(row["exact_verdict"]))
         out["runner"] = runner_out
     except (SceneError, ValueError, ArithmeticError) as exc:
         out["runner"] = {"error": f"{type(exc).__name__}: {exc}"}
     return out
+
+
+def _signed(verdict: dict) -> dict:
+    stable = verdict.get("stable")
+    return {"stable": stable, **{k: signed_margin(verdict.get(k), stable)
+                                 for k in ("gain_margin", "phase_margin", "modulus_margin")}}
