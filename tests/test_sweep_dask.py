@@ -31,7 +31,7 @@ def client():
     from distributed import Client, LocalCluster
 
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=logging.ERROR)
+                           dashboard_address=":0", silence_logs=logging.ERROR)
     client = Client(cluster, set_as_default=False)
     yield client
     client.close()
@@ -241,3 +241,33 @@ def test_a_sweep_survives_its_workers_being_killed(client, tmp_path):
                for i in pq.read_table(p).column("sample").to_pylist()]
     assert sorted(samples) == list(range(8))
     client.wait_for_workers(2, timeout=120)
+
+
+def test_a_local_cluster_beside_another_warns_nothing():
+    """The sweep's LocalCluster while port 8787 is taken (another cluster's dashboard): no
+    "Port 8787 is already in use" warning (the scheduler's HTTP server binds a free port), and
+    nothing else warned while it starts and closes."""
+    import socket
+    import warnings
+
+    from spacecraft.sweep.execute import open_executor
+
+    taken = socket.socket()
+    try:
+        taken.bind(("0.0.0.0", 8787))
+        taken.listen(1)
+    except OSError:
+        taken.close()          # taken already: by another cluster, as the test wants
+        taken = None
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            executor = open_executor(workers=2)
+            try:
+                assert executor.kind == "local-cluster" and executor.n_workers == 2
+            finally:
+                executor.close()
+        assert [str(w.message) for w in caught] == []
+    finally:
+        if taken is not None:
+            taken.close()

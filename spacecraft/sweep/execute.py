@@ -415,9 +415,11 @@ def open_executor(*, client=None, scheduler: str | None = None, workers: int | N
     from distributed import Client, LocalCluster
 
     with dask.config.set(_LOCAL_CLUSTER_CONFIG):
-        # no dashboard: nothing listens on 8787, so nothing warns that it is taken
+        # the scheduler's HTTP server (its dashboard and health routes; dashboard_address
+        # None still binds the default 8787) on a free port: no "Port 8787 is already in use"
+        # beside another cluster
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=":0", silence_logs=logging.ERROR)
     client = Client(cluster, set_as_default=False)
     return Executor("local-cluster", client, n, [cluster, client])
 
