@@ -51,6 +51,7 @@ import numpy as np
 from .discretise import DiscretisationOverflowWarning, discretise
 from .frequency import _ModalEvaluator
 from .signals import _check_pair, _is_digital, _labels, _measurements, _reference_inputs
+from .threads import limits_blas_threads, total_states
 
 __all__ = ["split_delay", "delayed_discretisation", "DelayedSampledPlant",
            "delayed_closed_loop", "check_delay", "total_delay", "DELAY_SNAP",
@@ -210,6 +211,7 @@ def _check_dt(dt) -> float:
     return dt
 
 
+@limits_blas_threads(total_states)
 def delayed_closed_loop(plant: control.StateSpace, controller: control.StateSpace,
                         delay: float, *, dt: float | None = None) -> control.StateSpace:
     """The attitude loop with the torque delayed by ``delay``, as a discrete system.
