@@ -531,24 +531,31 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         finite = np.isfinite(row)  # a grid point exactly on an undamped pole: L is infinite
         grids.append((omega[finite], row[finite]))
 
+    m = len(grids)
+
     def values_at(roots: list[np.ndarray]) -> list[np.ndarray]:
         owner = np.concatenate([np.full(r.size, j) for j, r in enumerate(roots)]).astype(int)
         if owner.size == 0:
             return [np.zeros(0, dtype=complex) for _ in roots]
-        values = evaluate(np.concatenate(roots), owner)
+        values = evaluate(np.concatenate(roots), owner % m)
         return [values[owner == j] for j in range(len(roots))]
 
-    def log_gain(w: np.ndarray, owner: np.ndarray) -> np.ndarray:
+    def crossing(w: np.ndarray, owner: np.ndarray) -> np.ndarray:
+        """Im L_j for owner j < m, log|L_j| for owner m + j: one evaluation of the loop per
+        step refines the phase and the gain crossovers together."""
+        values = evaluate(w, owner % m)
         with np.errstate(divide="ignore"):
-            return np.log(np.abs(evaluate(w, owner)))
+            return np.where(owner < m, values.imag, np.log(np.abs(values)))
 
     # phase crossovers: L real and negative (Im L changes sign where Re L < 0). Crossings where
     # |L| < 1e-9 (a gain margin above 180 dB) are round-off in Im L, not a margin.
-    phase_roots = _crossings_of_many(lambda w, owner: evaluate(w, owner).imag,
-                                     [(w, row.imag) for w, row in grids])
     # gain crossovers: |L| = 1
-    gain_roots = _crossings_of_many(log_gain, [(w, np.log(np.abs(row))) for w, row in grids])
-    L_phase, L_gain = values_at(phase_roots), values_at(gain_roots)
+    with np.errstate(divide="ignore"):
+        roots = _crossings_of_many(crossing, [(w, row.imag) for w, row in grids]
+                                   + [(w, np.log(np.abs(row))) for w, row in grids])
+    phase_roots, gain_roots = roots[:m], roots[m:]
+    values = values_at(roots)
+    L_phase, L_gain = values[:m], values[m:]
     out = []
     for j, (w_grid, row) in enumerate(grids):
         gain_margin, w_pc = math.inf, math.inf

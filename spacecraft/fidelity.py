@@ -17,6 +17,30 @@ Choosing n_modes
     :func:`choose_n_modes` returns the smallest n that meets both, with the errors of every n
     it tried (a short, monotone search: Craig-Bampton frequencies converge like n**-4).
 
+Converging the closed loops
+    Open-loop accuracy is not enough: the loops' verdicts also depend on modes above the band
+    (a mode two octaves up sets a gain margin, the least-damped closed-loop pole can be the
+    fourth mode). From that n, :func:`refine_for_closed_loop` adds one mode per beam at a time
+    and closes every loop of the scene on the truth model with n and n + 1 modes; n is kept
+    when, for every loop, between the two (:func:`closed_loop_change`, each a relative change,
+    compared with the tolerance):
+
+    * the stability verdict is the same;
+    * every closed-loop pole up to the band that matters (``band``: bandwidth_factor x the
+      fastest crossover, or the first exact coupled frequency above bandwidth_factor x the
+      bandwidth if higher, as rule 1 above) has a counterpart within tol |s|;
+    * the least damping ratio of all closed-loop poles agrees within tol relative, or within
+      tol x 1e-3 (:data:`DAMPING_SCALE`) for damping ratios below 1e-3 (where a loop is warned
+      about as lightly damped whatever the digits);
+    * the gain margin (tol relative in gain, 20 log10(1 + tol) dB), phase margin and modulus
+      margin agree within tol relative (both infinite: equal).
+
+    The time metrics of the slew follow from the poles and residues, which these settle; they
+    are not simulated per n. Each n costs one coupled eigen-decomposition of the truth model
+    and the closed-loop eigenvalues and margins of each loop (a few milliseconds); every
+    model, plant, controller and verdict is built once and reused by the run. The search stops
+    at the largest n the scene's limits allow (reported as not converged).
+
 Dropping what the signals cannot reach
     :meth:`Spacecraft.plant` with ``prune=True`` drops the modes that no input excites or no
     output sees (e.g. the symmetric bending of two symmetric wings under a pure torque); the
@@ -41,13 +65,19 @@ import numpy as np
 from appendages import limits
 from appendages.interface import describe
 
-__all__ = ["FidelityChoice", "choose_n_modes", "low_band", "transfer_theta_torque"]
+__all__ = ["FidelityChoice", "choose_n_modes", "low_band", "transfer_theta_torque",
+           "closed_loop_change", "refine_for_closed_loop", "DAMPING_SCALE"]
 
 #: Largest number of modes per beam the search from a tolerance tries (also within the scene's
 #: limits.modes), whatever limits.modes allows: Craig-Bampton frequency errors fall like n**-4,
 #: so a tolerance that 40 modes miss needs ten times the modes for 1e-4 of it, beyond a search
 #: that builds one plant per n (about a second for all 40); give fidelity.n_modes for more.
 MAX_MODES = 40
+
+
+#: Damping ratios below this are compared absolutely (tolerance x DAMPING_SCALE) in the
+#: closed-loop rule: the light-damping threshold of :mod:`spacecraft.verdicts`.
+DAMPING_SCALE = 1e-3
 
 
 @dataclasses.dataclass(frozen=True)
@@ -69,6 +99,11 @@ class FidelityChoice:
     trials : list of dict
         For each n tried: ``n_modes``, ``frequency_error`` (max relative), ``gain_error`` (max
         relative on the low band).
+    open_loop_n_modes : int or None
+        The n the open-loop rule chose (``n_modes`` until the closed-loop rule refines it).
+    closed_loop : dict or None
+        The closed-loop rule's record (:func:`refine_for_closed_loop`): ``band`` [rad/s],
+        ``trials`` (per n: the changes from n to n + 1), ``converged``.
     """
 
     n_modes: int
@@ -77,13 +112,18 @@ class FidelityChoice:
     band: tuple
     reference_frequencies: np.ndarray
     trials: list
+    open_loop_n_modes: int | None = None
+    closed_loop: dict | None = None
 
     def as_dict(self) -> dict:
         """JSON-ready form."""
         return {"n_modes": self.n_modes, "method": self.method, "tolerance": self.tolerance,
                 "band": list(self.band),
                 "reference_frequencies": self.reference_frequencies.tolist(),
-                "trials": self.trials}
+                "trials": self.trials,
+                "open_loop_n_modes": (self.n_modes if self.open_loop_n_modes is None
+                                      else self.open_loop_n_modes),
+                **({"closed_loop": self.closed_loop} if self.closed_loop is not None else {})}
 
 
 def low_band(bandwidth: float, factor: float, first_frequency: float,
@@ -212,3 +252,135 @@ def choose_n_modes(truncated_plant: Callable[[int], tuple], exact_frequencies: C
         f"{tolerance:g}: best n_modes = {best['n_modes']} with frequency error "
         f"{best['frequency_error']:.3g} and gain error {best['gain_error']:.3g}; raise "
         "fidelity.tolerance or give fidelity.n_modes")
+
+
+def _relative(a: float | None, b: float | None, *, scale: float = 0.0) -> float:
+    """|a - b| / max(|b|, scale); 0 for two equal values (both infinite included), inf when
+    only one is finite or missing."""
+    if a is None or b is None:
+        return 0.0 if a is None and b is None else math.inf
+    if a == b:
+        return 0.0
+    if not (math.isfinite(a) and math.isfinite(b)):
+        return math.inf
+    return abs(a - b) / max(abs(b), scale, 1e-300)
+
+
+def _pole_change(before: np.ndarray, after: np.ndarray, band: float) -> float:
+    """Largest distance, relative to |s|, from a pole of either set within the band (upper
+    half-plane) to the nearest pole of the other set."""
+    worst = 0.0
+    for mine, other in ((after, before), (before, after)):
+        mine = mine[(mine.imag >= 0) & (np.abs(mine) <= band)]
+        if mine.size == 0:
+            continue
+        if other.size == 0:
+            return math.inf
+        distance = np.abs(mine[:, None] - other[None, :]).min(axis=1)
+        worst = max(worst, float(np.max(distance / np.maximum(np.abs(mine), 1e-300))))
+    return worst
+
+
+def _pole_facts(poles: np.ndarray) -> tuple[bool, float | None]:
+    """(stable, least damping ratio) of closed-loop poles [1/s]: stable when no pole grows
+    faster than a marginal one, Re(s) <= 1e-10 max(1, |s|) (spacecraft.verdicts.MARGINAL);
+    damping -Re(s)/|s| (0 at s = 0)."""
+    s = np.asarray(poles, dtype=complex)
+    if s.size == 0:
+        return True, None
+    w = np.abs(s)
+    zeta = np.where(w > 0, -s.real / np.where(w > 0, w, 1.0), 0.0)
+    return bool(not np.any(s.real > 1e-10 * np.maximum(1.0, w))), float(zeta.min())
+
+
+def closed_loop_change(before: dict, after: dict, band: float, *,
+                       margins: bool = True) -> dict:
+    """How much the closed loops change from one truth model to a finer one.
+
+    Parameters
+    ----------
+    before, after : dict
+        loop -> an object with ``poles`` (closed-loop poles [1/s]) and ``verdict`` (its
+        :class:`controllers.SpilloverVerdict`, read only for the margins) on the two truth
+        models, the same loops in both.
+    band : float, rad/s
+        The poles compared are those up to it (module docstring).
+    margins : bool
+        Compare the margins too (False: only what the poles give, without computing a margin).
+
+    Returns
+    -------
+    dict
+        The largest relative change over the loops of: ``verdict`` (0, or inf when a loop's
+        stability differs), ``poles``, ``least_damping`` (relative, absolute below
+        :data:`DAMPING_SCALE` in units of it), and with ``margins`` ``gain_margin`` (in gain),
+        ``phase_margin``, ``modulus_margin``.
+    """
+    names = ("verdict", "poles", "least_damping") + (
+        ("gain_margin", "phase_margin", "modulus_margin") if margins else ())
+    out = dict.fromkeys(names, 0.0)
+    for key, b in after.items():
+        a = before[key]
+        (stable_a, zeta_a), (stable_b, zeta_b) = _pole_facts(a.poles), _pole_facts(b.poles)
+        change = {
+            "verdict": 0.0 if stable_a == stable_b else math.inf,
+            "poles": _pole_change(np.asarray(a.poles, complex), np.asarray(b.poles, complex),
+                                  band),
+            "least_damping": _relative(zeta_a, zeta_b, scale=DAMPING_SCALE),
+        }
+        if margins:
+            ma, mb = a.verdict.margins, b.verdict.margins
+            # a gain margin in dB: the relative change of the gain, 10^(dGM/20) - 1
+            change["gain_margin"] = (
+                0.0 if ma.gain_margin == mb.gain_margin else
+                abs(10.0 ** ((ma.gain_margin - mb.gain_margin) / 20.0) - 1.0)
+                if math.isfinite(ma.gain_margin - mb.gain_margin) else math.inf)
+            change["phase_margin"] = _relative(ma.phase_margin, mb.phase_margin)
+            change["modulus_margin"] = _relative(ma.modulus_margin, mb.modulus_margin)
+        for name, value in change.items():
+            out[name] = max(out[name], value)
+    return out
+
+
+def refine_for_closed_loop(closed_loops: Callable[[int], dict], n_start: int, *,
+                           tolerance: float, band: float, n_max: int
+                           ) -> tuple[int, dict]:
+    """The smallest n >= n_start at which the scene's closed loops have converged.
+
+    Parameters
+    ----------
+    closed_loops : callable n -> dict
+        loop -> an object with ``poles`` and ``verdict`` (:func:`closed_loop_change`) on the
+        truth model with n modes per beam (each n evaluated once: the caller caches what it
+        builds; the verdict is read only once the poles have converged).
+    n_start : int
+        The open-loop rule's n (:func:`choose_n_modes`).
+    tolerance : float
+        Relative tolerance (the scene's ``fidelity.tolerance``).
+    band : float, rad/s
+        Poles compared up to this frequency (module docstring).
+    n_max : int
+        Largest n to try.
+
+    Returns
+    -------
+    n_modes : int
+        The first n whose loops change by at most ``tolerance`` (:func:`closed_loop_change`)
+        when a mode per beam is added; ``n_max`` if none up to it does.
+    record : dict
+        ``band``, ``trials`` (per n: ``n_modes`` and the changes to n + 1, the margins' only
+        where the poles' were within the tolerance), ``converged``.
+    """
+    trials = []
+    n, current = n_start, closed_loops(n_start)
+    while n < n_max:
+        finer = closed_loops(n + 1)
+        # the poles first: the margins (the costly part) only once the poles have settled
+        change = closed_loop_change(current, finer, band, margins=False)
+        if max(change.values()) <= tolerance:
+            change = closed_loop_change(current, finer, band)
+        trials.append({"n_modes": n, **change})
+        if max(change.values()) <= tolerance:
+            return n, {"band": band, "trials": trials, "converged": True}
+        n, current = n + 1, finer
+    return n, {"band": band, "trials": trials, "converged": False}

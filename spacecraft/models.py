@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import math
 import time
 import warnings
@@ -30,12 +31,13 @@ import controllers
 from appendages.interface import FlexsatError
 
 from .coupling import Spacecraft
-from .fidelity import MAX_MODES, FidelityChoice, choose_n_modes
+from .fidelity import MAX_MODES, FidelityChoice, choose_n_modes, refine_for_closed_loop
 from .hub import Hub, Mount
 from .limits import estimate_cost
 from .scene import AppendageSpec, ChainSpec, Scene, SceneError
+from .verdicts import closed_loop_poles
 
-__all__ = ["ModelBuilder", "RunStats", "raised_by_flexsat", "LQR_FREQUENCY_RANGE",
+__all__ = ["ModelBuilder", "TruthLoop", "RunStats", "raised_by_flexsat", "LQR_FREQUENCY_RANGE",
            "ProgressCallback"]
 
 #: Range of the rigid-body LQR natural frequency (q / (r J^2))^(1/4) [rad/s]: that of a PD's
@@ -129,6 +131,26 @@ def raised_by_flexsat(exc: BaseException) -> bool:
     except (OSError, ValueError):
         return False
     return any(path.is_relative_to(folder) for folder in _OUR_FOLDERS)
+
+
+class TruthLoop:
+    """A controller closed on a truth plant (:meth:`ModelBuilder.truth_loop`).
+
+    Attributes
+    ----------
+    poles : ndarray, complex, 1/s
+        Closed-loop poles (s-plane).
+    verdict : controllers.SpilloverVerdict
+        Its verdict with margins, computed when first read.
+    """
+
+    def __init__(self, poles: np.ndarray, verdict: Callable[[], object]):
+        self.poles = poles
+        self._verdict = verdict
+
+    @functools.cached_property
+    def verdict(self):
+        return self._verdict()
 
 
 class ModelBuilder:
@@ -279,6 +301,80 @@ class ModelBuilder:
             return Spacecraft(self.hub, mounts)
         return self.cached(("spacecraft", key), build)
 
+    def design_key(self, variant: str, n_modes: int | None) -> tuple:
+        """Cache key of a design variant's models: n_modes matters only when an appendage is
+        designed on its truth model (``design = "truth"``)."""
+        depends = any(a.design == "truth" for a in self.scene.appendages)
+        return ("design", variant, n_modes if depends else None)
+
+    def design_spacecraft(self, variant: str, n_modes: int | None) -> Spacecraft:
+        """The spacecraft of a design variant (its design model of each appendage)."""
+        models = [self.design_model(a, variant, n_modes) for a in self.scene.appendages]
+        return self.spacecraft(self.design_key(variant, n_modes), models)
+
+    def design_plant(self, variant: str, n_modes: int | None):
+        """The plant the controllers are tuned on (tip deflections when the LQR weighs them)."""
+        lqr = self.scene.controller.lqr
+        return self.plant(self.design_spacecraft(variant, n_modes),
+                          self.design_key(variant, n_modes),
+                          tip=lqr is not None and lqr.deflection_weight is not None,
+                          prune=self.scene.fidelity.prune)
+
+    def tuned(self, variant: str, kind: str, n_modes: int | None):
+        """The controller ``kind`` tuned on a design variant (:func:`spacecraft.tuning.tune`),
+        once per design plant; a failure is a SceneError naming controller.<kind>."""
+        from .tuning import tune
+
+        def build():
+            plant, _ = self.design_plant(variant, n_modes)
+            with self.scene_values(f"controller.{kind}", f"cannot tune on the design model "
+                                                         f"({variant}): "):
+                if kind == "pd":
+                    self.stats.pd_designs += 1
+                else:
+                    self.stats.lqr_designs += 1
+                return tune(kind, plant, self.scene.controller)
+        return self.cached(("tuned", self.design_key(variant, n_modes), kind), build)
+
+    def design_margins(self, variant: str, kind: str, n_modes: int | None):
+        """:func:`controllers.margins` of a controller on its own design plant (once)."""
+        def build():
+            plant, _ = self.design_plant(variant, n_modes)
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                return controllers.margins(plant, self.tuned(variant, kind, n_modes).controller)
+        return self.cached(("design margins", self.design_key(variant, n_modes), kind), build)
+
+    def truth_spillover(self, plant, controller):
+        """:func:`controllers.spillover` of a controller on a truth plant, once per (plant,
+        controller) of the run."""
+        def build():
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                return controllers.spillover(plant, controller)
+        return self.cached(("spillover", id(plant), id(controller)), build)
+
+    def truth_loop(self, plant, controller) -> "TruthLoop":
+        """A controller closed on a truth plant: its poles at once, its verdict when read."""
+        def build():
+            return TruthLoop(closed_loop_poles(controllers.close_loop(plant, controller)),
+                             lambda: self.truth_spillover(plant, controller))
+        return self.cached(("truth loop", id(plant), id(controller)), build)
+
+    def truth_plant(self, n_modes: int | None):
+        """The truth plant of the verdicts (torque to theta, omega; pruned as the scene says)."""
+        models = [self.truth_model(a, n_modes) for a in self.scene.appendages]
+        sc = self.spacecraft(("truth", n_modes), models)
+        return self.plant(sc, ("truth", n_modes), prune=self.scene.fidelity.prune)[0]
+
+    def truth_loops(self, n_modes: int) -> dict:
+        """(variant, kind) -> :class:`TruthLoop` of every loop of the scene on the truth model
+        with n_modes modes per beam."""
+        plant = self.truth_plant(n_modes)
+        return {(variant, kind): self.truth_loop(
+                    plant, self.tuned(variant, kind, n_modes).controller)
+                for variant in self.scene.design_variants for kind in self.scene.controller.types}
+
     def plant(self, sc: Spacecraft, key, *, tip=False, root_loads=False, disturbances=False,
               prune=True):
         """Plant with the requested signals, pruned if asked (built once per signal set)."""
@@ -382,7 +478,29 @@ class ModelBuilder:
                                         method=scene.fidelity.method,
                                         first_zero=self.first_clamped_frequency(),
                                         n_max=self.max_modes())
+        with self.stage("converging the closed loops"):
+            choice = self.closed_loop_fidelity(choice, bandwidth)
         return choice.n_modes, choice
+
+    def closed_loop_fidelity(self, choice: FidelityChoice, bandwidth: float) -> FidelityChoice:
+        """The open-loop choice refined until the scene's closed loops converge
+        (:func:`spacecraft.fidelity.refine_for_closed_loop`); the band of poles compared is
+        bandwidth_factor x the fastest crossover on the design models (as the run's check of
+        the truth model's resolution), or the first exact coupled frequency above
+        bandwidth_factor x the bandwidth if higher."""
+        scene = self.scene
+        if not scene.controller.types:
+            return choice
+        crossovers = [self.design_margins(variant, kind, choice.n_modes).gain_crossover_frequency
+                      for variant in scene.design_variants for kind in scene.controller.types]
+        crossovers = [w for w in crossovers if math.isfinite(w)]
+        band = max(scene.fidelity.bandwidth_factor * max([bandwidth] + crossovers),
+                   float(choice.reference_frequencies[-1]))
+        n, record = refine_for_closed_loop(self.truth_loops, choice.n_modes,
+                                           tolerance=scene.fidelity.tolerance, band=band,
+                                           n_max=self.max_modes())
+        return dataclasses.replace(choice, n_modes=n, open_loop_n_modes=choice.n_modes,
+                                   closed_loop=record)
 
     def max_modes(self) -> int:
         """Most modes per beam the search from a tolerance may try: fidelity.MAX_MODES, within

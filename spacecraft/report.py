@@ -416,6 +416,7 @@ def _models(data: dict) -> list:
             b.append(("table", ["n_modes", "frequency error [-]", "gain error [-]"],
                       [[t["n_modes"], _fmt(t["frequency_error"], 3), _fmt(t["gain_error"], 3)]
                        for t in choice["trials"]]))
+            b += _closed_loop_fidelity(choice)
         else:
             b.append(("p", "n_modes was given by the scene (fidelity.n_modes)."))
         for name, r in truth.get("resolved", {}).items():
@@ -521,6 +522,33 @@ def _controllers(data: dict) -> list:
     else:
         b.append(("p", "None: every mode of the design plants is within the loops' reach."))
     return b
+
+
+def _closed_loop_fidelity(choice: dict) -> list:
+    """Why the closed-loop rule kept n_modes (spacecraft.fidelity): the changes of the loops
+    from each n to the next."""
+    record = choice.get("closed_loop")
+    if not record:
+        return []
+    n0, n = choice["open_loop_n_modes"], choice["n_modes"]
+    text = (f"Then the closed loops: from {n0} mode{'s' if n0 != 1 else ''}, a mode per beam is "
+            "added until every loop of the scene, closed on the truth model, changes by less "
+            f"than the tolerance when one more is added: its stability, its poles up to "
+            f"{_fmt(record['band'], 4)} rad/s, its least damping ratio and, once those have "
+            "settled, its margins (the largest relative changes below). ")
+    if record["converged"]:
+        text += f"{n} modes per beam meet it."
+    else:
+        text = warn(text + f"The search stopped at {n} modes per beam (the scene's limits) "
+                           "without meeting it.")
+    # the margins are compared only once the poles have settled ("-": not computed)
+    rows = [[t["n_modes"], _fmt(t["poles"], 3), _fmt(t["least_damping"], 3),
+             *(_fmt(t[k], 3) if k in t else "-"
+               for k in ("gain_margin", "phase_margin", "modulus_margin")),
+             "no" if t["verdict"] else "yes"] for t in record["trials"]]
+    return [("p", text),
+            ("table", ["n_modes", "poles [-]", "least damping [-]", "gain margin [-]",
+                       "phase margin [-]", "modulus margin [-]", "same verdict"], rows)]
 
 
 def _poles_text(poles: list) -> str:

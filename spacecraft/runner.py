@@ -37,7 +37,7 @@ from .responses import (appendage_peaks, diverged_at, outputs_until_overflow,
                         simulate_manoeuvre, trace)
 from .scene import Scene, load_scene, scene_dict
 from .tables import describe_model, equivalence_table
-from .tuning import digital_facts, rigid_crossover, tune
+from .tuning import digital_facts, rigid_crossover
 from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, growing,
                        loop_status, margin_flags, resolved_frequency, verdict_dict,
                        withheld_metrics)
@@ -129,6 +129,7 @@ class _Runner(ModelBuilder):
                     for match in a.fit.match:
                         self.fit(a, match)
         n_modes, choice = self.choose_fidelity()
+        self.n_modes = n_modes
         data["fidelity"] = {
             "n_modes": n_modes, "method": scene.fidelity.method if n_modes else None,
             "prune": scene.fidelity.prune, "chosen_from_tolerance": choice is not None,
@@ -156,12 +157,10 @@ class _Runner(ModelBuilder):
             designs = {}
             for variant in scene.design_variants:
                 models = [self.design_model(a, variant, n_modes) for a in scene.appendages]
-                sc = self.spacecraft(("design", variant), models)
-                needs_tip = (scene.controller.lqr is not None
-                             and scene.controller.lqr.deflection_weight is not None)
-                design_plant, info = self.plant(sc, ("design", variant), tip=needs_tip,
-                                                prune=prune)
-                sim_plant, _ = self.plant(sc, ("design", variant), tip=outputs.tip_deflection,
+                sc = self.design_spacecraft(variant, n_modes)
+                design_plant, info = self.design_plant(variant, n_modes)
+                sim_plant, _ = self.plant(sc, self.design_key(variant, n_modes),
+                                          tip=outputs.tip_deflection,
                                           root_loads=outputs.root_loads,
                                           disturbances=disturbances, prune=prune)
                 designs[variant] = {"spacecraft": sc, "plant": design_plant,
@@ -186,13 +185,7 @@ class _Runner(ModelBuilder):
             c = scene.controller
             for variant, d in designs.items():
                 for kind in c.types:
-                    with self.scene_values(f"controller.{kind}", f"cannot tune on the design "
-                                                                 f"model ({variant}): "):
-                        if kind == "pd":
-                            stats.pd_designs += 1
-                        else:
-                            stats.lqr_designs += 1
-                        tuned = tune(kind, d["plant"], c)
+                    tuned = self.tuned(variant, kind, n_modes)
                     d["controllers"][kind] = tuned.controller
                     d["tuned"][kind] = tuned
                     data.setdefault("controllers", {}).setdefault(variant, {})[kind] = {
@@ -247,10 +240,8 @@ class _Runner(ModelBuilder):
         scene = self.scene
         m = scene.manoeuvre
         row = {"design": variant, "controller": kind}
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            design_margins = controllers.margins(d["plant"], K)
-            verdict = controllers.spillover(truth_verdict, K)
+        design_margins = self.design_margins(variant, kind, self.n_modes)
+        verdict = self.truth_spillover(truth_verdict, K)
         row["design_margins"] = _margins(design_margins)
         row["verdict"] = verdict_dict(verdict)
         digital = None

@@ -588,6 +588,17 @@ def design_warnings(data: dict, *, loop_band: float | None, resolved: dict) -> l
                                     f"but the loops act up to {loop_band:.4g} rad/s "
                                     "(bandwidth_factor x crossover): modes in that band are "
                                     "missing; raise fidelity.n_modes or use fidelity.tolerance"))
+    record = ((data.get("fidelity") or {}).get("choice") or {}).get("closed_loop")
+    if record is not None and not record["converged"]:
+        last = record["trials"][-1] if record["trials"] else {}
+        worst = max(((k, v) for k, v in last.items() if k != "n_modes"),
+                    key=lambda item: item[1], default=None)
+        out.append(_warning("truth_not_converged", "the truth model's closed loops have not "
+                            f"converged at {data['fidelity']['n_modes']} modes per beam (the "
+                            "most the search tries within limits.modes and limits.states)"
+                            + (f": the {worst[0].replace('_', ' ')} still changes by "
+                               f"{worst[1]:.3g} (relative) with one more mode" if worst else "")
+                            + "; loosen fidelity.tolerance or give fidelity.n_modes"))
     exact = (data.get("exact") or {}).get("coupled_frequencies")
     truth = data.get("truth", {}).get("coupled_frequencies")
     if loop_band is not None and exact and truth is not None:
