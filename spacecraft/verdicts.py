@@ -223,7 +223,7 @@ def withheld_metrics(metrics: dict, status: dict) -> tuple[dict, dict]:
     return values, flags
 
 
-def exact_loop_verdict(spacecraft, controller, omega, *, theta=None):
+def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: float = 0.0):
     """The verdict and margins of a planar loop closed on the exact distributed spacecraft.
 
     Stability by the Nyquist criterion on the exact frequency response over ``omega``
@@ -247,6 +247,9 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None):
         roots it also brackets the margins.
     theta : array of complex, optional
         The exact theta/torque on ``omega`` [rad/(N m)], if already known.
+    delay : float, s
+        A loop delay (computation plus transport), in the count and the margins as
+        :func:`controllers.spillover` takes it.
 
     Returns
     -------
@@ -267,7 +270,7 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None):
         theta = np.asarray(theta, dtype=complex).reshape(-1)[order]
     frd = control.frd(np.stack([theta, 1j * omega * theta]).reshape(2, 1, -1), omega,
                       inputs=["torque"], outputs=["theta", "omega"])
-    verdict = controllers.spillover(frd, controller)
+    verdict = controllers.spillover(frd, controller, delay=delay)
     gains = _measurement_gains(controller)
 
     def loop(w: np.ndarray) -> np.ndarray:
@@ -286,7 +289,8 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None):
     K_theta, K_omega = gains(grid)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         margins = controllers.loop_margins(loop, grid,
-                                           -(K_theta + 1j * grid * K_omega) * theta_grid)
+                                           -(K_theta + 1j * grid * K_omega) * theta_grid,
+                                           delay=delay)
     return dataclasses.replace(verdict, margins=margins)
 
 

@@ -132,3 +132,26 @@ def test_the_exact_verdict_keeps_the_nyquist_count_and_refines_only_margins(loop
     assert grid.stable == row["exact_verdict"]["stable"]
     assert grid.n_unstable_poles == row["exact_verdict"]["n_unstable_poles"]
     assert abs(grid.margins.phase_margin - row["exact_verdict"]["phase_margin"]) < 1e-2
+
+
+def test_a_loop_delay_enters_the_exact_margins(loop):
+    # a delay tau multiplies L by exp(-j omega tau): |L| unchanged, the phase lowered by
+    # omega tau. At the delayed loop's own gain crossover (on this undamped rod a resonance's:
+    # 10 ms is beyond what its undamped modes tolerate at 71 rad/s), the reference's |L| is 1
+    # and its phase margin less omega tau is the delayed margin.
+    from spacecraft.verdicts import exact_loop_verdict
+
+    result, row, K, ref = loop
+    theta = np.asarray(result.exact_frd.frdata)[0, 0]
+    runner = _Runner(result.scene, None, RunStats())
+    tau = 0.01
+    delayed = exact_loop_verdict(runner.exact_spacecraft(), K, result.exact_frd.omega,
+                                 theta=theta, delay=tau).margins
+    w = delayed.gain_crossover_frequency
+    with mp.workdps(DPS):
+        L = ref.L(mp.mpf(w))
+        pm = float(mp.degrees(mp.arg(L))) + 180.0 - math.degrees(w * tau)
+    pm = (pm + 180.0) % 360.0 - 180.0
+    assert abs(float(abs(L)) - 1.0) < 1e-9
+    assert abs(delayed.phase_margin - pm) < 1e-9
+    assert delayed.delay == tau
