@@ -53,7 +53,7 @@ import control
 import numpy as np
 
 from .arguments import describe, real_number
-from .discretise import discretise_blocks
+from .discretise import discretise, discretise_blocks
 from .loop import close_loop
 from .signals import Channels, channels
 from .simulate import Simulator
@@ -65,16 +65,21 @@ __all__ = ["WheelLoop", "WheelResponse", "simulate_wheels", "DEVIATION_SUFFIX"]
 
 #: Suffix of the plant-level input through which the wheels' deviation enters (see module doc).
 DEVIATION_SUFFIX = "_wheel_deviation"
-# A segment of one mode is first tried over _FIRST_SEGMENT samples, doubled while the mode lasts,
-# up to as many samples as _SEGMENT_WORK multiply-adds of its doubling scan allow (n^2 per sample
-# and level) within [_SHORTEST_SEGMENT, _LONGEST_SEGMENT]: the scan costs little beside the
-# per-segment overhead (~0.1 ms) for small loops. After a mode that lasted one sample, this many
+# A segment of one mode is first tried over _FIRST_SEGMENT samples, after a switch over twice the
+# last mode's length, doubled while the mode lasts, up to as many samples as _SEGMENT_WORK
+# multiply-adds of its doubling scan allow (n^2 per sample and level), within
+# [_SHORTEST_SEGMENT, _LONGEST_SEGMENT]: the scan costs little beside the per-segment overhead
+# (~0.1 ms) for small loops. After a mode that lasted one sample, this many
 # samples are stepped singly (a Coulomb friction sign chattering about zero speed, or a wheel at
 # its momentum limit, would otherwise cost a segment per sample).
 _SEGMENT_WORK = 4_000_000
 _FIRST_SEGMENT = 512
-_SHORTEST_SEGMENT, _LONGEST_SEGMENT = 64, 4096
+_SHORTEST_SEGMENT, _LONGEST_SEGMENT = 16, 4096
 _CHATTER_STEPS = 8
+# Loops of at most this many states are simulated by segments from the first sample (the free
+# mode's segments cost ~0.8 ms per 2000 samples up to ~30 states, less than the simulator's
+# set-up); larger ones run the linear loop through the Simulator, O(n) per sample, first.
+_SEGMENTS_FROM_START = 32
 
 
 @dataclasses.dataclass
@@ -296,21 +301,38 @@ class WheelLoop:
         n_lin = self.linear_loop.nstates
         X0 = _check_state(X0, n_lin)
         dt = None if S.isdtime(strict=True) else float((T[-1] - T[0]) / (n_t - 1))
-        simulator = self._simulator(dt)
+        if dt is None and abs(float(T[1] - T[0]) - float(S.dt)) > 1e-6 * float(S.dt):
+            raise ValueError(f"T must have the simulator's step dt = {float(S.dt)!r} s (the "
+                             f"digital loop's); got a step of {float(T[1] - T[0])!r} s")
+        if dt is not None:
+            steps = np.diff(T)
+            if np.max(np.abs(steps - dt)) > 1e-6 * dt + 8 * np.finfo(float).eps * np.max(
+                    np.abs(T)):
+                raise ValueError("T must be evenly spaced [s]; got steps from "
+                                 f"{steps.min()!r} to {steps.max()!r} s")
         # initial absolute momenta: h_abs = h + J_s g . omega(0)
         C, D = np.asarray(S.C, dtype=float), np.asarray(S.D, dtype=float)
         X0_S = np.concatenate([X0, np.zeros(nw)])
         h_rows = self._h_rows
         h_start = C[h_rows] @ X0_S + D[h_rows, :n_u] @ U[:, 0]      # -J_s g . omega(0)
         X0_S[n_lin:] = np.array([w.initial_momentum for w in wheels.wheels]) - h_start
-        U_S = np.vstack([U, np.zeros((nw, n_t))])
-        Y = simulator.outputs(T, U_S, X0_S)
-        c_lin, h_lin = wheels.allocation @ Y[self._tc_rows], Y[h_rows]
-        E, torque_sat, momentum_sat = _deviations(wheels, c_lin, h_lin)
-        active = np.flatnonzero(np.any(E != 0.0, axis=0))
-        if active.size:
-            self._nonlinear_run(self._modes(dt), int(active[0]), U, X0_S, Y, E, torque_sat,
-                                momentum_sat)
+        shape = (nw, n_t)
+        E, torque_sat, momentum_sat = np.zeros(shape), np.zeros(shape, bool), np.zeros(shape,
+                                                                                       bool)
+        if S.nstates <= _SEGMENTS_FROM_START:
+            # small loops: every sample by segments, the first in the free mode
+            Y = np.empty((S.noutputs, n_t))
+            self._nonlinear_run(self._modes(dt), 0, U, X0_S, Y, E, torque_sat, momentum_sat)
+        else:
+            # the linear loop by the simulator (O(n) per sample), segments from the first
+            # sample where a wheel leaves it
+            Y = self._simulator(dt).outputs(T, np.vstack([U, np.zeros(shape)]), X0_S)
+            c_lin, h_lin = wheels.allocation @ Y[self._tc_rows], Y[h_rows]
+            E, torque_sat, momentum_sat = _deviations(wheels, c_lin, h_lin)
+            active = np.flatnonzero(np.any(E != 0.0, axis=0))
+            if active.size:
+                self._nonlinear_run(self._modes(dt), int(active[0]), U, X0_S, Y, E,
+                                    torque_sat, momentum_sat)
         return self._result(T, U, Y, E, torque_sat, momentum_sat)
 
     def _nonlinear_run(self, modes: _Modes, k0, U, X0, Y, E, torque_sat, momentum_sat):
@@ -318,51 +340,58 @@ class WheelLoop:
         response (module docstring): runs of samples in which every wheel stays in one affine
         mode are one segment of S with that mode's feedback, evolved exactly; samples whose
         deviation is not affine (several wheels scaled together), or where modes chatter, are
-        stepped one at a time with the deviation held over the step."""
-        nw, n_t = self.wheels.n_wheels, U.shape[1]
-        C, D = modes.C, modes.D
-        free = np.zeros(3 * nw + 1)
+        stepped one at a time (in their mode, or with the deviation held if it is not
+        affine)."""
+        n_t, nw = U.shape[1], self.wheels.n_wheels
         with one_blas_thread():
             x = X0
             for k in range(0, k0, modes.longest):      # the linear loop's state at k0
                 stop = min(k + modes.longest, k0)
-                x = modes.segment(free, x, U[:, k:stop + 1])[0][:, -1]
-            k, stepping, horizon = k0, 0, modes.first
+                x = modes.segment(modes.free, x, U[:, k:stop + 1])[:, -1]
+            k, stepping, horizon, key = k0, 0, modes.first, None
             while k < n_t:
-                u = U[:, k]
-                c, h = modes.commands(x[:, None], u[:, None])
-                key, ts, ms = modes.key(c, h)
-                if stepping or k == n_t - 1 or not modes.affine(key[:, 0]):
-                    # one sample: in its mode, or with e held where e is not affine
-                    if k == n_t - 1:
+                if key is None:                         # the mode at sample k
+                    c, h = modes.commands(x[:, None], U[:, k:k + 1])
+                    key, ts, ms = modes.key(c, h)
+                    key, ts, ms = key[:, 0], ts[:, 0], ms[:, 0]
+                affine = modes.affine(key)
+                if stepping or k == n_t - 1 or not affine:
+                    if affine:                          # one sample in its mode
+                        out = modes.outputs(key, x[:, None], U[:, k:k + 1])[:, 0]
+                        e = out[2 * nw:3 * nw]
+                        if k < n_t - 1:
+                            x = modes.segment(key, x, U[:, k:k + 2])[:, -1]
+                    else:                               # e held over the step
+                        c, h = modes.commands(x[:, None], U[:, k:k + 1])
                         e = self.wheels.applied_torques(c[:, 0], h[:, 0])[0] - c[:, 0]
-                        x1 = x
-                    elif modes.affine(key[:, 0]):
-                        x1, e = modes.segment(key[:, 0], x, U[:, k:k + 2])
-                        x1, e = x1[:, -1], e[:, 0]
-                    else:
-                        e = self.wheels.applied_torques(c[:, 0], h[:, 0])[0] - c[:, 0]
-                        x1 = modes.step(x, u, U[:, k + 1], e)
-                    E[:, k], torque_sat[:, k], momentum_sat[:, k] = e, ts[:, 0], ms[:, 0]
-                    Y[:, k] = C @ x + D @ np.concatenate([u, e])
-                    x = x1
+                        out = modes.held_outputs(x, U[:, k], e)
+                        if k < n_t - 1:
+                            x = modes.step(x, U[:, k], U[:, k + 1], e)
+                    E[:, k], torque_sat[:, k], momentum_sat[:, k] = e, ts, ms
+                    Y[:, k] = out[3 * nw:]
+                    key = None
                     k, stepping = k + 1, max(stepping - 1, 0)
                     continue
-                key = key[:, 0]
                 stop = min(k + horizon, n_t - 1)           # the segment's steps: k .. stop-1
-                Z, e_seg = modes.segment(key, x, U[:, k:stop + 1])     # x_k .. x_stop
-                cs, hs = modes.commands(Z[:, :-1], U[:, k:stop])
-                keys, ts, ms = modes.key(cs, hs)
-                same = np.all(keys == key[:, None], axis=0)
+                Z = modes.segment(key, x, U[:, k:stop + 1])           # x_k .. x_stop
+                out = modes.outputs(key, Z, U[:, k:stop + 1])         # [c; h; e; y]
+                keys, tss, mss = modes.key(out[:nw], out[nw:2 * nw])
+                same = np.all(keys[:, :-1] == key[:, None], axis=0)
                 # the first sample's mode is the one just chosen, whatever its round-off
                 j = stop - k if same[1:].all() else 1 + int(np.argmin(same[1:]))
-                E[:, k:k + j] = e_seg[:, :j]
-                torque_sat[:, k:k + j], momentum_sat[:, k:k + j] = ts[:, :j], ms[:, :j]
-                Y[:, k:k + j] = C @ Z[:, :j] + D @ np.vstack([U[:, k:k + j], e_seg[:, :j]])
+                E[:, k:k + j] = out[2 * nw:3 * nw, :j]
+                torque_sat[:, k:k + j], momentum_sat[:, k:k + j] = tss[:, :j], mss[:, :j]
+                torque_sat[:, k], momentum_sat[:, k] = ts, ms
+                Y[:, k:k + j] = out[3 * nw:, :j]
                 x = Z[:, j].copy()
+                # the mode at k + j, from its exact state x_(k+j) (the old mode acted before)
+                key, ts, ms = keys[:, j], tss[:, j], mss[:, j]
                 switched = j < stop - k
                 stepping = _CHATTER_STEPS if j == 1 and switched else 0
-                horizon = modes.first if switched else min(2 * horizon, modes.longest)
+                # the next segment: twice this one's length (a mode that lasted j samples is
+                # likely followed by one of similar length: limit cycles), doubled while it lasts
+                horizon = min(max(2 * j, _SHORTEST_SEGMENT) if switched else 2 * horizon,
+                              modes.longest)
                 k += j
                 if not np.all(np.isfinite(x)):
                     raise FloatingPointError("simulation with wheels overflowed: the loop's "
@@ -371,7 +400,17 @@ class WheelLoop:
     def _modes(self, dt) -> _Modes:
         key = None if dt is None else round(dt, 15)
         if key not in self._mode_cache:
-            self._mode_cache[key] = _Modes(self, self._simulator(dt), dt)
+            simulator = self._simulators.get(key)
+            if simulator is not None:       # its exact discrete matrices, if it has them
+                free = (simulator.Ad, simulator.Bd0, simulator.Bd1)
+            elif self.system.isdtime(strict=True):
+                B = np.asarray(self.system.B, dtype=float)
+                free = (np.asarray(self.system.A, dtype=float), B, np.zeros_like(B))
+            else:
+                with one_blas_thread():
+                    free = discretise(np.asarray(self.system.A, dtype=float),
+                                      np.asarray(self.system.B, dtype=float), dt, "linear")
+            self._mode_cache[key] = _Modes(self, free, dt)
         return self._mode_cache[key]
 
     def _result(self, T, U, Y, E, torque_sat, momentum_sat) -> WheelResponse:
@@ -445,18 +484,19 @@ class _Modes:
     e held.
     """
 
-    def __init__(self, loop: WheelLoop, simulator: Simulator, dt: float | None):
+    def __init__(self, loop: WheelLoop, free, dt: float | None):
         wheels, S = loop.wheels, loop.system
         nw, n_u = wheels.n_wheels, loop._n_u
         self.wheels, self.nw, self.n_u, self.dt = wheels, nw, n_u, dt
         A, B, C, D = (np.asarray(M, dtype=float) for M in (S.A, S.B, S.C, S.D))
-        self.A, self.B_u, self.B_e, self.C, self.D = A, B[:, :n_u], B[:, n_u:], C, D
+        self.A, self.B_u, self.B_e, self.C = A, B[:, :n_u], B[:, n_u:], C
+        self.Du, self.De = D[:, :n_u], D[:, n_u:]
         P = wheels.allocation
         self.Cc, self.Dc = P @ C[loop._tc_rows], P @ D[loop._tc_rows, :n_u]
         self.Ch, self.Dh = C[loop._h_rows], D[loop._h_rows, :n_u]
         self.discrete = S.isdtime(strict=True)
-        # S's own matrices: the free mode (e = g) and the held-e step
-        self.Ad, self.Bd0, self.Bd1 = simulator.Ad, simulator.Bd0, simulator.Bd1
+        # S's own exact discrete matrices (first-order hold): the free mode and the held-e step
+        self.Ad, self.Bd0, self.Bd1 = free
         self.tau = wheels.torque_limits[:, None]
         self.hmax = wheels.momentum_limits[:, None]
         self.cc = np.array([w.coulomb_friction for w in wheels.wheels])[:, None]
@@ -469,7 +509,9 @@ class _Modes:
         self.longest = int(np.clip(2 ** math.floor(math.log2(_SEGMENT_WORK / (levels * n * n))),
                                    _SHORTEST_SEGMENT, _LONGEST_SEGMENT))
         self.first = min(_FIRST_SEGMENT, self.longest)
+        self.free = np.zeros(3 * nw + 1)
         self._cache: dict = {}
+        self._constant_cache: dict = {}
 
     def commands(self, x: np.ndarray, u: np.ndarray):
         """The wheels' commands c and momenta h at states x (n, N) and inputs u (n_u, N)."""
@@ -494,15 +536,16 @@ class _Modes:
         np.multiply(np.sign(c), over & ~gated, out=key[nw:2 * nw])
         np.multiply(np.sign(h), self.has_coulomb, out=key[2 * nw:3 * nw])
         key[-1] = self.scaled & over.any(axis=0)
+        key += 0.0                     # -0.0 -> 0.0: one cache entry per mode
         return key, over, gated
 
     def affine(self, key: np.ndarray) -> bool:
         """Whether a sample's mode is affine."""
         return key[-1] == 0.0
 
-    def segment(self, key: np.ndarray, x: np.ndarray, U: np.ndarray):
+    def segment(self, key: np.ndarray, x: np.ndarray, U: np.ndarray) -> np.ndarray:
         """States x_k, ..., x_k+L of a segment of one mode from x_k and the inputs u_k, ...,
-        u_k+L (n_u, L + 1), and the deviations e_k, ..., e_k+L-1.
+        u_k+L (n_u, L + 1).
 
         x_(i+1) = Phi x_i + q_i, q_i = G0 v_i + G1 v_(i+1), v = [u; g] (the mode's exact
         discrete matrices), is an affine recursion; its prefix (scan) by doubling,
@@ -516,30 +559,60 @@ class _Modes:
         .. [1] W. D. Hillis, G. L. Steele, "Data parallel algorithms", Comm. ACM 29(12),
            1170-1183, 1986 (the prefix computation by doubling).
         """
-        nw = self.nw
-        K, Ku, G0, G1, powers = self._mode(key)
-        b, s = key[nw:2 * nw, None], key[2 * nw:3 * nw, None]
-        g = np.where(b != 0.0, b * np.where(b != 0.0, self.tau, 0.0), 0.0) + self.cc * s
+        mode = self._mode(key)
+        q_g = self._constants(key)[1]
         L = U.shape[1] - 1
-        V = np.vstack([U, np.broadcast_to(g, (nw, L + 1))])
         Y = np.empty((x.size, L + 1))
         Y[:, 0] = x
-        Y[:, 1:] = G0 @ V[:, :-1]
-        if G1 is not None:
-            Y[:, 1:] += G1 @ V[:, 1:]
+        np.matmul(mode.G0u, U[:, :-1], out=Y[:, 1:])
+        if mode.G1u is not None:
+            Y[:, 1:] += mode.G1u @ U[:, 1:]
+        if q_g is not None:
+            Y[:, 1:] += q_g
         d, level = 1, 0
         while d <= L:
-            Y[:, d:] += powers[level] @ Y[:, :-d]
+            Y[:, d:] += mode.powers[level] @ Y[:, :-d]
             d, level = 2 * d, level + 1
-        return Y, K @ Y[:, :-1] + Ku @ U[:, :-1] + g
+        return Y
 
-    def _mode(self, key: np.ndarray):
-        """A mode's gains K, K_u, discrete input matrices G0, G1 (G1 None for a digital loop)
-        and the powers Phi^(2^l), l = 0 .. log2(longest segment), built once (they depend on
-        a only)."""
-        nw = self.nw
+    def outputs(self, key: np.ndarray, X: np.ndarray, U: np.ndarray) -> np.ndarray:
+        """[c; h; e; y] at states X (n, N) and inputs U (n_u, N) in a mode: the wheels'
+        commands and momenta, the deviation e = K x + K_u u + g and S's outputs
+        y = C x + D_u u + D_e e, from one product with each of X and U."""
+        mode = self._mode(key)
+        out = mode.Mx @ X + mode.Mu @ U
+        const = self._constants(key)[0]
+        if const is not None:
+            out += const
+        return out
+
+    def held_outputs(self, x: np.ndarray, u: np.ndarray, e: np.ndarray) -> np.ndarray:
+        """[c; h; e; y] at one sample with a given e (a sample not in an affine mode)."""
+        c, h = self.commands(x[:, None], u[:, None])
+        y = self.C @ x + self.Du @ u + self.De @ e
+        return np.concatenate([c[:, 0], h[:, 0], e, y])
+
+    def _constants(self, key: np.ndarray):
+        """(the outputs' constant [0; 0; g; D_e g], column; the scan's G g), None where g = 0,
+        built once per key."""
+        cache = key.tobytes()
+        if cache not in self._constant_cache:
+            nw = self.nw
+            b, s = key[nw:2 * nw], key[2 * nw:3 * nw]
+            g = np.where(b != 0.0, b * np.where(b != 0.0, self.tau[:, 0], 0.0), 0.0) \
+                + self.cc[:, 0] * s
+            if not g.any():
+                self._constant_cache[cache] = (None, None)
+            else:
+                const = np.concatenate([np.zeros(2 * nw), g, self.De @ g])[:, None]
+                self._constant_cache[cache] = (const, (self._mode(key).Gg @ g)[:, None])
+        return self._constant_cache[cache]
+
+    def _mode(self, key: np.ndarray) -> _Mode:
+        """A mode's matrices (they depend on a only), built once."""
+        nw, nu = self.nw, self.n_u
         a = key[:nw]
-        cache = tuple(a.tolist())
+        cache = a.tobytes()
         if cache not in self._cache:
             K = -a[:, None] * self.Cc + self.cv * self.Ch
             Ku = -a[:, None] * self.Dc + self.cv * self.Dh
@@ -553,11 +626,32 @@ class _Modes:
                 else:
                     Phi, G0, G1 = (M[0] for M in discretise_blocks(A_M[None], B_M[None],
                                                                     self.dt, "linear"))
+            # g is constant over the step: its first-order hold is the zero-order hold
+            Gg = G0[:, nu:] if G1 is None else G0[:, nu:] + G1[:, nu:]
             powers = [Phi]
             for _ in range(int(math.log2(self.longest))):
                 powers.append(powers[-1] @ powers[-1])
-            self._cache[cache] = (K, Ku, G0, G1, powers)
+            self._cache[cache] = _Mode(
+                G0u=np.ascontiguousarray(G0[:, :nu]),
+                G1u=None if G1 is None else np.ascontiguousarray(G1[:, :nu]), Gg=Gg,
+                powers=powers,
+                Mx=np.vstack([self.Cc, self.Ch, K, self.C + self.De @ K]),
+                Mu=np.vstack([self.Dc, self.Dh, Ku, self.Du + self.De @ Ku]))
         return self._cache[cache]
+
+
+@dataclasses.dataclass(frozen=True)
+class _Mode:
+    """One mode's matrices (:class:`_Modes`): discrete input matrices of u (G1u None for a
+    digital loop) and of the constant g, the powers Phi^(2^l), and the output maps
+    [c; h; e; y] = Mx x + Mu u + [0; 0; g; D_e g]."""
+
+    G0u: np.ndarray
+    G1u: np.ndarray | None
+    Gg: np.ndarray
+    powers: list
+    Mx: np.ndarray
+    Mu: np.ndarray
 
 
 def _deviations(wheels: WheelSet, c: np.ndarray, h: np.ndarray):
