@@ -226,6 +226,9 @@ def characteristic_roots(kind: str, n: int) -> np.ndarray:
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ValueError(f"n must be a positive integer (number of roots); got {describe(n)}")
     limits.check("n", int(n), "roots", "roots at once")
+    if not isinstance(kind, str):
+        raise TypeError(f"kind must be a string, e.g. 'free-free'; got {type(kind).__name__} "
+                        f"{describe(kind)}")
     k = np.arange(1, n + 1, dtype=float)
     if kind == "free-free":    # cos x = sech x
         return _newton(lambda x: np.cos(x) - _sech(x),

@@ -496,6 +496,14 @@ def three_axis_root_model(xy: RootModel, xz: RootModel, torsion: RootModel,
         are named ``xy.<name>``, ``xz.<name>``, ``torsion.<name>``, ``axial.<name>``.
     """
     parts = {"xy": xy, "xz": xz, "torsion": torsion, "axial": axial}
+    for name, rm in parts.items():
+        n_root = 2 if name in ("xy", "xz") else 1
+        if not isinstance(rm, RootModel):
+            raise TypeError(f"{name} must be a RootModel (n_root = {n_root}); got "
+                            f"{type(rm).__name__} {describe(rm)}")
+        if rm.n_root != n_root:
+            raise ValueError(f"{name} must be a RootModel with n_root = {n_root}; got "
+                             f"n_root = {rm.n_root}")
     n = 6 + sum(rm.n - rm.n_root for rm in parts.values())
     M, C, K = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
     tip = np.zeros((3, n))

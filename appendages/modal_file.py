@@ -85,7 +85,12 @@ def read_modal_data(path) -> ModalAppendage:
         The data themselves are refused by :class:`~appendages.ModalAppendage` (the message is
         prefixed with the file's name).
     """
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be a file path (str or os.PathLike); got "
+                        f"{type(path).__name__}")
     name = os.fspath(path)
+    if not os.path.isfile(name):
+        raise FileNotFoundError(f"path must be an existing modal data file; got {name!r:.200}")
     with open(name, "rb") as handle:
         try:
             document = tomllib.load(handle)
@@ -183,5 +188,8 @@ def write_modal_data(appendage: ModalAppendage, path) -> None:
     lines.append("participation = " + _array(appendage.participation))
     if appendage.tip_motion is not None:
         lines.append("tip_motion = " + _array(appendage.tip_motion))
+    if not isinstance(path, (str, os.PathLike)):
+        raise TypeError(f"path must be a file path (str or os.PathLike); got "
+                        f"{type(path).__name__}")
     with open(os.fspath(path), "w", encoding="utf-8") as handle:
         handle.write("\n".join(lines) + "\n")

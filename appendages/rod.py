@@ -116,8 +116,9 @@ class Rod:
         stiffness_quantity, inertia_quantity = MOTIONS[motion]
         self.motion = motion
         self.length = check_range("length", length, "length")
-        self.stiffness = check_range(stiffness_quantity, stiffness, stiffness_quantity)
-        self.inertia = check_range(inertia_quantity, inertia, inertia_quantity)
+        self.stiffness = check_range(f"stiffness ({stiffness_quantity})", stiffness,
+                                     stiffness_quantity)
+        self.inertia = check_range(f"inertia ({inertia_quantity})", inertia, inertia_quantity)
         from .beam import _check_damping_ratio  # here: beam imports this module
 
         self.damping_ratio = _check_damping_ratio(damping_ratio)

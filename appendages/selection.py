@@ -157,7 +157,7 @@ def _check(tolerance, quantity, families) -> tuple[float, tuple]:
     tolerance = float(tolerance)
     if not (math.isfinite(tolerance) and 0.0 < tolerance < 1.0):
         raise ValueError(f"tolerance must lie in (0, 1) (relative error) [-]; got {describe(tolerance)}")
-    if quantity not in QUANTITIES:
+    if not isinstance(quantity, str) or quantity not in QUANTITIES:
         raise ValueError(f"quantity must be one of {QUANTITIES}; got {describe(quantity)}")
     if families is None:
         families = FAMILIES

@@ -14,7 +14,7 @@ import numpy as np
 from .signals import MESSAGE_VALUE_CHARS
 
 __all__ = ["describe", "real_number", "positive", "non_negative", "optional_positive",
-           "finite_vector"]
+           "finite_vector", "real_array", "frequency_grid", "check_choice", "check_inertia"]
 
 
 def describe(value, limit: int = MESSAGE_VALUE_CHARS) -> str:
@@ -84,3 +84,82 @@ def finite_vector(value, name: str, unit: str, length: int | None = None) -> np.
     if not np.all(np.isfinite(array)):
         raise ValueError(f"{name} must be finite [{unit}]; got {describe(value)}")
     return array
+
+
+def real_array(value, name: str, unit: str) -> np.ndarray:
+    """Real numbers (a number or a sequence of them) as a float64 array, or TypeError naming
+    ``name`` (strings, None, complex numbers, bools and other objects are refused)."""
+    if isinstance(value, (str, bytes, bool, np.bool_)) or value is None:
+        raise TypeError(f"{name} must be real numbers [{unit}]; got {type(value).__name__} "
+                        f"{describe(value)}")
+    try:
+        array = np.asarray(value)
+    except (ValueError, TypeError):  # ragged nesting, objects numpy cannot hold
+        array = np.asarray([object()], dtype=object)
+    if array.dtype == bool or array.dtype.kind not in "iuf":
+        raise TypeError(f"{name} must be real numbers [{unit}]; got {type(value).__name__} "
+                        f"{describe(value)}")
+    with np.errstate(over="ignore"):
+        return array.astype(float)
+
+
+def frequency_grid(omega, name: str = "omega", *, minimum: int = 1) -> np.ndarray:
+    """``omega`` as a 1-D float64 array of positive finite frequencies [rad/s], at least
+    ``minimum`` of them; TypeError or ValueError naming ``name`` (the values are those a
+    frequency response is evaluated at: from 1e-150 rad/s, where omega**2 stays a normal float)."""
+    grid = real_array(omega, name, "rad/s").reshape(-1)
+    if grid.size < minimum or not np.all(np.isfinite(grid)) or np.any(grid < 1e-150):
+        raise ValueError(f"{name} must be positive finite frequencies [rad/s], at least "
+                         f"{minimum} of them, each at least 1e-150 (its square stays a normal "
+                         f"float); got {describe(grid)}")
+    return grid
+
+
+def check_choice(value, name: str, choices) -> str:
+    """``value`` if it is one of the strings ``choices``, else TypeError (not a string) or
+    ValueError naming ``name``."""
+    if not isinstance(value, str):
+        raise TypeError(f"{name} must be one of {tuple(choices)}; got {type(value).__name__} "
+                        f"{describe(value)}")
+    if value not in choices:
+        raise ValueError(f"{name} must be one of {tuple(choices)}; got {describe(value)}")
+    return value
+
+
+def check_inertia(inertia, name: str = "inertia") -> np.ndarray:
+    """A 3x3 inertia tensor [kg*m**2] of a body, as float64, symmetrised.
+
+    Symmetric to 1e-9 of its largest entry, positive definite, finite, and its principal
+    moments j1 <= j2 <= j3 obey the triangle inequality j3 <= j1 + j2 (to 1e-9 relative;
+    equality is a flat plate): the checks of the hub's tensor in
+    :func:`spacecraft.kinematics.check_inertia_tensor`, kept here because controllers imports
+    no other flexsat package.
+
+    Raises
+    ------
+    TypeError
+        Not real numbers.
+    ValueError
+        Not 3x3, not finite, not symmetric, not positive definite, or no body's (the message
+        gives the principal moments).
+    """
+    J = real_array(inertia, name, "kg*m^2")
+    if J.shape != (3, 3):
+        raise ValueError(f"{name} must be a 3x3 tensor [kg*m^2]; got shape {J.shape}: "
+                         f"{describe(inertia)}")
+    if not np.all(np.isfinite(J)):
+        raise ValueError(f"{name} must be finite [kg*m^2]; got {describe(J)}")
+    scale = float(np.max(np.abs(J)))
+    if np.max(np.abs(J - J.T)) > 1e-9 * scale:
+        raise ValueError(f"{name} must be symmetric [kg*m^2] (to 1e-9 of its largest entry); "
+                         f"got {describe(J)}")
+    J = 0.5 * (J + J.T)
+    moments = np.linalg.eigvalsh(J)
+    if not moments[0] > 0.0:
+        raise ValueError(f"{name} must be positive definite [kg*m^2]; got principal moments "
+                         f"{describe(moments)}")
+    if moments[2] > (moments[0] + moments[1]) * (1.0 + 1e-9):
+        raise ValueError(f"{name} must be the inertia of a body [kg*m^2]: its largest principal "
+                         f"moment at most the sum of the other two (triangle inequality); got "
+                         f"principal moments {describe(moments)}")
+    return J

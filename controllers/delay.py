@@ -65,6 +65,10 @@ DELAY_SNAP = 1e-9
 MAX_DELAY_STATES = 10_000
 
 
+#: Longest delay [s] accepted: omega * delay stays finite up to 1e200 rad/s.
+MAX_DELAY = 1e100
+
+
 def check_delay(delay, name: str = "delay") -> float:
     """A delay [s]: a real number >= 0 and finite (0 for none); TypeError or ValueError naming
     it otherwise, a warning-free value for a plausible one."""
@@ -73,6 +77,9 @@ def check_delay(delay, name: str = "delay") -> float:
     delay = float(delay)
     if not (math.isfinite(delay) and delay >= 0):
         raise ValueError(f"{name} must be non-negative and finite [s]; got {delay:.6g}")
+    if delay > MAX_DELAY:
+        raise ValueError(f"{name} must be at most {MAX_DELAY:g} [s] (omega * delay, the phase "
+                         f"it adds, stays finite); got {delay:.6g}")
     return delay
 
 

@@ -19,6 +19,8 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.csgraph
 
+from .arguments import frequency_grid
+
 __all__ = ["CHUNK_BYTES", "frequency_response_data"]
 
 #: Largest temporary of one chunk of a frequency sweep [bytes]: the (frequencies x poles)
@@ -307,11 +309,9 @@ def frequency_response_data(system: control.StateSpace, omega, *, name: str | No
     """
     if not isinstance(system, control.StateSpace):
         raise TypeError(f"system must be a control.StateSpace; got {type(system).__name__}")
-    omega = np.sort(np.asarray(omega, dtype=float).reshape(-1))
-    if omega.size == 0 or not np.all(np.isfinite(omega)) or np.any(omega <= 0):
-        raise ValueError("omega must be positive finite frequencies [rad/s]; got "
-                         f"{np.array2string(omega[:5], precision=4)}"
-                         f"{'...' if omega.size > 5 else ''}")
+    omega = np.sort(frequency_grid(omega))
+    if name is not None and not isinstance(name, str):
+        raise TypeError(f"name must be a string or None; got {type(name).__name__}")
     ev = _evaluator(system, list(system.input_labels), list(system.output_labels))
     point = np.exp(1j * omega * float(system.dt)) if system.isdtime(strict=True) else 1j * omega
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):

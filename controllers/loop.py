@@ -19,6 +19,7 @@ import numpy as np
 
 from .delay import DelayedSampledPlant, delayed_closed_loop, total_delay
 from .frequency import _evaluator, _poles_of, _siso_zeros
+from .arguments import frequency_grid
 from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_pair, _check_plant,
                       _is_digital, _labels, _measurements, _reference_inputs, _short)
 from .threads import limits_blas_threads, total_states
@@ -450,8 +451,5 @@ def loop_frequency_response(plant, controller, omega: np.ndarray | None = None, 
     loop = _Loop(plant, controller, total_delay(controller, delay, computation_delay))
     if omega is None:
         omega = loop.grid()
-    omega = np.asarray(omega, dtype=float).reshape(-1)
-    if omega.size == 0 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
-        raise ValueError("omega must be positive finite frequencies [rad/s]; got "
-                         f"{omega[:5]}...")
+    omega = frequency_grid(omega)
     return omega, loop(omega)

@@ -44,6 +44,7 @@ import scipy.optimize
 
 from .delay import check_delay, total_delay
 from .loop import _Loop, close_loop, loop_frequency_response
+from .arguments import frequency_grid
 from .signals import _check_controller, _check_pair, _check_plant, _is_digital
 from .stability import _continuous_poles
 from .threads import limits_blas_threads, total_states
@@ -357,9 +358,9 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
     refine = omega is None
     if omega is None:
         omega = loop.grid()
-    omega = np.unique(np.asarray(omega, dtype=float).reshape(-1))
-    if omega.size < 2 or np.any(~np.isfinite(omega)) or np.any(omega <= 0):
-        raise ValueError("omega must hold at least two positive finite frequencies [rad/s]")
+    omega = np.unique(frequency_grid(omega, minimum=2))
+    if omega.size < 2:
+        raise ValueError("omega must hold at least two distinct frequencies [rad/s]")
     if refine and tau > 0.0:
         omega = _delay_grid(lambda w: _gain(loop.matrix(w)), omega, tau)
     if not loop.ch.mimo:
@@ -492,7 +493,14 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
     Margins
         With ``delay_margin``, the extra delay it tolerates (see :class:`Margins`).
     """
-    omega = np.asarray(omega, dtype=float).reshape(-1)
+    if not callable(loop):
+        raise TypeError(f"loop must be a function of omega [rad/s] giving L(j omega); got "
+                        f"{type(loop).__name__}")
+    omega = frequency_grid(omega, minimum=2)
+    if L is not None and not (isinstance(L, np.ndarray) and L.shape == omega.shape
+                              and L.dtype.kind in "fc"):
+        raise ValueError(f"L must be loop(omega), an array of {omega.size} numbers; got "
+                         f"{type(L).__name__} of shape {np.shape(L)}")
     delay = check_delay(delay)
     if delay > 0.0:
         bare, given = loop, L

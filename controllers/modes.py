@@ -38,7 +38,7 @@ import scipy.sparse.csgraph
 from .frequency import _ModalEvaluator, _evaluator
 from .loop import close_loop
 from .signals import (OMEGA, THETA, TORQUE, _check_plant, _is_digital, _require_signal,
-                      _short, channels)
+                      _real_number, _short, channels)
 from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _continuous_poles
 
 __all__ = ["FlexibleMode", "INFLUENCE_TOL", "rigid_body_inertia", "flexible_modes"]
@@ -178,6 +178,14 @@ def flexible_modes(plant: control.StateSpace, *, input: str | None = None,
         Sorted by frequency, one entry per complex-conjugate pair.
     """
     ch = _check_plant(plant)
+    for value, name in ((input, "input"), (output, "output")):
+        if value is not None and not isinstance(value, str):
+            raise TypeError(f"{name} must be a signal name (str) or None; got "
+                            f"{type(value).__name__} {_short(value)}")
+    min_participation = _real_number(min_participation, "min_participation", "-")
+    if not (math.isfinite(min_participation) and min_participation >= 0):
+        raise ValueError(f"min_participation must be non-negative and finite [-]; got "
+                         f"{min_participation:.6g}")
     if input is None and output is None:
         inputs, outputs = list(ch.torques), list(ch.thetas)
     else:

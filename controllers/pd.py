@@ -33,6 +33,7 @@ import numpy as np
 from .frequency import _evaluator
 from .margins import _crossings
 from .modes import _inertia_matrix, _verify_loop, flexible_modes, rigid_body_inertia
+from .arguments import check_choice, check_inertia, real_array
 from .signals import (OMEGA, THETA, THETA_REF, TORQUE, _check_plant, _real_number, _short,
                       channels)
 from .stability import _warn_removed
@@ -95,8 +96,21 @@ def natural_frequency_from_bandwidth(bandwidth: float, damping: float) -> float:
     """
     bandwidth = _positive(bandwidth, "bandwidth", "rad/s")
     damping = _positive(damping, "damping", "1")
-    z2 = damping * damping
-    return bandwidth / math.sqrt(1.0 - 2.0 * z2 + math.sqrt(4.0 * z2 * z2 - 4.0 * z2 + 2.0))
+    # wn = wb / sqrt(hypot(a, 1) - a), a = 2 zeta^2 - 1 (4 zeta^4 - 4 zeta^2 + 2 = a^2 + 1);
+    # for a > 0 the difference cancels, and 1 / (hypot(a, 1) - a) = hypot(a, 1) + a is exact.
+    # Written with a = zeta^2 b, b = 2 - zeta^-2, so that no zeta^2 overflows.
+    if damping <= 1.0:
+        a = 2.0 * damping * damping - 1.0
+        factor = 1.0 / math.sqrt(math.hypot(a, 1.0) - a)
+    else:
+        b = 2.0 - 1.0 / (damping * damping)
+        factor = damping * math.sqrt(b + math.hypot(b, 1.0 / (damping * damping)))
+    wn = bandwidth * factor
+    if not math.isfinite(wn):
+        raise ValueError(f"bandwidth {bandwidth:.6g} rad/s with damping {damping:.6g} needs a "
+                         f"natural frequency of about {bandwidth:.3g} x {factor:.3g} rad/s, "
+                         "beyond the floating-point range; choose a smaller bandwidth or damping")
+    return wn
 
 
 def pd_gains(inertia, natural_frequency, damping, *, axes: str = "principal"):
@@ -108,18 +122,42 @@ def pd_gains(inertia, natural_frequency, damping, *, axes: str = "principal"):
 
     Computed in IEEE arithmetic: a gain beyond the float64 range is inf (0 below it), never an
     OverflowError.
+
+    Parameters
+    ----------
+    inertia : float or (3, 3) array, kg*m**2
+        Positive and finite; a tensor symmetric positive definite and a body's
+        (:func:`controllers.arguments.check_inertia`).
+    natural_frequency : float or 3 floats, rad/s
+        Positive and finite (per axis for a tensor).
+    damping : float or 3 floats, -
+        Positive and finite (per axis for a tensor).
+    axes : {"principal", "hub"}
+
+    Raises
+    ------
+    TypeError, ValueError
+        A parameter that is not as above (named in the message).
     """
-    if np.ndim(inertia) == 0:
-        J, wn, zeta = (np.float64(x) for x in (inertia, natural_frequency, damping))
+    n_axes = 1 if np.ndim(inertia) == 0 and not isinstance(inertia, (list, tuple)) else 3
+    wn = _per_axis(natural_frequency, "natural_frequency", "rad/s", n_axes)
+    zeta = _per_axis(damping, "damping", "1", n_axes)
+    check_choice(axes, "axes", ("principal", "hub"))
+    if n_axes == 1:
+        return _gains(_positive(inertia, "inertia", "kg*m^2"), wn[0], zeta[0], axes)
+    return _gains(check_inertia(inertia), wn, zeta, axes)
+
+
+def _gains(J, wn, zeta, axes: str):
+    """pd_gains on checked arguments (a float J with floats wn, zeta; or a 3x3 J with 3 each)."""
+    if np.ndim(J) == 0:
         with np.errstate(over="ignore", under="ignore"):
+            J, wn, zeta = np.float64(J), np.float64(wn), np.float64(zeta)
             return float(J * wn * wn), float(2.0 * zeta * wn * J)
-    J = np.asarray(inertia, dtype=float)
-    wn = np.broadcast_to(np.asarray(natural_frequency, dtype=float), (3,))
-    zeta = np.broadcast_to(np.asarray(damping, dtype=float), (3,))
     with np.errstate(over="ignore", under="ignore", invalid="ignore"):
         if axes == "hub":
             return J * (wn * wn)[None, :], J * (2.0 * zeta * wn)[None, :]
-        j, R = principal_axes(J)
+        j, R = _principal_axes(J)
         return (R * (j * wn * wn)) @ R.T, (R * (2.0 * zeta * wn * j)) @ R.T
 
 
@@ -127,8 +165,17 @@ def principal_axes(inertia) -> tuple[np.ndarray, np.ndarray]:
     """Principal moments j [kg*m^2] and axes R (columns, hub axes) of an inertia tensor,
     J = R diag(j) R^T, ordered so that column i is the principal axis closest to hub axis i
     (the permutation maximising the product of |R_ii|) with R_ii > 0. A diagonal J gives
-    R = I exactly."""
-    J = np.asarray(inertia, dtype=float)
+    R = I exactly.
+
+    Raises
+    ------
+    TypeError, ValueError
+        ``inertia`` not a 3x3 inertia tensor of a body (:func:`controllers.arguments.check_inertia`).
+    """
+    return _principal_axes(check_inertia(inertia))
+
+
+def _principal_axes(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if np.count_nonzero(J - np.diag(np.diag(J))) == 0:
         return np.diag(J).copy(), np.eye(3)
     j, V = np.linalg.eigh(0.5 * (J + J.T))
@@ -343,7 +390,7 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
         raise ValueError("give exactly one of natural_frequency [rad/s] or bandwidth [rad/s]; got "
                          f"natural_frequency={_short(natural_frequency)}, "
                          f"bandwidth={_short(bandwidth)}")
-    if axes not in ("principal", "hub"):
+    if not isinstance(axes, str) or axes not in ("principal", "hub"):
         raise ValueError(f"axes must be 'principal' or 'hub'; got {_short(axes)}")
     damping = _per_axis(damping, "damping", "1", ch.n_axes)
     if natural_frequency is not None:
@@ -359,9 +406,9 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
     J = rigid_body_inertia(plant)
     with np.errstate(over="ignore", under="ignore"):
         if ch.mimo:
-            Kp, Kd = pd_gains(J, wn, damping, axes=axes)
+            Kp, Kd = _gains(J, wn, damping, axes)
         else:
-            Kp, Kd = pd_gains(J, wn[0], damping[0])
+            Kp, Kd = _gains(J, wn[0], damping[0], axes)
     if not (np.all(np.isfinite(Kp)) and np.all(np.isfinite(Kd))
             and np.all(np.diag(np.atleast_2d(Kp)) > 0) and np.all(np.diag(np.atleast_2d(Kd)) > 0)):
         J_text = f"{J:.4g}" if not ch.mimo else _short(np.round(J, 6))
@@ -393,7 +440,7 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
                                  "from torque to theta")
             wz = modes[0].frequency
         else:
-            wz = _positive(_real_number(notch, "notch", "rad/s"), "notch", "rad/s")
+            wz = _filter_frequency(notch, "notch")
         if wz <= 2.0 * wn_max:
             raise ValueError(f"notch frequency must exceed 2 x natural frequency = "
                              f"{2 * wn_max:.4g} rad/s (it would cut into the rigid-body loop); "
@@ -402,7 +449,7 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
                                                NOTCH_POLE_DAMPING), ch.n_axes) * controller
         filters.append(f"notch = {wz:.4g} rad/s")
     if roll_off is not None:
-        wr = _positive(roll_off, "roll_off", "rad/s")
+        wr = _filter_frequency(roll_off, "roll_off")
         if wr <= 2.0 * wn_max:
             raise ValueError(f"roll_off corner must exceed 2 x natural frequency = "
                              f"{2 * wn_max:.4g} rad/s; got {wr:.4g} rad/s")
@@ -472,12 +519,24 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
     return controller
 
 
+#: Largest filter frequency [rad/s]: its square, a coefficient of the filter, stays finite.
+MAX_FILTER_FREQUENCY = 1e150
+
+
+def _filter_frequency(value, name: str) -> float:
+    w = _positive(_real_number(value, name, "rad/s"), name, "rad/s")
+    if w > MAX_FILTER_FREQUENCY:
+        raise ValueError(f"{name} must be at most {MAX_FILTER_FREQUENCY:g} [rad/s] (its square "
+                         f"is a coefficient of the filter); got {w:.6g}")
+    return w
+
+
 def _per_axis(value, name: str, unit: str, n_axes: int) -> np.ndarray:
     """A positive specification per axis: a real number (every axis) or, for three axes, a
     sequence of 3 positive finite numbers [unit]."""
     if n_axes > 1 and isinstance(value, (list, tuple, np.ndarray)):
-        array = np.asarray(value)
-        if array.shape != (n_axes,) or array.dtype.kind not in "fiu":
+        array = real_array(value, name, unit)
+        if array.shape != (n_axes,):
             raise ValueError(f"{name} must be a real number or {n_axes} of them (one per axis) "
                              f"[{unit}]; got {_short(value)}")
         return np.array([_positive(float(x), f"{name}[{i}]", unit)

@@ -177,6 +177,7 @@ def _unit_axis(axis) -> np.ndarray | None:
     if e.shape != (3,) or not np.all(np.isfinite(e)) or not np.any(e):
         raise ValueError(f"axis must be a non-zero finite 3-vector (hub axes); got shape "
                          f"{e.shape}")
+    e = e / np.max(np.abs(e))  # scaled first: the norm of 1e-300 or 1e200 entries stays normal
     return e / np.linalg.norm(e)
 
 
@@ -429,7 +430,7 @@ def mode_shaper(modes, *, kind: str = "zvd") -> Shaper:
     kind : {"zv", "zvd"}
         The shaper of each mode.
     """
-    if kind not in SHAPER_KINDS:
+    if not isinstance(kind, str) or kind not in SHAPER_KINDS:
         raise ValueError(f"kind must be one of {SHAPER_KINDS}; got {str(kind)[:40]!r}")
     if isinstance(modes, (str, bytes)) or not isinstance(modes, Sequence) or not modes:
         raise ValueError("modes must be a non-empty sequence of FlexibleMode or (frequency "
@@ -524,7 +525,7 @@ class Profile:
 
     def __init__(self, kind: str, angle: float, breakpoints, coefficients, *, axis=None,
                  shaper: Shaper | None = None, base: "Profile | None" = None):
-        if kind not in PROFILE_KINDS:
+        if not isinstance(kind, str) or kind not in PROFILE_KINDS:
             raise ValueError(f"kind must be one of {PROFILE_KINDS}; got {str(kind)[:40]!r}")
         self.kind = kind
         self.angle = _angle(angle)
@@ -538,8 +539,8 @@ class Profile:
                 or self.breakpoints[0] != 0.0 or np.any(np.diff(self.breakpoints) <= 0)
                 or not np.all(np.isfinite(self.coefficients))):
             raise ValueError("breakpoints must increase from 0 [s], one more than the finite "
-                             f"coefficient rows (K, 4); got {self.breakpoints.size} breakpoints "
-                             f"and {self.coefficients.shape[0]} rows")
+                             f"rows of coefficients (K, 4); got {self.breakpoints.size} "
+                             f"breakpoints and {self.coefficients.shape[0]} rows")
         if shaper is not None and not isinstance(shaper, Shaper):
             raise TypeError(f"shaper must be a Shaper; got {type(shaper).__name__}")
         if base is not None and not isinstance(base, Profile):
@@ -723,7 +724,7 @@ class Profile:
             By signal name, as :meth:`references` names them.
         """
         dt = _positive(dt, "dt", "s")
-        if hold not in ("linear", "zero"):
+        if not isinstance(hold, str) or hold not in ("linear", "zero"):
             raise ValueError(f"hold must be 'linear' or 'zero'; got {str(hold)[:40]!r}")
         if norm not in ("sup", "integral"):
             raise ValueError(f"norm must be 'sup' or 'integral'; got {str(norm)[:40]!r}")
@@ -1008,7 +1009,7 @@ def minimum_time(kind: str, angle: float, *, inertia=None, torque_limit=None, ra
                  jerk_limit=None, axis=None) -> float:
     """Shortest duration [s] of a "bang-coast-bang" or "smooth" (jerk-limited) profile under
     the limits (closed form; see :func:`bang_coast_bang`, :func:`jerk_limited`)."""
-    if kind not in ("bang-coast-bang", "smooth"):
+    if not isinstance(kind, str) or kind not in ("bang-coast-bang", "smooth"):
         raise ValueError(f"kind must be 'bang-coast-bang' or 'smooth'; got {str(kind)[:40]!r}")
     theta = abs(_angle(angle))
     e = _unit_axis(axis)
@@ -1075,7 +1076,11 @@ def bang_coast_bang(angle: float, duration: float | None = None, *, inertia=None
                                                   "more than that)" if not math.isfinite(A)
                                                   else ""))
     ta = 0.5 * T if not math.isfinite(W) else min(0.5 * T, T - theta / W)
-    a = theta / (ta * (T - ta))
+    with np.errstate(over="ignore"):
+        a = theta / (ta * (T - ta)) if ta * (T - ta) > 0 else math.inf
+    if not math.isfinite(a):
+        raise ValueError(f"bang_coast_bang: duration {T:.6g} s is too short for the slew of "
+                         f"{angle:.6g} rad: its acceleration leaves the floating-point range")
     if duration is None or T <= t_min:
         a = min(a, A)  # at the shortest time the limit itself (no round-off above it)
     coast = max(T - 2.0 * ta, 0.0)
@@ -1229,7 +1234,7 @@ def reference_profile(kind: str, angle: float, duration: float | None = None, *,
     base : {"bang-coast-bang", "smooth"}
         The shaped profile's base.
     """
-    if kind not in PROFILE_KINDS:
+    if not isinstance(kind, str) or kind not in PROFILE_KINDS:
         raise ValueError(f"kind must be one of {PROFILE_KINDS}; got {str(kind)[:40]!r}")
     if kind == "step":
         if duration is None:
@@ -1247,7 +1252,7 @@ def reference_profile(kind: str, angle: float, duration: float | None = None, *,
         if not isinstance(shaper, Shaper):
             raise ValueError(f"shaper must be a Shaper for kind='shaped'; got "
                              f"{type(shaper).__name__}")
-        if base not in ("bang-coast-bang", "smooth"):
+        if not isinstance(base, str) or base not in ("bang-coast-bang", "smooth"):
             raise ValueError(f"base must be 'bang-coast-bang' or 'smooth'; got "
                              f"{str(base)[:40]!r}")
         if base == "bang-coast-bang" and jerk_limit is not None:

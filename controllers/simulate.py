@@ -160,9 +160,9 @@ class Simulator:
                 raise ValueError("dt must be given for a continuous-time system "
                                  "(sample step [s]); got None")
             dt = _check_dt(dt)
-        if hold not in HOLDS:
+        if not isinstance(hold, str) or hold not in HOLDS:
             raise ValueError(f"hold must be one of {HOLDS}; got {hold!r:.100}")
-        if method not in METHODS:
+        if not isinstance(method, str) or method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}; got {method!r:.100}")
         if method == "modal" and not kernel_available():
             raise RuntimeError("method='modal' needs numba (pip install numba); it is not "
@@ -303,7 +303,7 @@ class Simulator:
             The response of an unstable system overflows float64 (with
             ``on_overflow="raise"``, or at the very first sample).
         """
-        if on_overflow not in OVERFLOW_ACTIONS:
+        if not isinstance(on_overflow, str) or on_overflow not in OVERFLOW_ACTIONS:
             raise ValueError(f"on_overflow must be one of {OVERFLOW_ACTIONS}; got "
                              f"{on_overflow!r:.100}")
         T, U, X0 = self._check_run_arguments(T, U, X0)

@@ -76,6 +76,14 @@ def compare_metrics(actual: Mapping[str, float], expected: Mapping[str, float], 
     loop that did not settle) passes only if equal on both sides; a metric missing on either side
     fails. ``metrics`` defaults to every key of ``expected``.
     """
+    for value, what in ((actual, "actual"), (expected, "expected")):
+        if not isinstance(value, Mapping):
+            raise TypeError(f"{what} must be a mapping metric -> value (controllers.metrics); "
+                            f"got {type(value).__name__}")
+    if metrics is not None and (isinstance(metrics, str) or not isinstance(metrics, Sequence)
+                                or not all(isinstance(m, str) for m in metrics)):
+        raise TypeError(f"metrics must be a sequence of metric names or None; got "
+                        f"{type(metrics).__name__} {str(metrics)[:100]}")
     names = list(expected) if metrics is None else list(metrics)
     if not names:
         raise ValueError("metrics to compare must not be empty")

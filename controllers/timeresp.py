@@ -13,12 +13,14 @@ None, with ``diverged`` True and ``diverged_at`` set (see :func:`metrics`).
 from __future__ import annotations
 
 import math
+import warnings
 
 import control
 import numpy as np
 
 from .signals import (AXES, PLANAR, THETA, THETA_REF, THREE_AXIS, TIP_SUFFIX, TORQUE, Channels,
                       _real_number, _require_signal, _short, tip_outputs)
+from .arguments import real_array
 from .simulate import _OVERFLOW, simulate
 
 __all__ = ["METRIC_UNITS", "MAX_SAMPLES", "slew_profile", "slew", "step_response",
@@ -91,11 +93,15 @@ def _simulate(system, T, U):
     return stopped
 
 
-def _time_grid(system, t_final, dt, default_dt: float, max_samples) -> np.ndarray:
-    """Sample times 0, dt, ..., <= t_final, refused beyond max_samples before allocation."""
+def _time_grid(system, t_final, dt, default_dt: float, max_samples,
+               default_from: str = "t_final") -> np.ndarray:
+    """Sample times 0, dt, ..., <= t_final, refused beyond max_samples before allocation;
+    ``default_from`` names what t_final (when it is not "t_final") and the default dt are
+    derived from, for the messages."""
     t_final = _real_number(t_final, "t_final", "s")
     if not (np.isfinite(t_final) and t_final > 0):
-        raise ValueError(f"t_final must be positive and finite [s]; got {t_final:.6g}")
+        where = "" if default_from == "t_final" else f" (3 x {default_from} by default)"
+        raise ValueError(f"t_final must be positive and finite [s]{where}; got {t_final:.6g}")
     limit = MAX_SAMPLES if max_samples is None else _real_number(max_samples, "max_samples",
                                                                  "1")
     if not limit >= 2:
@@ -108,7 +114,8 @@ def _time_grid(system, t_final, dt, default_dt: float, max_samples) -> np.ndarra
     else:
         step = default_dt if dt is None else _real_number(dt, "dt", "s")
         if not (np.isfinite(step) and step > 0):
-            raise ValueError(f"dt must be positive and finite [s]; got {step:.6g}")
+            where = "" if dt is not None else f" (by default a fraction of {default_from})"
+            raise ValueError(f"dt must be positive and finite [s]{where}; got {step:.6g}")
     n_float = t_final / step + 1.0
     if n_float > limit:
         signals = system.noutputs + system.ninputs
@@ -162,6 +169,7 @@ def _axis_vector(axis, ch: Channels) -> np.ndarray:
     e = np.asarray(axis, dtype=float)
     if e.shape != (3,) or not np.all(np.isfinite(e)) or not np.any(e):
         raise ValueError(f"axis must be a non-zero finite 3-vector (hub axes); got {_short(axis)}")
+    e = e / np.max(np.abs(e))  # scaled first: the norm of 1e-300 or 1e200 entries stays normal
     return e / np.linalg.norm(e)
 
 
@@ -173,6 +181,11 @@ def _check_slew(angle, duration, name: str = "duration") -> tuple[float, float]:
         raise ValueError(f"angle must be non-zero and finite [rad]; got {angle:.6g}")
     if not (np.isfinite(duration) and duration > 0):
         raise ValueError(f"{name} must be positive and finite [s]; got {duration:.6g}")
+    if abs(angle) > 2.0 * math.pi:
+        # radians here, as everywhere in the Python API; a scene file gives degrees
+        warnings.warn(f"angle = {angle:g} rad is more than a turn (2 pi rad); did you give "
+                      f"degrees? {angle:g} deg = {math.radians(angle):.6g} rad", UserWarning,
+                      stacklevel=3)
     return angle, duration
 
 
@@ -187,19 +200,31 @@ def slew_profile(t: np.ndarray, angle: float, duration: float) -> np.ndarray:
     Parameters
     ----------
     t : array of float, s
+        Finite times.
     angle : float, rad
+        Non-zero and finite (more than a turn, 2 pi, is warned about: degrees given?).
     duration : float, s
+        Positive and finite.
 
     Returns
     -------
     ndarray, rad, same shape as t
 
+    Raises
+    ------
+    TypeError, ValueError
+        A parameter that is not as above (named in the message).
+
     References
     ----------
     R. L. Norton, Design of Machinery, 5th ed., sec. 8.6 (cycloidal displacement).
     """
-    t = np.asarray(t, dtype=float)
-    tau = np.clip(t / duration, 0.0, 1.0)
+    t = real_array(t, "t", "s")
+    if not np.all(np.isfinite(t)):
+        raise ValueError(f"t must be finite times [s]; got {_short(t)}")
+    angle, duration = _check_slew(angle, duration)
+    with np.errstate(over="ignore"):  # t / a subnormal duration: inf, clipped to 1
+        tau = np.clip(t / duration, 0.0, 1.0)
     return angle * (tau - np.sin(2.0 * np.pi * tau) / (2.0 * np.pi))
 
 
@@ -252,7 +277,7 @@ def slew(closed_loop: control.StateSpace, angle: float, duration: float, *,
         _require_signal(closed_loop, name, "input", "closed_loop")
     angle, duration = _check_slew(angle, duration)
     t_final = 3.0 * duration if t_final is None else t_final
-    T = _time_grid(closed_loop, t_final, dt, duration / 500.0, max_samples)
+    T = _time_grid(closed_loop, t_final, dt, duration / 500.0, max_samples, "duration")
     profile = slew_profile(T, angle, duration)
     U = _inputs(closed_loop, T.size, **{name: e_i * profile if ch.mimo else profile
                                         for name, e_i in zip(ch.refs, e)})
@@ -327,6 +352,9 @@ def disturbance_response(closed_loop: control.StateSpace, input: str = "disturba
 def _step_on(closed_loop, input: str, amplitude, unit: str, t_final, dt, max_samples
              ) -> control.TimeResponseData:
     """Step of ``amplitude`` on one closed-loop input at t = 0, every other input zero."""
+    if not isinstance(input, str):
+        raise TypeError(f"input must be the name of a closed-loop input (str); got "
+                        f"{type(input).__name__} {_short(input)}")
     _check_closed_loop(closed_loop)
     _require_signal(closed_loop, input, "input", "closed_loop")
     amplitude = _real_number(amplitude, "amplitude", unit)
@@ -542,7 +570,7 @@ def profile_response(closed_loop: control.StateSpace, profile, *, inertia=None,
     if ch.mimo != (profile.axis is not None):
         raise ValueError(f"profile must be {'three-axis (with an axis)' if ch.mimo else 'planar'}"
                          f" for this {'three-axis' if ch.mimo else 'planar'} closed loop")
-    if hold not in ("linear", "zero", "generator"):
+    if not isinstance(hold, str) or hold not in ("linear", "zero", "generator"):
         raise ValueError(f"hold must be 'linear', 'zero' or 'generator'; got {_short(hold)}")
     labels = list(closed_loop.input_labels)
     for name in ch.refs:

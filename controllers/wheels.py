@@ -55,7 +55,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .arguments import describe, finite_vector, non_negative, optional_positive, real_number
+from .arguments import (check_inertia, describe, finite_vector, non_negative, optional_positive,
+                        real_number)
 from .profiles import minimum_time
 
 __all__ = ["ReactionWheel", "WheelSet", "SATURATION_MODES", "MIN_SPAN_RATIO",
@@ -531,8 +532,8 @@ def check_slew_time(wheels: WheelSet, angle: float, duration: float, inertia, *,
         limits = _slew_limits(wheels, angle, inertia, axis)
         about = "" if wheels.planar else f" about {np.array2string(limits['axis'], precision=4)}"
         raise ValueError(
-            f"duration {duration_s:.6g} s is too short for a {math.degrees(angle):.6g} deg "
-            f"slew{about} with these wheels: their torque capacity {limits['torque']:.4g} N*m "
+            f"duration {duration_s:.6g} s is too short for the slew of angle {angle:.6g} rad "
+            f"({math.degrees(angle):.6g} deg){about} with these wheels: their torque capacity {limits['torque']:.4g} N*m "
             f"and momentum room {limits['momentum_room']:.4g} N*m*s (for the inertia "
             f"{limits['inertia']:.6g} kg*m^2 about the slew axis) allow it in no less than "
             f"{shortest:.4g} s")
@@ -571,6 +572,9 @@ def _inertia_times(inertia, e: np.ndarray, planar: bool):
         if not (math.isfinite(J) and J > 0):
             raise ValueError(f"inertia must be positive and finite [kg*m^2]; got "
                              f"{describe(inertia)}")
+        if not 1e-20 <= J <= 1e20:  # flexsat's inertia range: J, 1/J and their products finite
+            raise ValueError(f"inertia must lie in [1e-20, 1e20] [kg*m^2]; got "
+                             f"{describe(inertia)}")
         return J
     try:
         M = np.asarray(inertia, dtype=float)
@@ -584,4 +588,4 @@ def _inertia_times(inertia, e: np.ndarray, planar: bool):
     if not (symmetric and np.all(np.linalg.eigvalsh(0.5 * (M + M.T)) > 0)):
         raise ValueError(f"inertia must be symmetric positive definite [kg*m^2]; got "
                          f"{describe(inertia)}")
-    return M @ e
+    return check_inertia(M) @ e  # and a body's (triangle inequality)

@@ -88,6 +88,8 @@ def guess_unit(name: str) -> str | None:
     >>> guess_unit("theta_ref"), guess_unit("omega"), guess_unit("M"), guess_unit("F_y")
     ('rad', 'rad/s', 'N.m', 'N')
     """
+    if not isinstance(name, str):
+        raise TypeError(f"name must be a signal name (str); got {type(name).__name__}")
     words = [w for w in re.split(r"[^A-Za-z0-9]+|(?<=[a-z])(?=[A-Z])", name) if w]
     unit = None
     for word in words:

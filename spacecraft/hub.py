@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from appendages.interface import RANGES, check_range, describe
+from appendages.unit_slips import warn_angle_in_degrees
 
 from .kinematics import (check_inertia_tensor, check_rotation, mount_transformation,
                          planar_orientation, real_vector3)
@@ -141,7 +142,10 @@ class Mount:
     direction : float or (float, float), optional
         Planar mounts: the appendage's x axis in hub axes, an angle [rad] from the hub's x
         axis (at most 1e6 rad in magnitude: beyond, a double cannot resolve the angle to
-        1e-10 rad), or a non-zero vector of two real numbers; default 0.
+        1e-10 rad), or a non-zero vector of two real numbers; default 0. Radians, as
+        everywhere in the Python API (a scene file gives degrees): an angle of more than a
+        turn (|direction| > 2 pi) is warned about (:class:`appendages.unit_slips.UnitWarning`), as
+        it is more likely degrees.
     orientation : (3, 3) array, optional
         Three-axis mounts: a rotation matrix whose columns are the appendage's local x, y, z
         axes in hub axes (orthonormal to 1e-9, det +1; helpers in
@@ -168,9 +172,9 @@ class Mount:
             if direction is not _UNSET:
                 raise TypeError("give direction (a planar mount) or orientation (three axes), "
                                 f"not both; got direction {describe(direction)}")
-            position = real_vector3("position", position, "m")
             self._orientation = check_rotation("orientation", orientation)
             self._orientation.flags.writeable = False
+            position = real_vector3("position", position, "m")
             if not hasattr(appendage, "W6"):
                 raise TypeError(
                     "a three-axis mount needs an appendage with W6(s) (root motions per root "
@@ -211,6 +215,7 @@ class Mount:
             if not math.isfinite(angle) or abs(angle) > ANGLE_LIMIT:
                 raise ValueError(f"direction must be a finite angle of at most {ANGLE_LIMIT:g} "
                                  f"in magnitude [rad] or a 2-vector; got {describe(direction)}")
+            warn_angle_in_degrees("direction", angle, stacklevel=4)
             return angle
         if isinstance(direction, (str, bytes, complex, np.complexfloating, bool, np.bool_)) \
                 or direction is None:

@@ -28,6 +28,7 @@ import math
 import numpy as np
 
 from appendages.interface import RANGES, describe
+from appendages.unit_slips import warn_angle_in_degrees
 
 __all__ = ["ORTHONORMALITY_TOLERANCE", "SYMMETRY_TOLERANCE", "TRIANGLE_TOLERANCE",
            "check_inertia_tensor",
@@ -168,6 +169,8 @@ def euler_orientation(sequence: str, angles) -> np.ndarray:
         Three axes, e.g. ``"ZYX"`` (upper case: intrinsic rotations, each about the axes
         already turned; lower case: extrinsic, about the hub's fixed axes).
     angles : sequence of three floats, rad
+        Radians, as everywhere in the Python API (a scene file gives degrees); an angle of
+        more than a turn is warned about (:class:`appendages.unit_slips.UnitWarning`).
 
     Returns
     -------
@@ -185,6 +188,8 @@ def euler_orientation(sequence: str, angles) -> np.ndarray:
                          f"(intrinsic), no two consecutive alike (e.g. 'ZYX', 'zxz'); got "
                          f"{describe(sequence)}")
     angles = real_vector3("angles", angles, "rad")
+    for k, angle in enumerate(angles):
+        warn_angle_in_degrees(f"angles[{k}]", float(angle))
     return Rotation.from_euler(sequence, angles).as_matrix()
 
 
@@ -206,13 +211,16 @@ def orientation_from_axis(x_axis, y_axis=None) -> np.ndarray:
         ``[x, y, z]`` columns, ``z = x x y``.
     """
     x = real_vector3("x_axis", x_axis, "-")
-    if np.linalg.norm(x) == 0.0:
+    if not np.any(x):
         raise ValueError("x_axis must be a nonzero vector [-]; got (0, 0, 0)")
+    x = x / np.max(np.abs(x))  # scaled first: the norm of tiny or huge entries stays normal
     x = x / np.linalg.norm(x)
     if y_axis is None:
         y = np.eye(3)[int(np.argmin(np.abs(x)))]
     else:
         y = real_vector3("y_axis", y_axis, "-")
+        if np.any(y):
+            y = y / np.max(np.abs(y))
     size = np.linalg.norm(y)
     y = y - (y @ x) * x
     if np.linalg.norm(y) <= 1e-9 * size:

@@ -244,6 +244,9 @@ class OutputFolder:
     """
 
     def __init__(self, path: str | os.PathLike | None = None):
+        if path is not None and not isinstance(path, (str, os.PathLike)):
+            raise TypeError(f"path must be a folder path (str or os.PathLike) or None; got "
+                            f"{type(path).__name__} {path!r:.100}")
         self.requested = None if path is None else Path(path)
         self.path: Path | None = None
         self.partial: Path | None = None

@@ -674,9 +674,9 @@ def report_blocks(data: dict, images: list) -> list:
                          f"{_label(f['design']) if f['design'] else 'the design chain'}, "
                          f"{f['input']} on the {f['model']} model" for f in files["timeseries"]]))
     if data.get("warnings"):
-        b.append(("h2", "Numerical warnings"))
-        b.append(("p", "Warnings raised by the numerical libraries while running the scene "
-                       "(each once):"))
+        b.append(("h2", "Warnings"))
+        b.append(("p", "Scene values that look like unit slips (UnitWarning), then warnings "
+                       "raised while running the scene (each once):"))
         b.append(("ul", list(data["warnings"])))
     stats = data.get("stats", {})
     b.append(("h2", "Work done"))

@@ -43,7 +43,8 @@ from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, g
                        withheld_metrics)
 
 __all__ = ["RunStats", "RunResult", "run", "ProgressCallback", "equivalence_table", "FIT_LABELS",
-           "raised_by_flexsat", "LQR_FREQUENCY_RANGE", "diverged_at", "warning_lines"]
+           "raised_by_flexsat", "LQR_FREQUENCY_RANGE", "diverged_at", "warning_lines",
+           "input_warning_lines"]
 
 # Most distinct warnings kept in a run's results.
 _MAX_WARNINGS = 20
@@ -417,7 +418,7 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
             blas_threads_for(estimate_cost(scene).loop_states):
         warnings.simplefilter("default")
         result = _Runner(scene, progress, stats, time_responses).run()
-    result.data["warnings"] = warning_lines(caught)
+    result.data["warnings"] = input_warning_lines(scene) + warning_lines(caught)
     return result
 
 
@@ -429,13 +430,20 @@ def _run_three_axis(scene, progress, stats, time_responses) -> RunResult:
     with warnings.catch_warnings(record=True) as caught, library_limits(scene.limits):
         warnings.simplefilter("default")
         out = run_three_axis(scene, progress=progress, time_responses=time_responses)
-    out["data"]["warnings"] = out["data"]["warnings"] + warning_lines(caught)
+    out["data"]["warnings"] = (input_warning_lines(scene) + out["data"]["warnings"]
+                               + warning_lines(caught))
     return RunResult(scene=scene, data=out["data"], stats=stats,
                      truth={"plant": out["plants"]["truth"]},
                      designs={"design": {"plant": out["plants"]["design"],
                                          "controllers": out["controllers"]}},
                      responses=out["responses"], loops=out["loops"], models={},
                      three_axis=out)
+
+
+def input_warning_lines(scene) -> list[str]:
+    """The scene's values that look like unit slips (:attr:`Scene.input_warnings`), as warning
+    lines (``UnitWarning: <file>: <key>: ...``)."""
+    return [f"UnitWarning: {line}" for line in scene.input_warnings]
 
 
 def warning_lines(caught) -> list[str]:

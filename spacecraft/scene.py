@@ -266,6 +266,8 @@ from typing import Any
 
 import numpy as np
 
+from appendages.unit_slips import damping_in_percent, modulus_in_megapascals, radians_in_degrees
+
 from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, estimate_cost
 from .scene_reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
                            _NAME, _Reader, _kind, _quoted, _short, _shown)
@@ -347,8 +349,14 @@ def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
     density = youngs = None
     if section != "uniform":
         density = r.number(t, "density", path, "beam.density")
-        youngs = r.number(t, "youngs_modulus", path, "beam.youngs_modulus")
-    damping = r.number(t, "damping_ratio", path, "beam.damping_ratio", default=0.0)
+        youngs = _with_unit_hint(lambda: r.number(t, "youngs_modulus", path,
+                                                  "beam.youngs_modulus"),
+                                 t.get("youngs_modulus"), _modulus_hint)
+        r.warn(f"{path}.youngs_modulus", modulus_in_megapascals(youngs, density))
+    damping = _with_unit_hint(lambda: r.number(t, "damping_ratio", path, "beam.damping_ratio",
+                                               default=0.0),
+                              t.get("damping_ratio"), _percent_hint)
+    r.warn(f"{path}.damping_ratio", damping_in_percent(damping))
     allowed = {"section", "length", "damping_ratio", *_SECTION_KEYS[section]}
     if section != "uniform":
         allowed |= {"density", "youngs_modulus", "poisson_ratio"}
@@ -374,6 +382,33 @@ def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
                       f"and material) lies outside [{lo:g}, {hi:g}] rad/s, the range flexsat's "
                       "models are verified for; check the units of length, section and material")
     return BeamSpec(section, length, tuple(dims.items()), density, youngs, damping, poisson)
+
+
+def _with_unit_hint(read, value, hint):
+    """``read()``, its SceneError completed by ``hint(value)`` (the likely unit slip of a value
+    outside the range) when there is one."""
+    try:
+        return read()
+    except SceneError as exc:
+        said = hint(value) if isinstance(value, (int, float)) and not isinstance(value, bool) \
+            else None
+        if said is None:
+            raise
+        raise SceneError(f"{exc}; {said}") from None
+
+
+def _modulus_hint(value: float) -> str | None:
+    """Below 1e5 Pa: the modulus in MPa or GPa gives a structural material (1e8-1e12 Pa)."""
+    for factor, unit in ((1e6, "MPa"), (1e9, "GPa")):
+        if 0 < value < 1e5 and 1e8 <= value * factor <= 1e12:
+            return f"did you give {unit}? {value:g} {unit} = {value * factor:g} Pa"
+    return None
+
+
+def _percent_hint(value: float) -> str | None:
+    """1 to 100: a damping ratio in per cent."""
+    return (f"did you give per cent? {value:g} % = {value / 100:g}" if 1 <= value <= 100
+            else None)
 
 
 _CHAIN_ARRAYS = {"lengths": "chain.lengths", "masses": "chain.masses",
@@ -453,7 +488,9 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
             raise r.error(full, "must be a non-zero vector")
         direction = math.atan2(vec[1], vec[0])
     else:
-        direction = math.radians(r.check_number(direction_value, full, "direction"))
+        degrees = r.check_number(direction_value, full, "direction")
+        r.warn(full, radians_in_degrees(degrees))
+        direction = math.radians(degrees)
     beam = _read_beam(r, t.pop("beam"), f"{path}.beam") if "beam" in t else None
     if three_axis:
         _check_three_axis_appendage(r, t, path, beam)
@@ -540,6 +577,8 @@ def _read_orientation(r: _Reader, t: dict, path: str) -> tuple:
     from .kinematics import euler_orientation
 
     angles = r.vector(t, "orientation", path, "orientation", default=(0.0, 0.0, 0.0), size=3)
+    for k, angle in enumerate(angles):
+        r.warn(f"{path}.orientation[{k}]", radians_in_degrees(angle))
     sequence, full = r.take(t, "orientation_sequence", path, "ZYX")
     try:
         R = euler_orientation(sequence, [math.radians(a) for a in angles])
@@ -624,7 +663,9 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
 
 def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> ManoeuvreSpec:
     t = r.table(data, path)
-    angle = math.radians(r.number(t, "slew_angle", path, "manoeuvre.slew_angle"))
+    degrees = r.number(t, "slew_angle", path, "manoeuvre.slew_angle")
+    r.warn(f"{path}.slew_angle", radians_in_degrees(degrees))
+    angle = math.radians(degrees)
     slew_time = r.number(t, "slew_time", path, "manoeuvre.slew_time")
     duration = r.number(t, "duration", path, "manoeuvre.duration", default=None)
     duration = 3.0 * slew_time if duration is None else duration
@@ -675,10 +716,14 @@ def _read_slew_axis(r: _Reader, t: dict, path: str) -> tuple:
                           f"got {_shown(value)}")
         return tuple(float(a == value) for a in "xyz")
     axis = r.vector({"slew_axis": value}, "slew_axis", path, "manoeuvre.slew_axis", size=3)
-    norm = math.sqrt(sum(a * a for a in axis))
-    if norm == 0.0:
+    largest = max(abs(a) for a in axis)
+    if largest == 0.0:
         raise r.error(full, "must be a non-zero vector (hub axes); got [0, 0, 0]")
-    return tuple(a / norm for a in axis)
+    # scaled by the largest entry first: [1e-300, 0, 0] is the x axis, not a zero vector
+    # (its squares would underflow)
+    scaled = [a / largest for a in axis]
+    norm = math.sqrt(sum(a * a for a in scaled))
+    return tuple(a / norm for a in scaled)
 
 
 def _read_simulator(r: _Reader, data, path: str) -> SimulatorSpec:
@@ -901,7 +946,7 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) ->
                   fidelity=fidelity, controller=controller, manoeuvre=manoeuvre,
                   outputs=outputs, export=export,
                   report=ReportSpec(plots, equivalence, timeseries), limits=r.limits,
-                  simulator=simulator)
+                  simulator=simulator, input_warnings=tuple(r.warnings))
     _check_cost(r, scene)
     return scene
 
@@ -992,7 +1037,7 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         Naming the file, the key path and the problem (also for a missing, unreadable, too
         large or deeply nested file, or bad TOML), or the work limit a scene exceeds.
     """
-    overrides = read_limits(limits, "--limit") if limits else {}
+    overrides = read_limits(limits, "--limit") if limits is not None else {}
     if isinstance(scene, Scene):
         return scene
     if scene is None:
@@ -1058,10 +1103,13 @@ def _guarded(read, name: str) -> Scene:
 
 def scene_path(name: str) -> Path:
     """Path of an embedded scene (``"default"``, ``"single_boom"``, ``"two_wings"``...)."""
+    if not isinstance(name, str):
+        raise TypeError(f"name must be the name of an embedded scene (a string); got "
+                        f"{type(name).__name__} {_shown(name)}")
     resource = importlib.resources.files("spacecraft").joinpath("scenes", f"{name}.toml")
     path = Path(str(resource))
     if not path.is_file():
-        raise SceneError(f"no embedded scene {_shown(name)}; available: "
+        raise SceneError(f"name: no embedded scene {_shown(name)}; available: "
                          + ", ".join(example_scenes()))
     return path
 

@@ -170,6 +170,14 @@ class _Reader:
     def __init__(self, source: str, limits: Limits | None = None):
         self.source = source
         self.limits = Limits() if limits is None else limits
+        self.warnings: list[str] = []
+
+    def warn(self, path: str, problem: str | None) -> None:
+        """Record a value that looks like a unit slip (``problem`` from
+        :mod:`appendages.unit_slips`; None: nothing to say) for :attr:`Scene.input_warnings`."""
+        if problem is not None:
+            where = f"{self.source}: " if self.source else ""
+            self.warnings.append(f"{where}{path}: {problem}")
 
     def error(self, path: str, problem: str) -> SceneError:
         where = f"{self.source}: " if self.source else ""

@@ -263,6 +263,9 @@ class Scene:
     report: ReportSpec
     limits: Limits = Limits()
     simulator: SimulatorSpec = SimulatorSpec()
+    #: Values that look like unit slips, one line each naming the key and the likely mistake
+    #: (:mod:`appendages.unit_slips`); the run reports them with its warnings.
+    input_warnings: tuple = ()
 
     @property
     def three_axis(self) -> bool:
@@ -316,6 +319,7 @@ def scene_dict(scene: Scene) -> dict:
         table ``dimensions``), plus ``units`` naming the unit system.
     """
     out = _plain(scene)
+    del out["input_warnings"]  # reported with the run's warnings, not a key of the scene
     out["units"] = ("SI: m, kg, s, N, Pa, rad (slew_angle, direction), rad/s; controller and "
                     "simulator sample_time in s")
     return out

@@ -255,7 +255,9 @@ def test_three_axis_shortest_slew_needs_the_axis_and_a_tensor():
     with pytest.raises(ValueError, match="inertia must be symmetric positive definite"):
         controllers.shortest_slew_time(ws, 0.1, -inertia, axis=[1, 0, 0])
     # off a principal axis the torque J e a and momentum J e omega point along J e, not e
-    full = np.array([[300.0, 40.0, 0.0], [40.0, 200.0, 0.0], [0.0, 0.0, 100.0]])
+    # (J_zz 150, not 100: principal moments 186, 314 and 100 break the triangle inequality of a
+    # body, 314 > 186 + 100, and are refused; J e is the same)
+    full = np.array([[300.0, 40.0, 0.0], [40.0, 200.0, 0.0], [0.0, 0.0, 150.0]])
     e = np.array([1.0, 0.0, 0.0])
     Je = full @ e
     u = Je / np.linalg.norm(Je)

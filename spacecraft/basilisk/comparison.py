@@ -102,6 +102,14 @@ def compare(response: control.TimeResponseData, reference: control.TimeResponseD
         name -> ``{"peak": max |reference|, "peak_difference": max |response - reference|,
         "relative": peak_difference / peak}`` (relative is None where the peak is 0).
     """
+    for value, what in ((response, "response"), (reference, "reference")):
+        if not isinstance(value, control.TimeResponseData):
+            raise TypeError(f"{what} must be a control.TimeResponseData; got "
+                            f"{type(value).__name__}")
+    if names is not None and (isinstance(names, str) or not all(
+            isinstance(n, str) for n in np.atleast_1d(np.asarray(names, dtype=object)))):
+        raise TypeError(f"names must be a sequence of signal names (str) or None; got "
+                        f"{names!r:.100}")
     t = np.asarray(response.time, dtype=float)
     t_ref = np.asarray(reference.time, dtype=float)
     same = t.shape == t_ref.shape and np.allclose(t, t_ref, rtol=0.0, atol=1e-9)

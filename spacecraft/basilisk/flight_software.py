@@ -168,6 +168,9 @@ def default_sample_time(plant: control.StateSpace, controller: control.StateSpac
     """
     import controllers
 
+    if not isinstance(controller, control.StateSpace):
+        raise TypeError(f"controller must be a control.StateSpace; got "
+                        f"{type(controller).__name__}")
     if controller.dt not in (None, 0) and controller.dt is not True:
         return float(controller.dt)
     omega, L = controllers.loop_frequency_response(plant, controller)

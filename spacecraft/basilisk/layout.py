@@ -241,6 +241,9 @@ def chain_spacecraft(spacecraft: Spacecraft, chains: Mapping | None = None) -> S
     """
     if not isinstance(spacecraft, Spacecraft):
         raise TypeError(f"spacecraft must be a flexsat Spacecraft; got {type(spacecraft).__name__}")
+    if chains is not None and not isinstance(chains, Mapping):
+        raise TypeError(f"chains must be a mapping mount name -> HingedChain or None; got "
+                        f"{type(chains).__name__} {chains!r:.100}")
     chains = {} if chains is None else dict(chains)
     unknown = sorted(set(chains) - set(spacecraft.names))
     if unknown:

@@ -78,6 +78,9 @@ STEP_SECONDS, BODY_SECONDS, SAMPLE_SECONDS = 1.0e-4, 1.8e-7, 1.0e-4
 MAX_SECONDS = Limits().basilisk_seconds
 
 _NANO = 1e-9
+#: Most RK4 steps per flight-software sample a run may need (the search for a step dividing
+#: the sample time stays short; a run that stiff would take days anyway).
+MAX_STEPS_PER_SAMPLE = 1e6
 
 
 @dataclasses.dataclass
@@ -125,6 +128,9 @@ class BasiliskResult:
 
 def nanoseconds(seconds: float, name: str) -> int:
     """Basilisk's clock is integer nanoseconds: the step in ns, checked to be representable."""
+    if not seconds * 1e9 < 2.0**63:  # Basilisk's clock is a uint64 of nanoseconds
+        raise ValueError(f"{name} must be at most {2.0**63 * _NANO:.6g} s (Basilisk's clock); "
+                         f"got {seconds!r}")
     nanos = round(seconds * 1e9)
     if nanos < 1 or abs(nanos * _NANO - seconds) > 1e-9 * seconds:
         raise ValueError(f"{name} must be a whole number of nanoseconds (Basilisk's clock) [s]; "
@@ -151,10 +157,20 @@ def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None
     ValueError
         A step that does not divide T, or one beyond RK4's stability limit for w_max.
     """
+    w = check_positive("highest_frequency", highest_frequency, "rad/s", allow_zero=True)
     T = check_positive("sample_time", sample_time, "s")
     period = nanoseconds(T, "sample_time")
+    if w * T / DEFAULT_STEP_FACTOR > MAX_STEPS_PER_SAMPLE:
+        raise ValueError(f"highest_frequency {w:.6g} rad/s needs more than "
+                         f"{MAX_STEPS_PER_SAMPLE:g} RK4 steps per flight-software sample of "
+                         f"{T:.6g} s (w*dt <= {DEFAULT_STEP_FACTOR:g}); use a softer or shorter "
+                         "chain, or a shorter sample time")
+    highest_frequency = w
     if dt is not None:
         dt = check_positive("dt", dt, "s")
+        if not T / dt <= MAX_STEPS_PER_SAMPLE:
+            raise ValueError(f"dt must be at least the sample time / {MAX_STEPS_PER_SAMPLE:g} "
+                             f"= {T / MAX_STEPS_PER_SAMPLE:.6g} [s]; got {dt!r}")
         k = round(T / dt)
         if k < 1 or period % k or abs(k * dt - T) > 1e-9 * T:
             raise ValueError(f"dt must divide the flight-software sample time {T!r} s into a whole "
@@ -191,7 +207,27 @@ def _dividing_steps(period: int, dt: float) -> str:
 
 
 def estimated_seconds(n_bodies: int, duration: float, dt: float, sample_time: float) -> float:
-    """Estimated wall time [s] of a Basilisk run (see :data:`STEP_SECONDS`)."""
+    """Estimated wall time [s] of a Basilisk run (see :data:`STEP_SECONDS`).
+
+    Parameters
+    ----------
+    n_bodies : int
+        Spinning bodies (>= 0).
+    duration, dt, sample_time : float, s
+        Simulated time, RK4 step and flight-software step (positive, finite).
+
+    Returns
+    -------
+    float, s
+        inf for a run beyond the float range (refused by any limit).
+    """
+    if isinstance(n_bodies, bool) or not isinstance(n_bodies, (int, np.integer)) or n_bodies < 0:
+        raise ValueError(f"n_bodies must be a non-negative integer; got {n_bodies!r:.100}")
+    duration = check_positive("duration", duration, "s")
+    dt = check_positive("dt", dt, "s")
+    sample_time = check_positive("sample_time", sample_time, "s")
+    if n_bodies > 1e6:
+        return math.inf
     steps = duration / dt
     return (steps * (STEP_SECONDS + BODY_SECONDS * n_bodies**3)
             + duration / sample_time * SAMPLE_SECONDS)

@@ -69,9 +69,12 @@ def sweep_scenes() -> list[str]:
 
 def sweep_scene_path(name: str) -> Path:
     """Path of an embedded sweep scene (``"default"``)."""
+    if not isinstance(name, str):
+        raise TypeError(f"name must be the name of an embedded sweep scene (a string); got "
+                        f"{type(name).__name__} {name!r:.100}")
     path = _folder() / f"{name}.toml"
     if not path.is_file():
-        raise SweepError(f"no embedded sweep scene {name!r}; available: "
+        raise SweepError(f"name: no embedded sweep scene {name!r}; available: "
                          + ", ".join(sweep_scenes()))
     return path
 
