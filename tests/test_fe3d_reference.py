@@ -792,3 +792,16 @@ def test_more_zero_modes_than_declared_is_an_error():
     for n_rigid in (0, 5):
         with pytest.raises(fe3d.SingularMatrixError, match="more zero-frequency modes"):
             fe3d.natural_frequencies(K, M, 3, n_rigid=n_rigid)
+
+
+def test_a_matrix_singular_to_working_precision_is_refused_without_a_zero_pivot():
+    # Whether SuperLU finds an exactly zero pivot in a singular matrix is decided by rounding
+    # (the BLAS kernel), so the refined solve checks its result: max|A| max|x| / max|b| is a
+    # lower bound of kappa_inf(A), and above 1 / (64 eps) = 7e13 the matrix is singular to
+    # working precision. diag(1, 1e-17) has nonzero pivots (no SuperLU error) and kappa 1e17:
+    # refused; diag(1, 1e-12) (kappa 1e12, a fine mesh's order) is solved exactly.
+    b = np.ones((2, 1))
+    with pytest.raises(fe3d.SingularMatrixError, match="working precision"):
+        fe3d._RefinedLU([(1.0, np.diag([1.0, 1e-17]))]).solve(b)
+    x = fe3d._RefinedLU([(1.0, np.diag([1.0, 1e-12]))]).solve(b)
+    np.testing.assert_allclose(x, [[1.0], [1e12]], rtol=4 * np.finfo(float).eps, atol=0)
