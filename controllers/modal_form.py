@@ -710,12 +710,12 @@ class _Decoupling:
                                  for lam in cluster) for i, s in candidates]
                 i, s = candidates[int(np.argmin(distances))]
                 if i != k + size:
-                    # trexc rotates the columns of its "q" argument: Y's rows above b.
-                    Yb = np.asfortranarray(self.Y[:b])
-                    T, Yb, info = scipy.linalg.lapack.dtrexc(T, Yb, i + 1, k + size + 1,
-                                                             overwrite_a=1, overwrite_q=1)
-                    self.T = T
-                    self.Y[:b] = Yb
+                    # trexc rotates the columns of its "q" argument, all n rows of it (LAPACK
+                    # requires ldq >= n: Y's rows above b alone, ldq = b, were refused as an
+                    # illegal argument, info = -6, and the cluster took all the rest).
+                    T, Y, info = scipy.linalg.lapack.dtrexc(T, self.Y, i + 1, k + size + 1,
+                                                            overwrite_a=1, overwrite_q=1)
+                    self.T, self.Y = T, Y
                     if info != 0:      # swap refused (ill-conditioned): take all the rest
                         size = b - k
                         break
