@@ -182,13 +182,17 @@ def test_criterion_against_exact_beam(rod):
 
 def test_criterion_with_exact_column(rod):
     """exact=beam adds both models' differences from the exact beam: the same numbers as
-    spectral_errors (rtol 1e-12), zero for the truncation's poles, and the band errors."""
+    spectral_errors, zero for the truncation's poles, and the band errors. The differences
+    are relative differences of frequencies, (w_chain - w_beam) / w_beam, each frequency
+    right to ~1e-15 relative: they agree to that absolutely (atol 1e-14), not relative to
+    themselves (rtol 1e-12 alone failed on one BLAS kernel for a difference of 2e-5 whose
+    two computations were 3.6e-17 apart)."""
     chain = HingedChain.three_body(10.0, rod.mass, 0.26989, 37.134)
     result = criterion(two_mode_beam(rod), chain, exact=rod)
     errors = spectral_errors(rod, chain, 2)
     np.testing.assert_allclose([result.exact_differences["candidate"][label]
                                 for label in ("n41", "n42", "w1", "w2")],
-                               [*errors["W4"], *errors["poles"]], rtol=1e-12)
+                               [*errors["W4"], *errors["poles"]], rtol=1e-12, atol=1e-14)
     assert abs(result.exact_differences["reference"]["w2"]) < 1e-12
     assert result.exact_differences["reference"]["k1"] is None
     assert result.exact_max_log_error.shape == (2, 4)
