@@ -428,10 +428,19 @@ sys.exit(main(sys.argv[1:]))
 """
 
 
+def _sigint_as_in_a_terminal():
+    """A command typed in a terminal starts with SIGINT at its default, which Python turns
+    into KeyboardInterrupt. Tests run in the background of a script (nohup, a CI runner, `&`
+    without job control) inherit SIGINT ignored, and a child that inherits that ignores it
+    too, as POSIX asks: the child of these tests gets the terminal's disposition."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(args, seconds, cwd=ROOT, **kwargs):
     code = SLOW_RUN.format(root=str(ROOT), seconds=seconds)
     return subprocess.Popen([sys.executable, "-c", code, *map(str, args)], cwd=cwd,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=_sigint_as_in_a_terminal, **kwargs)
 
 
 def wait_for_partial(folder: Path, process, timeout: float = 120.0):
