@@ -294,8 +294,12 @@ def test_a_run_without_fmus_loads_no_fmu_toolchain_nor_dask():
     """issue 10: fmpy and the FMU exporter only when FMUs are built, Dask only for sweeps."""
     import subprocess
     import sys
+    from pathlib import Path
 
-    code = ("import sys, json; sys.path.insert(0, 'tests'); from test_scene import scene_with; "
+    # this file's folder and the project's root by their paths, not the working directory's
+    tests = Path(__file__).resolve().parent
+    paths = [str(tests), str(tests.parent)]
+    code = (f"import sys, json; sys.path[:0] = {paths!r}; from test_scene import scene_with; "
             "import spacecraft; spacecraft.run(scene_with(**{'report.equivalence': False})); "
             "print(' '.join(m for m in ('fmu', 'fmpy', 'dask', 'distributed', 'pyarrow') "
             "if m in sys.modules))")
