@@ -502,8 +502,10 @@ def spectral_errors(reference, candidate, n: int | None = None) -> dict:
 # fits
 # ---------------------------------------------------------------------------------------------
 def is_uniform_beam(model) -> bool:
-    """A uniform beam (no tip body, one section): the fits' scale-invariant, memoised path."""
-    return isinstance(model, Beam) and getattr(model, "tip", None) is None
+    """A uniform beam (no tip body, or one of zero mass; one section): the fits'
+    scale-invariant, memoised path."""
+    tip = getattr(model, "tip", None)
+    return isinstance(model, Beam) and (tip is None or bool(getattr(tip, "is_null", False)))
 
 
 def _beam_data(beam):
