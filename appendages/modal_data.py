@@ -777,9 +777,10 @@ class ModalAppendage(FiniteAppendage):
         if tip and self._tip is None:
             raise ValueError("tip outputs need tip_motion [m/sqrt(kg)] (each mode's tip "
                              "motion); this ModalAppendage was built without it")
-        self._check_residual_regular()
         if not three_axis:
+            self.planar_view("xy")._check_residual_regular()
             return super().state_space(tip=tip, name=name)
+        self._check_residual_regular()
         self._require_three_axis("state_space(three_axis=True)")
         import control
 

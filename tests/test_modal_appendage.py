@@ -354,3 +354,21 @@ def test_bad_damping_and_length(good):
         ModalAppendage(w, G, rigid).state_space(tip=True)
     with pytest.raises(ValueError, match="three-axis modal data"):
         ModalAppendage(w, G, rigid).W6(1j)
+
+
+def test_modes_holding_all_the_mass():
+    # Every degree of freedom's mass in the kept modes (a lumped model, all its modes): the
+    # residual mass is zero; data that exceed it by round-off (1e-9 here, below
+    # RESIDUAL_TOLERANCE) are taken as zero. W tends to a constant flexibility, which couples
+    # to a hub but has no free state-space model of a mass matrix: that is refused by name.
+    G = np.array([[1.2, 0.7], [-0.4, 0.9]])
+    rigid = (G.T @ G) * (1.0 - 1e-9)
+    app = ModalAppendage([2.0, 9.0], G, rigid, length=1.0)
+    np.testing.assert_allclose(app.residual_mass, 0.0, atol=1e-8)
+    s = np.array([1e6j])
+    W_inf = np.linalg.inv(G.T @ np.diag([4.0, 81.0]) @ G)  # s^2 M(s) -> G^T Omega^2 G
+    np.testing.assert_allclose(app.W(s)[0], W_inf, rtol=1e-6)
+    with pytest.raises(ValueError, match="residual mass is singular"):
+        app.state_space()
+    coupled = Spacecraft(Hub(10.0, 5.0), [Mount(app, (0.2, 0.0), 0.0)])
+    assert coupled.natural_frequencies(2, exact=False).size == 2
