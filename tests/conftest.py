@@ -12,7 +12,10 @@ the tests (for a given version of the code), and the constants of our own module
 1e10, the documented limits...) stay in it: they are good fuzz inputs.
 """
 import importlib
+import importlib.util
 import pkgutil
+
+import pytest
 
 PACKAGES = ("appendages", "controllers", "fmu", "spacecraft")
 
@@ -31,3 +34,16 @@ def _import_everything():
 
 
 _import_everything()
+
+
+def pytest_collection_modifyitems(config, items):
+    """Tests marked ``basilisk`` run Basilisk (the optional ``basilisk`` extra): where bsk is not
+    installed (the README's test install) they are skipped with the install hint as the reason.
+    CI runs them in a pass of their own with the extra (``pytest -m basilisk``)."""
+    if importlib.util.find_spec("Basilisk") is not None:
+        return
+    from spacecraft.basilisk import INSTALL_HINT
+    skip = pytest.mark.skip(reason=INSTALL_HINT)
+    for item in items:
+        if item.get_closest_marker("basilisk") is not None:
+            item.add_marker(skip)
