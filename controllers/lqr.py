@@ -32,7 +32,7 @@ import scipy.linalg
 from .frequency import _ModalEvaluator
 from .modes import _design_model, _inertia_matrix, _verify_loop, rigid_body_inertia
 from .pd import _check_sampling, _positive, _rigid_crossover
-from .riccati import _modal_correction, _solve_care
+from .riccati import _modal_correction, _solve_care, _solve_dare
 from .signals import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant, _short,
                       channels, tip_outputs)
 from .loop import close_loop
@@ -451,6 +451,14 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                                      sigma, T if digital else None, x_rate)
             except (np.linalg.LinAlgError, ValueError, FloatingPointError,
                     ZeroDivisionError) as exc:
+                if digital:  # the continuous design at these weights has just succeeded
+                    raise ValueError(
+                        f"lqr: the digital design at sample_time {T:.4g} s failed numerically "
+                        f"({_short(str(exc))}) where the continuous design with the same "
+                        f"weights succeeded: the sampling is the cause (plant modes up to "
+                        f"{w_plant:.4g} rad/s, omega T up to {w_plant * T:.3g}; rigid-body "
+                        f"bandwidth {_short(np.round(w_r, 4)) if m > 1 else f'{w_r[0]:.3g}'} "
+                        f"rad/s): change sample_time, or use the continuous design") from None
                 raise ValueError(
                     f"lqr: the {'digital ' if digital else ''}design failed numerically for "
                     f"these weights ({_short(str(exc))}); the rigid-body bandwidth is "
@@ -590,10 +598,10 @@ def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T, x_rate=None
         Phi, Gamma = E[:n, :n], E[:n, n:]
         rho = math.exp(-sigma * T)
         Pt, Gt = Phi / rho, Gamma @ S / rho
-        P = scipy.linalg.solve_discrete_are(Pt, Gt, Qs * T, Rs * T, s=Ns * T)
+        P = _solve_dare(Pt, Gt, Qs * T, Rs * T, Ns * T, "digital regulator")
         K = S @ np.linalg.solve(Rs * T + Gt.T @ P @ Gt, Gt.T @ P @ Pt + (Ns * T).T)
         Wd, Vd = Ws * T, Vs / T
-        Sk = scipy.linalg.solve_discrete_are(Pt.T, Cm.T, Wd, Vd)
+        Sk = _solve_dare(Pt.T, Cm.T, Wd, Vd, None, "digital Kalman filter")
         L = rho * (Pt @ Sk @ Cm.T @ np.linalg.inv(Cm @ Sk @ Cm.T + Vd))
     # poles the Riccati solution could not resolve (below): moved by a modal correction
     if T is None:

@@ -49,6 +49,7 @@ __all__ = [
     "NOTCH_ZERO_DAMPING",
     "NOTCH_POLE_DAMPING",
     "MIN_SAMPLES_PER_CROSSOVER",
+    "MIN_CROSSOVER_ANGLE",
 ]
 
 #: Damping of the second-order roll-off low-pass (1/sqrt(2): Butterworth, flat pass band).
@@ -239,8 +240,27 @@ def _rigid_crossover(plant, controller) -> float:
 PATHOLOGICAL_SAMPLING = 1e-6
 
 
+#: Smallest rigid-body crossover angle per sample, omega_c T, of a digital loop. The sampled
+#: loop's poles z = exp(s T) then lie about omega_c T from z = 1, and s = log(z) / T is
+#: resolved only to eps / T: at omega_c T = 1e-9 that is 2.2e-7 of omega_c (the loop's own
+#: decay rates, the flexible modes' damping, are resolved), below it the digital loop's poles,
+#: margins and stability verdict are round-off (a PD at T = 1e-14 s had its rigid-body poles
+#: computed at z = 1 exactly).
+MIN_CROSSOVER_ANGLE = 1e-9
+
+
 def _check_sampling(sample_time: float, omega_c: float, what: str) -> None:
-    """ValueError unless 2 pi / sample_time >= MIN_SAMPLES_PER_CROSSOVER * omega_c."""
+    """ValueError unless MIN_CROSSOVER_ANGLE <= omega_c sample_time and
+    2 pi / sample_time >= MIN_SAMPLES_PER_CROSSOVER * omega_c."""
+    if 0.0 < omega_c * sample_time < MIN_CROSSOVER_ANGLE:
+        raise ValueError(
+            f"{what}: sample_time {sample_time:.4g} s is too short for double precision: the "
+            f"loop turns by omega_c T = {omega_c * sample_time:.3g} rad per sample at its "
+            f"rigid-body crossover {omega_c:.4g} rad/s, so its sampled poles z = exp(s T) lie "
+            f"within that of z = 1, where a float resolves s only to eps / T = "
+            f"{np.finfo(float).eps / sample_time:.3g} 1/s; use sample_time >= "
+            f"{MIN_CROSSOVER_ANGLE / omega_c:.4g} s (omega_c T >= {MIN_CROSSOVER_ANGLE:g}), or "
+            "the continuous design")
     omega_s = 2.0 * math.pi / sample_time
     if omega_s < MIN_SAMPLES_PER_CROSSOVER * omega_c:
         raise ValueError(
@@ -271,10 +291,13 @@ def check_sample_time(sample_time: float, plant, continuous_controller) -> float
     omega_c = _rigid_crossover(plant, continuous_controller)
     _check_sampling(sample_time, omega_c, "sample time")
     for mode in _safe_modes(plant):
-        # omega T = k pi puts the pair exp(+-j omega T) on one point z = +-1: the sampled plant
-        # loses that mode's controllability (pathological sampling; Kalman, Ho and Narendra
-        # 1963), whatever the gains. sin(omega T) is computed to ~eps omega T, far below the bound.
-        if abs(math.sin(mode.frequency * sample_time)) <= PATHOLOGICAL_SAMPLING:
+        # omega T = k pi, k >= 1, puts the pair exp(+-j omega T) on one point z = +-1: the
+        # sampled plant loses that mode's controllability (pathological sampling; Kalman, Ho
+        # and Narendra 1963), whatever the gains. sin(omega T) is computed to ~eps omega T, far
+        # below the bound. omega T near 0 (k = 0) is fast sampling, not pathological: the pair
+        # 1 +- j omega T stays apart (the precision of a fast rate is MIN_CROSSOVER_ANGLE's).
+        if (mode.frequency * sample_time > math.pi / 2
+                and abs(math.sin(mode.frequency * sample_time)) <= PATHOLOGICAL_SAMPLING):
             k = round(mode.frequency * sample_time / math.pi)
             raise ValueError(
                 f"sample_time {sample_time:.6g} s samples the {mode.frequency:.6g} rad/s mode at "

@@ -47,6 +47,39 @@ def _solve_care(A, B, Q, R, N, what: str) -> np.ndarray:
     return X
 
 
+def _solve_dare(A, B, Q, R, S, what: str) -> np.ndarray:
+    """Stabilising solution X of the discrete Riccati equation (cross term S, or None), as
+    :func:`scipy.linalg.solve_discrete_are` gives it from the ordered real generalized Schur
+    form of the symplectic pencil; if LAPACK cannot reorder that form (it refuses to swap two
+    2 x 2 blocks whose exchange would leave the pencil too far from Schur form, which happens at
+    fast sampling, where every eigenvalue exp(+-lambda T) lies near z = 1: the hinged wing's
+    LQR at 10 kHz, though 1 and 100 kHz passed), the same in complex arithmetic, where swaps of
+    1 x 1 blocks do not fail, and its real part (the solution is real).
+
+    References
+    ----------
+    P. van Dooren, "A generalized eigenvalue approach for solving Riccati equations", SIAM J.
+    Sci. Stat. Comput. 2(2), 1981 (the pencil and its ordered QZ form).
+    """
+    try:
+        X = scipy.linalg.solve_discrete_are(A, B, Q, R, s=S)
+        if np.all(np.isfinite(X)):
+            return X
+    except (np.linalg.LinAlgError, ValueError):
+        pass
+    try:
+        complex_ = [np.asarray(M, dtype=complex) for M in (A, B, Q, R)]
+        X = scipy.linalg.solve_discrete_are(
+            *complex_, s=None if S is None else np.asarray(S, dtype=complex))
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise ValueError(f"{what}: the discrete Riccati equation has no stabilising solution "
+                         f"that can be computed ({_short(str(exc))})") from None
+    X = np.real(X)
+    if not np.all(np.isfinite(X)):
+        raise ValueError(f"{what}: the discrete Riccati equation's solution is not finite")
+    return 0.5 * (X + X.T)
+
+
 def _laub(A, B, Q, R, N) -> np.ndarray:
     """Laub's Schur method (see _solve_care); ValueError if the stable subspace is not n-dim.
 
