@@ -16,7 +16,9 @@ from .compare import Comparison, compare
 from .discretise import DiscretisationOverflowWarning
 from .lqr import (KalmanNoise, LQRDesign, lqr, lqr_design, rate_reference_state,
                   reference_state)
+from .noise import SensorNoise
 from .pd import natural_frequency_from_bandwidth, pd, pd_gains, principal_axes
+from .pointing import PointingBudget, close_loop_with_sensors, pointing
 from .profiles import (PROFILE_KINDS, Profile, Shaper, bang_coast_bang, jerk_limited,
                        minimum_time, mode_shaper, reference_profile, shaped, step_reference,
                        zv_shaper, zvd_shaper)
@@ -34,6 +36,8 @@ __all__ = [
     "RemovedMode",
     "ReactionWheel",
     "RemovedModesWarning",
+    "PointingBudget",
+    "SensorNoise",
     "FlexibleMode",
     "KalmanNoise",
     "LQRDesign",
@@ -53,6 +57,7 @@ __all__ = [
     "bang_coast_bang",
     "check_slew_time",
     "close_loop",
+    "close_loop_with_sensors",
     "compare",
     "compare_metrics",
     "disturbance_response",
@@ -71,6 +76,7 @@ __all__ = [
     "natural_frequency_from_bandwidth",
     "pd",
     "pd_gains",
+    "pointing",
     "principal_axes",
     "profile_response",
     "rate_reference_state",

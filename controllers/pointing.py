@@ -1,0 +1,420 @@
+r"""Pointing error statistics of a closed loop with sensor noise, by exact covariance analysis.
+
+The loop (:func:`close_loop_with_sensors`) is the attitude loop with its measurements corrupted
+at the controller's inputs: the controller reads ``theta_measured = theta + theta_noise`` and
+``omega_measured = omega + omega_noise`` (three axes: ``theta_noise_x``, ...). The noise is
+:class:`.SensorNoise`: white angle noise, white rate noise and a Gauss-Markov gyro bias (a shaping
+state per axis appended to the loop). With the reference at rest, the loop's state is a
+stationary zero-mean Gaussian process; its covariance P solves
+
+    A P + P A^T + B W B^T = 0                  (continuous loop),
+    P = Phi P Phi^T + B_d W_d B_d^T            (digital controller: the sampled loop at its
+                                                samples, each noise discretised over the sample,
+                                                :mod:`.noise`),
+
+and the pointing errors are outputs e = C x (the true attitude, theta_ref = 0; tip deflections
+for the jitter), with no direct feedthrough of white noise (checked).
+
+Definitions (ECSS-E-ST-60-10C, sec. 3.2 [1]_): the absolute performance error APE(t) = e(t);
+the mean performance error over a window of length Delta, MPE = (1/Delta) int e over the window;
+the relative performance error RPE(t) = e(t) - MPE of a window containing t. Statistical
+interpretation (ECSS-E-ST-60-10C annex A.1): a stationary, ergodic, zero-mean Gaussian process,
+for which the temporal, ensemble and mixed interpretations coincide; every figure is a standard
+deviation (1 sigma) per axis; :meth:`PointingBudget.at` scales them to a probability level
+(two-sided Gaussian: 99.73 % -> 3 sigma). The standard leaves where t lies in its window open
+(its note 2 to RPE); ``placement="random"`` takes t uniformly within the window (the "windowed
+variance" of [2]_, whose spectral weighting is 1 - sinc^2(omega Delta / 2), ECSS-E-HB-60-10A
+[3]_), ``placement="end"`` at the window's end (a causal mean).
+
+Derivation (continuous). With R(tau) = E[e(t + tau) e(t)] = C e^(A tau) P C^T (tau >= 0), the
+window mean's variance is
+
+    MPE^2 = Var(e_bar) = (1 / Delta^2) int int R(t1 - t2) = (2 / Delta^2) C I2 P C^T,
+    I2 = int_0^Delta (Delta - tau) e^(A tau) dtau,
+
+(the symmetric part is meant throughout). For t uniform in the window, averaging
+Var(e(t) - e_bar) = R(0) - 2 Cov(e(t), e_bar) + Var(e_bar) over t gives R(0) - Var(e_bar):
+
+    RPE_random^2 = (2 / Delta^2) C [int_0^Delta (Delta - tau)(I - e^(A tau)) dtau] P C^T
+                 = -(2 / Delta^2) C A J3 P C^T,       J3 = int_0^Delta (Delta - tau)^2 / 2 e^(A tau),
+
+(integrating by parts: int (Delta - tau)(e^(A tau) - I) = A J3), a form without the
+cancellation of R(0) - Var(e_bar) for short windows. For t at the window's end,
+Cov(e(t), e_bar) = (1 / Delta) C I1 P C^T, I1 = int_0^Delta e^(A tau), and
+
+    RPE_end^2 = (2 / Delta) C [int_0^Delta (I - e^(A tau))] P C^T - RPE_random^2
+              = -(2 / Delta) C A I2 P C^T - RPE_random^2.
+
+I2 and J3 are blocks of one matrix exponential, e^(M Delta) with M = [[A, I, 0, 0], [0, 0, I,
+0], [0, 0, 0, I], [0, 0, 0, 0]]: blocks (1, 3) and (1, 4) [4]_ (computed in time scaled by
+Delta, accurate for any window).
+
+Derivation (sampled, step T, window of N samples, mean e_bar = (1/N) sum of its samples,
+R(m) = C Phi^m P C^T): Var(e_bar) = (1 / N^2) [2 C S2 P C^T - N R(0)],
+RPE_random^2 = (2 / N^2) C (I - Phi) S3 P C^T and
+RPE_end^2 = (2 / N) C (I - Phi) S2' P C^T - RPE_random^2, with S2 = sum_(j<N) (N - j) Phi^j,
+S2' = sum_(j<N-1) (N - 1 - j) Phi^j, S3 = sum_(j<N-1) (N - 1 - j)(N - j) / 2 Phi^j: blocks
+(1, 3) and (1, 4) of powers N and N + 1 of [[Phi, I, 0, 0], [0, I, I, 0], [0, 0, I, I],
+[0, 0, 0, I]] (by repeated squaring). The statistics of a sampled loop are those at its
+samples.
+
+References
+----------
+.. [1] ECSS-E-ST-60-10C, *Space engineering: Control performance*, ESA-ESTEC, 15 November 2008,
+   sec. 3.2 (APE, MPE, RPE) and annex A (statistical interpretation).
+.. [2] M. E. Pittelkau, "Pointing error definitions, metrics, and algorithms", AAS 03-559,
+   2003; R. L. Lucke, S. W. Sirlin, A. M. San Martin, "New definitions of pointing stability:
+   AC and DC effects", J. Astronautical Sciences 40(4), 557-576, 1992 (windowed variance).
+.. [3] ECSS-E-HB-60-10A, *Space engineering: Control performance guidelines*, ESA-ESTEC, 14
+   December 2010 (weighting functions of the error indices).
+.. [4] C. F. Van Loan, "Computing integrals involving the matrix exponential", IEEE Trans.
+   Automatic Control 23(3), 395-404, 1978.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from statistics import NormalDist
+
+import control
+import numpy as np
+import scipy.linalg
+
+from .arguments import describe, positive, real_number
+from .loop import close_loop
+from .noise import SensorNoise
+from .signals import OMEGA, THETA, channels, tip_outputs
+from .threads import one_blas_thread
+
+__all__ = ["close_loop_with_sensors", "noise_input_names", "pointing", "PointingBudget",
+           "PLACEMENTS", "NOISE", "MEASURED"]
+
+#: Where t lies in its RPE window (module docstring).
+PLACEMENTS = ("random", "end")
+#: Infix of the noise inputs (``theta_noise``, ``omega_noise_x``...) and of the measured
+#: signals (``theta_measured``...).
+NOISE, MEASURED = "_noise", "_measured"
+
+
+def noise_input_names(ch) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(attitude noise inputs, rate noise inputs) of a loop of convention ``ch``: ``theta_noise``
+    and ``omega_noise`` (planar), ``theta_noise_x``, ... (three axes)."""
+    return (tuple(f"{THETA}{NOISE}{ch.suffix(i)}" for i in range(ch.n_axes)),
+            tuple(f"{OMEGA}{NOISE}{ch.suffix(i)}" for i in range(ch.n_axes)))
+
+
+def close_loop_with_sensors(plant: control.StateSpace, controller: control.StateSpace
+                            ) -> control.StateSpace:
+    """The attitude loop with noise inputs at the controller's measurements.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        As for :func:`.close_loop` (continuous, named signals).
+    controller : control.StateSpace
+        Continuous or digital, with the measurement inputs ``theta``, ``omega`` (three axes:
+        ``theta_x``...).
+
+    Returns
+    -------
+    control.StateSpace
+        :func:`.close_loop` of the plant with the extra outputs ``theta_measured`` =
+        theta + theta_noise and ``omega_measured`` = omega + omega_noise [rad, rad/s] (three
+        axes: ``theta_measured_x``...) and the controller reading them. Inputs: the loop's
+        (references, disturbances), then ``theta_noise``, ``omega_noise`` (three axes:
+        ``theta_noise_x``, ..., ``omega_noise_z``) for the measurements the controller uses.
+        Outputs: the plant's (the true attitude), the measured signals, the torque(s).
+    """
+    if not isinstance(plant, control.StateSpace):
+        raise TypeError(f"plant must be a control.StateSpace; got {type(plant).__name__}")
+    if not isinstance(controller, control.StateSpace):
+        raise TypeError(f"controller must be a control.StateSpace; got "
+                        f"{type(controller).__name__}")
+    ch = channels(plant)
+    thetas, omegas = noise_input_names(ch)
+    inputs, outputs = list(plant.input_labels), list(plant.output_labels)
+    c_in = list(controller.input_labels)
+    measured = [m for m in ch.measurements if m in c_in]
+    if not measured:
+        raise ValueError(f"controller must read the attitude or rate measurements "
+                         f"{list(ch.measurements)}; got inputs {describe(c_in)}")
+    noise_names = {m: (thetas + omegas)[list(ch.measurements).index(m)] for m in measured}
+    reserved = [n for n in list(noise_names.values()) + [_measured(m) for m in measured]
+                if n in inputs or n in outputs]
+    if reserved:
+        raise ValueError(f"plant must not have signals named {reserved} (reserved for the "
+                         "sensor noise and the measured signals)")
+    A, B, C, D = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))
+    rows = [outputs.index(m) for m in measured]
+    k = len(measured)
+    B_aug = np.hstack([B, np.zeros((A.shape[0], k))])
+    C_aug = np.vstack([C, C[rows]])
+    D_aug = np.block([[D, np.zeros((D.shape[0], k))], [D[rows], np.eye(k)]])
+    noisy = control.ss(A, B_aug, C_aug, D_aug, plant.dt,
+                       inputs=inputs + [noise_names[m] for m in measured],
+                       outputs=outputs + [_measured(m) for m in measured],
+                       states=list(plant.state_labels), name=plant.name)
+    reader = control.ss(controller.A, controller.B, controller.C, controller.D, controller.dt,
+                         inputs=[_measured(n) if n in measured else n for n in c_in],
+                         outputs=list(controller.output_labels),
+                         states=list(controller.state_labels), name=controller.name)
+    return close_loop(noisy, reader)
+
+
+def _measured(name: str) -> str:
+    """theta -> theta_measured, theta_x -> theta_measured_x."""
+    for base in (THETA, OMEGA):
+        if name == base:
+            return base + MEASURED
+        if name.startswith(base + "_"):
+            return base + MEASURED + name[len(base):]
+    raise ValueError(f"not a measurement: {name!r}")
+
+
+@dataclasses.dataclass(frozen=True)
+class PointingBudget:
+    """Stationary pointing statistics of a loop with sensor noise (1 sigma, per output).
+
+    Attributes
+    ----------
+    ape, mpe, rpe : dict of str to float, rad
+        Per attitude output (``theta`` or ``theta_x``..``theta_z``): the standard deviations
+        of the absolute performance error, of the window mean (the MPE's) and of the relative
+        performance error over ``window`` (module docstring).
+    jitter, jitter_mpe, jitter_rpe : dict of str to float, m
+        The same for each tip output (``*tip_deflection``...).
+    window : float, s
+    placement : str
+        "random" or "end" (where t lies in its RPE window).
+    sampled : bool
+        True for a digital controller: statistics at the samples.
+    covariance : numpy.ndarray
+        The stationary state covariance P (the loop's states, then the gyro biases').
+    state_labels : list of str
+    """
+
+    ape: dict
+    mpe: dict
+    rpe: dict
+    jitter: dict
+    jitter_mpe: dict
+    jitter_rpe: dict
+    window: float
+    placement: str
+    sampled: bool
+    covariance: np.ndarray
+    state_labels: list
+
+    def at(self, probability: float) -> dict:
+        """The figures at a probability level: each standard deviation times the two-sided
+        Gaussian quantile k with P(|e| <= k sigma) = probability (0.9973 -> 3.0).
+
+        Returns
+        -------
+        dict
+            ``{"ape": {...}, "mpe": ..., "rpe": ..., "jitter": ..., "jitter_mpe": ...,
+            "jitter_rpe": ...}`` in rad and m, and ``"factor"``, k.
+        """
+        p = real_number(probability, "probability", "1")
+        if not 0.0 < p < 1.0:
+            raise ValueError(f"probability must lie in (0, 1); got {describe(probability)}")
+        k = NormalDist().inv_cdf(0.5 + 0.5 * p)
+        out = {name: {key: k * value for key, value in getattr(self, name).items()}
+               for name in ("ape", "mpe", "rpe", "jitter", "jitter_mpe", "jitter_rpe")}
+        out["factor"] = k
+        return out
+
+
+def pointing(plant: control.StateSpace, controller: control.StateSpace, noise: SensorNoise,
+             *, window: float, placement: str = "random",
+             outputs=None) -> PointingBudget:
+    """Pointing error statistics of the loop under sensor noise (module docstring).
+
+    Parameters
+    ----------
+    plant, controller : control.StateSpace
+        As for :func:`close_loop_with_sensors`.
+    noise : SensorNoise
+        One level per axis or three (three-axis loops).
+    window : float, s
+        The RPE and MPE window Delta; for a digital controller a whole number of samples.
+    placement : {"random", "end"}
+        Where t lies in its window.
+    outputs : sequence of str, optional
+        Tip outputs for the jitter (default: every ``*tip_deflection`` and tip output of the
+        plant).
+
+    Returns
+    -------
+    PointingBudget
+
+    Raises
+    ------
+    TypeError
+        ``noise`` not a SensorNoise; bad plant or controller.
+    ValueError
+        A loop that is not asymptotically stable (no stationary error), an output fed directly
+        by white noise (infinite variance in continuous time), a window that is not positive
+        (or not a whole number of samples), unknown placement or outputs.
+    """
+    if not isinstance(noise, SensorNoise):
+        raise TypeError(f"noise must be a controllers.SensorNoise; got {type(noise).__name__}")
+    if not isinstance(placement, str) or placement not in PLACEMENTS:
+        raise ValueError(f"placement must be one of {PLACEMENTS}; got {describe(placement)}")
+    window = positive(window, "window", "s")
+    loop = close_loop_with_sensors(plant, controller)
+    ch = channels(plant)
+    levels = noise.per_axis(ch.n_axes)
+    sampled = loop.isdtime(strict=True)
+    T = float(loop.dt) if sampled else None
+    if sampled:
+        n_window = window / T
+        if abs(n_window - round(n_window)) > 1e-9 * n_window or round(n_window) < 1:
+            raise ValueError(f"window must be a whole number of the digital loop's samples "
+                             f"(T = {T:.6g} s) [s]; got {window:.6g} s ({n_window:.6g} samples)")
+    plant_outputs = list(plant.output_labels)
+    if outputs is None:
+        tips = tip_outputs(plant_outputs)
+    else:
+        tips = [str(n) for n in outputs]
+        unknown = [n for n in tips if n not in plant_outputs]
+        if unknown:
+            raise ValueError(f"outputs must be plant outputs; got {unknown} (the plant has "
+                             f"{describe(plant_outputs)})")
+    A, Bw, W, C, labels, state_labels = _noise_model(loop, ch, levels, T)
+    names = list(ch.thetas) + tips
+    rows = [labels.index(n) for n in names]
+    C = C[rows]
+    with one_blas_thread():
+        P = _stationary_covariance(A, Bw, W, sampled)
+        sigma2, mpe2, rpe2 = _window_statistics(A, C, P, window, T, placement)
+    values = {name: tuple(math.sqrt(max(v, 0.0)) for v in (s, m, r))
+              for name, s, m, r in zip(names, sigma2, mpe2, rpe2)}
+    attitude, jitter = list(ch.thetas), tips
+    return PointingBudget(
+        ape={n: values[n][0] for n in attitude}, mpe={n: values[n][1] for n in attitude},
+        rpe={n: values[n][2] for n in attitude}, jitter={n: values[n][0] for n in jitter},
+        jitter_mpe={n: values[n][1] for n in jitter},
+        jitter_rpe={n: values[n][2] for n in jitter}, window=window, placement=placement,
+        sampled=sampled, covariance=P, state_labels=state_labels)
+
+
+def _noise_model(loop, ch, levels, T):
+    """The loop with the gyro biases as states, driven by white noise: (A, B_w, W, C, output
+    labels, state labels) with W the intensities (continuous) or the per-sample covariances
+    (sampled loop, T the step) of the noises (module docstring of :mod:`.noise`)."""
+    A, B, C, D = (np.asarray(M, dtype=float) for M in (loop.A, loop.B, loop.C, loop.D))
+    inputs = list(loop.input_labels)
+    thetas, omegas = noise_input_names(ch)
+    n = A.shape[0]
+    columns, intensities, biases = [], [], []
+    for i, level in enumerate(levels):
+        for name, key in ((thetas[i], "attitude_density"), (omegas[i], "angle_random_walk")):
+            q = level[key]
+            if q > 0 and name in inputs:
+                columns.append(("input", inputs.index(name)))
+                intensities.append(q * q / T if T else q * q)
+        sigma, tau = level["bias_instability"], level["bias_correlation_time"]
+        if sigma > 0 and omegas[i] in inputs:
+            biases.append((inputs.index(omegas[i]), sigma, tau))
+    nb = len(biases)
+    A_aug = np.zeros((n + nb, n + nb))
+    A_aug[:n, :n] = A
+    for j, (col, sigma, tau) in enumerate(biases):
+        A_aug[:n, n + j] = B[:, col]              # the bias adds to the rate measurement
+        if T:
+            phi = math.exp(-T / tau)
+            A_aug[n + j, n + j] = phi
+            columns.append(("bias", j))
+            intensities.append(sigma * sigma * -math.expm1(-2.0 * T / tau))
+        else:
+            A_aug[n + j, n + j] = -1.0 / tau
+            columns.append(("bias", j))
+            intensities.append(2.0 * sigma * sigma / tau)
+    Bw = np.zeros((n + nb, len(columns)))
+    Dw = np.zeros((C.shape[0], len(columns)))
+    for k, (kind, index) in enumerate(columns):
+        if kind == "input":
+            Bw[:n, k] = B[:, index]
+            Dw[:, k] = D[:, index]
+        else:
+            Bw[n + index, k] = 1.0
+    C_aug = np.hstack([C, D[:, [b[0] for b in biases]]]) if nb else C
+    labels = list(loop.output_labels)
+    fed = [labels[r] for r in range(C.shape[0]) if np.any(Dw[r] != 0.0)]
+    wanted = set(ch.thetas) | set(tip_outputs(labels))
+    direct = [name for name in fed if name in wanted]
+    if direct:
+        raise ValueError(f"outputs {direct} are fed directly by white sensor noise (a "
+                         "feedthrough from torque in the plant): their variance is not "
+                         "defined by this model")
+    states = list(loop.state_labels) + [f"gyro_bias{ch.suffix(i)}"
+                                        for i, level in enumerate(levels)
+                                        if level["bias_instability"] > 0]
+    return A_aug, Bw, np.array(intensities), C_aug, labels, states
+
+
+def _stationary_covariance(A, Bw, W, sampled: bool) -> np.ndarray:
+    """P of the Lyapunov equation (module docstring), after checking asymptotic stability."""
+    lam = np.linalg.eigvals(A) if A.size else np.zeros(0)
+    if sampled:
+        worst = float(np.max(np.abs(lam), initial=0.0))
+        if not worst < 1.0:
+            raise ValueError(f"the sampled closed loop must be asymptotically stable for a "
+                             f"stationary pointing error; its largest |eigenvalue| is "
+                             f"{worst:.6g} >= 1")
+    else:
+        worst = float(np.max(lam.real, initial=-math.inf))
+        if not worst < 0.0:
+            raise ValueError(f"the closed loop must be asymptotically stable for a stationary "
+                             f"pointing error; its rightmost eigenvalue has real part "
+                             f"{worst:.6g} >= 0 [1/s]")
+    Q = (Bw * W) @ Bw.T
+    if sampled:
+        P = scipy.linalg.solve_discrete_lyapunov(A, Q)
+    else:
+        P = scipy.linalg.solve_continuous_lyapunov(A, -Q)
+    return 0.5 * (P + P.T)
+
+
+def _window_statistics(A, C, P, window, T, placement):
+    """Variances of e, of its window mean and of the RPE (module docstring), per output."""
+    n = A.shape[0]
+    CP = C @ P
+
+    def sym_diag(M):                     # diag of C M P C^T, symmetric part: rows of M
+        return np.einsum("ij,ij->i", C @ M, CP)
+
+    sigma2 = np.einsum("ij,ij->i", CP, C)
+    I = np.eye(n)
+    if T is None:
+        # in the time scaled by Delta (s = tau / Delta): e^M with M = [[A Delta, I, 0, 0], ...]
+        # has the blocks I2 / Delta^2 and J3 / Delta^3; with A Delta the only large block it is
+        # accurate to round-off for any Delta (unscaled, the identity blocks times Delta lose
+        # (Delta |A|)^2 eps: 3e-4 at Delta |A| = 1e4)
+        M = np.zeros((4 * n, 4 * n))
+        M[:n, :n] = A * window
+        M[:n, n:2 * n] = M[n:2 * n, 2 * n:3 * n] = M[2 * n:3 * n, 3 * n:] = I
+        E = scipy.linalg.expm(M)
+        I2_scaled, J3_scaled = E[:n, 2 * n:3 * n], E[:n, 3 * n:]
+        mpe2 = 2.0 * sym_diag(I2_scaled)                        # (2 / Delta^2) C I2 P C^T
+        rpe2 = -2.0 * window * sym_diag(A @ J3_scaled)          # -(2 / Delta^2) C A J3 P C^T
+        if placement == "end":
+            rpe2 = -2.0 * window * sym_diag(A @ I2_scaled) - rpe2   # -(2/Delta) C A I2 P C^T
+        return sigma2, mpe2, rpe2
+    N = int(round(window / T))
+    M = np.zeros((4 * n, 4 * n))
+    M[:n, :n] = A
+    M[:n, n:2 * n] = I
+    for b in (1, 2):
+        M[b * n:(b + 1) * n, b * n:(b + 1) * n] = I
+        M[b * n:(b + 1) * n, (b + 1) * n:(b + 2) * n] = I
+    M[3 * n:, 3 * n:] = I
+    MN = np.linalg.matrix_power(M, N)
+    MN1 = MN @ M
+    S2, S2p, S3 = MN1[:n, 2 * n:3 * n], MN[:n, 2 * n:3 * n], MN1[:n, 3 * n:]
+    mpe2 = (2.0 * sym_diag(S2) - N * sigma2) / N ** 2
+    rpe2 = 2.0 / N ** 2 * sym_diag((I - A) @ S3)
+    if placement == "end":
+        rpe2 = 2.0 / N * sym_diag((I - A) @ S2p) - rpe2
+    return sigma2, mpe2, rpe2
