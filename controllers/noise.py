@@ -171,6 +171,9 @@ class SensorNoise:
         ValueError
             Three per-axis values for a planar loop.
         """
+        if isinstance(n_axes, bool) or not isinstance(n_axes, (int, np.integer)) \
+                or n_axes not in (1, 3):
+            raise ValueError(f"n_axes must be 1 (planar) or 3; got {describe(n_axes)}")
         out = []
         for i in range(n_axes):
             axis = {}

@@ -276,7 +276,11 @@ def pointing(plant: control.StateSpace, controller: control.StateSpace, noise: S
     if outputs is None:
         tips = tip_outputs(plant_outputs)
     else:
-        tips = [str(n) for n in outputs]
+        if isinstance(outputs, str) or not isinstance(outputs, (list, tuple)) or not all(
+                isinstance(n, str) for n in outputs):
+            raise TypeError(f"outputs must be a list of plant output names (tip deflections); "
+                            f"got {describe(outputs)}")
+        tips = list(outputs)
         unknown = [n for n in tips if n not in plant_outputs]
         if unknown:
             raise ValueError(f"outputs must be plant outputs; got {unknown} (the plant has "

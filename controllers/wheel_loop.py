@@ -56,6 +56,7 @@ from .arguments import describe, real_number
 from .discretise import discretise, discretise_blocks
 from .loop import close_loop
 from .signals import Channels, channels
+from .chunked import OVERFLOW as _OVERFLOW
 from .simulate import Simulator
 from .threads import one_blas_thread
 from .timeresp import MAX_SAMPLES
@@ -323,6 +324,10 @@ class WheelLoop:
             # small loops: every sample by segments, the first in the free mode
             Y = np.empty((S.noutputs, n_t))
             self._nonlinear_run(self._modes(dt), 0, U, X0_S, Y, E, torque_sat, momentum_sat)
+            with np.errstate(invalid="ignore"):
+                if not np.all(np.abs(Y) < _OVERFLOW):
+                    raise FloatingPointError("simulation with wheels overflowed: the loop's "
+                                             "response leaves the float64 range")
         else:
             # the linear loop by the simulator (O(n) per sample), segments from the first
             # sample where a wheel leaves it
@@ -343,7 +348,7 @@ class WheelLoop:
         stepped one at a time (in their mode, or with the deviation held if it is not
         affine)."""
         n_t, nw = U.shape[1], self.wheels.n_wheels
-        with one_blas_thread():
+        with one_blas_thread(), np.errstate(over="ignore", invalid="ignore"):
             x = X0
             for k in range(0, k0, modes.longest):      # the linear loop's state at k0
                 stop = min(k + modes.longest, k0)
@@ -393,7 +398,7 @@ class WheelLoop:
                 horizon = min(max(2 * j, _SHORTEST_SEGMENT) if switched else 2 * horizon,
                               modes.longest)
                 k += j
-                if not np.all(np.isfinite(x)):
+                if not np.all(np.abs(x) < _OVERFLOW):
                     raise FloatingPointError("simulation with wheels overflowed: the loop's "
                                              "response leaves the float64 range")
 

@@ -285,12 +285,19 @@ class WheelSet:
                              + (" (degrees? give radians)" if math.isfinite(beta)
                                 and 1.0 < beta < 90.0 else ""))
         a0 = real_number(azimuth, "azimuth", "rad")
-        if not math.isfinite(a0):
-            raise ValueError(f"azimuth must be finite [rad]; got {describe(azimuth)}")
+        if not (math.isfinite(a0) and abs(a0) <= 2.0 * math.pi):
+            raise ValueError(f"azimuth must be finite and within [-2 pi, 2 pi] [rad]; got "
+                             f"{describe(azimuth)}")
         a = a0 + 0.5 * math.pi * np.arange(4)
         axes = np.column_stack([math.sin(beta) * np.cos(a), math.sin(beta) * np.sin(a),
                                 np.full(4, math.cos(beta))])
-        return cls((wheel,) * 4, axes, saturation=saturation, names=names)
+        try:
+            return cls((wheel,) * 4, axes, saturation=saturation, names=names)
+        except ValueError as exc:
+            if "spin_axes" not in str(exc):
+                raise
+            raise ValueError(f"cant_angle = {beta:.6g} rad puts the four spin axes too close to "
+                             f"the pyramid axis or to its base plane: {exc}") from None
 
     @property
     def n_wheels(self) -> int:
@@ -376,8 +383,8 @@ class WheelSet:
             Wheels whose command exceeded their torque limit; wheels held at their momentum
             limit (motor torque set to zero).
         """
-        c = np.asarray(command, dtype=float)
-        h = np.asarray(momentum, dtype=float)
+        c = _finite_array(command, "command", "N*m")
+        h = _finite_array(momentum, "momentum", "N*m*s")
         if c.shape[:1] != (self.n_wheels,) or c.ndim > 2 or h.shape != c.shape:
             raise ValueError(f"command and momentum must have shape (n_wheels,) or (n_wheels, "
                              f"n_samples) with n_wheels = {self.n_wheels}; got {c.shape} and "
@@ -398,7 +405,10 @@ class WheelSet:
     def friction_torques(self, momentum) -> np.ndarray:
         """Friction torque of each wheel on the hub [N*m], c_v Omega + c_c sign(Omega), at
         momenta h = J_s Omega [N*m*s] (shape (n_wheels,) or (n_wheels, n_samples))."""
-        h = np.asarray(momentum, dtype=float)
+        h = _finite_array(momentum, "momentum", "N*m*s")
+        if h.shape[:1] != (self.n_wheels,) or h.ndim > 2:
+            raise ValueError(f"momentum must have shape (n_wheels,) or (n_wheels, n_samples) "
+                             f"with n_wheels = {self.n_wheels} [N*m*s]; got {h.shape}")
         column = (slice(None),) + (None,) * (h.ndim - 1)
         cc = np.array([w.coulomb_friction for w in self.wheels])[column]
         cv = np.array([w.viscous_friction / w.spin_inertia if w.viscous_friction else 0.0
@@ -408,6 +418,18 @@ class WheelSet:
     def __repr__(self) -> str:
         kind = "planar" if self.planar else f"{self.n_wheels} wheels"
         return f"WheelSet({kind}, saturation={self.saturation!r}, names={self.names})"
+
+
+def _finite_array(value, name: str, unit: str) -> np.ndarray:
+    """A float64 array of finite real numbers, or an error naming ``name``."""
+    array = np.asarray(value) if not isinstance(value, np.ndarray) else value
+    if array.dtype == object or array.dtype.kind not in "iuf" or array.dtype == bool:
+        raise TypeError(f"{name} must be an array of real numbers [{unit}]; got "
+                        f"{describe(value)}")
+    array = array.astype(float, copy=False)
+    if not np.all(np.isfinite(array)):
+        raise ValueError(f"{name} must be finite [{unit}]; got {describe(value)}")
+    return array
 
 
 def _capacity(a: np.ndarray, limits: np.ndarray) -> float:

@@ -184,6 +184,8 @@ def _valid_table(tmp: Path) -> dict:
         "times": [0.0, 1.0], "controllers.WheelSet.wheels": [wheel],
         "wheels": controllers.WheelSet([wheel]), "controllers.check_slew_time.inertia": J,
         "controllers.shortest_slew_time.inertia": J,
+        "noise": controllers.SensorNoise(attitude_density=1e-5, angle_random_walk=1e-6),
+        "window": 1.0, "controllers.simulate_wheels.T": np.linspace(0.0, 1.0, 11),
         "controllers.manoeuvre_metrics.end_time": 10.0,
         "controllers.bang_coast_bang.duration": 10.0, "controllers.jerk_limited.duration": 10.0,
         "controllers.shaped.base": controllers.bang_coast_bang(0.1, 10.0),
