@@ -45,8 +45,9 @@ Any appendage
     A three-axis appendage other than a uniform beam (a
     :class:`~appendages.modal_data.ModalAppendage`, a beam with a tip body) gives its planes
     as planar appendages (``planar_view("xy")``, ``planar_view("xz")``, the root's other
-    motions held) and its torsion and axial motion as rods (``torsion_rod()``,
-    ``axial_rod()``: first free and clamped frequencies, rigid inertia; None when rigid). The
+    motions held); its torsion and axial motion are read from its undamped root dynamic
+    stiffness D6 (:func:`motion_frequencies`: the first clamped and free frequencies of one
+    root motion with the others held; none when that motion is rigid). The
     x-y plane is fitted by flexsat's fit of any appendage (mass, centre of mass and inertia
     exact); the x-z plane need not be a scaled copy of it, so its bodies' inertias about y and
     its hinges are refitted on the same bodies to the x-z plane's own poles and zeros, with
@@ -80,7 +81,8 @@ import scipy.optimize
 from .chain import HingedChain, _spring_chain
 from .interface import ConvergenceError, describe
 
-__all__ = ["fit_chain_3d", "rod_chain_errors", "rod_chain_frequencies"]
+__all__ = ["MotionRod", "fit_chain_3d", "motion_frequencies", "rod_chain_errors",
+           "rod_chain_frequencies"]
 
 _ALPHA_BOUND = 8.0
 
@@ -255,10 +257,10 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
     from . import fitting
     from .equivalence import damping_ratio_of, fit_chain, fit_targets
 
-    for attribute in ("planar_view", "inertia_tensor", "torsion_rod", "axial_rod"):
+    for attribute in ("planar_view", "inertia_tensor", "dynamic_stiffness6"):
         if not hasattr(appendage, attribute):
             raise TypeError(f"fit_chain_3d needs a three-axis appendage (planar_view, "
-                            f"inertia_tensor, torsion_rod, axial_rod); got "
+                            f"inertia_tensor, dynamic_stiffness6); got "
                             f"{type(appendage).__name__} without '{attribute}'")
     if not getattr(appendage, "three_axis", False):
         raise ValueError(f"fit_chain_3d needs three-axis data; {describe(appendage)} is planar")
@@ -278,7 +280,11 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
     about_axis = float(appendage.inertia_tensor[0, 0]) + appendage.mass * float(
         center[1] ** 2 + center[2] ** 2)
     torsional_inertias = masses * (about_axis / appendage.mass)
-    springs, rods = {}, {"torsion": appendage.torsion_rod(), "axial": appendage.axial_rod()}
+    scale = float(fit_targets(xy, n)["targets"][0, 0])  # the first bending frequency
+    zeta = damping_ratio_of(appendage)
+    springs, rods = {}, {motion: motion_frequencies(appendage, index, scale, rigid, zeta)
+                         for motion, index, rigid in (("torsion", 3, about_axis),
+                                                      ("axial", 0, appendage.mass))}
     for motion, total in (("torsion", about_axis), ("axial", None)):
         rod = rods[motion]
         if rod is None:
@@ -303,10 +309,113 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
         if springs[motion] is not None and rod.damping_ratio > 0.0:
             w1, _ = rod_chain_frequencies(inertias, springs[motion])
             dampings[f"{motion}_dampings"] = 2.0 * rod.damping_ratio * springs[motion] / w1
-    del n
     return HingedChain(planar.lengths, planar.masses, planar.inertias, planar.hinge_stiffnesses,
                        hinge_dampings=planar.hinge_dampings, com_offsets=planar.com_offsets,
                        inertias_y=inertias_y, hinge_stiffnesses_y=stiffnesses_y,
                        torsional_inertias=torsional_inertias,
                        torsion_stiffnesses=springs["torsion"],
                        axial_stiffnesses=springs["axial"], **dampings)
+
+
+class MotionRod:
+    """One root motion of a three-axis appendage, the others held, seen as a rod: what the rod
+    criterion of :func:`fit_chain_3d` needs (as a uniform beam's :class:`~appendages.rod.Rod`).
+
+    Attributes
+    ----------
+    free, clamped : float
+        Its first free (pole of W) and clamped (zero of W) frequency [rad/s].
+    rigid_inertia : float
+        Its rigid mass [kg] or moment of inertia about the axis [kg*m^2].
+    damping_ratio : float
+        The appendage's (its first mode's) [-].
+    """
+
+    def __init__(self, free: float, clamped: float, rigid_inertia: float, damping_ratio: float):
+        self.free, self.clamped = float(free), float(clamped)
+        self.rigid_inertia, self.damping_ratio = float(rigid_inertia), float(damping_ratio)
+
+    def __repr__(self) -> str:
+        return (f"MotionRod(free={self.free!r}, clamped={self.clamped!r}, "
+                f"rigid_inertia={self.rigid_inertia!r})")
+
+    def natural_frequencies(self, n: int) -> np.ndarray:
+        """[free] (n = 1 only)."""
+        if n != 1:
+            raise ValueError(f"a MotionRod holds the first frequency only; got n = {n!r}")
+        return np.array([self.free])
+
+    def cantilever_frequencies(self, n: int) -> np.ndarray:
+        """[clamped] (n = 1 only)."""
+        if n != 1:
+            raise ValueError(f"a MotionRod holds the first frequency only; got n = {n!r}")
+        return np.array([self.clamped])
+
+
+#: The scan of :func:`motion_frequencies`: points per decade and decades above and below the
+#: appendage's first bending frequency.
+_SCAN_PER_DECADE, _SCAN_BELOW, _SCAN_ABOVE = 400, 3, 8
+
+
+def motion_frequencies(appendage, index: int, scale: float, rigid_inertia: float,
+                       damping_ratio: float = 0.0) -> MotionRod | None:
+    """The first clamped and free frequencies of root motion ``index`` (0 axial, 3 torsion)
+    with the root's other motions held, from the undamped root dynamic stiffness.
+
+    On the imaginary axis ``f(omega) = D6[index, index](i omega)`` of an undamped structure is
+    real and decreasing between its poles (its derivative in omega**2 is minus a kinetic
+    energy), from ``f(0) = 0``: it first falls to a pole at the first clamped frequency (the
+    zero of this motion's W), comes back from plus infinity and crosses zero at the first free
+    frequency (its pole). They are bracketed on a logarithmic scan (400 points per decade from
+    ``1e-3 scale`` to ``1e8 scale``) and refined by Brent's method on ``1/f`` and ``f``. A pole
+    and zero closer than the scan's step (a mode of another motion coupled very weakly) are
+    passed over, as W barely shows them.
+
+    Parameters
+    ----------
+    appendage
+        Offers ``dynamic_stiffness6(s)`` (and ``undamped()`` when damped).
+    index : {0, 3}
+    scale : float, rad/s
+        A frequency of the appendage (its first bending one).
+    rigid_inertia : float
+        The motion's rigid inertia [kg or kg*m^2], kept with the result.
+    damping_ratio : float
+
+    Returns
+    -------
+    MotionRod or None
+        None when f has no pole in the scan: the motion is rigid (an inextensible or
+        torsionally rigid appendage).
+    """
+    model = appendage.undamped() if hasattr(appendage, "undamped") else appendage
+
+    def f(omega):
+        value = model.dynamic_stiffness6(np.atleast_1d(1j * omega))[..., index, index].real
+        return value if np.ndim(omega) else float(value[0])
+
+    edges = scale * np.logspace(-_SCAN_BELOW, _SCAN_ABOVE,
+                                (_SCAN_BELOW + _SCAN_ABOVE) * _SCAN_PER_DECADE + 1)
+    with np.errstate(all="ignore"):
+        values = f(edges)
+    finite = np.isfinite(values)
+    sign = np.sign(np.where(finite, values, np.nan))
+    up = np.flatnonzero((sign[:-1] < 0) & (sign[1:] > 0))  # through a pole: - to +
+    if up.size == 0:
+        return None
+    k = int(up[0])
+    def inverse(w):  # continuous through the pole; at the pole itself D is not finite
+        value = f(w)
+        return 1.0 / value if math.isfinite(value) else 0.0
+
+    with np.errstate(all="ignore"):
+        clamped = scipy.optimize.brentq(inverse, edges[k], edges[k + 1],
+                                        xtol=1e-14 * edges[k], rtol=1e-15)
+    down = np.flatnonzero((sign[k + 1:-1] > 0) & (sign[k + 2:] < 0))
+    if down.size == 0:
+        return None
+    j = k + 1 + int(down[0])
+    with np.errstate(all="ignore"):
+        free = scipy.optimize.brentq(f, edges[j], edges[j + 1], xtol=1e-14 * edges[j],
+                                     rtol=1e-15)
+    return MotionRod(free, clamped, rigid_inertia, damping_ratio)

@@ -89,7 +89,7 @@ from .interface import (ROOT_LOADS, ROOT_MOTIONS, FiniteAppendage, RootModel,
                         inverse_symmetric)
 from .modal import ModalStiffness, fixed_root_model
 
-__all__ = ["ModalAppendage", "ModalRod", "NEGLIGIBLE_FRACTION", "PLANES", "RESIDUAL_TOLERANCE"]
+__all__ = ["ModalAppendage", "NEGLIGIBLE_FRACTION", "PLANES", "RESIDUAL_TOLERANCE"]
 
 #: Planes of a three-axis appendage and their root coordinates in the planar convention:
 #: (rows/columns of the 6x6 data, signs). The x-z plane's rotation is ``dw/dx = -theta_y``.
@@ -604,26 +604,6 @@ class ModalAppendage(FiniteAppendage):
             self._cache[("planar", plane)] = cached
         return cached
 
-    def torsion_rod(self) -> "ModalRod | None":
-        """The torsion about x, the root's other motions held (:class:`ModalRod`), or None
-        when no mode twists the root (torsionally rigid data)."""
-        return self._rod("torsion", 3)
-
-    def axial_rod(self) -> "ModalRod | None":
-        """The axial motion along x, the root's other motions held (:class:`ModalRod`), or
-        None when no mode moves the root along x (axially rigid data)."""
-        return self._rod("axial", 0)
-
-    def _rod(self, motion: str, column: int):
-        self._require_three_axis(f"{motion}_rod()")
-        key = ("rod", motion)
-        if key not in self._cache:
-            w, G, zeta, tip = self._motion_modes([column], [1.0],
-                                                 2 if motion == "torsion" else None)
-            self._cache[key] = (ModalRod(w, G[:, 0], float(self._rigid_mass[column, column]),
-                                         zeta, motion) if w.size else None)
-        return self._cache[key]
-
     def undamped(self) -> "ModalAppendage":
         """The same data without damping (itself when undamped)."""
         if not np.any(self._damping):
@@ -815,74 +795,3 @@ class ModalAppendage(FiniteAppendage):
                 "mass matrix; couple it to a hub (root_model) or drop the last modes "
                 "(truncated(n_modes))")
 
-
-class ModalRod:
-    """Torsion or axial motion of three-axis modal data, the root's other motions held.
-
-    What a three-axis chain fit needs of a motion (:func:`appendages.fit3d.fit_chain_3d`),
-    as :class:`~appendages.rod.Rod` gives it for a uniform beam: the free and clamped
-    frequencies and the rigid inertia. Built by :meth:`ModalAppendage.torsion_rod` and
-    :meth:`ModalAppendage.axial_rod`.
-
-    Parameters
-    ----------
-    frequencies : ndarray, (k,), rad/s
-        The cantilever modes that move this motion's root coordinate.
-    participation : ndarray, (k,)
-        Their participation in it [sqrt(kg) or sqrt(kg)*m].
-    rigid_inertia : float
-        The rigid mass [kg] (axial) or moment of inertia about x [kg*m^2] (torsion) about the
-        root.
-    damping_ratios : ndarray, (k,)
-    motion : {"torsion", "axial"}
-    """
-
-    def __init__(self, frequencies, participation, rigid_inertia: float, damping_ratios,
-                 motion: str):
-        self.motion = motion
-        self._w = np.asarray(frequencies, dtype=float)
-        self._g = np.asarray(participation, dtype=float)
-        self._zeta = np.asarray(damping_ratios, dtype=float)
-        self._inertia = float(rigid_inertia)
-
-    def __repr__(self) -> str:
-        return (f"ModalRod({self.motion}, {self._w.size} modes, rigid inertia "
-                f"{self._inertia:.6g})")
-
-    @property
-    def rigid_inertia(self) -> float:
-        """The motion's rigid mass [kg] or moment of inertia about x [kg*m^2]."""
-        return self._inertia
-
-    @property
-    def damping_ratio(self) -> float:
-        """The damping ratio of its first mode [-]."""
-        return float(self._zeta[0])
-
-    def _check_n(self, n) -> int:
-        if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 0:
-            raise ValueError(f"n must be a non-negative integer; got {describe(n)}")
-        if n > self._w.size:
-            raise ValueError(f"n = {n}: the {self.motion} of these data has {self._w.size} "
-                             "modes")
-        return int(n)
-
-    def cantilever_frequencies(self, n: int) -> np.ndarray:
-        """The first n frequencies with the root clamped [rad/s] (zeros of its W)."""
-        return self._w[:self._check_n(n)].copy()
-
-    def natural_frequencies(self, n: int) -> np.ndarray:
-        """The first n frequencies of the free motion [rad/s] (poles of its W): the roots of
-        its dynamic mass ``M(s) = I - sum_i g_i**2 s**2/(s**2 + w_i**2)``, the eigenvalues of
-        ``K v = w**2 M v`` with ``M = [[I, g^T], [g, 1]]``, ``K = diag(0, w_i**2)``, the
-        rigid mode left out."""
-        n = self._check_n(n)
-        k = self._w.size
-        M = np.eye(k + 1)
-        M[0, 0] = self._inertia
-        M[0, 1:] = M[1:, 0] = self._g
-        K = np.diag(np.concatenate([[0.0], self._w**2]))
-        d = equilibrate(K, M)
-        lam = scipy.linalg.eigvals(K * np.outer(d, d), M * np.outer(d, d)).real
-        lam = np.sort(lam[np.isfinite(lam)])  # a zero residual inertia: infinite ones
-        return np.sqrt(np.maximum(lam[1:], 0.0))[:n]
