@@ -413,6 +413,24 @@ def test_saturated_loop_matches_an_independent_implementation(limits, digital):
     assert np.max(np.abs(e - E[0])) <= 1e-9 * np.max(np.abs(E[0]))
 
 
+def test_a_large_loop_matches_the_independent_implementation():
+    # 39 states: the linear loop runs through controllers.Simulator, the segments from the first
+    # sample where a wheel leaves it (the small loops above run by segments throughout)
+    modes = [(1.0 + 0.7 * i, 0.01, 0.02 / (1 + i), 0.02 / (1 + i)) for i in range(18)]
+    plant = modal_plant(J, modes, tips=[("wing_tip_deflection", [0.5 / (1 + i)
+                                                                 for i in range(18)])],
+                        disturbance=False)
+    K = controllers.pd(plant, natural_frequency=0.1, damping=0.7)
+    wl = controllers.WheelLoop(plant, K, planar(torque_limit=0.02, momentum_limit=0.5,
+                                                coulomb_friction=3e-3))
+    assert wl.system.nstates > 32
+    result = wl.simulate(T, SLEW)
+    assert result.saturated
+    Y, _, labels = full_state_reference(wl, T, SLEW[None, :], DT)
+    y = signals(result.response, labels)
+    assert np.all(peak_relative(y, Y) <= 1e-9), peak_relative(y, Y)
+
+
 def test_applied_torque_stays_within_the_limit_and_the_times_add_up():
     result = controllers.simulate_wheels(PLANT, PD, planar(torque_limit=0.03), T, SLEW)
     torque, command, flag = signals(result.response, ["torque", "torque_command",
