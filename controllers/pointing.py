@@ -103,8 +103,9 @@ def noise_input_names(ch) -> tuple[tuple[str, ...], tuple[str, ...]]:
             tuple(f"{OMEGA}{NOISE}{ch.suffix(i)}" for i in range(ch.n_axes)))
 
 
-def close_loop_with_sensors(plant: control.StateSpace, controller: control.StateSpace
-                            ) -> control.StateSpace:
+def close_loop_with_sensors(plant: control.StateSpace, controller: control.StateSpace, *,
+                            delay: float = 0.0, computation_delay: bool = False,
+                            dt: float | None = None) -> control.StateSpace:
     """The attitude loop with noise inputs at the controller's measurements.
 
     Parameters
@@ -114,6 +115,8 @@ def close_loop_with_sensors(plant: control.StateSpace, controller: control.State
     controller : control.StateSpace
         Continuous or digital, with the measurement inputs ``theta``, ``omega`` (three axes:
         ``theta_x``...).
+    delay, computation_delay, dt
+        A loop delay, as for :func:`.close_loop`.
 
     Returns
     -------
@@ -158,7 +161,7 @@ def close_loop_with_sensors(plant: control.StateSpace, controller: control.State
                          inputs=[_measured(n) if n in measured else n for n in c_in],
                          outputs=list(controller.output_labels),
                          states=list(controller.state_labels), name=controller.name)
-    return close_loop(noisy, reader)
+    return close_loop(noisy, reader, delay=delay, computation_delay=computation_delay, dt=dt)
 
 
 def _measured(name: str) -> str:
@@ -226,8 +229,8 @@ class PointingBudget:
 
 
 def pointing(plant: control.StateSpace, controller: control.StateSpace, noise: SensorNoise,
-             *, window: float, placement: str = "random",
-             outputs=None) -> PointingBudget:
+             *, window: float, placement: str = "random", outputs=None, delay: float = 0.0,
+             computation_delay: bool = False) -> PointingBudget:
     """Pointing error statistics of the loop under sensor noise (module docstring).
 
     Parameters
@@ -243,6 +246,11 @@ def pointing(plant: control.StateSpace, controller: control.StateSpace, noise: S
     outputs : sequence of str, optional
         Tip outputs for the jitter (default: every ``*tip_deflection`` and tip output of the
         plant).
+    delay : float, s
+        A loop delay (:func:`.close_loop`), for a digital controller (its delayed loop is
+        exact; a continuous controller's is infinite-dimensional: refused).
+    computation_delay : bool
+        One sample of a digital controller added to the delay.
 
     Returns
     -------
@@ -262,7 +270,15 @@ def pointing(plant: control.StateSpace, controller: control.StateSpace, noise: S
     if not isinstance(placement, str) or placement not in PLACEMENTS:
         raise ValueError(f"placement must be one of {PLACEMENTS}; got {describe(placement)}")
     window = positive(window, "window", "s")
-    loop = close_loop_with_sensors(plant, controller)
+    if isinstance(controller, control.StateSpace) and not controller.isdtime(strict=True) \
+            and not (isinstance(delay, (int, float)) and not isinstance(delay, bool)
+                     and delay == 0):
+        raise ValueError(f"delay of a continuous controller: its delayed loop is "
+                         f"infinite-dimensional and has no exact covariance here; give a digital "
+                         f"controller (sample_time) for a delay [s]; got delay = "
+                         f"{describe(delay)}")
+    loop = close_loop_with_sensors(plant, controller, delay=delay,
+                                   computation_delay=computation_delay)
     ch = channels(plant)
     levels = noise.per_axis(ch.n_axes)
     sampled = loop.isdtime(strict=True)

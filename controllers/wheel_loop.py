@@ -151,6 +151,10 @@ class WheelLoop:
         Controller (continuous or digital) as for :func:`.close_loop`.
     wheels : WheelSet
         Planar set (one wheel) for a planar plant, three-axis set for a three-axis plant.
+    delay, computation_delay, dt
+        A loop delay, as for :func:`.close_loop`: the wheels receive the command of ``delay``
+        earlier (the delayed loop of a continuous controller is discretised on ``dt``, and the
+        wheels act on that discrete loop).
 
     Attributes
     ----------
@@ -176,7 +180,8 @@ class WheelLoop:
     """
 
     def __init__(self, plant: control.StateSpace, controller: control.StateSpace,
-                 wheels: WheelSet) -> None:
+                 wheels: WheelSet, *, delay: float = 0.0, computation_delay: bool = False,
+                 dt: float | None = None) -> None:
         if not isinstance(wheels, WheelSet):
             raise TypeError(f"wheels must be a controllers.WheelSet; got "
                             f"{type(wheels).__name__} {describe(wheels)}")
@@ -190,7 +195,8 @@ class WheelLoop:
         self.wheels = wheels
         self.channels = ch
         deviations = [t + DEVIATION_SUFFIX for t in ch.torques]
-        self.linear_loop = close_loop(_with_deviation_inputs(plant, ch, deviations), controller)
+        self.linear_loop = close_loop(_with_deviation_inputs(plant, ch, deviations), controller,
+                                      delay=delay, computation_delay=computation_delay, dt=dt)
         self.system = self._wheel_system(plant, deviations)
         self._simulators: dict = {}
         self._mode_cache: dict = {}
@@ -732,14 +738,16 @@ def _check_state(X0, n: int) -> np.ndarray:
 
 
 def simulate_wheels(plant: control.StateSpace, controller: control.StateSpace,
-                    wheels: WheelSet, T, U=None, X0=None, *,
+                    wheels: WheelSet, T, U=None, X0=None, *, delay: float = 0.0,
+                    computation_delay: bool = False, dt: float | None = None,
                     max_samples: int | None = None) -> WheelResponse:
-    """One simulation of the loop with wheels: ``WheelLoop(plant, controller,
-    wheels).simulate(T, U, X0)`` (keep the WheelLoop to simulate it again without its
-    set-up).
+    """One simulation of the loop with wheels: ``WheelLoop(plant, controller, wheels, delay=...,
+    computation_delay=..., dt=...).simulate(T, U, X0)`` (keep the WheelLoop to simulate it
+    again without its set-up).
 
     See Also
     --------
     WheelLoop, WheelLoop.simulate
     """
-    return WheelLoop(plant, controller, wheels).simulate(T, U, X0, max_samples=max_samples)
+    return WheelLoop(plant, controller, wheels, delay=delay, computation_delay=computation_delay,
+                     dt=dt).simulate(T, U, X0, max_samples=max_samples)

@@ -191,6 +191,28 @@ def test_probability_levels_are_gaussian_quantiles():
         b.at(99.73)
 
 
+def test_computation_delay_is_one_sample_of_delay_in_the_controller():
+    # computation_delay: the command applied one sample later; the same loop as a controller
+    # followed by a unit delay z^-1 written out, to round-off
+    T = 0.1
+    K = controllers.pd(FLEXIBLE, natural_frequency=0.1, damping=0.7, sample_time=T)
+    inner = control.ss(K.A, K.B, K.C, K.D, T, inputs=list(K.input_labels),
+                       outputs=["command"])
+    unit_delay = control.ss([[0.0]], [[1.0]], [[1.0]], [[0.0]], T, inputs=["command"],
+                            outputs=["torque"])
+    delayed = control.interconnect([inner, unit_delay], inputs=list(K.input_labels),
+                                   outputs=["torque"])
+    a = controllers.pointing(FLEXIBLE, K, NOISE, window=1.0, computation_delay=True)
+    b = controllers.pointing(FLEXIBLE, delayed, NOISE, window=1.0)
+    for kind in ("ape", "mpe", "rpe", "jitter", "jitter_rpe"):
+        for name, value in getattr(a, kind).items():
+            assert value == pytest.approx(getattr(b, kind)[name], rel=1e-9), (kind, name)
+    assert a.ape["theta"] > controllers.pointing(FLEXIBLE, K, NOISE, window=1.0).ape["theta"]
+    with pytest.raises(ValueError, match="delay of a continuous controller"):
+        controllers.pointing(FLEXIBLE, controllers.pd(FLEXIBLE, natural_frequency=0.1),
+                             NOISE, window=1.0, delay=0.1)
+
+
 # -- long simulations with generated noise --------------------------------------------------
 def noise_model(loop, noise, dt=None):
     """(A, B_w, W) of the loop with a Gauss-Markov bias state per axis, written out here: the

@@ -298,6 +298,20 @@ def test_a_wheel_that_never_saturates_gives_the_linear_response(kind):
         10.0 - result.peak_momentum["wheel"], rel=1e-15)
 
 
+def test_a_delayed_loop_through_a_wheel_that_never_saturates_is_the_delayed_loop():
+    # the wheel receives the command of `delay` earlier: with no limit reached, the delayed
+    # loop of close_loop (exact for a digital controller), to round-off
+    K = controllers.pd(PLANT, natural_frequency=0.1, damping=0.7, sample_time=DT)
+    loop = controllers.close_loop(PLANT, K, delay=0.25)
+    y_lin = np.asarray(controllers.simulate(loop, T, SLEW).outputs).reshape(loop.noutputs, -1)
+    result = controllers.simulate_wheels(PLANT, K, planar(torque_limit=1.0), T, SLEW,
+                                         delay=0.25)
+    y = signals(result.response, loop.output_labels)
+    assert np.all(peak_relative(y, y_lin) <= 1e-11), peak_relative(y, y_lin)
+    assert controllers.simulate_wheels(PLANT, K, planar(torque_limit=0.03), T, SLEW,
+                                       delay=0.25).saturated
+
+
 def test_three_axis_wheels_that_never_saturate_give_the_linear_response():
     inertia = np.array([[300.0, 5.0, -3.0], [5.0, 200.0, 2.0], [-3.0, 2.0, 150.0]])
     plant = three_axis_plant(inertia, [(1.5, 0.01, np.array([0.02, 0.01, 0.0]),
