@@ -63,12 +63,13 @@ import warnings
 from collections.abc import Sequence
 
 import numpy as np
+import scipy.linalg
 
 from . import fitting, limits
 from .beam import Beam, characteristic_roots
 from .chain import HingedChain
 from .fitting import FitWarning
-from .interface import FiniteAppendage, as_frequency_array, describe
+from .interface import FiniteAppendage, as_frequency_array, describe, equilibrate
 
 __all__ = [
     "ANY_APPENDAGE_BUDGET",
@@ -76,6 +77,7 @@ __all__ = [
     "FitWarning",
     "ModelQuantities",
     "criterion",
+    "damping_frequency_of",
     "damping_ratio_of",
     "fit_chain",
     "fit_targets",
@@ -530,6 +532,29 @@ def damping_ratio_of(appendage) -> float:
     return float(zeta)
 
 
+def damping_frequency_of(appendage) -> float:
+    """The frequency [rad/s] at which a fitted chain's stiffness-proportional hinge damping
+    (``2 zeta c_h / w``) gives the appendage's damping ratio.
+
+    Its first cantilever (fixed-root) frequency, the mode whose ratio the damping ratio is
+    (:func:`damping_ratio_of`; as the beams' chains match it), or its first free-free one for
+    an appendage with ``damping_convention = "free-free"``.
+    """
+    if getattr(appendage, "damping_convention", "cantilever") == "free-free":
+        return float(_model_frequencies(appendage, 0, 1)[0])
+    if hasattr(appendage, "cantilever_frequencies"):
+        return float(appendage.cantilever_frequencies(1)[0])
+    frequencies = getattr(appendage, "frequencies", None)  # modal data: the cantilever modes
+    if frequencies is not None:
+        return float(np.min(frequencies))
+    rm = appendage.root_model()
+    r = rm.n_root
+    Kii, Mii = rm.stiffness[r:, r:], rm.mass[r:, r:]
+    d = equilibrate(Kii, Mii)
+    lam = scipy.linalg.eigvalsh(Kii * np.outer(d, d), Mii * np.outer(d, d))
+    return float(np.sqrt(np.min(lam)))
+
+
 def fit_targets(appendage, n_bodies: int):
     """What the poles-and-zeros fit needs of any appendage that gives W (module docstring).
 
@@ -587,8 +612,9 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
         optionally ``damping_ratio``), or any appendage with W, its poles and zeros, ``mass``,
         ``length``, ``inertia`` and ``center_of_mass`` (a beam with a tip body, a stepped beam,
         a :class:`~appendages.modal_data.ModalAppendage`...): flexsat's fit only (module
-        docstring, "Any appendage"), with hinge dampings ``2 zeta c_h / w_1`` for the damping
-        ratio of the appendage's first mode (:func:`damping_ratio_of`).
+        docstring, "Any appendage"), with hinge dampings ``2 zeta c_h / w`` for the damping
+        ratio of the appendage's first mode (:func:`damping_ratio_of`) at its first cantilever
+        frequency w (:func:`damping_frequency_of`).
     n_bodies : int
         Number of rigid bodies (>= 2); the chain has n_bodies - 1 hinges and
         n_bodies + 1 degrees of freedom.
@@ -737,7 +763,7 @@ def _fit_any(appendage, n: int, match: str, frequencies, pole_weight, max_nfev) 
     try:
         return fit.scaled(data["length"], data["mass"], unit,
                           damping_ratio=damping_ratio_of(appendage),
-                          first_frequency=float(data["targets"][0, 0]))
+                          first_frequency=damping_frequency_of(appendage))
     except ValueError as exc:
         raise ValueError(f"fit_chain(n_bodies={n}) of {describe(appendage)}: the fitted chain is "
                          f"outside the documented ranges: {exc}") from None

@@ -60,6 +60,9 @@ Damping
     A damped beam (modal damping ratio zeta) gives every joint stiffness-proportional damping
     ``2 zeta k/w_1`` with w_1 that motion's first free-free chain frequency: ratio zeta at the
     chain's first mode of each motion, the rule of ``HingedChain.rfem`` and of the runner.
+    Any other appendage: ``2 zeta k/w`` with w its first cantilever frequency of that plane
+    or motion (:func:`appendages.equivalence.damping_frequency_of`, the motion's first clamped
+    frequency), the modes whose ratio zeta is.
 
 References
 ----------
@@ -255,7 +258,7 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
     """:func:`fit_chain_3d` of a three-axis appendage other than a uniform beam (module
     docstring, "Any appendage")."""
     from . import fitting
-    from .equivalence import damping_ratio_of, fit_chain, fit_targets
+    from .equivalence import damping_frequency_of, damping_ratio_of, fit_chain, fit_targets
 
     for attribute in ("planar_view", "inertia_tensor", "dynamic_stiffness6"):
         if not hasattr(appendage, attribute):
@@ -302,13 +305,13 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
     dampings = {}
     zeta_xz = damping_ratio_of(xz)
     if zeta_xz > 0.0:
-        dampings["hinge_dampings_y"] = (2.0 * zeta_xz * stiffnesses_y
-                                        / float(data_xz["targets"][0, 0]))
-    for motion, inertias in (("torsion", torsional_inertias), ("axial", masses)):
+        dampings["hinge_dampings_y"] = 2.0 * zeta_xz * stiffnesses_y / damping_frequency_of(xz)
+    for motion in ("torsion", "axial"):
         rod = rods[motion]
         if springs[motion] is not None and rod.damping_ratio > 0.0:
-            w1, _ = rod_chain_frequencies(inertias, springs[motion])
-            dampings[f"{motion}_dampings"] = 2.0 * rod.damping_ratio * springs[motion] / w1
+            # the ratio at the motion's first clamped frequency, as in bending
+            dampings[f"{motion}_dampings"] = (2.0 * rod.damping_ratio * springs[motion]
+                                              / rod.clamped)
     return HingedChain(planar.lengths, planar.masses, planar.inertias, planar.hinge_stiffnesses,
                        hinge_dampings=planar.hinge_dampings, com_offsets=planar.com_offsets,
                        inertias_y=inertias_y, hinge_stiffnesses_y=stiffnesses_y,

@@ -556,8 +556,8 @@ class DimensionlessChain:
         """The chain in SI from a fit in units of ``length`` [m], ``mass`` [kg] and
         ``frequency_unit`` [rad/s] (:func:`fit_poles_and_zeros_to`): inertias in
         ``mass length**2``, hinge stiffnesses in ``mass length**2 frequency_unit**2``; hinge
-        dampings ``2 zeta c_h / w_1`` (ratio zeta at the chain's first mode, w_1 =
-        ``first_frequency`` [rad/s], the appendage's) when ``damping_ratio`` > 0.
+        dampings ``2 zeta c_h / w`` (stiffness-proportional: ratio zeta at w =
+        ``first_frequency`` [rad/s]) when ``damping_ratio`` > 0.
 
         Raises ValueError (from :class:`HingedChain`) when a scaled value leaves the documented
         ranges.
