@@ -283,7 +283,7 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
     about_axis = float(appendage.inertia_tensor[0, 0]) + appendage.mass * float(
         center[1] ** 2 + center[2] ** 2)
     torsional_inertias = masses * (about_axis / appendage.mass)
-    scale = float(fit_targets(xy, n)["targets"][0, 0])  # the first bending frequency
+    scale = float(planar.poles()[0])  # the first bending frequency (fitted to 1e-4)
     zeta = damping_ratio_of(appendage)
     springs, rods = {}, {motion: motion_frequencies(appendage, index, scale, rigid, zeta)
                          for motion, index, rigid in (("torsion", 3, about_axis),
@@ -357,7 +357,7 @@ class MotionRod:
 
 #: The scan of :func:`motion_frequencies`: points per decade and decades above and below the
 #: appendage's first bending frequency.
-_SCAN_PER_DECADE, _SCAN_BELOW, _SCAN_ABOVE = 400, 3, 8
+_SCAN_PER_DECADE, _SCAN_BELOW, _SCAN_ABOVE = 100, 3, 8
 
 
 def motion_frequencies(appendage, index: int, scale: float, rigid_inertia: float,
@@ -369,7 +369,7 @@ def motion_frequencies(appendage, index: int, scale: float, rigid_inertia: float
     real and decreasing between its poles (its derivative in omega**2 is minus a kinetic
     energy), from ``f(0) = 0``: it first falls to a pole at the first clamped frequency (the
     zero of this motion's W), comes back from plus infinity and crosses zero at the first free
-    frequency (its pole). They are bracketed on a logarithmic scan (400 points per decade from
+    frequency (its pole). They are bracketed on a logarithmic scan (100 points per decade from
     ``1e-3 scale`` to ``1e8 scale``) and refined by Brent's method on ``1/f`` and ``f``. A pole
     and zero closer than the scan's step (a mode of another motion coupled very weakly) are
     passed over, as W barely shows them.
