@@ -15,12 +15,15 @@ from .modal_file import read_modal_data, write_modal_data
 from .nastran import read_nastran
 from .rod import Rod
 from .selection import ModelChoice, cheapest_model
+from .stepped import SteppedBeam
+from .tip import TipBody
 
 __all__ = [
     "Appendage", "Beam", "ConvergenceError", "EquivalenceResult", "FiniteAppendage",
     "FitWarning", "FlexsatError", "HingedChain", "LimitError", "MOLENAAR_K", "ModalAppendage",
     "ModalBeam", "ModelChoice",
-    "ModelQuantities", "Rod", "RootModel", "characteristic_roots", "cheapest_model", "criterion",
+    "ModelQuantities", "Rod", "RootModel", "SteppedBeam", "TipBody", "characteristic_roots",
+    "cheapest_model", "criterion",
     "equivalence", "fit_chain", "fit_chain_3d", "limits", "read_modal_data", "read_nastran",
     "spectral_errors", "three_axis_root_model", "write_modal_data",
 ]

@@ -46,6 +46,15 @@ as ``[(1-sigma) e^{bx} + (1+sigma) e^{-bx}]/2`` with ``(1-sigma)`` and ``sigma``
 exponentials scaled by ``e^{-bL}``. This removes the cancellation that ruins the textbook form
 beyond about 12 modes (Tang 2003).
 
+Damping and tip bodies
+----------------------
+The modal damping ratio is that of every cantilever (fixed-root) mode by default
+(:mod:`appendages.damping`: the damped root dynamic stiffness is the undamped closed form plus
+each cantilever mode's damping, the tail in Hurwitz zeta sums; W its inverse);
+``damping_convention="free-free"`` keeps the former meaning, every free-free mode damped (the
+correction and repair below). A beam carrying a rigid body at its free end (``tip=``) has no
+closed form: it is the exact assembled model of :mod:`appendages.segmented`.
+
 References
 ----------
 .. [1] R. D. Blevins, "Formulas for Natural Frequency and Mode Shape", Van Nostrand, 1979,
@@ -66,9 +75,14 @@ import numpy as np
 import scipy.special
 
 from . import limits
-from .interface import (as_frequency_array, check_derived, check_positive, check_range, describe,
+from .assembly import Segment
+from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
+                      hurwitz_tail_coefficients)
+from .interface import (as_frequency_array, check_derived, check_range, describe,
                         inverse_2x2)
 from .rod import Rod
+from .segmented import SegmentedBeam
+from .tip import TipBody, check_tip
 
 __all__ = ["Beam", "characteristic_roots", "rectangle_torsion_constant"]
 
@@ -346,15 +360,6 @@ def _shape_products(x1: np.ndarray, kind1: str, x2: np.ndarray, kind2: str) -> n
     return total + trig_exp(a, A1, B1, b, C2, D2) + trig_exp(b, A2, B2, a, C1, D1)
 
 
-def _check_damping_ratio(damping_ratio) -> float:
-    """The modal damping ratio as a float in [0, 1), or TypeError/ValueError naming it."""
-    zeta = check_positive("damping_ratio", damping_ratio, "-", allow_zero=True)
-    if zeta >= 1.0:
-        raise ValueError(f"damping_ratio must be below 1 (underdamped modes) [-]; got "
-                         f"{describe(damping_ratio)}")
-    return zeta
-
-
 def _check_section(bending_stiffness: float, linear_density: float, ej_formula: str,
                    rho_formula: str, ej_given, rho_given) -> None:
     """Check the beam properties a section constructor derived, blaming its own parameters."""
@@ -443,16 +448,28 @@ class Beam:
     axial_stiffness : float, N, optional
         EA. None: inextensible (the limit EA -> inf), the assumption the planar model makes.
     damping_ratio : float, optional
-        Modal damping ratio, the same for every elastic mode: bending in both planes, torsion
-        and axial motion (dimensionless, 0 <= zeta < 1; one structural damping ratio, as the
-        planar model has one for every bending mode). The exact W(s) of a damped beam is the
-        undamped closed form plus the exact damping correction of each mode, summed until the
-        rest is below round-off; a damped rod's W has a closed form (:mod:`appendages.rod`).
+        Modal damping ratio, the same for every elastic mode (dimensionless, 0 <= zeta < 1):
+        by default of every cantilever (fixed-root) mode, as finite-element data carries it,
+        bending in both planes, torsion and axial motion; a hub much heavier than the beam
+        then sees its first modes damped at zeta. The exact W(s) of a damped beam is the
+        inverse of its exact damped root dynamic stiffness: the undamped closed form plus the
+        damping of each cantilever mode, the tail summed in closed form
+        (:mod:`appendages.damping`).
+    damping_convention : {"cantilever", "free-free"}, optional
+        What damping_ratio damps: "cantilever" (default) the cantilever modes; "free-free"
+        every free-free mode (flexsat's meaning before, kept by name; the bare uniform beam
+        only): then W(s) is the undamped closed form plus each free-free mode's damping, and
+        a rod's W the digamma form of :mod:`appendages.rod`.
+    tip : TipBody, optional
+        A rigid body fixed to the free end (:class:`appendages.TipBody`): W(s), W6(s), the
+        mass properties, the frequencies and the truncations include it exactly, through the
+        assembled model of :mod:`appendages.segmented` (a body of zero mass and inertia gives
+        the bare beam bit for bit).
 
     Raises
     ------
     TypeError
-        A parameter that is not a real number.
+        A parameter that is not a real number, a tip that is not a TipBody.
     ValueError
         A parameter outside its documented range (:data:`appendages.interface.RANGES`):
         length 1e-6 to 1e6 m, bending_stiffness(_y) 1e-15 to 1e15 N*m**2, linear_density 1e-12 to
@@ -481,12 +498,14 @@ class Beam:
                  bending_stiffness_y: float | None = None,
                  torsional_stiffness: float | None = None,
                  torsional_inertia: float | None = None,
-                 axial_stiffness: float | None = None, damping_ratio: float = 0.0):
+                 axial_stiffness: float | None = None, damping_ratio: float = 0.0,
+                 damping_convention: str = "cantilever", tip: TipBody | None = None):
         self.length = check_range("length", length, "length")
         self.bending_stiffness = check_range("bending_stiffness", bending_stiffness,
                                              "bending_stiffness")
         self.linear_density = check_range("linear_density", linear_density, "linear_density")
-        self.damping_ratio = _check_damping_ratio(damping_ratio)
+        self.damping_ratio = check_damping_ratio(damping_ratio)
+        self.damping_convention = check_damping_convention(damping_convention)
         given = {"bending_stiffness_y": bending_stiffness_y,
                  "torsional_stiffness": torsional_stiffness,
                  "torsional_inertia": torsional_inertia, "axial_stiffness": axial_stiffness}
@@ -501,7 +520,21 @@ class Beam:
         self.torsional_stiffness = given["torsional_stiffness"]
         self.torsional_inertia = given["torsional_inertia"]
         self.axial_stiffness = given["axial_stiffness"]
+        self.tip = check_tip(tip)
+        if self.damping_convention == "free-free" and self.tip is not None \
+                and not self.tip.is_null:
+            raise ValueError("damping_convention='free-free' is the bare uniform beam's only; a "
+                             "beam with a tip body is damped in its cantilever modes "
+                             "(damping_convention='cantilever'); got 'free-free' with "
+                             f"tip={self.tip!r}")
         self._cache: dict = {}
+        # with a tip body: the exact assembled model (appendages.segmented); a body of zero
+        # mass and inertia leaves the bare beam, bit for bit
+        self._segmented = None if self.tip is None or self.tip.is_null else SegmentedBeam(
+            [Segment(self.length, self.bending_stiffness, self.linear_density,
+                     self.bending_stiffness_y if self.three_axis else None,
+                     self.torsional_stiffness, self.torsional_inertia, self.axial_stiffness)],
+            self.tip, self.damping_ratio)
 
     @property
     def bending_stiffness_y(self) -> float:
@@ -515,6 +548,11 @@ class Beam:
         """True when the beam has the properties of a three-axis model (a torsional inertia)."""
         return self.torsional_inertia is not None
 
+    @property
+    def is_uniform(self) -> bool:
+        """True for the bare uniform beam (no tip body), whose closed forms apply."""
+        return self._segmented is None
+
     def _require_three_axis(self, what: str) -> None:
         if self.torsional_inertia is None:
             raise ValueError(
@@ -527,7 +565,9 @@ class Beam:
     # -- constructors -------------------------------------------------------------------------
     @classmethod
     def circular_rod(cls, length: float, diameter: float, density: float, youngs_modulus: float,
-                     *, poisson_ratio: float = 0.3, damping_ratio: float = 0.0) -> "Beam":
+                     *, poisson_ratio: float = 0.3, damping_ratio: float = 0.0,
+                     damping_convention: str = "cantilever",
+                     tip: TipBody | None = None) -> "Beam":
         """Solid circular rod (the paper's example: 10 m, 0.01 m, 7800 kg/m**3, 2.06e11 Pa).
 
         Every property is filled: ``EJ = E pi d**4/64`` in both planes, ``EA = E pi d**2/4``,
@@ -543,7 +583,10 @@ class Beam:
         poisson_ratio : float, optional
             nu, in (-1, 0.5) [-], for the shear modulus; default 0.3 (steel; aluminium
             alloys 0.33). It enters only torsion.
-        damping_ratio : float, optional
+        damping_ratio, damping_convention : optional
+            As :class:`Beam`.
+        tip : TipBody, optional
+            A rigid body at the free end (:class:`Beam`).
         """
         d = check_range("diameter", diameter, "length")
         rho = check_range("density", density, "density")
@@ -557,12 +600,13 @@ class Beam:
                        [("diameter", diameter, "m"), ("density", density, "kg/m^3")])
         return cls._section(length, E, nu, rho, area, second_moment, second_moment,
                             2.0 * second_moment, 2.0 * second_moment, damping_ratio,
-                            [("diameter", diameter, "m")])
+                            [("diameter", diameter, "m")], tip, damping_convention)
 
     @classmethod
     def tube(cls, length: float, outer_diameter: float, wall_thickness: float, density: float,
              youngs_modulus: float, *, poisson_ratio: float = 0.3,
-             damping_ratio: float = 0.0) -> "Beam":
+             damping_ratio: float = 0.0, damping_convention: str = "cantilever",
+             tip: TipBody | None = None) -> "Beam":
         """Thin- or thick-walled circular tube (a typical deployable boom).
 
         ``EJ = E pi (D**4 - d**4)/64`` in both planes, ``EA``, ``GJ = G pi (D**4 - d**4)/32``
@@ -579,7 +623,10 @@ class Beam:
         youngs_modulus : float, Pa
         poisson_ratio : float, optional
             nu in (-1, 0.5) [-], default 0.3.
-        damping_ratio : float, optional
+        damping_ratio, damping_convention : optional
+            As :class:`Beam`.
+        tip : TipBody, optional
+            A rigid body at the free end (:class:`Beam`).
         """
         D = check_range("outer_diameter", outer_diameter, "length")
         t = check_range("wall_thickness", wall_thickness, "length")
@@ -605,12 +652,13 @@ class Beam:
         return cls._section(length, E, nu, rho, area, second_moment, second_moment,
                             2.0 * second_moment, 2.0 * second_moment, damping_ratio,
                             [("outer_diameter", outer_diameter, "m"),
-                             ("wall_thickness", wall_thickness, "m")])
+                             ("wall_thickness", wall_thickness, "m")], tip, damping_convention)
 
     @classmethod
     def rectangular(cls, length: float, width: float, thickness: float, density: float,
                     youngs_modulus: float, *, poisson_ratio: float = 0.3,
-                    damping_ratio: float = 0.0) -> "Beam":
+                    damping_ratio: float = 0.0, damping_convention: str = "cantilever",
+                    tip: TipBody | None = None) -> "Beam":
         """Solid rectangular section: thickness along local y, width along local z.
 
         The planar beam (x-y plane) bends about its thin direction (a panel strip or tape,
@@ -628,7 +676,10 @@ class Beam:
         youngs_modulus : float, Pa
         poisson_ratio : float, optional
             nu in (-1, 0.5) [-], default 0.3.
-        damping_ratio : float, optional
+        damping_ratio, damping_convention : optional
+            As :class:`Beam`.
+        tip : TipBody, optional
+            A rigid body at the free end (:class:`Beam`).
         """
         b = check_range("width", width, "length")
         h = check_range("thickness", thickness, "length")
@@ -643,11 +694,13 @@ class Beam:
                         ("density", density, "kg/m^3")])
         return cls._section(length, E, nu, rho, b * h, b * h**3 / 12.0, h * b**3 / 12.0,
                             rectangle_torsion_constant(b, h), b * h * (b * b + h * h) / 12.0,
-                            damping_ratio, [("width", width, "m"), ("thickness", thickness, "m")])
+                            damping_ratio, [("width", width, "m"), ("thickness", thickness, "m")],
+                            tip, damping_convention)
 
     @classmethod
     def _section(cls, length, E, nu, rho, area, I_z, I_y, torsion_constant, polar_moment,
-                 damping_ratio, dimensions) -> "Beam":
+                 damping_ratio, dimensions, tip=None,
+                 damping_convention="cantilever") -> "Beam":
         """A beam from section properties, every derived one checked against RANGES."""
         given_E = dimensions + [("youngs_modulus", E, "Pa")]
         values = {
@@ -663,7 +716,8 @@ class Beam:
                                                "density*I_p",
                                                dimensions + [("density", rho, "kg/m^3")]),
         }
-        return cls(length, E * I_z, rho * area, damping_ratio=damping_ratio, **values)
+        return cls(length, E * I_z, rho * area, damping_ratio=damping_ratio,
+                   damping_convention=damping_convention, tip=tip, **values)
 
     def __repr__(self) -> str:
         extra = "".join(f", {name}={value!r}" for name, value in (
@@ -671,9 +725,12 @@ class Beam:
             ("torsional_stiffness", self.torsional_stiffness),
             ("torsional_inertia", self.torsional_inertia),
             ("axial_stiffness", self.axial_stiffness)) if value is not None)
+        tip = "" if self.tip is None else f", tip={self.tip!r}"
+        convention = ("" if self.damping_convention == "cantilever"
+                      else f", damping_convention={self.damping_convention!r}")
         return (f"Beam(length={self.length!r}, bending_stiffness={self.bending_stiffness!r}, "
                 f"linear_density={self.linear_density!r}{extra}, "
-                f"damping_ratio={self.damping_ratio!r})")
+                f"damping_ratio={self.damping_ratio!r}{convention}{tip})")
 
     def _three_axis_properties(self) -> dict:
         return {"bending_stiffness_y": self._bending_stiffness_y,
@@ -688,7 +745,7 @@ class Beam:
         cached = self._cache.get("undamped")
         if cached is None:
             cached = Beam(self.length, self.bending_stiffness, self.linear_density,
-                          **self._three_axis_properties())
+                          tip=self.tip, **self._three_axis_properties())
             self._cache["undamped"] = cached
         return cached
 
@@ -713,12 +770,25 @@ class Beam:
                 cached = self
             else:
                 cached = Beam(self.length, EJ, self.linear_density,
-                              damping_ratio=self.damping_ratio)
+                              damping_ratio=self.damping_ratio,
+                              damping_convention=self.damping_convention,
+                              tip=self._planar_tip(plane))
             self._cache[key] = cached
         return cached
 
+    def _planar_tip(self, plane: str) -> TipBody | None:
+        """The tip body as a planar model of one plane sees it: its moment about z (x-y) or y
+        (x-z), its offset along x and across the axis in that plane."""
+        tip = self.tip
+        if tip is None:
+            return None
+        if plane == "xy":
+            return TipBody(tip.mass, tip.planar_inertia, tip.offset[:2])
+        return TipBody(tip.mass, float(tip.inertia_tensor[1, 1]), tip.offset[[0, 2]])
+
     def torsion_rod(self) -> Rod | None:
-        """The beam's torsion as an exact rod (GJ, rho*I_p), or None when torsionally rigid.
+        """The beam's torsion as an exact rod (GJ, rho*I_p), or None when torsionally rigid
+        (the beam's own, without a tip body).
 
         Raises ValueError naming the missing property for a planar beam.
         """
@@ -728,28 +798,75 @@ class Beam:
         if "torsion" not in self._cache:
             self._cache["torsion"] = Rod(self.length, self.torsional_stiffness,
                                          self.torsional_inertia,
-                                         damping_ratio=self.damping_ratio, motion="torsion")
+                                         damping_ratio=self.damping_ratio, motion="torsion",
+                                         damping_convention=self.damping_convention)
         return self._cache["torsion"]
 
     def axial_rod(self) -> Rod | None:
-        """The beam's axial motion as an exact rod (EA, rho*A), or None when inextensible."""
+        """The beam's axial motion as an exact rod (EA, rho*A), or None when inextensible (the
+        beam's own, without a tip body)."""
         if self.axial_stiffness is None:
             return None
         if "axial" not in self._cache:
             self._cache["axial"] = Rod(self.length, self.axial_stiffness, self.linear_density,
-                                       damping_ratio=self.damping_ratio, motion="axial")
+                                       damping_ratio=self.damping_ratio, motion="axial",
+                                       damping_convention=self.damping_convention)
         return self._cache["axial"]
 
     # -- rigid properties ---------------------------------------------------------------------
     @property
     def mass(self) -> float:
-        """Mass m = rho*A L [kg]."""
+        """Mass m = rho*A L [kg], the tip body's included."""
+        if self._segmented is not None:
+            return self._segmented.mass
         return self.linear_density * self.length
 
     @property
     def inertia(self) -> float:
-        """Moment of inertia about the centre of mass, undeformed: m L**2/12 [kg*m**2]."""
+        """Moment of inertia about z through the centre of mass, undeformed: m L**2/12
+        [kg*m**2] (with a tip body: its moment and the parallel-axis terms added)."""
+        if self._segmented is not None:
+            return self._segmented.inertia
         return self.mass * self.length**2 / 12.0
+
+    @property
+    def first_moment(self) -> float:
+        """First moment of the mass about the root along x [kg*m]: m L/2 for the bare beam."""
+        if self._segmented is not None:
+            return self._segmented.first_moment
+        return 0.5 * self.mass * self.length
+
+    @property
+    def center_of_mass_vector(self) -> np.ndarray:
+        """Centre of mass from the root, beam axes [m], shape (3,) (off the axis only with a
+        tip body offset across it)."""
+        if self._segmented is not None:
+            return self._segmented.center_of_mass_vector
+        return np.array([0.5 * self.length, 0.0, 0.0])
+
+    @property
+    def rigid_mass_matrix(self) -> np.ndarray:
+        """Rigid mass matrix about the root in (delta, phi) [kg, kg*m; kg*m, kg*m**2]:
+        ``rho*A [[L, L**2/2], [L**2/2, L**3/3]]`` for the bare beam."""
+        if self._segmented is not None:
+            return self._segmented.rigid_mass_matrix
+        L = self.length
+        return self.linear_density * np.array([[L, L**2 / 2.0], [L**2 / 2.0, L**3 / 3.0]])
+
+    @property
+    def rigid_mass_matrix6(self) -> np.ndarray:
+        """Rigid mass matrix about the root in (u, v, w, theta_x, theta_y, theta_z)."""
+        if self._segmented is not None:
+            return self._segmented.rigid_mass_matrix6
+        self._require_three_axis("rigid_mass_matrix6")
+        m, L = self.mass, self.length
+        M = np.zeros((6, 6))
+        M[0, 0] = M[1, 1] = M[2, 2] = m
+        M[3, 3] = self.torsional_inertia * L
+        M[4, 4] = M[5, 5] = m * L**2 / 3.0
+        M[1, 5] = M[5, 1] = m * L / 2.0
+        M[2, 4] = M[4, 2] = -m * L / 2.0
+        return M
 
     @property
     def frequency_scale(self) -> float:
@@ -758,7 +875,10 @@ class Beam:
 
     @property
     def center_of_mass(self) -> float:
-        """Distance of the centre of mass from the attachment end along x [m]: L/2."""
+        """Distance of the centre of mass from the attachment end along x [m]: L/2 for the
+        bare beam."""
+        if self._segmented is not None:
+            return self._segmented.center_of_mass
         return 0.5 * self.length
 
     @property
@@ -769,6 +889,8 @@ class Beam:
         (Euler-Bernoulli, as :attr:`inertia`).
         """
         self._require_three_axis("inertia_tensor")
+        if self._segmented is not None:
+            return self._segmented.inertia_tensor
         return np.diag([self.torsional_inertia * self.length, self.inertia, self.inertia])
 
     # -- frequencies --------------------------------------------------------------------------
@@ -787,10 +909,14 @@ class Beam:
 
     def natural_frequencies(self, n: int) -> np.ndarray:
         """First n free-free bending frequencies w_k [rad/s] (rigid-body modes excluded)."""
+        if self._segmented is not None:
+            return self._segmented.natural_frequencies(n)
         return self._roots("free-free", n) ** 2 * self.frequency_scale
 
     def cantilever_frequencies(self, n: int) -> np.ndarray:
         """First n clamped-free frequencies [rad/s] (attachment end clamped)."""
+        if self._segmented is not None:
+            return self._segmented.cantilever_frequencies(n)
         return self._roots("clamped-free", n) ** 2 * self.frequency_scale
 
     def zeros(self, r: int, n: int = 2) -> np.ndarray:
@@ -801,6 +927,8 @@ class Beam:
         """
         if isinstance(r, bool) or not isinstance(r, (int, np.integer)) or r not in (1, 2, 3, 4):
             raise ValueError(f"r must be 1, 2, 3 or 4 (W1, W2, W3, W4); got {describe(r)}")
+        if self._segmented is not None:
+            return self._segmented.zeros(r, n)
         kind = {1: "pinned-free", 2: "w2", 3: "w2", 4: "sliding-free"}[r]
         return self._roots(kind, n) ** 2 * self.frequency_scale
 
@@ -820,6 +948,7 @@ class Beam:
         boundary : {"free-free", "clamped-free"}
             Free-free modes, or cantilever modes clamped at the attachment end.
         """
+        self._uniform_only("mode_shapes")
         if isinstance(x, (str, bytes)) or x is None:
             raise TypeError(f"x must be positions along the beam [m]; got {type(x).__name__}")
         x = np.atleast_1d(np.asarray(x))
@@ -841,6 +970,56 @@ class Beam:
             trig = -trig
         shapes = trig + c_plus * np.exp(arg - xk) + 0.5 * (1.0 + sigma) * np.exp(-arg)
         return shapes / math.sqrt(self.mass)
+
+    def _uniform_only(self, what: str) -> None:
+        """ValueError for the closed forms of the bare uniform beam asked of a tip beam."""
+        if self._segmented is not None:
+            raise ValueError(f"{what} is a closed form of the bare uniform beam; a beam with a "
+                             "tip body has no such closed form (its modal data: "
+                             "free_free_modes, cantilever_modes)")
+
+    # -- modal data (the truncations' input; closed forms, or the assembled model's) ----------
+    def free_free_modes(self, n: int, *, n_root: int = 2):
+        """The first n free-free bending modes: (frequencies (n,) [rad/s], root values
+        ``b_k = (phi_k(0), phi_k'(0))`` (n, 2) [1/sqrt(kg), 1/(sqrt(kg) m)], tip values
+        ``phi_k(L)`` (n, 1)), mass-normalised. ``n_root=6``: the three-axis modes of a beam
+        with a tip body (root values (n, 6), tip rows v, w, theta_x)."""
+        if self._segmented is not None:
+            return self._segmented.free_free_modes(n, n_root=n_root)
+        self._planar_data(n_root)
+        root, tip = self._free_free_root_values(n)
+        return self.natural_frequencies(n), root, tip[:, None]
+
+    def cantilever_modes(self, n: int, *, n_root: int = 2):
+        """The first n cantilever modes: (frequencies (n,) [rad/s], participation factors
+        ``l_k = [integral rho*A psi_k, integral rho*A x psi_k]`` (n, 2) [sqrt(kg),
+        sqrt(kg)*m], tip values ``psi_k(L)`` (n, 1)), mass-normalised (``n_root=6``: as
+        :meth:`free_free_modes`)."""
+        if self._segmented is not None:
+            return self._segmented.cantilever_modes(n, n_root=n_root)
+        self._planar_data(n_root)
+        return (self.cantilever_frequencies(n), self.modal_participation(n),
+                self._cantilever_tip_values(n)[:, None])
+
+    def free_free_tail(self, n: int, power: int, *, n_root: int = 2):
+        """``(sum_{k>n} b_k b_k^T/w_k**power (2, 2), sum_{k>n} phi_k(L) b_k/w_k**power (1, 2))``
+        over the dropped free-free modes, without cancellation (power 2, 3, 4; with a tip
+        body 2 and 4)."""
+        if self._segmented is not None:
+            return self._segmented.free_free_tail(n, power, n_root=n_root)
+        self._planar_data(n_root)
+        if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise ValueError(f"n must be a non-negative integer (modes kept); got {describe(n)}")
+        if isinstance(power, (bool, np.bool_)) or power not in (2, 3, 4):
+            raise ValueError(f"power must be 2, 3 or 4; got {describe(power)}")
+        bb, tb = self._free_free_tail(n, power)
+        return bb, tb[None, :]
+
+    def _planar_data(self, n_root) -> None:
+        if n_root != 2:
+            raise ValueError("the bare uniform beam's modal data are planar (n_root=2): its "
+                             "motions are separate (planar_view, torsion_rod, axial_rod); "
+                             f"got n_root={describe(n_root)}")
 
     def _free_free_root_values(self, n: int):
         """Mass-normalised (phi_k(0), phi_k'(0)) and phi_k(L) of the first n free-free modes."""
@@ -899,15 +1078,18 @@ class Beam:
         a rotation of the clamped end. From the beam equation, ``integral psi = -psi'''(0)/b**4
         = 2 sigma_k/b_k`` and ``integral x psi = psi''(0)/b**4 = 2/b_k**2`` (unnormalised shapes
         with integral of the square L), exact at any k. Their squares summed over all modes
-        give m and m L**2/3 (the effective masses), a check used in the tests.
+        give m and m L**2/3 (the effective masses), a check used in the tests. With a tip
+        body: the assembled model's (:meth:`cantilever_modes`).
         """
+        if self._segmented is not None:
+            return self._segmented.cantilever_modes(n)[1]
         xk = self._roots("clamped-free", n)
         sigma, _ = _shape_terms("clamped-free", xk)
         beta = xk / self.length
         scale = self.linear_density / math.sqrt(self.mass)
         return np.column_stack([2.0 * sigma / beta, 2.0 / beta**2]) * scale
 
-    def cantilever_participation_tail(self, n: int) -> np.ndarray:
+    def cantilever_participation_tail(self, n: int, *, n_root: int = 2) -> np.ndarray:
         """``sum_{k>n} l_k l_k^T`` of the participation factors, shape (2, 2) [kg, kg*m; ...].
 
         The rigid mass the first n cantilever modes leave to the others: with
@@ -915,8 +1097,14 @@ class Beam:
         ``l_k l_k^T = 4 rho*A/L [[sigma**2/b**2, sigma/b**3], [., 1/b**4]]`` with b = beta_k
         (in 1/m). Modes n < k <= max(n, 16) are summed explicitly; beyond, ``sigma_k = 1`` and
         ``beta_k L = (k - 1/2) pi`` to below 1e-19, and ``sum_{k>K} (beta_k L)**-q =
-        pi**-q zeta(q, K + 1/2)`` (Hurwitz). No cancellation, unlike ``M_rr - L^T L``.
+        pi**-q zeta(q, K + 1/2)`` (Hurwitz). No cancellation, unlike ``M_rr - L^T L``
+        (which a beam with a tip body uses: :class:`~appendages.segmented.SegmentedBeam`).
         """
+        if self._segmented is not None:
+            return self._segmented.cantilever_participation_tail(n, n_root=n_root)
+        self._planar_data(n_root)
+        if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise ValueError(f"n must be a non-negative integer (modes kept); got {describe(n)}")
         K = max(n, 16)
         L = self.length
         x = self._roots("clamped-free", K)[n:]
@@ -946,6 +1134,7 @@ class Beam:
         Gauss-Legendre quadrature this replaces took 100 s in a 1000-mode damped
         Craig-Bampton model).
         """
+        self._uniform_only("free_cantilever_overlap")
         for name, value in (("n_free", n_free), ("n_cantilever", n_cantilever)):
             if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) \
                     or value < 1:
@@ -989,9 +1178,17 @@ class Beam:
         ndarray of complex128, shape ``np.shape(s) + (2, 2)``
             ``[[W1, W2], [W2, W4]]`` in m/N, 1/N and 1/(N*m).
         """
+        if self._segmented is not None:
+            return self._segmented.W(s)
         s = as_frequency_array(s)
         if np.any(s == 0):
             raise ValueError("s = 0 is the rigid-body pole of W (W is infinite there) [rad/s]")
+        if self.damping_ratio > 0.0 and self.damping_convention == "cantilever":
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                W = inverse_2x2(self._cantilever_damping()(s.ravel())).reshape(s.shape + (2, 2))
+            if not np.all(np.isfinite(W)):  # pragma: no cover - damped W is finite
+                raise ValueError("W is not finite at s (damped beam) [rad/s]")
+            return W
         W = np.zeros(s.shape + (2, 2), dtype=np.complex128)
         W[..., 0, 0], W[..., 0, 1], W[..., 1, 1] = self._undamped_entries(s)
         W[..., 1, 0] = W[..., 0, 1]
@@ -1038,6 +1235,10 @@ class Beam:
 
     def _dynamic_stiffness(self, s: np.ndarray) -> np.ndarray:
         """:meth:`dynamic_stiffness` of a checked complex array s."""
+        if self._segmented is not None:
+            return self._segmented.dynamic_stiffness(s)
+        if self.damping_ratio > 0.0 and self.damping_convention == "cantilever":
+            return self._cantilever_damping()(s.ravel()).reshape(s.shape + (2, 2))
         D = np.zeros(s.shape + (2, 2), dtype=np.complex128)
         if self.damping_ratio > 0.0:
             nonzero = s != 0
@@ -1093,6 +1294,8 @@ class Beam:
             frequency.
         """
         self._require_three_axis("W6")
+        if self._segmented is not None:
+            return self._segmented.W6(s)
         s = as_frequency_array(s)
         if np.any(s == 0):
             raise ValueError("s = 0 is the rigid-body pole of W6 (W6 is infinite there) [rad/s]")
@@ -1118,6 +1321,8 @@ class Beam:
         ndarray of complex128, shape ``np.shape(s) + (6, 6)``
         """
         self._require_three_axis("dynamic_stiffness6")
+        if self._segmented is not None:
+            return self._segmented.dynamic_stiffness6(s)
         s = as_frequency_array(s)
         D_xy = self._dynamic_stiffness(s)
         D_xz = D_xy if self._planes_equal() else self.planar_view("xz")._dynamic_stiffness(s)
@@ -1148,6 +1353,8 @@ class Beam:
         beyond omega_max and the union cut at the smallest of their ends.
         """
         self._require_three_axis("clamped_frequencies6")
+        if self._segmented is not None:
+            return self._segmented.clamped_frequencies6(omega_max)
         parts = []
         for plane in (("xy",) if self._planes_equal() else ("xy", "xz")):
             beam = self.planar_view(plane)
@@ -1164,6 +1371,53 @@ class Beam:
         complete = min(part[-1] for part in parts)
         merged = np.sort(np.concatenate(parts))
         return merged[merged <= complete]
+
+    def _cantilever_damping(self) -> CantileverDamping:
+        """The damped root dynamic stiffness of the cantilever convention (built once)."""
+        cached = self._cache.get("cantilever_damping")
+        if cached is None:
+            bare = self.undamped()
+            cached = CantileverDamping(
+                self.damping_ratio, lambda s: bare._dynamic_stiffness(s),
+                lambda n: (self.cantilever_frequencies(n), self.modal_participation(n)),
+                self.rigid_mass_matrix, tail=self._cantilever_tail)
+            self._cache["cantilever_damping"] = cached
+        return cached
+
+    def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:
+        r"""The damping of the cantilever modes k > n (:mod:`appendages.damping`), exactly.
+
+        Beyond n >= 16 the roots are ``x_k = (k - 1/2) pi`` and ``sigma_k = 1`` to below
+        1e-19, so ``l_k l_k^T = (4 rho*A/L) [[L**2/x**2, L**3/x**3], [., L**4/x**4]]``,
+        ``w_k = x_k**2 c0``; with ``g(u) = sum_j c_j u**j``
+        (:func:`~appendages.damping.hurwitz_tail_coefficients`, |u| <= 1/10 where it is
+        used, 12 terms: the rest below 1e-10 of the first) the tail is
+        ``sum_j c_j v**(4+j) c0**2 (4 rho*A/L) [L**2 Z(6+2j), L**3 Z(7+2j), L**4 Z(8+2j)]``
+        with ``v = s/c0`` and ``Z(q) = pi**-q zeta(q, n + 1/2)`` (Hurwitz). Where the mode cap
+        of :mod:`appendages.damping` binds and ``|s|/w_(n+1) > 1/2`` only the leading term is
+        kept. Returns shape (npts, 2, 2).
+        """
+        c0, L = self.frequency_scale, self.length
+        w_next = ((n + 0.5) * math.pi) ** 2 * c0
+        n_terms = _TAIL_TERMS if float(np.max(np.abs(s), initial=0.0)) <= 0.5 * w_next else 1
+        key = ("cantilever_tail", n, n_terms)
+        coefficients = self._cache.get(key)
+        if coefficients is None:
+            c = hurwitz_tail_coefficients(self.damping_ratio, n_terms)
+            j = np.arange(1, n_terms + 1)
+            orders = 2 * j[None, :] + np.array([[6], [7], [8]])
+            Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, n + 0.5)
+            scale = 4.0 * self.linear_density / L * c0**2 * np.array([L**2, L**3, L**4])[:, None]
+            coefficients = self._cache[key] = scale * c[None, :] * Z      # (3, J)
+        v = s / c0
+        out = np.zeros((3, s.size), dtype=np.complex128)
+        for t in range(n_terms - 1, -1, -1):
+            out = (out + coefficients[:, t:t + 1]) * v
+        out = out * v**4
+        D = np.empty((s.size, 2, 2), dtype=np.complex128)
+        D[:, 0, 0], D[:, 0, 1], D[:, 1, 1] = out
+        D[:, 1, 0] = D[:, 0, 1]
+        return D
 
     def _undamped_entries(self, s: np.ndarray):
         """W1, W2, W4 of the undamped closed form (module docstring), each of shape s.shape."""

@@ -142,8 +142,9 @@ class HingedChain(FiniteAppendage):
     hinge_dampings : sequence of float, N*m*s/rad, optional
         Viscous damping of each hinge (same count; default zero).
     com_offsets : sequence of float, m, optional
-        Distance of each body's centre of mass from the body's start, in [0, length]
-        (default: mid-length).
+        Distance of each body's centre of mass from the body's start, in [0, length]; the last
+        body's may lie beyond its end (a body carrying a tip mass), >= 0 (default:
+        mid-length).
     root : {"rigid", "hinged"}
         How the first body is attached to the mount.
 
@@ -220,6 +221,7 @@ class HingedChain(FiniteAppendage):
             self.com_offsets = _as_vector("com_offsets", com_offsets, None, "m", size=n,
                                           allow_zero=True)
             over = self.com_offsets > self.lengths * (1.0 + 1e-12)
+            over[-1] = False   # the last body's centre may lie beyond its end (a tip body)
             if np.any(over):
                 k = int(np.flatnonzero(over)[0])
                 raise ValueError(
@@ -362,8 +364,9 @@ class HingedChain(FiniteAppendage):
         stiffnesses = np.full(n_bodies - 1, EJ / H)
         three_axis = _three_axis_rfem(beam, lengths, H) if getattr(beam, "three_axis", False) \
             else {}
+        masses, inertias, offsets = _with_tip(beam, lengths, masses, inertias, three_axis)
         with _derived_from(f"HingedChain.rfem(beam, n_bodies={n_bodies})", beam):
-            return cls(lengths, masses, inertias, stiffnesses,
+            return cls(lengths, masses, inertias, stiffnesses, com_offsets=offsets,
                        hinge_dampings=_proportional_damping(beam, stiffnesses), **three_axis)
 
     @classmethod
@@ -398,8 +401,9 @@ class HingedChain(FiniteAppendage):
         lengths[2:-1:2] = 2.0 * k * ell
         masses, inertias = _frozen_pieces(lengths, rho)
         stiffnesses = np.full(2 * n, 6.0 * EJ / ell * (1.0 - 2.0 * k) ** 2)
+        masses, inertias, offsets = _with_tip(beam, lengths, masses, inertias, {})
         with _derived_from(f"HingedChain.superelements(beam, n={n})", beam):
-            return cls(lengths, masses, inertias, stiffnesses,
+            return cls(lengths, masses, inertias, stiffnesses, com_offsets=offsets,
                        hinge_dampings=_proportional_damping(beam, stiffnesses))
 
     # -- rigid properties ---------------------------------------------------------------------
@@ -695,6 +699,51 @@ def _beam_properties(beam) -> tuple[float, float, float]:
             f"linear_density [kg/m]; got {type(beam).__name__}") from exc
 
 
+def _with_tip(beam, lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarray,
+              three_axis: dict):
+    """The beam's tip body added to the chain's last body: (masses, inertias, com_offsets).
+
+    The body of mass m_t and inertia J_t (about its centre, at ``l_n + offset_x`` from the last
+    body's start) and the last body (m_b, J_b, centre a_b) make one rigid body: mass
+    ``m_b + m_t``, centre ``a = (m_b a_b + m_t p)/(m_b + m_t)`` and inertia
+    ``J_b + m_b (a_b - a)**2 + J_t + m_t (p - a)**2`` about it (parallel-axis theorem), in each
+    plane; the torsional inertia gains ``J_t,xx``. A chain's bodies lie on its axis with their
+    principal axes along the chain's, so a tip body off the axis or with products of inertia
+    in the appendage's axes is refused by name. Without a tip body: the inputs and mid-length
+    centres.
+    """
+    offsets = 0.5 * lengths
+    tip = getattr(beam, "tip", None)
+    if tip is None or tip.is_null:
+        return masses, inertias, offsets
+    if np.any(tip.offset[1:] != 0.0):
+        raise ValueError(f"a chain's bodies lie on its axis: the tip body's offset must be along "
+                         f"x to be carried by HingedChain.rfem or superelements [m]; got "
+                         f"offset={tip.offset.tolist()!r}")
+    three = bool(three_axis)
+    J_tip = tip.inertia_tensor if three else None
+    if three and np.any(J_tip != np.diag(np.diag(J_tip))):
+        raise ValueError("a chain's bodies have their principal axes along the chain's: the tip "
+                         "body's inertia must be diagonal in the appendage's axes to be carried "
+                         f"by HingedChain.rfem [kg*m^2]; got {J_tip.tolist()!r}")
+    masses, inertias = masses.copy(), inertias.copy()
+    m_b, a_b, m_t = masses[-1], offsets[-1], tip.mass
+    p = lengths[-1] + tip.offset[0]
+    M = m_b + m_t
+    a = (m_b * a_b + m_t * p) / M
+    shift = m_b * (a_b - a) ** 2 + m_t * (p - a) ** 2
+    masses[-1], offsets[-1] = M, a
+    inertias[-1] += shift + (tip.planar_inertia if not three else J_tip[2, 2])
+    if three:
+        inertias_y = np.array(three_axis["inertias_y"], dtype=float)
+        inertias_y[-1] += shift + J_tip[1, 1]
+        three_axis["inertias_y"] = inertias_y
+        torsional = np.array(three_axis["torsional_inertias"], dtype=float)
+        torsional[-1] += J_tip[0, 0]
+        three_axis["torsional_inertias"] = torsional
+    return masses, inertias, offsets
+
+
 def _three_axis_rfem(beam, lengths: np.ndarray, H: float) -> dict:
     """The three-axis parameters of an RFEM chain (:meth:`HingedChain.rfem`)."""
     n_hinges = lengths.size - 1
@@ -710,17 +759,28 @@ def _three_axis_rfem(beam, lengths: np.ndarray, H: float) -> dict:
             out[f"{name}_stiffnesses"] = springs
             zeta = rod.damping_ratio
             if zeta > 0.0:
-                out[f"{name}_dampings"] = 2.0 * zeta * springs / float(rod.natural_frequencies(1)[0])
+                out[f"{name}_dampings"] = 2.0 * zeta * springs / _first_damped_frequency(rod)
     return out
 
 
+def _first_damped_frequency(model) -> float:
+    """The frequency at which a stiffness-proportional damping reproduces the model's ratio:
+    its first cantilever frequency (the ratio of the cantilever modes, the default convention)
+    or its first free-free one (``damping_convention="free-free"``)."""
+    if getattr(model, "damping_convention", "cantilever") == "cantilever":
+        return float(model.cantilever_frequencies(1)[0])
+    return float(model.natural_frequencies(1)[0])
+
+
 def _proportional_damping(beam, stiffnesses: np.ndarray) -> np.ndarray | None:
-    """Hinge dampings 2 zeta c / w_1 (zeta at the beam's first frequency), or None if zeta = 0."""
+    """Hinge dampings 2 zeta c / w_1, or None if zeta = 0: stiffness-proportional, the damping
+    ratio zeta at w_1, the beam's first cantilever frequency (or its first free-free one with
+    ``damping_convention="free-free"``): C = (2 zeta/w_1) K damps each mode of the chain, root
+    clamped or free, at zeta w_k/w_1."""
     zeta = float(getattr(beam, "damping_ratio", 0.0) or 0.0)
     if zeta == 0.0:
         return None
-    w1 = float(beam.natural_frequencies(1)[0])
-    return 2.0 * zeta * stiffnesses / w1
+    return 2.0 * zeta * stiffnesses / _first_damped_frequency(beam)
 
 
 def _assemble(lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarray,

@@ -41,6 +41,8 @@ name               default  what it bounds
                             response is evaluated at once (~1 GiB of temporaries at 1e6)
 ``elements``       50e6     entries of an array whose size is the product of two requests
                             (``Beam.mode_shapes(x, n)``: 0.4 GiB of float64)
+``segments``       1000     segments of a :class:`~appendages.stepped.SteppedBeam` (each
+                            evaluation of its W(s) is O(segments) per frequency)
 =================  =======  ===================================================================
 
 Raising a limit
@@ -81,6 +83,7 @@ DEFAULTS = types.MappingProxyType({
     "appendages": 100,
     "points": 1_000_000,
     "elements": 50_000_000,
+    "segments": 1000,
 })
 
 _CURRENT: contextvars.ContextVar = contextvars.ContextVar("flexsat_limits", default=DEFAULTS)

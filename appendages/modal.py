@@ -42,12 +42,33 @@ Three reductions of the exact beam, all realised in attachment-end coordinates (
 
         M = [[M_rr, L^T], [L, I]],  K = diag(0, 0, w_ck**2),  C = blockdiag(0, C_c)
 
-    (C: the beam's free-free modal damping projected on the cantilever modes, not diagonal)
-    with ``M_rr = rho*A [[L, L**2/2], [L**2/2, L**3/3]]`` and L the participation factors
-    ``rho*A integral [1, x] psi_k dx`` (closed forms in :meth:`Beam.modal_participation`). The
-    rigid-body inertia is exact for any n; the attachment-end dynamic stiffness is
-    ``D(s) = s**2 M_rr - s**4 sum_k l_k l_k^T/(s**2 + w_ck**2)``, whose dropped terms decay like
-    k**-6 (translation) and k**-12 (rotation), so zeros and coupled frequencies converge fast.
+    (C: ``diag(2 zeta w_ck)``, the beam's damping ratio being that of its cantilever modes;
+    with ``damping_convention="free-free"`` the beam's free-free modal damping projected on the
+    cantilever modes, not diagonal) with ``M_rr = rho*A [[L, L**2/2], [L**2/2, L**3/3]]`` and L
+    the participation factors ``rho*A integral [1, x] psi_k dx`` (closed forms in
+    :meth:`Beam.modal_participation`). The rigid-body inertia is exact for any n; the
+    attachment-end dynamic stiffness is ``D(s) = s**2 M_rr - s**4 sum_k l_k l_k^T/(s**2 +
+    w_ck**2)``, whose dropped terms decay like k**-6 (translation) and k**-12 (rotation), so
+    zeros and coupled frequencies converge fast.
+
+Any beam from its exact modal data
+----------------------------------
+A beam with a tip body or of several segments (:mod:`appendages.segmented`) has no closed-form
+modes; :class:`GeneralTruncation` builds the same three reductions from the modal data its exact
+model provides (free-free root values b_k and tip values, cantilever participation factors l_k
+and tip values, the rigid mass matrix M_rr about the root, the free-free tails
+``sum_{k>n} b b^T/w**2`` and ``/w**4``), planar (``n_root = 2``), three-axis (6, the coupled modes
+of all motions) or for one rod (1). A free model's rigid-body part is ``M_rr^-1/s**2``: with
+``M_rr = L L^T`` (Cholesky) the rows of ``B_r = L^-1`` are root values of mass-normalised rigid
+modes (``B_r^T B_r = M_rr^-1``), whatever the mass distribution. Damping: a Craig-Bampton model
+carries the cantilever modes' damping exactly, ``diag(2 zeta w_ck)``; a free-interface model
+needs the operator ``sum_i 2 zeta w_ci g_i g_i^T`` in its own coordinates, g_i the cantilever
+coordinate i of each of its modes. Closed forms of g_i through ``lambda_k - lambda_i`` cancel
+where a free-free and a cantilever frequency nearly coincide (free-free mode k and cantilever
+mode k + 1 meet as k grows), so the free-free modes are taken from a Craig-Bampton model of
+``4 n + 64`` cantilever modes (an eigen-decomposition) whose cantilever coordinates are the g_i;
+the residual modes' are the dropped modes' sums over that model. The terms decay like ``i**-8``.
+A uniform beam's free-interface truncation with the cantilever convention is built the same way.
 
 References
 ----------
@@ -72,10 +93,11 @@ import numpy as np
 import scipy.linalg
 
 from . import limits
-from .interface import (FiniteAppendage, RootModel, as_frequency_array, describe, inverse_2x2,
-                        three_axis_root_model)
+from .interface import (ROOT_MOTIONS, FiniteAppendage, RootModel, as_frequency_array, describe,
+                        equilibrate, inverse_2x2, inverse_symmetric, three_axis_root_model)
 
-__all__ = ["ModalBeam", "METHODS", "MOTION_NAMES", "ModalStiffness", "fixed_root_model"]
+__all__ = ["ModalBeam", "METHODS", "MOTION_NAMES", "ModalStiffness", "fixed_root_model",
+           "GeneralTruncation"]
 
 METHODS = ("craig-bampton", "residual", "free-free")
 
@@ -310,8 +332,11 @@ class _Bending:
                 participation = beam.modal_participation(n)
             else:
                 w, participation = np.zeros(0), np.zeros((0, 2))
-            damping = (_bending_projected_damping(beam, n)
-                       if beam.damping_ratio > 0.0 and n else None)
+            damping = None
+            if beam.damping_ratio > 0.0 and n:
+                damping = (np.diag(2.0 * beam.damping_ratio * w)
+                           if beam.damping_convention == "cantilever"
+                           else _bending_projected_damping(beam, n))
             cached = self._cb = (M_rr, participation, w, damping)
         return cached
 
@@ -414,7 +439,10 @@ class _RodMotion:
         if cached is None:
             rod, n = self.rod, self.n
             l, _, w = rod.cantilever_modes(n)
-            damping = rod.projected_damping(n) if rod.damping_ratio > 0.0 and n else None
+            damping = None
+            if rod.damping_ratio > 0.0 and n:
+                damping = (np.diag(2.0 * rod.damping_ratio * w)
+                           if rod.damping_convention == "cantilever" else rod.projected_damping(n))
             cached = self._cb = (np.array([[self.m]]), l[:, None], w, damping)
         return cached
 
@@ -453,6 +481,224 @@ class _RodMotion:
         nonzero = s != 0
         D[nonzero] = 1.0 / self.W(s[nonzero])
         return D
+
+
+class _RodData:
+    """A rod's modal data in the form :class:`GeneralTruncation` reads (n_root = 1)."""
+
+    def __init__(self, rod):
+        self.rod, self.length, self.damping_ratio = rod, rod.length, rod.damping_ratio
+        self.rigid_mass_matrix = np.array([[rod.rigid_inertia]])
+
+    def free_free_modes(self, n, n_root=1):
+        b, tip, w = self.rod.free_free_modes(n)
+        return w, b[:, None], tip[:, None]
+
+    def cantilever_modes(self, n, n_root=1):
+        l, tip, w = self.rod.cantilever_modes(n)
+        return w, l[:, None], tip[:, None]
+
+    def free_free_tail(self, n, power, n_root=1):
+        bb, tb = self.rod.free_free_tail(n, power)
+        return np.array([[bb]]), np.array([[tb]])
+
+    def cantilever_participation_tail(self, n, n_root=1):
+        return np.array([[self.rod.cantilever_participation_tail(n)]])
+
+
+# -- any beam from its exact modal data ----------------------------------------------------------
+def _rigid_line(beam_length: float, n_root: int) -> np.ndarray:
+    """Tip motions (rows) of a unit rigid motion of the root: planar (1, 2), three-axis (3, 6)
+    with the rows of :data:`~appendages.interface.TIP_MOTIONS`."""
+    if n_root == 1:
+        return np.array([[1.0]])
+    if n_root == 2:
+        return np.array([[1.0, beam_length]])
+    T = np.zeros((3, 6))
+    T[0, 1], T[0, 5] = 1.0, beam_length     # v(L) = v + L theta_z
+    T[1, 2], T[1, 4] = 1.0, -beam_length    # w(L) = w - L theta_y
+    T[2, 3] = 1.0                           # theta_x(L) = theta_x
+    return T
+
+
+def _tip_rows(tip: np.ndarray, n_root: int) -> np.ndarray:
+    """The RootModel's tip: 1-D planar or rod, (3, n) three-axis."""
+    return tip[0] if n_root <= 2 else tip
+
+
+def _names(n_root: int, n_modes: int, extra: tuple = ()) -> tuple:
+    root = {1: ("q",), 2: ("delta", "phi")}.get(n_root, ROOT_MOTIONS)
+    return tuple(root) + tuple(f"eta[{k + 1}]" for k in range(n_modes)) + extra
+
+
+class GeneralTruncation:
+    """A truncation of a beam from its exact modal data (module docstring).
+
+    Parameters
+    ----------
+    beam : SegmentedBeam-like
+        Offers ``rigid_mass_matrix`` / ``rigid_mass_matrix6``, ``free_free_modes(n, n_root=)``,
+        ``cantilever_modes(n, n_root=)``, ``free_free_tail(n, power, n_root=)``,
+        ``cantilever_participation_tail(n, n_root=)``, ``length`` and ``damping_ratio``.
+    n : int
+        Elastic modes kept.
+    method : {"craig-bampton", "residual", "free-free"}
+    n_root : {2, 6}
+    """
+
+    def __init__(self, beam, n: int, method: str, n_root: int):
+        self.beam, self.n, self.method, self.n_root = beam, n, method, n_root
+        self._root_model = None
+
+    @property
+    def rigid_mass(self) -> np.ndarray:
+        M = self.beam.rigid_mass_matrix if self.n_root <= 2 else self.beam.rigid_mass_matrix6
+        return np.asarray(M, dtype=float)
+
+    def _modes(self, kind: str, n: int):
+        """(w, root values or participation, tip values) of the first n modes (n may be 0)."""
+        if n == 0:
+            rows = 1 if self.n_root <= 2 else 3
+            return np.zeros(0), np.zeros((0, self.n_root)), np.zeros((0, rows))
+        get = self.beam.free_free_modes if kind == "free" else self.beam.cantilever_modes
+        w, root, tip = get(n, n_root=self.n_root)
+        return w, root, np.asarray(tip).reshape(w.size, -1)
+
+    def craig_bampton_data(self):
+        """(M_rr, participation (n, d), cantilever frequencies (n,), damping (n, n) or None,
+        tip values (n, rows))."""
+        w, l, tip = self._modes("clamped", self.n)
+        zeta = self.beam.damping_ratio
+        damping = np.diag(2.0 * zeta * w) if zeta > 0.0 else None
+        return self.rigid_mass, l, w, damping, tip
+
+    def root_model(self) -> RootModel:
+        if self._root_model is None:
+            self._root_model = (self._craig_bampton() if self.method == "craig-bampton"
+                                else self._free_interface())
+        return self._root_model
+
+    # -- Craig-Bampton --------------------------------------------------------------------------
+    def _craig_bampton(self) -> RootModel:
+        M_rr, l, w, damping, tip = self.craig_bampton_data()
+        n, r = w.size, self.n_root
+        mass = np.eye(n + r)
+        mass[:r, :r] = M_rr
+        mass[r:, :r] = l
+        mass[:r, r:] = l.T
+        stiffness = np.zeros((n + r, n + r))
+        stiffness[r:, r:] = np.diag(w**2)
+        C = np.zeros((n + r, n + r))
+        if damping is not None:
+            C[r:, r:] = damping
+        tip_rows = np.zeros((tip.shape[1], n + r))
+        tip_rows[:, r:] = tip.T
+        return RootModel(0.5 * (mass + mass.T), C, stiffness, _tip_rows(tip_rows, r),
+                         _names(r, n), n_root=r)
+
+    # -- free interface -------------------------------------------------------------------------
+    def _free_interface(self) -> RootModel:
+        beam, n, r = self.beam, self.n, self.n_root
+        w, b, tip = self._modes("free", n)
+        b_modes, tip_modes, stiffness_modes = b, tip, w**2
+        extra = ()
+        if self.method == "residual":
+            b_res, lam, tip_res = self.residual_modes()
+            b_modes = np.vstack([b_modes, b_res])
+            tip_modes = np.vstack([tip_modes, tip_res])
+            stiffness_modes = np.concatenate([stiffness_modes, lam])
+            extra = tuple(f"residual[{k + 1}]" for k in range(lam.size))
+        N = stiffness_modes.size
+        L_chol = np.linalg.cholesky(self.rigid_mass)
+        b_rigid = np.linalg.inv(L_chol)                  # rows: rigid modes' root values
+        line = _rigid_line(beam.length, r)
+        tip_rigid = b_rigid @ line.T                     # (r, rows)
+        T = np.zeros((N + r, N + r))
+        Br_inv_T = np.linalg.inv(b_rigid.T)
+        T[:r, :r] = Br_inv_T
+        T[:r, r:] = -Br_inv_T @ b_modes.T
+        T[r:, r:] = np.eye(N)
+        mass = T.T @ T
+        stiffness = np.zeros((N + r, N + r))
+        stiffness[r:, r:] = np.diag(stiffness_modes)
+        damping = np.zeros((N + r, N + r))
+        if beam.damping_ratio > 0.0:
+            damping[r:, r:] = self._projected_damping()
+        tip_abs = np.vstack([tip_rigid, tip_modes]).T @ T   # (rows, N + r)
+        tip_abs[:, :r] -= line
+        return RootModel(0.5 * (mass + mass.T), damping, stiffness, _tip_rows(tip_abs, r),
+                         _names(r, n, extra), n_root=r)
+
+    def residual_modes(self):
+        """(root values (d', d), squared frequencies (d',), tip values (d', rows)) of the residual
+        attachment modes: ``R V = R2 V diag(lam)``, ``V^T R2 V = I``, root values ``(R V)^T``
+        (:mod:`appendages.modal`); d' = d less the directions without residual flexibility."""
+        R, tip_R = self.beam.free_free_tail(self.n, 2, n_root=self.n_root)
+        lam, V = self._residual_basis()
+        return (R @ V).T, lam, (tip_R @ V).T
+
+    def _residual_basis(self):
+        """(lam, V) of ``R V = R2 V diag(lam)`` on the range of R2 (a motion that is rigid,
+        inextensible or torsionally rigid, has no residual flexibility and no residual mode)."""
+        R, _ = self.beam.free_free_tail(self.n, 2, n_root=self.n_root)
+        R2, _ = self.beam.free_free_tail(self.n, 4, n_root=self.n_root)
+        d = np.sqrt(np.abs(np.diag(R2)))
+        d = np.where(d > 0, 1.0 / np.where(d > 0, d, 1.0), 1.0)
+        values, U = np.linalg.eigh(R2 * np.outer(d, d))
+        keep = values > 1e-12 * values.max(initial=0.0)
+        U = d[:, None] * U[:, keep]
+        lam, V = scipy.linalg.eigh(U.T @ R @ U, U.T @ R2 @ U)
+        return lam, U @ V
+
+    # -- W and D --------------------------------------------------------------------------------
+    def D(self, s: np.ndarray) -> np.ndarray:
+        """Attachment-end dynamic stiffness, shape ``s.shape + (d, d)``; s = 0 gives 0.
+        Craig-Bampton: O(n) per frequency (:class:`~appendages.modal.ModalStiffness`); the
+        others: static condensation of the root model."""
+        if self.method == "craig-bampton":
+            if getattr(self, "_stiffness", None) is None:
+                M_rr, l, w, damping, _ = self.craig_bampton_data()
+                tail = self.beam.cantilever_participation_tail(self.n, n_root=self.n_root)
+                self._stiffness = ModalStiffness(M_rr, l, w, damping, tail)
+            return self._stiffness(s)
+        return self.root_model().dynamic_stiffness(s)
+
+    def W(self, s: np.ndarray) -> np.ndarray:
+        """W(s) = D(s)^-1, shape ``s.shape + (d, d)`` (inf/NaN at an undamped pole; s != 0)."""
+        D = self.D(s)
+        if self.n_root == 1:
+            return 1.0 / D
+        return inverse_2x2(D) if self.n_root == 2 else inverse_symmetric(D)
+
+    def _projected_damping(self) -> np.ndarray:
+        """The cantilever modes' damping in this model's elastic coordinates (module docstring)."""
+        beam, n, r = self.beam, self.n, self.n_root
+        n_c = 4 * n + 64
+        w_c, l, _ = self._modes("clamped", n_c)
+        M_rr = self.rigid_mass
+        mass = np.eye(n_c + r)
+        mass[:r, :r] = M_rr
+        mass[r:, :r] = l
+        mass[:r, r:] = l.T
+        K = np.zeros((n_c + r, n_c + r))
+        K[r:, r:] = np.diag(w_c**2)
+        d = equilibrate(K, mass)
+        lam, V = scipy.linalg.eigh(K * np.outer(d, d), mass * np.outer(d, d))
+        V = V * d[:, None]
+        V, lam = V[:, r:], lam[r:]                       # elastic modes (rigid ones first)
+        # the exact modes' signs: the root parts of V are the modes' root values b_k
+        w, b, _ = self._modes("free", n)
+        sign = np.sign(np.sum(V[:r, :n] * b.T, axis=0))
+        sign[sign == 0] = 1.0
+        G = V[r:, :n] * sign                             # (n_c, n): g_i of the kept modes
+        if self.method == "residual":
+            V_res = self._residual_basis()[1]
+            # residual shapes: sum over the dropped modes of phi_k b_k^T V/w_k**2
+            dropped = V[:, n:]
+            weights = (dropped[:r].T @ V_res) / lam[n:, None]      # (modes, d')
+            G = np.hstack([G, dropped[r:] @ weights])
+        C = (G.T * (2.0 * beam.damping_ratio * w_c)) @ G
+        return 0.5 * (C + C.T)
 
 
 class ModalBeam(FiniteAppendage):
@@ -494,10 +740,20 @@ class ModalBeam(FiniteAppendage):
         limits.check("n_modes", int(n_modes), "modes", "bending modes")
         if not isinstance(method, str) or method not in METHODS:
             raise ValueError(f"method must be one of {METHODS}; got {describe(method)}")
-        for attribute in ("length", "bending_stiffness", "linear_density", "natural_frequencies"):
+        # a bare uniform beam: its closed forms; any other beam (a tip body, segments): its
+        # exact modal data (GeneralTruncation)
+        self._uniform = bool(getattr(beam, "is_uniform", False))
+        needed = (("length", "bending_stiffness", "linear_density", "natural_frequencies")
+                  if self._uniform else ("length", "damping_ratio", "rigid_mass_matrix",
+                                         "free_free_modes", "cantilever_modes"))
+        for attribute in needed:
             if not hasattr(beam, attribute):
-                raise TypeError(f"beam must be a uniform Beam; got {type(beam).__name__} "
+                raise TypeError(f"beam must be a Beam or SteppedBeam; got {type(beam).__name__} "
                                 f"without '{attribute}'")
+        if modes_per_motion is not None and not self._uniform:
+            raise ValueError("modes_per_motion applies to a uniform beam's four separate "
+                             "motions; a beam with a tip body or segments keeps its n_modes "
+                             f"lowest coupled modes; got {describe(modes_per_motion)}")
         self.beam = beam
         self.n_modes = int(n_modes)
         self.method = method
@@ -548,25 +804,46 @@ class ModalBeam(FiniteAppendage):
             return self
         cached = self.__dict__.get("_undamped")
         if cached is None:
-            counts = self.modes_per_motion if self.beam.three_axis else None
+            counts = self.modes_per_motion if self.beam.three_axis and self._uniform else None
             cached = self.__dict__["_undamped"] = ModalBeam(self.beam.undamped(), self.n_modes,
                                                             method=self.method,
                                                             modes_per_motion=counts)
         return cached
 
     # -- the motions ----------------------------------------------------------------------------
-    def _planar(self) -> _Bending:
+    def _planar(self):
         cached = self.__dict__.get("_planar_motion")
         if cached is None:
-            cached = self.__dict__["_planar_motion"] = _Bending(self.beam, self.n_modes,
-                                                                self.method)
+            cached = (_Bending(self.beam, self.n_modes, self.method)
+                      if self._uniform and not self._projected(self.beam) else
+                      GeneralTruncation(self.beam, self.n_modes, self.method, 2))
+            self.__dict__["_planar_motion"] = cached
+        return cached
+
+    def _projected(self, part) -> bool:
+        """True when a uniform motion's free-interface truncation carries the damping of its
+        cantilever modes (projected, :class:`GeneralTruncation`), not its own modes'."""
+        return (self.method != "craig-bampton" and part is not None
+                and part.damping_ratio > 0.0 and part.damping_convention == "cantilever")
+
+    def _general6(self) -> GeneralTruncation:
+        """The three-axis truncation of a non-uniform beam (its coupled modes)."""
+        self.beam._require_three_axis("a three-axis truncation")
+        cached = self.__dict__.get("_general6_model")
+        if cached is None:
+            cached = self.__dict__["_general6_model"] = GeneralTruncation(
+                self.beam, self.n_modes, self.method, 6)
         return cached
 
     @property
     def modes_per_motion(self) -> dict:
         """Modes the three-axis model keeps per motion: ``{"xy": .., "xz": .., "torsion": ..,
-        "axial": ..}`` (rigid motions: 0). Their sum is ``n_modes`` or more (ties)."""
+        "axial": ..}`` (rigid motions: 0). Their sum is ``n_modes`` or more (ties). A uniform
+        beam's only: with a tip body or segments the modes couple."""
         self.beam._require_three_axis("a three-axis truncation")
+        if not self._uniform:
+            raise ValueError("modes_per_motion: the modes of a beam with a tip body or "
+                             "segments are not split by motion")
         cached = self.__dict__.get("_modes_per_motion")
         if cached is None:
             beam, n = self.beam, self.n_modes
@@ -586,12 +863,23 @@ class ModalBeam(FiniteAppendage):
         cached = self.__dict__.get("_motion_models")
         if cached is None:
             beam, counts = self.beam, self.modes_per_motion
+
+            def bending(plane):
+                view = beam.planar_view(plane)
+                if self._projected(view):
+                    return GeneralTruncation(view, counts[plane], self.method, 2)
+                return _Bending(view, counts[plane], self.method)
+
+            def rod(name, model, rigid_inertia):
+                if self._projected(model):
+                    return GeneralTruncation(_RodData(model), counts[name], self.method, 1)
+                return _RodMotion(model, rigid_inertia, counts[name], self.method)
+
             cached = {
-                "xy": _Bending(beam.planar_view("xy"), counts["xy"], self.method),
-                "xz": _Bending(beam.planar_view("xz"), counts["xz"], self.method),
-                "torsion": _RodMotion(beam.torsion_rod(), beam.torsional_inertia * beam.length,
-                                      counts["torsion"], self.method),
-                "axial": _RodMotion(beam.axial_rod(), beam.mass, counts["axial"], self.method),
+                "xy": bending("xy"), "xz": bending("xz"),
+                "torsion": rod("torsion", beam.torsion_rod(),
+                               beam.torsional_inertia * beam.length),
+                "axial": rod("axial", beam.axial_rod(), beam.mass),
             }
             self.__dict__["_motion_models"] = cached
         return cached
@@ -637,7 +925,11 @@ class ModalBeam(FiniteAppendage):
         s = as_frequency_array(s)
         if np.any(s == 0):
             raise ValueError("s = 0 is the rigid-body pole of W6 (W6 is infinite there) [rad/s]")
-        W6 = self._six(s, "W")
+        if not self._uniform:
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                W6 = self._general6().W(s)
+        else:
+            W6 = self._six(s, "W")
         if not np.all(np.isfinite(W6)):
             raise ValueError("s is a natural frequency of the undamped model: W6 is infinite "
                              "there [rad/s]")
@@ -645,6 +937,9 @@ class ModalBeam(FiniteAppendage):
 
     def dynamic_stiffness6(self, s) -> np.ndarray:
         """Three-axis D6(s) = W6(s)^-1, shape ``np.shape(s) + (6, 6)``; s = 0 gives 0."""
+        if not self._uniform:
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                return self._general6().D(as_frequency_array(s))
         return self._six(as_frequency_array(s), "D")
 
     def _six(self, s: np.ndarray, which: str) -> np.ndarray:
@@ -675,5 +970,7 @@ class ModalBeam(FiniteAppendage):
         return self._planar().root_model()
 
     def _three_axis_root_model(self) -> RootModel:
+        if not self._uniform:
+            return self._general6().root_model()
         motions = self._motions()
         return three_axis_root_model(*(motions[name].root_model() for name in MOTION_NAMES))

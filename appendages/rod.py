@@ -57,6 +57,8 @@ import numpy as np
 import scipy.special
 
 from . import limits
+from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
+                      hurwitz_tail_coefficients)
 from .interface import as_frequency_array, check_range, describe
 
 __all__ = ["Rod", "MOTIONS"]
@@ -99,8 +101,11 @@ class Rod:
     inertia : float
         rho*A [kg/m] (axial) or rho*I_p [kg*m] (torsion), per unit length.
     damping_ratio : float, optional
-        Modal damping ratio of every elastic mode, 0 <= zeta < 1.
+        Modal damping ratio, 0 <= zeta < 1, of every cantilever (fixed-root) mode by default.
     motion : {"axial", "torsion"}
+    damping_convention : {"cantilever", "free-free"}, optional
+        What damping_ratio damps (:class:`~appendages.beam.Beam`): the cantilever modes
+        (default; :mod:`appendages.damping`) or every free-free mode (the digamma form above).
 
     Notes
     -----
@@ -110,7 +115,8 @@ class Rod:
     """
 
     def __init__(self, length: float, stiffness: float, inertia: float, *,
-                 damping_ratio: float = 0.0, motion: str = "axial"):
+                 damping_ratio: float = 0.0, motion: str = "axial",
+                 damping_convention: str = "cantilever"):
         if not isinstance(motion, str) or motion not in MOTIONS:
             raise ValueError(f"motion must be 'axial' or 'torsion'; got {describe(motion)}")
         stiffness_quantity, inertia_quantity = MOTIONS[motion]
@@ -119,9 +125,9 @@ class Rod:
         self.stiffness = check_range(f"stiffness ({stiffness_quantity})", stiffness,
                                      stiffness_quantity)
         self.inertia = check_range(f"inertia ({inertia_quantity})", inertia, inertia_quantity)
-        from .beam import _check_damping_ratio  # here: beam imports this module
-
-        self.damping_ratio = _check_damping_ratio(damping_ratio)
+        self.damping_ratio = check_damping_ratio(damping_ratio)
+        self.damping_convention = check_damping_convention(damping_convention)
+        self._cantilever = None
 
     def __repr__(self) -> str:
         return (f"Rod(length={self.length!r}, stiffness={self.stiffness!r}, "
@@ -185,6 +191,8 @@ class Rod:
 
     def _W(self, s: np.ndarray) -> np.ndarray:
         m = self.rigid_inertia
+        if self.damping_ratio > 0.0 and self.damping_convention == "cantilever":
+            return 1.0 / self._D(s)
         if self.damping_ratio == 0.0:
             zcoth, _ = zcoth_and_tanh_over_z(s * self.travel_time)
             return zcoth / (m * s**2)
@@ -208,6 +216,8 @@ class Rod:
             return self._D(s)
 
     def _D(self, s: np.ndarray) -> np.ndarray:
+        if self.damping_ratio > 0.0 and self.damping_convention == "cantilever":
+            return self._cantilever_damping()(s.ravel())[:, 0, 0].reshape(s.shape)
         if self.damping_ratio == 0.0:
             _, tanhz = zcoth_and_tanh_over_z(s * self.travel_time)
             return self.rigid_inertia * s**2 * tanhz
@@ -215,6 +225,40 @@ class Rod:
         nonzero = s != 0
         D[nonzero] = 1.0 / self._W(s[nonzero])
         return D
+
+    def _undamped_D(self, s: np.ndarray) -> np.ndarray:
+        _, tanhz = zcoth_and_tanh_over_z(s * self.travel_time)
+        return self.rigid_inertia * s**2 * tanhz
+
+    def _cantilever_damping(self) -> CantileverDamping:
+        """The damped D of the cantilever convention (:mod:`appendages.damping`), built once."""
+        if self._cantilever is None:
+            def modes(n):
+                l, _, w = self.cantilever_modes(n)
+                return w, l[:, None]
+
+            self._cantilever = CantileverDamping(
+                self.damping_ratio, lambda s: self._undamped_D(s)[:, None, None], modes,
+                np.array([[self.rigid_inertia]]), tail=self._cantilever_tail)
+        return self._cantilever
+
+    def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:
+        """The damping of the cantilever modes k > n, exactly: ``l_k**2 = 2 m/(b_k pi)**2``,
+        ``w_k = b_k Omega`` (``b_k = k - 1/2``), so with ``g(u) = sum_j c_j u**j`` the tail is
+        ``sum_j c_j v**(4+j) Omega**2 (2 m/pi**2) zeta(4 + j, n + 1/2)``, ``v = s/Omega``
+        (12 terms where ``|s| <= w_(n+1)/2``, else the leading one). Shape (npts, 1, 1)."""
+        Omega = math.pi / self.travel_time
+        w_next = (n + 0.5) * Omega
+        n_terms = 12 if float(np.max(np.abs(s), initial=0.0)) <= 0.5 * w_next else 1
+        c = hurwitz_tail_coefficients(self.damping_ratio, n_terms)
+        j = np.arange(1, n_terms + 1)
+        coefficients = (c * Omega**2 * 2.0 * self.rigid_inertia / math.pi**2
+                        * scipy.special.zeta(4.0 + j, n + 0.5))
+        v = s / Omega
+        out = np.zeros(s.size, dtype=np.complex128)
+        for t in range(n_terms - 1, -1, -1):
+            out = (out + coefficients[t]) * v
+        return (out * v**4)[:, None, None]
 
     # -- modal data ---------------------------------------------------------------------------
     def free_free_modes(self, n: int):

@@ -108,6 +108,11 @@ __all__ = [
     "hub_compliance",
     "attitude_compliance",
     "SingularMatrixError",
+    "TipSpec",
+    "tip_mass_matrix",
+    "stepped_beam_matrices",
+    "appendage_root_compliance",
+    "appendage_spacecraft_matrices",
 ]
 
 _FIELDS = ("length", "bending_stiffness", "bending_stiffness_y", "torsional_stiffness",
@@ -1127,3 +1132,145 @@ def attitude_compliance(K, M, s) -> np.ndarray:
     ndarray of complex, shape np.shape(s) + (3, 3)
     """
     return hub_compliance(K, M, s)[..., 3:, 3:]
+
+
+# ---------------------------------------------------------------------------------------------
+# Stepped beams with a tip body (issue 21): segments of uniform elements, a rigid body at the end
+# ---------------------------------------------------------------------------------------------
+
+class TipSpec(NamedTuple):
+    """A rigid body fixed to the free end of a beam.
+
+    Attributes
+    ----------
+    mass : float, kg
+    inertia : array_like (3, 3), kg m^2
+        About the body's centre of mass, beam axes.
+    offset : array_like (3,), m
+        The centre of mass from the free end, beam axes.
+    """
+
+    mass: float
+    inertia: np.ndarray
+    offset: np.ndarray
+
+
+def tip_mass_matrix(tip: TipSpec) -> np.ndarray:
+    """The tip body's 6x6 mass matrix about the free-end node, in (u, v, w, theta_x, theta_y,
+    theta_z).
+
+    A point of the body at r from the node moves by u + theta x r. The kinetic energy of the body
+    (mass m, centre at c, inertia J about the centre) is m/2 |u' + theta' x c|^2 +
+    1/2 theta'^T J theta'; with theta x c = -[c]x theta, the velocity of the centre is
+    [I, -[c]x] q', so M = m [I, -[c]x]^T [I, -[c]x] + diag(0, J) ([6]_, sec. 2.6 / Goldstein).
+    """
+    m = float(tip.mass)
+    c = _vector3("tip offset", tip.offset, "m")
+    J = np.asarray(tip.inertia, dtype=float).reshape(3, 3)
+    A = np.hstack([np.eye(3), -_cross_matrix(c)])
+    M = m * A.T @ A
+    M[3:, 3:] += J
+    return 0.5 * (M + M.T)
+
+
+def _stepped_layout(segments, n_elements, rod_order, bending_order):
+    segments = [_as_params(p) for p in segments]
+    if isinstance(n_elements, (int, np.integer)) and not isinstance(n_elements, bool):
+        counts = [int(n_elements)] * len(segments)
+    else:
+        counts = [_count("n_elements", c) for c in n_elements]
+    if len(counts) != len(segments):
+        raise ValueError("n_elements must be one count or one per segment")
+    return segments, counts
+
+
+def stepped_beam_matrices(segments, n_elements, tip: TipSpec | None = None, *,
+                          rod_order: int = 5, bending_order: int = 5):
+    """Stiffness and mass of a free beam of uniform segments with a tip body, beam axes.
+
+    Each segment (BeamParameters or mapping or object with the attributes; its length its own)
+    is cut into ``n_elements`` equal elements (:func:`element_matrices`); the segments follow
+    each other from the root; the tip body's :func:`tip_mass_matrix` is added at the last node.
+
+    Returns
+    -------
+    K, M : scipy.sparse.csr_array
+        Degrees of freedom as :func:`beam_matrices`: node i's six from 6 i (node 0 the root),
+        then every element's bubble amplitudes.
+    """
+    pr, pb = _orders(rod_order, bending_order)
+    segments, counts = _stepped_layout(segments, n_elements, pr, pb)
+    n_el = sum(counts)
+    nb = _n_bubbles(pr, pb)
+    n = 6 * (n_el + 1) + nb * n_el
+    rows, cols, k_data, m_data = [], [], [], []
+    e = 0
+    for params, count in zip(segments, counts):
+        Ke, Me = element_matrices(params, params.length / count, pr, pb)
+        for _ in range(count):
+            dofs = np.concatenate([6 * e + np.arange(6), 6 * (e + 1) + np.arange(6),
+                                   6 * (n_el + 1) + nb * e + np.arange(nb)])
+            rows.append(np.repeat(dofs, dofs.size))
+            cols.append(np.tile(dofs, dofs.size))
+            k_data.append(Ke.ravel())
+            m_data.append(Me.ravel())
+            e += 1
+    if tip is not None:
+        dofs = 6 * n_el + np.arange(6)
+        rows.append(np.repeat(dofs, 6))
+        cols.append(np.tile(dofs, 6))
+        k_data.append(np.zeros(36))
+        m_data.append(tip_mass_matrix(tip).ravel())
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    K = scipy.sparse.csr_array(scipy.sparse.coo_array((np.concatenate(k_data), (rows, cols)),
+                                                      shape=(n, n)))
+    M = scipy.sparse.csr_array(scipy.sparse.coo_array((np.concatenate(m_data), (rows, cols)),
+                                                      shape=(n, n)))
+    return K, M
+
+
+def appendage_root_compliance(segments, n_elements, s, tip: TipSpec | None = None, *,
+                              rod_order: int = 5, bending_order: int = 5) -> np.ndarray:
+    """W6(s) of a free stepped beam with a tip body from the finite-element model (the root
+    node's block of (K + s^2 M)^-1, rigid part in closed form: :func:`root_compliance`)."""
+    K, M = stepped_beam_matrices(segments, n_elements, tip, rod_order=rod_order,
+                                 bending_order=bending_order)
+    return _free_compliance(K, M, s)
+
+
+def appendage_spacecraft_matrices(hub_mass: float, hub_inertia, mounts, n_elements, *,
+                                  rod_order: int = 5, bending_order: int = 5):
+    """Stiffness and mass of a rigid hub carrying stepped beams with tip bodies.
+
+    As :func:`spacecraft_matrices`, each mount being ``(segments, tip, position, orientation)``
+    (tip a :class:`TipSpec` or None), its beam from :func:`stepped_beam_matrices`.
+
+    Returns
+    -------
+    K, M : scipy.sparse.csr_array
+        The hub's six degrees of freedom first, then each beam's but its root node's.
+    """
+    hub_mass = _positive("hub_mass", hub_mass, "kg")
+    J = _hub_inertia(hub_inertia)
+    beams = []
+    for i, mount in enumerate(mounts):
+        segments, tip, position, orientation = mount
+        Kb, Mb = stepped_beam_matrices(segments, n_elements, tip, rod_order=rod_order,
+                                       bending_order=bending_order)
+        T = mount_transformation(_vector3(f"mounts[{i}] position", position, "m"),
+                                 _rotation(f"mounts[{i}] orientation", orientation))
+        beams.append((Kb, Mb, T))
+    n = 6 + sum(Kb.shape[0] - 6 for Kb, _, _ in beams)
+    hub = np.zeros((6, 6))
+    hub[:3, :3] = hub_mass * np.eye(3)
+    hub[3:, 3:] = J
+    K = scipy.sparse.csr_array((n, n))
+    M = scipy.sparse.csr_array(scipy.sparse.coo_array(
+        (hub.ravel(), np.divmod(np.arange(36), 6)), shape=(n, n)))
+    start = 6
+    for Kb, Mb, T in beams:
+        P = _beam_gather(T, start, Kb.shape[0], n)
+        K = K + P.T @ Kb @ P
+        M = M + P.T @ Mb @ P
+        start += Kb.shape[0] - 6
+    return (0.5 * (K + K.T)).tocsr(), (0.5 * (M + M.T)).tocsr()

@@ -316,7 +316,7 @@ def test_damped_W_equals_modal_sum_with_damping():
     # Reference: the undamped closed form plus the damping correction of each of 200000 modes
     # summed explicitly (its own tail after 200000 modes is below 1e-12 here). Tolerance 1e-9
     # relative to the matrix.
-    beam = Beam(2.0, 3.0, 0.5, damping_ratio=0.02)
+    beam = Beam(2.0, 3.0, 0.5, damping_ratio=0.02, damping_convention="free-free")
     undamped = Beam(2.0, 3.0, 0.5)
     s = np.array([0.3j, 2 + 5j, 40j, -1 + 30j, 300j])
     n = 200_000
@@ -337,8 +337,9 @@ def test_damped_W_equals_modal_sum_with_damping():
 def test_damped_resonance_peak_height():
     # At s = i w_1 the first mode's term is b b^T/(2 i zeta w_1^2), which dominates W4 for
     # light damping: |W4| * 2 zeta w_1^2 -> b_phi^2 as zeta -> 0 (other modes O(zeta) smaller).
+    # The free-free convention: each free-free mode damped at zeta.
     zeta = 1e-4
-    beam = Beam(1.0, 1.0, 1.0, damping_ratio=zeta)
+    beam = Beam(1.0, 1.0, 1.0, damping_ratio=zeta, damping_convention="free-free")
     w1 = beam.natural_frequencies(1)[0]
     root, _ = beam._free_free_root_values(1)
     peak = abs(beam.W(1j * w1)[1, 1]) * 2 * zeta * w1**2

@@ -1,4 +1,6 @@
-"""The exact W(s) of a damped beam: the damping correction and its repair near the poles."""
+"""The exact W(s) of a beam damped in its free-free modes (damping_convention="free-free"): the
+damping correction and its repair near the poles. The cantilever convention (the default) is
+tested in tests/test_cantilever_damping.py."""
 
 import mpmath as mp
 import numpy as np
@@ -64,7 +66,7 @@ def test_damped_W_near_a_pole_against_mpmath(mode, offset):
     = 4e-3 of |W| here) plus eps times the correction sum; 1e-12 leaves room for the closed
     form's own rounding near x ~ 20 (a few hundred eps)."""
     zeta = 1e-3
-    beam = Beam(1.5, 2.0, 0.7, damping_ratio=zeta)
+    beam = Beam(1.5, 2.0, 0.7, damping_ratio=zeta, damping_convention="free-free")
     wk = beam.natural_frequencies(mode)[-1]
     s = 1j * wk * (1.0 + offset * zeta)
     near, _ = beam._near_poles(np.array([s]))
@@ -82,7 +84,7 @@ def test_repaired_W_equals_the_unrepaired_form_where_that_is_well_conditioned(ze
     eps (1 + zeta w_k/|s - i w_k|) times |W| times the closed form's condition near its pole,
     eps x_k/|x - x_k| <= 1e3 eps. The repair (circle mean) must give the same W: 1e-11 of the
     matrix."""
-    beam = Beam(1.0, 1.0, 1.0, damping_ratio=zeta)
+    beam = Beam(1.0, 1.0, 1.0, damping_ratio=zeta, damping_convention="free-free")
     w = beam.natural_frequencies(6)
     checked = 0
     for k, wk in enumerate(w):
@@ -110,7 +112,7 @@ def test_damping_correction_tail_against_explicit_modes():
     modes, below 1e-15 of the tail here), at |s| up to a tenth of w_{N+1}, where the series is
     used: relative 1e-9 (the series' truncation is below 1e-10, the explicit sum's rounding
     about 1e-12)."""
-    beam = Beam(1.0, 1.0, 1.0, damping_ratio=0.05)
+    beam = Beam(1.0, 1.0, 1.0, damping_ratio=0.05, damping_convention="free-free")
     n = 16
     w_next = beam.natural_frequencies(n + 1)[-1]
     s = np.array([0.1j, 1 + 2j, 0.05j * w_next, (0.06 + 0.07j) * w_next, 0.1j * w_next])

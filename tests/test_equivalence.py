@@ -421,20 +421,23 @@ def test_scaled_chain_fits_its_own_beam(rod):
 
 @pytest.mark.parametrize("match", ["poles-and-zeros", "frequencies"])
 def test_fitted_chain_of_a_damped_beam_is_damped(rod, match):
-    """A beam with modal damping ratio zeta gives hinge dampings 2 zeta c_h / w_1 as
-    HingedChain.rfem does: stiffness-proportional, so the chain's first mode has the damping
-    ratio zeta w_1^chain / w_1, zeta to the pole match (2e-4). The rest of the chain is the
-    undamped beam's. (Before issue 10 the fitted chain of a damped beam was undamped.)"""
+    """A beam with modal damping ratio zeta (of its cantilever modes) gives hinge dampings
+    2 zeta c_h / w_c1 as HingedChain.rfem does, w_c1 its first cantilever frequency:
+    stiffness-proportional, so each mode of the chain has the damping ratio zeta w/w_c1 (zeta at
+    the first cantilever mode); the free chain's first mode zeta w_1^chain/w_c1, with w_1^chain
+    the beam's w_1 to the pole match (2e-4). The rest of the chain is the undamped beam's.
+    (Before issue 10 the fitted chain of a damped beam was undamped; before issue 21 the ratio
+    was matched at the first free-free frequency.)"""
     zeta = 0.01
     damped = Beam(rod.length, rod.bending_stiffness, rod.linear_density, damping_ratio=zeta)
     chain = fit_chain(damped, 4, match=match)
-    w1 = rod.natural_frequencies(1)[0]
-    np.testing.assert_allclose(chain.hinge_dampings, 2 * zeta * chain.hinge_stiffnesses / w1,
+    w1, wc1 = rod.natural_frequencies(1)[0], rod.cantilever_frequencies(1)[0]
+    np.testing.assert_allclose(chain.hinge_dampings, 2 * zeta * chain.hinge_stiffnesses / wc1,
                                rtol=1e-15)
     poles = np.linalg.eigvals(np.asarray(chain.state_space().A))
     oscillating = poles[poles.imag > 1e-9]
     first = oscillating[np.argmin(np.abs(oscillating))]
-    np.testing.assert_allclose(-first.real / abs(first), zeta, rtol=2e-4)
+    np.testing.assert_allclose(-first.real / abs(first), zeta * w1 / wc1, rtol=2e-4)
     np.testing.assert_array_equal(in_beam_units(chain, damped),
                                   in_beam_units(fit_chain(rod, 4, match=match), rod))
 

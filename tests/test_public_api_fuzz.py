@@ -161,6 +161,7 @@ def _valid_table(tmp: Path) -> dict:
         "appendages.write_modal_data.path": tmp / "written.toml",
         "appendages.read_modal_data.path": Lazy(lambda: _modal_file(tmp, modal)),
         "torsion": rigid, "axial": rigid,
+        "segments": [o["beam"], o["beam"]], "appendages.TipBody.inertia": 0.1,
         # controllers
         "plant": o["plant"], "controller": o["pd"], "closed_loop": o["loop"],
         "design_plant": o["plant"], "truth_plant": o["plant"], "response": o["response"],

@@ -70,8 +70,9 @@ def test_rod_limits_and_frequencies():
 def test_damped_rod_digamma_form_is_the_modal_sum():
     """W = 1/(m s^2) + (2/m) sum_k 1/(s^2 + 2 zeta w_k s + w_k^2), summed by mpmath (nsum
     with its Richardson extrapolation, 30 digits) against the digamma closed form: rtol 1e-12
-    (scipy's complex digamma is good to ~1e-15 relative)."""
-    rod = Rod(2.0, 900.0, 0.5, damping_ratio=0.05)
+    (scipy's complex digamma is good to ~1e-15 relative). The free-free convention (every
+    free-free mode damped); the cantilever one is tests/test_cantilever_damping.py's."""
+    rod = Rod(2.0, 900.0, 0.5, damping_ratio=0.05, damping_convention="free-free")
     m, Omega = rod.rigid_inertia, math.pi / rod.travel_time
     with mp.workdps(30):
         for s in (0.7j, 3.0 + 40.0j, 1j * Omega, 1e-3j, 500.0j):

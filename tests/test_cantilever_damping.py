@@ -1,0 +1,214 @@
+"""Damping where engineers define it: an appendage's ratio is that of its cantilever modes.
+
+References: the damped root dynamic stiffness of appendages.damping's docstring,
+D(s) = s^2 M_rr - s^4 sum_k l_k l_k^T/(s^2 + 2 zeta w_k s + w_k^2), summed here in 40-digit
+arithmetic with the modes of Blevins' table 8-1 (cantilever roots of cos x cosh x = -1, found by
+mpmath) and the series' tail by mpmath.nsum; the heavy-hub limit (a root held fixed: the first
+coupled mode is the first cantilever mode, damped at the entered ratio).
+"""
+
+import math
+
+import mpmath as mp
+import numpy as np
+import pytest
+
+from appendages import Beam, HingedChain, Rod, SteppedBeam, TipBody
+from spacecraft import Hub, Mount, Spacecraft
+
+
+def D_cantilever_mpmath(beam, s, dps=40, n_exact=30):
+    """The damped root dynamic stiffness of a uniform beam in 40 digits (module docstring).
+
+    Mass-normalised cantilever modes psi_k (Blevins table 8-1, integral of the square L before
+    normalising): participation factors ``l_k = rho A/sqrt(m) (2 sigma_k/beta_k,
+    2/beta_k^2)``, ``sigma_k = (sinh x - sin x)/(cosh x + cos x)`` at the roots x_k of
+    ``cos x cosh x = -1``; beyond n_exact modes ``x_k = (k - 1/2) pi``, ``sigma_k = 1`` (to
+    e^-x_k < 1e-40) and the rest of the series by mpmath.nsum. Independent of the float code
+    (no Hurwitz series, no circle mean, no closed-form undamped D).
+    """
+    with mp.workdps(dps):
+        s = mp.mpc(s)
+        zeta = mp.mpf(beam.damping_ratio)
+        EJ, L, rho = (mp.mpf(beam.bending_stiffness), mp.mpf(beam.length),
+                      mp.mpf(beam.linear_density))
+        m = rho * L
+        c0 = mp.sqrt(EJ / (rho * L**4))
+        M = mp.matrix([[m, m * L / 2], [m * L / 2, m * L**2 / 3]])
+
+        def term(x, sigma):
+            beta = x / L
+            l0, l1 = 2 * sigma / beta * rho / mp.sqrt(m), 2 / beta**2 * rho / mp.sqrt(m)
+            w = x**2 * c0
+            f = s**4 / (s**2 + 2 * zeta * w * s + w**2)
+            return f * l0 * l0, f * l0 * l1, f * l1 * l1
+
+        D = M * s**2
+        for k in range(1, n_exact + 1):
+            x = mp.findroot(lambda x: mp.cos(x) + mp.sech(x), (k - mp.mpf(0.5)) * mp.pi)
+            sigma = (mp.sinh(x) - mp.sin(x)) / (mp.cosh(x) + mp.cos(x))
+            a, b, c = term(x, sigma)
+            D[0, 0] -= a
+            D[0, 1] -= b
+            D[1, 1] -= c
+        for index, (i, j) in enumerate(((0, 0), (0, 1), (1, 1))):
+            D[i, j] -= mp.nsum(lambda k: term((k - mp.mpf(0.5)) * mp.pi, 1)[index],
+                               [n_exact + 1, mp.inf])
+        D[1, 0] = D[0, 1]
+        return np.array([[complex(D[i, j]) for j in range(2)] for i in range(2)])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("where", ["far", "pole1", "pole3", "high"])
+def test_uniform_beam_cantilever_damping_against_40_digits(where):
+    """The damped D(s) of a uniform beam (closed form + explicit modes + Hurwitz tail, and the
+    circle mean near an undamped cantilever pole) against the 40-digit modal sum: 1e-11 of the
+    matrix (the float code's rounding is a few hundred eps of its terms near a pole, where
+    the closed form is 1e3 times D; the tail series stops below 1e-10 of its first term,
+    itself below 1e-3 of D)."""
+    beam = Beam(1.5, 2.0, 0.7, damping_ratio=2e-3)
+    wc = beam.cantilever_frequencies(3)
+    s = {"far": 0.3 + 7.0j, "pole1": 1j * wc[0] * (1 + 1e-4),
+         "pole3": 1j * wc[2] * (1 - 1e-3), "high": 4.0 + 900.0j}[where]
+    if where.startswith("pole"):
+        assert beam._cantilever_damping()._near_poles(np.array([s]), 64)[0][0]
+    reference = D_cantilever_mpmath(beam, s)
+    D = beam.dynamic_stiffness(s)
+    assert np.abs(D - reference).max() <= 1e-11 * np.abs(reference).max()
+    np.testing.assert_allclose(beam.W(s), np.linalg.inv(reference), rtol=1e-10, atol=0)
+
+
+def test_rod_cantilever_damping_against_the_modal_sum():
+    """D = m s^2 - s^4 sum_k l_k^2/(s^2 + 2 zeta w_k s + w_k^2) with l_k^2 = 2 m/((k - 1/2)
+    pi)^2 and w_k = (k - 1/2) pi/tau (Blevins table 8-19), by mpmath.nsum in 30 digits:
+    rtol 1e-12."""
+    rod = Rod(2.0, 900.0, 0.5, damping_ratio=0.05)
+    m, Omega = rod.rigid_inertia, math.pi / rod.travel_time
+    with mp.workdps(30):
+        for s in (0.7j, 3.0 + 40.0j, 0.5j * Omega * (1 + 1e-5), 1e-3j, 500.0j):
+            sm = mp.mpc(s)
+            total = m * sm**2 - mp.nsum(
+                lambda k: sm**4 * 2 * m / ((k - 0.5) * mp.pi) ** 2
+                / (sm**2 + 2 * 0.05 * (k - 0.5) * Omega * sm + ((k - 0.5) * Omega) ** 2),
+                [1, mp.inf])
+            assert abs(rod.dynamic_stiffness(s) / complex(total) - 1) < 1e-12, s
+
+
+def _coupled_pole(beam, hub_mass, hub_inertia, guess):
+    """The coupled pole near ``guess`` of a hub carrying the beam at its centre, from the exact
+    Z(s) = M_hub s^2 + G^T D(s) G: a root of ``(s - guess) det Z(s)`` (the factor removes the
+    damped cantilever pole of D next to it), by the secant method in complex s from 1e-3 of
+    |guess| away (near the pole Z is dominated by its rank-one pole term and its determinant
+    is rounding; at the coupled pole it is not)."""
+    sc = Spacecraft(Hub(hub_mass, hub_inertia), [Mount(beam, (0.0, 0.0), 0.0)])
+
+    def f(s):
+        Z = sc.exact.hub_dynamic_stiffness(np.array([s]))[0]
+        scale = np.abs(np.diag(Z))
+        return (s - guess) * np.linalg.det(Z / np.sqrt(np.outer(scale, scale)))
+
+    a, b = guess * (1 + 1e-3), guess * (1 + 1e-3j)
+    fa, fb = f(a), f(b)
+    for _ in range(60):
+        c = b - fb * (b - a) / (fb - fa)
+        if abs(c - b) < 1e-15 * abs(c):
+            return c
+        a, fa, b, fb = b, fb, c, f(c)
+    return b
+
+
+@pytest.mark.parametrize("kind", ["uniform", "tip", "stepped"])
+def test_a_very_heavy_hub_sees_the_entered_damping(kind):
+    """Issue 21's check: with a hub much heavier than the beam (its root held, in effect) the
+    first coupled mode is the first cantilever mode, damped at the entered ratio. The coupled
+    pole tends to the damped cantilever pole like m/M (its distance falls by 10 when M and J
+    grow by 10); at M/m = 1e4 the damping ratio agrees to 1e-3 relative (the shift of the pole
+    is about 1e-4 of it)."""
+    zeta = 0.005
+    if kind == "uniform":
+        beam = Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11, damping_ratio=zeta)
+    elif kind == "tip":
+        beam = Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11, damping_ratio=zeta,
+                                 tip=TipBody(2.0, 0.01, 0.05))
+    else:
+        beam = SteppedBeam([Beam.circular_rod(4.0, 0.014, 7800.0, 2.06e11, damping_ratio=zeta),
+                            Beam.circular_rod(6.0, 0.01, 7800.0, 2.06e11, damping_ratio=zeta)])
+    wc = float(beam.cantilever_frequencies(1)[0])
+    pole = wc * complex(-zeta, math.sqrt(1 - zeta**2))
+    m, J = beam.mass, beam.inertia + beam.mass * beam.center_of_mass**2
+    distances = []
+    for ratio in (1e3, 1e4):
+        s = _coupled_pole(beam, ratio * m, ratio * J, pole)
+        distances.append(abs(s - pole))
+    assert 5.0 < distances[0] / distances[1] < 20.0
+    assert -s.real / abs(s) == pytest.approx(zeta, rel=1e-3)
+
+
+@pytest.mark.slow
+def test_craig_bampton_truncations_converge_to_the_damped_beam():
+    """The Craig-Bampton model carries the convention exactly (its cantilever modes damped at
+    zeta, diag(2 zeta w)): its W converges to the exact damped W as modes are added, for the
+    uniform beam and with a tip body (measured errors 5e-10 and 1e-11 at 256 modes; the
+    truncation's own rest decays like n^-3)."""
+    s = np.concatenate([1j * np.linspace(0.3, 60.0, 7) + 0.2, [40j + 0.01]])
+    for beam in (Beam(1.7, 2.3, 0.9, damping_ratio=0.01),
+                 Beam(1.7, 2.3, 0.9, damping_ratio=0.01, tip=TipBody(3.0, 0.2, 0.15))):
+        exact = beam.W(s)
+        errors = [np.abs(beam.truncated(n).W(s) - exact).max() / np.abs(exact).max()
+                  for n in (8, 32, 128)]
+        assert errors[0] > errors[1] > errors[2] and errors[2] < 1e-7
+
+
+def test_free_interface_truncations_carry_the_cantilever_damping():
+    """Free-free and residual models project the cantilever modes' damping on their own
+    coordinates: their W converges to the exact damped W too (measured 8e-4 and 1e-10 at 16
+    modes)."""
+    beam = Beam(1.7, 2.3, 0.9, damping_ratio=0.01)
+    s = 1j * np.linspace(0.3, 60.0, 7) + 0.2
+    exact = beam.W(s)
+    for method, bound in (("free-free", 2e-3), ("residual", 1e-8)):
+        errors = [np.abs(beam.truncated(n, method=method).W(s) - exact).max()
+                  / np.abs(exact).max() for n in (4, 16)]
+        assert errors[1] < errors[0] and errors[1] < bound
+
+
+def test_free_free_convention_is_kept_by_name():
+    """damping_convention="free-free" is the previous meaning: W is the undamped closed form
+    plus the damping of every free-free mode; its first free-free resonance has the peak
+    height b b^T/(2 i zeta w^2) (to O(zeta)); the cantilever convention's differs."""
+    zeta = 1e-4
+    old = Beam(1.0, 1.0, 1.0, damping_ratio=zeta, damping_convention="free-free")
+    new = Beam(1.0, 1.0, 1.0, damping_ratio=zeta)
+    w1 = old.natural_frequencies(1)[0]
+    _, b, _ = old.free_free_modes(1)
+    peak = abs(old.W(1j * w1)[1, 1]) * 2 * zeta * w1**2
+    assert peak == pytest.approx(b[0, 1] ** 2, rel=1e-3)
+    assert abs(new.W(1j * w1)[1, 1]) * 2 * zeta * w1**2 != pytest.approx(b[0, 1] ** 2,
+                                                                          rel=1e-2)
+
+
+def test_chain_hinge_damping_matches_the_first_cantilever_mode():
+    """The RFEM chain's stiffness-proportional hinges 2 zeta c/w_c1 damp each of its modes at
+    zeta w/w_c1: its first cantilever mode (root held) at zeta, to the chain's discretisation
+    of w_c1 (2e-4 with 64 bodies)."""
+    zeta = 0.01
+    beam = Beam(2.0, 3.0, 0.5, damping_ratio=zeta)
+    chain = HingedChain.rfem(beam, 64)
+    rm = chain.root_model()
+    r = rm.n_root
+    M, C, K = rm.mass[r:, r:], rm.damping[r:, r:], rm.stiffness[r:, r:]
+    n = M.shape[0]
+    A = np.block([[np.zeros((n, n)), np.eye(n)],
+                  [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])
+    poles = np.linalg.eigvals(A)
+    first = poles[np.argmin(np.abs(poles))]
+    assert -first.real / abs(first) == pytest.approx(zeta, rel=1e-3)
+
+
+def test_damping_convention_is_checked():
+    with pytest.raises(ValueError, match="damping_convention"):
+        Beam(1.0, 1.0, 1.0, damping_ratio=0.01, damping_convention="modal")
+    with pytest.raises(ValueError, match="damping_convention"):
+        Beam(1.0, 1.0, 1.0, damping_convention="free-free", tip=TipBody(1.0, 0.0))
+    with pytest.raises(ValueError, match="damping_convention"):
+        Rod(1.0, 1.0, 1.0, damping_convention=3)
