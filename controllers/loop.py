@@ -42,7 +42,7 @@ def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
     controller : control.StateSpace
         Controller with output ``'torque'`` (three-axis: ``'torque_x'``, ``'torque_y'``,
         ``'torque_z'``); its inputs are plant outputs (measurements) and
-        reference inputs (names containing ``'ref'``). If the controller is discrete-time
+        reference inputs (names containing ``'ref'`` or ``'ff'``). If the controller is discrete-time
         (``dt`` > 0), the plant is discretised with a zero-order hold at that ``dt`` and the
         result is the exact sampled-data loop at the sampling instants (every plant input,
         including disturbances, is then held constant over a sample). FRD plants need a

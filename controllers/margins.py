@@ -369,7 +369,8 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
     # L on the grid once: the loop-at-a-time functions and the singular values all follow from
     # S = (I + L)^-1 there; only the refinements evaluate L again
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        R = np.eye(m) + loop.matrix(omega)
+        L_grid = loop.matrix(omega)
+        R = np.eye(m) + L_grid
         S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
         per_axis = dict(zip(loop.ch.axes, _loops_margins(
             lambda w, owner: loop.broken_all(w)[np.arange(w.size), owner], omega,
@@ -398,7 +399,7 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
     sigma, w_sigma = _refined_extremum(lambda w: singular_values(w)[1], omega[ok], smallest[ok],
                                        maximum=False)
     alpha = 1.0 / disk_peak if disk_peak > 0 else math.inf
-    crossings = _unit_crossings(loop.matrix, omega)
+    crossings = _unit_crossings(loop.matrix, omega, L_grid)
     return MultiLoopMargins(per_axis, alpha, disk_margin_gain(alpha), disk_margin_phase(alpha),
                             w_disk, sigma, w_sigma, tau, _first_event(crossings, 0.0))
 
@@ -636,26 +637,48 @@ def _delay_grid(gain: Callable[[np.ndarray], np.ndarray] | None, omega: np.ndarr
     return np.unique(np.concatenate([omega, starts + steps * offsets]))
 
 
-def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarray
-                    ) -> list[tuple[float, complex, int]]:
+def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
+                    L: np.ndarray | None = None) -> list[tuple[float, complex, int]]:
     """Where an eigenvalue of L(j omega) crosses the unit circle: (omega_c [rad/s], lambda_c,
     direction), direction +1 where |lambda| falls through 1 (a closed-loop root then crosses
     to the right as the delay grows), -1 where it rises.
 
     Found from the number of eigenvalues outside the unit circle on the grid (no tracking of
     eigenvalues needed), each change bisected to 1e-13 relative in frequency. ``matrix(w)``
-    gives L, shape (f, m, m); a planar loop is the m = 1 case (|L| = 1: the gain crossovers).
+    gives L, shape (f, m, m) (``L``: its values on ``omega``, if known); a planar loop is the
+    m = 1 case (|L| = 1: the gain crossovers). The count needs no eigenvalues where
+    ||L||_F < 1 (every |lambda| < 1) or ||L^-1||_F < 1 (every |lambda| > 1): most of a grid.
     """
-    def count_at(w):
+    def count_at(w, L=None):
+        with np.errstate(all="ignore"):
+            L = matrix(w) if L is None else L
+            finite = np.all(np.isfinite(L), axis=(1, 2))
+            m = L.shape[1]
+            count = np.zeros(L.shape[0], dtype=int)
+            lam = np.full(L.shape[:2], np.nan, dtype=complex)
+            small = finite & (np.sqrt(np.sum(np.abs(L) ** 2, axis=(1, 2))) < 1.0)
+            rest = finite & ~small
+            if rest.any():
+                inverse = np.linalg.inv(L[rest]) if m > 1 else 1.0 / L[rest]
+                large = np.sqrt(np.sum(np.abs(inverse) ** 2, axis=(1, 2))) < 1.0
+                idx = np.nonzero(rest)[0]
+                count[idx[large]] = m
+                hard = idx[~large]
+                if hard.size:
+                    lam[hard] = np.linalg.eigvals(L[hard])
+                    count[hard] = np.sum(np.abs(lam[hard]) > 1.0, axis=1)
+        return count, lam, finite
+
+    def eigenvalues_at(w):
         with np.errstate(all="ignore"):
             L = matrix(w)
         finite = np.all(np.isfinite(L), axis=(1, 2))
         lam = np.full(L.shape[:2], np.inf, dtype=complex)
         if finite.any():
             lam[finite] = np.linalg.eigvals(L[finite])
-        return np.sum(np.abs(lam) > 1.0, axis=1), lam, finite
+        return lam, finite
 
-    count, _, finite = count_at(omega)
+    count, _, finite = count_at(omega, L)
     grid, count = omega[finite], count[finite]
     i = np.nonzero(count[:-1] != count[1:])[0]
     if i.size == 0:
@@ -675,7 +698,7 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
         b[idx[~same]] = mid[active][~same]
         cb[idx[~same]] = cm[~same]
     w = 0.5 * (a + b)
-    _, lam, ok = count_at(w)
+    lam, ok = eigenvalues_at(w)
     out = []
     for k in range(w.size):
         if not ok[k]:

@@ -572,6 +572,10 @@ def profile_response(closed_loop: control.StateSpace, profile, *, inertia=None,
                          f" for this {'three-axis' if ch.mimo else 'planar'} closed loop")
     if not isinstance(hold, str) or hold not in ("linear", "zero", "generator"):
         raise ValueError(f"hold must be 'linear', 'zero' or 'generator'; got {_short(hold)}")
+    if hold == "generator" and gyroscopic is True and ch.mimo:
+        raise ValueError("gyroscopic=True cannot be fed through the profile's generator (the "
+                         "term omega_ref x J omega_ref is not linear in its state): use "
+                         "hold='linear' or 'zero', or gyroscopic=False")
     labels = list(closed_loop.input_labels)
     for name in ch.refs:
         _require_signal(closed_loop, name, "input", "closed_loop")
