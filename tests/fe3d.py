@@ -576,9 +576,9 @@ class _RefinedLU:
         complaint on one CPU and as exactly singular on others). Otherwise the pivot of the
         null direction is ~eps |A| and the solve returns |x| ~ |b| / (eps |A|). For any
         matrix, max|A| max|x| / max|b| <= kappa_inf(A), so a ratio above 1 / (64 eps)
-        (7e13) means eps kappa > 1/64: beyond what the refinement can correct, and ~1e4 times
-        the condition numbers of the meshes used here (kappa ~ N^4 for N elements).
-        Measured for the singular matrices: ratios of 1e18 to 1e19.
+        (7e13) means eps kappa > 1/64: beyond what the refinement can correct. Measured: up
+        to 1.7e11 in the solves of the tests' meshes (kappa ~ N^4 for N elements), 1e18 to
+        1e19 for the singular matrices.
         """
         top = float(np.max(np.abs(b), initial=0.0))
         if self.size * float(np.max(np.abs(x), initial=0.0)) > top / (64 * np.finfo(float).eps):
