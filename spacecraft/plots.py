@@ -485,6 +485,8 @@ _DAMPING_LINES = (0.05, 0.2, 0.4, 0.7)
 
 def plot_poles(result, path: Path) -> str:
     """Draw ``poles.png``; returns its caption."""
+    from .verdicts import MIN_DAMPING
+
     kinds = list(dict.fromkeys(k[1] for k in result.poles))
     n = len(kinds)
     height = 8.2
@@ -562,6 +564,12 @@ def plot_poles(result, path: Path) -> str:
         near.set_ylabel("Im s [rad/s]")
         spread.axhspan(-1.0, 0.0, color=UNSTABLE_COLOUR, alpha=0.06, lw=0)
         spread.axhline(0.0, color=REFERENCE_COLOUR, lw=0.7)
+        if col == 0:
+            handles.append(spread.axhline(MIN_DAMPING, color=CAUTION_COLOUR, lw=0.8, ls="--",
+                                          label=f"light damping (zeta {MIN_DAMPING:g}): "
+                                                "a pole below is warned about"))
+        else:
+            spread.axhline(MIN_DAMPING, color=CAUTION_COLOUR, lw=0.8, ls="--")
         spread.set_yscale("symlog", linthresh=1e-3)
         spread.set_ylim(-1.0, 1.05)
         spread.set_xlabel("natural frequency |s| [rad/s]")
@@ -574,8 +582,9 @@ def plot_poles(result, path: Path) -> str:
     return ("Closed-loop poles of each controller on its design model (crosses) and on the "
             "truth model (circles), one colour per design model: top, the s-plane near the "
             "loop's bandwidth with lines of constant damping ratio; bottom, damping ratio "
-            "against natural frequency of every pole (symmetric log scale below 1e-3). "
-            "Unstable poles red; the unstable region shaded.")
+            "against natural frequency of every pole (symmetric log scale below 1e-3), the "
+            "light-damping threshold dashed orange. Unstable poles red; the unstable region "
+            "shaded.")
 
 
 # ---------------------------------------------------------------------------------------------
