@@ -124,15 +124,17 @@ def test_a_small_scene_runs_single_threaded_outside_the_controllers_too(two_thre
     controllers' entry points do, so a run's numbers and CPU time do not depend on the
     caller's setting."""
     import spacecraft.runner as runner
+    import spacecraft.tuning as tuning
 
     seen = []
-    original = runner.tune
+    original = tuning.tune
 
     def recording(*args, **kwargs):
         seen.append(set(blas_threads()))
         return original(*args, **kwargs)
 
-    monkeypatch.setattr(runner, "tune", recording)
+    # the run tunes through its model builder (spacecraft.models.ModelBuilder.tuned)
+    monkeypatch.setattr(tuning, "tune", recording)
     runner.run(None, time_responses=False)
     assert seen and all(s == {1} for s in seen)
     assert set(blas_threads()) == {2}            # the caller's setting restored
