@@ -222,3 +222,23 @@ def test_a_pd_sweep_records_each_samples_gains():
     assert t["pd_kp"][0] == pytest.approx(pd["Kp"], rel=1e-12)
     assert t["pd_kd"][0] == pytest.approx(pd["Kd"], rel=1e-12)
     assert json.loads(t["controller"][0])["kind"] == "pd"
+
+
+def test_a_slew_that_does_not_settle_is_a_result():
+    """The default sweep scene simulated for 65 s of a 60 s slew: stable, but not settled in
+    the 2 % band by the end. Its settling time is withheld (None), as the run's report
+    withholds it; the sample is not a failure (it once failed with a TypeError on the None,
+    and as the nominal scene stopped the sweep with exit 2 where flexsat run exits 0)."""
+    from spacecraft.sweep.evaluate import evaluate, prepare
+    from spacecraft.sweep.parameters import read_sweep
+
+    raw = tomllib.loads(sweep_scene_path("default").read_text())
+    raw.pop("sweep")
+    raw["manoeuvre"]["duration"] = 65.0
+    spec = read_sweep({"parameters": {"hub.inertia": {"distribution": "uniform", "low": 45.0,
+                                                      "high": 55.0}},
+                       "design": "nominal"}, raw, "test")
+    row = evaluate(prepare(raw, spec, "test"), spec.nominal)
+    assert row["error"] == "" and row["stable"] is True
+    assert row["status"] == "not settled" and row["settling_time"] is None
+    assert row["overshoot"] is not None and row["peak_torque"] > 0

@@ -478,6 +478,7 @@ class SampleStore:
         self._lock = None
         self._created: list[Path] = []
         self._written = False
+        self._verified: dict[str, tuple] = {}
 
     # -- entering and leaving --------------------------------------------------------------
     def __enter__(self) -> "SampleStore":
@@ -615,8 +616,16 @@ class SampleStore:
         return table
 
     def completed(self) -> np.ndarray:
-        """Sample indices already in the folder (sorted)."""
-        done = [self._check(p).column("sample").to_numpy() for p in self._part_paths()]
+        """Sample indices already in the folder (sorted); each part is checked whole once
+        (then, unchanged, only its sample column is read)."""
+        import pyarrow.parquet as pq
+
+        done = []
+        for path in self._part_paths():
+            if self._verified.get(path.name) != _stamp(path):
+                self._check(path)
+                self._verified[path.name] = _stamp(path)
+            done.append(pq.read_table(path, columns=["sample"]).column("sample").to_numpy())
         return np.sort(np.concatenate(done)) if done else np.zeros(0, dtype=np.int64)
 
     def write(self, table) -> Path:
@@ -631,6 +640,7 @@ class SampleStore:
         stamped = table.replace_schema_metadata(meta)
         write_atomically(path, lambda handle: pq.write_table(stamped, handle,
                                                               write_page_checksum=True))
+        self._verified[path.name] = _stamp(path)
         self._written = True
         return path
 
@@ -652,6 +662,13 @@ class SampleStore:
             return None
         table = pa.concat_tables(tables)
         return table.take(np.argsort(table.column("sample").to_numpy(), kind="stable"))
+
+
+def _stamp(path: Path) -> tuple:
+    """A part's size and modification time (a part rewritten since its check is checked
+    again)."""
+    info = path.stat()
+    return info.st_size, info.st_mtime_ns
 
 
 def _digest(table) -> str:
