@@ -3,10 +3,12 @@ an unstable loop's margin figures never shown as guarantees (planar and three-ax
 summary, report.md/html, results.json).
 
 The planar scene is the review's (the paper's rod, damped 0.5 %, two chain fits, LQR on each):
-the LQR tuned on the paper's fit is UNSTABLE on the truth model with "gain margin -29.5 dB",
-the one tuned on flexsat's fit lowers the damping of the mode at 3.07 rad/s from 0.0030 to
-0.0025. The three-axis scene is the issue's reproducer (a wing mounted 1.7 km away and an LQR
-of 1e12 attitude weight: UNSTABLE, disk margin figure 0.3 with 2 modes)."""
+the LQR tuned on the paper's fit is UNSTABLE on the truth model with a negative "gain margin"
+(-29.5 dB in the review, with the damping then given to the free-free modes), the one tuned on
+flexsat's fit lowers the damping of the mode at 3.07 rad/s. A PD on the undamped rod leaves a
+closed-loop pole below the light-damping threshold (the review's case was single_boom's, zeta
+9.5e-5 with free-free damping). The three-axis scene is the issue's reproducer (a wing mounted
+1.7 km away and an LQR of 1e12 attitude weight: UNSTABLE)."""
 import copy
 import json
 import math
@@ -171,29 +173,30 @@ def test_the_unstable_planar_loop_shows_no_margin_as_a_guarantee(lqr):
     row = _row(data, "frequencies")
     v = row["verdict"]
     assert row["status"]["truth"]["status"] in ("unstable", "diverges")
-    assert v["gain_margin"] == pytest.approx(-29.5, abs=0.1)
+    gm, mm = v["gain_margin"], v["modulus_margin"]
+    assert gm < 0
     assert v["margin_flags"] == {"gain_margin": "unstable", "phase_margin": "unstable",
                                  "modulus_margin": "unstable"}
     line = [x for x in summary_lines(data) if "paper's fit" in x and "warning" not in x][0]
     assert isinstance(line, Tone) and line.tone == "bad"
-    assert "no margins" in line and "gain margin -29.5" not in line
+    assert "no margins" in line and f"gain margin {gm:.3g}" not in line
     saved = json.loads((folder / "results.json").read_text())
     assert _row(saved, "frequencies")["verdict"]["margin_flags"]["gain_margin"] == "unstable"
     html = (folder / "report.html").read_text()
-    assert '<td class="bad">-29.54 (unstable: no margin)</td>' in html
-    assert '<td class="bad">0.5241 (unstable: no margin)</td>' in html
+    assert f'<td class="bad">{gm:.4g} (unstable: no margin)</td>' in html
+    assert f'<td class="bad">{mm:.4g} (unstable: no margin)</td>' in html
     warning = [w for w in data["design_warnings"] if w.get("design") == "frequencies"]
     assert [w["code"] for w in warning] == ["unstable"]
-    assert "gain margin -29.5 dB" in warning[0]["message"]
+    assert f"gain margin {gm:.3g} dB" in warning[0]["message"]
 
 
 def test_an_lqr_that_lowers_a_modes_damping_is_warned_and_marked(lqr):
     folder, result, data, _ = lqr
     row = _row(data, "poles-and-zeros")
     mode = [m for m in row["verdict"]["modes"] if abs(m["frequency"] - 3.07) < 0.01][0]
-    # the default scene's finding: 0.0030 open loop, 0.00246 closed loop
-    assert mode["open_loop_damping"] == pytest.approx(0.0030, abs=5e-5)
-    assert mode["closed_loop_damping"] == pytest.approx(0.00246, abs=5e-5)
+    # the default scene's finding (0.0030 open loop, 0.00246 closed loop with free-free damping;
+    # 0.0059 and 0.0053 with cantilever damping): lowered by more than DAMPING_DROP
+    assert mode["closed_loop_damping"] < (1 - DAMPING_DROP) * mode["open_loop_damping"]
     codes = [w["code"] for w in data["design_warnings"] if w.get("design") == "poles-and-zeros"]
     assert codes == ["damping_lowered"]
     line = [x for x in summary_lines(data) if "flexsat fit" in x and "warning" not in x][0]
@@ -202,15 +205,19 @@ def test_an_lqr_that_lowers_a_modes_damping_is_warned_and_marked(lqr):
         folder / "report.html").read_text()
 
 
-def test_single_booms_lightly_damped_loop_is_not_stable_in_black(tmp_path):
-    result, data, figures = _written("single_boom", tmp_path)
+def test_a_lightly_damped_loop_is_not_stable_in_black(tmp_path):
+    # the undamped rod: the PD damps its fourth mode (15.6 rad/s) to about 2e-4 only
+    scene = scene_with(**{"fidelity.n_modes": 4, "report.plots": ["slew"],
+                          "report.equivalence": False})
+    result, data, figures = _written(scene, tmp_path)
     row = data["closed_loops"][0]
     assert row["verdict"]["least_damping_ratio"] < MIN_DAMPING
     assert "light_damping" in [w["code"] for w in data["design_warnings"]]
     line = summary_lines(data)[1]
     assert line.tone == "warn" and "lightly damped (zeta" in line
     html = (tmp_path / "report.html").read_text()
-    assert '<li class="warn">PD tuned on chain, flexsat fit: stable on the truth model (' in html
+    assert '<li class="warn">PD tuned on chain, paper&#x27;s fit: stable on the truth model (' \
+        in html
     title = figures["slew.png"].axes[0].get_title()
     assert "lightly damped" in title
     assert figures["slew.png"].axes[0].title.get_color() == CAUTION_COLOUR
