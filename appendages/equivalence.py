@@ -427,7 +427,8 @@ def criterion(reference, candidate, *, exact=None, band: Sequence[float] | None 
     zeta = _check_real("evaluation_damping", evaluation_damping, "-", low=0.0, high=1.0)
     if names is None:
         names = (type(reference).__name__, type(candidate).__name__)
-    elif isinstance(names, str) or len(names) != 2:
+    elif (isinstance(names, str) or not isinstance(names, Sequence) or len(names) != 2
+          or not all(isinstance(n, str) for n in names)):
         raise ValueError(f"names must be two strings (reference, candidate); got {describe(names)}")
     ref_q = ModelQuantities.of(reference, names[0])
     cand_q = ModelQuantities.of(candidate, names[1])
@@ -435,7 +436,10 @@ def criterion(reference, candidate, *, exact=None, band: Sequence[float] | None 
                    zip(_ROWS, ref_q.values(), cand_q.values())}
     if band is None:
         band = _default_band(reference, ref_q)
-    band = np.asarray(band, dtype=np.float64) if not isinstance(band, (str, bytes)) else None
+    try:
+        band = np.asarray(band, dtype=np.float64) if not isinstance(band, (str, bytes)) else None
+    except (TypeError, ValueError):  # complex numbers, objects: not a band
+        band = None
     if band is None or band.shape != (2,) or not np.all(np.isfinite(band)) or \
             not 0.0 < band[0] < band[1]:
         raise ValueError(f"band must be (omega_min, omega_max) with 0 < omega_min < omega_max "
@@ -686,6 +690,7 @@ def fit_chain(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     if not isinstance(match, str) or match not in MATCHES:
         raise ValueError(f"match must be one of {MATCHES}; got {describe(match)}")
     if not is_uniform_beam(beam):
+        _check_model("beam", beam)
         return _fit_any(beam, int(n_bodies), match, frequencies, pole_weight, max_nfev)
     L, EJ, rho = _beam_data(beam)
     n = int(n_bodies)

@@ -207,6 +207,11 @@ def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     from .equivalence import is_uniform_beam, fit_chain  # here: equivalence imports chain
 
     if not is_uniform_beam(beam):
+        for attribute in ("planar_view", "inertia_tensor", "torsion_rod", "axial_rod"):
+            if not hasattr(beam, attribute):
+                raise TypeError(f"beam must be a three-axis appendage (planar_view, "
+                                f"inertia_tensor, torsion_rod, axial_rod); got "
+                                f"{type(beam).__name__} without '{attribute}'")
         return _fit_any_3d(beam, n_bodies, match, fit_options)
     if not getattr(beam, "three_axis", False):
         raise ValueError(

@@ -320,7 +320,7 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
     truth_loop = close_loop(truth_plant, controller)
     # the time grid (and its size limit) first: refuse before any simulation
     _time_grid(design_loop, 3.0 * duration if t_final is None else t_final, dt,
-               duration / 500.0, max_samples)
+               duration / 500.0, max_samples, keyword)
     design_response = slew(design_loop, angle, duration, t_final=t_final, dt=dt,
                            max_samples=max_samples, axis=axis)
     truth_response = slew(truth_loop, angle, duration, t_final=t_final, dt=dt,

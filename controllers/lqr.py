@@ -29,6 +29,7 @@ import control
 import numpy as np
 import scipy.linalg
 
+from .arguments import real_array
 from .frequency import _ModalEvaluator
 from .modes import _design_model, _inertia_matrix, _verify_loop, rigid_body_inertia
 from .pd import _check_sampling, _positive, _rigid_crossover
@@ -218,7 +219,7 @@ def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray
     if np.isscalar(deflection_weight):
         w = _nonneg(deflection_weight, "deflection_weight", "1/m^2")
         return tips, w * np.eye(len(tips))
-    W = np.asarray(deflection_weight, dtype=float)
+    W = real_array(deflection_weight, "deflection_weight", "1/m^2")
     if W.shape != (len(tips), len(tips)):
         raise ValueError(f"deflection_weight matrix must have shape ({len(tips)}, {len(tips)}) "
                          f"for the outputs {_short(tips)}; got {W.shape}")
@@ -377,6 +378,10 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                          f"of shape (n_states, {2 * m}); got {_short(estimator)}")
     q_theta, q_omega, r = _check_weights(attitude_weight, rate_weight, torque_weight, m)
     speed = _positive(estimator_speed, "estimator_speed", "1")
+    if not 1e-6 <= speed <= 1e6:
+        raise ValueError(f"estimator_speed must lie in [1e-6, 1e6] (the estimator's bandwidth "
+                         f"over the regulator's; beyond, no loop resolves both) [-]; got "
+                         f"{speed:.6g}")
     tip_names, W_tip = _deflection_weights(plant, deflection_weight)
     weights = _weights_text(q_theta, q_omega, r, W_tip)
     T = None if sample_time is None else _positive(sample_time, "sample_time", "s")
@@ -430,7 +435,7 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
         noise = (KalmanNoise.default(float(Jd[0]), float(q_theta[0]), float(r[0]), speed)
                  if m == 1 else KalmanNoise.default(_inertia_matrix(J), q_theta, r, speed))
     else:
-        L_given = np.asarray(estimator, dtype=float)
+        L_given = real_array(estimator, "estimator", "-")
         n_d = design_plant.nstates
         if L_given.shape != (n_d, 2 * m):
             detail = (f" (the design model: the plant without the {len(removed)} mode(s) the "

@@ -20,6 +20,7 @@ sampled FMUs do.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -50,6 +51,9 @@ class _Slave:
         from fmpy.fmi3 import FMU3Slave
 
         self.role = role
+        if not isinstance(path, (str, os.PathLike)):
+            raise TypeError(f"{role}_fmu must be a str or os.PathLike (an .fmu file); got "
+                            f"{type(path).__name__}")
         self.path = Path(path)
         self.unzip_dir = None
         self.fmu = None
@@ -375,11 +379,14 @@ def _check_run(method: object, step: object, stop_time: object, start_time: obje
             raise TypeError(f"{label} must be a mapping {{name: value}}; got "
                             f"{type(value).__name__} {shorten(value)}")
     duration = float(stop_time) - float(start_time)
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"stop_time must be after start_time, by a finite time [s]; got "
+                         f"stop_time {stop_time!r}, start_time {start_time!r}")
     check_cosimulation_steps(duration / step, step, duration)
     n_steps = int(round(duration / step))
     if n_steps < 1 or abs(n_steps * step - duration) > 1e-9 * max(duration, step):
         raise ValueError(f"stop_time - start_time must be a positive whole number of steps "
-                         f"({step!r} s) [s]; got {duration!r} s")
+                         f"(step = {step!r} s) [s]; got {duration!r} s")
     return n_steps
 
 

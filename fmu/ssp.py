@@ -209,6 +209,10 @@ def write_ssp(path: str | os.PathLike, plant_fmu: str | os.PathLike,
     if stop_time is not None:
         from .checks import positive_finite
         stop_time = positive_finite("stop_time", stop_time)
+    for label, value in (("plant_fmu", plant_fmu), ("controller_fmu", controller_fmu)):
+        if not isinstance(value, (str, os.PathLike)):
+            raise TypeError(f"{label} must be a str or os.PathLike (an .fmu file); got "
+                            f"{type(value).__name__} {shorten(value)}")
     components = []
     for role, fmu_path in (("plant", plant_fmu), ("controller", controller_fmu)):
         _, inputs, outputs = _interface(Path(fmu_path), role)

@@ -724,7 +724,14 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
         results.json.
     """
     from .exports import finish_exports, start_exports, write_ssps
+    from .runner import RunResult, check_options
 
+    if not isinstance(result, RunResult):
+        raise TypeError(f"result must be a RunResult (spacecraft.run); got {type(result).__name__}")
+    if not isinstance(folder, (str, os.PathLike)) or not os.path.isdir(folder):
+        raise ValueError(f"folder must be an existing folder (str or os.PathLike; see "
+                         f"spacecraft.output_folder); got {folder!r:.200}")
+    check_options(fmus=fmus, plots=plots, pages=pages, progress=progress)
     if result.data.get("three_axis"):
         from .three_axis_run import write_three_axis_report
 

@@ -44,7 +44,7 @@ from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, g
 
 __all__ = ["RunStats", "RunResult", "run", "ProgressCallback", "equivalence_table", "FIT_LABELS",
            "raised_by_flexsat", "LQR_FREQUENCY_RANGE", "diverged_at", "warning_lines",
-           "input_warning_lines"]
+           "input_warning_lines", "check_options"]
 
 # Most distinct warnings kept in a run's results.
 _MAX_WARNINGS = 20
@@ -407,6 +407,9 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     >>> result = spacecraft.run("two_wings.toml")          # doctest: +SKIP
     >>> [w["message"] for w in result.data["design_warnings"]]   # doctest: +SKIP
     """
+    check_options(progress=progress, time_responses=time_responses)
+    if stats is not None and not isinstance(stats, RunStats):
+        raise TypeError(f"stats must be a RunStats or None; got {type(stats).__name__}")
     scene = load_scene(scene)
     stats = RunStats() if stats is None else stats
     if scene.three_axis:
@@ -444,6 +447,20 @@ def input_warning_lines(scene) -> list[str]:
     """The scene's values that look like unit slips (:attr:`Scene.input_warnings`), as warning
     lines (``UnitWarning: <file>: <key>: ...``)."""
     return [f"UnitWarning: {line}" for line in scene.input_warnings]
+
+
+def check_options(**options) -> None:
+    """TypeError naming an option of :func:`run` or :func:`spacecraft.write_report` that is
+    not what it must be: ``progress`` None or a function of one message, the others a bool
+    (``fmus`` and ``plots`` also None: the scene's choice)."""
+    for name, value in options.items():
+        if name == "progress":
+            if value is not None and not callable(value):
+                raise TypeError(f"progress must be None or a function of one message; got "
+                                f"{type(value).__name__}")
+        elif not isinstance(value, bool) and not (value is None and name in ("fmus", "plots")):
+            allowed = "True, False or None" if name in ("fmus", "plots") else "True or False"
+            raise TypeError(f"{name} must be {allowed}; got {type(value).__name__} {value!r:.60}")
 
 
 def warning_lines(caught) -> list[str]:

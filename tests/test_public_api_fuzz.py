@@ -12,11 +12,11 @@ zero, huge, subnormal, complex, a bool, a string, None, empty and NaN-holding se
 arbitrary object), every other parameter its valid value (its default, or
 :data:`VALID`). A call passes if it returns without a NaN in a numeric result (a legal value
 accepted: None for an optional parameter, -1 for a signed one), or raises ValueError,
-TypeError, one of flexsat's errors or FileNotFoundError whose message names the parameter, or a
-FloatingPointError (a response that leaves the float64 range, which flexsat raises on purpose
-and says so) (as a word, or as the
-last part of a scene key); it fails on any other exception, a message that does not name the
-parameter, a NaN in the result, or a call longer than :data:`TIMEOUT`. The table is fixed
+TypeError, one of flexsat's errors or FileNotFoundError whose message names the parameter (as
+a word, or as the last part of a scene key), or a FloatingPointError or one of flexsat's
+ArithmeticErrors (a response that leaves the float64 range, a Basilisk run that diverges:
+raised on purpose, saying so); it fails on any other exception, a message that does not name
+the parameter, a NaN in the result, or a call longer than :data:`TIMEOUT`. The table is fixed
 (derandomised): the same calls on every machine.
 
 ``python tests/test_public_api_fuzz.py`` prints the calls that fail, and their count.
@@ -126,6 +126,11 @@ def _fmus(tmp: Path) -> dict:
             "ssp": fmu.write_ssp(tmp / "loop.ssp", plant, controller)}
 
 
+def _folder(path: Path) -> Path:
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
 def _modal_file(tmp: Path, appendage) -> Path:
     from appendages import write_modal_data
 
@@ -167,7 +172,8 @@ def _valid_table(tmp: Path) -> dict:
         "design_plant": o["plant"], "truth_plant": o["plant"], "response": o["response"],
         "controllers.assert_closed_loops_close.actual": o["loop"],
         "controllers.assert_closed_loops_close.expected": o["loop"],
-        "controllers.assert_closed_loops_close.angle": 0.1,
+        "controllers.assert_closed_loops_close.angle": 0.1, "controllers.compare.slew_time": 10.0,
+        "spacecraft.basilisk.simulate.sample_time": 0.1,
         "controllers.assert_closed_loops_close.duration": 10.0,
         "actual": {"overshoot": 1.0}, "expected": {"overshoot": 1.0},
         "angle": 0.1, "duration": 10.0, "t": np.linspace(0.0, 20.0, 21), "T": np.linspace(
@@ -200,7 +206,7 @@ def _valid_table(tmp: Path) -> dict:
         "plant_fmu": Lazy(lambda: fmus.build()["plant"]),
         "controller_fmu": Lazy(lambda: fmus.build()["controller"]),
         "ssp": Lazy(lambda: fmus.build()["ssp"]), "stop_time": 1.0, "step": 0.01,
-        "result": Lazy(lambda: _small_run()), "folder": tmp / "fuzz_report",
+        "result": Lazy(lambda: _small_run()), "folder": Lazy(lambda: _folder(tmp / "report")),
         "spacecraft.scene_path.name": "default",
         # spacecraft
         "mass": 100.0, "spacecraft.Hub.inertia": J, "hub": Hub(100.0, J),
@@ -311,6 +317,7 @@ def _names(message: str, name: str) -> bool:
 def fuzz(qualname: str, obj, table: dict) -> tuple[int, list[str]]:
     """(calls, failures) of one callable over every parameter and bad value."""
     from appendages.interface import FlexsatError
+    from fmu import FMUError
 
     parameters = _parameters(obj)
     base = {k: v.build() if isinstance(v, Lazy) else v
@@ -327,9 +334,12 @@ def fuzz(qualname: str, obj, table: dict) -> tuple[int, list[str]]:
                         _deadline(TIMEOUT):
                     warnings.simplefilter("ignore")
                     result = _call(obj, parameters, kwargs)
-            except FloatingPointError:
-                pass  # a response that leaves the float64 range: raised on purpose, says so
-            except (ValueError, TypeError, FlexsatError, FileNotFoundError) as exc:
+            except (FloatingPointError, ArithmeticError) as exc:
+                # a response that leaves the float64 range (FloatingPointError), a run that
+                # diverges (BasiliskIntegrationError): raised on purpose, saying so
+                if not isinstance(exc, (FloatingPointError, FlexsatError)):
+                    failures.append(f"{what}: {type(exc).__name__}: {str(exc)[:160]}")
+            except (ValueError, TypeError, FlexsatError, FMUError, FileNotFoundError) as exc:
                 if not _names(str(exc), p.name):
                     failures.append(f"{what}: {type(exc).__name__} not naming it: "
                                     f"{str(exc)[:160]}")
@@ -406,6 +416,18 @@ def test_every_public_callable_has_valid_values_for_its_required_parameters(tmp_
 def test_public_functions_refuse_bad_values_by_name(tmp_path):
     calls, failures = _run(_selected(expensive=False), tmp_path)
     assert calls > 3000
+    assert not failures, f"{len(failures)} of {calls} calls:\n" + "\n".join(failures)
+
+
+@pytest.mark.slow
+def test_expensive_public_functions_refuse_bad_values_by_name(tmp_path):
+    """FMU builds and co-simulations, scene runs and reports, Basilisk runs, fits: each valid
+    call succeeds, and every bad value is refused by name (about a minute)."""
+    table = _valid_table(tmp_path)
+    for qualname in sorted(_selected(expensive=True)):
+        _valid_call(qualname, public_callables()[qualname], table)
+    calls, failures = _run(_selected(expensive=True), tmp_path)
+    assert calls > 2000
     assert not failures, f"{len(failures)} of {calls} calls:\n" + "\n".join(failures)
 
 

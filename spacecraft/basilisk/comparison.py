@@ -30,8 +30,8 @@ from ..coupling import Spacecraft
 from .actuators import ReactionWheel
 from .flight_software import flight_software_law
 from .layout import chain_spacecraft
-from .simulation import (MAX_SECONDS, BasiliskResult, disturbance_values, nanoseconds,
-                         simulate_slew)
+from .simulation import (MAX_SECONDS, BasiliskResult, default_duration, disturbance_values,
+                         nanoseconds, sample_count, simulate_slew)
 
 __all__ = ["SlewComparison", "linear_slew", "compare", "slew_comparison"]
 
@@ -60,13 +60,22 @@ def linear_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: f
 
     law = flight_software_law(controller, sample_time)
     T = law.sample_time
+    if isinstance(angle, bool) or not isinstance(angle, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(angle):
+        raise TypeError(f"angle must be a finite real number [rad]; got {angle!r:.60}")
     slew_time = check_positive("slew_time", slew_time, "s")
-    duration = check_positive("duration", 3.0 * slew_time if duration is None else duration, "s")
+    duration = default_duration(slew_time, duration)
+    if disturbances is not None and not isinstance(disturbances, Mapping):
+        raise TypeError(f"disturbances must be a mapping name -> function of time or array; "
+                        f"got {type(disturbances).__name__}")
     if plant is None:
         plant = chain_spacecraft(spacecraft, chains).plant(
             tip_deflection=True, disturbances=bool(disturbances))
     loop = controllers.close_loop(plant, law.controller)
-    n = int(math.floor(duration / T + 1e-9)) + 1
+    n = sample_count(duration, T)
+    if n < 2:
+        raise ValueError(f"duration {duration!r} s must be at least one sample time {T!r} s "
+                         "(3 x slew_time by default)")
     times = np.arange(n) * (nanoseconds(T, "sample_time") * _NANO)
     U = np.zeros((loop.ninputs, n))
     labels = list(loop.input_labels)
@@ -175,6 +184,9 @@ def slew_comparison(spacecraft: Spacecraft, controller: control.StateSpace, angl
     -------
     SlewComparison
     """
+    if truth_plant is not None and not isinstance(truth_plant, control.StateSpace):
+        raise TypeError(f"truth_plant must be a control.StateSpace or None; got "
+                        f"{type(truth_plant).__name__}")
     basilisk = simulate_slew(spacecraft, controller, angle, slew_time, duration=duration,
                              sample_time=sample_time, dt=dt, chains=chains,
                              disturbances=disturbances, reaction_wheel=reaction_wheel,

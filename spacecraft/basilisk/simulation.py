@@ -60,7 +60,8 @@ from .install import (BasiliskIntegrationError, BasiliskModelError, BasiliskRunT
 from .layout import SpacecraftLayout, layout
 
 __all__ = ["BasiliskResult", "simulate", "simulate_slew", "dynamics_step", "estimated_seconds", "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR",
-           "DISTURBANCES", "MAX_SECONDS", "nanoseconds", "disturbance_values"]
+           "DISTURBANCES", "MAX_SECONDS", "MAX_SAMPLES", "nanoseconds", "disturbance_values",
+           "sample_count", "default_duration"]
 
 #: RK4 is stable on the imaginary axis for |w dt| <= 2 sqrt(2) [1]_.
 RK4_STABILITY_LIMIT = 2.0 * math.sqrt(2.0)
@@ -78,6 +79,8 @@ STEP_SECONDS, BODY_SECONDS, SAMPLE_SECONDS = 1.0e-4, 1.8e-7, 1.0e-4
 MAX_SECONDS = Limits().basilisk_seconds
 
 _NANO = 1e-9
+#: Most flight-software samples of one run (a run's outputs are kept per sample).
+MAX_SAMPLES = 1e8
 #: Most RK4 steps per flight-software sample a run may need (the search for a step dividing
 #: the sample time stays short; a run that stiff would take days anyway).
 MAX_STEPS_PER_SAMPLE = 1e6
@@ -242,7 +245,31 @@ def _finite(value, name: str, unit: str) -> float:
     return value
 
 
+def default_duration(slew_time: float, duration) -> float:
+    """``duration`` [s], or 3 x slew_time when None (named in the error if that overflows)."""
+    if duration is not None:
+        return check_positive("duration", duration, "s")
+    if not math.isfinite(3.0 * slew_time):
+        raise ValueError(f"slew_time must be at most {1e300:g} [s] (the default duration is "
+                         f"3 x slew_time); got {slew_time!r}")
+    return 3.0 * slew_time
+
+
+def sample_count(duration: float, sample_time: float) -> int:
+    """Flight-software samples of a run, floor(duration / T) + 1: refused (ValueError naming
+    both) above :data:`MAX_SAMPLES`."""
+    ratio = duration / sample_time
+    if not ratio <= MAX_SAMPLES:
+        raise ValueError(f"duration / sample_time = {duration!r} s / {sample_time!r} s is more "
+                         f"than {MAX_SAMPLES:g} flight-software samples; lengthen sample_time "
+                         "or shorten duration")
+    return int(math.floor(ratio + 1e-9)) + 1
+
+
 def _initial_angles(lay: SpacecraftLayout, initial_angles: Mapping | None) -> dict:
+    if initial_angles is not None and not isinstance(initial_angles, Mapping):
+        raise TypeError(f"initial_angles must be a mapping mount name -> hinge angles [rad]; "
+                        f"got {type(initial_angles).__name__}")
     angles = {}
     initial_angles = {} if initial_angles is None else dict(initial_angles)
     names = [a.name for a in lay.appendages]
@@ -259,6 +286,9 @@ def _initial_angles(lay: SpacecraftLayout, initial_angles: Mapping | None) -> di
 
 
 def disturbance_values(disturbances: Mapping | None, times: np.ndarray) -> dict:
+    if disturbances is not None and not isinstance(disturbances, Mapping):
+        raise TypeError(f"disturbances must be a mapping name -> function of time or array; got "
+                        f"{type(disturbances).__name__}")
     values = {}
     for name, profile in ({} if disturbances is None else dict(disturbances)).items():
         if name not in DISTURBANCES:
@@ -342,9 +372,15 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
     else:
         T = check_positive("sample_time", sample_time, "s")
     duration = check_positive("duration", duration, "s")
-    n_samples = int(math.floor(duration / T + 1e-9)) + 1
+    n_samples = sample_count(duration, T)
+    if reference is not None and not callable(reference):
+        raise TypeError(f"reference must be None or a function of the times [s]; got "
+                        f"{type(reference).__name__}")
+    if not isinstance(conservation, (bool, np.bool_)):
+        raise TypeError(f"conservation must be True or False; got {type(conservation).__name__}")
     if n_samples < 2:
-        raise ValueError(f"duration {duration!r} s must be at least one sample time {T!r} s")
+        raise ValueError(f"duration {duration!r} s must be at least one sample_time {T!r} s "
+                         "(a slew's duration is 3 x slew_time by default)")
     frequencies = lay.spacecraft.modes()[0] if lay.n_bodies else np.zeros(1)
     w_max = float(np.max(frequencies))
     step = dynamics_step(w_max, T, dt)
@@ -604,7 +640,7 @@ def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle:
             or not math.isfinite(angle) or angle == 0:
         raise ValueError(f"angle must be non-zero and finite [rad]; got {angle!r}")
     slew_time = check_positive("slew_time", slew_time, "s")
-    duration = 3.0 * slew_time if duration is None else duration
+    duration = default_duration(slew_time, duration)
     return simulate(spacecraft, controller, duration=duration, sample_time=sample_time, dt=dt,
                     chains=chains, disturbances=disturbances, reaction_wheel=reaction_wheel,
                     max_seconds=max_seconds, reference=lambda t: controllers.slew_profile(t, float(angle), slew_time))

@@ -151,7 +151,14 @@ def load_sweep(scene=None, *, parameters: Mapping | None = None, max_samples: in
         raise SweepError(f"{source}: no [sweep] table and no parameters given: nothing to "
                          "sweep (add a [sweep] table: see the embedded sweep scene 'default')")
     if parameters is not None:
+        if not isinstance(parameters, Mapping):
+            raise SweepError(f"parameters must be a mapping key path -> distribution table; got "
+                             f"{type(parameters).__name__}")
         table["parameters"] = dict(parameters)
+    if max_samples is not None and (isinstance(max_samples, bool) or not isinstance(
+            max_samples, int) or max_samples < 1):
+        raise SweepError(f"max_samples must be a positive whole number or None; got "
+                         f"{max_samples!r:.100}")
     table.update({k: v for k, v in settings.items() if v is not None})
     return raw, read_sweep(table, raw, source, max_samples=max_samples), source
 
