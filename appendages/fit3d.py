@@ -207,11 +207,6 @@ def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     from .equivalence import is_uniform_beam, fit_chain  # here: equivalence imports chain
 
     if not is_uniform_beam(beam):
-        for attribute in ("planar_view", "inertia_tensor", "torsion_rod", "axial_rod"):
-            if not hasattr(beam, attribute):
-                raise TypeError(f"beam must be a three-axis appendage (planar_view, "
-                                f"inertia_tensor, torsion_rod, axial_rod); got "
-                                f"{type(beam).__name__} without '{attribute}'")
         return _fit_any_3d(beam, n_bodies, match, fit_options)
     if not getattr(beam, "three_axis", False):
         raise ValueError(
@@ -267,8 +262,8 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
 
     for attribute in ("planar_view", "inertia_tensor", "dynamic_stiffness6"):
         if not hasattr(appendage, attribute):
-            raise TypeError(f"fit_chain_3d needs a three-axis appendage (planar_view, "
-                            f"inertia_tensor, dynamic_stiffness6); got "
+            raise TypeError(f"fit_chain_3d needs a three-axis appendage as its beam "
+                            f"(planar_view, inertia_tensor, dynamic_stiffness6); got "
                             f"{type(appendage).__name__} without '{attribute}'")
     if not getattr(appendage, "three_axis", False):
         raise ValueError(f"fit_chain_3d needs three-axis data; {describe(appendage)} is planar")

@@ -484,7 +484,7 @@ def test_bad_input(rod):
         fit_chain(rod, 3.0)
     with pytest.raises(ValueError, match=r"match='frequencies' .*needs a uniform Beam"):
         fit_chain(chain, 3, match="frequencies")  # any appendage: flexsat's fit only
-    with pytest.raises(TypeError, match="appendage must be an appendage model"):
+    with pytest.raises(TypeError, match="beam must be an appendage model"):
         fit_chain("rod", 3)
     with pytest.raises(ValueError, match=r"frequencies must be 2 increasing positive values "
                                          r"\[rad/s\]"):

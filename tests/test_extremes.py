@@ -52,9 +52,13 @@ def range_edges(quantity):
 
 
 def run_clean(action):
-    """Run ``action`` with every warning an error; return its result."""
+    """Run ``action`` with every warning an error (but the deliberate unit-slip warning of an
+    angle beyond a turn, appendages.unit_slips.UnitWarning); return its result."""
+    from appendages.unit_slips import UnitWarning
+
     with warnings.catch_warnings():
         warnings.simplefilter("error")
+        warnings.simplefilter("ignore", UnitWarning)
         return action()
 
 
