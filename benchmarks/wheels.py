@@ -15,7 +15,8 @@ PD and LQR tuned on both fitted chains, each closed on its design chain and on t
   on a shaped profile (bang-coast-bang, 10 deg in 60 s, ZVD shaper on the design chain's first
   flexible mode) with its rate reference and feedforward torque, ``Simulator`` + outputs;
 - ``wheels``: the flown slew through one reaction wheel, ``WheelLoop(plant, controller,
-  wheels).simulate(T, U)`` (set-up included), with the issue's torque limit 0.03 N m and a
+  wheels).simulate(T, U)`` (set-up included; "simulate only": a built WheelLoop's first
+  simulation, its caches emptied), with the issue's torque limit 0.03 N m and a
   momentum limit 1.2 N m s (the slew needs 0.054 N m and 1.6 N m s: both limits act), spin
   inertia 0.01 kg m^2; and ``wheels, unsaturated`` with limits it never reaches.
 
@@ -110,8 +111,16 @@ def main() -> None:
         def wheels_free():
             return controllers.WheelLoop(plant, K, free).simulate(T, U)
 
+        built = controllers.WheelLoop(plant, K, saturating)
+
+        def wheels_simulate():
+            built._simulators.clear()
+            built._mode_cache.clear()
+            return built.simulate(T, U)
+
         load_before = os.getloadavg()[0]
         timing = cpu_times({"today": today, "flown": flown, "wheels": wheels,
+                            "wheels, simulate only": wheels_simulate,
                             "wheels, unsaturated": wheels_free}, repeats)
         load_after = os.getloadavg()[0]
         run = wheels()
@@ -142,6 +151,7 @@ def main() -> None:
                      f"{1e3 * timing['today']['median']:.2f}",
                      f"{1e3 * timing['flown']['median']:.2f}",
                      f"{1e3 * timing['wheels']['median']:.2f}",
+                     f"{1e3 * timing['wheels, simulate only']['median']:.2f}",
                      f"{1e3 * timing['wheels, unsaturated']['median']:.2f}",
                      f"{entry['ratio_wheels_to_today_median']:.2f} "
                      f"({entry['ratio_wheels_to_today_min']:.2f})",
@@ -149,12 +159,21 @@ def main() -> None:
                      f"{load_before:.1f}-{load_after:.1f}"])
         print(rows[-1], flush=True)
     info = machine_info()
+    totals = {name: sum(e["times_cpu_s"][name]["median"] for e in out)
+              for name in out[0]["times_cpu_s"]}
+    ratio = totals["wheels"] / totals["today"]
+    rows.append(["all 8 loops", "", "", "", f"{1e3 * totals['today']:.2f}",
+                 f"{1e3 * totals['flown']:.2f}", f"{1e3 * totals['wheels']:.2f}",
+                 f"{1e3 * totals['wheels, simulate only']:.2f}",
+                 f"{1e3 * totals['wheels, unsaturated']:.2f}", f"{ratio:.2f}", "", "", ""])
     write_json("wheels.json", {"machine": info, "repeats": repeats, "loops": out,
+                               "totals_cpu_s": totals, "ratio_wheels_to_today_total": ratio,
                                "wheel": {"torque_limit": TORQUE_LIMIT,
                                          "momentum_limit": MOMENTUM_LIMIT,
                                          "spin_inertia": SPIN_INERTIA}})
     header = ["design", "controller", "plant", "states", "today [ms]", "flown [ms]",
-              "wheels [ms]", "wheels, unsaturated [ms]", "wheels / today: median (min)",
+              "wheels [ms]", "of which simulate [ms]", "wheels, unsaturated [ms]",
+              "wheels / today: median (min)",
               "saturated [s]", "theta error at 0.1 s / peak [rad]", "load (1 min)"]
     text = (f"# The flown slew through reaction wheels vs today's slew\n\n"
             f"{info['date_utc']} UTC, {info['cpu']}, {info['nproc']} CPUs, BLAS threads "
