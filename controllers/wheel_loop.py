@@ -69,17 +69,17 @@ DEVIATION_SUFFIX = "_wheel_deviation"
 # A segment of one mode is first tried over _FIRST_SEGMENT samples, after a switch over twice the
 # last mode's length, doubled while the mode lasts, up to as many samples as _SEGMENT_WORK
 # multiply-adds of its doubling scan allow (n^2 per sample and level), within
-# [_SHORTEST_SEGMENT, _LONGEST_SEGMENT]: the scan costs little beside the per-segment overhead
-# (~0.1 ms) for small loops. After a mode that lasted one sample, this many
-# samples are stepped singly (a Coulomb friction sign chattering about zero speed, or a wheel at
-# its momentum limit, would otherwise cost a segment per sample).
+# [_SHORTEST_SEGMENT, _LONGEST_SEGMENT]: for small loops the scan's flops cost little beside a
+# segment's fixed overhead. After a mode that lasted one sample, _CHATTER_STEPS samples are
+# stepped singly (a Coulomb friction sign chattering about zero speed, or a wheel at its
+# momentum limit, would otherwise cost a segment per sample).
 _SEGMENT_WORK = 4_000_000
 _FIRST_SEGMENT = 512
 _SHORTEST_SEGMENT, _LONGEST_SEGMENT = 16, 4096
 _CHATTER_STEPS = 8
-# Loops of at most this many states are simulated by segments from the first sample (the free
-# mode's segments cost ~0.8 ms per 2000 samples up to ~30 states, less than the simulator's
-# set-up); larger ones run the linear loop through the Simulator, O(n) per sample, first.
+# Loops of at most this many states are simulated by segments from the first sample (measured
+# cheaper than the simulator's set-up and run up to ~40 states, benchmarks/wheels.py); larger
+# ones run the linear loop through the Simulator, O(n) per sample, first.
 _SEGMENTS_FROM_START = 32
 
 
@@ -540,13 +540,16 @@ class _Modes:
         n_samples) of :meth:`WheelSet.applied_torques`."""
         nw = c.shape[0]
         over = np.abs(c) > self.tau
-        m = np.where(over, np.copysign(self.tau, c), c)
-        gated = (np.abs(h) >= self.hmax) & (m * h <= 0.0)
+        # the motor torque m has the sign of c (c, or +-tau clipped), so m h <= 0 iff c h <= 0
+        gated = (np.abs(h) >= self.hmax) & (c * h <= 0.0)
         key = np.empty((3 * nw + 1, c.shape[1]))
         np.logical_or(gated, over, out=key[:nw])
-        np.multiply(np.sign(c), over & ~gated, out=key[nw:2 * nw])
+        np.multiply(np.sign(c), over > gated, out=key[nw:2 * nw])
         np.multiply(np.sign(h), self.has_coulomb, out=key[2 * nw:3 * nw])
-        key[-1] = self.scaled & over.any(axis=0)
+        if self.scaled:
+            key[-1] = over.any(axis=0)
+        else:
+            key[-1] = 0.0
         key += 0.0                     # -0.0 -> 0.0: one cache entry per mode
         return key, over, gated
 
@@ -573,18 +576,20 @@ class _Modes:
         mode = self._mode(key)
         q_g = self._constants(key)[1]
         L = U.shape[1] - 1
-        Y = np.empty((x.size, L + 1))
-        Y[:, 0] = x
-        np.matmul(mode.G0u, U[:, :-1], out=Y[:, 1:])
-        if mode.G1u is not None:
-            Y[:, 1:] += mode.G1u @ U[:, 1:]
+        # samples as rows: the shifted blocks Y[d:], Y[:-d] are contiguous (40 % faster for
+        # short segments than columns); returned transposed, a view
+        Y = np.empty((L + 1, x.size))
+        Y[0] = x
+        np.matmul(U[:, :-1].T, mode.G0u_T, out=Y[1:])
+        if mode.G1u_T is not None:
+            Y[1:] += U[:, 1:].T @ mode.G1u_T
         if q_g is not None:
-            Y[:, 1:] += q_g
+            Y[1:] += q_g
         d, level = 1, 0
         while d <= L:
-            Y[:, d:] += mode.powers[level] @ Y[:, :-d]
+            Y[d:] += Y[:-d] @ mode.powers_T[level]
             d, level = 2 * d, level + 1
-        return Y
+        return Y.T
 
     def outputs(self, key: np.ndarray, X: np.ndarray, U: np.ndarray) -> np.ndarray:
         """[c; h; e; y] at states X (n, N) and inputs U (n_u, N) in a mode: the wheels'
@@ -616,7 +621,7 @@ class _Modes:
                 self._constant_cache[cache] = (None, None)
             else:
                 const = np.concatenate([np.zeros(2 * nw), g, self.De @ g])[:, None]
-                self._constant_cache[cache] = (const, (self._mode(key).Gg @ g)[:, None])
+                self._constant_cache[cache] = (const, self._mode(key).Gg @ g)
         return self._constant_cache[cache]
 
     def _mode(self, key: np.ndarray) -> _Mode:
@@ -643,9 +648,9 @@ class _Modes:
             for _ in range(int(math.log2(self.longest))):
                 powers.append(powers[-1] @ powers[-1])
             self._cache[cache] = _Mode(
-                G0u=np.ascontiguousarray(G0[:, :nu]),
-                G1u=None if G1 is None else np.ascontiguousarray(G1[:, :nu]), Gg=Gg,
-                powers=powers,
+                G0u_T=np.ascontiguousarray(G0[:, :nu].T),
+                G1u_T=None if G1 is None else np.ascontiguousarray(G1[:, :nu].T), Gg=Gg,
+                powers_T=[np.ascontiguousarray(M.T) for M in powers],
                 Mx=np.vstack([self.Cc, self.Ch, K, self.C + self.De @ K]),
                 Mu=np.vstack([self.Dc, self.Dh, Ku, self.Du + self.De @ Ku]))
         return self._cache[cache]
@@ -653,14 +658,14 @@ class _Modes:
 
 @dataclasses.dataclass(frozen=True)
 class _Mode:
-    """One mode's matrices (:class:`_Modes`): discrete input matrices of u (G1u None for a
-    digital loop) and of the constant g, the powers Phi^(2^l), and the output maps
-    [c; h; e; y] = Mx x + Mu u + [0; 0; g; D_e g]."""
+    """One mode's matrices (:class:`_Modes`): discrete input matrices of u, transposed (G1u_T
+    None for a digital loop), and of the constant g, the powers Phi^(2^l), transposed, and the
+    output maps [c; h; e; y] = Mx x + Mu u + [0; 0; g; D_e g]."""
 
-    G0u: np.ndarray
-    G1u: np.ndarray | None
+    G0u_T: np.ndarray
+    G1u_T: np.ndarray | None
     Gg: np.ndarray
-    powers: list
+    powers_T: list
     Mx: np.ndarray
     Mu: np.ndarray
 
