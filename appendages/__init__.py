@@ -6,8 +6,8 @@ from .chain import MOLENAAR_K, HingedChain
 from .equivalence import (EquivalenceResult, FitWarning, ModelQuantities, criterion, fit_chain,
                           spectral_errors)
 from .fit3d import fit_chain_3d
-from .interface import (Appendage, ConvergenceError, FiniteAppendage, FlexsatError, RootModel,
-                        three_axis_root_model)
+from .errors import ConvergenceError, FlexsatError
+from .interface import Appendage, FiniteAppendage, RootModel, three_axis_root_model
 from .limits import LimitError
 from .modal import ModalBeam
 from .modal_data import ModalAppendage

@@ -91,7 +91,8 @@ from typing import NamedTuple
 import numpy as np
 
 from . import members
-from .interface import ConvergenceError, check_positive, describe
+from .checks import check_positive
+from .errors import ConvergenceError, describe
 
 __all__ = ["BeamAssembly", "Segment", "CONTOUR_POINTS", "check_segments"]
 

@@ -78,8 +78,10 @@ from . import limits
 from .assembly import Segment
 from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
                       hurwitz_tail_coefficients)
-from .interface import (as_frequency_array, check_derived, check_range, describe,
-                        inverse_2x2)
+from .checks import as_frequency_array, check_derived, check_range
+from .errors import describe
+from .interface import inverse_2x2, place_bending_planes
+from .modal import ModalBeam
 from .rod import Rod
 from .segmented import SegmentedBeam
 from .tip import TipBody, check_tip
@@ -365,18 +367,6 @@ def _check_section(bending_stiffness: float, linear_density: float, ej_formula: 
     """Check the beam properties a section constructor derived, blaming its own parameters."""
     check_derived(bending_stiffness, "bending_stiffness", ej_formula, ej_given)
     check_derived(linear_density, "linear_density", rho_formula, rho_given)
-
-
-def _place_planes(out: np.ndarray, xy: np.ndarray, xz: np.ndarray) -> None:
-    """Put the 2x2 matrices of both bending planes into 6x6 ones (``W6``/``D6`` layout).
-
-    x-y plane in (v, theta_z) = (1, 5); x-z plane in (w, theta_y) = (2, 4) with the
-    off-diagonal sign flipped (theta_y = -dw/dx).
-    """
-    out[..., 1, 1], out[..., 5, 5] = xy[..., 0, 0], xy[..., 1, 1]
-    out[..., 1, 5] = out[..., 5, 1] = xy[..., 0, 1]
-    out[..., 2, 2], out[..., 4, 4] = xz[..., 0, 0], xz[..., 1, 1]
-    out[..., 2, 4] = out[..., 4, 2] = -xz[..., 0, 1]
 
 
 def _check_poisson_ratio(poisson_ratio) -> float:
@@ -1302,7 +1292,7 @@ class Beam:
         W_xy = self.W(s)
         W_xz = W_xy if self._planes_equal() else self.planar_view("xz").W(s)
         W6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
-        _place_planes(W6, W_xy, W_xz)
+        place_bending_planes(W6, W_xy, W_xz)
         W6[..., 0, 0] = self._rod_entry(self.axial_rod(), self.mass, s, "W")
         W6[..., 3, 3] = self._rod_entry(self.torsion_rod(),
                                         self.torsional_inertia * self.length, s, "W")
@@ -1327,7 +1317,7 @@ class Beam:
         D_xy = self._dynamic_stiffness(s)
         D_xz = D_xy if self._planes_equal() else self.planar_view("xz")._dynamic_stiffness(s)
         D6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
-        _place_planes(D6, D_xy, D_xz)
+        place_bending_planes(D6, D_xy, D_xz)
         D6[..., 0, 0] = self._rod_entry(self.axial_rod(), self.mass, s, "D")
         D6[..., 3, 3] = self._rod_entry(self.torsion_rod(),
                                         self.torsional_inertia * self.length, s, "D")
@@ -1628,6 +1618,4 @@ class Beam:
         -------
         ModalBeam
         """
-        from .modal import ModalBeam
-
         return ModalBeam(self, n_modes, method=method, modes_per_motion=modes_per_motion)

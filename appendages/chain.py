@@ -56,10 +56,13 @@ import numpy as np
 import scipy.linalg
 
 from . import limits
-from .interface import (RANGES, FiniteAppendage, RootModel, as_frequency_array, check_range,
-                        describe, equilibrate, inverse_2x2, three_axis_root_model)
+from .checks import RANGES, as_frequency_array, check_range
+from .errors import describe
+from .interface import (FiniteAppendage, RootModel, equilibrate, inverse_2x2, place_bending_planes,
+                        three_axis_root_model)
 
-__all__ = ["HingedChain", "MOLENAAR_K"]
+__all__ = ["HingedChain", "MOLENAAR_K", "chain_matrices", "proportional_hinge_dampings",
+           "spring_chain_matrices"]
 
 #: Molenaar's superelement end-rod fraction k = (1 - 1/sqrt(3))/2 [1]_.
 MOLENAAR_K: float = 0.5 * (1.0 - 1.0 / np.sqrt(3.0))
@@ -367,7 +370,8 @@ class HingedChain(FiniteAppendage):
         masses, inertias, offsets = _with_tip(beam, lengths, masses, inertias, three_axis)
         with _derived_from(f"HingedChain.rfem(beam, n_bodies={n_bodies})", beam):
             return cls(lengths, masses, inertias, stiffnesses, com_offsets=offsets,
-                       hinge_dampings=_proportional_damping(beam, stiffnesses), **three_axis)
+                       hinge_dampings=proportional_hinge_dampings(beam, stiffnesses),
+                       **three_axis)
 
     @classmethod
     def superelements(cls, beam, n: int) -> "HingedChain":
@@ -404,7 +408,7 @@ class HingedChain(FiniteAppendage):
         masses, inertias, offsets = _with_tip(beam, lengths, masses, inertias, {})
         with _derived_from(f"HingedChain.superelements(beam, n={n})", beam):
             return cls(lengths, masses, inertias, stiffnesses, com_offsets=offsets,
-                       hinge_dampings=_proportional_damping(beam, stiffnesses))
+                       hinge_dampings=proportional_hinge_dampings(beam, stiffnesses))
 
     # -- rigid properties ---------------------------------------------------------------------
     @property
@@ -444,14 +448,14 @@ class HingedChain(FiniteAppendage):
     # -- matrices -----------------------------------------------------------------------------
     def _matrices(self):
         """Mass, damping, stiffness matrices and tip row in the coordinates of eq. (1)."""
-        return _assemble(self.lengths, self.masses, self.inertias, self.com_offsets,
-                         self.hinge_stiffnesses, self.hinge_dampings, self.root == "hinged")
+        return chain_matrices(self.lengths, self.masses, self.inertias, self.com_offsets,
+                              self.hinge_stiffnesses, self.hinge_dampings, self.root == "hinged")
 
     def _check_mass_matrix(self, inertias=None, name: str = "inertias") -> None:
         """Raise ValueError when the bodies' mass matrix is singular (e.g. massless last rod)."""
-        M = _assemble(self.lengths, self.masses,
-                      self.inertias if inertias is None else inertias, self.com_offsets,
-                      self.hinge_stiffnesses, self.hinge_dampings, self.root == "hinged")[0]
+        M = chain_matrices(self.lengths, self.masses,
+                           self.inertias if inertias is None else inertias, self.com_offsets,
+                           self.hinge_stiffnesses, self.hinge_dampings, self.root == "hinged")[0]
         keep = np.flatnonzero(np.diag(M) != 0.0)
         Mk = M[np.ix_(keep, keep)]
         d = np.sqrt(np.diag(Mk))
@@ -577,8 +581,6 @@ class HingedChain(FiniteAppendage):
         s : complex or array_like of complex, rad/s
             Not 0 (the rigid-body pole).
         """
-        from .beam import _place_planes
-
         self._require_three_axis("W6")
         s = as_frequency_array(s)
         if np.any(s == 0):
@@ -588,7 +590,7 @@ class HingedChain(FiniteAppendage):
         W_xz = _bending_recursion(s, self.lengths, self.masses, self.inertias_y,
                                   self.com_offsets, self.hinge_stiffnesses_y,
                                   self.hinge_dampings_y, hinged)
-        _place_planes(W6, self.W(s), W_xz)
+        place_bending_planes(W6, self.W(s), W_xz)
         W6[..., 0, 0] = _spring_recursion(s, self.masses, self.axial_stiffnesses,
                                           self.axial_dampings, hinged)
         W6[..., 3, 3] = _spring_recursion(s, self.torsional_inertias, self.torsion_stiffnesses,
@@ -607,7 +609,7 @@ class HingedChain(FiniteAppendage):
                 ("theta_x", self.torsional_inertias, self.torsion_stiffnesses,
                  self.torsion_dampings),
                 ("u", self.masses, self.axial_stiffnesses, self.axial_dampings)):
-            M, C, K, tip = _spring_chain(inertias, springs, dampings, hinged)
+            M, C, K, tip = spring_chain_matrices(inertias, springs, dampings, hinged)
             start = 1 if hinged else 2  # a rigid root's first body moves with the root
             names = ("q",) + tuple(f"{label}_{start + k}" for k in range(M.shape[0] - 1))
             parts.append(RootModel(M, C, K, tip, names, n_root=1))
@@ -751,8 +753,8 @@ def _three_axis_rfem(beam, lengths: np.ndarray, H: float) -> dict:
     out = {"inertias_y": inertias,
            "hinge_stiffnesses_y": np.full(n_hinges, beam.bending_stiffness_y / H),
            "torsional_inertias": beam.torsional_inertia * lengths}
-    out["hinge_dampings_y"] = _proportional_damping(beam.planar_view("xz"),
-                                                    out["hinge_stiffnesses_y"])
+    out["hinge_dampings_y"] = proportional_hinge_dampings(beam.planar_view("xz"),
+                                                          out["hinge_stiffnesses_y"])
     for name, rod in (("torsion", beam.torsion_rod()), ("axial", beam.axial_rod())):
         if rod is not None:
             springs = np.full(n_hinges, rod.stiffness / H)
@@ -772,23 +774,60 @@ def _first_damped_frequency(model) -> float:
     return float(model.natural_frequencies(1)[0])
 
 
-def _proportional_damping(beam, stiffnesses: np.ndarray) -> np.ndarray | None:
-    """Hinge dampings 2 zeta c / w_1, or None if zeta = 0: stiffness-proportional, the damping
-    ratio zeta at w_1, the beam's first cantilever frequency (or its first free-free one with
-    ``damping_convention="free-free"``): C = (2 zeta/w_1) K damps each mode of the chain, root
-    clamped or free, at zeta w_k/w_1."""
+def proportional_hinge_dampings(beam, stiffnesses: np.ndarray) -> np.ndarray | None:
+    """Hinge dampings that give a chain a beam's damping ratio, stiffness-proportionally.
+
+    ``C = (2 zeta/w_1) K``: each mode of the chain, root clamped or free, is damped at
+    ``zeta w_k/w_1``, so the mode at ``w_1`` has the beam's ratio ``zeta``; ``w_1`` is the
+    beam's first cantilever frequency (the mode whose ratio ``damping_ratio`` is) or, with
+    ``damping_convention="free-free"``, its first free-free one.
+
+    Parameters
+    ----------
+    beam : Beam or Rod
+        The model whose ``damping_ratio`` (0 if it has none) the chain takes.
+    stiffnesses : ndarray, N*m/rad (N/m for an axial spring)
+        The chain's hinge (or joint spring) stiffnesses.
+
+    Returns
+    -------
+    ndarray or None
+        The hinge dampings ``2 zeta c_h/w_1`` [N*m*s/rad, N*s/m for an axial spring], or None
+        when ``zeta = 0`` (an undamped chain).
+    """
     zeta = float(getattr(beam, "damping_ratio", 0.0) or 0.0)
     if zeta == 0.0:
         return None
     return 2.0 * zeta * stiffnesses / _first_damped_frequency(beam)
 
 
-def _assemble(lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarray,
-              com_offsets: np.ndarray, stiffnesses: np.ndarray, dampings: np.ndarray | None,
-              hinged: bool):
-    """(M, C, K, tip) of a chain in the coordinates of eq. (1) (see the module docstring).
+def chain_matrices(lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarray,
+                   com_offsets: np.ndarray, stiffnesses: np.ndarray, dampings: np.ndarray | None,
+                   hinged: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Mass, damping and stiffness matrices of a planar chain, eq. (2) of the module docstring.
 
-    No validation: the arrays are float64 of consistent sizes (n bodies, n - 1 or n hinges).
+    The matrices of :class:`HingedChain` from plain arrays, without its checks: for the fits,
+    which assemble many candidate chains. The arrays must be float64 and of consistent sizes
+    (not checked).
+
+    Parameters
+    ----------
+    lengths, masses, inertias, com_offsets : ndarray, shape (n,)
+        Per body: length [m], mass [kg], moment of inertia about its centre of mass
+        [kg*m**2] and centre-of-mass offset from its start [m].
+    stiffnesses : ndarray, shape (n - 1,) or (n,) with ``hinged``, N*m/rad
+        Hinge stiffnesses from the root outwards (a hinged root's first).
+    dampings : ndarray like ``stiffnesses`` [N*m*s/rad], or None
+        Hinge dampings; None: undamped.
+    hinged : bool
+        ``root="hinged"`` (a massless mount joined to body 1 by the first hinge).
+
+    Returns
+    -------
+    M, C, K : ndarray, shape (size, size)
+        In the coordinates ``q`` of the module docstring (size n + 1, n + 2 with ``hinged``).
+    tip : ndarray, shape (size,)
+        The row giving the elastic tip deflection ``w(L) - delta - L*phi`` [m].
     """
     n = lengths.size
     ell, m, a, J = lengths, masses, com_offsets, inertias
@@ -888,13 +927,34 @@ def _spring_recursion(s: np.ndarray, inertias, stiffnesses, dampings, hinged: bo
     return W.reshape(s.shape)
 
 
-def _spring_chain(inertias: np.ndarray, stiffnesses, dampings, hinged: bool):
-    """(M, C, K, tip) of a spring chain in root coordinates (torsion or axial motion).
+def spring_chain_matrices(inertias: np.ndarray, stiffnesses: np.ndarray | None,
+                          dampings: np.ndarray | None, hinged: bool
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Mass, damping and stiffness matrices of a spring chain (a chain's torsion or axial motion).
 
     Coordinates: rigid root ``[q_1 (the root, body 1), q_2, ..., q_n]``; hinged root
-    ``[q_mount (massless), q_1, ..., q_n]``; joint springs between neighbours. Rigid joints
-    (``stiffnesses`` None): one coordinate carrying every inertia. ``tip`` is
-    ``q_n - q_root``.
+    ``[q_mount (massless), q_1, ..., q_n]``; joint springs between neighbours. No checks (the
+    arrays are float64 of consistent sizes), as :func:`chain_matrices`.
+
+    Parameters
+    ----------
+    inertias : ndarray, shape (n,)
+        Per body: moment of inertia about the chain's axis [kg*m**2] (torsion) or mass [kg]
+        (axial motion).
+    stiffnesses : ndarray, shape (n - 1,) or (n,) with ``hinged``, or None
+        Joint springs [N*m/rad, or N/m axially] from the root outwards; None: rigid joints, one
+        coordinate carrying every inertia.
+    dampings : ndarray like ``stiffnesses`` [N*m*s/rad, or N*s/m], or None
+        Joint dampers; None: undamped.
+    hinged : bool
+        A massless mount joined to body 1 by the first spring.
+
+    Returns
+    -------
+    M, C, K : ndarray, shape (size, size)
+        size n, n + 1 with ``hinged``, 1 with rigid joints.
+    tip : ndarray, shape (size,)
+        The row giving the tip's motion relative to the root, ``q_n - q_root`` [rad or m].
     """
     if stiffnesses is None:
         return (np.array([[float(np.sum(inertias))]]), np.zeros((1, 1)), np.zeros((1, 1)),

@@ -41,7 +41,8 @@ import math
 
 import numpy as np
 
-from .interface import check_positive, describe
+from .checks import check_positive
+from .errors import describe
 
 __all__ = ["CantileverDamping", "CONVENTIONS", "MAX_MODES", "check_damping_convention",
            "check_damping_ratio",

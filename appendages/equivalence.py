@@ -69,7 +69,9 @@ from . import fitting, limits
 from .beam import Beam, characteristic_roots
 from .chain import HingedChain
 from .fitting import FitWarning
-from .interface import FiniteAppendage, as_frequency_array, describe, equilibrate
+from .checks import as_frequency_array
+from .errors import describe
+from .interface import FiniteAppendage, equilibrate
 
 __all__ = [
     "ANY_APPENDAGE_BUDGET",

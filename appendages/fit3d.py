@@ -81,8 +81,11 @@ import numpy as np
 import scipy.linalg
 import scipy.optimize
 
-from .chain import HingedChain, _spring_chain
-from .interface import ConvergenceError, describe
+from . import fitting
+from .chain import HingedChain, spring_chain_matrices
+from .equivalence import (damping_frequency_of, damping_ratio_of, fit_chain, fit_targets,
+                          is_uniform_beam)
+from .errors import ConvergenceError, describe
 
 __all__ = ["MotionRod", "fit_chain_3d", "motion_frequencies", "rod_chain_errors",
            "rod_chain_frequencies"]
@@ -93,8 +96,8 @@ _ALPHA_BOUND = 8.0
 def rod_chain_frequencies(inertias: np.ndarray, stiffnesses: np.ndarray) -> tuple[float, float]:
     """First free-free and first clamped (body 1 held) frequencies [rad/s] of a spring chain
     with a rigid root (bodies 1..n, springs between neighbours)."""
-    M, _, K, _ = _spring_chain(np.asarray(inertias, float), np.asarray(stiffnesses, float), None,
-                               False)
+    M, _, K, _ = spring_chain_matrices(np.asarray(inertias, float),
+                                       np.asarray(stiffnesses, float), None, False)
     free = np.sort(scipy.linalg.eigvalsh(K, M))
     clamped = scipy.linalg.eigvalsh(K[1:, 1:], M[1:, 1:])
     return math.sqrt(max(free[1], 0.0)), math.sqrt(max(np.min(clamped), 0.0))
@@ -204,8 +207,6 @@ def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     ConvergenceError
         If the rod criterion gives non-finite springs.
     """
-    from .equivalence import is_uniform_beam, fit_chain  # here: equivalence imports chain
-
     if not is_uniform_beam(beam):
         return _fit_any_3d(beam, n_bodies, match, fit_options)
     if not getattr(beam, "three_axis", False):
@@ -257,9 +258,6 @@ def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
 def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> HingedChain:
     """:func:`fit_chain_3d` of a three-axis appendage other than a uniform beam (module
     docstring, "Any appendage")."""
-    from . import fitting
-    from .equivalence import damping_frequency_of, damping_ratio_of, fit_chain, fit_targets
-
     for attribute in ("planar_view", "inertia_tensor", "dynamic_stiffness6"):
         if not hasattr(appendage, attribute):
             raise TypeError(f"fit_chain_3d needs a three-axis appendage as its beam "

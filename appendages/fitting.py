@@ -142,8 +142,8 @@ import scipy.linalg
 import scipy.optimize
 
 from .beam import characteristic_roots
-from .chain import HingedChain, _assemble, _proportional_damping
-from .interface import ConvergenceError
+from .chain import HingedChain, chain_matrices, proportional_hinge_dampings
+from .errors import ConvergenceError
 
 __all__ = ["DimensionlessChain", "FitWarning", "clear_memo", "evaluation_budget",
            "fit_frequencies", "fit_plane_on_layout", "fit_poles_and_zeros",
@@ -367,7 +367,7 @@ def _spectrum(arrays, n_values: int, jacobian: bool = False):
     vanishes is set to 0.
     """
     lengths, masses, inertias, offsets, stiffnesses = arrays[:5]
-    M, _, K, _ = _assemble(lengths, masses, inertias, offsets, stiffnesses, None, False)
+    M, _, K, _ = chain_matrices(lengths, masses, inertias, offsets, stiffnesses, None, False)
     size = K.shape[0]
     index = np.arange(size)
     no_delta, no_phi = _pinned(index, 0), _pinned(index, 1)
@@ -549,7 +549,7 @@ class DimensionlessChain:
         return HingedChain(self.lengths * L, self.masses * (rho * L),
                            self.inertias * (rho * L**3), stiffnesses,
                            com_offsets=self.com_offsets * L,
-                           hinge_dampings=_proportional_damping(beam, stiffnesses))
+                           hinge_dampings=proportional_hinge_dampings(beam, stiffnesses))
 
     def scaled(self, length: float, mass: float, frequency_unit: float, *,
                damping_ratio: float = 0.0, first_frequency: float | None = None) -> HingedChain:
@@ -911,7 +911,7 @@ def fit_plane_on_layout(lengths, masses, com_offsets, inertias, hinge_stiffnesse
 
 
 def _first_pole(lengths, masses, inertias, offsets, stiffnesses) -> float:
-    M, _, K, _ = _assemble(lengths, masses, inertias, offsets, stiffnesses, None, False)
+    M, _, K, _ = chain_matrices(lengths, masses, inertias, offsets, stiffnesses, None, False)
     lam = np.sort(scipy.linalg.eigvalsh(K, M))
     return math.sqrt(max(lam[2], 0.0)) if lam.size > 2 else 0.0
 

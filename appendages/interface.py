@@ -43,11 +43,16 @@ References
 from __future__ import annotations
 
 import dataclasses
-import types
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 import scipy.linalg
+
+# The errors and the argument checks have modules of their own (appendages.errors,
+# appendages.checks); their names stay importable from here, where they were first defined.
+from .checks import (RANGES, S_RANGE, as_frequency_array, check_derived, check_positive,
+                     check_range)
+from .errors import ConvergenceError, FlexsatError, describe
 
 __all__ = [
     "Appendage",
@@ -70,159 +75,8 @@ __all__ = [
     "ThreeAxisAppendage",
     "FlexsatError",
     "ConvergenceError",
+    "place_bending_planes",
 ]
-
-#: Longest text of a value echoed in an error message (characters).
-MESSAGE_VALUE_WIDTH = 100
-
-
-class FlexsatError(Exception):
-    """Base class of flexsat's own errors."""
-
-
-class ConvergenceError(FlexsatError, RuntimeError):
-    """A numerical procedure (root search, fit) did not converge."""
-
-
-def describe(value, width: int = MESSAGE_VALUE_WIDTH) -> str:
-    """``repr(value)`` shortened to about ``width`` characters, for error messages.
-
-    A long value (a 200,000-element array, a huge string) is cut in the middle and its length
-    is said, so that a message stays one readable line.
-    """
-    if isinstance(value, np.ndarray) and value.size > 20:
-        text = np.array2string(value.ravel()[:6], separator=", ", threshold=6)[:-1]
-        return f"array of shape {value.shape} ({text}, ...])"
-    try:
-        text = repr(value)
-    except Exception:  # a broken __repr__ must not hide the real error
-        text = f"<{type(value).__name__}>"
-    if len(text) <= width:
-        return text
-    keep = max(width - 30, 10)
-    return f"{text[: keep // 2 + keep % 2]}...{text[-(keep // 2):]} ({len(text):,} characters)"
-
-
-#: Documented ranges of the physical parameters, SI: ``name -> (low, high, unit)``.
-#:
-#: Inside them every quantity that flexsat derives from the parameters (W(s) = L**3/EJ f(y),
-#: the frequency scale ``c = sqrt(EJ/(rho*A L**4))``, the residual tails ``4/(m c**4) =
-#: 4 rho*A L**7/EJ**2``, the mass matrices ``rho*A L**3``, ``m p**2``...) stays between about
-#: 1e-100 and 1e100, far from the overflow and underflow of double precision (1e+-308), and the
-#: eigen-solvers see problems made dimensionless by diagonal scaling (:func:`equilibrate`), so
-#: their accuracy depends on the dimensionless groups only (mass ratios, offsets over lengths,
-#: damping), never on the units. Values beyond are refused by name (:func:`check_range`), not
-#: because nothing could be computed there but because nothing there has been shown sound.
-#: The bounds are wide: lengths from a micrometre to 1000 km, masses from 1e-15 kg (the
-#: "massless hub" of the limiting-case tests) to 1e15 kg.
-RANGES = types.MappingProxyType({
-    "length": (1e-6, 1e6, "m"),                    # beam and body lengths, section sizes, |position|
-    "bending_stiffness": (1e-15, 1e15, "N*m^2"),   # EJ
-    "linear_density": (1e-12, 1e6, "kg/m"),        # rho*A
-    "density": (1e-3, 1e5, "kg/m^3"),
-    "youngs_modulus": (1e3, 1e13, "Pa"),
-    "mass": (1e-15, 1e15, "kg"),                   # hub, rigid bodies
-    "inertia": (1e-20, 1e20, "kg*m^2"),            # hub
-    "body_inertia": (0.0, 1e20, "kg*m^2"),         # a chain's body (0: a point mass)
-    "hinge_stiffness": (1e-15, 1e15, "N*m/rad"),
-    "hinge_damping": (0.0, 1e15, "N*m*s/rad"),
-    # three axes (issue 11): GJ like EJ; rho*I_p = rho*A r**2 with r up to the length bound;
-    # EA = E*A from the youngs_modulus and section ranges
-    "torsional_stiffness": (1e-15, 1e15, "N*m^2"),  # GJ
-    "torsional_inertia": (1e-30, 1e12, "kg*m"),     # rho*I_p per unit length
-    "axial_stiffness": (1e-9, 1e20, "N"),           # EA
-    "axial_spring": (1e-15, 1e20, "N/m"),           # a chain joint's axial spring
-})
-
-
-def _real(name: str, value, unit: str) -> float:
-    """``value`` as a float; TypeError naming ``name`` and ``unit`` unless it is a real number."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(
-            value, (int, float, np.integer, np.floating)):
-        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} "
-                        f"{describe(value)}")
-    try:
-        return float(value)
-    except OverflowError:  # a Python int beyond the double range
-        raise ValueError(f"{name} must be finite [{unit}]; got {describe(value)}") from None
-
-
-def check_positive(name: str, value, unit: str, *, allow_zero: bool = False) -> float:
-    """Return ``value`` as float after checking that it is a positive finite real number.
-
-    Raises
-    ------
-    TypeError
-        If ``value`` is not a real number.
-    ValueError
-        If it is not finite or not positive (or negative when ``allow_zero``).
-    """
-    value_f = _real(name, value, unit)
-    ok = np.isfinite(value_f) and (value_f >= 0.0 if allow_zero else value_f > 0.0)
-    if not ok:
-        what = "non-negative" if allow_zero else "positive"
-        raise ValueError(f"{name} must be {what} and finite [{unit}]; got {describe(value)}")
-    return value_f
-
-
-def check_range(name: str, value, quantity: str, *, allow_zero: bool = False) -> float:
-    """Return ``value`` as float after checking it lies in the documented range of ``quantity``.
-
-    Parameters
-    ----------
-    name : str
-        The parameter's name, for the message.
-    value : real
-    quantity : str
-        A key of :data:`RANGES` (gives the bounds and the unit).
-    allow_zero : bool
-        Also accept exactly 0 (a point mass's inertia, an undamped hinge).
-
-    Raises
-    ------
-    TypeError
-        If ``value`` is not a real number.
-    ValueError
-        If it is not finite or lies outside the range (the message gives the range).
-    """
-    low, high, unit = RANGES[quantity]
-    value_f = check_positive(name, value, unit, allow_zero=allow_zero)
-    if (allow_zero and value_f == 0.0) or low <= value_f <= high:
-        return value_f
-    raise ValueError(
-        f"{name} must lie in [{low:g}, {high:g}] [{unit}]{' or be 0' if allow_zero else ''}, "
-        f"the range where flexsat's numerics are sound (appendages.interface.RANGES); "
-        f"got {describe(value)}")
-
-
-def check_derived(value: float, quantity: str, formula: str, given) -> float:
-    """Check a value derived from the user's parameters; blame those parameters if it is out.
-
-    Parameters
-    ----------
-    value : float
-        The derived value (e.g. ``E pi d**4/64``, possibly 0 or inf after underflow/overflow).
-    quantity : str
-        Its key in :data:`RANGES` (e.g. ``"bending_stiffness"``).
-    formula : str
-        How it was derived, for the message (``"youngs_modulus*pi*diameter**4/64"``).
-    given : sequence of (name, value, unit)
-        The parameters it came from, as the user gave them.
-
-    Raises
-    ------
-    ValueError
-        Naming every parameter of ``given`` with its value and unit, the derived value and
-        its range.
-    """
-    low, high, unit = RANGES[quantity]
-    if np.isfinite(value) and low <= value <= high:
-        return float(value)
-    names = " and ".join(f"{name} = {describe(v)} {u}" for name, v, u in given)
-    raise ValueError(
-        f"{names} give {quantity} = {formula} = {value:.3g} {unit}, outside the range "
-        f"[{low:g}, {high:g}] {unit} where flexsat's numerics are sound "
-        f"(appendages.interface.RANGES); change {' or '.join(n for n, _, _ in given)}")
 
 
 def equilibrate(K: np.ndarray, M: np.ndarray) -> np.ndarray:
@@ -255,46 +109,6 @@ def equilibrate(K: np.ndarray, M: np.ndarray) -> np.ndarray:
             if row.max() > 0.0:
                 d[j] = size / row.max()
     return d
-
-
-#: Smallest and largest |s| [rad/s] at which W(s) is evaluated (s = 0 aside, the rigid-body
-#: pole). W ~ 1/(m s**2) near 0 and the mass matrices times s**2 grow like s**2: with the
-#: parameters in RANGES, 1e-80 <= |s| <= 1e80 keeps every intermediate below 1e300.
-S_RANGE = (1e-80, 1e80)
-
-
-def as_frequency_array(s) -> np.ndarray:
-    """Return the Laplace variable ``s`` [rad/s] as a complex128 array, checking its type.
-
-    Raises
-    ------
-    TypeError
-        Not a number or an array of numbers.
-    ValueError
-        A NaN or infinite value, or a non-zero magnitude outside :data:`S_RANGE`.
-    """
-    if isinstance(s, (str, bytes)) or s is None:
-        raise TypeError(f"s must be a complex number or array of them [rad/s]; got {type(s).__name__}")
-    try:
-        arr = np.asarray(s)
-    except Exception as exc:  # pragma: no cover - numpy raises many kinds here
-        raise TypeError(f"s must be a complex number or array of them [rad/s]; got {describe(s)}") from exc
-    if arr.dtype.kind not in "biufc":
-        raise TypeError(f"s must be a complex number or array of them [rad/s]; got dtype {arr.dtype}")
-    from . import limits  # here: limits imports this module
-
-    limits.check("s (number of points)", arr.size, "points", "points at once")
-    arr = arr.astype(np.complex128)
-    if not np.all(np.isfinite(arr)):
-        raise ValueError("s must be finite [rad/s]; got a NaN or infinite value")
-    magnitude = np.abs(arr)
-    outside = (magnitude != 0) & ((magnitude < S_RANGE[0]) | (magnitude > S_RANGE[1]))
-    if np.any(outside):
-        raise ValueError(
-            f"s must have a magnitude between {S_RANGE[0]:g} and {S_RANGE[1]:g} [rad/s] "
-            f"(appendages.interface.S_RANGE: beyond, W(s) leaves double precision); got "
-            f"{describe(arr[outside][0])}")
-    return arr
 
 
 def inverse_2x2(D: np.ndarray) -> np.ndarray:
@@ -462,6 +276,28 @@ class RootModel:
 #: theta_y = -dw/dx (a rotation about +y turns +x towards -z); torsion theta_x; axial u.
 _THREE_AXIS_LAYOUT = (("xy", (1, 5), (1.0, 1.0)), ("xz", (2, 4), (1.0, -1.0)),
                       ("torsion", (3,), (1.0,)), ("axial", (0,), (1.0,)))
+
+
+def place_bending_planes(out: np.ndarray, xy: np.ndarray, xz: np.ndarray) -> None:
+    """Write the two bending planes' planar 2x2 matrices into 6x6 ones (``W6``/``D6``), in place.
+
+    The x-y plane's ``(delta, phi)`` are ``(v, theta_z)``, rows and columns (1, 5) of the
+    :data:`ROOT_MOTIONS` order; the x-z plane's are ``(w, -theta_y)``, rows and columns
+    (2, 4), so its off-diagonal entry changes sign (``theta_y = -dw/dx``), the layout of
+    :func:`three_axis_root_model`. The other entries of ``out`` are left as they are.
+
+    Parameters
+    ----------
+    out : ndarray, shape (..., 6, 6)
+        The three-axis matrices, written in place.
+    xy, xz : ndarray, shape (..., 2, 2)
+        Each plane's matrix in the planar convention: a compliance W (entries in m/N, 1/N and
+        rad/(N*m)) or a dynamic stiffness D (their inverses), stacked like ``out``.
+    """
+    out[..., 1, 1], out[..., 5, 5] = xy[..., 0, 0], xy[..., 1, 1]
+    out[..., 1, 5] = out[..., 5, 1] = xy[..., 0, 1]
+    out[..., 2, 2], out[..., 4, 4] = xz[..., 0, 0], xz[..., 1, 1]
+    out[..., 2, 4] = out[..., 4, 2] = -xz[..., 0, 1]
 
 
 def three_axis_root_model(xy: RootModel, xz: RootModel, torsion: RootModel,

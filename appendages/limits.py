@@ -68,7 +68,7 @@ import math
 import types
 from collections.abc import Iterator
 
-from .interface import FlexsatError, describe
+from .errors import FlexsatError, describe
 
 __all__ = ["DEFAULTS", "LimitError", "check", "current", "raised"]
 

@@ -73,7 +73,8 @@ from fractions import Fraction
 
 import numpy as np
 
-from .interface import check_positive, describe
+from .checks import check_positive
+from .errors import describe
 
 __all__ = ["bending_member", "bending_static_stiffness", "bending_clamped_count",
            "bending_mass_series", "rod_mass_series",

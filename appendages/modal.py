@@ -93,8 +93,10 @@ import numpy as np
 import scipy.linalg
 
 from . import limits
-from .interface import (ROOT_MOTIONS, FiniteAppendage, RootModel, as_frequency_array, describe,
-                        equilibrate, inverse_2x2, inverse_symmetric, three_axis_root_model)
+from .checks import as_frequency_array
+from .errors import describe
+from .interface import (ROOT_MOTIONS, FiniteAppendage, RootModel, equilibrate, inverse_2x2,
+                        inverse_symmetric, place_bending_planes, three_axis_root_model)
 
 __all__ = ["ModalBeam", "METHODS", "MOTION_NAMES", "ModalStiffness", "fixed_root_model",
            "GeneralTruncation"]
@@ -944,13 +946,11 @@ class ModalBeam(FiniteAppendage):
 
     def _six(self, s: np.ndarray, which: str) -> np.ndarray:
         """The motions' W (``which="W"``) or D ("D") placed in a 6x6 as in :meth:`Beam.W6`."""
-        from .beam import _place_planes
-
         motions = self._motions()
         out = np.zeros(s.shape + (6, 6), dtype=np.complex128)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             part = {name: getattr(motion, which)(s) for name, motion in motions.items()}
-            _place_planes(out, part["xy"], part["xz"])
+            place_bending_planes(out, part["xy"], part["xz"])
             out[..., 0:1, 0:1] = part["axial"]
             out[..., 3:4, 3:4] = part["torsion"]
         return out

@@ -84,9 +84,10 @@ import numpy as np
 import scipy.linalg
 
 from . import limits
-from .interface import (ROOT_LOADS, ROOT_MOTIONS, FiniteAppendage, RootModel,
-                        as_frequency_array, check_range, describe, equilibrate, inverse_2x2,
-                        inverse_symmetric)
+from .checks import as_frequency_array, check_range
+from .errors import describe
+from .interface import (ROOT_LOADS, ROOT_MOTIONS, FiniteAppendage, RootModel, equilibrate,
+                        inverse_2x2, inverse_symmetric)
 from .modal import ModalStiffness, fixed_root_model
 
 __all__ = ["ModalAppendage", "NEGLIGIBLE_FRACTION", "PLANES", "RESIDUAL_TOLERANCE"]

@@ -41,7 +41,7 @@ import tomllib
 
 import numpy as np
 
-from .interface import describe
+from .errors import describe
 from .modal_data import ModalAppendage
 from .units import modal_data_to_si, unit_factor
 

@@ -53,7 +53,7 @@ import warnings
 
 import numpy as np
 
-from .interface import FlexsatError, describe
+from .errors import FlexsatError, describe
 from .modal_data import ModalAppendage
 from .units import LENGTH_UNITS, MASS_UNITS, modal_data_to_si, unit_factor
 

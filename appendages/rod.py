@@ -59,7 +59,8 @@ import scipy.special
 from . import limits
 from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
                       hurwitz_tail_coefficients)
-from .interface import as_frequency_array, check_range, describe
+from .checks import as_frequency_array, check_range
+from .errors import describe
 
 __all__ = ["Rod", "MOTIONS"]
 

@@ -36,7 +36,9 @@ import numpy as np
 from . import limits
 from .assembly import BeamAssembly, Segment, check_segments
 from .damping import CantileverDamping, check_damping_ratio
-from .interface import as_frequency_array, describe, inverse_2x2, inverse_symmetric
+from .checks import as_frequency_array
+from .errors import describe
+from .interface import inverse_2x2, inverse_symmetric
 from .tip import check_tip
 
 __all__ = ["SegmentedBeam"]

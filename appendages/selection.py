@@ -35,7 +35,9 @@ import math
 import numbers
 from collections.abc import Sequence
 
-from .interface import describe
+from .chain import HingedChain
+from .equivalence import fit_chain
+from .errors import describe
 
 __all__ = ["FAMILIES", "QUANTITIES", "ModelChoice", "cheapest_model", "candidates"]
 
@@ -139,14 +141,10 @@ class ModelChoice:
         """
         if self.family in ("craig-bampton", "residual", "free-free"):
             return beam.truncated(self.size, method=self.family)
-        from .chain import HingedChain
-
         if self.family == "rfem":
             return HingedChain.rfem(beam, self.size)
         if self.family == "superelements":
             return HingedChain.superelements(beam, self.size)
-        from .equivalence import fit_chain
-
         return fit_chain(beam, self.size)
 
 

@@ -32,7 +32,9 @@ import numpy as np
 from . import limits
 from .assembly import Segment
 from .beam import Beam
-from .interface import check_range, describe
+from .checks import check_range
+from .errors import describe
+from .modal import ModalBeam
 from .segmented import SegmentedBeam
 from .tip import TipBody, check_tip
 
@@ -150,8 +152,6 @@ class SteppedBeam(SegmentedBeam):
         """A finite modal model with ``n_modes`` modes (:class:`~appendages.modal.ModalBeam`):
         ``"craig-bampton"`` (default: root motion and the first cantilever modes),
         ``"residual"`` or ``"free-free"``, all built from the exact modes."""
-        from .modal import ModalBeam
-
         return ModalBeam(self, n_modes, method=method)
 
     @classmethod

@@ -32,7 +32,8 @@ import numbers
 
 import numpy as np
 
-from .interface import RANGES, check_range, describe
+from .checks import RANGES, check_range
+from .errors import describe
 
 __all__ = ["TipBody", "check_inertia_tensor", "check_tip", "cross_matrix"]
 

@@ -15,7 +15,7 @@ import types
 
 import numpy as np
 
-from .interface import describe
+from .errors import describe
 
 __all__ = ["FREQUENCY_UNITS", "LENGTH_UNITS", "MASS_UNITS", "modal_data_to_si", "unit_factor"]
 

@@ -241,10 +241,10 @@ def modal_bound(n: int, pole_weight: float = 10.0) -> float:
     import scipy.linalg
     import scipy.optimize
 
-    from appendages.chain import _assemble
+    from appendages.chain import chain_matrices
 
     k = n - 1
-    M, _, K, _ = _assemble(*fitting._rfem_arrays(n), None, False)
+    M, _, K, _ = chain_matrices(*fitting._rfem_arrays(n), None, False)
     lam, modes = scipy.linalg.eigh(K, M)
     rigid = modes[:2, :2] @ modes[:2, :2].T  # R: the rigid modes' participations
     root = np.linalg.cholesky(rigid)
