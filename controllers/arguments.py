@@ -8,13 +8,17 @@ required), ValueError for a number outside its range.
 from __future__ import annotations
 
 import math
+import os
+import sys
 
 import numpy as np
 
-from .signals import MESSAGE_VALUE_CHARS
+__all__ = ["MESSAGE_VALUE_CHARS", "describe", "real_number", "positive", "non_negative",
+           "optional_positive", "finite_vector", "real_array", "frequency_grid", "check_choice",
+           "check_inertia", "user_stacklevel"]
 
-__all__ = ["describe", "real_number", "positive", "non_negative", "optional_positive",
-           "finite_vector", "real_array", "frequency_grid", "check_choice", "check_inertia"]
+#: Longest echo of a user's value in an error message [characters].
+MESSAGE_VALUE_CHARS = 100
 
 
 def describe(value, limit: int = MESSAGE_VALUE_CHARS) -> str:
@@ -163,3 +167,18 @@ def check_inertia(inertia, name: str = "inertia") -> np.ndarray:
                          f"moment at most the sum of the other two (triangle inequality); got "
                          f"principal moments {describe(moments)}")
     return J
+
+
+def user_stacklevel() -> int:
+    """The ``stacklevel`` that makes a warning point at the user's line.
+
+    For a ``warnings.warn(..., stacklevel=user_stacklevel())`` in the function that calls this
+    one: the number of frames from that function out to the first frame outside the controllers
+    package, so that a warning raised deep inside a design (a discretisation that overflows, a
+    mode left out of the loop's reach) names the line of the user's code that asked for it.
+    """
+    frame, level = sys._getframe(2), 2
+    package = os.path.dirname(os.path.abspath(__file__))
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
+        frame, level = frame.f_back, level + 1
+    return level

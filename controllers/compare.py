@@ -17,9 +17,9 @@ import numpy as np
 
 from .loop import close_loop, loop_frequency_response
 from .margins import SpilloverVerdict, margins, spillover
-from .signals import (THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_controller, _check_plant,
+from .signals import (THETA, THETA_REF, TIP_SUFFIX, TORQUE, check_controller, check_plant,
                       channels, tip_outputs)
-from .timeresp import METRIC_UNITS, _check_slew, _time_grid, _trace, metrics, slew
+from .timeresp import METRIC_UNITS, check_slew, metrics, signal_trace, slew, time_grid
 
 __all__ = ["Comparison", "compare", "metric_table", "difference_columns"]
 
@@ -172,7 +172,7 @@ class Comparison:
             for name in names:
                 for label, resp, style in (("design", self.design_response, "-"),
                                            ("truth", self.truth_response, "--")):
-                    y = _trace(resp, name)
+                    y = signal_trace(resp, name)
                     if y is not None:
                         stop = getattr(resp, "diverged_at", None)
                         ax.plot(np.asarray(resp.t).reshape(-1), y, style,
@@ -180,7 +180,7 @@ class Comparison:
                                                              if stop is not None else ""))
             if kind == THETA:
                 for ref_name in ch.refs:
-                    ref = _trace(self.design_response, ref_name, "input")
+                    ref = signal_trace(self.design_response, ref_name, "input")
                     if ref is not None:
                         ax.plot(np.asarray(self.design_response.t).reshape(-1), ref, ":",
                                 color="gray", label=ref_name)
@@ -298,12 +298,12 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
         response leaves the float64 range within t_final, ``truth_metrics["diverged"]`` True
         with ``truth_metrics["diverged_at"]`` [s] and None for its time metrics.
     """
-    _check_plant(design_plant, "design_plant")
+    check_plant(design_plant, "design_plant")
     if isinstance(truth_plant, control.FrequencyResponseData):
         raise TypeError("truth_plant must be a control.StateSpace for time responses; for a "
                         "FrequencyResponseData truth use controllers.spillover / margins")
-    _check_plant(truth_plant, "truth_plant")
-    _check_controller(controller)
+    check_plant(truth_plant, "truth_plant")
+    check_controller(controller)
     if duration is not None:
         if slew_time is not None:
             raise TypeError("give slew_time [s] only (duration is its deprecated name)")
@@ -315,12 +315,12 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
         keyword = "slew_time"
     if slew_time is None:
         raise TypeError("compare() needs slew_time [s], the duration of the slew")
-    angle, duration = _check_slew(angle, slew_time, keyword)
+    angle, duration = check_slew(angle, slew_time, keyword)
     design_loop = close_loop(design_plant, controller)
     truth_loop = close_loop(truth_plant, controller)
     # the time grid (and its size limit) first: refuse before any simulation
-    _time_grid(design_loop, 3.0 * duration if t_final is None else t_final, dt,
-               duration / 500.0, max_samples, keyword)
+    time_grid(design_loop, 3.0 * duration if t_final is None else t_final, dt,
+              duration / 500.0, max_samples, keyword)
     design_response = slew(design_loop, angle, duration, t_final=t_final, dt=dt,
                            max_samples=max_samples, axis=axis)
     truth_response = slew(truth_loop, angle, duration, t_final=t_final, dt=dt,
@@ -330,7 +330,7 @@ def compare(design_plant: control.StateSpace, truth_plant: control.StateSpace,
     truth_metrics = metrics(truth_response) | verdict.margins.as_dict()
     difference = {}
     for name in design_response.output_labels:
-        a, b = _trace(truth_response, name), _trace(design_response, name)
+        a, b = signal_trace(truth_response, name), signal_trace(design_response, name)
         if a is not None and b is not None:
             n = min(a.size, b.size)  # a diverged response ends early
             difference[name] = a[:n] - b[:n]

@@ -49,8 +49,8 @@ import control
 import numpy as np
 
 from .discretise import DiscretisationOverflowWarning, discretise
-from .frequency import _ModalEvaluator
-from .signals import _check_pair, _is_digital, _labels, _measurements, _reference_inputs
+from .frequency import ModalEvaluator
+from .signals import check_pair, fed_back_signals, is_digital, reference_inputs, signal_names
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["split_delay", "delayed_discretisation", "DelayedSampledPlant",
@@ -94,7 +94,7 @@ def total_delay(controller, delay, computation_delay) -> float:
         raise TypeError(f"computation_delay must be True or False; got "
                         f"{type(computation_delay).__name__}")
     if computation_delay:
-        if not _is_digital(controller):
+        if not is_digital(controller):
             raise ValueError("computation_delay is one sample of a digital controller; this "
                              "controller is continuous (give its delay as delay [s])")
         delay += float(controller.dt)
@@ -192,8 +192,8 @@ class DelayedSampledPlant:
         self.lag = k + 1 if f > 0 else k
         self.D = np.asarray(plant.D, dtype=float)[np.ix_(i_out, i_in)]
         C = np.asarray(plant.C, dtype=float)[i_out]
-        self.ev = _ModalEvaluator(Phi, np.hstack([G0, G1]), C, np.zeros((len(i_out), 2 * self.m)),
-                                  center=1.0)
+        self.ev = ModalEvaluator(Phi, np.hstack([G0, G1]), C, np.zeros((len(i_out), 2 * self.m)),
+                                 center=1.0)
 
     def __call__(self, z) -> np.ndarray:
         """P(z), shape (len(z), n_outputs, n_inputs), complex128."""
@@ -246,12 +246,12 @@ def delayed_closed_loop(plant: control.StateSpace, controller: control.StateSpac
         ``plant_x*``, the controller's ``controller_x*``, and the delay line ``delay_u*``
         (past commands).
     """
-    ch = _check_pair(plant, controller)
+    ch = check_pair(plant, controller)
     delay = check_delay(delay)
     if delay <= 0:
         raise ValueError("delay must be positive [s] for a delayed loop (use close_loop without "
                          "a delay)")
-    digital = _is_digital(controller)
+    digital = is_digital(controller)
     if digital:
         T = float(controller.dt)
         if dt is not None and not math.isclose(_check_dt(dt), T, rel_tol=1e-9):
@@ -269,9 +269,9 @@ def delayed_closed_loop(plant: control.StateSpace, controller: control.StateSpac
                              f"controller (the hold's mean delay dt/2 is taken out of the loop's "
                              f"delay); got {T:.6g} s")
         shift = max(delay - 0.5 * T, 0.0)
-    measured = _measurements(plant, controller)
-    refs = _reference_inputs(controller, _labels(plant, "output"))
-    p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
+    measured = fed_back_signals(plant, controller)
+    refs = reference_inputs(controller, signal_names(plant, "output"))
+    p_in, p_out = signal_names(plant, "input"), signal_names(plant, "output")
     c_in = list(controller.input_labels)
     disturbances = [n for n in p_in if n not in ch.torques]
     Ap, Bp, Cp, Dp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))

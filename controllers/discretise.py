@@ -25,7 +25,7 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.csgraph
 
-from .stability import _stacklevel_outside
+from .arguments import user_stacklevel
 
 __all__ = ["DiscretisationOverflowWarning", "discretise", "discretise_blocks", "expm_2x2"]
 
@@ -138,7 +138,7 @@ def discretise_blocks(A, B, dt, hold):
             f"s leaves the float64 range (growth rate max Re(lambda) = {growth:.3g} 1/s, "
             f"e^({growth * dt:.3g}) per step, above e^{math.log(np.finfo(float).max):.1f}); a "
             "simulation on this grid diverges at its first step: shorten dt to follow the "
-            "growth", DiscretisationOverflowWarning, stacklevel=_stacklevel_outside())
+            "growth", DiscretisationOverflowWarning, stacklevel=user_stacklevel())
     return Ad, Bd0, Bd1
 
 

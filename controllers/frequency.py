@@ -21,7 +21,8 @@ import scipy.sparse.csgraph
 
 from .arguments import frequency_grid
 
-__all__ = ["CHUNK_BYTES", "frequency_response_data"]
+__all__ = ["CHUNK_BYTES", "ModalEvaluator", "frequency_response_data", "modal_evaluator",
+           "siso_zeros"]
 
 #: Largest temporary of one chunk of a frequency sweep [bytes]: the (frequencies x poles)
 #: complex matrix of 1 / (s - lambda). 16 MiB: a 400-mode plant (802 poles) is evaluated
@@ -39,7 +40,7 @@ _COND_LIMIT_SMALL = 1e6
 _COND_LIMIT = 1e10
 
 
-class _ModalEvaluator:
+class ModalEvaluator:
     """Evaluate C (sI - A)^-1 B + D at many complex points in O(n) per point.
 
     A is balanced, then split into its decoupled parts (connected components of its sparsity
@@ -53,14 +54,33 @@ class _ModalEvaluator:
     directly. A part whose eigenvectors are ill-conditioned (a defective flexible block) is
     kept as it is and solved densely at each point (cheap for the small parts where it occurs).
 
+    A discrete-time system is evaluated at z with ``center=1``: its rigid-body block sits at
+    z = 1, so A - I takes the place of A and z - 1 that of s (the same partial fractions).
+
+    Parameters
+    ----------
+    A, B, C, D : array_like
+        The state-space matrices, (n, n), (n, m), (p, n) and (p, m), in the system's units.
+    center : float
+        0 for a continuous system (evaluated at s [rad/s]), 1 for a discrete one (at z).
+
+    Attributes
+    ----------
+    modal : bool
+        True when every part was diagonalised or block-diagonalised (no dense solve per point).
+    rigid_tol : float
+        |eigenvalue| below which an eigenvalue counts as rigid-body (after balancing).
+
+    Notes
+    -----
+    Calling the evaluator, ``ev(s)``, gives G at each point; :meth:`poles` the eigenvalues of A
+    and :meth:`characteristic_frequencies` the undamped frequencies of the non-rigid ones.
+
     References
     ----------
     G. H. Golub and C. F. Van Loan, Matrix Computations, 4th ed., 2013, sec. 7.6.3
     (block diagonalisation by a Sylvester equation); B. N. Parlett, C. Reinsch, "Balancing a
     matrix for calculation of eigenvalues and eigenvectors", Numer. Math. 13, 1969.
-
-    A discrete-time system is evaluated at z with ``center=1``: its rigid-body block sits at
-    z = 1, so A - I takes the place of A and z - 1 that of s (the same partial fractions).
     """
 
     def __init__(self, A, B, C, D, *, center: float = 0.0):
@@ -226,22 +246,34 @@ def _dense_response(A, B, C, s) -> np.ndarray:
         return G
 
 
-def _evaluator(system, inputs: Sequence[str], outputs: Sequence[str]) -> _ModalEvaluator:
-    """Evaluator of one block of a system's transfer matrix (at s, or at z if discrete)."""
+def modal_evaluator(system, inputs: Sequence[str], outputs: Sequence[str]) -> ModalEvaluator:
+    """A :class:`ModalEvaluator` of one block of a system's transfer matrix.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        Continuous (evaluated at s [rad/s]) or discrete (evaluated at z).
+    inputs, outputs : sequence of str
+        Names of the block's inputs and outputs, in the order of its columns and rows.
+
+    Returns
+    -------
+    ModalEvaluator
+        ``ev(s)`` has shape ``(len(s), len(outputs), len(inputs))``.
+    """
     i_in = [list(system.input_labels).index(n) for n in inputs]
     i_out = [list(system.output_labels).index(n) for n in outputs]
-    return _ModalEvaluator(system.A, system.B[:, i_in], system.C[i_out, :],
-                           system.D[np.ix_(i_out, i_in)],
-                           center=1.0 if system.isdtime(strict=True) else 0.0)
+    return ModalEvaluator(system.A, system.B[:, i_in], system.C[i_out, :],
+                          system.D[np.ix_(i_out, i_in)],
+                          center=1.0 if system.isdtime(strict=True) else 0.0)
 
 
-def _poles_of(ev: _ModalEvaluator) -> np.ndarray:
-    """Poles of an evaluator's system (s-plane, or z-plane for a discrete one)."""
-    return ev.poles()
-
-
-def _siso_zeros(A, b, c, d) -> np.ndarray:
+def siso_zeros(A, b, c, d) -> np.ndarray:
     """Finite zeros of the SISO system d + c (sI - A)^-1 b, by a standard eigenproblem.
+
+    ``A`` (n, n), ``b`` and ``c`` n-vectors and ``d`` a scalar, real; the zeros come back as a
+    complex128 array (empty when there is none), in the units of A's eigenvalues (rad/s, or z
+    for a discrete system).
 
     With d != 0 the zeros are the eigenvalues of A - b c / d. With d = 0 an orthogonal
     (Householder) change of state coordinates x = H z puts the output on the last coordinate,
@@ -287,7 +319,7 @@ def frequency_response_data(system: control.StateSpace, omega, *, name: str | No
     """``control.FrequencyResponseData`` of a state-space system, O(n) per frequency.
 
     The same response as ``control.frd(system, omega)`` (which solves an n x n system at each
-    frequency), through the modal partial fractions of :class:`_ModalEvaluator`: a modal plant
+    frequency), through the modal partial fractions of :class:`ModalEvaluator`: a modal plant
     costs O(n) to set up and O(n) per frequency, any other system one Schur decomposition;
     frequencies are evaluated in chunks, so the memory beyond the result stays below
     CHUNK_BYTES.
@@ -312,7 +344,7 @@ def frequency_response_data(system: control.StateSpace, omega, *, name: str | No
     omega = np.sort(frequency_grid(omega))
     if name is not None and not isinstance(name, str):
         raise TypeError(f"name must be a string or None; got {type(name).__name__}")
-    ev = _evaluator(system, list(system.input_labels), list(system.output_labels))
+    ev = modal_evaluator(system, list(system.input_labels), list(system.output_labels))
     point = np.exp(1j * omega * float(system.dt)) if system.isdtime(strict=True) else 1j * omega
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         G = ev(point)

@@ -18,13 +18,13 @@ import control
 import numpy as np
 
 from .delay import DelayedSampledPlant, delayed_closed_loop, total_delay
-from .frequency import _evaluator, _poles_of, _siso_zeros
-from .arguments import frequency_grid
-from .signals import (OMEGA, THETA, TORQUE, _check_controller, _check_pair, _check_plant,
-                      _is_digital, _labels, _measurements, _reference_inputs, _short)
+from .frequency import modal_evaluator, siso_zeros
+from .arguments import describe, frequency_grid
+from .signals import (OMEGA, THETA, TORQUE, check_controller, check_pair, check_plant,
+                      fed_back_signals, is_digital, reference_inputs, signal_names)
 from .threads import limits_blas_threads, total_states
 
-__all__ = ["close_loop", "loop_frequency_response"]
+__all__ = ["LoopTransfer", "close_loop", "loop_frequency_response"]
 
 
 def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
@@ -73,12 +73,12 @@ def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
     """
     frd = isinstance(plant, control.FrequencyResponseData)
     if frd:
-        _check_plant(plant, allow_frd=True)
-        _check_controller(controller)
+        check_plant(plant, allow_frd=True)
+        check_controller(controller)
     else:
-        ch = _check_pair(plant, controller)
+        ch = check_pair(plant, controller)
     tau = total_delay(controller, delay, computation_delay)
-    if dt is not None and (tau == 0.0 or _is_digital(controller) or frd):
+    if dt is not None and (tau == 0.0 or is_digital(controller) or frd):
         raise ValueError("dt [s] is the step of the delayed loop of a continuous controller on a "
                          "state-space plant; got dt with "
                          + ("no delay" if tau == 0.0 else "a digital controller or an FRD plant"))
@@ -86,12 +86,12 @@ def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
         return _close_loop_frd(plant, controller, tau)
     if tau > 0.0:
         return delayed_closed_loop(plant, controller, tau, dt=dt)
-    measured = _measurements(plant, controller)
-    refs = _reference_inputs(controller, _labels(plant, "output"))
-    p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
+    measured = fed_back_signals(plant, controller)
+    refs = reference_inputs(controller, signal_names(plant, "output"))
+    p_in, p_out = signal_names(plant, "input"), signal_names(plant, "output")
     c_in = list(controller.input_labels)
     disturbances = [n for n in p_in if n not in ch.torques]
-    if _is_digital(controller):
+    if is_digital(controller):
         plant = control.c2d(plant, controller.dt, method="zoh")
     Ap, Bp, Cp, Dp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))
     Ac, Bc, Cc, Dc = (np.asarray(M, dtype=float)
@@ -137,9 +137,9 @@ def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
 def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.StateSpace,
                     delay: float = 0.0) -> control.FrequencyResponseData:
     """Closed-loop frequency response on an FRD plant's grid (see :func:`close_loop`)."""
-    _check_plant(plant, allow_frd=True)
-    _check_controller(controller)
-    if _is_digital(controller):
+    check_plant(plant, allow_frd=True)
+    check_controller(controller)
+    if is_digital(controller):
         raise ValueError("close_loop on a FrequencyResponseData plant needs a continuous "
                          f"controller; got dt={controller.dt}")
     if delay > 0.0:
@@ -150,14 +150,14 @@ def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.St
         data[:, i_t, :] *= np.exp(-1j * np.asarray(plant.omega, dtype=float) * delay)
         plant = control.frd(data, plant.omega, inputs=list(plant.input_labels),
                             outputs=list(plant.output_labels), name=plant.name)
-    loop = _Loop(plant, controller)  # measured rows of the plant (theta/omega derived)
-    p_in, p_out = _labels(plant, "input"), _labels(plant, "output")
-    refs = _reference_inputs(controller, sorted(set(p_out) | set(loop.measured)))
+    loop = LoopTransfer(plant, controller)  # measured rows of the plant (theta/omega derived)
+    p_in, p_out = signal_names(plant, "input"), signal_names(plant, "output")
+    refs = reference_inputs(controller, sorted(set(p_out) | set(loop.measured)))
     disturbances = [n for n in p_in if n != TORQUE]
     omega = loop.omega
     jw = 1j * omega
     data = np.asarray(plant.frdata)[:, :, : omega.size]  # (p, m, f)
-    K = _evaluator(controller, list(controller.input_labels), [TORQUE])(jw)[:, 0, :]  # (f, c)
+    K = modal_evaluator(controller, list(controller.input_labels), [TORQUE])(jw)[:, 0, :]  # (f, c)
     c_in = list(controller.input_labels)
     Ky = K[:, [c_in.index(n) for n in loop.measured]]  # (f, n_meas)
     Kr = K[:, [c_in.index(n) for n in refs]]  # (f, n_ref)
@@ -191,16 +191,47 @@ def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.St
                        outputs=p_out + [TORQUE], name="closed_loop")
 
 
-class _Loop:
-    """L(omega) = -sum_i K_i P_i at real frequencies omega [rad/s] (see module docstring)."""
+class LoopTransfer:
+    """The loop transfer function L(omega) = -sum_i K_i P_i at real frequencies omega [rad/s].
+
+    The loop is broken at the plant's torque inputs, negative-feedback convention (module
+    docstring); a digital controller is evaluated at z = exp(j omega T), a delay multiplies L by
+    exp(-j omega tau) (or, digital on a state-space plant, gives the exact sampled plant with
+    the delayed hold). The margins (:mod:`controllers.margins`) are computed on it.
+
+    Parameters
+    ----------
+    plant : control.StateSpace or control.FrequencyResponseData
+        The plant (an FRD for the planar loop only, interpolated between its frequencies).
+    controller : control.StateSpace
+        Continuous or digital, of the plant's convention.
+    delay : float, s
+        Loop delay tau >= 0.
+
+    Attributes
+    ----------
+    ch : Channels
+        The loop's signal convention.
+    measured : list of str
+        The fed-back measurements.
+    digital : bool
+        A digital controller (sample time ``dt`` [s]).
+
+    Notes
+    -----
+    ``loop(omega)`` gives L, shape (f,) planar or (f, m, m); :meth:`matrix` always (f, m, m);
+    :meth:`broken` and :meth:`broken_all` the loop-at-a-time functions; :meth:`grid` a
+    frequency grid refined around the lightly damped poles and zeros of L; :meth:`zeros` the
+    zeros of one channel's loop.
+    """
 
     def __init__(self, plant, controller, delay: float = 0.0):
-        self.ch = ch = _check_pair(plant, controller, allow_frd=True)
+        self.ch = ch = check_pair(plant, controller, allow_frd=True)
         self.delay = float(delay)
         if ch.mimo and isinstance(plant, control.FrequencyResponseData):
             raise ValueError("three-axis loops need a StateSpace plant (a FrequencyResponseData "
                              "plant is supported for the planar loop only)")
-        self.digital = _is_digital(controller)
+        self.digital = is_digital(controller)
         self.dt = float(controller.dt) if self.digital else 0.0
         self.frd = isinstance(plant, control.FrequencyResponseData)
         if self.frd:
@@ -210,8 +241,8 @@ class _Loop:
             self.measured = [n for n in controller.input_labels
                              if n in outputs or n in derivable]
             if not self.measured:
-                raise ValueError(f"controller inputs {_short(list(controller.input_labels))} "
-                                 f"contain none of the plant outputs {_short(outputs)}: nothing "
+                raise ValueError(f"controller inputs {describe(list(controller.input_labels))} "
+                                 f"contain none of the plant outputs {describe(outputs)}: nothing "
                                  "is fed back")
             i_t = list(plant.input_labels).index(TORQUE)
             self.omega = np.asarray(plant.omega, dtype=float)
@@ -229,8 +260,8 @@ class _Loop:
                     rows.append(data[outputs.index(OMEGA)] / jw)
             self.plant_data = np.array(rows, dtype=complex).reshape(len(rows), self.omega.size)
         else:
-            self.measured = _measurements(plant, controller)
-        self.controller_ev = _evaluator(controller, self.measured, list(ch.torques))
+            self.measured = fed_back_signals(plant, controller)
+        self.controller_ev = modal_evaluator(controller, self.measured, list(ch.torques))
         if not self.frd:
             p = control.c2d(plant, self.dt, method="zoh") if self.digital else plant
             if self.digital and self.delay > 0.0:
@@ -239,7 +270,7 @@ class _Loop:
                 self.plant_ev = DelayedSampledPlant(plant, self.dt, self.delay,
                                                     list(ch.torques), self.measured)
             else:
-                self.plant_ev = _evaluator(p, list(ch.torques), self.measured)
+                self.plant_ev = modal_evaluator(p, list(ch.torques), self.measured)
             self._plant_discretised = p
         self.plant = plant
         self.controller = controller
@@ -319,10 +350,10 @@ class _Loop:
     def _controller_roots(self) -> np.ndarray:
         """Poles of the controller and zeros of each of its measurement channels."""
         c = self.controller
-        roots = [_poles_of(self.controller_ev)]
+        roots = [self.controller_ev.poles()]
         for name in self.measured:
             j = list(c.input_labels).index(name)
-            roots.append(_siso_zeros(c.A, c.B[:, j], c.C[0], c.D[0, j]))
+            roots.append(siso_zeros(c.A, c.B[:, j], c.C[0], c.D[0, j]))
         roots = np.concatenate(roots).astype(complex)
         return roots[np.isfinite(roots) & (np.abs(roots) < 1e12)]
 
@@ -330,7 +361,7 @@ class _Loop:
         """Zeros of the loop of one torque channel alone, -K_ii P_ii (z-plane for a digital
         loop; the planar loop's L): the zeros of the series connection plant -> controller
         from torque input ``channel`` to torque output ``channel``, by
-        :func:`~controllers.frequency._siso_zeros` (a real eigenproblem of the loop's order,
+        :func:`~controllers.frequency.siso_zeros` (a real eigenproblem of the loop's order,
         not the QZ of its pencil)."""
         p, c = self._plant_discretised, self.controller
         i_t = list(p.input_labels).index(self.ch.torques[channel])
@@ -344,7 +375,7 @@ class _Loop:
         B = np.vstack([Bt, Bcm @ Dmt])
         C = -np.hstack([Dcm @ Cm, Cc])
         D = -Dcm @ Dmt
-        z = _siso_zeros(A, B, C, D)
+        z = siso_zeros(A, B, C, D)
         return z[np.isfinite(z) & (np.abs(z) < 1e12)]
 
     def _loop_at_a_time_poles(self) -> np.ndarray:
@@ -370,7 +401,7 @@ class _Loop:
             # the FRD's own grid (it must resolve the plant) plus the controller's resonances
             roots = self._controller_roots()
         else:
-            roots = np.concatenate([_poles_of(self.plant_ev), _poles_of(self.controller_ev),
+            roots = np.concatenate([self.plant_ev.poles(), self.controller_ev.poles(),
                                     self._loop_at_a_time_poles()]
                                    + [self.zeros(i) for i in range(self.ch.n_axes)]
                                    ).astype(complex)
@@ -447,8 +478,8 @@ def loop_frequency_response(plant, controller, omega: np.ndarray | None = None, 
         three axes: L = -K P broken at the three torque inputs (row: torque output, column:
         torque input).
     """
-    _check_controller(controller)
-    loop = _Loop(plant, controller, total_delay(controller, delay, computation_delay))
+    check_controller(controller)
+    loop = LoopTransfer(plant, controller, total_delay(controller, delay, computation_delay))
     if omega is None:
         omega = loop.grid()
     omega = frequency_grid(omega)

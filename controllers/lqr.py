@@ -29,16 +29,16 @@ import control
 import numpy as np
 import scipy.linalg
 
-from .arguments import real_array
-from .frequency import _ModalEvaluator
-from .modes import _design_model, _inertia_matrix, _verify_loop, rigid_body_inertia
-from .pd import _check_sampling, _positive, _rigid_crossover
-from .riccati import _modal_correction, _solve_care, _solve_dare
-from .signals import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, _check_plant, _short,
-                      channels, tip_outputs)
+from .arguments import describe, positive, real_array
+from .frequency import ModalEvaluator
+from .modes import design_model, inertia_matrix, rigid_body_inertia, verify_loop
+from .pd import check_sampling, rigid_crossover
+from .riccati import modal_correction, solve_care, solve_dare
+from .signals import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, channels, check_plant,
+                      tip_outputs)
 from .loop import close_loop
-from .stability import (MARGIN, MAX_SCALE_RATIO, RemovedMode, _continuous_poles,
-                        _warn_removed)
+from .stability import (MARGIN, MAX_SCALE_RATIO, RemovedMode, continuous_poles,
+                        warn_removed_modes)
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["lqr", "KalmanNoise", "LQRDesign", "lqr_design", "reference_state",
@@ -87,11 +87,11 @@ class KalmanNoise:
             if isinstance(value, (tuple, list, np.ndarray)):
                 if len(value) != 3:
                     raise ValueError(f"{name} must be a real number or 3 of them (one per axis) "
-                                     f"[{unit}]; got {_short(value)}")
+                                     f"[{unit}]; got {describe(value)}")
                 object.__setattr__(self, name, tuple(
-                    _positive(v, f"{name}[{i}]", unit) for i, v in enumerate(value)))
+                    positive(v, f"{name}[{i}]", unit) for i, v in enumerate(value)))
             else:
-                _positive(value, name, unit)
+                positive(value, name, unit)
 
     def per_axis(self, n_axes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(torque, attitude, rate) intensities as arrays of n_axes entries."""
@@ -126,7 +126,7 @@ class KalmanNoise:
 
         Three axes: the same per axis, with J_ii, q_i, r_i (a scalar weight for every axis).
         """
-        k = _positive(estimator_speed, "estimator_speed", "1")
+        k = positive(estimator_speed, "estimator_speed", "1")
         if all(np.ndim(x) == 0 for x in (inertia, attitude_weight, torque_weight)):
             w_r = (attitude_weight / (torque_weight * inertia ** 2)) ** 0.25
             w_e = k * w_r
@@ -206,12 +206,12 @@ def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray
         return [], np.zeros((0, 0))
     if not tips:
         raise ValueError("deflection_weight given but the plant has no '*tip_deflection' output; "
-                         f"outputs are {_short(list(plant.output_labels))}")
+                         f"outputs are {describe(list(plant.output_labels))}")
     if isinstance(deflection_weight, Mapping):
         unknown = [k for k in deflection_weight if k not in tips]
         if unknown:
-            raise ValueError(f"deflection_weight names {_short(unknown)} are not tip-deflection "
-                             f"outputs {_short(tips)}")
+            raise ValueError(f"deflection_weight names {describe(unknown)} are not tip-deflection "
+                             f"outputs {describe(tips)}")
         names = list(deflection_weight)
         W = np.diag([_nonneg(deflection_weight[n], f"deflection_weight[{n!r}]", "1/m^2")
                      for n in names])
@@ -222,11 +222,11 @@ def _deflection_weights(plant, deflection_weight) -> tuple[list[str], np.ndarray
     W = real_array(deflection_weight, "deflection_weight", "1/m^2")
     if W.shape != (len(tips), len(tips)):
         raise ValueError(f"deflection_weight matrix must have shape ({len(tips)}, {len(tips)}) "
-                         f"for the outputs {_short(tips)}; got {W.shape}")
+                         f"for the outputs {describe(tips)}; got {W.shape}")
     if not np.allclose(W, W.T, rtol=1e-12, atol=0) or np.min(np.linalg.eigvalsh(W)) < -1e-12 * max(
             1.0, np.abs(W).max()):
         raise ValueError("deflection_weight must be symmetric positive semidefinite [1/m^2]; got "
-                         f"eigenvalues {_short(np.linalg.eigvalsh((W + W.T) / 2))}")
+                         f"eigenvalues {describe(np.linalg.eigvalsh((W + W.T) / 2))}")
     return tips, W
 
 
@@ -246,7 +246,7 @@ def reference_state(plant: control.StateSpace) -> np.ndarray:
     ValueError
         If no such equilibrium exists (the plant is not free-floating).
     """
-    ch = _check_plant(plant)
+    ch = check_plant(plant)
     labels = list(plant.output_labels)
     C_theta = plant.C[[labels.index(n) for n in ch.thetas]]
     C_omega = plant.C[[labels.index(n) for n in ch.omegas]]
@@ -281,7 +281,7 @@ def rate_reference_state(plant: control.StateSpace) -> np.ndarray:
     ValueError
         If no such state exists (the plant is not free-floating).
     """
-    ch = _check_plant(plant)
+    ch = check_plant(plant)
     x_ref = reference_state(plant).reshape(plant.nstates, ch.n_axes)
     labels = list(plant.output_labels)
     C_theta = plant.C[[labels.index(n) for n in ch.thetas]]
@@ -306,7 +306,7 @@ def _weight_array(value, name: str, unit: str, n_axes: int, *, positive: bool) -
         array = np.asarray(value)
         if array.shape != (n_axes,):
             raise ValueError(f"{name} must be a real number or {n_axes} of them (one per axis) "
-                             f"[{unit}]; got {_short(value)}")
+                             f"[{unit}]; got {describe(value)}")
         return np.array([check(x.item() if hasattr(x, "item") else x, f"{name}[{i}]", unit)
                          for i, x in enumerate(array)])
     return np.full(n_axes, check(value, name, unit))
@@ -328,7 +328,7 @@ def _check_weights(attitude_weight, rate_weight, torque_weight, n_axes: int = 1)
     q_omega = _weight_array(rate_weight, "rate_weight", "s^2/rad^2", n_axes, positive=False)
     r = _weight_array(torque_weight, "torque_weight", "1/(N*m)^2", n_axes, positive=True)
     if np.any(q_theta <= 0):
-        got = q_theta[0] if n_axes == 1 else _short(q_theta)
+        got = q_theta[0] if n_axes == 1 else describe(q_theta)
         raise ValueError("attitude_weight must be positive [1/rad^2]: with no weight on theta the "
                          "rigid-body attitude mode is undetectable in the cost (A, sqrt(Q)) and "
                          f"the attitude is not regulated; got {got}")
@@ -337,11 +337,11 @@ def _check_weights(attitude_weight, rate_weight, torque_weight, n_axes: int = 1)
 
 def _weights_text(q_theta, q_omega, r, W_tip) -> str:
     def text(x):
-        return f"{x[0]:.3g}" if x.size == 1 else _short(np.round(x, 6))
+        return f"{x[0]:.3g}" if x.size == 1 else describe(np.round(x, 6))
 
     out = (f"attitude_weight={text(q_theta)}, rate_weight={text(q_omega)}, "
            f"torque_weight={text(r)}")
-    return out + (f", deflection_weight={_short(np.diag(W_tip))}" if W_tip.size else "")
+    return out + (f", deflection_weight={describe(np.diag(W_tip))}" if W_tip.size else "")
 
 
 def _rigid_bandwidths(q_theta, r, Jd, speed, weights) -> tuple[np.ndarray, np.ndarray]:
@@ -366,33 +366,33 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                estimator_speed: float = 3.0, sample_time: float | None = None,
                feedforward: bool = False) -> LQRDesign:
     """LQR + estimator design; see :func:`lqr` (which returns only the controller)."""
-    ch = _check_plant(plant)
+    ch = check_plant(plant)
     if not isinstance(feedforward, (bool, np.bool_)):
-        raise TypeError(f"feedforward must be True or False; got {_short(feedforward)}")
+        raise TypeError(f"feedforward must be True or False; got {describe(feedforward)}")
     m = ch.n_axes
     if sample_time is not None and not isinstance(estimator, (str, KalmanNoise)):
         raise ValueError("a Luenberger gain array is a continuous-time estimator; with sample_time "
                          "use estimator='kalman' or a KalmanNoise")
     if isinstance(estimator, str) and estimator != "kalman":
         raise ValueError(f"estimator must be 'kalman', a KalmanNoise or a Luenberger gain array "
-                         f"of shape (n_states, {2 * m}); got {_short(estimator)}")
+                         f"of shape (n_states, {2 * m}); got {describe(estimator)}")
     q_theta, q_omega, r = _check_weights(attitude_weight, rate_weight, torque_weight, m)
-    speed = _positive(estimator_speed, "estimator_speed", "1")
+    speed = positive(estimator_speed, "estimator_speed", "1")
     if not 1e-6 <= speed <= 1e6:
         raise ValueError(f"estimator_speed must lie in [1e-6, 1e6] (the estimator's bandwidth "
                          f"over the regulator's; beyond, no loop resolves both) [-]; got "
                          f"{speed:.6g}")
     tip_names, W_tip = _deflection_weights(plant, deflection_weight)
     weights = _weights_text(q_theta, q_omega, r, W_tip)
-    T = None if sample_time is None else _positive(sample_time, "sample_time", "s")
+    T = None if sample_time is None else positive(sample_time, "sample_time", "s")
     J = rigid_body_inertia(plant)
-    Jd = np.diag(_inertia_matrix(J)).copy()  # the inertia each torque sees first
+    Jd = np.diag(inertia_matrix(J)).copy()  # the inertia each torque sees first
     w_r, w_e = _rigid_bandwidths(q_theta, r, Jd, speed, weights)
     A = np.asarray(plant.A, dtype=float)
     with np.errstate(all="ignore"):
         # O(n) for a modal plant (its decoupled parts), one Schur form otherwise
-        w_modes = np.abs(_ModalEvaluator(A, np.zeros((A.shape[0], 0)),
-                                         np.zeros((0, A.shape[0])), np.zeros((0, 0))).poles())
+        w_modes = np.abs(ModalEvaluator(A, np.zeros((A.shape[0], 0)),
+                                        np.zeros((0, A.shape[0])), np.zeros((0, 0))).poles())
     w_plant = float(w_modes.max(initial=0.0))
     # the lowest flexible mode (the rigid-body eigenvalues are ~sqrt(eps ||A||) from 0)
     w_low = float(w_modes[w_modes > 1e-6 * math.sqrt(max(w_plant, 1.0))].min(initial=np.inf))
@@ -419,7 +419,7 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
             f"more than {MAX_SCALE_RATIO:g} times the plant's lowest flexible mode "
             f"{w_low:.4g} rad/s, whose poles the stability margin then cannot resolve; lower "
             f"attitude_weight and rate_weight (or raise torque_weight); got {weights}")
-    design_plant, removed, removed_eigs = _design_model(plant, critical=sigma, J=J, what="lqr")
+    design_plant, removed, removed_eigs = design_model(plant, critical=sigma, J=J, what="lqr")
     noise = None
     if isinstance(estimator, KalmanNoise):
         noise = estimator
@@ -433,7 +433,7 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                              "1 / attitude_weight, ...) leave the floating-point range for these "
                              f"weights; give a KalmanNoise or moderate weights; got {weights}")
         noise = (KalmanNoise.default(float(Jd[0]), float(q_theta[0]), float(r[0]), speed)
-                 if m == 1 else KalmanNoise.default(_inertia_matrix(J), q_theta, r, speed))
+                 if m == 1 else KalmanNoise.default(inertia_matrix(J), q_theta, r, speed))
     else:
         L_given = real_array(estimator, "estimator", "-")
         n_d = design_plant.nstates
@@ -459,20 +459,20 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                 if digital:  # the continuous design at these weights has just succeeded
                     raise ValueError(
                         f"lqr: the digital design at sample_time {T:.4g} s failed numerically "
-                        f"({_short(str(exc))}) where the continuous design with the same "
+                        f"({describe(str(exc))}) where the continuous design with the same "
                         f"weights succeeded: the sampling is the cause (plant modes up to "
                         f"{w_plant:.4g} rad/s, omega T up to {w_plant * T:.3g}; rigid-body "
-                        f"bandwidth {_short(np.round(w_r, 4)) if m > 1 else f'{w_r[0]:.3g}'} "
+                        f"bandwidth {describe(np.round(w_r, 4)) if m > 1 else f'{w_r[0]:.3g}'} "
                         f"rad/s): change sample_time, or use the continuous design") from None
                 raise ValueError(
                     f"lqr: the {'digital ' if digital else ''}design failed numerically for "
-                    f"these weights ({_short(str(exc))}); the rigid-body bandwidth is "
-                    f"{_short(np.round(w_r, 4)) if m > 1 else f'{w_r[0]:.3g}'} rad/s "
+                    f"these weights ({describe(str(exc))}); the rigid-body bandwidth is "
+                    f"{describe(np.round(w_r, 4)) if m > 1 else f'{w_r[0]:.3g}'} rad/s "
                     f"against plant modes up to {w_plant:.4g} rad/s: choose weights that put "
                     f"it within a few decades of the modes; got {weights}") from None
             if T is not None and not digital:
                 # the sampling rule on the continuous design loop's rigid-body crossover
-                _check_sampling(T, _rigid_crossover(design_plant, design.controller), "lqr")
+                check_sampling(T, rigid_crossover(design_plant, design.controller), "lqr")
         return _checked(design, alpha, T, weights, estimator)
 
     # the guarantee is on the loop's own poles, which round-off can put further right than the
@@ -510,10 +510,10 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                     "lower estimator_speed or attitude_weight (round-off of high gains), or "
                     f"prune the mode from the plant (Spacecraft.plant(prune=True)); got {weights}")
 
-        _verify_loop(plant, design.controller, J=J, what="lqr", removed_eigs=removed_eigs,
-                     scale_floor=scale, advise=advise)
-        _warn_removed("lqr", removed, "(left out of the design model; they keep their "
-                      "open-loop eigenvalues in the closed loop)")
+        verify_loop(plant, design.controller, J=J, what="lqr", removed_eigs=removed_eigs,
+                    scale_floor=scale, advise=advise)
+        warn_removed_modes("lqr", removed, "(left out of the design model; they keep their "
+                           "open-loop eigenvalues in the closed loop)")
     return LQRDesign(design.controller, design.K, design.L, design.Q, design.R, design.N,
                      design.x_ref, design.regulator_poles, design.estimator_poles,
                      design_plant, tuple(removed), alpha, x_rate)
@@ -583,11 +583,11 @@ def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T, x_rate=None
         Ws = (B * (W_t / v0)) @ B.T
         Vs = np.diag(np.concatenate([V_t, V_w]) / v0)
     if T is None:
-        P = _solve_care(A + sigma * I, Bs, Qs, Rs, Ns, "regulator")
+        P = solve_care(A + sigma * I, Bs, Qs, Rs, Ns, "regulator")
         K = S @ np.linalg.solve(Rs, Bs.T @ P + Ns.T)
         if L_given is None:
-            Sk = _solve_care(A.T + sigma * I, Cm.T, Ws, Vs, np.zeros((n, 2 * m)),
-                             "Kalman filter")
+            Sk = solve_care(A.T + sigma * I, Cm.T, Ws, Vs, np.zeros((n, 2 * m)),
+                            "Kalman filter")
             L = Sk @ Cm.T @ np.linalg.inv(Vs)
         else:
             L = L_given
@@ -603,10 +603,10 @@ def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T, x_rate=None
         Phi, Gamma = E[:n, :n], E[:n, n:]
         rho = math.exp(-sigma * T)
         Pt, Gt = Phi / rho, Gamma @ S / rho
-        P = _solve_dare(Pt, Gt, Qs * T, Rs * T, Ns * T, "digital regulator")
+        P = solve_dare(Pt, Gt, Qs * T, Rs * T, Ns * T, "digital regulator")
         K = S @ np.linalg.solve(Rs * T + Gt.T @ P @ Gt, Gt.T @ P @ Pt + (Ns * T).T)
         Wd, Vd = Ws * T, Vs / T
-        Sk = _solve_dare(Pt.T, Cm.T, Wd, Vd, None, "digital Kalman filter")
+        Sk = solve_dare(Pt.T, Cm.T, Wd, Vd, None, "digital Kalman filter")
         L = rho * (Pt @ Sk @ Cm.T @ np.linalg.inv(Cm @ Sk @ Cm.T + Vd))
     # poles the Riccati solution could not resolve (below): moved by a modal correction
     if T is None:
@@ -623,8 +623,8 @@ def _design(plant, Q, N, R, r0, Jd, x_ref, noise, L_given, sigma, T, x_rate=None
 
         def target(x):
             return rho * x / abs(x) if abs(x) > 0 else complex(0.0)
-    dK, regulator_poles = _modal_correction(Phi - Gamma @ K, Gamma, flagged, target)
-    dL, estimator_poles = _modal_correction((Phi - L @ Cm).T, Cm.T, flagged, target)
+    dK, regulator_poles = modal_correction(Phi - Gamma @ K, Gamma, flagged, target)
+    dL, estimator_poles = modal_correction((Phi - L @ Cm).T, Cm.T, flagged, target)
     K, L = K + dK, L + dL.T
     Bm = Gamma - L @ Dm
     Ac = Phi - L @ Cm - Bm @ K
@@ -660,7 +660,7 @@ def _loop_round_off(plant, design: LQRDesign, alpha: float, removed_eigs, T):
     while the estimator pole itself was at -4e-8. The check is on the loop the guarantee is
     about, as a user (close_loop(...).poles()) computes it. A violating pole nearer a
     removed mode than any designed pole is not round-off but a removed mode the loop moves:
-    (None, 0.0), and _verify_loop refuses it with its own advice.
+    (None, 0.0), and verify_loop refuses it with its own advice.
 
     References
     ----------
@@ -669,7 +669,7 @@ def _loop_round_off(plant, design: LQRDesign, alpha: float, removed_eigs, T):
     at the transmission zeros as the control weight goes to zero).
     """
     with np.errstate(all="ignore"):
-        poles = _continuous_poles(close_loop(plant, design.controller))
+        poles = continuous_poles(close_loop(plant, design.controller))
         kept = np.asarray(removed_eigs, dtype=complex).reshape(-1)
         if T is not None:
             kept = np.log(np.exp(kept * T)) / T
@@ -686,7 +686,7 @@ def _loop_round_off(plant, design: LQRDesign, alpha: float, removed_eigs, T):
             designed = np.log(designed) / T
     if kept.size and np.min(np.abs(kept - worst)) < np.min(np.abs(designed - worst),
                                                              initial=np.inf):
-        # a removed mode that the loop moves: not round-off (_verify_loop says what to do)
+        # a removed mode that the loop moves: not round-off (verify_loop says what to do)
         return None, 0.0
     return worst, worst.real + alpha
 

@@ -43,15 +43,15 @@ import numpy as np
 import scipy.optimize
 
 from .delay import check_delay, total_delay
-from .loop import _Loop, close_loop, loop_frequency_response
+from .loop import LoopTransfer, close_loop, loop_frequency_response
 from .arguments import frequency_grid
-from .signals import _check_controller, _check_pair, _check_plant, _is_digital
-from .stability import _continuous_poles
+from .signals import check_controller, check_pair, check_plant, is_digital
+from .stability import continuous_poles
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "margins",
            "spillover", "disk_margin_gain", "disk_margin_phase", "loop_margins",
-           "MAX_DELAY_GRID"]
+           "MAX_DELAY_GRID", "zero_crossings"]
 
 #: Most frequencies a delayed loop's grid may hold (omega tau resolved to pi/4 up to the grid's
 #: top): beyond, margins() refuses the delay by name before evaluating anything.
@@ -198,9 +198,12 @@ class MultiLoopMargins:
         return out
 
 
-def _crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values: np.ndarray
-               ) -> np.ndarray:
+def zero_crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values: np.ndarray
+                   ) -> np.ndarray:
     """Zeros of f: grid points where `values` is 0 and refined roots where it changes sign.
+
+    ``f`` maps an array of frequencies [rad/s] to real values; ``values = f(omega)`` on the
+    increasing grid ``omega``. Returns the zeros found [rad/s], increasing.
 
     Every sign-change bracket of the grid is refined at once by the Illinois variant of regula
     falsi, one vectorised evaluation of f per iteration (with a bisection step when a bracket
@@ -220,7 +223,7 @@ def _crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, values:
 
 def _crossings_of_many(f: Callable[[np.ndarray, np.ndarray], np.ndarray],
                        grids: list[tuple[np.ndarray, np.ndarray]]) -> list[np.ndarray]:
-    """Zeros of several functions at once, as :func:`_crossings` finds those of one.
+    """Zeros of several functions at once, as :func:`zero_crossings` finds those of one.
 
     ``grids[j] = (omega_j, values_j)``: function j on its grid. ``f(x, owner)`` evaluates, at
     each x[k], the function ``owner[k]``: one call refines the brackets of every function
@@ -352,9 +355,9 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
     margins); P. Seiler, A. Packard, P. Gahinet, "An introduction to disk margins", IEEE Control
     Systems Magazine 40(5), 2020 (disk margins, balanced sigma = 0, multiloop).
     """
-    _check_controller(controller)
+    check_controller(controller)
     tau = total_delay(controller, delay, computation_delay)
-    loop = _Loop(plant, controller, tau)
+    loop = LoopTransfer(plant, controller, tau)
     refine = omega is None
     if omega is None:
         omega = loop.grid()
@@ -469,7 +472,7 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
     """Gain, phase and modulus margins of a scalar loop function, found on the function itself.
 
     The grid only brackets them: every crossing of |L| = 1 and of the negative real axis is
-    refined on ``loop`` to 1e-13 relative in frequency (regula falsi, :func:`_crossings`), the
+    refined on ``loop`` to 1e-13 relative in frequency (regula falsi, :func:`zero_crossings`), the
     minimum of |1 + L| by a bounded scalar search between the grid neighbours of its grid
     minimum; the margins are the values of ``loop`` there. A loop known exactly (the exact
     distributed beam's response through W(s)) gives its margins to the accuracy of its
@@ -833,7 +836,7 @@ class SpilloverVerdict:
 
 def _mode_spillover(plant, closed_poles: np.ndarray) -> tuple[ModeSpillover, ...]:
     """Each flexible mode of the plant and the closed-loop pole nearest it."""
-    lam = _continuous_poles(plant)
+    lam = continuous_poles(plant)
     w_max = max(np.abs(lam).max(initial=0.0), 1.0)
     flexible = np.sort_complex(lam[(lam.imag > 1e-6 * math.sqrt(w_max))])
     upper = closed_poles[closed_poles.imag >= 0]
@@ -894,14 +897,14 @@ def spillover(truth_plant, controller, *, delay: float = 0.0,
     1978 (control and observation spillover); Skogestad & Postlethwaite, Multivariable Feedback
     Control, 2nd ed., sec. 4.9 (Nyquist criterion with poles on the imaginary axis).
     """
-    _check_plant(truth_plant, "truth_plant", allow_frd=True)
-    _check_controller(controller)
+    check_plant(truth_plant, "truth_plant", allow_frd=True)
+    check_controller(controller)
     tau = total_delay(controller, delay, computation_delay)
     mg = margins(truth_plant, controller, delay=tau)
-    continuous_delay = tau > 0.0 and not _is_digital(controller)
+    continuous_delay = tau > 0.0 and not is_digital(controller)
     if isinstance(truth_plant, control.StateSpace):
         loop = close_loop(truth_plant, controller, delay=0.0 if continuous_delay else tau)
-        s = _continuous_poles(loop)
+        s = continuous_poles(loop)
         w = np.abs(s)
         unstable = s.real >= -1e-10 * np.maximum(1.0, w)
         if continuous_delay:
@@ -921,7 +924,7 @@ def spillover(truth_plant, controller, *, delay: float = 0.0,
             least_damping_ratio=None if i is None else float(zeta[i]),
             least_damped_frequency=None if i is None else float(w[i]),
             margins=mg, method="eigenvalues", modes=_mode_spillover(truth_plant, s))
-    if _is_digital(controller):
+    if is_digital(controller):
         raise ValueError("spillover on a FrequencyResponseData truth_plant needs a continuous "
                          "controller (the sampled-data Nyquist count would need the aliased "
                          f"plant response); got dt={controller.dt}: use a StateSpace truth_plant")
@@ -935,7 +938,7 @@ def spillover(truth_plant, controller, *, delay: float = 0.0,
     n0 = int(round(-slope))
     phase = np.unwrap(np.angle(1.0 + L))
     delta = phase[-1] - phase[0]
-    lam_c = _continuous_poles(controller)
+    lam_c = continuous_poles(controller)
     p_rhp = int(np.sum(lam_c.real > 1e-10 * np.maximum(1.0, np.abs(lam_c))))
     z = p_rhp - (2.0 * delta - n0 * math.pi) / (2.0 * math.pi)
     n_unstable = int(round(z))
@@ -956,7 +959,7 @@ def _delay_free_crossings(plant, controller) -> list[tuple[float, complex, int]]
     :func:`_unit_crossings`), on the loop's default grid. ValueError if |L| does not fall
     below 1 at the grid's top: the delayed loop would then be of neutral type, whose roots the
     crossings do not account for."""
-    loop = _Loop(plant, controller)
+    loop = LoopTransfer(plant, controller)
     omega = loop.grid()
     with np.errstate(all="ignore"):
         top = _gain(loop.matrix(omega[-1:]))[0]

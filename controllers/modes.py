@@ -35,13 +35,14 @@ import scipy.linalg
 import scipy.sparse
 import scipy.sparse.csgraph
 
-from .frequency import _ModalEvaluator, _evaluator
+from .arguments import describe, real_number
+from .frequency import ModalEvaluator, modal_evaluator
 from .loop import close_loop
-from .signals import (OMEGA, THETA, TORQUE, _check_plant, _is_digital, _require_signal,
-                      _real_number, _short, channels)
-from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, _continuous_poles
+from .signals import OMEGA, THETA, TORQUE, channels, check_plant, is_digital, require_signal
+from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, continuous_poles
 
-__all__ = ["FlexibleMode", "INFLUENCE_TOL", "rigid_body_inertia", "flexible_modes"]
+__all__ = ["FlexibleMode", "INFLUENCE_TOL", "design_model", "flexible_modes", "inertia_matrix",
+           "rigid_body_inertia", "verify_loop"]
 
 #: Participation at or below which a loop cannot influence a mode (module docstring).
 INFLUENCE_TOL = MARGIN
@@ -72,7 +73,7 @@ class FlexibleMode:
     participation: float
 
 
-def _rigid_gain(ev: _ModalEvaluator) -> tuple[np.ndarray, np.ndarray]:
+def _rigid_gain(ev: ModalEvaluator) -> tuple[np.ndarray, np.ndarray]:
     """Coefficients (A1, A2) of the singular part A1/s + A2/s^2 at s = 0 of an evaluator.
 
     With the rigid block T11 nilpotent of index 2, (sI - T11)^-1 = I/s + T11/s^2, so
@@ -112,8 +113,8 @@ def rigid_body_inertia(plant: control.StateSpace) -> float | np.ndarray:
     Low-frequency limit of the free-floating plant theta/torque -> 1/(J s^2); e.g. P. C. Hughes,
     Spacecraft Attitude Dynamics, Wiley 1986, ch. 12 (hybrid coordinates).
     """
-    ch = _check_plant(plant)
-    ev = _evaluator(plant, list(ch.torques), list(ch.thetas))
+    ch = check_plant(plant)
+    ev = modal_evaluator(plant, list(ch.torques), list(ch.thetas))
     A1, A2 = _rigid_gain(ev)
     scale = float(np.linalg.norm(A2, 2)) if np.any(A2) else 1.0
     # a frequency scale to compare the 1/s and 1/s^2 coefficients: A1/A2 is in rad/s
@@ -137,20 +138,21 @@ def rigid_body_inertia(plant: control.StateSpace) -> float | np.ndarray:
         raise ValueError(
             "plant must be free-floating: the channels torque_* -> theta_* need a rigid-body "
             "double integrator J^-1/s^2 with J symmetric positive definite [kg*m^2]; got the "
-            f"1/s^2 coefficient {_short(np.round(Jinv, 12))} and 1/s coefficient of norm "
+            f"1/s^2 coefficient {describe(np.round(Jinv, 12))} and 1/s coefficient of norm "
             f"{np.abs(A1).max():.3g} ({ev.k} eigenvalue(s) of A near zero)")
     J = np.linalg.inv(0.5 * (Jinv + Jinv.T))
     return 0.5 * (J + J.T)
 
 
-def _inertia_matrix(J) -> np.ndarray:
-    """J as an (m, m) array (a planar inertia as (1, 1))."""
+def inertia_matrix(J) -> np.ndarray:
+    """An inertia [kg*m**2] as an (m, m) float64 array: a planar one (a number) as (1, 1), a
+    three-axis tensor as it is (no checks: :func:`rigid_body_inertia` gives a checked one)."""
     return np.atleast_2d(np.asarray(J, dtype=float))
 
 
 def _sqrt_inertia(J) -> np.ndarray:
     """Symmetric square root of the inertia, (m, m)."""
-    Jm = _inertia_matrix(J)
+    Jm = inertia_matrix(J)
     w, V = np.linalg.eigh(Jm)
     return (V * np.sqrt(np.maximum(w, 0.0))) @ V.T
 
@@ -177,12 +179,12 @@ def flexible_modes(plant: control.StateSpace, *, input: str | None = None,
     list of FlexibleMode
         Sorted by frequency, one entry per complex-conjugate pair.
     """
-    ch = _check_plant(plant)
+    ch = check_plant(plant)
     for value, name in ((input, "input"), (output, "output")):
         if value is not None and not isinstance(value, str):
             raise TypeError(f"{name} must be a signal name (str) or None; got "
-                            f"{type(value).__name__} {_short(value)}")
-    min_participation = _real_number(min_participation, "min_participation", "-")
+                            f"{type(value).__name__} {describe(value)}")
+    min_participation = real_number(min_participation, "min_participation", "-")
     if not (math.isfinite(min_participation) and min_participation >= 0):
         raise ValueError(f"min_participation must be non-negative and finite [-]; got "
                          f"{min_participation:.6g}")
@@ -191,9 +193,9 @@ def flexible_modes(plant: control.StateSpace, *, input: str | None = None,
     else:
         inputs = [ch.torques[0] if input is None else input]
         outputs = [ch.thetas[0] if output is None else output]
-    _require_signal(plant, inputs[0], "input", "plant")
-    _require_signal(plant, outputs[0], "output", "plant")
-    ev = _evaluator(plant, inputs, outputs)
+    require_signal(plant, inputs[0], "input", "plant")
+    require_signal(plant, outputs[0], "output", "plant")
+    ev = modal_evaluator(plant, inputs, outputs)
     try:
         J = rigid_body_inertia(plant)
     except ValueError:
@@ -201,7 +203,7 @@ def flexible_modes(plant: control.StateSpace, *, input: str | None = None,
     Jh = _sqrt_inertia(J)
     if len(inputs) == 1:  # one channel: the inertia seen by that torque
         i = list(ch.torques).index(inputs[0]) if inputs[0] in ch.torques else 0
-        Jh = np.array([[math.sqrt(_inertia_matrix(J)[i, i])]])
+        Jh = np.array([[math.sqrt(inertia_matrix(J)[i, i])]])
     if not ev.modal:
         lam, V = np.linalg.eig(plant.A)
         raise ValueError("plant A is defective outside its rigid-body block; cannot list modes "
@@ -301,8 +303,8 @@ def _clusters(lam: np.ndarray, mask: np.ndarray, tol: float) -> list[list[int]]:
     return groups
 
 
-def _design_model(plant: control.StateSpace, *, critical: float, J, what: str
-                  ) -> tuple[control.StateSpace, list[RemovedMode], np.ndarray]:
+def design_model(plant: control.StateSpace, *, critical: float, J, what: str
+                 ) -> tuple[control.StateSpace, list[RemovedMode], np.ndarray]:
     """The plant without the modes a loop cannot influence (see the module docstring).
 
     A mode is left out when Re(lambda) >= -critical [1/s] (no damping to speak of) and its
@@ -311,6 +313,17 @@ def _design_model(plant: control.StateSpace, *, critical: float, J, what: str
     components of A's sparsity graph: the modes of a modal realisation) are kept or dropped
     whole, exactly; a part holding both kinds is split along its invariant subspaces (ordered
     real Schur form, Sylvester equation), the kept spectrum first.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        The plant (checked by the caller).
+    critical : float, 1/s
+        Modes with Re(lambda) >= -critical count as undamped.
+    J : float or ndarray, kg*m**2
+        The plant's rigid-body inertia (:func:`rigid_body_inertia`).
+    what : str
+        The caller's name for the messages ("pd", "lqr").
 
     Returns
     -------
@@ -333,7 +346,7 @@ def _design_model(plant: control.StateSpace, *, critical: float, J, what: str
     Jh = _sqrt_inertia(J)
     Ab, (d, _) = scipy.linalg.matrix_balance(A, permute=False, separate=True)
     norm = max(np.linalg.norm(Ab, 1), np.finfo(float).tiny)
-    rigid_tol = 1e-6 * math.sqrt(max(norm, 1.0))  # as _ModalEvaluator: sqrt(eps)-perturbed
+    rigid_tol = 1e-6 * math.sqrt(max(norm, 1.0))  # as ModalEvaluator: sqrt(eps)-perturbed
     cluster_tol = _CLUSTER_RTOL * norm            # Jordan blocks and repeated frequencies
     n_parts, part_of = scipy.sparse.csgraph.connected_components(
         scipy.sparse.csr_matrix(A != 0.0), directed=True, connection="weak")
@@ -469,9 +482,9 @@ def _mode_participations(plant, J, eigenvalues) -> list[float]:
                                    Jh, 0.0) for x in eigenvalues]
 
 
-def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J,
-                 what: str, advise, removed_eigs: np.ndarray | None = None,
-                 scale_floor: float = 0.0) -> tuple[float, list[RemovedMode]]:
+def verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J,
+                what: str, advise, removed_eigs: np.ndarray | None = None,
+                scale_floor: float = 0.0) -> tuple[float, list[RemovedMode]]:
     """Check the stability guarantee of a designed loop on its design plant.
 
     Every pole s of ``close_loop(plant, controller)`` (s = log(z) / T for a digital loop) must
@@ -485,8 +498,18 @@ def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J
 
     Parameters
     ----------
+    plant, controller : control.StateSpace
+        The design plant and the designed controller.
+    J : float or ndarray, kg*m**2
+        The plant's rigid-body inertia (:func:`rigid_body_inertia`).
+    what : str
+        The design's name for the messages ("pd", "lqr").
     advise : callable (pole: complex, alpha: float, scale: float) -> str
         The message's second half: which parameter to change and how.
+    removed_eigs : ndarray of complex, optional
+        The eigenvalues of the modes left out of a design model (:func:`design_model`).
+    scale_floor : float, rad/s
+        A lower bound of the loop's spectral scale omega_s (a design's rigid-body bandwidth).
 
     Returns
     -------
@@ -501,10 +524,10 @@ def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J
     """
     loop = close_loop(plant, controller)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        poles = _continuous_poles(loop)
+        poles = continuous_poles(loop)
         A = np.asarray(plant.A, dtype=float)
         lam = np.linalg.eigvals(A).astype(complex) if A.size else np.zeros(0, dtype=complex)
-        T = float(controller.dt) if _is_digital(controller) else 0.0
+        T = float(controller.dt) if is_digital(controller) else 0.0
         if T:
             lam = np.log(np.exp(lam * T)) / T  # the sampled plant's modes, aliased
     if not np.all(np.isfinite(poles)):
@@ -532,7 +555,7 @@ def _verify_loop(plant: control.StateSpace, controller: control.StateSpace, *, J
         allowed = ~rigid
         if rigid.any():
             # rigid-body motion the loop cannot move (translations): from the design model
-            _, removed, _ = _design_model(plant, critical=alpha, J=J, what=what)
+            _, removed, _ = design_model(plant, critical=alpha, J=J, what=what)
             n_free = sum(m.multiplicity for m in removed if m.frequency == 0.0)
             allowed[np.nonzero(rigid)[0][:n_free]] = True
     allowed &= lam.real >= -alpha

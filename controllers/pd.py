@@ -30,13 +30,12 @@ import math
 import control
 import numpy as np
 
-from .frequency import _evaluator
-from .margins import _crossings
-from .modes import _inertia_matrix, _verify_loop, flexible_modes, rigid_body_inertia
-from .arguments import check_choice, check_inertia, real_array
-from .signals import (OMEGA, THETA, THETA_REF, TORQUE, _check_plant, _real_number, _short,
-                      channels)
-from .stability import _warn_removed
+from .frequency import modal_evaluator
+from .margins import zero_crossings
+from .modes import flexible_modes, inertia_matrix, rigid_body_inertia, verify_loop
+from .arguments import check_choice, check_inertia, describe, positive, real_array, real_number
+from .signals import OMEGA, THETA, THETA_REF, TORQUE, channels, check_plant
+from .stability import warn_removed_modes
 from .threads import limits_blas_threads, total_states
 
 __all__ = [
@@ -45,6 +44,8 @@ __all__ = [
     "principal_axes",
     "natural_frequency_from_bandwidth",
     "check_sample_time",
+    "check_sampling",
+    "rigid_crossover",
     "ROLL_OFF_DAMPING",
     "NOTCH_ZERO_DAMPING",
     "NOTCH_POLE_DAMPING",
@@ -64,15 +65,6 @@ NOTCH_POLE_DAMPING = 0.5
 #: Workman, Digital Control of Dynamic Systems, 3rd ed., sec. 11.2: 10 to 30 times the bandwidth;
 #: below 10 the hold's phase lag omega T / 2 at crossover exceeds 18 deg).
 MIN_SAMPLES_PER_CROSSOVER = 10.0
-
-
-def _positive(value, name: str, unit: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
-    value = float(value)
-    if not (np.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be positive and finite [{unit}]; got {value}")
-    return value
 
 
 def natural_frequency_from_bandwidth(bandwidth: float, damping: float) -> float:
@@ -95,8 +87,8 @@ def natural_frequency_from_bandwidth(bandwidth: float, damping: float) -> float:
     (bandwidth of the standard second-order system); K. Ogata, Modern Control Engineering, 5th ed.,
     ch. 7 (same relation).
     """
-    bandwidth = _positive(bandwidth, "bandwidth", "rad/s")
-    damping = _positive(damping, "damping", "1")
+    bandwidth = positive(bandwidth, "bandwidth", "rad/s")
+    damping = positive(damping, "damping", "1")
     # wn = wb / sqrt(hypot(a, 1) - a), a = 2 zeta^2 - 1 (4 zeta^4 - 4 zeta^2 + 2 = a^2 + 1);
     # for a > 0 the difference cancels, and 1 / (hypot(a, 1) - a) = hypot(a, 1) + a is exact.
     # Written with a = zeta^2 b, b = 2 - zeta^-2, so that no zeta^2 overflows.
@@ -145,7 +137,7 @@ def pd_gains(inertia, natural_frequency, damping, *, axes: str = "principal"):
     zeta = _per_axis(damping, "damping", "1", n_axes)
     check_choice(axes, "axes", ("principal", "hub"))
     if n_axes == 1:
-        return _gains(_positive(inertia, "inertia", "kg*m^2"), wn[0], zeta[0], axes)
+        return _gains(positive(inertia, "inertia", "kg*m^2"), wn[0], zeta[0], axes)
     return _gains(check_inertia(inertia), wn, zeta, axes)
 
 
@@ -187,7 +179,7 @@ def _principal_axes(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return j[list(best)], R
 
 
-def _rigid_crossover(plant, controller) -> float:
+def rigid_crossover(plant, controller) -> float:
     """Gain-crossover frequency [rad/s] of a continuous controller on the plant's rigid body.
 
     The loop is taken on the rigid-body part of the plant alone, theta/torque = 1/(J s^2) and
@@ -195,13 +187,26 @@ def _rigid_crossover(plant, controller) -> float:
     L_r(j w) = -(K_theta(j w) / (J (j w)^2) + K_omega(j w) / (J j w)). Its crossover is the
     lowest frequency where |L_r| falls through 1: the loop's bandwidth, which flexible
     resonances (crossings of |L| = 1 at undamped modes) do not move.
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        A checked plant (its rigid-body inertia is read from it).
+    controller : control.StateSpace
+        A continuous controller of the plant's convention.
+
+    Returns
+    -------
+    float
+        The crossover [rad/s]; 0 when the controller feeds back neither attitude nor rate, or
+        its loop gain never reaches 1.
     """
     ch = channels(plant)
-    Jinv = np.linalg.inv(_inertia_matrix(rigid_body_inertia(plant)))
+    Jinv = np.linalg.inv(inertia_matrix(rigid_body_inertia(plant)))
     inputs = [name for name in ch.thetas + ch.omegas if name in controller.input_labels]
     if not inputs:
         return 0.0
-    ev = _evaluator(controller, inputs, list(ch.torques))
+    ev = modal_evaluator(controller, inputs, list(ch.torques))
     # rigid-body plant rows: theta_i = (J^-1 u)_i / s^2, omega_i = (J^-1 u)_i / s
     rows = np.array([Jinv[(ch.thetas + ch.omegas).index(n) % ch.n_axes] for n in inputs])
     powers = np.array([2.0 if name in ch.thetas else 1.0 for name in inputs])
@@ -231,7 +236,7 @@ def _rigid_crossover(plant, controller) -> float:
         return float(omega[-1]) if log_gain[-1] >= 0 else 0.0
     i = down[0]
     with np.errstate(divide="ignore"):
-        roots = _crossings(lambda w: np.log(gain(w)), omega[i:i + 2], log_gain[i:i + 2])
+        roots = zero_crossings(lambda w: np.log(gain(w)), omega[i:i + 2], log_gain[i:i + 2])
     return float(roots[0]) if roots.size else float(omega[i])
 
 
@@ -249,9 +254,16 @@ PATHOLOGICAL_SAMPLING = 1e-6
 MIN_CROSSOVER_ANGLE = 1e-9
 
 
-def _check_sampling(sample_time: float, omega_c: float, what: str) -> None:
-    """ValueError unless MIN_CROSSOVER_ANGLE <= omega_c sample_time and
-    2 pi / sample_time >= MIN_SAMPLES_PER_CROSSOVER * omega_c."""
+def check_sampling(sample_time: float, omega_c: float, what: str) -> None:
+    """Check a sample time T [s] against a loop's rigid-body crossover omega_c [rad/s].
+
+    Raises
+    ------
+    ValueError
+        ``omega_c T < MIN_CROSSOVER_ANGLE`` (too fast for double precision) or
+        ``2 pi / T < MIN_SAMPLES_PER_CROSSOVER omega_c`` (too slow for the bandwidth); the
+        message starts with ``what`` (the design) and gives the sample times that would do.
+    """
     if 0.0 < omega_c * sample_time < MIN_CROSSOVER_ANGLE:
         raise ValueError(
             f"{what}: sample_time {sample_time:.4g} s is too short for double precision: the "
@@ -277,7 +289,7 @@ def check_sample_time(sample_time: float, plant, continuous_controller) -> float
 
     Raises ValueError if 2 pi / sample_time < MIN_SAMPLES_PER_CROSSOVER * omega_c, with omega_c
     the gain crossover of the controller's loop on the plant's rigid-body part
-    (``_rigid_crossover``): the loop's bandwidth, not a crossing of |L| = 1 at a flexible
+    (:func:`rigid_crossover`): the loop's bandwidth, not a crossing of |L| = 1 at a flexible
     resonance. Whether the sampled loop is stable is a separate check on its poles (the exact
     zero-order-hold discretisation of plant and controller), made by :func:`pd` and
     :func:`controllers.lqr`.
@@ -287,9 +299,9 @@ def check_sample_time(sample_time: float, plant, continuous_controller) -> float
     float
         omega_c [rad/s].
     """
-    sample_time = _positive(sample_time, "sample_time", "s")
-    omega_c = _rigid_crossover(plant, continuous_controller)
-    _check_sampling(sample_time, omega_c, "sample time")
+    sample_time = positive(sample_time, "sample_time", "s")
+    omega_c = rigid_crossover(plant, continuous_controller)
+    check_sampling(sample_time, omega_c, "sample time")
     for mode in _safe_modes(plant):
         # omega T = k pi, k >= 1, puts the pair exp(+-j omega T) on one point z = +-1: the
         # sampled plant loses that mode's controllability (pathological sampling; Kalman, Ho
@@ -408,13 +420,13 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
     B. Wie, Space Vehicle Dynamics and Control, 2nd ed., AIAA 2008 (gain and phase stabilisation
     of flexible modes).
     """
-    ch = _check_plant(plant)
+    ch = check_plant(plant)
     if (natural_frequency is None) == (bandwidth is None):
         raise ValueError("give exactly one of natural_frequency [rad/s] or bandwidth [rad/s]; got "
-                         f"natural_frequency={_short(natural_frequency)}, "
-                         f"bandwidth={_short(bandwidth)}")
+                         f"natural_frequency={describe(natural_frequency)}, "
+                         f"bandwidth={describe(bandwidth)}")
     if not isinstance(axes, str) or axes not in ("principal", "hub"):
-        raise ValueError(f"axes must be 'principal' or 'hub'; got {_short(axes)}")
+        raise ValueError(f"axes must be 'principal' or 'hub'; got {describe(axes)}")
     damping = _per_axis(damping, "damping", "1", ch.n_axes)
     if natural_frequency is not None:
         spec = "natural_frequency"
@@ -425,7 +437,7 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
         wn = np.array([natural_frequency_from_bandwidth(b, z) for b, z in zip(wb, damping)])
     given = natural_frequency if bandwidth is None else bandwidth
     spec_text = (f"{spec} = {float(given):.4g} rad/s" if np.ndim(given) == 0 else
-                 f"{spec} = {_short(np.asarray(given, dtype=float))} rad/s")
+                 f"{spec} = {describe(np.asarray(given, dtype=float))} rad/s")
     J = rigid_body_inertia(plant)
     with np.errstate(over="ignore", under="ignore"):
         if ch.mimo:
@@ -434,14 +446,15 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
             Kp, Kd = _gains(J, wn[0], damping[0], axes)
     if not (np.all(np.isfinite(Kp)) and np.all(np.isfinite(Kd))
             and np.all(np.diag(np.atleast_2d(Kp)) > 0) and np.all(np.diag(np.atleast_2d(Kd)) > 0)):
-        J_text = f"{J:.4g}" if not ch.mimo else _short(np.round(J, 6))
-        raise ValueError(f"pd: {spec_text} with damping {_short(damping if ch.mimo else damping[0])}"
+        J_text = f"{J:.4g}" if not ch.mimo else describe(np.round(J, 6))
+        damping_text = describe(damping if ch.mimo else damping[0])
+        raise ValueError(f"pd: {spec_text} with damping {damping_text}"
                          f" and the plant's inertia J = {J_text} kg*m^2 gives gains "
-                         f"Kp = J wn^2 = {_short(Kp)} N*m/rad, Kd = 2 zeta wn J = {_short(Kd)} "
-                         f"N*m*s/rad outside the floating-point range; choose a {spec} within a "
-                         "few decades of the plant's modes")
+                         f"Kp = J wn^2 = {describe(Kp)} N*m/rad, Kd = 2 zeta wn J = "
+                         f"{describe(Kd)} N*m*s/rad outside the floating-point range; choose "
+                         f"a {spec} within a few decades of the plant's modes")
     if not isinstance(feedforward, (bool, np.bool_)):
-        raise TypeError(f"feedforward must be True or False; got {_short(feedforward)}")
+        raise TypeError(f"feedforward must be True or False; got {describe(feedforward)}")
     # the feedback law on [theta_ref (, omega_ref), theta, omega]; torque_ff joins after the
     # filters (below)
     blocks = [Kp] + ([Kd] if feedforward else []) + [-Kp, -Kd]
@@ -456,7 +469,7 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
         if isinstance(notch, str):
             if notch != "first_mode":
                 raise ValueError(f"notch must be a frequency [rad/s] or 'first_mode'; got "
-                                 f"{_short(notch)}")
+                                 f"{describe(notch)}")
             modes = flexible_modes(plant)
             if not modes:
                 raise ValueError("notch='first_mode' but the plant has no flexible mode visible "
@@ -494,13 +507,13 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
     controller = control.ss(A, B, C, D, 0, **signals)
     T = None
     if sample_time is not None:
-        T = _positive(_real_number(sample_time, "sample_time", "s"), "sample_time", "s")
+        T = positive(real_number(sample_time, "sample_time", "s"), "sample_time", "s")
         check_sample_time(T, plant, controller)
         digital = control.c2d(controller, T, method="zoh")
         controller = control.ss(digital.A, digital.B, digital.C, digital.D, T, **signals)
     rigid_poles = np.concatenate([np.roots([1.0, 2.0 * z * w, w * w])
                                   for w, z in zip(wn, damping)]).astype(complex)
-    damping_text = _short(damping) if ch.mimo else f"{damping[0]:.4g}"
+    damping_text = describe(damping) if ch.mimo else f"{damping[0]:.4g}"
 
     def advise(pole: complex, alpha: float, scale: float) -> str:
         w = abs(pole)
@@ -535,10 +548,10 @@ def pd(plant: control.StateSpace, *, natural_frequency=None, bandwidth=None, dam
                 f"round-off of a loop {scale / max(w, 1e-300):.1e} times faster than it); "
                 f"lower {spec}")
 
-    _, excused = _verify_loop(plant, controller, J=J, what="pd", advise=advise,
-                              scale_floor=wn_max)
-    _warn_removed("pd", excused, "(the loop moves them by less than the stability margin; they "
-                  "keep their open-loop eigenvalues)")
+    _, excused = verify_loop(plant, controller, J=J, what="pd", advise=advise,
+                             scale_floor=wn_max)
+    warn_removed_modes("pd", excused, "(the loop moves them by less than the stability margin; "
+                       "they keep their open-loop eigenvalues)")
     return controller
 
 
@@ -547,7 +560,7 @@ MAX_FILTER_FREQUENCY = 1e150
 
 
 def _filter_frequency(value, name: str) -> float:
-    w = _positive(_real_number(value, name, "rad/s"), name, "rad/s")
+    w = positive(real_number(value, name, "rad/s"), name, "rad/s")
     if w > MAX_FILTER_FREQUENCY:
         raise ValueError(f"{name} must be at most {MAX_FILTER_FREQUENCY:g} [rad/s] (its square "
                          f"is a coefficient of the filter); got {w:.6g}")
@@ -561,10 +574,10 @@ def _per_axis(value, name: str, unit: str, n_axes: int) -> np.ndarray:
         array = real_array(value, name, unit)
         if array.shape != (n_axes,):
             raise ValueError(f"{name} must be a real number or {n_axes} of them (one per axis) "
-                             f"[{unit}]; got {_short(value)}")
-        return np.array([_positive(float(x), f"{name}[{i}]", unit)
+                             f"[{unit}]; got {describe(value)}")
+        return np.array([positive(float(x), f"{name}[{i}]", unit)
                          for i, x in enumerate(array)])
-    return np.full(n_axes, _positive(value, name, unit))
+    return np.full(n_axes, positive(value, name, unit))
 
 
 def _per_output(siso: control.StateSpace, n: int) -> control.StateSpace:

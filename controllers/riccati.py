@@ -10,12 +10,12 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg
 
-from .signals import _short
+from .arguments import describe
 
-__all__ = []  # private helpers of controllers.lqr
+__all__ = ["modal_correction", "solve_care", "solve_dare"]
 
 
-def _solve_care(A, B, Q, R, N, what: str) -> np.ndarray:
+def solve_care(A, B, Q, R, N, what: str) -> np.ndarray:
     """Stabilising solution X of A^T X + X A - (X B + N) R^-1 (B^T X + N^T) + Q = 0.
 
     The stable invariant subspace [U_11; U_21] of the balanced Hamiltonian from an ordered
@@ -28,6 +28,25 @@ def _solve_care(A, B, Q, R, N, what: str) -> np.ndarray:
     Schur form of the 2n Hamiltonian costs a fifteenth of scipy's QZ of the (2n + m) pencil
     (measured: 0.6 s against 9 s for n = 398, one BLAS thread), which matters for chains of
     hundreds of bodies.
+
+    Parameters
+    ----------
+    A, B : ndarray, (n, n) and (n, m)
+        The system (the state-space matrices of the design, shifted by the degree of stability).
+    Q, R, N : ndarray, (n, n), (m, m) and (n, m)
+        State, input and cross weights (R invertible).
+    what : str
+        The design step for the message ("regulator", "Kalman filter").
+
+    Returns
+    -------
+    ndarray, (n, n)
+        X.
+
+    Raises
+    ------
+    ValueError
+        No stabilising solution can be computed (the message starts with ``what``).
 
     References
     ----------
@@ -43,11 +62,11 @@ def _solve_care(A, B, Q, R, N, what: str) -> np.ndarray:
         X = scipy.linalg.solve_continuous_are(A, B, Q, R, s=N)
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise ValueError(f"{what}: the Riccati equation has no stabilising solution that can be "
-                         f"computed ({_short(str(exc))})") from None
+                         f"computed ({describe(str(exc))})") from None
     return X
 
 
-def _solve_dare(A, B, Q, R, S, what: str) -> np.ndarray:
+def solve_dare(A, B, Q, R, S, what: str) -> np.ndarray:
     """Stabilising solution X of the discrete Riccati equation (cross term S, or None), as
     :func:`scipy.linalg.solve_discrete_are` gives it from the ordered real generalized Schur
     form of the symplectic pencil; if LAPACK cannot reorder that form (it refuses to swap two
@@ -55,6 +74,27 @@ def _solve_dare(A, B, Q, R, S, what: str) -> np.ndarray:
     fast sampling, where every eigenvalue exp(+-lambda T) lies near z = 1: the hinged wing's
     LQR at 10 kHz, though 1 and 100 kHz passed), the same in complex arithmetic, where swaps of
     1 x 1 blocks do not fail, and its real part (the solution is real).
+
+    Parameters
+    ----------
+    A, B : ndarray, (n, n) and (n, m)
+        The sampled system.
+    Q, R : ndarray, (n, n) and (m, m)
+        State and input weights.
+    S : ndarray, (n, m), or None
+        Cross weight.
+    what : str
+        The design step for the message ("digital regulator", "digital Kalman filter").
+
+    Returns
+    -------
+    ndarray, (n, n)
+        X, symmetric.
+
+    Raises
+    ------
+    ValueError
+        No stabilising solution can be computed, or it is not finite.
 
     References
     ----------
@@ -73,7 +113,7 @@ def _solve_dare(A, B, Q, R, S, what: str) -> np.ndarray:
             *complex_, s=None if S is None else np.asarray(S, dtype=complex))
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise ValueError(f"{what}: the discrete Riccati equation has no stabilising solution "
-                         f"that can be computed ({_short(str(exc))})") from None
+                         f"that can be computed ({describe(str(exc))})") from None
     X = np.real(X)
     if not np.all(np.isfinite(X)):
         raise ValueError(f"{what}: the discrete Riccati equation's solution is not finite")
@@ -81,7 +121,7 @@ def _solve_dare(A, B, Q, R, S, what: str) -> np.ndarray:
 
 
 def _laub(A, B, Q, R, N) -> np.ndarray:
-    """Laub's Schur method (see _solve_care); ValueError if the stable subspace is not n-dim.
+    """Laub's Schur method (see solve_care); ValueError if the stable subspace is not n-dim.
 
     The real Schur form first (a third of the complex one's cost: 2.7x measured on the
     1604-state Hamiltonian of a 400-mode plant); if its reordering fails (LAPACK cannot swap
@@ -171,7 +211,7 @@ def _stable_subspace_complex(Hb: np.ndarray, n: int) -> np.ndarray:
     return U[:, :n]
 
 
-def _modal_correction(M, G, flagged, target) -> tuple[np.ndarray, np.ndarray]:
+def modal_correction(M, G, flagged, target) -> tuple[np.ndarray, np.ndarray]:
     """Gain dK that moves each flagged eigenvalue of M to target(eigenvalue) in M - G dK and
     leaves every other eigenvalue exactly where it is (modal control); returns dK and the
     eigenvalues of M - G dK (computed on the way: no second eigen-decomposition).
@@ -188,6 +228,22 @@ def _modal_correction(M, G, flagged, target) -> tuple[np.ndarray, np.ndarray]:
     eigenvalues, orthogonal to W2, stay eigenvectors with their eigenvalues. Real eigenvalues
     are moved alike with a one-dimensional W2. The correction costs gains of about
     |lambda - target| / |g|, the least that moves the mode.
+
+    Parameters
+    ----------
+    M : ndarray, (n, n)
+        The closed-loop matrix (continuous A - B K, or a sampled Phi - Gamma K).
+    G : ndarray, (n, m)
+        The input matrix through which the correction acts.
+    flagged : callable (complex) -> bool
+        True for an eigenvalue to be moved.
+    target : callable (complex) -> complex
+        Where a flagged eigenvalue goes.
+
+    Returns
+    -------
+    (ndarray, ndarray)
+        dK, shape (m, n), and the eigenvalues of M - G dK (complex).
 
     References
     ----------

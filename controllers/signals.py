@@ -26,14 +26,14 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import control
-import numpy as np
+
+# MESSAGE_VALUE_CHARS was defined here before it moved to controllers.arguments: still importable
+from .arguments import MESSAGE_VALUE_CHARS, describe  # noqa: F401
 
 __all__ = ["TORQUE", "THETA", "OMEGA", "THETA_REF", "OMEGA_REF", "TORQUE_FF", "TIP_SUFFIX",
-           "AXES", "Channels",
-           "PLANAR", "THREE_AXIS", "channels", "tip_outputs"]
-
-#: Longest echo of a user's value in an error message [characters].
-MESSAGE_VALUE_CHARS = 100
+           "AXES", "Channels", "PLANAR", "THREE_AXIS", "channels", "check_controller",
+           "check_pair", "check_plant", "fed_back_signals", "is_digital", "reference_inputs",
+           "require_signal", "signal_names", "tip_outputs"]
 
 TORQUE = "torque"
 THETA = "theta"
@@ -125,45 +125,49 @@ def channels(system, kind: str = "plant") -> Channels:
         return THREE_AXIS
     raise ValueError(f"{kind} must have an {signal} named 'torque' (planar) or {signal}s "
                      f"'torque_x', 'torque_y', 'torque_z' (three-axis); got {signal}s "
-                     f"{_short(names)}")
+                     f"{describe(names)}")
 
 
-def _short(value, limit: int = MESSAGE_VALUE_CHARS) -> str:
-    """repr of a value for an error message, cut to about ``limit`` characters."""
-    if isinstance(value, float):
-        text = f"{value:.6g}"
-    else:
-        try:
-            with np.printoptions(threshold=20, edgeitems=3, precision=6):
-                text = repr(value)
-        except Exception:  # noqa: BLE001 - a repr that fails must not hide the real error
-            text = f"<{type(value).__name__}>"
-    text = " ".join(text.split())
-    return text if len(text) <= limit else text[: limit - 3] + "..."
-
-
-def _real_number(value, name: str, unit: str) -> float:
-    """A real number (not a bool, not a string) as float, or TypeError naming it."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
-        raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__} "
-                        f"{_short(value)}")
-    return float(value)
-
-
-def _labels(system, kind: str) -> list[str]:
+def signal_names(system, kind: str) -> list[str]:
+    """The names of a system's inputs (``kind="input"``) or outputs (any other ``kind``)."""
     return list(system.input_labels if kind == "input" else system.output_labels)
 
 
-def _require_signal(system, name: str, kind: str, what: str) -> int:
-    labels = _labels(system, kind)
+def require_signal(system, name: str, kind: str, what: str) -> int:
+    """The index of the ``kind`` ("input" or "output") signal ``name`` of ``system``.
+
+    Raises
+    ------
+    ValueError
+        It has no such signal (the message calls the system ``what`` and lists its signals).
+    """
+    labels = signal_names(system, kind)
     if name not in labels:
         raise ValueError(f"{what} must have an {kind} named {name!r}; got {kind}s "
-                         f"{_short(labels)}")
+                         f"{describe(labels)}")
     return labels.index(name)
 
 
-def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> Channels:
-    """Check a plant's type and signals; return its convention."""
+def check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> Channels:
+    """Check a plant's type, time base and signals (module docstring); return its convention.
+
+    Parameters
+    ----------
+    plant : control.StateSpace or control.FrequencyResponseData
+        Continuous-time, with the torque inputs and the attitude and rate outputs of its
+        convention (an FRD needs one of theta and omega per axis).
+    what : str
+        Its name in the messages (the caller's parameter).
+    allow_frd : bool
+        Accept a ``control.FrequencyResponseData`` (frequency-domain functions).
+
+    Raises
+    ------
+    TypeError
+        Not a StateSpace (or FrequencyResponseData when allowed).
+    ValueError
+        Discrete-time, or a signal of the convention missing.
+    """
     allowed = (control.StateSpace, control.FrequencyResponseData) if allow_frd else (
         control.StateSpace,)
     if not isinstance(plant, allowed):
@@ -171,10 +175,10 @@ def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> Chan
         raise TypeError(f"{what} must be a control.{expected}; got {type(plant).__name__}")
     if isinstance(plant, control.StateSpace) and not plant.isctime(strict=True):
         raise ValueError(f"{what} must be continuous-time (dt=0); got dt={plant.dt}")
-    labels = _labels(plant, "input")
+    labels = signal_names(plant, "input")
     if TORQUE not in labels and not all(n in labels for n in THREE_AXIS.torques):
         raise ValueError(f"{what} must have an input named 'torque' (or inputs 'torque_x', "
-                         f"'torque_y', 'torque_z' for three axes); got inputs {_short(labels)}")
+                         f"'torque_y', 'torque_z' for three axes); got inputs {describe(labels)}")
     ch = channels(plant)
     if isinstance(plant, control.FrequencyResponseData):
         # an FRD needs one of theta, omega per axis: the other follows from omega = j w theta
@@ -182,15 +186,31 @@ def _check_plant(plant, what: str = "plant", *, allow_frd: bool = False) -> Chan
         for theta, omega in zip(ch.thetas, ch.omegas):
             if theta not in outputs and omega not in outputs:
                 raise ValueError(f"{what} must have an output named {theta!r} or {omega!r}; "
-                                 f"got outputs {_short(outputs)}")
+                                 f"got outputs {describe(outputs)}")
         return ch
     for name in ch.measurements:
-        _require_signal(plant, name, "output", what)
+        require_signal(plant, name, "output", what)
     return ch
 
 
-def _check_controller(controller, what: str = "controller") -> Channels:
-    """Check a controller's type, outputs and time base; return its convention."""
+def check_controller(controller, what: str = "controller") -> Channels:
+    """Check a controller's type, outputs and time base; return its convention.
+
+    Parameters
+    ----------
+    controller : control.StateSpace
+        Output ``'torque'`` (planar) or ``'torque_x'``, ``'torque_y'``, ``'torque_z'``;
+        continuous (dt = 0), digital (dt > 0 [s]) or a static gain (dt None).
+    what : str
+        Its name in the messages.
+
+    Raises
+    ------
+    TypeError
+        Not a StateSpace.
+    ValueError
+        Other outputs, or an unspecified time base (dt True).
+    """
     if not isinstance(controller, control.StateSpace):
         raise TypeError(f"{what} must be a control.StateSpace; got {type(controller).__name__}")
     outputs = list(controller.output_labels)
@@ -201,40 +221,64 @@ def _check_controller(controller, what: str = "controller") -> Channels:
     else:
         raise ValueError(f"{what} must have exactly one output named 'torque' (planar) or the "
                          "outputs 'torque_x', 'torque_y', 'torque_z' (three-axis); got outputs "
-                         f"{_short(outputs)}")
+                         f"{describe(outputs)}")
     if controller.dt is True:  # None: a static gain, usable in either time base
         raise ValueError(f"{what} must be continuous (dt=0) or have a sample time dt > 0 [s]; "
                          f"got dt={controller.dt}")
     return ch
 
 
-def _check_pair(plant, controller, *, allow_frd: bool = False) -> Channels:
-    """Plant and controller of one convention."""
-    ch = _check_plant(plant, allow_frd=allow_frd)
-    if _check_controller(controller) is not ch:
-        raise ValueError(f"controller outputs {_short(list(controller.output_labels))} do not "
-                         f"drive the plant's torque inputs {_short(list(ch.torques))}")
+def check_pair(plant, controller, *, allow_frd: bool = False) -> Channels:
+    """Check a plant and a controller (:func:`check_plant`, :func:`check_controller`) and
+    that the controller's torques drive the plant's; return their convention.
+
+    Raises
+    ------
+    ValueError
+        A planar controller on a three-axis plant or the reverse, or what the two checks raise.
+    """
+    ch = check_plant(plant, allow_frd=allow_frd)
+    if check_controller(controller) is not ch:
+        raise ValueError(f"controller outputs {describe(list(controller.output_labels))} do not "
+                         f"drive the plant's torque inputs {describe(list(ch.torques))}")
     return ch
 
 
-def _measurements(plant, controller) -> list[str]:
-    """Controller inputs that are plant outputs (the fed-back signals)."""
-    outputs = _labels(plant, "output")
+def fed_back_signals(plant, controller) -> list[str]:
+    """The controller's inputs that are plant outputs (the fed-back measurements), in the
+    controller's order.
+
+    Raises
+    ------
+    ValueError
+        There are none: nothing is fed back.
+    """
+    outputs = signal_names(plant, "output")
     measured = [name for name in controller.input_labels if name in outputs]
     if not measured:
-        raise ValueError(f"controller inputs {_short(list(controller.input_labels))} contain "
-                         f"none of the plant outputs {_short(outputs)}: nothing is fed back")
+        raise ValueError(f"controller inputs {describe(list(controller.input_labels))} contain "
+                         f"none of the plant outputs {describe(outputs)}: nothing is fed back")
     return measured
 
 
-def _reference_inputs(controller, plant_outputs: Sequence[str]) -> list[str]:
+def reference_inputs(controller, plant_outputs: Sequence[str]) -> list[str]:
+    """The controller's inputs that are not among ``plant_outputs``: its references.
+
+    Raises
+    ------
+    ValueError
+        One of them is no reference (a name holding neither 'ref' nor 'ff'): it would be an
+        input the loop leaves unconnected.
+    """
     others = [n for n in controller.input_labels if n not in plant_outputs]
     bad = [n for n in others if "ref" not in n and "ff" not in n]
     if bad:
-        raise ValueError(f"controller inputs {_short(bad)} are neither plant outputs nor "
+        raise ValueError(f"controller inputs {describe(bad)} are neither plant outputs nor "
                          "reference inputs (names containing 'ref' or 'ff')")
     return others
 
 
-def _is_digital(controller) -> bool:
+def is_digital(controller) -> bool:
+    """True for a discrete-time system (``dt > 0`` [s]); False for a continuous one or a
+    static gain (dt None)."""
     return bool(controller.isdtime(strict=True))

@@ -28,14 +28,15 @@ stability, used by :func:`controllers.lqr` to reach the margin).
 """
 from __future__ import annotations
 
-import os
-import sys
 import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MARGIN", "MAX_SCALE_RATIO", "RemovedMode", "RemovedModesWarning", "stability_margin"]
+from .arguments import user_stacklevel
+
+__all__ = ["MARGIN", "MAX_SCALE_RATIO", "RemovedMode", "RemovedModesWarning", "continuous_poles",
+           "stability_margin", "warn_removed_modes"]
 
 #: Relative stability margin of a designed loop: Re(s) <= -MARGIN * omega_s (module docstring).
 MARGIN = 1e-13
@@ -94,28 +95,45 @@ def _describe_modes(modes, limit: int = 6) -> str:
     return text + (f" and {len(modes) - limit} more" if len(modes) > limit else "")
 
 
-def _warn_removed(what: str, modes, detail: str) -> None:
-    """Warn (RemovedModesWarning) at the caller's line outside this package."""
+def warn_removed_modes(what: str, modes, detail: str) -> None:
+    """Warn that a design left modes out of its guarantee (:class:`RemovedModesWarning`).
+
+    The warning points at the user's line (the first outside the controllers package); nothing
+    is said when ``modes`` is empty.
+
+    Parameters
+    ----------
+    what : str
+        The design that removed them ("pd", "lqr"), the message's start.
+    modes : sequence of RemovedMode
+        The modes left out, by frequency (the first six are listed).
+    detail : str
+        Why and with what consequence, for the message.
+    """
     if not modes:
         return
     warnings.warn(f"{what}: {len(modes)} mode(s) out of the loop's reach {detail}: "
                   f"{_describe_modes(modes)}", RemovedModesWarning,
-                  stacklevel=_stacklevel_outside())
+                  stacklevel=user_stacklevel())
 
 
-def _stacklevel_outside() -> int:
-    """The ``stacklevel`` for a warnings.warn in the caller of this function that points at
-    the first frame outside the controllers package (the user's line)."""
-    frame, level = sys._getframe(2), 2
-    package = os.path.dirname(os.path.abspath(__file__))
-    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
-        frame, level = frame.f_back, level + 1
-    return level
+def continuous_poles(system) -> np.ndarray:
+    """The poles of a system in the s-plane [rad/s], a digital one's mapped from the z-plane.
 
+    A digital system's poles z are mapped by ``s = log(z) / T`` (the principal branch: a pole
+    in the left half of the z-plane comes back at the Nyquist frequency pi/T); poles at z = 0,
+    infinitely fast and deadbeat, are left out.
 
-def _continuous_poles(system) -> np.ndarray:
-    """Poles in the s-plane; a digital system's z-plane poles mapped by s = log(z) / T
-    (poles at z = 0, infinitely fast and deadbeat, are left out)."""
+    Parameters
+    ----------
+    system : control.StateSpace
+        Continuous, or digital with sample time ``T = system.dt`` [s].
+
+    Returns
+    -------
+    ndarray of complex128
+        The eigenvalues of ``system.A`` [rad/s], mapped as above when digital.
+    """
     lam = np.linalg.eigvals(system.A) if system.nstates else np.zeros(0, dtype=complex)
     lam = lam.astype(complex)
     if system.isdtime(strict=True):

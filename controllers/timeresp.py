@@ -19,12 +19,14 @@ import control
 import numpy as np
 
 from .signals import (AXES, PLANAR, THETA, THETA_REF, THREE_AXIS, TIP_SUFFIX, TORQUE, Channels,
-                      _real_number, _require_signal, _short, tip_outputs)
-from .arguments import real_array
-from .simulate import _OVERFLOW, simulate
+                      require_signal, tip_outputs)
+from .arguments import describe, real_array, real_number
+from .chunked import OVERFLOW
+from .simulate import simulate
 
 __all__ = ["METRIC_UNITS", "MAX_SAMPLES", "slew_profile", "slew", "step_response",
-           "disturbance_response", "metrics", "profile_response", "manoeuvre_metrics"]
+           "disturbance_response", "metrics", "profile_response", "manoeuvre_metrics",
+           "check_slew", "signal_trace", "time_grid"]
 
 #: Units of the metrics returned by :func:`metrics` and :func:`margins` (for tables).
 METRIC_UNITS: dict[str, str] = {
@@ -72,8 +74,8 @@ def _simulate(system, T, U):
     y = np.asarray(response.y, dtype=float).reshape(n_out, -1)
     x = np.asarray(response.x, dtype=float).reshape(n_states, -1)
     with np.errstate(invalid="ignore"):
-        bad = ~(np.isfinite(y).all(axis=0) & (np.abs(y).max(axis=0, initial=0.0) < _OVERFLOW)
-                & np.isfinite(x).all(axis=0) & (np.abs(x).max(axis=0, initial=0.0) < _OVERFLOW))
+        bad = ~(np.isfinite(y).all(axis=0) & (np.abs(y).max(axis=0, initial=0.0) < OVERFLOW)
+                & np.isfinite(x).all(axis=0) & (np.abs(x).max(axis=0, initial=0.0) < OVERFLOW))
     if not bad.any():
         response.diverged_at = None
         return response
@@ -93,26 +95,47 @@ def _simulate(system, T, U):
     return stopped
 
 
-def _time_grid(system, t_final, dt, default_dt: float, max_samples,
-               default_from: str = "t_final") -> np.ndarray:
-    """Sample times 0, dt, ..., <= t_final, refused beyond max_samples before allocation;
-    ``default_from`` names what t_final (when it is not "t_final") and the default dt are
-    derived from, for the messages."""
-    t_final = _real_number(t_final, "t_final", "s")
+def time_grid(system, t_final, dt, default_dt: float, max_samples,
+              default_from: str = "t_final") -> np.ndarray:
+    """Sample times 0, dt, ..., <= t_final [s] of a response, refused beyond max_samples before
+    any allocation.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        The loop to simulate; a digital one fixes dt at its sample time.
+    t_final : float, s
+        Positive and finite.
+    dt : float or None, s
+        The step; None: ``default_dt`` (a digital loop: its sample time).
+    default_dt : float, s
+        The step when ``dt`` is None.
+    max_samples : int or None
+        The most samples allowed (None: :data:`MAX_SAMPLES`).
+    default_from : str
+        What t_final (when it is not "t_final") and the default dt were derived from, for the
+        messages.
+
+    Raises
+    ------
+    TypeError, ValueError
+        A bad t_final, dt or max_samples (by name), or more samples than allowed.
+    """
+    t_final = real_number(t_final, "t_final", "s")
     if not (np.isfinite(t_final) and t_final > 0):
         where = "" if default_from == "t_final" else f" (3 x {default_from} by default)"
         raise ValueError(f"t_final must be positive and finite [s]{where}; got {t_final:.6g}")
-    limit = MAX_SAMPLES if max_samples is None else _real_number(max_samples, "max_samples",
-                                                                 "1")
+    limit = MAX_SAMPLES if max_samples is None else real_number(max_samples, "max_samples",
+                                                                "1")
     if not limit >= 2:
         raise ValueError(f"max_samples must be at least 2; got {limit:.6g}")
     if system.isdtime(strict=True):
         step = float(system.dt)
-        if dt is not None and not math.isclose(_real_number(dt, "dt", "s"), step, rel_tol=1e-9):
+        if dt is not None and not math.isclose(real_number(dt, "dt", "s"), step, rel_tol=1e-9):
             raise ValueError(f"dt must equal the digital loop's sample time {step} [s]; got "
                              f"{float(dt):.6g}")
     else:
-        step = default_dt if dt is None else _real_number(dt, "dt", "s")
+        step = default_dt if dt is None else real_number(dt, "dt", "s")
         if not (np.isfinite(step) and step > 0):
             where = "" if dt is not None else f" (by default a fraction of {default_from})"
             raise ValueError(f"dt must be positive and finite [s]{where}; got {step:.6g}")
@@ -139,7 +162,7 @@ def _check_closed_loop(closed_loop) -> Channels:
     ch = _response_channels(list(closed_loop.output_labels))
     if ch is None:
         for name in (THETA, TORQUE):
-            _require_signal(closed_loop, name, "output", "closed_loop")
+            require_signal(closed_loop, name, "output", "closed_loop")
     return ch
 
 
@@ -157,26 +180,39 @@ def _axis_vector(axis, ch: Channels) -> np.ndarray:
     if not ch.mimo:
         if axis is not None:
             raise ValueError(f"axis is for three-axis loops; this planar loop turns about its "
-                             f"one axis; got axis={_short(axis)}")
+                             f"one axis; got axis={describe(axis)}")
         return np.ones(1)
     if axis is None:
         raise ValueError("axis must be given for a three-axis loop: 'x', 'y', 'z' or a 3-vector "
                          "(hub axes) of the eigen-axis slew")
     if isinstance(axis, str):
         if axis not in AXES:
-            raise ValueError(f"axis must be 'x', 'y', 'z' or a 3-vector; got {_short(axis)}")
+            raise ValueError(f"axis must be 'x', 'y', 'z' or a 3-vector; got {describe(axis)}")
         return np.eye(3)[AXES.index(axis)]
     e = np.asarray(axis, dtype=float)
     if e.shape != (3,) or not np.all(np.isfinite(e)) or not np.any(e):
-        raise ValueError(f"axis must be a non-zero finite 3-vector (hub axes); got {_short(axis)}")
+        raise ValueError(f"axis must be a non-zero finite 3-vector (hub axes); got "
+                         f"{describe(axis)}")
     e = e / np.max(np.abs(e))  # scaled first: the norm of 1e-300 or 1e200 entries stays normal
     return e / np.linalg.norm(e)
 
 
-def _check_slew(angle, duration, name: str = "duration") -> tuple[float, float]:
-    """Validated (angle [rad], slew duration [s]); ``name`` is the caller's keyword for it."""
-    angle = _real_number(angle, "angle", "rad")
-    duration = _real_number(duration, name, "s")
+def check_slew(angle, duration, name: str = "duration") -> tuple[float, float]:
+    """The checked (angle [rad], slew duration [s]) of a slew; ``name`` is the caller's keyword
+    for the duration.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Not real numbers, a zero or infinite angle, a duration not positive and finite.
+
+    Warns
+    -----
+    UserWarning
+        An angle beyond a turn (2 pi rad): degrees given for radians?
+    """
+    angle = real_number(angle, "angle", "rad")
+    duration = real_number(duration, name, "s")
     if not (np.isfinite(angle) and angle != 0):
         raise ValueError(f"angle must be non-zero and finite [rad]; got {angle:.6g}")
     if not (np.isfinite(duration) and duration > 0):
@@ -221,8 +257,8 @@ def slew_profile(t: np.ndarray, angle: float, duration: float) -> np.ndarray:
     """
     t = real_array(t, "t", "s")
     if not np.all(np.isfinite(t)):
-        raise ValueError(f"t must be finite times [s]; got {_short(t)}")
-    angle, duration = _check_slew(angle, duration)
+        raise ValueError(f"t must be finite times [s]; got {describe(t)}")
+    angle, duration = check_slew(angle, duration)
     with np.errstate(over="ignore"):  # t / a subnormal duration: inf, clipped to 1
         tau = np.clip(t / duration, 0.0, 1.0)
     return angle * (tau - np.sin(2.0 * np.pi * tau) / (2.0 * np.pi))
@@ -274,10 +310,10 @@ def slew(closed_loop: control.StateSpace, angle: float, duration: float, *,
     ch = _check_closed_loop(closed_loop) or PLANAR
     e = _axis_vector(axis, ch)
     for name in ch.refs:
-        _require_signal(closed_loop, name, "input", "closed_loop")
-    angle, duration = _check_slew(angle, duration)
+        require_signal(closed_loop, name, "input", "closed_loop")
+    angle, duration = check_slew(angle, duration)
     t_final = 3.0 * duration if t_final is None else t_final
-    T = _time_grid(closed_loop, t_final, dt, duration / 500.0, max_samples, "duration")
+    T = time_grid(closed_loop, t_final, dt, duration / 500.0, max_samples, "duration")
     profile = slew_profile(T, angle, duration)
     U = _inputs(closed_loop, T.size, **{name: e_i * profile if ch.mimo else profile
                                         for name, e_i in zip(ch.refs, e)})
@@ -312,12 +348,12 @@ def step_response(closed_loop: control.StateSpace, *, amplitude: float = 1.0,
         return _step_on(closed_loop, THETA_REF, amplitude, "rad", t_final, dt, max_samples)
     e = _axis_vector(axis, ch)
     for name in ch.refs:
-        _require_signal(closed_loop, name, "input", "closed_loop")
-    amplitude = _real_number(amplitude, "amplitude", "rad")
+        require_signal(closed_loop, name, "input", "closed_loop")
+    amplitude = real_number(amplitude, "amplitude", "rad")
     if not (np.isfinite(amplitude) and amplitude != 0):
         raise ValueError(f"amplitude must be non-zero and finite [rad]; got {amplitude:.6g}")
-    T = _time_grid(closed_loop, _real_number(t_final, "t_final", "s"), dt,
-                   float(t_final) / 2000.0, max_samples)
+    T = time_grid(closed_loop, real_number(t_final, "t_final", "s"), dt,
+                  float(t_final) / 2000.0, max_samples)
     U = _inputs(closed_loop, T.size, **{name: np.full(T.size, amplitude * e_i)
                                         for name, e_i in zip(ch.refs, e)})
     return _simulate(closed_loop, T, U)
@@ -354,19 +390,21 @@ def _step_on(closed_loop, input: str, amplitude, unit: str, t_final, dt, max_sam
     """Step of ``amplitude`` on one closed-loop input at t = 0, every other input zero."""
     if not isinstance(input, str):
         raise TypeError(f"input must be the name of a closed-loop input (str); got "
-                        f"{type(input).__name__} {_short(input)}")
+                        f"{type(input).__name__} {describe(input)}")
     _check_closed_loop(closed_loop)
-    _require_signal(closed_loop, input, "input", "closed_loop")
-    amplitude = _real_number(amplitude, "amplitude", unit)
+    require_signal(closed_loop, input, "input", "closed_loop")
+    amplitude = real_number(amplitude, "amplitude", unit)
     if not (np.isfinite(amplitude) and amplitude != 0):
         raise ValueError(f"amplitude must be non-zero and finite [{unit}]; got {amplitude:.6g}")
-    t_final = _real_number(t_final, "t_final", "s")
-    T = _time_grid(closed_loop, t_final, dt, t_final / 2000.0, max_samples)
+    t_final = real_number(t_final, "t_final", "s")
+    T = time_grid(closed_loop, t_final, dt, t_final / 2000.0, max_samples)
     U = _inputs(closed_loop, T.size, **{input: np.full(T.size, amplitude)})
     return _simulate(closed_loop, T, U)
 
 
-def _trace(response, name: str, kind: str = "output") -> np.ndarray | None:
+def signal_trace(response, name: str, kind: str = "output") -> np.ndarray | None:
+    """The samples of one output (``kind="output"``) or input (any other ``kind``) of a
+    ``control.TimeResponseData``, in the signal's units; None if it has no such signal."""
     labels = list(response.output_labels if kind == "output" else response.input_labels)
     if name not in labels:
         return None
@@ -429,26 +467,26 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
     """
     if not isinstance(response, control.TimeResponseData):
         raise TypeError(f"response must be a control.TimeResponseData; got {type(response).__name__}")
-    settling_band = _real_number(settling_band, "settling_band", "1")
+    settling_band = real_number(settling_band, "settling_band", "1")
     if not (0 < settling_band < 1):
         raise ValueError(f"settling_band must be in (0, 1) [fraction of the reference]; "
                          f"got {settling_band:.6g}")
     t = np.asarray(response.t, dtype=float).reshape(-1)
     if _response_channels(list(response.output_labels)) is THREE_AXIS:
         return _three_axis_metrics(response, t, settling_band)
-    theta = _trace(response, THETA)
-    torque = _trace(response, TORQUE)
+    theta = signal_trace(response, THETA)
+    torque = signal_trace(response, TORQUE)
     if theta is None or torque is None:
         raise ValueError("response must have outputs 'theta' and 'torque' (or theta_x..z and "
-                         f"torque_x..z); got {_short(list(response.output_labels))}")
-    ref = _trace(response, THETA_REF, "input")
+                         f"torque_x..z); got {describe(list(response.output_labels))}")
+    ref = signal_trace(response, THETA_REF, "input")
     ref = np.zeros_like(theta) if ref is None else ref
     tips = tip_outputs(response.output_labels)
     r_f = float(ref[-1]) if ref.size else 0.0
     names = ["peak_torque", "peak_attitude_error", "final_attitude_error"]
     names += ["peak_tip_deflection"] if tips else []
     names += ["overshoot", "settling_time"] if r_f != 0.0 else []
-    diverged_at = _divergence(response, t, [theta, torque, ref] + [_trace(response, n)
+    diverged_at = _divergence(response, t, [theta, torque, ref] + [signal_trace(response, n)
                                                                   for n in tips])
     if diverged_at is not None:
         return {**{name: None for name in names}, "diverged": True, "diverged_at": diverged_at}
@@ -458,7 +496,7 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
         "peak_attitude_error": float(np.max(np.abs(error))),
         "final_attitude_error": float(abs(error[-1]))}
     if tips:
-        out["peak_tip_deflection"] = max(float(np.max(np.abs(_trace(response, n))))
+        out["peak_tip_deflection"] = max(float(np.max(np.abs(signal_trace(response, n))))
                                          for n in tips)
     if r_f != 0.0:
         out["overshoot"] = float(100.0 * max(0.0, np.max(theta / r_f) - 1.0))
@@ -476,9 +514,9 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
 def _three_axis_metrics(response, t: np.ndarray, settling_band: float) -> dict:
     """:func:`metrics` of a three-axis response (see its docstring)."""
     ch = THREE_AXIS
-    theta = np.array([_trace(response, n) for n in ch.thetas])
-    torque = np.array([_trace(response, n) for n in ch.torques])
-    refs = [_trace(response, n, "input") for n in ch.refs]
+    theta = np.array([signal_trace(response, n) for n in ch.thetas])
+    torque = np.array([signal_trace(response, n) for n in ch.torques])
+    refs = [signal_trace(response, n, "input") for n in ch.refs]
     ref = np.array([np.zeros(t.size) if r is None else r for r in refs])
     tips = tip_outputs(response.output_labels)
     r_f = ref[:, -1]
@@ -490,7 +528,7 @@ def _three_axis_metrics(response, t: np.ndarray, settling_band: float) -> dict:
     names += ["overshoot", "settling_time"] if phi != 0.0 else []
     names += per_axis + [f"peak_{n}" for n in tips]
     diverged_at = _divergence(response, t, list(theta) + list(torque) + list(ref)
-                              + [_trace(response, n) for n in tips])
+                              + [signal_trace(response, n) for n in tips])
     if diverged_at is not None:
         return {**{name: None for name in names}, "diverged": True, "diverged_at": diverged_at}
     error = theta - ref
@@ -499,7 +537,7 @@ def _three_axis_metrics(response, t: np.ndarray, settling_band: float) -> dict:
         "peak_torque": float(np.max(np.abs(torque))),
         "peak_attitude_error": float(np.max(norm)),
         "final_attitude_error": float(norm[-1])}
-    peaks = {n: float(np.max(np.abs(_trace(response, n)))) for n in tips}
+    peaks = {n: float(np.max(np.abs(signal_trace(response, n)))) for n in tips}
     if tips:
         out["peak_tip_deflection"] = max(peaks.values())
     if phi != 0.0:
@@ -571,24 +609,24 @@ def profile_response(closed_loop: control.StateSpace, profile, *, inertia=None,
         raise ValueError(f"profile must be {'three-axis (with an axis)' if ch.mimo else 'planar'}"
                          f" for this {'three-axis' if ch.mimo else 'planar'} closed loop")
     if not isinstance(hold, str) or hold not in ("linear", "zero", "generator"):
-        raise ValueError(f"hold must be 'linear', 'zero' or 'generator'; got {_short(hold)}")
+        raise ValueError(f"hold must be 'linear', 'zero' or 'generator'; got {describe(hold)}")
     if hold == "generator" and gyroscopic is True and ch.mimo:
         raise ValueError("gyroscopic=True cannot be fed through the profile's generator (the "
                          "term omega_ref x J omega_ref is not linear in its state): use "
                          "hold='linear' or 'zero', or gyroscopic=False")
     labels = list(closed_loop.input_labels)
     for name in ch.refs:
-        _require_signal(closed_loop, name, "input", "closed_loop")
+        require_signal(closed_loop, name, "input", "closed_loop")
     wants_ff = any(name in labels for name in ch.feedforwards)
     if wants_ff and inertia is None:
         raise ValueError("inertia [kg*m^2] must be given: the closed loop has feedforward torque "
-                         f"inputs {_short(list(ch.feedforwards))}")
+                         f"inputs {describe(list(ch.feedforwards))}")
     end = float(profile.end_time)
     t_final = 2.0 * end if t_final is None else t_final
-    T = _time_grid(closed_loop, t_final, dt, end / 500.0, max_samples)
+    T = time_grid(closed_loop, t_final, dt, end / 500.0, max_samples)
     references = profile.references(T, inertia if wants_ff else None, gyroscopic=gyroscopic)
     with np.errstate(invalid="ignore"):
-        if any(not np.all(np.abs(v) < _OVERFLOW) for v in references.values()):
+        if any(not np.all(np.abs(v) < OVERFLOW) for v in references.values()):
             raise ValueError("the feedforward torque J s'' leaves the float64 range: check "
                              "inertia [kg*m^2]")
     U = _inputs(closed_loop, T.size, **{name: values for name, values in references.items()
@@ -658,8 +696,8 @@ def manoeuvre_metrics(response: control.TimeResponseData, end_time: float | None
         if end_time is None:
             raise ValueError("end_time [s] must be given for a response that does not carry "
                              "profile_end (from profile_response)")
-    end_time = _real_number(end_time, "end_time", "s")
-    settling_band = _real_number(settling_band, "settling_band", "1")
+    end_time = real_number(end_time, "end_time", "s")
+    settling_band = real_number(settling_band, "settling_band", "1")
     if not (0 < settling_band < 1):
         raise ValueError(f"settling_band must be in (0, 1) [fraction of the reference]; "
                          f"got {settling_band:.6g}")
@@ -667,16 +705,16 @@ def manoeuvre_metrics(response: control.TimeResponseData, end_time: float | None
     ch = _response_channels(list(response.output_labels))
     if ch is None:
         raise ValueError("response must have outputs 'theta' and 'torque' (or theta_x..z and "
-                         f"torque_x..z); got {_short(list(response.output_labels))}")
+                         f"torque_x..z); got {describe(list(response.output_labels))}")
     if not (np.isfinite(end_time) and t[0] <= end_time <= t[-1]):
         raise ValueError(f"end_time must lie within the response [{t[0]:.6g}, {t[-1]:.6g}] s; "
                          f"got {end_time:.6g}")
-    theta = np.array([_trace(response, n) for n in ch.thetas])
-    torque = np.array([_trace(response, n) for n in ch.torques])
-    refs = [_trace(response, n, "input") for n in ch.refs]
+    theta = np.array([signal_trace(response, n) for n in ch.thetas])
+    torque = np.array([signal_trace(response, n) for n in ch.torques])
+    refs = [signal_trace(response, n, "input") for n in ch.refs]
     ref = np.array([np.zeros(t.size) if r is None else r for r in refs])
     tips = tip_outputs(response.output_labels)
-    tip = np.array([_trace(response, n) for n in tips]).reshape(len(tips), t.size)
+    tip = np.array([signal_trace(response, n) for n in tips]).reshape(len(tips), t.size)
     names = ["profile_end", "peak_attitude_error_during", "peak_torque_during",
              "residual_attitude_error", "settling_time_after_end"]
     names += ["residual_tip_deflection"] if tips else []

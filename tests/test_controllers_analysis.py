@@ -413,7 +413,7 @@ def test_crossings_refines_all_brackets_together_and_drops_pole_passes():
     sign change at 2 that is no root. All brackets share one vectorised evaluation per
     iteration: the old scalar brentq loop made ~10 calls per bracket (~670 single-frequency
     evaluations per margins call, the bottleneck)."""
-    from controllers.margins import _crossings
+    from controllers.margins import zero_crossings
 
     calls = []
 
@@ -422,29 +422,29 @@ def test_crossings_refines_all_brackets_together_and_drops_pole_passes():
         return (x - 1.0) * (x - 3.0) * (x - 5.0) / (x - 2.0)
 
     grid = np.linspace(0.55, 5.45, 8)  # no grid point on a root or on the pole
-    roots = np.sort(_crossings(f, grid, f(grid)))
+    roots = np.sort(zero_crossings(f, grid, f(grid)))
     calls = calls[1:]  # the grid evaluation above
     np.testing.assert_allclose(roots, [1.0, 3.0, 5.0], rtol=1e-13)  # 1e-13 b stopping width
     assert len(calls) <= 40 and all(n <= 4 for n in calls)
 
 
 def test_crossings_exact_grid_zero_and_no_sign_change():
-    from controllers.margins import _crossings
+    from controllers.margins import zero_crossings
 
     grid = np.array([0.5, 1.0, 1.5])
     values = np.array([-1.0, 0.0, 2.0])
-    np.testing.assert_array_equal(_crossings(lambda x: x - 1.0, grid, values), [1.0])
-    assert _crossings(np.cos, grid, np.ones(3)).size == 0
+    np.testing.assert_array_equal(zero_crossings(lambda x: x - 1.0, grid, values), [1.0])
+    assert zero_crossings(np.cos, grid, np.ones(3)).size == 0
 
 
 def test_modal_evaluator_matches_resolvent():
     """G(s) = C (sI - A)^-1 B + D from the residues and the triangular rigid block equals a
     direct solve on a free-floating plant (rigid Jordan block) with two outputs, round-off
     only (1e-12 relative to |G|)."""
-    from controllers.frequency import _evaluator
+    from controllers.frequency import modal_evaluator
 
     plant = modal_plant(J, [(2.0, 0.01, 0.05, 0.05), (9.0, 0.0, 0.02, -0.01)])
-    ev = _evaluator(plant, ["torque", "disturbance_torque"], ["theta", "omega"])
+    ev = modal_evaluator(plant, ["torque", "disturbance_torque"], ["theta", "omega"])
     assert ev.modal and ev.k == 2
     s = 1j * np.array([0.013, 0.7, 2.05, 8.9, 40.0]) + np.array([0.0, 0.0, 0.0, 0.0, 0.3])
     G = ev(s)
@@ -464,16 +464,16 @@ def test_margins_evaluation_count_on_flexible_loop():
                             (15.0, 0.0, 1.0, -0.001)])
     K = controllers.pd(RIGID, natural_frequency=0.5, roll_off=4.0)  # unstable on this plant
     counted = []
-    original = loop_module._Loop.__call__
+    original = loop_module.LoopTransfer.__call__
 
     def counting(self, omega):
         counted.append(np.size(omega))
         return original(self, omega)
 
-    loop_module._Loop.__call__ = counting
+    loop_module.LoopTransfer.__call__ = counting
     try:
         m = controllers.margins(plant, K)
     finally:
-        loop_module._Loop.__call__ = original
+        loop_module.LoopTransfer.__call__ = original
     assert len(counted) < 80  # was ~10 per sign-change bracket plus ~25 for the modulus search
     assert math.isfinite(m.phase_margin) and m.modulus_margin > 0

@@ -8,7 +8,7 @@ import scipy.linalg
 
 import controllers
 from controllers import frequency as frequency_module
-from controllers.frequency import _evaluator, _ModalEvaluator, _siso_zeros
+from controllers.frequency import ModalEvaluator, modal_evaluator, siso_zeros
 from plants import modal_plant
 
 J = 250.0  # kg m^2
@@ -40,8 +40,8 @@ def test_modal_plant_is_set_up_without_a_schur_form_of_its_whole_A(monkeypatch):
 
     monkeypatch.setattr(frequency_module.scipy.linalg, "schur", recording)
     plant = _many_modes(60)
-    ev = _evaluator(plant, ["torque", "disturbance_torque"], ["theta", "omega",
-                                                              "wing_tip_deflection"])
+    ev = modal_evaluator(plant, ["torque", "disturbance_torque"], ["theta", "omega",
+                                                                   "wing_tip_deflection"])
     assert sizes == [2] and ev.modal and ev.k == 2 and ev.lam.size == 120
     s = 1j * np.array([0.01, 0.9, 3.3, 47.0, 212.0, 1e4]) + 0.05
     G, ref = ev(s), _resolvent(plant, s)
@@ -54,7 +54,7 @@ def test_defective_flexible_block_is_solved_densely():
     cannot be diagonalised: its part is kept as it is and solved at each point, the rest of the
     plant stays modal. Closed form of the part: b c / (s + w)^2."""
     plant = modal_plant(J, [(2.0, 1.0, 0.3, 0.3), (7.0, 0.01, 0.1, 0.1)], disturbance=False)
-    ev = _evaluator(plant, ["torque"], ["theta"])
+    ev = modal_evaluator(plant, ["torque"], ["theta"])
     assert not ev.modal and len(ev.dense) == 1 and ev.lam.size == 2
     s = np.array([0.5j, 2.0j, 6.9j, 30.0j])
     expected = 1 / (J * s ** 2) + 0.09 / (s + 2.0) ** 2 + 0.01 / (s ** 2 + 0.14 * s + 49.0)
@@ -70,8 +70,8 @@ def test_sweep_memory_is_bounded_by_chunking(monkeypatch):
     but the BLAS blocking of the sum over the poles (its order, with several threads): round-off
     of 202 terms, 1e-12 relative to the largest response."""
     plant = _many_modes(100)
-    ev = _evaluator(plant, ["torque", "disturbance_torque"], ["theta", "omega",
-                                                              "wing_tip_deflection"])
+    ev = modal_evaluator(plant, ["torque", "disturbance_torque"], ["theta", "omega",
+                                                                   "wing_tip_deflection"])
     s = 1j * np.logspace(-2, 3, 20_000)
     monkeypatch.setattr(frequency_module, "CHUNK_BYTES", 1 << 20)
     tracemalloc.start()
@@ -108,7 +108,7 @@ def test_siso_zeros_against_the_numerator(seed):
     num = np.trim_zeros(np.where(np.abs(num[0]) > 1e-10 * np.abs(num[0]).max(), num[0], 0.0),
                         "f")
     ref = np.roots(num)
-    z = _siso_zeros(A, b, c, d)
+    z = siso_zeros(A, b, c, d)
     assert z.size == ref.size == n - degree
     for x in ref:
         assert np.min(np.abs(z - x)) < 1e-7 * max(1.0, abs(x))
@@ -123,12 +123,12 @@ def test_siso_zeros_closed_forms():
     b = np.array([0.0, 1.0 / J])
     # one backward-stable Householder step and a 1 x 1 eigenproblem (Higham 2002, sec. 19.3)
     # for a well-conditioned zero (||c|| / Kd = 1.06): a few eps relative; rtol 45 eps
-    np.testing.assert_allclose(_siso_zeros(A, b, np.array([Kp, Kd]), 0.0), [-Kp / Kd],
+    np.testing.assert_allclose(siso_zeros(A, b, np.array([Kp, Kd]), 0.0), [-Kp / Kd],
                                rtol=1e-14)
-    assert _siso_zeros(A, b, np.array([1.0, 0.0]), 0.0).size == 0
+    assert siso_zeros(A, b, np.array([1.0, 0.0]), 0.0).size == 0
     w, p = 3.0, 0.04
     plant = modal_plant(J, [(w, 0.0, p, p)], disturbance=False)
-    z = _siso_zeros(plant.A, plant.B[:, 0], plant.C[0], 0.0)
+    z = siso_zeros(plant.A, plant.B[:, 0], plant.C[0], 0.0)
     # zeros of (s^2 + w^2) + p^2 J s^2 = 0: s = +- j w / sqrt(1 + p^2 J)
     np.testing.assert_allclose(np.sort(z.imag), [-w / np.sqrt(1 + p * p * J),
                                                  w / np.sqrt(1 + p * p * J)], rtol=1e-12)

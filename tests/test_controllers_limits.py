@@ -82,7 +82,8 @@ def test_metrics_of_a_loop_that_never_settles_are_none_not_inf(unstable_on_truth
 
 
 def test_type_errors_name_the_parameter_and_unit(unstable_on_truth):
-    with pytest.raises(TypeError, match=r"angle must be a real number \[rad\]; got str '1'"):
+    with pytest.raises(TypeError, match=r"angle must be a real number \[rad\] \(give the "
+                       r"number in SI units, without a unit string\); got str '1'"):
         controllers.compare(RIGID, RIGID, unstable_on_truth, angle="1", slew_time=20.0)
     with pytest.raises(TypeError, match=r"slew_time must be a real number \[s\]"):
         controllers.compare(RIGID, RIGID, unstable_on_truth, angle=0.1, slew_time=[20.0])

@@ -295,7 +295,7 @@ def test_lqr_on_undamped_plants_with_large_hub_ratios(ratio):
 def test_modal_correction_moves_one_mode_and_no_other():
     """M - G dK: the flagged pair moves to the target exactly (to round-off of the 2 x 2
     placement, 1e-12 relative), the other eigenvalues stay (left invariant subspace)."""
-    from controllers.riccati import _modal_correction
+    from controllers.riccati import modal_correction
 
     rng = np.random.default_rng(11)
     lam = [complex(-1.0, 2.0), complex(1e-14, 7.0), complex(-3.0, 0.5)]
@@ -303,8 +303,8 @@ def test_modal_correction_moves_one_mode_and_no_other():
     S = rng.standard_normal((6, 6))
     M = S @ scipy.linalg.block_diag(*blocks) @ np.linalg.inv(S)
     G = rng.standard_normal((6, 1))
-    dK, reported = _modal_correction(M, G, lambda x: x.real > -1e-3,
-                                     lambda x: complex(-0.5, x.imag))
+    dK, reported = modal_correction(M, G, lambda x: x.real > -1e-3,
+                                    lambda x: complex(-0.5, x.imag))
     got = np.sort_complex(np.linalg.eigvals(M - G @ dK))
     # the eigenvalues it reports are those of the corrected matrix (same round-off)
     np.testing.assert_allclose(np.sort_complex(reported), got, rtol=0, atol=1e-10)
@@ -319,7 +319,7 @@ def test_removed_modes_invariant_to_state_and_input_scaling():
     torque in another unit leave the removed modes and their participation unchanged: the
     participation is a residue of theta/torque, independent of the state coordinates, and
     relative to the rigid-body gain 1/J of the same channel."""
-    from controllers.modes import _design_model
+    from controllers.modes import design_model
 
     stuck = modal_plant(J, [(2.0, 0.0, 0.04, 0.04), (30.0, 0.0, 0.0, 0.02),
                             (45.0, 0.0, 0.03, 0.0)])
@@ -330,7 +330,7 @@ def test_removed_modes_invariant_to_state_and_input_scaling():
                         outputs=list(stuck.output_labels))
     for plant in (stuck, scaled):
         Jp = controllers.rigid_body_inertia(plant)
-        design, removed, _ = _design_model(plant, critical=1e-9, J=Jp, what="test")
+        design, removed, _ = design_model(plant, critical=1e-9, J=Jp, what="test")
         # exactly the 30 rad/s mode the torque cannot reach and the 45 rad/s one theta and
         # omega cannot see
         assert [m.frequency for m in removed] == pytest.approx([30.0, 45.0], rel=1e-12)

@@ -102,7 +102,7 @@ EMBEDDED = embedded_planar_plant(PLANAR, 300.0, 400.0)
 
 
 def _response(system, inputs, outputs, s):
-    ev = controllers.frequency._evaluator(system, inputs, outputs)
+    ev = controllers.frequency.modal_evaluator(system, inputs, outputs)
     return ev(np.asarray(s))
 
 

@@ -114,7 +114,7 @@ def test_a_digital_lqr_failure_names_the_sampling_not_the_weights(monkeypatch):
         raise ValueError("digital regulator: the discrete Riccati equation has no stabilising "
                          "solution that can be computed (LAPACK)")
 
-    monkeypatch.setattr(importlib.import_module("controllers.lqr"), "_solve_dare", failing)
+    monkeypatch.setattr(importlib.import_module("controllers.lqr"), "solve_dare", failing)
     with pytest.raises(ValueError, match=r"the digital design at sample_time 0\.01 s failed "
                                          r"numerically \(.*\) where the continuous design "
                                          r"with the same weights succeeded: the sampling is "

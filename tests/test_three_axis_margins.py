@@ -3,7 +3,7 @@ against LAPACK's SVD, and the grid that places its points once for coincident ro
 
 import numpy as np
 
-from controllers.loop import _Loop
+from controllers.loop import LoopTransfer
 from controllers.margins import _largest_singular_values
 from plants import three_axis_plant
 
@@ -47,7 +47,7 @@ def test_grid_places_coincident_roots_once_and_keeps_distinct_ones():
     def points_near_2(modes):
         plant = three_axis_plant(J, modes)
         K = controllers.pd(plant, natural_frequency=0.1, damping=0.7)
-        return np.count_nonzero(np.abs(_Loop(plant, K).grid() - 2.0) < 0.05)
+        return np.count_nonzero(np.abs(LoopTransfer(plant, K).grid() - 2.0) < 0.05)
 
     single = points_near_2([(2.0, 0.005, b1, b1)])
     coincident = points_near_2([(2.0, 0.005, b1, b1), (2.0, 0.005, b2, b2)])
