@@ -21,14 +21,21 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 
 import numpy as np
 
-__all__ = ["MAX_SHOWN", "shorten", "real_number", "positive_finite", "c_identifier",
-           "is_c_identifier", "xml_text", "first_xml_illegal"]
+from .limits import check_cosimulation_steps
+
+__all__ = ["MAX_SHOWN", "COSIMULATION_METHODS", "shorten", "real_number", "positive_finite",
+           "c_identifier", "is_c_identifier", "xml_text", "first_xml_illegal",
+           "check_cosimulation_run"]
 
 #: Longest excerpt of a value shown in an error message [characters].
 MAX_SHOWN = 100
+
+#: The master algorithms of a co-simulation (:func:`fmu.cosimulate`).
+COSIMULATION_METHODS = ("gauss-seidel", "jacobi")
 
 _C_IDENTIFIER = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 # characters XML 1.0 forbids (the complement of production [2] Char)
@@ -102,3 +109,47 @@ def xml_text(name: str, value: object) -> str:
             f"tab, newline and carriage return); got U+{ord(value[position]):04X} at position "
             f"{position} of {shorten(value)}")
     return value
+
+
+def check_cosimulation_run(method: object, step: object, stop_time: object,
+                           start_time: object, inputs: object, start_values: tuple) -> int:
+    """Check the arguments of a fixed-step co-simulation run; return its number of steps.
+
+    Parameters
+    ----------
+    method : str
+        One of :data:`COSIMULATION_METHODS`.
+    step, stop_time, start_time : float, s
+        The communication step (positive) and the interval, a whole number of steps long and
+        at most ``fmu.limits.MAX_COSIMULATION_STEPS`` of them.
+    inputs : mapping or None
+        The external inputs by name.
+    start_values : tuple of (name, mapping or None)
+        Further mappings to check, with their parameter names.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the parameter, its unit, what was expected and what was got.
+    """
+    if not isinstance(method, str) or method not in COSIMULATION_METHODS:
+        raise ValueError(f"method must be one of {COSIMULATION_METHODS}; got {shorten(method)}")
+    for label, value in (("step", step), ("stop_time", stop_time), ("start_time", start_time)):
+        if not math.isfinite(real_number(label, value, "s")):
+            raise ValueError(f"{label} must be finite [s]; got {value!r}")
+    if not step > 0:
+        raise ValueError(f"step must be positive [s]; got {step!r}")
+    for label, value in (("inputs", inputs), *start_values):
+        if value is not None and not isinstance(value, Mapping):
+            raise TypeError(f"{label} must be a mapping {{name: value}}; got "
+                            f"{type(value).__name__} {shorten(value)}")
+    duration = float(stop_time) - float(start_time)
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"stop_time must be after start_time, by a finite time [s]; got "
+                         f"stop_time {stop_time!r}, start_time {start_time!r}")
+    check_cosimulation_steps(duration / step, step, duration)
+    n_steps = int(round(duration / step))
+    if n_steps < 1 or abs(n_steps * step - duration) > 1e-9 * max(duration, step):
+        raise ValueError(f"stop_time - start_time must be a positive whole number of steps "
+                         f"(step = {step!r} s) [s]; got {duration!r} s")
+    return n_steps

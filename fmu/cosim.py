@@ -28,22 +28,31 @@ from typing import Union
 
 import numpy as np
 
-from .checks import real_number, shorten
+from .checks import check_cosimulation_run, real_number, shorten
 from .errors import CosimulationError
-from .limits import check_cosimulation_steps
 
-__all__ = ["cosimulate", "run_loop", "Signal"]
+__all__ = ["FMUSlave", "Signal", "cosimulate", "run_loop"]
 
 #: An external input: a constant, a function of time ``f(t) -> float`` (t in s), or a table
 #: ``(times, values)`` (see :func:`cosimulate`).
 Signal = Union[float, Callable[[float], float], tuple]
 
-_METHODS = ("gauss-seidel", "jacobi")
-
-
-class _Slave:
+class FMUSlave:
     """One Co-Simulation FMU instance (FMI 2.0 or 3.0), with its real inputs and outputs
-    by name and, for FMI 3.0, its periodic input clock if it has one."""
+    by name and, for FMI 3.0, its periodic input clock if it has one.
+
+    The master's view of an FMU over fmpy's ``FMU2Slave``/``FMU3Slave``: every call's status
+    is checked in one place and a failure raised as a :class:`~fmu.errors.CosimulationError`
+    naming the FMU (by ``role``), the call and the time.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The .fmu file.
+    role : str
+        The FMU's part in the loop for the messages ("plant", "controller", an SSP
+        component's name); ``<role>_fmu`` is the parameter named when ``path`` is refused.
+    """
 
     def __init__(self, path: str | Path, role: str):
         from fmpy import extract, read_model_description
@@ -325,14 +334,14 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
     in FMI for Model Exchange and Co-Simulation V2.0", Archive of Mechanical Engineering
     60(1), 75-94, 2013 (Jacobi and Gauss-Seidel master algorithms).
     """
-    n_steps = _check_run(method, step, stop_time, start_time, inputs,
-                         (("plant_start_values", plant_start_values),
-                          ("controller_start_values", controller_start_values)))
-    slaves: list[_Slave] = []
+    n_steps = check_cosimulation_run(method, step, stop_time, start_time, inputs,
+                                     (("plant_start_values", plant_start_values),
+                                      ("controller_start_values", controller_start_values)))
+    slaves: list[FMUSlave] = []
     try:
-        plant = _Slave(plant_fmu, "plant")
+        plant = FMUSlave(plant_fmu, "plant")
         slaves.append(plant)
-        controller = _Slave(controller_fmu, "controller")
+        controller = FMUSlave(controller_fmu, "controller")
         slaves.append(controller)
 
         plant_to_controller = [(name, name) for name in plant.outputs if name in controller.inputs]
@@ -349,7 +358,7 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
                                     "rename one so every signal has one source")
         # external inputs: inputs that no output feeds, by name (one name may be an input
         # of both FMUs: it is then set on both)
-        external: dict[str, list[tuple[_Slave, str]]] = {}
+        external: dict[str, list[tuple[FMUSlave, str]]] = {}
         for slave, connected in ((controller, plant_to_controller), (plant, controller_to_plant)):
             fed = {end for _, end in connected}
             for name in slave.inputs:
@@ -364,35 +373,9 @@ def cosimulate(plant_fmu: str | Path, controller_fmu: str | Path, stop_time: flo
             slave.close()
 
 
-def _check_run(method: object, step: object, stop_time: object, start_time: object,
-               inputs: object, start_values: tuple) -> int:
-    """Check the arguments of a co-simulation run; returns the number of steps."""
-    if not isinstance(method, str) or method not in _METHODS:
-        raise ValueError(f"method must be one of {_METHODS}; got {shorten(method)}")
-    for label, value in (("step", step), ("stop_time", stop_time), ("start_time", start_time)):
-        if not math.isfinite(real_number(label, value, "s")):
-            raise ValueError(f"{label} must be finite [s]; got {value!r}")
-    if not step > 0:
-        raise ValueError(f"step must be positive [s]; got {step!r}")
-    for label, value in (("inputs", inputs), *start_values):
-        if value is not None and not isinstance(value, Mapping):
-            raise TypeError(f"{label} must be a mapping {{name: value}}; got "
-                            f"{type(value).__name__} {shorten(value)}")
-    duration = float(stop_time) - float(start_time)
-    if not (math.isfinite(duration) and duration > 0):
-        raise ValueError(f"stop_time must be after start_time, by a finite time [s]; got "
-                         f"stop_time {stop_time!r}, start_time {start_time!r}")
-    check_cosimulation_steps(duration / step, step, duration)
-    n_steps = int(round(duration / step))
-    if n_steps < 1 or abs(n_steps * step - duration) > 1e-9 * max(duration, step):
-        raise ValueError(f"stop_time - start_time must be a positive whole number of steps "
-                         f"(step = {step!r} s) [s]; got {duration!r} s")
-    return n_steps
-
-
-def run_loop(plant: _Slave, controller: _Slave, plant_to_controller: list[tuple[str, str]],
+def run_loop(plant: FMUSlave, controller: FMUSlave, plant_to_controller: list[tuple[str, str]],
              controller_to_plant: list[tuple[str, str]],
-             external: Mapping[str, list[tuple[_Slave, str]]],
+             external: Mapping[str, list[tuple[FMUSlave, str]]],
              inputs: Mapping[str, Signal] | None, *, method: str, start_time: float,
              n_steps: int, step: float, plant_start_values: Mapping[str, float] | None = None,
              controller_start_values: Mapping[str, float] | None = None) -> np.ndarray:
@@ -400,10 +383,10 @@ def run_loop(plant: _Slave, controller: _Slave, plant_to_controller: list[tuple[
 
     Parameters
     ----------
-    plant, controller : _Slave
+    plant, controller : FMUSlave
         Not yet initialised; the caller closes them.
     plant_to_controller, controller_to_plant : list of (output name, input name)
-    external : mapping of str to list of (_Slave, input name)
+    external : mapping of str to list of (FMUSlave, input name)
         Unconnected inputs by external name.
     inputs : mapping of str to signal, optional
         Values of external inputs by external name.

@@ -35,8 +35,8 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from .checks import shorten, xml_text
-from .cosim import Signal, _check_run, _Slave, run_loop
+from .checks import check_cosimulation_run, shorten, xml_text
+from .cosim import FMUSlave, Signal, run_loop
 from .errors import CosimulationError, FMUBuildError
 from .files import write_atomically
 from .units import SI_UNITS
@@ -280,7 +280,7 @@ def cosimulate_ssp(ssp: str | os.PathLike, stop_time: float, step: float, *,
     if start_values is not None and not isinstance(start_values, Mapping):
         raise TypeError(f"start_values must be a mapping {{component: {{name: value}}}}; got "
                         f"{type(start_values).__name__} {shorten(start_values)}")
-    n_steps = _check_run(method, step, stop_time, start_time, inputs, ())
+    n_steps = check_cosimulation_run(method, step, stop_time, start_time, inputs, ())
     try:
         structure = read_ssd(str(ssp), validate=True)
     except Exception as error:  # fmpy raises plain exceptions
@@ -291,7 +291,7 @@ def cosimulate_ssp(ssp: str | os.PathLike, stop_time: float, step: float, *,
         raise CosimulationError(f"the SSP {Path(ssp).name} must hold two FMU components (plant "
                                 f"and controller); got {len(components)}")
     folder = Path(tempfile.mkdtemp(prefix="flexsat-ssp-"))
-    slaves: list[_Slave] = []
+    slaves: list[FMUSlave] = []
     try:
         with zipfile.ZipFile(ssp) as archive:
             for component in components:
@@ -302,11 +302,11 @@ def cosimulate_ssp(ssp: str | os.PathLike, stop_time: float, step: float, *,
                 # written under a name of ours: a source path never leaves the folder
                 destination = folder / f"{len(slaves)}.fmu"
                 destination.write_bytes(archive.read(member))
-                slaves.append(_Slave(destination, component.name))
+                slaves.append(FMUSlave(destination, component.name))
         plant, controller = slaves
         by_name = {slave.role: slave for slave in slaves}
         plant_to_controller, controller_to_plant = [], []
-        external: dict[str, list[tuple[_Slave, str]]] = {}
+        external: dict[str, list[tuple[FMUSlave, str]]] = {}
         for connection in structure.system.connections:
             start, end = connection.startElement, connection.endElement
             if start in by_name and end in by_name:

@@ -270,7 +270,6 @@ REMAINING_CIRCLES = {
 REMAINING_PRIVATE = {
     "spacecraft": "spacecraft.cli, scene, three_axis_run, sweep.evaluate and sweep.command "
                   "import private names of scene, scene_reader, report, runner and cli",
-    "fmu": "fmu.ssp imports cosim._Slave and cosim._check_run",
 }
 
 

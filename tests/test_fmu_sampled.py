@@ -190,7 +190,7 @@ def test_clock_activation_and_fmu_sampling_give_the_same_loop(monkeypatch):
     activation (an importer that does not handle clocks) fmi3DoStep takes the samples
     itself: bit-identical results."""
     ticks = []
-    original = fmu.cosim._Slave.tick
+    original = fmu.cosim.FMUSlave.tick
 
     def counting(self, time):
         if self.ticks_at(time):
@@ -198,12 +198,12 @@ def test_clock_activation_and_fmu_sampling_give_the_same_loop(monkeypatch):
         return original(self, time)
 
     with monkeypatch.context() as patch:
-        patch.setattr(fmu.cosim._Slave, "tick", counting)
+        patch.setattr(fmu.cosim.FMUSlave, "tick", counting)
         clocked = cosimulate(exported("plant", "3.0"), exported("lqr", "3.0"), 1.0, SAMPLE_TIME / 2,
                              inputs={"theta_ref": 0.1})
     assert len(ticks) == 21  # 0, 0.05, ..., 1.0: every other point of the h = T/2 grid
     with monkeypatch.context() as patch:
-        patch.setattr(fmu.cosim._Slave, "tick", lambda self, time: None)
+        patch.setattr(fmu.cosim.FMUSlave, "tick", lambda self, time: None)
         unclocked = cosimulate(exported("plant", "3.0"), exported("lqr", "3.0"), 1.0,
                                SAMPLE_TIME / 2, inputs={"theta_ref": 0.1})
     for name in clocked.dtype.names:
