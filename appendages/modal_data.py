@@ -102,9 +102,10 @@ PLANES = {"xy": ((1, 5), (1.0, 1.0)), "xz": ((2, 4), (1.0, -1.0))}
 #: complete set of modes makes zero.
 RESIDUAL_TOLERANCE = 1e-6
 
-#: Effective-mass fraction below which a mode is taken as not seen by a motion (a planar or rod
-#: view): the cross-talk that round-off leaves in a decoupled model's data is ~1e-14 (single-
-#: precision output), a mode coupled that weakly makes a pole-zero pair that W does not show.
+#: Effective-mass fraction below which a mode is taken as not seen by a motion (a planar view):
+#: the cross-talk that round-off leaves in a decoupled model's data is far below it (1e-28 and
+#: less in tests/data/nastran's beam_modes), and a mode coupled that weakly makes a pole-zero
+#: pair that W does not show.
 NEGLIGIBLE_FRACTION = 1e-12
 
 # Modes whose frequencies agree to this (relative) are one degenerate group (a round boom's two
