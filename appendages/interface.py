@@ -16,7 +16,7 @@ coordinates*, a :class:`RootModel`: generalised coordinates ``q = [delta, phi, q
 
 so that ``W(s) = [(M s**2 + C s + K)^-1]`` restricted to the first two coordinates. This is the
 form in which a hub couples to any appendage: the first two coordinates are set equal to the hub's
-motion at the mount, whatever the appendage's class (``spacecraft.coupling``). The mass matrix may
+motion at the mount, whatever the appendage's class (``spacecraft.dynamics.coupling``). The mass matrix may
 be singular (a massless spring between the mount and the first body); the coupled system is not.
 
 Three axes (issue 11)

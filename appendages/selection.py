@@ -18,7 +18,7 @@ Quantities
 
 What this rule does not cover: coupled frequencies and closed-loop responses depend on the hub
 (mass ratio, mount position, controller bandwidth); for those, search the actual scene
-(``spacecraft.fidelity.choose_n_modes``), starting from the size given here. Non-uniform beams
+(``spacecraft.design.fidelity.choose_n_modes``), starting from the size given here. Non-uniform beams
 are not covered either.
 
 References

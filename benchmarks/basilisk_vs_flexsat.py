@@ -120,8 +120,8 @@ def one_case(label: str, spacecraft, K, truth_plant, scene, *, repeats: int = 5)
 
 def scene_rows(names) -> list:
     """Every design variant x controller of the embedded scenes."""
-    from spacecraft.runner import run
-    from spacecraft.scene import load_scene, scene_path
+    from spacecraft.design.loop import run
+    from spacecraft.scene.read import load_scene, scene_path
 
     rows = []
     for name in names:
@@ -155,7 +155,7 @@ def _damped_fit(beam, n_bodies: int):
 def _default_scene_parts(position=(0.5, 0.0), direction=0.0):
     """(beam, truth plant, scene) of the default scene with the rod at another mount."""
     from spacecraft import Hub, Mount, Spacecraft
-    from spacecraft.scene import default_scene
+    from spacecraft.scene.read import default_scene
 
     scene = default_scene()
     beam = paper_rod(damping_ratio=0.005)

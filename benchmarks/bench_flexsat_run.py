@@ -79,7 +79,7 @@ def import_floor(env: dict) -> dict:
     """CPU and wall seconds to import what a run needs (one fresh process)."""
     code = ("import time; c = time.process_time(); t = time.perf_counter(); "
             "import control; a = time.process_time() - c; "
-            "import spacecraft.runner, spacecraft.report; "
+            "import spacecraft.design.loop, spacecraft.report.write; "
             "print(a, time.process_time() - c, time.perf_counter() - t)")
     done = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env,
                           capture_output=True, text=True, check=True)

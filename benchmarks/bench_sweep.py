@@ -1,7 +1,7 @@
 """Cost of a sweep (issue 13): one sample, Dask's per-task overhead, 1 -> 2 worker speed-up,
 10,000 samples of the default sweep scene.
 
-Measured on the shipped sweep scene (``spacecraft/scenes/sweeps/default.toml``: the paper's rod
+Measured on the shipped sweep scene (``spacecraft/scene/embedded/sweeps/default.toml``: the paper's rod
 on a 100 kg hub, LQR + Kalman tuned on the fitted 3-body chain and held (design = "nominal"),
 2 modes of truth, the slew, every sample also closed on the exact beam), no FMUs and no plots:
 
@@ -66,8 +66,8 @@ def load() -> list[float]:
 
 def per_sample(n: int) -> dict:
     import spacecraft.sweep as S
-    from spacecraft.runner import run
-    from spacecraft.scene import load_scene
+    from spacecraft.design.loop import run
+    from spacecraft.scene.read import load_scene
     from spacecraft.sweep.evaluate import apply_values, evaluate, prepare
 
     raw, spec, source = S.load_sweep(None, samples=n)

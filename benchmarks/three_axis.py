@@ -48,7 +48,7 @@ import controllers
 from appendages import Beam, limits
 from appendages.fit3d import fit_chain_3d
 from spacecraft import Hub, Mount, Spacecraft
-from spacecraft.kinematics import euler_orientation, orientation_from_axis
+from spacecraft.dynamics.kinematics import euler_orientation, orientation_from_axis
 
 sys.path.insert(0, str(ROOT / "tests"))
 import fe3d  # noqa: E402  (the independent reference, shipped with the tests)

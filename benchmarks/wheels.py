@@ -10,7 +10,7 @@ PD and LQR tuned on both fitted chains, each closed on its design chain and on t
 8 loops of 6 to 12 states). For each loop:
 
 - ``today``: what the runner does for the scene's slew today, ``Simulator(loop, 0.1)`` and
-  ``spacecraft.responses.simulate_manoeuvre`` (cycloidal 10 deg / 60 s, 200 s at 0.1 s);
+  ``spacecraft.design.responses.simulate_manoeuvre`` (cycloidal 10 deg / 60 s, 200 s at 0.1 s);
 - ``flown``: the flown slew without wheels, the same controller tuned with ``feedforward=True``
   on a shaped profile (bang-coast-bang, 10 deg in 60 s, ZVD shaper on the design chain's first
   flexible mode) with its rate reference and feedforward torque, ``Simulator`` + outputs;
@@ -42,7 +42,7 @@ import numpy as np
 import controllers
 import spacecraft
 from _common import machine_info, markdown_table, write_json, RESULTS
-from spacecraft.responses import simulate_manoeuvre
+from spacecraft.design.responses import simulate_manoeuvre
 
 ANGLE, DURATION, T_FINAL, STEP = math.radians(10.0), 60.0, 200.0, 0.1
 TORQUE_LIMIT, MOMENTUM_LIMIT, SPIN_INERTIA = 0.03, 1.2, 0.01

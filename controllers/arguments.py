@@ -136,7 +136,7 @@ def check_inertia(inertia, name: str = "inertia") -> np.ndarray:
     Symmetric to 1e-9 of its largest entry, positive definite, finite, and its principal
     moments j1 <= j2 <= j3 obey the triangle inequality j3 <= j1 + j2 (to 1e-9 relative;
     equality is a flat plate): the checks of the hub's tensor in
-    :func:`spacecraft.kinematics.check_inertia_tensor`, kept here because controllers imports
+    :func:`spacecraft.dynamics.kinematics.check_inertia_tensor`, kept here because controllers imports
     no other flexsat package.
 
     Raises

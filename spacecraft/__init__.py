@@ -1,5 +1,12 @@
-"""The spacecraft: a rigid hub coupled to appendages through the W-matrix interface, scenes,
-the scene runner, its report and the ``flexsat`` command.
+"""The spacecraft: a rigid hub coupled to appendages through the W-matrix interface, and the
+application around it.
+
+The subpackages, from the physics up (each imports only those listed before it):
+:mod:`.dynamics` (hub, mounts, the coupled spacecraft, exact references), :mod:`.scene` (a
+user's question, read and validated), :mod:`.basilisk` (the adapter to Basilisk),
+:mod:`.design` (the design loop: models, fidelity, tuning, responses, verdicts), :mod:`.report`
+(output folder, pages, plots, results, FMUs), :mod:`.sweep` (sweeps on Dask) and :mod:`.cli`
+(the ``flexsat`` command). :mod:`.walkthrough` is a worked example of the public API.
 
 The names below are imported on first use (PEP 562): ``import spacecraft`` costs nothing, so
 that ``flexsat --help`` does not load numpy, scipy, python-control, matplotlib or Dask.
@@ -7,16 +14,15 @@ that ``flexsat --help`` does not load numpy, scipy, python-control, matplotlib o
 
 import importlib
 
-#: Public name -> the module that defines it.
+#: Public name -> the subpackage that exports it.
 _WHERE = {
-    "SecondOrderModel": "coupling", "Spacecraft": "coupling",
-    "Hub": "hub", "Mount": "hub",
-    "Limits": "limits",
-    "OutputError": "output", "OutputFolder": "output",
-    "output_folder": "report", "write_report": "report",
-    "RunResult": "runner", "RunStats": "runner", "run": "runner",
-    "Scene": "scene", "SceneError": "scene", "default_scene": "scene",
+    "SecondOrderModel": "dynamics", "Spacecraft": "dynamics", "Hub": "dynamics",
+    "Mount": "dynamics",
+    "Limits": "scene", "Scene": "scene", "SceneError": "scene", "default_scene": "scene",
     "example_scenes": "scene", "load_scene": "scene", "scene_path": "scene",
+    "RunResult": "design", "RunStats": "design", "run": "design",
+    "OutputError": "report", "OutputFolder": "report", "output_folder": "report",
+    "write_report": "report",
 }
 
 __all__ = [

@@ -507,7 +507,7 @@ def hinged_wing(**simulator):
     ``simulator`` keys and no plots."""
     import tomllib
 
-    from spacecraft.scene import scene_path
+    from spacecraft.scene.read import scene_path
 
     with open(scene_path("hinged_wing"), "rb") as stream:
         data = tomllib.load(stream)
@@ -580,7 +580,7 @@ def test_a_basilisk_run_over_its_time_limit_names_the_limit():
 def test_the_summary_names_the_truth_model_it_compares_with():
     """hinged_wing's truth is a 20-body chain, not "the distributed beam"."""
     from spacecraft import load_scene
-    from spacecraft.simulators import summary, truth_label
+    from spacecraft.design.simulators import summary, truth_label
 
     assert truth_label(load_scene("hinged_wing")) == "the 20-body truth chain"
     assert truth_label(load_scene("single_boom")) == "the distributed beam (truth)"

@@ -9,7 +9,7 @@ import pytest
 from appendages import Beam
 from appendages.equivalence import fit_chain
 from spacecraft import cli
-from spacecraft.runner import run
+from spacecraft.design.loop import run
 
 # The small test scene of tests/test_scene.py as a file: no FMUs, plots only when asked.
 SCENE = """\
@@ -155,14 +155,14 @@ def test_output_folder_taken_is_a_user_error(scene_file, tmp_path, capsys):
 
 
 def test_failure_leaves_no_half_written_folder(scene_file, tmp_path, capsys, monkeypatch):
-    import spacecraft.report
+    import spacecraft.report.write
 
     def broken(*args, **kwargs):
         folder = args[1]
         (folder / "report.md").write_text("half")
         raise RuntimeError("disk on fire")
 
-    monkeypatch.setattr(spacecraft.report, "write_report", broken)
+    monkeypatch.setattr(spacecraft.report.write, "write_report", broken)
     out = tmp_path / "o"
     assert flexsat("run", scene_file, "--out", out, "--quiet") == 1
     err = capsys.readouterr().err
@@ -300,17 +300,17 @@ def test_debug_is_accepted_after_the_subcommand(command):
 
 def test_debug_after_the_subcommand_shows_the_traceback(scene_file, tmp_path, capsys,
                                                        monkeypatch):
-    import spacecraft.runner
+    import spacecraft.design.loop
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("x")
-    monkeypatch.setattr(spacecraft.runner, "run", broken)
+    monkeypatch.setattr(spacecraft.design.loop, "run", broken)
     assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet", "--debug") == 1
     assert "Traceback" in capsys.readouterr().err
 
 
 def test_scenes_json_lists_name_title_and_a_loadable_path(capsys):
-    from spacecraft.scene import example_scenes, load_scene
+    from spacecraft.scene.read import example_scenes, load_scene
 
     assert flexsat("scenes", "--json") == 0
     scenes = json.loads(capsys.readouterr().out)
@@ -462,9 +462,9 @@ def test_help_imports_no_numerical_library():
 
 def test_package_names_resolve_on_first_use():
     import spacecraft
-    import spacecraft.runner
+    import spacecraft.design.loop
 
-    assert spacecraft.run is spacecraft.runner.run
+    assert spacecraft.run is spacecraft.design.loop.run
     assert callable(spacecraft.sweep) and spacecraft.sweep.__name__ == "spacecraft.sweep"
     assert set(spacecraft.__all__) <= set(dir(spacecraft))
     with pytest.raises(AttributeError, match="no attribute 'nope'"):
@@ -481,7 +481,7 @@ def test_the_last_line_counts_in_words(scene_file, tmp_path, capsys):
 
 
 def test_basilisk_table_keeps_small_relative_differences_visible():
-    from spacecraft.report import _basilisk
+    from spacecraft.report.write import _basilisk
 
     entry = {"design": "frequencies", "bsk_version": "2.12.1", "sample_time": 0.05,
              "dt": 0.05, "summary": "s",

@@ -1,6 +1,6 @@
 """Every exit path of the flexsat command, and its output folders.
 
-Exit codes (spacecraft/cli.py): 0 success (also when stdout is closed early); 1 a bug of
+Exit codes (spacecraft/cli/command.py): 0 success (also when stdout is closed early); 1 a bug of
 flexsat; 2 a user or environment error, one line on stderr; 130 SIGINT; 128 + n signal n
 (143 SIGTERM, 129 SIGHUP). Output folders are claimed before any computing, follow the umask,
 are complete or absent, and simultaneous runs never collide.
@@ -21,9 +21,9 @@ from pathlib import Path
 
 import pytest
 
-import spacecraft.report
-import spacecraft.runner
-from spacecraft.output import OWNER
+import spacecraft.report.write
+import spacecraft.design.loop
+from spacecraft.report.output import OWNER
 
 from test_cli import SCENE, flexsat, scene_file  # noqa: F401 (scene_file: a fixture)
 
@@ -42,7 +42,7 @@ def no_computing(monkeypatch):
     """Make any scene run fail loudly: the checks under test must come before it."""
     def fail(*args, **kwargs):
         raise AssertionError("the run started although the output folder is unusable")
-    monkeypatch.setattr(spacecraft.runner, "run", fail)
+    monkeypatch.setattr(spacecraft.design.loop, "run", fail)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -60,7 +60,7 @@ def test_success_exits_0_with_a_complete_folder(scene_file, tmp_path, capsys):
 def test_a_bug_exits_1_with_one_line(scene_file, tmp_path, capsys, monkeypatch, error):
     def broken(*args, **kwargs):
         raise error
-    monkeypatch.setattr(spacecraft.runner, "run", broken)
+    monkeypatch.setattr(spacecraft.design.loop, "run", broken)
     out = tmp_path / "out"
     assert flexsat("run", scene_file, "--out", out, "--quiet") == 1
     line = one_line(capsys)
@@ -72,7 +72,7 @@ def test_a_bug_exits_1_with_one_line(scene_file, tmp_path, capsys, monkeypatch, 
 def test_debug_shows_the_traceback(scene_file, tmp_path, capsys, monkeypatch):
     def broken(*args, **kwargs):
         raise ZeroDivisionError("x")
-    monkeypatch.setattr(spacecraft.runner, "run", broken)
+    monkeypatch.setattr(spacecraft.design.loop, "run", broken)
     assert flexsat("--debug", "run", scene_file, "--out", tmp_path / "o", "--quiet") == 1
     assert "Traceback" in capsys.readouterr().err
 
@@ -175,11 +175,11 @@ def test_output_under_proc_exits_2_before_computing(scene_file, capsys, monkeypa
 def test_unwritable_output_exits_2_before_computing(scene_file, tmp_path, capsys, monkeypatch,
                                                     problem):
     # root may write anywhere: the file system's refusal is simulated at the one mkdir
-    import spacecraft.output
+    import spacecraft.report.output
 
     def refuse(path, *args, **kwargs):
         raise OSError(problem, os.strerror(problem), str(path))
-    monkeypatch.setattr(spacecraft.output.os, "mkdir", refuse)
+    monkeypatch.setattr(spacecraft.report.output.os, "mkdir", refuse)
     no_computing(monkeypatch)
     assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet") == 2
     assert f"cannot create the output folder here ({os.strerror(problem)})" in one_line(capsys)
@@ -269,7 +269,7 @@ def test_a_full_tmpdir_is_blamed_on_tmpdir_not_on_out(scene_file, tmp_path, caps
 def test_out_of_memory_exits_2(scene_file, tmp_path, capsys, monkeypatch):
     def hungry(*args, **kwargs):
         raise MemoryError()
-    monkeypatch.setattr(spacecraft.runner, "run", hungry)
+    monkeypatch.setattr(spacecraft.design.loop, "run", hungry)
     assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet") == 2
     assert one_line(capsys).startswith("flexsat: error: out of memory")
 
@@ -283,7 +283,7 @@ def test_fmu_errors_are_classified(scene_file, tmp_path, capsys, monkeypatch, me
 
     def no_compiler(*args, **kwargs):
         raise FMUBuildError(message)
-    monkeypatch.setattr(spacecraft.report, "write_report", no_compiler)
+    monkeypatch.setattr(spacecraft.report.write, "write_report", no_compiler)
     assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet") == code
     assert "FMU export failed: " + message.split(":")[0] in one_line(capsys)
 
@@ -381,7 +381,7 @@ def test_title_is_escaped_in_markdown_and_html(scene_file, tmp_path):
 
 
 def test_markdown_text_renders_as_the_text():
-    from spacecraft.report import markdown_text
+    from spacecraft.report.write import markdown_text
 
     assert markdown_text("n_modes = 3, peak_tip") == "n_modes = 3, peak_tip"  # intraword _
     assert markdown_text("# 1. - x", line_start=True) == r"\# 1. - x"
@@ -417,13 +417,13 @@ def test_numerical_warnings_are_one_formatted_line(scene_file, tmp_path, capsys,
 SLOW_RUN = """\
 import sys, time
 sys.path.insert(0, {root!r})
-import spacecraft.runner as runner
+import spacecraft.design.loop as runner
 real = runner._Runner.run
 def slow(self):
     time.sleep({seconds})   # in the computation, after the output folder was claimed
     return real(self)
 runner._Runner.run = slow
-from spacecraft.cli import main
+from spacecraft.cli.command import main
 sys.exit(main(sys.argv[1:]))
 """
 

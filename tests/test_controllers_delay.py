@@ -62,7 +62,7 @@ def test_phase_margin_with_delay_is_the_margin_minus_omega_c_tau(plant):
 
 def test_delay_on_the_exact_beam_loop_function():
     """The runner's exact-beam verdict evaluates L through W(s) of the distributed beam
-    (spacecraft.verdicts.exact_loop_verdict: loop_margins on a callable, spillover on an FRD):
+    (spacecraft.design.verdicts.exact_loop_verdict: loop_margins on a callable, spillover on an FRD):
     the same identity holds on that callable, and the FRD verdict with the delay agrees with
     the callable's delay margin."""
     from appendages import Beam

@@ -2,7 +2,7 @@
 
 Reference: the loop of a hub carrying the paper's rod, closed by a PD, evaluated in 40-digit
 arithmetic from the closed form of the free-free beam's W(s) (written out here, independent of
-appendages.beam and spacecraft.exact), the hub's planar kinematics and the controller's
+appendages.beam and spacecraft.dynamics.exact), the hub's planar kinematics and the controller's
 state-space matrices; its crossings and the minimum of |1 + L| found by mpmath's root finder
 on that function. flexsat's exact response is right to about 1e-13 relative, so its margins
 must agree to 1e-9 (the promised accuracy, four orders of magnitude above the response's
@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import controllers
-from spacecraft.runner import RunStats, _Runner, run
-from spacecraft.scene import load_scene
+from spacecraft.design.loop import RunStats, _Runner, run
+from spacecraft.scene.read import load_scene
 
 from test_scene import scene_with
 
@@ -139,7 +139,7 @@ def test_a_loop_delay_enters_the_exact_margins(loop):
     # omega tau. At the delayed loop's own gain crossover (on this undamped rod a resonance's:
     # 10 ms is beyond what its undamped modes tolerate at 71 rad/s), the reference's |L| is 1
     # and its phase margin less omega tau is the delayed margin.
-    from spacecraft.verdicts import exact_loop_verdict
+    from spacecraft.design.verdicts import exact_loop_verdict
 
     result, row, K, ref = loop
     theta = np.asarray(result.exact_frd.frdata)[0, 0]

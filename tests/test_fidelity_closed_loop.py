@@ -3,7 +3,7 @@
 The finding: the default scene's truth model (2 Craig-Bampton modes, from the open-loop rule)
 missed the least-damped closed-loop pole (zeta 0.0045 at 15.6 rad/s, the fourth mode, with the
 damping then given to the free-free modes) and its LQR margins were 0.3 dB and 2 % of modulus
-margin from the exact beam's. With the closed-loop rule (spacecraft.fidelity
+margin from the exact beam's. With the closed-loop rule (spacecraft.design.fidelity
 .refine_for_closed_loop) the verdict agrees with a 12-mode truth model and with the exact beam
 to the scene's tolerance."""
 import dataclasses
@@ -13,9 +13,9 @@ import types
 import numpy as np
 import pytest
 
-from spacecraft.fidelity import (DAMPING_SCALE, closed_loop_change, refine_for_closed_loop)
-from spacecraft.runner import RunStats, _Runner, run
-from spacecraft.scene import load_scene
+from spacecraft.design.fidelity import (DAMPING_SCALE, closed_loop_change, refine_for_closed_loop)
+from spacecraft.design.loop import RunStats, _Runner, run
+from spacecraft.scene.read import load_scene
 
 from test_scene import scene_with
 

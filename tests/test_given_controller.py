@@ -1,4 +1,4 @@
-"""A controller given as numbers in a scene (spacecraft/given_controller.py): the same loop as
+"""A controller given as numbers in a scene (spacecraft/scene/given.py): the same loop as
 the tuned controller it records, and bad tables refused by key."""
 import copy
 import tomllib
@@ -6,10 +6,10 @@ import tomllib
 import numpy as np
 import pytest
 
-from spacecraft.given_controller import controller_record, given_state_space, read_given
-from spacecraft.report import write_report
-from spacecraft.runner import run
-from spacecraft.scene import SceneError, load_scene, scene_path
+from spacecraft.scene.given import controller_record, given_state_space, read_given
+from spacecraft.report.write import write_report
+from spacecraft.design.loop import run
+from spacecraft.scene.read import SceneError, load_scene, scene_path
 
 
 def single_boom():

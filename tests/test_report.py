@@ -13,10 +13,10 @@ import pytest
 from matplotlib.colors import same_color
 from matplotlib.figure import Figure
 
-from spacecraft.naming import UNSTABLE_COLOUR, design_label
-from spacecraft.report import write_report
-from spacecraft.runner import run
-from spacecraft.scene import load_scene
+from spacecraft.design.naming import UNSTABLE_COLOUR, design_label
+from spacecraft.report.write import write_report
+from spacecraft.design.loop import run
+from spacecraft.scene.read import load_scene
 
 from test_scene import scene_with
 
@@ -336,7 +336,7 @@ def test_at_1_hz_the_pd_is_refused_for_the_mode_it_destabilises():
     """At 1 Hz the chain's 2.98 rad/s mode lies near the Nyquist frequency pi rad/s and the
     sampled PD drives it unstable (checked independently: the ZOH-discretised design plant
     under u = -Kp theta - Kd omega has a pole at s = ln(z) = 0.00483 + 2.98j)."""
-    from spacecraft.scene import SceneError
+    from spacecraft.scene.read import SceneError
 
     with pytest.raises(SceneError, match=r"controller\.pd: .*2\.98\d* rad/s"):
         run(_digital_pd(1.0))
@@ -344,7 +344,7 @@ def test_at_1_hz_the_pd_is_refused_for_the_mode_it_destabilises():
 
 def test_one_mode_is_singular_in_the_W_legend():
     from appendages import Beam
-    from spacecraft.plots import _model_name
+    from spacecraft.report.plots import _model_name
 
     beam = Beam(10.0, 100.0, 1.0)
     assert _model_name(beam.truncated(1, method="craig-bampton")) == \

@@ -9,8 +9,8 @@ import controllers
 from appendages import Beam
 from appendages.equivalence import fit_chain
 from spacecraft import Hub, Mount, Spacecraft
-from spacecraft.report import output_folder, write_report
-from spacecraft.runner import run
+from spacecraft.report.write import output_folder, write_report
+from spacecraft.design.loop import run
 
 from test_scene import scene_with
 
@@ -155,7 +155,7 @@ def test_fidelity_from_tolerance_is_small_and_accurate():
         and last["gain_error"] <= 1e-3
     # every smaller n failed the tolerance (the smallest n is chosen)
     assert all(max(t["frequency_error"], t["gain_error"]) > 1e-3 for t in choice["trials"][:-1])
-    # then the closed loops (spacecraft.fidelity): n is the first whose loops change by less
+    # then the closed loops (spacecraft.design.fidelity): n is the first whose loops change by less
     # than the tolerance with one more mode (on this undamped rod the least damping ratio of
     # the PD's loop falls with every mode, ~n^-4, until it changes by less than 1e-3 x 1e-3)
     record = choice["closed_loop"]
@@ -208,7 +208,7 @@ def test_disturbance_pulse_reaches_the_truth_loop():
 
 
 def test_hinged_root_chain_scene_runs():
-    from spacecraft.scene import scene_path
+    from spacecraft.scene.read import scene_path
 
     result = run(scene_path("hinged_wing"))
     assert result.stats.exact_reference_evaluations == 0 and result.stats.chain_fits == 0

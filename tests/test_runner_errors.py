@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 import controllers
-from spacecraft.report import summary_lines
-from spacecraft.runner import _outputs_until_overflow, diverged_at, run
-from spacecraft.scene import SceneError
+from spacecraft.report.write import summary_lines
+from spacecraft.design.loop import _outputs_until_overflow, diverged_at, run
+from spacecraft.scene.read import SceneError
 
 from test_scene import scene_with
 

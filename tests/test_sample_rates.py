@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import controllers
-from spacecraft.scene import scene_path
+from spacecraft.scene.read import scene_path
 
 sys.path.insert(0, str(Path(__file__).parent))
 from plants import modal_plant  # noqa: E402

@@ -6,7 +6,7 @@ import math
 import pytest
 
 from appendages.interface import FlexsatError
-from spacecraft.scene import SceneError, example_scenes, load_scene, scene_path
+from spacecraft.scene.read import SceneError, example_scenes, load_scene, scene_path
 
 # undamped: damped Craig-Bampton models project the beam's damping on their modes, which costs
 # seconds per model; the tests that need damping set it
@@ -205,7 +205,7 @@ def test_basilisk_simulator_takes_the_digital_controllers_rate():
 def test_resolved_scene_is_json_ready():
     import json
 
-    from spacecraft.scene import scene_dict
+    from spacecraft.scene.read import scene_dict
 
     data = scene_dict(load_scene(None))
     text = json.dumps(data, allow_nan=False)   # no NaN or inf anywhere

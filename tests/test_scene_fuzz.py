@@ -7,7 +7,7 @@ draws that many examples; derandomised too, so a longer run explores further alo
 sequence).
 
 Two strategies: (1) mutations of a valid scene dict at the documented keys (the table of
-spacecraft/scene.py), with wild values (NaN, inf, huge and tiny floats, integers beyond the
+spacecraft/scene/read.py), with wild values (NaN, inf, huge and tiny floats, integers beyond the
 float range, unicode and control characters, long strings, booleans, nested arrays and
 tables, None), deleted keys, unknown keys and extra appendages; (2) TOML text: the small test
 scene with lines replaced or inserted, read from a file (tomllib's errors included).
@@ -21,7 +21,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from spacecraft.scene import Scene, SceneError, load_scene
+from spacecraft.scene.read import Scene, SceneError, load_scene
 
 from test_cli import SCENE
 from test_scene import BASE
@@ -30,7 +30,7 @@ EXAMPLES = int(os.environ.get("FLEXSAT_FUZZ_EXAMPLES", "150"))
 FUZZ = settings(max_examples=EXAMPLES, derandomize=True, deadline=None,
                 suppress_health_check=list(HealthCheck), database=None)
 
-# documented key paths (spacecraft/scene.py), as paths into the dict; 0 is the first appendage
+# documented key paths (spacecraft/scene/read.py), as paths into the dict; 0 is the first appendage
 A = ("appendages", 0)
 KEYS = [
     ("title",), ("hub",), ("hub", "mass"), ("hub", "inertia"), ("appendages",), A,

@@ -7,10 +7,10 @@ import re
 
 import pytest
 
-import spacecraft.scene
-from spacecraft.limits import Limits, estimate_cost
-from spacecraft.runner import run
-from spacecraft.scene import RANGES, SceneError, load_scene, read_limits
+import spacecraft.scene.read
+from spacecraft.scene.limits import Limits, estimate_cost
+from spacecraft.design.loop import run
+from spacecraft.scene.read import RANGES, SceneError, load_scene, read_limits
 
 from test_scene import scene_with
 
@@ -90,7 +90,7 @@ def test_bad_limits_are_refused(limits, match):
 
 
 def test_the_docstring_table_states_the_default_limits():
-    doc = spacecraft.scene.__doc__
+    doc = spacecraft.scene.read.__doc__
     table = doc[doc.index("Limits (work a scene may ask for"):]
     units = {"GiB": 1024**3, "MiB": 1024**2}
     for field in dataclasses.fields(Limits):
@@ -239,9 +239,9 @@ def test_the_limits_docs_state_the_cap_of_the_tolerance_search():
     fidelity.tolerance", but the search stops at fidelity.MAX_MODES = 40 whatever the limit.
     Both tables now state that number."""
     from spacecraft import limits as limits_module
-    from spacecraft.fidelity import MAX_MODES
+    from spacecraft.design.fidelity import MAX_MODES
 
-    for doc in (spacecraft.scene.__doc__, limits_module.__doc__):
+    for doc in (spacecraft.scene.read.__doc__, limits_module.__doc__):
         table = " ".join(doc[doc.index("\nmodes "):].split("\nbodies ")[0].split())
         assert f"tries at most {MAX_MODES}" in table, table
 
@@ -250,7 +250,7 @@ def test_fit_bodies_is_appendages_limit_and_raising_it_raises_appendages():
     """Before: the scene allowed 12 bodies and appendages 14, and a scene or --limit that
     raised fit_bodies past 14 still met appendages' LimitError."""
     from appendages import limits as library
-    from spacecraft.limits import Limits, library_limits
+    from spacecraft.scene.limits import Limits, library_limits
 
     assert Limits().fit_bodies == library.DEFAULTS["fit_bodies"]
     with library_limits(Limits(fit_bodies=20, modes=10)):
@@ -273,7 +273,7 @@ def test_fit_bodies_is_appendages_limit_and_raising_it_raises_appendages():
 @pytest.mark.parametrize("name", [f.name for f in dataclasses.fields(Limits)])
 def test_limits_refuse_what_is_not_a_limit_by_name(name, value, error, match):
     """Limits accepted None, "x" and NaN for every field (and compared them later)."""
-    from spacecraft.limits import LIMIT_UNITS
+    from spacecraft.scene.limits import LIMIT_UNITS
 
     unit = re.escape(LIMIT_UNITS[name][0])
     with pytest.raises(error, match=match.format(name=name, unit=unit)):
@@ -283,7 +283,7 @@ def test_limits_refuse_what_is_not_a_limit_by_name(name, value, error, match):
 
 
 def test_limits_are_whole_numbers_except_memory_and_basilisk_seconds():
-    from spacecraft.limits import REAL_LIMITS
+    from spacecraft.scene.limits import REAL_LIMITS
 
     for f in dataclasses.fields(Limits):
         if f.name in REAL_LIMITS:

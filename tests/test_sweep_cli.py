@@ -1,8 +1,8 @@
-"""``flexsat sweep``: the subcommand of the ``flexsat`` command (spacecraft/cli.py)."""
+"""``flexsat sweep``: the subcommand of the ``flexsat`` command (spacecraft/cli/command.py)."""
 import json
 
 from spacecraft import cli
-from spacecraft.scene import scene_path
+from spacecraft.scene.read import scene_path
 
 
 def test_flexsat_sweep_runs_the_shipped_sweep_scene(tmp_path, capsys):

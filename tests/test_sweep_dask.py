@@ -16,9 +16,9 @@ import pyarrow.parquet as pq
 import pytest
 
 import spacecraft.sweep
-from spacecraft.runner import run
+from spacecraft.design.loop import run
 from spacecraft.sweep import run_sweep, sweep_scene_path
-from spacecraft.sweep.command import main
+from spacecraft.cli.sweep import main
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = pytest.mark.slow
@@ -71,7 +71,7 @@ def test_resume_after_a_killed_run_loses_and_repeats_nothing(client, tmp_path):
     env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
     env["OPENBLAS_NUM_THREADS"] = "1"
     process = subprocess.Popen(
-        [sys.executable, "-m", "spacecraft.sweep.command", "--samples", "24", "--seed", "5",
+        [sys.executable, "-m", "spacecraft.cli.sweep", "--samples", "24", "--seed", "5",
          "--no-worst-case", "--no-plots", "--quiet", "--workers", "1", "--out", str(out)],
         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     parts = out / "samples"

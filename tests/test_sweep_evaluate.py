@@ -7,8 +7,8 @@ import pytest
 
 import controllers
 
-from spacecraft.runner import run
-from spacecraft.scene import load_scene
+from spacecraft.design.loop import run
+from spacecraft.scene.read import load_scene
 from spacecraft.sweep.evaluate import METRICS, evaluate, evaluate_batch, prepare
 from spacecraft.sweep.parameters import apply_values, read_sweep
 

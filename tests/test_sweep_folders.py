@@ -13,7 +13,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from spacecraft import cli
-from spacecraft.output import LOCK, OWNER, FolderLock, OutputError
+from spacecraft.report.output import LOCK, OWNER, FolderLock, OutputError
 from spacecraft.sweep import SweepError, run_sweep
 from spacecraft.sweep.execute import SampleStore
 
@@ -141,7 +141,7 @@ def test_a_resume_started_beside_a_running_sweep_is_refused(tmp_path, capsys):
     env["OPENBLAS_NUM_THREADS"] = "1"
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
     first = subprocess.Popen(
-        [sys.executable, "-m", "spacecraft.sweep.command", "--samples", "40", "--seed", "5",
+        [sys.executable, "-m", "spacecraft.cli.sweep", "--samples", "40", "--seed", "5",
          "--no-worst-case", "--no-plots", "--quiet", "--workers", "1", "--out", str(out)],
         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     try:

@@ -5,7 +5,7 @@ import tomllib
 import pytest
 
 from spacecraft import cli
-from spacecraft.scene import scene_path
+from spacecraft.scene.read import scene_path
 from spacecraft.sweep import SweepError, load_sweep, run_sweep, sweep_scene_path
 from spacecraft.sweep.parameters import MAX_SAMPLES, read_sweep, resolve_key
 

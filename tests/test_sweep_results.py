@@ -124,8 +124,8 @@ def test_the_report_is_in_colour_and_signed(rods):
 def test_each_sample_records_its_controller_and_it_runs_again(tmp_path):
     """design = "per-sample": the row's controller (JSON) given back to the runner closes the
     same truth loop: the same margins to 1e-9 (same model, same matrices)."""
-    from spacecraft.runner import run
-    from spacecraft.scene import load_scene
+    from spacecraft.design.loop import run
+    from spacecraft.scene.read import load_scene
     from spacecraft.sweep.parameters import apply_values
 
     result = run_sweep(None, parameters={"hub.inertia": {"distribution": "uniform",
@@ -206,8 +206,8 @@ def test_a_pd_sweep_records_each_samples_gains():
     """single_boom's PD tuned per sample: Kp = J wn^2, Kd = 2 zeta wn J with each sample's
     design inertia J, recorded beside its matrices; the runner on that sample tunes the same
     gains (the same fit and formula: 1e-12)."""
-    from spacecraft.runner import run
-    from spacecraft.scene import load_scene
+    from spacecraft.design.loop import run
+    from spacecraft.scene.read import load_scene
     from spacecraft.sweep.parameters import apply_values
 
     result = run_sweep("single_boom", parameters={"hub.inertia": {

@@ -123,8 +123,8 @@ def test_a_small_scene_runs_single_threaded_outside_the_controllers_too(two_thre
     products (appendages, plant assembly, tuning, tables) run on one thread as the
     controllers' entry points do, so a run's numbers and CPU time do not depend on the
     caller's setting."""
-    import spacecraft.runner as runner
-    import spacecraft.tuning as tuning
+    import spacecraft.design.loop as runner
+    import spacecraft.design.tuning as tuning
 
     seen = []
     original = tuning.tune
@@ -133,7 +133,7 @@ def test_a_small_scene_runs_single_threaded_outside_the_controllers_too(two_thre
         seen.append(set(blas_threads()))
         return original(*args, **kwargs)
 
-    # the run tunes through its model builder (spacecraft.models.ModelBuilder.tuned)
+    # the run tunes through its model builder (spacecraft.design.models.ModelBuilder.tuned)
     monkeypatch.setattr(tuning, "tune", recording)
     runner.run(None, time_responses=False)
     assert seen and all(s == {1} for s in seen)

@@ -9,7 +9,7 @@ import pytest
 
 from appendages import Beam, HingedChain
 from spacecraft import Hub, Mount, Spacecraft
-from spacecraft.kinematics import euler_orientation
+from spacecraft.dynamics.kinematics import euler_orientation
 
 TUBE = Beam.tube(4.0, 0.05, 0.001, 1600.0, 1.2e11)
 J3 = np.array([[950.0, 12.0, -8.0], [12.0, 780.0, 15.0], [-8.0, 15.0, 640.0]])
@@ -51,7 +51,7 @@ def test_flat_plate_inertia_is_accepted(moments):
 
 def test_inertia_of_no_body_in_a_scene_is_refused_by_key():
     from spacecraft import SceneError, load_scene
-    from spacecraft.scene import scene_path
+    from spacecraft.scene.read import scene_path
     import tomllib
 
     with open(scene_path("three_axis"), "rb") as stream:

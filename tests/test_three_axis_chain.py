@@ -19,7 +19,7 @@ from appendages import Beam, HingedChain, fit_chain, fit_chain_3d
 from appendages.fit3d import rod_chain_errors
 from appendages.interface import inverse_symmetric
 from spacecraft import Hub, Mount, Spacecraft
-from spacecraft.kinematics import euler_orientation
+from spacecraft.dynamics.kinematics import euler_orientation
 
 
 def cross(v):

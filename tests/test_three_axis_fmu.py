@@ -39,7 +39,7 @@ import fmu
 from appendages import Beam
 from appendages.fit3d import fit_chain_3d
 from spacecraft import Hub, Mount, Spacecraft
-from spacecraft.kinematics import euler_orientation, orientation_from_axis
+from spacecraft.dynamics.kinematics import euler_orientation, orientation_from_axis
 
 AXES = ("x", "y", "z")
 SAMPLE_TIME = 0.1  # s, digital controllers (>= 10 samples per rigid-body crossover)

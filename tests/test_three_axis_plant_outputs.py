@@ -13,7 +13,7 @@ import pytest
 
 from appendages import Beam
 from spacecraft import Hub, Mount, Spacecraft
-from spacecraft.kinematics import euler_orientation, orientation_from_axis
+from spacecraft.dynamics.kinematics import euler_orientation, orientation_from_axis
 
 
 def planar() -> Spacecraft:

@@ -19,8 +19,8 @@ from fmpy import read_model_description
 
 from appendages import Beam
 from spacecraft import Hub, Mount, Spacecraft, cli
-from spacecraft.kinematics import euler_orientation
-from spacecraft.scene import SceneError, load_scene, scene_path
+from spacecraft.dynamics.kinematics import euler_orientation
+from spacecraft.scene.read import SceneError, load_scene, scene_path
 
 AXES = ("x", "y", "z")
 SCENE = tomllib.loads(scene_path("three_axis").read_text())
@@ -163,7 +163,7 @@ def test_run_frequencies_equal_the_spacecraft_built_in_python(report):
     _, data = report
     wing = Beam.rectangular(6.0, 2.0, 0.04, 40.0, 7e8, damping_ratio=0.005)
     boom = Beam.tube(4.0, 0.05, 0.001, 1600.0, 1.2e11, damping_ratio=0.005)
-    from spacecraft.kinematics import orientation_from_axis
+    from spacecraft.dynamics.kinematics import orientation_from_axis
 
     craft = Spacecraft(Hub(820.0, np.array(SCENE["hub"]["inertia"])), [
         Mount(wing, (0.0, 1.1, 0.0), orientation=euler_orientation("ZYX", (math.pi / 2, 0.0,
@@ -180,7 +180,7 @@ def test_run_frequencies_equal_the_spacecraft_built_in_python(report):
 def test_digital_controllers_in_a_three_axis_scene():
     """controller.sample_rate = 10 Hz: PD and LQR discretised, closed as sampled-data loops;
     both stable on the truth model and at the target after 120 s (1e-2 of the slew)."""
-    from spacecraft.runner import run
+    from spacecraft.design.loop import run
 
     data = run(scene_with(lambda d: (d["controller"].update(sample_rate=10.0),
                                      d["export"].update(fmu=False)))).data

@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 import fe3d
 from appendages import Beam, HingedChain
 from spacecraft import Hub, Mount, Spacecraft
-from spacecraft.kinematics import euler_orientation, orientation_from_axis, planar_orientation
+from spacecraft.dynamics.kinematics import euler_orientation, orientation_from_axis, planar_orientation
 
 BEAM = Beam(2.0, 3.0, 0.5, bending_stiffness_y=7.0, torsional_stiffness=1.5,
             torsional_inertia=0.02, axial_stiffness=900.0)

@@ -17,8 +17,8 @@ from appendages import Beam
 from appendages.unit_slips import (UnitWarning, damping_in_percent, degrees_in_radians,
                               modulus_in_megapascals, radians_in_degrees)
 from spacecraft import Mount, SceneError, load_scene
-from spacecraft.kinematics import euler_orientation, orientation_from_axis
-from spacecraft.scene import example_scenes, scene_path
+from spacecraft.dynamics.kinematics import euler_orientation, orientation_from_axis
+from spacecraft.scene.read import example_scenes, scene_path
 
 
 # -- the rules ------------------------------------------------------------------------------

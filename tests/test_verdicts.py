@@ -1,4 +1,4 @@
-"""Verdicts that tell the truth: every warning rule of spacecraft.verdicts at its boundary, and
+"""Verdicts that tell the truth: every warning rule of spacecraft.design.verdicts at its boundary, and
 an unstable loop's margin figures never shown as guarantees (planar and three-axis; terminal
 summary, report.md/html, results.json).
 
@@ -17,12 +17,12 @@ import tomllib
 import pytest
 from matplotlib.figure import Figure
 
-from spacecraft.naming import CAUTION_COLOUR
-from spacecraft.pages import Tone
-from spacecraft.report import summary_lines, write_report
-from spacecraft.runner import run
-from spacecraft.scene import scene_path
-from spacecraft.verdicts import (DAMPING_DROP, MARGINAL, MIN_DAMPING, MIN_DISK_MARGIN,
+from spacecraft.design.naming import CAUTION_COLOUR
+from spacecraft.report.pages import Tone
+from spacecraft.report.write import summary_lines, write_report
+from spacecraft.design.loop import run
+from spacecraft.scene.read import scene_path
+from spacecraft.design.verdicts import (DAMPING_DROP, MARGINAL, MIN_DAMPING, MIN_DISK_MARGIN,
                                  MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN, MIN_PHASE_MARGIN, growing,
                                  loop_warnings, margin_flags)
 

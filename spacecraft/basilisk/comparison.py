@@ -26,7 +26,7 @@ import numpy as np
 
 from appendages.interface import check_positive
 
-from ..coupling import Spacecraft
+from ..dynamics.coupling import Spacecraft
 from .actuators import ReactionWheel
 from .flight_software import flight_software_law
 from .layout import chain_spacecraft

@@ -77,8 +77,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..coupling import Spacecraft
-from ..hub import Mount
+from ..dynamics.coupling import Spacecraft
+from ..dynamics.hub import Mount
 from .install import BasiliskModelError
 
 __all__ = ["BodyLayout", "AppendageLayout", "HubLayout", "SpacecraftLayout", "layout",

@@ -51,8 +51,8 @@ import numpy as np
 
 from appendages.interface import check_positive
 
-from ..coupling import Spacecraft
-from ..limits import Limits
+from ..dynamics.coupling import Spacecraft
+from ..scene.limits import Limits
 from .actuators import WHEEL_ACCELERATION_GUARD, ReactionWheel, rotor_inertia, wheel_config
 from .flight_software import FlightSoftwareLaw, flight_software_class, flight_software_law
 from .install import (BasiliskIntegrationError, BasiliskModelError, BasiliskRunTooLong,

@@ -1,9 +1,9 @@
 """One sample of a sweep: one design-loop evaluation, as the scene says, reduced to numbers.
 
 A sample is the sweep's scene with the sampled numbers put in (:func:`~.parameters.apply_values`)
-and validated by :func:`spacecraft.scene.load_scene`. Its evaluation is the runner's design loop
+and validated by :func:`spacecraft.scene.read.load_scene`. Its evaluation is the runner's design loop
 for one controller and one design model, built with the runner's own model builders
-(:class:`spacecraft.runner._Runner`: beams, truncations, chains, spacecraft, plants, the slew):
+(:class:`spacecraft.design.loop._Runner`: beams, truncations, chains, spacecraft, plants, the slew):
 
 1. design (``design = "per-sample"``): the design chain of each beam (the runner's fit:
    :func:`appendages.equivalence.fit_chain` solves the dimensionless fit once per process and
@@ -39,14 +39,14 @@ What a sample records, so that every verdict can be read and checked:
   an unstable one, so that every unstable sample ranks below every stable one in any table,
   plot, ranking or search (a stable loop's gain or phase margin counted by its size, as the
   run's warnings count a conditionally stable loop's negative gain margin);
-* ``status``: the slew of the truth loop as the run reports it (:func:`spacecraft.verdicts.
+* ``status``: the slew of the truth loop as the run reports it (:func:`spacecraft.design.verdicts.
   loop_status`: settles, not settled, slew unfinished, unstable, diverges), ``"unstable"`` also
   where the truth loop settles but the exact beam's verdict is unstable; without a manoeuvre
   ``"stable"`` or ``"unstable"``. A slew that does not settle or diverges is a result: its
   settling time (and, for an unstable loop, every time metric) is withheld (null), as the run's
-  report withholds it (:func:`spacecraft.verdicts.withheld_metrics`);
+  report withholds it (:func:`spacecraft.design.verdicts.withheld_metrics`);
 * the controller: with ``design = "per-sample"`` each sample's in the column ``controller``
-  (JSON: kind and state-space matrices, :func:`spacecraft.given_controller.controller_record`;
+  (JSON: kind and state-space matrices, :func:`spacecraft.scene.given.controller_record`;
   a PD's gains also in ``pd_kp``, ``pd_kd``); with ``design = "nominal"`` the one controller in
   :attr:`Context.nominal_record` (the sweep's ``sweep.json`` and ``summary.json``).
 
@@ -65,11 +65,11 @@ import warnings
 
 import numpy as np
 
-from ..given_controller import controller_record
-from ..runner import RunStats, _Runner
-from ..scene import SceneError, load_scene
-from ..tuning import tune
-from ..verdicts import TIME_METRICS, closed_loop_poles, loop_status, withheld_metrics
+from ..scene.given import controller_record
+from ..design.loop import RunStats, _Runner
+from ..scene.read import SceneError, load_scene
+from ..design.tuning import tune
+from ..design.verdicts import TIME_METRICS, closed_loop_poles, loop_status, withheld_metrics
 from .parameters import SweepError, SweepSpec, apply_values
 
 __all__ = ["Context", "METRICS", "STATUSES", "prepare", "evaluate", "evaluate_batch",
@@ -109,7 +109,7 @@ METRICS: dict[str, tuple[str, str, str]] = {
     "final_attitude_error": ("float", "rad", "|theta - theta_ref| at the end of the slew"),
     "n_modes": ("int", "-", "bending modes per truncated beam of the truth model"),
     "controller": ("str", "-", "the sample's controller (design = per-sample): JSON of kind, "
-                               "A, B, C, D (spacecraft.given_controller)"),
+                               "A, B, C, D (spacecraft.scene.given)"),
     "pd_kp": ("float", "N*m/rad", "the sample's PD proportional gain Kp (design = per-sample)"),
     "pd_kd": ("float", "N*m*s/rad", "the sample's PD derivative gain Kd (design = per-sample)"),
     "error": ("str", "-", "why the sample failed (empty: it did not)"),
@@ -162,7 +162,7 @@ class Context:
     nominal_controller : control.StateSpace or None
         ``design = "nominal"``: the controller tuned on the nominal scene.
     nominal_record : dict or None
-        Its numbers (:func:`spacecraft.given_controller.controller_record`) and, for a PD, its
+        Its numbers (:func:`spacecraft.scene.given.controller_record`) and, for a PD, its
         gains ``Kp`` [N m/rad], ``Kd`` [N m s/rad].
     exact : bool
         Close the loop on the exact beams too.
@@ -220,11 +220,11 @@ class SampleRunner(_Runner):
 
 def design_controller(runner: SampleRunner, context: Context):
     """The controller of a sample tuned on its design model as the runner tunes it
-    (:func:`spacecraft.tuning.tune`).
+    (:func:`spacecraft.design.tuning.tune`).
 
     Returns
     -------
-    spacecraft.tuning.Tuned
+    spacecraft.design.tuning.Tuned
 
     Raises
     ------
@@ -393,7 +393,7 @@ def exact_verdict(runner: _Runner, controller):
 
     Parameters
     ----------
-    runner : spacecraft.runner._Runner
+    runner : spacecraft.design.loop._Runner
         The sample's model builders.
     controller : control.StateSpace
         Continuous-time controller.

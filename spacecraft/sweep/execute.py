@@ -453,7 +453,7 @@ class SampleStore:
 
     Notes
     -----
-    Locking: entering takes the folder's lock (:class:`spacecraft.output.FolderLock`, the
+    Locking: entering takes the folder's lock (:class:`spacecraft.report.output.FolderLock`, the
     claim of run folders: one atomic ``mkdir`` with the owner's process recorded; the lock of
     a process that is gone is taken over), so a second sweep, or a ``--resume`` of it, started
     on a folder another sweep is writing stops at once naming that sweep's process. A fresh
@@ -483,7 +483,7 @@ class SampleStore:
     # -- entering and leaving --------------------------------------------------------------
     def __enter__(self) -> "SampleStore":
         """Check the folder and lock it (before the sweep does any work)."""
-        from ..output import LOCK, FolderLock
+        from ..report.output import LOCK, FolderLock
 
         if self.resume:
             if not (self.folder / _SETTINGS).is_file():

@@ -41,7 +41,7 @@ Key paths name a number of the scene in the file's units (deg, Hz, as the file w
 ``hub.inertia``, ``appendages.<name>.beam.youngs_modulus`` (appendages by their ``name``),
 ``appendages.<name>.position[0]``, ``controller.lqr.attitude_weight``... A key that the scene
 leaves at its default (``appendages.rod.beam.damping_ratio``) may be swept too. Each sample is
-the scene with these numbers replaced, validated by :func:`spacecraft.scene.load_scene` like any
+the scene with these numbers replaced, validated by :func:`spacecraft.scene.read.load_scene` like any
 scene (so every bound a scene has applies to every sample).
 
 Distributions (the worst-case box in brackets)
@@ -83,7 +83,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ..scene import SceneError, load_scene
+from ..scene.read import SceneError, load_scene
 
 __all__ = [
     "SweepError", "Parameter", "SweepSpec", "read_sweep", "resolve_key", "numeric_keys",

@@ -1,7 +1,7 @@
 """The sweep's report: statistics, probability of instability, sensitivities, plots, files.
 
 ``summary.json`` holds every figure of the report; ``report.md`` and ``report.html`` show them
-with the plots (``plots/*.png``), in colour as the run's report (:mod:`spacecraft.pages`: what
+with the plots (``plots/*.png``), in colour as the run's report (:mod:`spacecraft.report.pages`: what
 is unstable or failed in red, warnings in orange):
 
 * a histogram of each metric (failed samples and withheld values left out, infinite values
@@ -39,8 +39,8 @@ import numpy as np
 
 from fmu.files import write_text_atomically
 
-from ..pages import bad, markdown, render_html, warn
-from ..results import to_json
+from ..report.pages import bad, markdown, render_html, warn
+from ..report.results import to_json
 from .evaluate import METRICS
 
 __all__ = ["clopper_pearson", "summarise", "write_report", "spearman", "CONFIDENCE",

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from fmu.files import write_text_atomically
 
-from ..scene import SceneError
+from ..scene.read import SceneError
 from .evaluate import Context, evaluate, prepare
 from .execute import SampleStore, check_workers, open_executor, run_samples, schema
 from .parameters import SweepError, SweepSpec, check_box, read_sweep
@@ -59,7 +59,7 @@ class SweepResult:
 def _folder() -> Path:
     import importlib.resources
 
-    return Path(str(importlib.resources.files("spacecraft").joinpath("scenes", "sweeps")))
+    return Path(str(importlib.resources.files("spacecraft.scene").joinpath("embedded", "sweeps")))
 
 
 def sweep_scenes() -> list[str]:
@@ -82,7 +82,7 @@ def sweep_scene_path(name: str) -> Path:
 def _read(scene) -> tuple[dict, str]:
     """The scene mapping and its name: a file, an embedded sweep scene, an embedded scene
     (``flexsat scenes``: its ``[sweep]`` table, if any, or the parameters given), a dict."""
-    from ..scene import example_scenes, scene_path
+    from ..scene.read import example_scenes, scene_path
 
     if scene is None:
         return _read_file(sweep_scene_path("default"), "default sweep scene")
@@ -358,7 +358,7 @@ def sweep(scene=None, *, parameters: Mapping | None = None, samples: int | None 
         stay so where samples failed), the Parquet files' own format, no further dependency;
         ``table.to_pandas()`` gives a DataFrame where pandas is installed.
     """
-    from ..report import to_json
+    from ..report.write import to_json
 
     result = run_sweep(scene, parameters=parameters, samples=samples, client=client, **options)
     meta = dict(result.table.schema.metadata or {})

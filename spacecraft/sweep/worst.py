@@ -26,8 +26,8 @@ Method
 Verification
     The worst parameter set is written as a scene (``worst.toml``: the sweep's scene with those
     numbers, without ``[sweep]``, the exact reference on, and the very controller the sweep
-    closed there as ``[controller.given]``, :mod:`spacecraft.given_controller`: the nominal one,
-    or the one tuned on that sample) and run by :func:`spacecraft.runner.run` itself, whose
+    closed there as ``[controller.given]``, :mod:`spacecraft.scene.given`: the nominal one,
+    or the one tuned on that sample) and run by :func:`spacecraft.design.loop.run` itself, whose
     verdict and margins on the exact beam (its own dense grid through W(s), exact coupled
     frequencies) are reported beside the sweep's: ``flexsat run worst.toml`` gives the sweep's
     verdict.
@@ -50,7 +50,7 @@ import re
 
 import numpy as np
 
-from ..scene import SceneError
+from ..scene.read import SceneError
 from .evaluate import SampleRunner, signed_margin
 from .parameters import SweepSpec, apply_values
 
@@ -366,19 +366,19 @@ def verify(context, values: dict, raw: dict, source: str) -> dict:
     """Check a worst case on the exact beams two ways.
 
     ``exact_reference``: the sweep's own loop (the same controller) closed on the runner's exact
-    reference (:meth:`spacecraft.runner._Runner.exact_reference_frd`: its dense grid placed at
+    reference (:meth:`spacecraft.design.loop._Runner.exact_reference_frd`: its dense grid placed at
     the exact coupled frequencies), independent of the sweep's lighter grid. ``runner``: the
     scene ``raw`` (``worst.toml``, the same controller given) run by
-    :func:`spacecraft.runner.run`: what a user re-running it gets, its margins signed as the
+    :func:`spacecraft.design.loop.run`: what a user re-running it gets, its margins signed as the
     sweep's. Failures are recorded as ``error`` texts.
     """
     import warnings
 
     import controllers
 
-    from ..given_controller import given_state_space
-    from ..runner import run
-    from ..scene import load_scene
+    from ..scene.given import given_state_space
+    from ..design.loop import run
+    from ..scene.read import load_scene
 
     out: dict = {}
     try:

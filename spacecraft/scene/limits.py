@@ -4,12 +4,12 @@ A scene can ask for minutes of computing and gigabytes of memory with one number
 (``fidelity.n_modes = 5000``, ``manoeuvre.step = 1e-6``). :func:`estimate_cost` bounds, from the
 validated scene alone, the sizes that drive the cost of a run: states of the largest plant and
 closed loop, samples per simulation, number of simulations and the memory their responses
-take. The scene reader (:mod:`spacecraft.scene`) compares them and the scene's counts (modes,
+take. The scene reader (:mod:`spacecraft.scene.read`) compares them and the scene's counts (modes,
 bodies, appendages, string lengths) with :class:`Limits` and refuses, naming the scene key and
 the limit, whatever exceeds one. A user who really wants more raises the limit explicitly: a
 ``[limits]`` table in the scene or ``--limit NAME=VALUE`` on the command line.
 
-Defaults (the table of ``spacecraft/scene.py`` and the README), measured on the development
+Defaults (the table of ``spacecraft/scene/read.py`` and the README), measured on the development
 machine (2 cores, load average 2-3; medians of single runs, noisy):
 
 ================= ============ ============================================================
@@ -17,7 +17,7 @@ limit             default      what it bounds, and the cost at the limit
 ================= ============ ============================================================
 modes             500          ``fidelity.n_modes`` (bending modes per truncated beam); the
                                search from ``fidelity.tolerance`` tries at most 40 (fewer if
-                               this limit is lower; ``spacecraft.fidelity.MAX_MODES`` says why)
+                               this limit is lower; ``spacecraft.design.fidelity.MAX_MODES`` says why)
 bodies            500          bodies of an explicit or ``from_beam`` chain (a 500-body
                                truth chain: 998 states, 7 s, 1.4 GB)
 fit_bodies        14           ``fit.n_bodies``: appendages' own limit (``appendages.limits``),
@@ -185,7 +185,7 @@ def appendage_dof(spec, which: str, n_modes: int | None) -> tuple[int, str]:
 
     Parameters
     ----------
-    spec : spacecraft.scene.AppendageSpec
+    spec : spacecraft.scene.read.AppendageSpec
     which : {"truth", "design"}
     n_modes : int or None
         Bending modes of a truncated beam (None: the smallest, 1, as a tolerance search starts).
@@ -228,7 +228,7 @@ def estimate_cost(scene) -> SceneCost:
 
     Parameters
     ----------
-    scene : spacecraft.scene.Scene
+    scene : spacecraft.scene.read.Scene
         A validated scene (its limits are not consulted here).
 
     Returns

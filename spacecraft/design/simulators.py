@@ -72,7 +72,7 @@ def _differences(comparison) -> dict:
 
 
 def _scene_error(scene, key: str, message: str):
-    from .scene import SceneError
+    from ..scene.read import SceneError
 
     return SceneError(f"{scene.source}: {key}: {message}")
 
@@ -82,7 +82,7 @@ def _checked_steps(scene, plant, controller, kind: str, spacecraft) -> float:
     (module docstring); SceneError naming the key."""
     from controllers.pd import check_sample_time
 
-    from .basilisk import default_sample_time, dynamics_step
+    from ..basilisk import default_sample_time, dynamics_step
 
     m, sim = scene.manoeuvre, scene.simulator
     digital = controller.dt not in (None, 0, True)
@@ -125,7 +125,7 @@ def _checked_steps(scene, plant, controller, kind: str, spacecraft) -> float:
 
 
 def default_rate_note() -> str:
-    from .basilisk import SAMPLES_PER_CROSSOVER
+    from ..basilisk import SAMPLES_PER_CROSSOVER
 
     return (f"{SAMPLES_PER_CROSSOVER:g} samples per period of the loop's fastest crossover or "
             "controller pole")
@@ -152,7 +152,7 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
 
     Parameters
     ----------
-    runner : spacecraft.runner._Runner
+    runner : spacecraft.design.loop._Runner
     designs : dict
         The runner's designs (variant -> ``spacecraft``, ``controllers``...).
     truth_sim : control.StateSpace
@@ -181,7 +181,7 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
     spacecraft.basilisk.BasiliskNotInstalled
         Without the ``bsk`` package (one line: how to install the extra).
     """
-    from .basilisk import BasiliskRunTooLong, ReactionWheel, require_basilisk, slew_comparison
+    from ..basilisk import BasiliskRunTooLong, ReactionWheel, require_basilisk, slew_comparison
 
     version = require_basilisk()
     scene = runner.scene

@@ -149,7 +149,7 @@ class Mount:
     orientation : (3, 3) array, optional
         Three-axis mounts: a rotation matrix whose columns are the appendage's local x, y, z
         axes in hub axes (orthonormal to 1e-9, det +1; helpers in
-        :mod:`spacecraft.kinematics`: ``euler_orientation``, ``orientation_from_axis``).
+        :mod:`spacecraft.dynamics.kinematics`: ``euler_orientation``, ``orientation_from_axis``).
     name : str, optional
         Signal prefix (``<name>_tip_deflection``); default ``appendage<k>`` by position in the
         spacecraft's list.
@@ -282,7 +282,7 @@ class Mount:
 
     def transformation(self) -> np.ndarray:
         """G (6x6): root motions (u, v, w, theta_x, theta_y, theta_z) in the appendage's axes
-        from hub motions (X, Y, Z, theta_x, theta_y, theta_z) (:mod:`spacecraft.kinematics`).
+        from hub motions (X, Y, Z, theta_x, theta_y, theta_z) (:mod:`spacecraft.dynamics.kinematics`).
 
         Defined for planar mounts too (in the hub's x-y plane)."""
         return mount_transformation(self.point, self.orientation)

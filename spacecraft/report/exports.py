@@ -19,7 +19,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .naming import controller_label, design_label
+from ..design.naming import controller_label, design_label
 
 __all__ = ["fmu_jobs", "start_exports", "finish_exports", "write_ssps"]
 

@@ -7,7 +7,7 @@ Eliminating every appendage leaves the hub's dynamic stiffness. Planar (hub coor
     Z(s) = M_hub s**2 + sum_i ( G_r,i^T D_i(s) G_r,i + m_i s**2 g_i g_i^T ),
 
 three axes (``h = (X, Y, Z, theta_x, theta_y, theta_z)``; root motions ``G_i h`` in the
-appendage's axes, :mod:`spacecraft.kinematics`; ``D6 = W6^-1``, axial motion included)::
+appendage's axes, :mod:`spacecraft.dynamics.kinematics`; ``D6 = W6^-1``, axial motion included)::
 
     Z(s) = M_hub s**2 + sum_i G_i^T D6_i(s) G_i.
 

@@ -9,7 +9,7 @@ end follows the hub rigidly,
 Three axes: the hub has ``h = (X, Y, Z, theta_x, theta_y, theta_z)`` (centre of mass, small
 rotation vector, hub axes) and each appendage's root motions in its own axes are
 ``(u, v, w, theta_x, theta_y, theta_z)_i = G_i h`` with the 6x6 ``G_i = Mount.transformation()``
-(:mod:`spacecraft.kinematics`); the appendage's axial motion is one of its root coordinates.
+(:mod:`spacecraft.dynamics.kinematics`); the appendage's axial motion is one of its root coordinates.
 
 Finite appendages (realisation in attachment-end coordinates, RootModel)
     The appendage's root coordinates (2 planar, 6 in three axes) are replaced by their
@@ -26,7 +26,7 @@ Finite appendages (realisation in attachment-end coordinates, RootModel)
 Distributed appendages (exact reference)
     Eliminating the appendages through ``D_i = W_i^-1`` (``W6_i^-1``) gives the hub's dynamic
     stiffness Z(s), the exact attitude response and, by the Wittrick-Williams count, the exact
-    coupled natural frequencies: :mod:`spacecraft.exact`.
+    coupled natural frequencies: :mod:`spacecraft.dynamics.exact`.
 
 References
 ----------
@@ -150,7 +150,7 @@ class Spacecraft:
 
     @property
     def exact(self) -> ExactReference:
-        """The exact frequency-domain reference (:mod:`spacecraft.exact`), built once."""
+        """The exact frequency-domain reference (:mod:`spacecraft.dynamics.exact`), built once."""
         cached = self._cache.get("exact")
         if cached is None:
             cached = self._cache["exact"] = ExactReference(self.hub, self.mounts)
@@ -344,7 +344,7 @@ class Spacecraft:
         exact : bool, optional
             True: roots of the coupled characteristic equation through each appendage's exact
             W(s) (W6 in three axes; Wittrick-Williams count and bisection,
-            :mod:`spacecraft.exact`); the accuracy reference for truncated models of a
+            :mod:`spacecraft.dynamics.exact`); the accuracy reference for truncated models of a
             distributed beam. False: eigenvalues of the assembled finite model. Default:
             exact when some appendage has no finite realisation.
 
@@ -572,7 +572,7 @@ class Spacecraft:
 
     # -- exact frequency-domain reference -------------------------------------------------------
     def _hub_dynamic_stiffness(self, s: np.ndarray, *, undamped: bool = False) -> np.ndarray:
-        """Z(s) of the hub with every appendage eliminated (:mod:`spacecraft.exact`)."""
+        """Z(s) of the hub with every appendage eliminated (:mod:`spacecraft.dynamics.exact`)."""
         return self.exact.hub_dynamic_stiffness(s, undamped=undamped)
 
     def frequency_response(self, omega, *, output: str = "theta"):

@@ -1,15 +1,15 @@
 """The report of a scene run: Markdown and HTML pages, PNG plots, results.json, time series, FMUs.
 
-:func:`write_report` writes a :class:`~spacecraft.runner.RunResult` into a folder. The same list
-of blocks (:mod:`spacecraft.pages`) renders to ``report.md`` and ``report.html``, so both say
-the same; every number shown is also in ``results.json`` (numbers only, :mod:`spacecraft.results`).
+:func:`write_report` writes a :class:`~spacecraft.design.loop.RunResult` into a folder. The same list
+of blocks (:mod:`spacecraft.report.pages`) renders to ``report.md`` and ``report.html``, so both say
+the same; every number shown is also in ``results.json`` (numbers only, :mod:`spacecraft.report.results`).
 :func:`output_folder` makes the folder appear only when complete.
 
 The report, in the order an attitude engineer reads it:
 
 - Summary: per loop its verdict on the truth model (stable, or UNSTABLE: diverges, in red),
   its margins, the slew's overshoot and settling time, the peak tip deflection per appendage;
-  then the design warnings (:mod:`spacecraft.verdicts`);
+  then the design warnings (:mod:`spacecraft.design.verdicts`);
 - The question asked: hub, appendages, manoeuvre, disturbance, sample rate, outputs;
 - Models: the truth model's fidelity and why (the tolerance, the band it had to match), the
   coupled frequencies of exact beam, truth and design models;
@@ -21,8 +21,8 @@ The report, in the order an attitude engineer reads it:
   loop), the margins with their crossover frequencies, the peaks per appendage (tip
   deflection, root force and moment when asked), the disturbance response apart from the slew,
   the verdicts (spillover on the truth model, Nyquist on the exact beam);
-- Basilisk's run of the manoeuvre, when asked (:mod:`spacecraft.simulators`);
-- Plots (:mod:`spacecraft.plots`), FMUs and SSP files (:mod:`spacecraft.exports`), the time
+- Basilisk's run of the manoeuvre, when asked (:mod:`spacecraft.design.simulators`);
+- Plots (:mod:`spacecraft.report.plots`), FMUs and SSP files (:mod:`spacecraft.report.exports`), the time
   series, numerical warnings, the work done.
 """
 
@@ -34,7 +34,7 @@ import math
 import os
 from pathlib import Path
 
-from .naming import controller_label, design_label, plural
+from ..design.naming import controller_label, design_label, plural
 from .output import MARKER, default_output_folder, output_folder
 from .pages import Tone, bad, markdown, markdown_text, render_html, warn
 from .results import to_json, write_timeseries
@@ -165,7 +165,7 @@ def metric_rows(rows: list, controller: str, table: str = "metrics") -> tuple[li
 
 def _margin_cell(name: str, value, flags: dict | None = None):
     """A margin's cell: red for a margin of an unstable loop (it guarantees nothing), orange
-    below its threshold (:func:`spacecraft.verdicts.margin_flags`)."""
+    below its threshold (:func:`spacecraft.design.verdicts.margin_flags`)."""
     text = _fmt(value, 4)
     flag = (flags or {}).get(name)
     if flag == "unstable":
@@ -176,7 +176,7 @@ def _margin_cell(name: str, value, flags: dict | None = None):
 def _damping_cell(verdict: dict):
     """The least closed-loop damping ratio, orange below MIN_DAMPING on a loop that does not
     diverge (one that does is red already)."""
-    from .verdicts import MIN_DAMPING
+    from ..design.verdicts import MIN_DAMPING
 
     zeta = verdict.get("least_damping_ratio")
     text = _fmt(zeta, 3)
@@ -186,7 +186,7 @@ def _damping_cell(verdict: dict):
 def _loop_cautions(row: dict, warnings: list) -> list[str]:
     """Short texts of the cautions on a loop that does not diverge (low margins, lowered or
     light damping, unstable on the exact beam), from its design warnings."""
-    from .verdicts import CAUTIONS as texts
+    from ..design.verdicts import CAUTIONS as texts
 
     out = []
     for w in warnings:
@@ -203,7 +203,7 @@ def _loop_cautions(row: dict, warnings: list) -> list[str]:
 
 def _appendage_rows(rows: list, names: list) -> tuple[list, list]:
     """Peak tip deflection, root force and root moment per appendage, per loop."""
-    from .responses import APPENDAGE_SIGNALS
+    from ..design.responses import APPENDAGE_SIGNALS
 
     header = ["loop", "appendage"]
     present = [(metric, unit) for _, metric, unit in APPENDAGE_SIGNALS
@@ -230,7 +230,7 @@ def _appendage_rows(rows: list, names: list) -> tuple[list, list]:
 
 
 def _verdict_rows(rows: list, warnings: list = ()) -> tuple[list, list]:
-    from .verdicts import growing
+    from ..design.verdicts import growing
 
     exact = any("exact_verdict" in r for r in rows)
     header = ["design model", "controller", "on truth model", "least damping [-]",
@@ -280,7 +280,7 @@ def _fidelity_line(data: dict) -> str:
 
 
 def _loop_line(r: dict, warnings: list = ()) -> str | Tone:
-    from .verdicts import growing
+    from ..design.verdicts import growing
 
     who = f"{controller_label(r['controller'])} tuned on {_label(r['design'])}"
     v = r["verdict"]
@@ -325,7 +325,7 @@ def summary_lines(data: dict) -> list:
     """Short summary of a run (the CLI prints it): the truth model, one line per loop, one per
     design warning (``warning: ...``)."""
     if data.get("three_axis"):
-        from .three_axis_run import three_axis_summary
+        from ..design.three_axis import three_axis_summary
 
         return three_axis_summary(data)
     lines: list = [_fidelity_line(data)]
@@ -525,7 +525,7 @@ def _controllers(data: dict) -> list:
 
 
 def _closed_loop_fidelity(choice: dict) -> list:
-    """Why the closed-loop rule kept n_modes (spacecraft.fidelity): the changes of the loops
+    """Why the closed-loop rule kept n_modes (spacecraft.design.fidelity): the changes of the loops
     from each n to the next."""
     record = choice.get("closed_loop")
     if not record:
@@ -589,7 +589,7 @@ def _closed_loops(data: dict) -> list:
 
 def _marking_rules() -> str:
     """What the colours of the margin and damping cells mean."""
-    from .verdicts import (DAMPING_DROP, MIN_DAMPING, MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN,
+    from ..design.verdicts import (DAMPING_DROP, MIN_DAMPING, MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN,
                            MIN_PHASE_MARGIN)
 
     return (f"Margins below gain {MIN_GAIN_MARGIN:g} dB, phase {MIN_PHASE_MARGIN:g} deg or "
@@ -636,7 +636,7 @@ def _basilisk(data: dict) -> list:
 
 
 def report_blocks(data: dict, images: list) -> list:
-    """The report as blocks (:mod:`spacecraft.pages`)."""
+    """The report as blocks (:mod:`spacecraft.report.pages`)."""
     b: list = [("h1", data.get("title") or "flexsat report"),
                ("p", f"Scene: {data['scene']}. Generated by flexsat {data.get('version', '')} "
                      f"on {data.get('created', '')}."),
@@ -707,7 +707,7 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
 
     Parameters
     ----------
-    result : spacecraft.runner.RunResult
+    result : spacecraft.design.loop.RunResult
     folder : path
         Destination (use :func:`output_folder` for an all-or-nothing folder).
     fmus, plots : bool, optional
@@ -733,7 +733,7 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
                          f"spacecraft.output_folder); got {folder!r:.200}")
     check_options(fmus=fmus, plots=plots, pages=pages, progress=progress)
     if result.data.get("three_axis"):
-        from .three_axis_run import write_three_axis_report
+        from ..design.three_axis import write_three_axis_report
 
         return write_three_axis_report(result.scene, result.three_axis, folder,
                                        fmus=fmus, plots=plots, pages=pages, progress=progress)

@@ -51,7 +51,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def summary_lines(summary: dict) -> list[str]:
     """Short summary of a sweep (printed by the command)."""
-    from .report import format_number as _fmt, instability_text
+    from ..sweep.report import format_number as _fmt, instability_text
 
     s = summary
     inst = s["instability"]
@@ -87,11 +87,11 @@ def summary_lines(summary: dict) -> list[str]:
 
 def run_command(args) -> int:
     """Run ``flexsat sweep`` with parsed arguments; returns the exit code."""
-    from ..cli import _Progress
-    from ..report import default_output_folder, to_json
-    from .runner import run_sweep
+    from .progress import Progress
+    from ..report.write import default_output_folder, to_json
+    from ..sweep.runner import run_sweep
 
-    log = _Progress(args.quiet)
+    log = Progress(args.quiet)
     out = args.out if args.out is not None else (None if args.resume else default_output_folder())
     settings = {"samples": args.samples, "seed": args.seed, "method": args.method,
                 "design": args.design, "worst_case_evaluations": args.worst_case_evaluations}
@@ -112,7 +112,7 @@ def run_command(args) -> int:
 
 def _all_failed(summary: dict, out) -> int:
     """0, or a SweepError when no sample could be evaluated (the report says why)."""
-    from .parameters import SweepError
+    from ..sweep.parameters import SweepError
 
     if summary["instability"]["of"]:
         return 0
@@ -123,11 +123,11 @@ def _all_failed(summary: dict, out) -> int:
 
 
 def main(argv=None) -> int:
-    """``python -m spacecraft.sweep.command``: the sweep without the ``flexsat`` front end
+    """``python -m spacecraft.cli.sweep``: the sweep without the ``flexsat`` front end
     (the same options; user errors exit 2 with one line)."""
     from appendages.interface import FlexsatError
 
-    parser = argparse.ArgumentParser(prog="python -m spacecraft.sweep.command",
+    parser = argparse.ArgumentParser(prog="python -m spacecraft.cli.sweep",
                                      description=__doc__.splitlines()[0])
     add_arguments(parser)
     args = parser.parse_args(argv)

@@ -56,14 +56,14 @@ def _poles(values, sample_time: float | None = None) -> list:
 
 def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
     """Tune the controller ``kind`` ("pd" or "lqr") of a scene's controller table on a plant
-    (or take it as given: ``spec.given`` of that kind, :mod:`spacecraft.given_controller`).
+    (or take it as given: ``spec.given`` of that kind, :mod:`spacecraft.scene.given`).
 
     Parameters
     ----------
     kind : str
     plant : control.StateSpace
         Design plant (inputs ``torque``; outputs ``theta``, ``omega``).
-    spec : spacecraft.scene.ControllerSpec
+    spec : spacecraft.scene.read.ControllerSpec
 
     Returns
     -------
@@ -105,8 +105,8 @@ def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
 
 
 def _given(given, sample_time: float | None) -> Tuned:
-    """The scene's given controller (:mod:`spacecraft.given_controller`): not tuned."""
-    from .given_controller import given_state_space
+    """The scene's given controller (:mod:`spacecraft.scene.given`): not tuned."""
+    from ..scene.given import given_state_space
 
     K = given_state_space(given, sample_time)
     description = {"kind": given.kind, "given": True,

@@ -57,7 +57,7 @@ def simulate_manoeuvre(loop, manoeuvre, *, simulator=None, together: bool = Fals
     ----------
     loop : control.StateSpace
         Closed loop from :func:`controllers.close_loop` (input ``theta_ref``, disturbances).
-    manoeuvre : spacecraft.scene.ManoeuvreSpec
+    manoeuvre : spacecraft.scene.read.ManoeuvreSpec
     simulator : controllers.Simulator, optional
         A simulator of ``loop`` at ``manoeuvre.step`` to reuse (continuous loops).
     together : bool

@@ -20,7 +20,7 @@ Subcommands
     List the embedded scenes.
 
 ``--limit NAME=VALUE`` (run, export, table, fit; repeatable) raises or lowers a work limit of
-:mod:`spacecraft.limits` (``modes``, ``bodies``, ``fit_bodies``, ``appendages``, ``states``,
+:mod:`spacecraft.scene.limits` (``modes``, ``bodies``, ``fit_bodies``, ``appendages``, ``states``,
 ``samples``, ``memory``, ``string_length``, ``file_size``, ``basilisk_seconds``) over the
 scene's own ``[limits]``.
 
@@ -62,6 +62,8 @@ import traceback
 import warnings
 from pathlib import Path
 
+from .progress import Progress
+
 __all__ = ["main", "build_parser", "Terminated"]
 
 #: Longest error line printed [characters].
@@ -85,23 +87,6 @@ _BEAM_OPTIONS = (
     ("--linear-density", float, "uniform: mass per length [kg/m]"),
     ("--damping-ratio", float, "modal damping ratio [-] (default 0)"),
 )
-
-
-class _Progress:
-    """Progress lines on stderr: '[  1.2 s] stage...'."""
-
-    def __init__(self, quiet: bool):
-        self.quiet = quiet
-        self.t0 = time.perf_counter()
-
-    def __call__(self, message: str) -> None:
-        if not self.quiet:
-            try:
-                print(f"[{time.perf_counter() - self.t0:6.1f} s] {message}...",
-                      file=sys.stderr, flush=True)
-            except (BrokenPipeError, ValueError):
-                # stderr closed (piped into head, or a closed file): the run goes on silently
-                self.quiet = True
 
 
 class _UserError(Exception):
@@ -248,7 +233,7 @@ def build_parser(*, sweep_arguments: bool = True) -> argparse.ArgumentParser:
                     "exact beam. Writes the samples (Parquet), summary.json, report.md, "
                     "report.html, plots and worst.toml into a folder.")
     if sweep_arguments:
-        from .sweep.command import add_arguments as add_sweep_arguments
+        from .sweep import add_arguments as add_sweep_arguments
 
         add_sweep_arguments(sweep)
 
@@ -261,7 +246,7 @@ def build_parser(*, sweep_arguments: bool = True) -> argparse.ArgumentParser:
 
 
 def _version() -> str:
-    """flexsat's version (:func:`spacecraft.report.version`, without importing the report)."""
+    """flexsat's version (:func:`spacecraft.report.write.version`, without importing the report)."""
     root = Path(__file__).resolve().parents[1] / "pyproject.toml"
     try:
         for line in root.read_text(encoding="utf-8").splitlines():
@@ -314,7 +299,7 @@ def _with_options(scene, args):
         scene = scene.replace(export=dataclasses.replace(scene.export, fmu=True, **changes))
     simulator = getattr(args, "simulator", None)
     if simulator is not None:
-        from .scene import with_simulator
+        from ..scene.read import with_simulator
 
         scene = with_simulator(scene, simulator)
     return scene
@@ -334,7 +319,7 @@ def _limits(args) -> dict:
 
 
 def _scene(argument, limits=None):
-    from .scene import example_scenes, load_scene, scene_path
+    from ..scene.read import example_scenes, load_scene, scene_path
 
     if argument is None:
         return load_scene(None, limits=limits)
@@ -355,7 +340,7 @@ def _scene(argument, limits=None):
 
 
 def _beam_from(args):
-    from .scene import SceneError, _Reader, _read_beam
+    from ..scene.read import SceneError, _Reader, _read_beam
 
     given = {option[2:].replace("-", "_"): getattr(args, option[2:].replace("-", "_"))
              for option, _, _ in _BEAM_OPTIONS}
@@ -380,14 +365,14 @@ def _beam_from(args):
 
 
 def _cmd_run(args, *, export_only: bool = False) -> int:
-    from .output import OutputFolder
-    from .report import summary_lines, to_json, write_report
-    from .runner import run
+    from ..report.output import OutputFolder
+    from ..report.write import summary_lines, to_json, write_report
+    from ..design.loop import run
 
-    progress = _Progress(args.quiet)
+    progress = Progress(args.quiet)
     scene = _with_options(_scene(args.scene, _limits(args)), args)
     if scene.simulator.name == "basilisk" and not export_only:
-        from .basilisk import require_basilisk
+        from ..basilisk import require_basilisk
 
         require_basilisk()   # before any work: one line saying how to install the extra
     if export_only and not scene.export.fmu:
@@ -421,7 +406,7 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
     for line in summary_lines(data):
         print(line)
     what = ["report.md", "report.html", "results.json"]
-    from .naming import plural
+    from ..design.naming import plural
 
     if data["files"].get("plots"):
         what.append(plural(len(data["files"]["plots"]), "plot"))
@@ -435,8 +420,8 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
 
 def _check_n_bodies(args):
     """--n-bodies of table and fit: at least 2, at most limits.fit_bodies."""
-    from .limits import Limits
-    from .scene import read_limits
+    from ..scene.limits import Limits
+    from ..scene.read import read_limits
 
     if args.n_bodies < 2:
         raise _UserError(f"--n-bodies must be at least 2; got {args.n_bodies}")
@@ -450,15 +435,15 @@ def _check_n_bodies(args):
 
 
 def _equivalence(args):
-    from .runner import equivalence_table
+    from ..design.loop import equivalence_table
 
     beam, source = _beam_from(args)
     from appendages.equivalence import fit_chain
     import warnings
 
-    from .limits import library_limits
+    from ..scene.limits import library_limits
 
-    progress = _Progress(args.quiet)
+    progress = Progress(args.quiet)
     fits = {}
     with warnings.catch_warnings(), library_limits(args.checked_limits):
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -475,7 +460,7 @@ def _fit_message(n_bodies: int, match: str) -> str:
 
 
 def _cmd_table(args) -> int:
-    from .report import equivalence_markdown, to_json
+    from ..report.write import equivalence_markdown, to_json
 
     args.checked_limits = _check_n_bodies(args)
     beam, source, table = _equivalence(args)
@@ -506,14 +491,14 @@ def _cmd_fit(args) -> int:
 
     from appendages.equivalence import fit_chain
 
-    from .report import to_json
-    from .tables import describe_model as _describe
+    from ..report.write import to_json
+    from ..design.tables import describe_model as _describe
 
-    from .limits import library_limits
+    from ..scene.limits import library_limits
 
     limits = _check_n_bodies(args)
     beam, source = _beam_from(args)
-    progress = _Progress(args.quiet)
+    progress = Progress(args.quiet)
     progress(_fit_message(args.n_bodies, args.match))
     with warnings.catch_warnings(), library_limits(limits):
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -541,7 +526,7 @@ def _cmd_fit(args) -> int:
 
 
 def _cmd_scenes(args) -> int:
-    from .scene import example_scenes, load_scene, scene_path
+    from ..scene.read import example_scenes, load_scene, scene_path
 
     scenes = [{"name": name, "title": load_scene(scene_path(name)).title,
                "path": str(scene_path(name))} for name in example_scenes()]
@@ -565,7 +550,7 @@ def _dispatch(args) -> int:
     if args.command == "fit":
         return _cmd_fit(args)
     if args.command == "sweep":
-        from .sweep.command import run_command
+        from .sweep import run_command
 
         return run_command(args)
     return _cmd_scenes(args)
@@ -577,7 +562,7 @@ def _classify(exc: BaseException) -> tuple[int, str]:
     from appendages.interface import FlexsatError
     from fmu import FMUError
 
-    from .output import is_environment_error
+    from ..report.output import is_environment_error
 
     if isinstance(exc, (FlexsatError, _UserError)):
         return 2, f"flexsat: error: {exc}"
@@ -632,7 +617,7 @@ def main(argv=None) -> int:
             print(_one_line(line), file=sys.stderr)
             return code
     # warnings outside a scene run (those of a run are in its report and printed with it)
-    from .runner import warning_lines
+    from ..design.loop import warning_lines
 
     for line in warning_lines(caught):
         print(f"flexsat: warning: {_one_line(line)}", file=sys.stderr)

@@ -52,7 +52,7 @@ manoeuvre ends before the slew  -            manoeuvre.duration < slew_time
 not settled                     2 % band     still outside at the end of the simulated time
 truth model misses modes        1 %          a coupled mode below bandwidth_factor x the loop's
                                              crossover that the truth model does not resolve
-truth model not converged       tolerance    the closed-loop rule of :mod:`spacecraft.fidelity`
+truth model not converged       tolerance    the closed-loop rule of :mod:`spacecraft.design.fidelity`
                                              stopped at its largest number of modes
 ==============================  ===========  ==================================================
 

@@ -1,13 +1,13 @@
 """Run a scene: build only what it asks for, tune, close the loops, collect every number.
 
-:func:`run` turns a :class:`~spacecraft.scene.Scene` into a :class:`RunResult`: the models
+:func:`run` turns a :class:`~spacecraft.scene.read.Scene` into a :class:`RunResult`: the models
 (truth: distributed beams truncated to the modes the scene's tolerance needs, or chains; design:
-chains fitted to the beams; :mod:`spacecraft.models`), the controllers tuned on each design
-model with their gains (:mod:`spacecraft.tuning`), the slew (and disturbance) responses of the
-design and truth loops with their metrics and verdicts (:mod:`spacecraft.responses`,
-:mod:`spacecraft.verdicts`), the design warnings, optionally Basilisk's run of the same
-manoeuvre (:mod:`spacecraft.simulators`), and the equivalence tables. The report
-(:mod:`spacecraft.report`) writes files from it; FMUs and plots are built there.
+chains fitted to the beams; :mod:`spacecraft.design.models`), the controllers tuned on each design
+model with their gains (:mod:`spacecraft.design.tuning`), the slew (and disturbance) responses of the
+design and truth loops with their metrics and verdicts (:mod:`spacecraft.design.responses`,
+:mod:`spacecraft.design.verdicts`), the design warnings, optionally Basilisk's run of the same
+manoeuvre (:mod:`spacecraft.design.simulators`), and the equivalence tables. The report
+(:mod:`spacecraft.report.write`) writes files from it; FMUs and plots are built there.
 
 Nothing the scene does not ask for is built. :class:`RunStats` counts the work the code did
 (FMU builds, plots, exact-beam evaluations, LQR designs, simulations, modes kept and dropped...),
@@ -29,13 +29,13 @@ import numpy as np
 import controllers
 from controllers.threads import blas_threads_for
 
-from .limits import estimate_cost, library_limits
+from ..scene.limits import estimate_cost, library_limits
 from .models import (LQR_FREQUENCY_RANGE, ModelBuilder, ProgressCallback, RunStats,
                      raised_by_flexsat)
 from .naming import FIT_LABELS
 from .responses import (appendage_peaks, diverged_at, outputs_until_overflow,
                         simulate_manoeuvre, trace)
-from .scene import Scene, load_scene, scene_dict
+from ..scene.read import Scene, load_scene, scene_dict
 from .tables import describe_model, equivalence_table
 from .tuning import digital_facts, rigid_crossover
 from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, growing,
@@ -62,7 +62,7 @@ class RunResult:
     ----------
     scene : Scene
     data : dict
-        Every number of the report, JSON-ready (see :mod:`spacecraft.report`).
+        Every number of the report, JSON-ready (see :mod:`spacecraft.report.write`).
     stats : RunStats
     truth : dict
         ``verdict`` and ``sim`` truth plants (control.StateSpace), ``spacecraft``.
@@ -85,7 +85,7 @@ class RunResult:
         Controller kind -> :class:`spacecraft.basilisk.SlewComparison` (Basilisk's run of the
         manoeuvre beside flexsat's), when the scene asks for it.
     three_axis : dict
-        A three-axis scene's run (:func:`spacecraft.three_axis_run.run_three_axis`): plants,
+        A three-axis scene's run (:func:`spacecraft.design.three_axis.run_three_axis`): plants,
         controllers, loops, responses; empty for a planar scene.
     """
 
@@ -319,7 +319,7 @@ class _Runner(ModelBuilder):
 
     def simulate_runs(self, loop, *, together: bool = False) -> dict:
         """The manoeuvre on a closed loop: ``{"slew": ..., "disturbance": ... or None}``
-        (see :func:`spacecraft.responses.simulate_manoeuvre`)."""
+        (see :func:`spacecraft.design.responses.simulate_manoeuvre`)."""
         m = self.scene.manoeuvre
         simulator = None
         if not loop.isdtime(strict=True):
@@ -381,7 +381,7 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     Parameters
     ----------
     scene : Scene, path, dict or None
-        Anything :func:`~spacecraft.scene.load_scene` accepts (None: the default scene).
+        Anything :func:`~spacecraft.scene.read.load_scene` accepts (None: the default scene).
     progress : callable, optional
         Called with a short message at the start of each stage.
     stats : RunStats, optional
@@ -426,9 +426,9 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
 
 
 def _run_three_axis(scene, progress, stats, time_responses) -> RunResult:
-    """A three-axis scene (:mod:`spacecraft.three_axis_run`) in a RunResult: ``data`` its
+    """A three-axis scene (:mod:`spacecraft.design.three_axis`) in a RunResult: ``data`` its
     numbers, ``loops``/``responses``/``designs`` its systems."""
-    from .three_axis_run import run_three_axis
+    from .three_axis import run_three_axis
 
     with warnings.catch_warnings(record=True) as caught, library_limits(scene.limits):
         warnings.simplefilter("default")

@@ -4,12 +4,12 @@
 or fitted to a beam), the truncated truth models, the coupled :class:`Spacecraft` of each model
 set, the state-space plants with the signals asked for, and the exact frequency-domain
 references through W(s) of the distributed beams; it chooses the number of modes from the
-scene's tolerance (:mod:`spacecraft.fidelity`). Everything is cached for the run: one chain fit
+scene's tolerance (:mod:`spacecraft.design.fidelity`). Everything is cached for the run: one chain fit
 per (beam, criterion), one Spacecraft (one eigen-decomposition) per model set, one plant per
 signal set. An error of flexsat's API raised by a call made with the scene's values becomes a
 :class:`SceneError` naming the scene key (:meth:`ModelBuilder.scene_values`).
 
-The scene runner (:mod:`spacecraft.runner`) and the sweeps (:mod:`spacecraft.sweep`) build on it.
+The scene runner (:mod:`spacecraft.design.loop`) and the sweeps (:mod:`spacecraft.sweep`) build on it.
 """
 
 from __future__ import annotations
@@ -30,18 +30,18 @@ import appendages
 import controllers
 from appendages.interface import FlexsatError
 
-from .coupling import Spacecraft
+from ..dynamics.coupling import Spacecraft
 from .fidelity import MAX_MODES, FidelityChoice, choose_n_modes, refine_for_closed_loop
-from .hub import Hub, Mount
-from .limits import estimate_cost
-from .scene import AppendageSpec, ChainSpec, Scene, SceneError
+from ..dynamics.hub import Hub, Mount
+from ..scene.limits import estimate_cost
+from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
 from .verdicts import closed_loop_poles
 
 __all__ = ["ModelBuilder", "TruthLoop", "RunStats", "raised_by_flexsat", "LQR_FREQUENCY_RANGE",
            "ProgressCallback"]
 
 #: Range of the rigid-body LQR natural frequency (q / (r J^2))^(1/4) [rad/s]: that of a PD's
-#: natural frequency in a scene (spacecraft.scene.RANGES["pd.frequency"]).
+#: natural frequency in a scene (spacecraft.scene.read.RANGES["pd.frequency"]).
 LQR_FREQUENCY_RANGE = (1e-5, 1e3)
 
 # Folders of flexsat's packages: an exception raised by code in them is a checked condition of
@@ -321,7 +321,7 @@ class ModelBuilder:
                           prune=self.scene.fidelity.prune)
 
     def tuned(self, variant: str, kind: str, n_modes: int | None):
-        """The controller ``kind`` tuned on a design variant (:func:`spacecraft.tuning.tune`),
+        """The controller ``kind`` tuned on a design variant (:func:`spacecraft.design.tuning.tune`),
         once per design plant; a failure is a SceneError naming controller.<kind>."""
         from .tuning import tune
 
@@ -484,7 +484,7 @@ class ModelBuilder:
 
     def closed_loop_fidelity(self, choice: FidelityChoice, bandwidth: float) -> FidelityChoice:
         """The open-loop choice refined until the scene's closed loops converge
-        (:func:`spacecraft.fidelity.refine_for_closed_loop`); the band of poles compared is
+        (:func:`spacecraft.design.fidelity.refine_for_closed_loop`); the band of poles compared is
         bandwidth_factor x the fastest crossover on the design models (as the run's check of
         the truth model's resolution), or the first exact coupled frequency above
         bandwidth_factor x the bandwidth if higher."""

@@ -1,12 +1,12 @@
 """Run a three-axis scene and write its report (issue 11, item 5).
 
-A scene whose hub has a 3x3 inertia tensor (:attr:`spacecraft.scene.Scene.three_axis`) runs
-here, beside the planar runner (:mod:`spacecraft.runner`), through the same steps:
+A scene whose hub has a 3x3 inertia tensor (:attr:`spacecraft.scene.read.Scene.three_axis`) runs
+here, beside the planar runner (:mod:`spacecraft.design.loop`), through the same steps:
 
 - models: each appendage's distributed beam (every motion: bending in two planes, torsion,
   axial), its truth model (the beam truncated to ``fidelity.n_modes`` Craig-Bampton modes, 10
   when the scene gives a tolerance instead: the tolerance-driven choice of
-  :mod:`spacecraft.fidelity` is planar) and its design model (the 3-D chain fitted with
+  :mod:`spacecraft.design.fidelity` is planar) and its design model (the 3-D chain fitted with
   :func:`appendages.fit_chain_3d`, first criterion of ``fit.match``);
 - plants: the truth spacecraft with tip motions in both planes and twist (when asked) and the
   design spacecraft, pruned as the scene says;
@@ -35,11 +35,11 @@ import controllers
 import fmu
 from appendages import fit_chain_3d
 
-from .coupling import Spacecraft
-from .hub import Hub, Mount
-from .pages import Tone, bad, markdown, render_html, warn
-from .scene_reader import SceneError
-from .scene_specs import scene_dict
+from ..dynamics.coupling import Spacecraft
+from ..dynamics.hub import Hub, Mount
+from ..report.pages import Tone, bad, markdown, render_html, warn
+from ..scene.reader import SceneError
+from ..scene.specs import scene_dict
 from .verdicts import CAUTIONS, growing, loop_warnings, verdict_dict
 
 __all__ = ["run_three_axis", "write_three_axis_report", "three_axis_summary", "DEFAULT_MODES"]
@@ -80,7 +80,7 @@ def run_three_axis(scene, *, progress=None, time_responses: bool = True) -> dict
 
     Parameters
     ----------
-    scene : spacecraft.scene.Scene
+    scene : spacecraft.scene.read.Scene
         A validated three-axis scene.
     progress : callable, optional
         Called with a short message at the start of each stage.
@@ -178,7 +178,7 @@ def _margins_of(verdict: dict) -> dict:
 
 def _fmt(value) -> str:
     """The report's number format (4 significant digits; None as "n/a", booleans as yes/no)."""
-    from .report import _fmt as report_format  # report imports this module
+    from ..report.write import _fmt as report_format  # report imports this module
     return report_format(value.item() if isinstance(value, np.generic) else value, 4)
 
 
@@ -274,7 +274,7 @@ def _blocks(scene, data: dict, images: list) -> list:
                                 "the gain [dB] and phase [deg] it guarantees in all loops at "
                                 "once) and the smallest singular value of the return "
                                 "difference I + L; below the thresholds of "
-                                "spacecraft.verdicts (6 dB, 30 deg, 0.5, alpha 2/3) in "
+                                "spacecraft.design.verdicts (6 dB, 30 deg, 0.5, alpha 2/3) in "
                                 "orange."))
         blocks.append(("table", ["margin", "value"], _margin_rows(row)))
         v = row["verdict"]
@@ -365,7 +365,7 @@ def write_three_axis_report(scene, out: dict, folder, *, fmus: bool | None = Non
                             plots: bool | None = None, pages: bool = True, progress=None) -> dict:
     """Write the report of a three-axis run into ``folder`` (see the module docstring);
     returns the results written to results.json."""
-    from .report import to_json, version
+    from ..report.write import to_json, version
 
     folder = Path(folder)
     progress = progress or (lambda message: None)

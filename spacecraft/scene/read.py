@@ -95,7 +95,7 @@ key                                    unit       meaning
 ``controller.given``                   -          one controller given as state-space numbers
                                                   instead of tuned (``kind``, ``A``, ``B``,
                                                   ``C``, ``D``; units and shapes in
-                                                  :mod:`spacecraft.given_controller`)
+                                                  :mod:`spacecraft.scene.given`)
 ``manoeuvre.slew_angle`` *             deg        slew angle (non-zero)
 ``manoeuvre.slew_time`` *              s          duration of the cycloidal slew profile
 ``manoeuvre.duration``                 s          simulated time; default 3 x slew_time
@@ -222,7 +222,7 @@ rigid-body LQR frequency (q / (r J^2))^(1/4), derived 1e-5 .. 1e3          rad/s
 ``simulator.reaction_wheel.max_speed``                1e-3 .. 1e6          rad/s
 ====================================================  ===================  ==================
 
-Limits (work a scene may ask for; :mod:`spacecraft.limits` has the measurements behind them).
+Limits (work a scene may ask for; :mod:`spacecraft.scene.limits` has the measurements behind them).
 Raise one explicitly where you really want more: a ``[limits]`` table in the scene
 (``[limits]`` / ``modes = 800``) or ``--limit modes=800`` on the command line (which wins).
 
@@ -231,7 +231,7 @@ limit              default      bounds
 =================  ===========  ==================================================================
 modes              500          ``fidelity.n_modes``; the search from ``fidelity.tolerance``
                                 tries at most 40 modes, or this limit if lower (see
-                                ``spacecraft.fidelity.MAX_MODES``)
+                                ``spacecraft.design.fidelity.MAX_MODES``)
 bodies             500          bodies per chain (arrays, ``chain.n_bodies``)
 fit_bodies         14           ``fit.n_bodies`` (appendages' limit: the range the fit is
                                 benchmarked and tested on)
@@ -269,10 +269,10 @@ import numpy as np
 from appendages.unit_slips import damping_in_percent, modulus_in_megapascals, radians_in_degrees
 
 from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, estimate_cost
-from .scene_reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
+from .reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
                            _NAME, _Reader, _kind, _quoted, _short, _shown)
-from .given_controller import read_given
-from .scene_specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLOT_ALIASES,
+from .given import read_given
+from .specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLOT_ALIASES,
                           PLOTS, SECTIONS, SIMULATORS, AppendageSpec, BeamSpec, ChainSpec,
                           ControllerSpec, DisturbanceSpec, ExportSpec, FidelitySpec, FitSpec,
                           HubSpec, LQRSpec, ManoeuvreSpec, OutputsSpec, PDSpec,
@@ -552,10 +552,10 @@ def _check_three_axis_scene(r: _Reader, simulator, outputs, export, plots) -> No
 
 def _read_inertia_tensor(r: _Reader, value, full: str) -> tuple:
     """A 3x3 symmetric positive definite inertia tensor of a body [kg m^2] (the checks of
-    :func:`spacecraft.kinematics.check_inertia_tensor`), rows as tuples."""
+    :func:`spacecraft.dynamics.kinematics.check_inertia_tensor`), rows as tuples."""
     import numpy as np
 
-    from .hub import Hub
+    from ..dynamics.hub import Hub
 
     if len(value) != 3 or not all(isinstance(row, (list, tuple)) and len(row) == 3
                                   for row in value):
@@ -574,7 +574,7 @@ def _read_orientation(r: _Reader, t: dict, path: str) -> tuple:
     """``orientation``: Euler angles [deg] of the appendage's axes (local x along it) in the
     ``orientation_sequence`` (default ``"ZYX"``: yaw about the hub's z, then pitch about the
     new y, then roll about the new x, the appendage's own axis)."""
-    from .kinematics import euler_orientation
+    from ..dynamics.kinematics import euler_orientation
 
     angles = r.vector(t, "orientation", path, "orientation", default=(0.0, 0.0, 0.0), size=3)
     for k, angle in enumerate(angles):
@@ -1025,7 +1025,7 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         Name used in error messages for a dict (default ``"<dict>"``).
     limits : mapping, optional
         Work limits that override the defaults and the scene's own ``[limits]`` table
-        (names of :class:`~spacecraft.limits.Limits`; the command line's ``--limit``).
+        (names of :class:`~spacecraft.scene.limits.Limits`; the command line's ``--limit``).
 
     Returns
     -------
@@ -1106,7 +1106,7 @@ def scene_path(name: str) -> Path:
     if not isinstance(name, str):
         raise TypeError(f"name must be the name of an embedded scene (a string); got "
                         f"{type(name).__name__} {_shown(name)}")
-    resource = importlib.resources.files("spacecraft").joinpath("scenes", f"{name}.toml")
+    resource = importlib.resources.files("spacecraft.scene").joinpath("embedded", f"{name}.toml")
     path = Path(str(resource))
     if not path.is_file():
         raise SceneError(f"name: no embedded scene {_shown(name)}; available: "
@@ -1116,7 +1116,7 @@ def scene_path(name: str) -> Path:
 
 def example_scenes() -> list[str]:
     """Names of the embedded scenes."""
-    folder = Path(str(importlib.resources.files("spacecraft").joinpath("scenes")))
+    folder = Path(str(importlib.resources.files("spacecraft.scene").joinpath("embedded")))
     return sorted(p.stem for p in folder.glob("*.toml"))
 
 

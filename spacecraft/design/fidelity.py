@@ -76,7 +76,7 @@ MAX_MODES = 40
 
 
 #: Damping ratios below this are compared absolutely (tolerance x DAMPING_SCALE) in the
-#: closed-loop rule: the light-damping threshold of :mod:`spacecraft.verdicts`.
+#: closed-loop rule: the light-damping threshold of :mod:`spacecraft.design.verdicts`.
 DAMPING_SCALE = 1e-3
 
 
@@ -283,7 +283,7 @@ def _pole_change(before: np.ndarray, after: np.ndarray, band: float) -> float:
 
 def _pole_facts(poles: np.ndarray) -> tuple[bool, float | None]:
     """(stable, least damping ratio) of closed-loop poles [1/s]: stable when no pole grows
-    faster than a marginal one, Re(s) <= 1e-10 max(1, |s|) (spacecraft.verdicts.MARGINAL);
+    faster than a marginal one, Re(s) <= 1e-10 max(1, |s|) (spacecraft.design.verdicts.MARGINAL);
     damping -Re(s)/|s| (0 at s = 0)."""
     s = np.asarray(poles, dtype=complex)
     if s.size == 0:

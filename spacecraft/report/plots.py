@@ -20,7 +20,7 @@ four PNG files, drawn on matplotlib's Agg canvas without pyplot):
 - ``W.png``: |W1|, |W2| = |W3|, |W4| of every (distinct) appendage: the exact beam, the truth
   model and the design chains, with the band where the truth model is resolved.
 
-Names and colours are those of :mod:`spacecraft.naming`: one colour per design model, the loop
+Names and colours are those of :mod:`spacecraft.design.naming`: one colour per design model, the loop
 on the truth model solid, on the design model dashed, the exact beam black, Basilisk dotted,
 anything unstable red. A figure has one legend (above the panels).
 """
@@ -32,10 +32,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .naming import (BASILISK_COLOUR, BASILISK_STYLE, CAUTION_COLOUR, DESIGN_STYLE, EXACT_COLOUR,
+from ..design.naming import (BASILISK_COLOUR, BASILISK_STYLE, CAUTION_COLOUR, DESIGN_STYLE, EXACT_COLOUR,
                      REFERENCE_COLOUR, TRUTH_STYLE, UNSTABLE_COLOUR, controller_label, design_label, plural,
                      variant_colour)
-from .responses import trace
+from ..design.responses import trace
 
 __all__ = ["plot_slew", "plot_loop", "plot_poles", "plot_W", "draw", "PLOT_FILES",
            "envelope", "identical"]
@@ -163,8 +163,8 @@ def _unstable(row, which: str = "truth") -> bool:
 
 def _cautions(result, kind: str) -> str:
     """The cautions of a controller's loops (low margins, lowered or light damping: the design
-    warnings of :mod:`spacecraft.verdicts`), as a title says them; "" when none."""
-    from .verdicts import CAUTIONS
+    warnings of :mod:`spacecraft.design.verdicts`), as a title says them; "" when none."""
+    from ..design.verdicts import CAUTIONS
 
     codes = [w["code"] for w in result.data.get("design_warnings", [])
              if w.get("controller") == kind and w["code"] in CAUTIONS]

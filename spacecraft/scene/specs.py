@@ -1,9 +1,9 @@
 """The scene's data model: a validated scene and its parts, in SI units (angles in rad).
 
-:func:`spacecraft.scene.load_scene` builds a :class:`Scene` from a TOML file or a dict and checks
+:func:`spacecraft.scene.read.load_scene` builds a :class:`Scene` from a TOML file or a dict and checks
 every value once; everything downstream (the runner, the report, the command line) reads these
 frozen dataclasses. The keys of the file, their units and ranges are documented in
-:mod:`spacecraft.scene`. :func:`scene_dict` gives the resolved scene (every default filled in)
+:mod:`spacecraft.scene.read`. :func:`scene_dict` gives the resolved scene (every default filled in)
 as a JSON-ready dict for ``results.json``.
 """
 
@@ -161,7 +161,7 @@ class LQRSpec:
 @dataclasses.dataclass(frozen=True)
 class ControllerSpec:
     """Controllers to tune on the design model and their sample time [s] (None: continuous);
-    ``given``: one of them given as numbers instead of tuned (:mod:`spacecraft.given_controller`)."""
+    ``given``: one of them given as numbers instead of tuned (:mod:`spacecraft.scene.given`)."""
 
     types: tuple
     pd: PDSpec | None
@@ -248,8 +248,8 @@ class SimulatorSpec:
 
 @dataclasses.dataclass(frozen=True)
 class Scene:
-    """A validated scene (SI units). Build it with :func:`~spacecraft.scene.load_scene` or
-    :func:`~spacecraft.scene.default_scene`."""
+    """A validated scene (SI units). Build it with :func:`~spacecraft.scene.read.load_scene` or
+    :func:`~spacecraft.scene.read.default_scene`."""
 
     title: str
     source: str
