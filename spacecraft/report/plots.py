@@ -485,7 +485,7 @@ _DAMPING_LINES = (0.05, 0.2, 0.4, 0.7)
 
 def plot_poles(result, path: Path) -> str:
     """Draw ``poles.png``; returns its caption."""
-    from .verdicts import MIN_DAMPING
+    from ..design.verdicts import MIN_DAMPING
 
     kinds = list(dict.fromkeys(k[1] for k in result.poles))
     n = len(kinds)
