@@ -724,7 +724,7 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
         results.json.
     """
     from .exports import finish_exports, start_exports, write_ssps
-    from .runner import RunResult, check_options
+    from ..design.loop import RunResult, check_options
 
     if not isinstance(result, RunResult):
         raise TypeError(f"result must be a RunResult (spacecraft.run); got {type(result).__name__}")
