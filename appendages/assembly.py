@@ -93,6 +93,7 @@ import numpy as np
 from . import members
 from .checks import check_positive
 from .errors import ConvergenceError, describe
+from .interface import inverse_symmetric
 
 __all__ = ["BeamAssembly", "Segment", "CONTOUR_POINTS", "check_segments"]
 
@@ -196,19 +197,26 @@ class BeamAssembly:
         stiffness and the torsional inertia, and all or none have GJ, all or none EA).
     tip_mass : ndarray, shape (n_root, n_root), or None
         The tip body's mass matrix about the free end (:meth:`TipBody.mass_matrix`).
-    n_root : {2, 6}
-        2: the planar model (x-y bending); 6: three axes.
+    n_root : {1, 2, 6}
+        2: the planar model (x-y bending); 6: three axes; 1: one rod motion alone
+        (``rod_motion``).
+    rod_motion : {"torsion", "axial"}, optional
+        With ``n_root=1``: which motion (root ``theta_x`` or ``u``; the tip mass matrix is then
+        the body's 1x1 moment about the axis or its mass).
     """
 
-    def __init__(self, segments, tip_mass, n_root: int):
+    def __init__(self, segments, tip_mass, n_root: int, rod_motion: str | None = None):
         # each segment as two elements split at the golden section: a uniform member's
         # clamped-clamped frequencies (the poles of its matrix) coincide with every free-free
         # frequency of the same member alone; split in an irrational ratio, no element's pole
         # falls on a frequency of the uniform beam (the closest, 0.056/k**2 relative at mode
         # k, costs the count eps k**2/0.056 there)
-        if isinstance(n_root, (bool, np.bool_)) or n_root not in (2, 6):
-            raise ValueError(f"n_root must be 2 (planar) or 6 (three axes); got "
+        if isinstance(n_root, (bool, np.bool_)) or n_root not in (1, 2, 6):
+            raise ValueError(f"n_root must be 1 (a rod), 2 (planar) or 6 (three axes); got "
                              f"{describe(n_root)}")
+        if n_root == 1 and rod_motion not in ("torsion", "axial"):
+            raise ValueError(f"rod_motion must be 'torsion' or 'axial' with n_root=1; got "
+                             f"{describe(rod_motion)}")
         self.segments = []
         for seg in check_segments(segments, three_axis=n_root == 6):
             self.segments += [seg._replace(length=seg.length * _GOLDEN),
@@ -222,7 +230,17 @@ class BeamAssembly:
         self.x = np.concatenate([[0.0], np.cumsum([seg.length for seg in self.segments])])
         self.length = float(self.x[-1])
         first = self.segments[0]
-        if n_root == 2:
+        if n_root == 1:
+            needed = (("torsional_stiffness", "torsional_inertia") if rod_motion == "torsion"
+                      else ("axial_stiffness",))
+            for k, seg in enumerate(self.segments):
+                for name in needed:
+                    if getattr(seg, name) is None:
+                        raise ValueError(f"segments[{k // 2}].{name} [{_UNITS[name]}] is needed "
+                                         f"by the {rod_motion} rod; got None")
+            self.motions = [(rod_motion, (0,), (1.0,))]
+            self.rigid = []
+        elif n_root == 2:
             self.motions = [("xy", (0, 1), (1.0, 1.0))]
             self.rigid = []
         else:
@@ -244,7 +262,7 @@ class BeamAssembly:
         self.rigid_select = np.zeros((n_root, n_root))
         for index, _ in self.rigid:
             self.rigid_select[index, index] = 1.0
-        self.tip_rows = [0] if n_root == 2 else [1, 2, 3]
+        self.tip_rows = [0] if n_root <= 2 else [1, 2, 3]
         self._cache: dict = {}
         self._set_scales()
 
@@ -252,6 +270,8 @@ class BeamAssembly:
     def transfer(self, x: float) -> np.ndarray:
         """T(x): the motions at x of a rigid motion of the root, shape (d, d)."""
         T = np.eye(self.n_root)
+        if self.n_root == 1:
+            return T
         if self.n_root == 2:
             T[0, 1] = x
         else:
@@ -479,7 +499,7 @@ class BeamAssembly:
         ("free", "clamped", "pinned", "sliding"), rigid-body modes left out."""
         omega = np.asarray(omega, dtype=float).ravel()
         free, n_rigid = self._free_dofs(kind, self.n_root)
-        if self.n_root == 6 and kind in ("pinned", "sliding"):
+        if self.n_root != 2 and kind in ("pinned", "sliding"):
             raise ValueError(f"kind {kind!r} is planar; a three-axis model is 'free' or "
                              "'clamped'")
         out = np.empty(omega.size, dtype=np.int64)
@@ -557,32 +577,36 @@ class BeamAssembly:
             negative += _neg_count(rigid[:, index][:, :, index])
         return negative
 
-    def frequencies(self, kind: str, n: int) -> np.ndarray:
+    def frequencies(self, kind: str, n: int, rtol: float = 0.0) -> np.ndarray:
         """The first n natural frequencies [rad/s] with the root ``kind``, by bisection on the
-        count to the last bit (cached, extended on demand)."""
+        count to the last bit (cached; a longer list extends the cached one, from its last
+        frequency up, and at least doubles it). ``rtol > 0``: brackets only that narrow
+        (relative), cached apart: the centres of :meth:`modes`' residue circles."""
         self._free_dofs(kind, self.n_root)
         if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1:
             raise ValueError(f"n must be a positive integer (number of frequencies); got "
                              f"{describe(n)}")
-        cached = self._cache.get(("frequencies", kind))
-        if cached is not None and cached.size >= n:
+        key = ("frequencies", kind, rtol)
+        cached = self._cache.get(key)
+        done = 0 if cached is None else cached.size
+        if done >= n:
             return cached[:n]
-        n_want = max(n + 1, 4)
-        hi = self.switch
+        n_want = max(n + 1, 4, 2 * done)
+        start = 0.0 if done == 0 else float(cached[-1]) * (1.0 - 1e-9)
+        hi = max(self.switch, 2.0 * start)
         while self.count(np.array([hi]), kind)[0] < n_want:
             hi *= 2.0
-        k = np.arange(1, n_want + 1)
-        lo_w = np.zeros(n_want)
-        hi_w = np.full(n_want, hi)
-        # one shared coarse grid first: brackets of one grid cell for every k
-        grid = hi * np.geomspace(1e-9, 1.0, 4 * n_want + 64)
+        k = np.arange(done + 1, n_want + 1)
+        # one shared coarse grid first: brackets of one grid cell for every new k
+        low = start if done else hi * 1e-9
+        grid = np.geomspace(low, hi, 4 * k.size + 64)
         counts = self.count(grid, kind)
         below = np.searchsorted(counts, k, side="left")  # first grid point with count >= k
         hi_w = grid[np.minimum(below, grid.size - 1)]
         lo_w = np.where(below > 0, grid[np.maximum(below - 1, 0)], 0.0)
-        for _ in range(200):
+        for _ in range(400):
             mid = np.where(lo_w > 0, np.sqrt(lo_w * hi_w), 0.5 * hi_w)
-            active = (hi_w - lo_w) > 2.0 * np.finfo(float).eps * hi_w
+            active = (hi_w - lo_w) > max(rtol, 2.0 * np.finfo(float).eps) * hi_w
             if not np.any(active):
                 break
             c = self.count(mid[active], kind)
@@ -592,8 +616,9 @@ class BeamAssembly:
             lo_w[idx[~up]] = mid[active][~up]
         else:  # pragma: no cover - bisection halves every bracket
             raise ConvergenceError("the frequency bisection did not converge")
-        result = 0.5 * (lo_w + hi_w)
-        self._cache[("frequencies", kind)] = result
+        new = 0.5 * (lo_w + hi_w)
+        result = new if cached is None else np.concatenate([cached, new])
+        self._cache[key] = result
         return result[:n]
 
     # -- modes ----------------------------------------------------------------------------------
@@ -627,18 +652,29 @@ class BeamAssembly:
         cached = self._cache.get(key)
         if cached is not None and cached[0].size >= n:
             return tuple(c[:n] for c in cached)
-        n_all = max(n, 16)
-        w = self.frequencies(kind, n_all + 1)
+        done = 0 if cached is None else cached[0].size
+        n_all = max(n, 16, 2 * done)
+        # circles centred on brackets of 1e-7: the residues give the exact eigenvalue too
+        w = self.frequencies(kind, n_all + 1, rtol=1e-7).copy()
         lam = w**2
         groups = self._clusters(w)
-        if len(groups[-1]) > 0 and groups[-1][-1] == n_all:  # the extra one is only a neighbour
-            pass
         d = self.n_root
         root = np.zeros((n_all, d))
         tip = np.zeros((n_all, len(self.tip_rows)))
+        # the cached modes are kept, but for the last group of them (it may have grown)
+        first_new = 0
+        for group in groups:
+            if done and group[0] <= done - 1 <= group[-1]:
+                first_new = group[0]       # the last cached group is done again
+                break
+        if cached is not None:
+            w[:first_new] = cached[0][:first_new]
+            root[:first_new], tip[:first_new] = cached[1][:first_new], cached[2][:first_new]
         theta = 2.0 * math.pi * (np.arange(CONTOUR_POINTS) + 0.5) / CONTOUR_POINTS
         centres, radii, members_of = [], [], []
         for g, group in enumerate(groups):
+            if group[0] < first_new:
+                continue
             if group[0] >= n_all:
                 break
             below = lam[groups[g - 1][-1]] if g > 0 else 0.0
@@ -648,6 +684,10 @@ class BeamAssembly:
             centres.append(centre)
             radii.append(radius)
             members_of.append(group)
+        if not centres:
+            result = (w[:n_all], root, tip)
+            self._cache[key] = result
+            return tuple(r[:n] for r in result)
         centres, radii = np.array(centres), np.array(radii)
         points = centres[:, None] + radii[:, None] * np.exp(1j * theta)[None, :]  # lambda
         s = np.sqrt(-points.astype(np.complex128))      # any root: D is even in s
@@ -656,15 +696,25 @@ class BeamAssembly:
         Tip = Tip.reshape(points.shape + (d, d))[..., self.tip_rows, :]
         weight = (radii[:, None] * np.exp(1j * theta)[None, :] / CONTOUR_POINTS)[..., None, None]
         if kind == "free":
-            from .interface import inverse_symmetric
             with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                W = inverse_symmetric(D)
-            residue = -np.sum(W * weight, axis=1).real            # sum b b^T
-            residue_tip = -np.sum((Tip @ W) * weight, axis=1).real  # sum phi_tip b^T
+                F = inverse_symmetric(D)
+            Tip = Tip @ F
         else:
-            residue = np.sum(D * weight, axis=1).real / (centres**2)[:, None, None]  # sum l l^T
-            residue_tip = -np.sum(Tip * weight, axis=1).real / centres[:, None, None]
+            F = D
+        # the eigenvalue: lambda_k = c + (sum (lambda - c) F w)/(sum F w) (first moment over
+        # the residue, exact for a pole inside the circle; traces for a group)
+        zeroth = np.sum(F * weight, axis=1)
+        first = np.sum(F * (weight * (points - centres[:, None])[..., None, None]), axis=1)
+        exact = centres + (np.trace(first, axis1=-2, axis2=-1)
+                           / np.trace(zeroth, axis1=-2, axis2=-1)).real
+        if kind == "free":
+            residue = -zeroth.real                                   # sum b b^T
+            residue_tip = -np.sum(Tip * weight, axis=1).real         # sum phi_tip b^T
+        else:
+            residue = zeroth.real / (exact**2)[:, None, None]        # sum l l^T
+            residue_tip = -np.sum(Tip * weight, axis=1).real / exact[:, None, None]
         for c, group in enumerate(members_of):
+            w[group] = math.sqrt(exact[c])
             P = 0.5 * (residue[c] + residue[c].T)
             values, vectors = np.linalg.eigh(P)
             m = len(group)
@@ -687,6 +737,8 @@ class BeamAssembly:
 
     def _root_weights(self) -> np.ndarray:
         """Scales that make root components comparable (rotations times the length)."""
+        if self.n_root == 1:
+            return np.ones(1)
         if self.n_root == 2:
             return np.array([1.0, 1e-3 * self.length])
         return np.array([1.0, 1.0, 1.0] + [1e-3 * self.length] * 3)

@@ -17,9 +17,12 @@ a product in each term (no difference of nearly equal fractions). Each term is
 ``l_k l_k^T s**4/w_k**2 g(s/w_k)`` with ``g(u) = 2 zeta u/((1 + u**2)(1 + 2 zeta u + u**2))``,
 small for the modes far above |s|: the sum is taken explicitly over the modes up to N and the rest
 either exactly (a uniform member's asymptotic modes: Hurwitz zeta sums, passed in as ``tail``) or
-left out once a bound on it is below 1e-15 of D: with ``w_k >= w_(N+1)``,
-``|sum_{k>N}| <= 2 zeta |s|**5 (M_rr - sum_{k<=N} l l^T)/w_(N+1)**3`` (roughly; each diagonal entry
-against ``|s|**2 M_rr``). Near an undamped pole ``+-i w_k``, where D_u is huge and the correction
+left out once a bound on it is below ``tolerance`` of D (1e-9 by default): with
+``w_k >= w_(N+1)``, ``|sum_{k>N}| <= 2 zeta |s|**5 (M_rr - sum_{k<=N} l l^T)/w_(N+1)**3`` (each
+diagonal entry against ``|s|**2 M_rr``; the bound is about 7 times the rest, whose terms decay
+like k**-8). The bound falls like ``w_(N+1)**-3`` only: 1e-9 keeps the modes up to about 30 |s|
+(zeta = 0.005), 1e-15 would need 3000 |s| (thousands of modes of a three-axis beam at a hundred
+times its first frequency). Near an undamped pole ``+-i w_k``, where D_u is huge and the correction
 cancels it, D is evaluated as the mean of the analytic ``D_u(z) + z**4 l_k l_k^T/(z**2 + w_k**2)``
 over a circle around s (mean-value property, 32 points) plus the damped pole term and the other
 modes' corrections, as :class:`appendages.beam.Beam` does for free-free damping.
@@ -81,9 +84,13 @@ class CantileverDamping:
     tail : callable, optional
         ``tail(s, N)``: the exact correction of the modes k > N, shape (npts, d, d); without
         it, N is chosen by the bound of the module docstring.
+    tolerance : float, optional
+        Without ``tail``: the relative size of D below which the bound on the modes left out
+        must fall (module docstring); default 1e-9.
     """
 
-    def __init__(self, zeta: float, undamped, modes, rigid_mass: np.ndarray, tail=None):
+    def __init__(self, zeta: float, undamped, modes, rigid_mass: np.ndarray, tail=None,
+                 tolerance: float = 1e-9):
         self.zeta = check_damping_ratio(zeta)
         for name, function in (("undamped", undamped), ("modes", modes)):
             if not callable(function):
@@ -91,6 +98,7 @@ class CantileverDamping:
         if tail is not None and not callable(tail):
             raise TypeError(f"tail must be callable or None; got {describe(tail)}")
         self.undamped, self.modes, self.tail = undamped, modes, tail
+        self.tolerance = check_positive("tolerance", tolerance, "-")
         self.rigid_mass = np.asarray(rigid_mass, dtype=float)
         if self.rigid_mass.ndim != 2 or self.rigid_mass.shape[0] != self.rigid_mass.shape[1] \
                 or not np.all(np.isfinite(self.rigid_mass)):
@@ -112,7 +120,7 @@ class CantileverDamping:
 
     def _modes_needed(self, s: np.ndarray) -> np.ndarray:
         """N per point (powers of two, at least 16): every mode up to 10 |s|, and with no
-        exact tail, enough that the bound on the rest is below 1e-15 of D."""
+        exact tail, enough that the bound on the rest is below the tolerance of D."""
         size = np.abs(s)
         n = np.full(s.size, 16, dtype=np.int64)
         while True:
@@ -128,7 +136,7 @@ class CantileverDamping:
                     ratio = float(np.max(np.abs(np.diagonal(rest))
                                          / np.abs(np.diagonal(self.rigid_mass))))
                     bound = 2.0 * self.zeta * (size[where] / w_next) ** 3 * ratio
-                    bad = bad | (bound > 1e-15)
+                    bad = bad | (bound > self.tolerance)
                 short[np.flatnonzero(where)[bad]] = True
             grow = short & (n < MAX_MODES)
             if not np.any(grow):
