@@ -85,6 +85,7 @@ from .modal import ModalBeam
 from .rod import Rod
 from .segmented import SegmentedBeam
 from .tip import TipBody, check_tip
+from .unit_slips import damping_in_percent, modulus_in_megapascals, warn_unit_slip
 
 __all__ = ["Beam", "characteristic_roots", "rectangle_torsion_constant"]
 
@@ -382,6 +383,16 @@ def _check_poisson_ratio(poisson_ratio) -> float:
     return nu
 
 
+def _warn_material(youngs_modulus: float, density: float, damping_ratio) -> None:
+    """Warn at a section constructor's caller about a modulus that looks like MPa or GPa and a
+    damping ratio that looks like per cent (:mod:`appendages.unit_slips`), once the values
+    are checked."""
+    zeta = check_damping_ratio(damping_ratio)
+    warn_unit_slip("youngs_modulus", youngs_modulus, "Pa",
+                   modulus_in_megapascals(youngs_modulus, density), stacklevel=4)
+    warn_unit_slip("damping_ratio", zeta, "", damping_in_percent(zeta), stacklevel=4)
+
+
 def rectangle_torsion_constant(side_a: float, side_b: float) -> float:
     """Saint-Venant torsion constant J_t [m**4] of a solid a x b rectangle.
 
@@ -490,6 +501,28 @@ class Beam:
                  torsional_inertia: float | None = None,
                  axial_stiffness: float | None = None, damping_ratio: float = 0.0,
                  damping_convention: str = "cantilever", tip: TipBody | None = None):
+        self._initialise(length, bending_stiffness, linear_density,
+                         bending_stiffness_y=bending_stiffness_y,
+                         torsional_stiffness=torsional_stiffness,
+                         torsional_inertia=torsional_inertia, axial_stiffness=axial_stiffness,
+                         damping_ratio=damping_ratio, damping_convention=damping_convention,
+                         tip=tip)
+        warn_unit_slip("damping_ratio", self.damping_ratio, "",
+                       damping_in_percent(self.damping_ratio))
+
+    @classmethod
+    def _quiet(cls, *args, **kwargs) -> "Beam":
+        """A beam built from values already warned about (a view, a section constructor's
+        beam): ``Beam(*args, **kwargs)`` without the unit-slip warnings."""
+        beam = cls.__new__(cls)
+        beam._initialise(*args, **kwargs)
+        return beam
+
+    def _initialise(self, length, bending_stiffness, linear_density, *,
+                    bending_stiffness_y=None, torsional_stiffness=None, torsional_inertia=None,
+                    axial_stiffness=None, damping_ratio=0.0, damping_convention="cantilever",
+                    tip=None) -> None:
+        """The constructor's checks and attributes (:class:`Beam`)."""
         self.length = check_range("length", length, "length")
         self.bending_stiffness = check_range("bending_stiffness", bending_stiffness,
                                              "bending_stiffness")
@@ -582,6 +615,7 @@ class Beam:
         rho = check_range("density", density, "density")
         E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
         nu = _check_poisson_ratio(poisson_ratio)
+        _warn_material(E, rho, damping_ratio)
         area = math.pi * d**2 / 4.0
         second_moment = math.pi * d**4 / 64.0
         _check_section(E * second_moment, rho * area,
@@ -627,6 +661,7 @@ class Beam:
         rho = check_range("density", density, "density")
         E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
         nu = _check_poisson_ratio(poisson_ratio)
+        _warn_material(E, rho, damping_ratio)
         d = D - 2.0 * t
         # D**4 - d**4 and D**2 - d**2 factored: no cancellation for a thin wall (t << D)
         area = math.pi * t * (D - t)
@@ -676,6 +711,7 @@ class Beam:
         rho = check_range("density", density, "density")
         E = check_range("youngs_modulus", youngs_modulus, "youngs_modulus")
         nu = _check_poisson_ratio(poisson_ratio)
+        _warn_material(E, rho, damping_ratio)
         _check_section(E * b * h**3 / 12.0, rho * b * h, "youngs_modulus*width*thickness**3/12",
                        "density*width*thickness",
                        [("width", width, "m"), ("thickness", thickness, "m"),
@@ -706,8 +742,9 @@ class Beam:
                                                "density*I_p",
                                                dimensions + [("density", rho, "kg/m^3")]),
         }
-        return cls(length, E * I_z, rho * area, damping_ratio=damping_ratio,
-                   damping_convention=damping_convention, tip=tip, **values)
+        # the section constructor warned about the material and the damping at its caller
+        return cls._quiet(length, E * I_z, rho * area, damping_ratio=damping_ratio,
+                          damping_convention=damping_convention, tip=tip, **values)
 
     def __repr__(self) -> str:
         extra = "".join(f", {name}={value!r}" for name, value in (
@@ -759,10 +796,10 @@ class Beam:
             if plane == "xy" and all(v is None for v in self._three_axis_properties().values()):
                 cached = self
             else:
-                cached = Beam(self.length, EJ, self.linear_density,
-                              damping_ratio=self.damping_ratio,
-                              damping_convention=self.damping_convention,
-                              tip=self._planar_tip(plane))
+                cached = Beam._quiet(self.length, EJ, self.linear_density,
+                                     damping_ratio=self.damping_ratio,
+                                     damping_convention=self.damping_convention,
+                                     tip=self._planar_tip(plane))
             self._cache[key] = cached
         return cached
 

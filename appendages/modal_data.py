@@ -89,6 +89,7 @@ from .errors import describe
 from .interface import (ROOT_LOADS, ROOT_MOTIONS, FiniteAppendage, RootModel, equilibrate,
                         inverse_2x2, inverse_symmetric)
 from .modal import ModalStiffness, fixed_root_model
+from .unit_slips import damping_in_percent, warn_unit_slip
 
 __all__ = ["ModalAppendage", "NEGLIGIBLE_FRACTION", "PLANES", "RESIDUAL_TOLERANCE"]
 
@@ -195,10 +196,9 @@ def _check_damping(damping, n: int) -> np.ndarray:
         raise ValueError(f"damping must lie in [0, 1) (modal damping ratio of each cantilever "
                          f"mode) [-]; got {zeta[k]!r}" + (f" at index {k}" if np.ndim(damping)
                                                            else ""))
-    if np.any(zeta > 0.5):
-        warnings.warn(f"damping ratios up to {zeta.max():g} [-]: structural damping ratios are "
-                      "typically 0.001-0.05; a percentage entered as a ratio (0.5 for 0.5 %)?",
-                      UserWarning, stacklevel=3)
+    largest = float(zeta.max(initial=0.0))
+    warn_unit_slip("damping" if np.ndim(damping) == 0 else "max(damping)", largest, "",
+                   damping_in_percent(largest), stacklevel=4)
     return zeta
 
 
@@ -327,7 +327,8 @@ class ModalAppendage(FiniteAppendage):
         ``[[m I, -m [c]x], [m [c]x, I_root]]``.
     damping : float or array_like, shape (n,)
         Modal damping ratio of the cantilever modes [-], one for all or one per mode, in
-        [0, 1) (a warning above 0.5: a percentage entered as a ratio?).
+        [0, 1) (a :class:`~appendages.unit_slips.UnitWarning` above 0.2: a percentage
+        entered as a ratio?).
     length : float, m, optional
         The appendage's extent along x from the root (the paper's L): needed by the chain fits
         and the equivalence table, and by a spacecraft's tip outputs.

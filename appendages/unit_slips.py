@@ -41,7 +41,7 @@ import warnings
 __all__ = ["UnitWarning", "DAMPING_WARNING", "WAVE_SPEED_WARNING", "ROUND_ANGLE_DIGITS",
            "ROUND_ANGLES",
            "radians_in_degrees", "degrees_in_radians", "modulus_in_megapascals",
-           "damping_in_percent", "warn_angle_in_degrees"]
+           "damping_in_percent", "warn_angle_in_degrees", "warn_unit_slip"]
 
 
 class UnitWarning(UserWarning):
@@ -115,6 +115,29 @@ def warn_angle_in_degrees(name: str, value: float, *, stacklevel: int = 3) -> No
     said = degrees_in_radians(value)
     if said is not None:
         warnings.warn(f"{name} = {value:g} rad is {said}", UnitWarning, stacklevel=stacklevel)
+
+
+def warn_unit_slip(name: str, value: float, unit: str, said: str | None, *,
+                   stacklevel: int = 3) -> None:
+    """Warn (:class:`UnitWarning`) about a value of the Python API that looks like a unit slip,
+    naming the parameter: ``"damping_ratio = 0.5: above 0.2, ...; did you give per cent?"``.
+
+    Parameters
+    ----------
+    name : str
+        The parameter as the caller named it.
+    value : float
+        Its value, in ``unit`` (``""`` for a ratio).
+    said : str or None
+        The likely mistake (:func:`modulus_in_megapascals`, :func:`damping_in_percent`...);
+        None: nothing to warn about.
+    stacklevel : int
+        As :func:`warnings.warn`, counted from the function that calls this one (3: its
+        caller's line).
+    """
+    if said is not None:
+        shown = f"{value:g} {unit}" if unit else f"{value:g}"
+        warnings.warn(f"{name} = {shown}: {said}", UnitWarning, stacklevel=stacklevel)
 
 
 def modulus_in_megapascals(youngs_modulus: float, density: float) -> str | None:

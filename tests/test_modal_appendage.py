@@ -17,6 +17,7 @@ import scipy.sparse
 import fe3d
 import fe_planar
 from appendages import Beam, ModalAppendage
+from appendages.unit_slips import UnitWarning
 from spacecraft import Hub, Mount, Spacecraft
 
 # A stepped boom (a stiff inner segment, a lighter outer one) with a tip body off its end.
@@ -345,7 +346,8 @@ def test_bad_damping_and_length(good):
         ModalAppendage(w, G, rigid, damping=-0.01)
     with pytest.raises(ValueError, match=r"damping must be one ratio or one per mode \(5\)"):
         ModalAppendage(w, G, rigid, damping=[0.01, 0.02])
-    with pytest.warns(UserWarning, match="percentage"):
+    with pytest.warns(UnitWarning, match=r"damping = 0\.7: above 0\.2.*did you give per cent\? "
+                                         r"0\.7 % = 0\.007"):
         ModalAppendage(w, G, rigid, damping=0.7)
     with pytest.raises(ValueError, match=r"length must be positive and finite \[m\]"):
         ModalAppendage(w, G, rigid, length=-2.0)

@@ -8,12 +8,13 @@ Python API are refused naming the parameter.
 import math
 import tomllib
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import controllers
-from appendages import Beam
+from appendages import Beam, SteppedBeam
 from appendages.unit_slips import (UnitWarning, damping_in_percent, degrees_in_radians,
                               modulus_in_megapascals, radians_in_degrees)
 from spacecraft import Mount, SceneError, load_scene
@@ -114,6 +115,19 @@ def test_a_refused_value_names_the_likely_unit_slip(change, match):
         load_scene(data)
 
 
+def test_a_run_reports_a_unit_slip_once_by_key_not_again_by_the_constructor():
+    data = default_scene_data()
+    data["appendages"][0]["beam"]["damping_ratio"] = 0.5
+    data.pop("export")
+    from spacecraft import run
+
+    lines = [line for line in run(load_scene(data, source="slip.toml"), time_responses=False)
+             .data["warnings"] if "damping" in line]
+    assert lines == ["UnitWarning: slip.toml: appendages[0].beam.damping_ratio: above 0.2, more "
+                     "than structures have (1e-4 to 0.05 without added dampers); did you give "
+                     "per cent? 0.5 % = 0.005"]
+
+
 def test_a_tiny_slew_axis_is_the_axis_it_points_along():
     """[1e-300, 0, 0] was refused as "got [0, 0, 0]" (its squares underflow): it is x."""
     with open(scene_path("three_axis"), "rb") as stream:
@@ -166,6 +180,46 @@ def test_euler_angles_and_slew_angles_in_degrees_are_warned_about():
     with pytest.warns(UserWarning, match=r"angle = 30 rad is more than a turn .*did you give "
                                          r"degrees\? 30 deg = 0\.523599 rad"):
         controllers.slew_profile(t, 30.0, 10.0)
+
+
+# -- the Python API's beams: a modulus in MPa or GPa, a damping ratio in per cent -----------
+@pytest.mark.parametrize("build, match", [
+    (lambda: Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e5), r"youngs_modulus = 206000 Pa: a bar "
+     r"wave speed sqrt\(E/rho\) of 5\.14 m/s .*did you give MPa\? 206000 MPa = 2\.06e\+11 Pa"),
+    (lambda: Beam.tube(5.0, 0.1, 0.002, 2700.0, 7.0e4), r"youngs_modulus = 70000 Pa: .*did you "
+     r"give MPa\? 70000 MPa = 7e\+10 Pa"),
+    (lambda: Beam.rectangular(6.0, 0.5, 0.02, 1600.0, 7.0e10, damping_ratio=0.5),
+     r"damping_ratio = 0\.5: above 0\.2, .*did you give per cent\? 0\.5 % = 0\.005"),
+    (lambda: Beam(2.0, 100.0, 1.0, damping_ratio=0.3), r"damping_ratio = 0\.3: above 0\.2"),
+    (lambda: SteppedBeam.tapered(4.0, 8, section="tube", root_dimensions={
+        "outer_diameter": 0.1, "wall_thickness": 0.002}, tip_dimensions={
+        "outer_diameter": 0.05, "wall_thickness": 0.002}, density=2700.0, youngs_modulus=7.0e4),
+     r"youngs_modulus = 70000 Pa: .*did you give MPa\?"),
+])
+def test_a_beam_constructor_warns_about_a_unit_slip_as_the_scene_reader(build, match):
+    """The rules of the scene's keys (appendages.unit_slips), at the caller's line."""
+    with pytest.warns(UnitWarning, match=match) as caught:
+        build()
+    assert all(Path(w.filename).resolve() == Path(__file__).resolve() or
+               w.filename.endswith("stepped.py") for w in caught)
+
+
+def test_a_beam_warns_once_and_its_views_do_not_warn_again():
+    with pytest.warns(UnitWarning) as caught:
+        beam = Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11, damping_ratio=0.25)
+    assert len(caught) == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        beam.planar_view("xz")
+        beam.W6(1j)
+        assert beam.undamped().damping_ratio == 0.0
+        Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11, damping_ratio=0.2)  # the bound itself
+        Beam.rectangular(6.0, 0.5, 0.02, 1600.0, 7.0e10, damping_ratio=0.005)
+
+
+def test_the_constructors_warn_after_refusing_what_is_not_a_number():
+    with pytest.raises(TypeError, match="damping_ratio"):
+        Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11, damping_ratio="0.5")
 
 
 # -- the Python API refuses what is not physics, naming the parameter -----------------------

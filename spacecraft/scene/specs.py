@@ -9,8 +9,10 @@ as a JSON-ready dict for ``results.json``.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
+import warnings
 
 from .limits import Limits
 
@@ -19,7 +21,7 @@ __all__ = [
     "LQRSpec", "ControllerSpec", "DisturbanceSpec", "ManoeuvreSpec", "OutputsSpec", "ExportSpec",
     "ReportSpec", "ReactionWheelSpec", "SimulatorSpec", "Scene", "scene_dict", "PLOTS",
     "PLOT_ALIASES", "EXPORTABLE", "SECTIONS", "MATCHES", "METHODS", "CONTROLLERS",
-    "FMI_VERSIONS", "SIMULATORS",
+    "FMI_VERSIONS", "SIMULATORS", "quiet_unit_slips",
 ]
 
 #: Plots a scene may ask for (``report.plots``): the slew responses, the open-loop transfer
@@ -37,6 +39,17 @@ FMI_VERSIONS = ("2.0", "3.0")
 #: Simulators of the manoeuvre (``simulator.name``): flexsat's own exact linear simulation, or
 #: Basilisk beside it.
 SIMULATORS = ("flexsat", "basilisk")
+
+
+@contextlib.contextmanager
+def quiet_unit_slips():
+    """Build appendages from a read scene without the constructors' unit-slip warnings
+    (:class:`appendages.unit_slips.UnitWarning`): the reader reported them by key."""
+    from appendages.unit_slips import UnitWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UnitWarning)
+        yield
 
 
 @dataclasses.dataclass(frozen=True)
@@ -68,7 +81,12 @@ class BeamSpec:
 
     def build(self):
         """The :class:`appendages.Beam` (every property of a section filled: both bending
-        planes, torsion and axial motion)."""
+        planes, torsion and axial motion). The values that look like unit slips were reported
+        by key when the scene was read: the constructors' own warnings are left out."""
+        with quiet_unit_slips():
+            return self._build()
+
+    def _build(self):
         from appendages import Beam
 
         d, z, nu = dict(self.dimensions), self.damping_ratio, self.poisson_ratio
