@@ -238,7 +238,7 @@ def test_the_limits_docs_state_the_cap_of_the_tolerance_search():
     """Issue-9 review: the tables said limits.modes is "also the cap of the search from
     fidelity.tolerance", but the search stops at fidelity.MAX_MODES = 40 whatever the limit.
     Both tables now state that number."""
-    from spacecraft import limits as limits_module
+    from spacecraft.scene import limits as limits_module
     from spacecraft.design.fidelity import MAX_MODES
 
     for doc in (spacecraft.scene.read.__doc__, limits_module.__doc__):
