@@ -20,13 +20,13 @@ _WHERE = {
     "Mount": "dynamics",
     "Limits": "scene", "Scene": "scene", "SceneError": "scene", "default_scene": "scene",
     "example_scenes": "scene", "load_scene": "scene", "scene_path": "scene",
-    "RunResult": "design", "RunStats": "design", "run": "design",
+    "DesignLoop": "design", "RunResult": "design", "RunStats": "design", "run": "design",
     "OutputError": "report", "OutputFolder": "report", "output_folder": "report",
     "write_report": "report",
 }
 
 __all__ = [
-    "Hub", "Limits", "Mount", "OutputError", "OutputFolder", "RunResult", "RunStats", "Scene",
+    "DesignLoop", "Hub", "Limits", "Mount", "OutputError", "OutputFolder", "RunResult", "RunStats", "Scene",
     "SceneError", "SecondOrderModel", "Spacecraft", "default_scene", "example_scenes",
     "load_scene", "output_folder", "run", "scene_path", "sweep", "write_report",
 ]

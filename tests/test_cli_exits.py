@@ -418,11 +418,11 @@ SLOW_RUN = """\
 import sys, time
 sys.path.insert(0, {root!r})
 import spacecraft.design.loop as runner
-real = runner._Runner.run
+real = runner.DesignLoop.run
 def slow(self):
     time.sleep({seconds})   # in the computation, after the output folder was claimed
     return real(self)
-runner._Runner.run = slow
+runner.DesignLoop.run = slow
 from spacecraft.cli.command import main
 sys.exit(main(sys.argv[1:]))
 """

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import controllers
-from spacecraft.design.loop import RunStats, _Runner, run
+from spacecraft.design.loop import DesignLoop, run
 from spacecraft.scene.read import load_scene
 
 from test_scene import scene_with
@@ -88,7 +88,7 @@ def loop():
 def test_the_reference_is_flexsats_exact_response(loop):
     # the reference model's conventions (signs, kinematics) against flexsat's exact response
     result, _, _, ref = loop
-    runner = _Runner(result.scene, None, RunStats())
+    runner = DesignLoop(result.scene)
     omega = np.array([0.05, 0.7, 2.3, 9.0])
     theta = runner.exact_spacecraft().exact.attitude_compliance(omega)[:, 0, 0]
     with mp.workdps(DPS):
@@ -143,7 +143,7 @@ def test_a_loop_delay_enters_the_exact_margins(loop):
 
     result, row, K, ref = loop
     theta = np.asarray(result.exact_frd.frdata)[0, 0]
-    runner = _Runner(result.scene, None, RunStats())
+    runner = DesignLoop(result.scene)
     tau = 0.01
     delayed = exact_loop_verdict(runner.exact_spacecraft(), K, result.exact_frd.omega,
                                  theta=theta, delay=tau).margins

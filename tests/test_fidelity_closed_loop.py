@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from spacecraft.design.fidelity import (DAMPING_SCALE, closed_loop_change, refine_for_closed_loop)
-from spacecraft.design.loop import RunStats, _Runner, run
+from spacecraft.design.loop import DesignLoop, run
 from spacecraft.scene.read import load_scene
 
 from test_scene import scene_with
@@ -152,6 +152,6 @@ def test_the_search_reuses_what_it_builds(default):
     stats = default.data["stats"]
     assert stats["pd_designs"] == 2 and stats["lqr_designs"] == 2
     # and the run's verdicts are the search's own (the truth plant of the chosen n)
-    runner = _Runner(default.scene, None, RunStats())
+    runner = DesignLoop(default.scene)
     n, _ = runner.choose_fidelity()
     assert n == default.data["fidelity"]["n_modes"]

@@ -12,7 +12,8 @@ import pytest
 
 import controllers
 from spacecraft.report.write import summary_lines
-from spacecraft.design.loop import _outputs_until_overflow, diverged_at, run
+from spacecraft.design.loop import run
+from spacecraft.design.responses import diverged_at, outputs_until_overflow
 from spacecraft.scene.read import SceneError
 
 from test_scene import scene_with
@@ -100,7 +101,7 @@ def test_overflow_prefix_is_the_exact_response():
     system = control.ss([[1.0]], [[1.0]], [[1.0]], [[0.0]], inputs=["u"], outputs=["y"])
     T = np.arange(2001) * 0.5
     U = np.ones((1, T.size))
-    Y = _outputs_until_overflow(controllers.Simulator(system, 0.5), T, U)
+    Y = outputs_until_overflow(controllers.Simulator(system, 0.5), T, U)
     finite = np.isfinite(Y[0])
     k = int(np.argmin(finite))
     assert 0 < k < T.size and not finite[k:].any()

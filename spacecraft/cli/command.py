@@ -435,7 +435,7 @@ def _check_n_bodies(args):
 
 
 def _equivalence(args):
-    from ..design.loop import equivalence_table
+    from ..design.tables import equivalence_table
 
     beam, source = _beam_from(args)
     from appendages.equivalence import fit_chain

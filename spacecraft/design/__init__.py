@@ -4,11 +4,12 @@
 spacecraft, plants, exact references), choosing the truth model's fidelity with
 :mod:`.fidelity`; :mod:`.tuning` tunes the controllers on the design plant; :mod:`.responses`
 simulates the manoeuvre; :mod:`.verdicts` judges each loop (stability, margins, warnings);
-:mod:`.loop` runs the whole loop for a scene (:func:`run`); :mod:`.tables` gives the paper's
+:mod:`.loop` is the design loop itself (:class:`DesignLoop`, the one evaluator; :func:`run`
+runs a scene's); :mod:`.tables` gives the paper's
 equivalence tables; :mod:`.naming` the one name and colour of each model and loop;
 :mod:`.simulators` runs the manoeuvre in Basilisk beside flexsat's prediction.
 """
 
-from .loop import RunResult, RunStats, run
+from .loop import ClosedLoops, DesignLoop, RunResult, RunStats, run
 
-__all__ = ["RunResult", "RunStats", "run"]
+__all__ = ["DesignLoop", "ClosedLoops", "RunResult", "RunStats", "run"]

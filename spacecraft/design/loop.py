@@ -1,19 +1,29 @@
-"""Run a scene: build only what it asks for, tune, close the loops, collect every number.
+"""The design loop: from a spacecraft's models to tuned controllers, closed loops and verdicts.
 
-:func:`run` turns a :class:`~spacecraft.scene.read.Scene` into a :class:`RunResult`: the models
-(truth: distributed beams truncated to the modes the scene's tolerance needs, or chains; design:
-chains fitted to the beams; :mod:`spacecraft.design.models`), the controllers tuned on each design
-model with their gains (:mod:`spacecraft.design.tuning`), the slew (and disturbance) responses of the
-design and truth loops with their metrics and verdicts (:mod:`spacecraft.design.responses`,
-:mod:`spacecraft.design.verdicts`), the design warnings, optionally Basilisk's run of the same
-manoeuvre (:mod:`spacecraft.design.simulators`), and the equivalence tables. The report
-(:mod:`spacecraft.report.write`) writes files from it; FMUs and plots are built there.
+:class:`DesignLoop` is the one evaluator of flexsat's design loop; :func:`run` (a scene, as
+``flexsat run`` runs it), the sweeps (:mod:`spacecraft.sweep`, one evaluation per sample) and
+a Python user with Spacecraft objects of their own all go through it. For a spacecraft and a
+controller specification it gives:
 
-Nothing the scene does not ask for is built. :class:`RunStats` counts the work the code did
-(FMU builds, plots, exact-beam evaluations, LQR designs, simulations, modes kept and dropped...),
-so tests can prove each skip. Expensive results are cached within a run: one chain fit per
-(beam, criterion), one Spacecraft (one eigen-decomposition) per model set, one plant per signal
-set, one simulator (matrix exponential) per closed loop.
+- the models (truth: distributed beams truncated to the modes the scene's tolerance needs, or
+  chains; design: chains fitted to the beams; :mod:`spacecraft.design.models`), or the
+  user's own truth, design and exact :class:`~spacecraft.Spacecraft` objects;
+- the controllers tuned on each design model with their gains (:mod:`spacecraft.design.tuning`);
+- per controller, the closed loops on the design and the truth model, the slew (and
+  disturbance) responses with their metrics, the margins on the design model, the verdict and
+  margins on the truth model, the exact beam's verdict when asked
+  (:mod:`spacecraft.design.responses`, :mod:`spacecraft.design.verdicts`): a
+  :class:`ClosedLoops` each;
+- the design warnings, optionally Basilisk's run of the same manoeuvre
+  (:mod:`spacecraft.design.simulators`) and the equivalence tables, all in a
+  :class:`RunResult`. The report (:mod:`spacecraft.report.write`) writes files from it; FMUs
+  and plots are built there.
+
+Nothing the specification does not ask for is built. :class:`RunStats` counts the work the code
+did (FMU builds, plots, exact-beam evaluations, LQR designs, simulations, modes kept and
+dropped...), so tests can prove each skip. Expensive results are cached within a loop: one
+chain fit per (beam, criterion), one Spacecraft (one eigen-decomposition) per model set, one
+plant per signal set, one simulator (matrix exponential) per closed loop.
 """
 
 from __future__ import annotations
@@ -21,6 +31,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
+from collections.abc import Mapping
 from pathlib import Path
 
 import control
@@ -30,37 +41,31 @@ import controllers
 from controllers.threads import blas_threads_for
 
 from ..scene.limits import estimate_cost, library_limits
-from .models import (LQR_FREQUENCY_RANGE, ModelBuilder, ProgressCallback, RunStats,
-                     raised_by_flexsat)
-from .naming import FIT_LABELS
-from .responses import (appendage_peaks, diverged_at, outputs_until_overflow,
-                        simulate_manoeuvre, trace)
-from ..scene.read import Scene, load_scene, scene_dict
+from ..scene.read import Scene, load_scene, models_scene, scene_dict
+from .models import ModelBuilder, ProgressCallback, RunStats
+from .responses import appendage_peaks, diverged_at, simulate_manoeuvre, trace
 from .tables import describe_model, equivalence_table
 from .tuning import digital_facts, rigid_crossover
 from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, growing,
-                       loop_status, margin_flags, resolved_frequency, verdict_dict,
-                       withheld_metrics)
+                       loop_status, margin_flags, margins_dict, resolved_frequency,
+                       verdict_dict, withheld_metrics)
 
-__all__ = ["RunStats", "RunResult", "run", "ProgressCallback", "equivalence_table", "FIT_LABELS",
-           "raised_by_flexsat", "LQR_FREQUENCY_RANGE", "diverged_at", "warning_lines",
+__all__ = ["DesignLoop", "ClosedLoops", "RunResult", "RunStats", "run", "warning_lines",
            "input_warning_lines", "check_options"]
 
 # Most distinct warnings kept in a run's results.
 _MAX_WARNINGS = 20
 
-# kept for callers of the earlier names
-_outputs_until_overflow = outputs_until_overflow
-_describe = describe_model
-
 
 @dataclasses.dataclass
 class RunResult:
-    """Everything a run produced.
+    """Everything a run of the design loop produced.
 
     Attributes
     ----------
     scene : Scene
+        The question (for a Python user's own models: a scene without appendage tables,
+        :func:`spacecraft.scene.read.models_scene`).
     data : dict
         Every number of the report, JSON-ready (see :mod:`spacecraft.report.write`).
     stats : RunStats
@@ -68,7 +73,8 @@ class RunResult:
         ``verdict`` and ``sim`` truth plants (control.StateSpace), ``spacecraft``.
     designs : dict
         Per design variant: ``plant``, ``sim_plant``, ``controllers`` {type: StateSpace},
-        ``spacecraft``, ``appendages`` (models per appendage name).
+        ``tuned`` {type: :class:`~spacecraft.design.tuning.Tuned`}, ``spacecraft``,
+        ``appendages`` (models per appendage name).
     responses : dict
         ``(variant, controller, "design"|"truth")`` -> the slew response
         (control.TimeResponseData; without the disturbance).
@@ -84,9 +90,6 @@ class RunResult:
     basilisk : dict
         Controller kind -> :class:`spacecraft.basilisk.SlewComparison` (Basilisk's run of the
         manoeuvre beside flexsat's), when the scene asks for it.
-    three_axis : dict
-        A three-axis scene's run (:func:`spacecraft.design.three_axis.run_three_axis`): plants,
-        controllers, loops, responses; empty for a planar scene.
     """
 
     scene: Scene
@@ -104,16 +107,162 @@ class RunResult:
     three_axis: dict = dataclasses.field(default_factory=dict)
 
 
-def _margins(m) -> dict:
-    return {**m.as_dict(), "gain_crossover_frequency": m.gain_crossover_frequency,
-            "phase_crossover_frequency": m.phase_crossover_frequency,
-            "modulus_margin_frequency": m.modulus_margin_frequency}
+@dataclasses.dataclass
+class ClosedLoops:
+    """One controller closed on its design model and on the truth model
+    (:meth:`DesignLoop.closed_loops`).
+
+    Attributes
+    ----------
+    variant : str
+        The design model it was tuned on (a fit criterion, or ``"design"``).
+    kind : str
+        ``"pd"`` or ``"lqr"``.
+    controller : control.StateSpace
+        The controller (tuned, or given).
+    row : dict
+        JSON-ready, the row of ``closed_loops`` in results.json: ``design``, ``controller``,
+        ``design_margins``, ``verdict`` (:func:`~spacecraft.design.verdicts.verdict_dict`),
+        ``digital``, ``exact_verdict``, and with a manoeuvre per model (``"design"``,
+        ``"truth"``) ``status``, ``metrics``, ``metric_flags``, ``appendages`` (peaks),
+        ``disturbance_metrics``, ``diverged``, ``peak_difference`` (truth - design).
+    verdict : controllers.SpilloverVerdict
+        On the truth model.
+    exact_verdict : controllers.SpilloverVerdict or None
+        On the exact distributed beams (Nyquist), when asked.
+    loops, poles, responses, disturbance_responses : dict
+        Per model (``"design"``, ``"truth"``): the closed loop (StateSpace), its poles [1/s]
+        (s-plane), the slew response and the disturbance response (control.TimeResponseData;
+        the slew's alone unless the manoeuvre was simulated whole).
+    """
+
+    variant: str
+    kind: str
+    controller: control.StateSpace
+    row: dict
+    verdict: object
+    exact_verdict: object = None
+    loops: dict = dataclasses.field(default_factory=dict)
+    poles: dict = dataclasses.field(default_factory=dict)
+    responses: dict = dataclasses.field(default_factory=dict)
+    disturbance_responses: dict = dataclasses.field(default_factory=dict)
 
 
-class _Runner(ModelBuilder):
-    """The scene runner: the model builder plus tuning, loops, responses and verdicts."""
+class DesignLoop(ModelBuilder):
+    """The design loop of one spacecraft: tune on the design model, judge on the truth model.
 
+    Parameters
+    ----------
+    scene : Scene, path, dict or None
+        Anything :func:`~spacecraft.scene.read.load_scene` accepts: the spacecraft's models
+        are built from it. Leave it out to give your own models instead.
+    truth : Spacecraft, optional
+        Your truth model (instead of a scene): e.g. the hub with every beam truncated to many
+        modes. Needs ``controller``.
+    design : Spacecraft or dict of str to Spacecraft, optional
+        The model(s) the controllers are tuned on (e.g. the hub with fitted chains), by label
+        (a single Spacecraft is labelled ``"design"``); default: the truth model itself.
+    exact : Spacecraft, optional
+        The spacecraft with its distributed appendages: the loops are also judged on its exact
+        frequency response (Nyquist), as ``outputs.exact_reference`` asks.
+    controller : dict or ControllerSpec, optional
+        With your own models: the controllers to tune, as a scene's ``[controller]`` table
+        (units of the scene file) or a validated
+        :class:`~spacecraft.scene.specs.ControllerSpec`.
+    manoeuvre : dict or ManoeuvreSpec, optional
+        With your own models: the slew (and disturbance), as a scene's ``[manoeuvre]`` table
+        (degrees) or a :class:`~spacecraft.scene.specs.ManoeuvreSpec`; none: no responses.
+    outputs : dict, optional
+        With your own models: a scene's ``[outputs]`` table (``tip_deflection``,
+        ``root_loads``; ``exact_reference`` follows from ``exact``).
+    progress : callable, optional
+        Called with a short message at the start of each stage.
+    stats : RunStats, optional
+        Counters to add to (a new one by default).
+    time_responses : bool
+        Simulate the manoeuvre (False: only tune and close the loops, e.g. for FMU export).
+
+    Raises
+    ------
+    SceneError
+        An invalid scene or specification, named by its key; later, a controller that cannot
+        be tuned on a design model (``controller.<kind>``).
+    TypeError
+        A scene given together with your own models, or models of the wrong type.
+
+    See Also
+    --------
+    run : a scene's whole run, as ``flexsat run`` does it.
+
+    Notes
+    -----
+    Planar and three-axis spacecraft go through the same steps; they differ where the physics
+    does: a three-axis loop has three torques, so its margins are the multivariable ones
+    (loop-at-a-time per axis, disk margin, the smallest singular value of the return
+    difference; :func:`controllers.margins`) and its metrics are given per axis besides the
+    norms (:func:`controllers.metrics`).
+
+    Examples
+    --------
+    A scene's design loop, one controller at a time:
+
+    >>> import spacecraft
+    >>> loop = spacecraft.DesignLoop("default")                     # doctest: +SKIP
+    >>> loops = loop.closed_loops("poles-and-zeros", "pd")          # doctest: +SKIP
+    >>> loops.verdict.stable, loops.row["metrics"]["truth"]["overshoot"]   # doctest: +SKIP
+
+    Your own models:
+
+    >>> from appendages import Beam
+    >>> from appendages.equivalence import fit_chain
+    >>> from spacecraft import DesignLoop, Hub, Mount, Spacecraft
+    >>> rod = Beam.circular_rod(10.0, 0.01, 7800.0, 2.06e11)
+    >>> def craft(model):
+    ...     return Spacecraft(Hub(100.0, 50.0), [Mount(model, (0.5, 0.0), 0.0, name="rod")])
+    >>> loop = DesignLoop(truth=craft(rod.truncated(20)), design=craft(fit_chain(rod, 3)),
+    ...                   controller={"pd": {"natural_frequency": 0.1}},
+    ...                   manoeuvre={"slew_angle": 10.0, "slew_time": 60.0})
+    >>> result = loop.run()
+    >>> result.data["closed_loops"][0]["verdict"]["stable"]
+    True
+    """
+
+    def __init__(self, scene=None, *, truth=None, design=None, exact=None, controller=None,
+                 manoeuvre=None, outputs=None, progress: ProgressCallback | None = None,
+                 stats: RunStats | None = None, time_responses: bool = True):
+        check_options(progress=progress, time_responses=time_responses)
+        if stats is not None and not isinstance(stats, RunStats):
+            raise TypeError(f"stats must be a RunStats or None; got {type(stats).__name__}")
+        given = None
+        models = {"truth": truth, "design": design, "exact": exact}
+        if any(v is not None for v in models.values()):
+            if scene is not None:
+                name = next(k for k, v in models.items() if v is not None)
+                raise TypeError(f"{name}: give a scene or your own models (truth, design, "
+                                "exact), not both")
+            scene, given = _models_question(truth, design, exact, controller, manoeuvre,
+                                            outputs)
+        else:
+            specs = {"controller": controller, "manoeuvre": manoeuvre, "outputs": outputs}
+            for name, value in specs.items():
+                if value is not None:
+                    raise TypeError(f"{name}: goes with your own models (truth=...); a scene "
+                                    "has its own tables")
+            scene = load_scene(scene)
+        super().__init__(scene, progress, RunStats() if stats is None else stats,
+                         bool(time_responses), given=given)
+        self.n_modes: int | None = None
+
+    # -- the whole loop ------------------------------------------------------------------------
     def run(self) -> RunResult:
+        """Build the models, tune every controller, close and judge every loop.
+
+        Returns
+        -------
+        RunResult
+            ``data`` holds every number (``closed_loops``: margins, verdicts, metrics and
+            status per loop; ``controllers``: gains; ``design_warnings``...).
+        """
         scene = self.scene
         stats = self.stats
         outputs = scene.outputs
@@ -121,10 +270,12 @@ class _Runner(ModelBuilder):
         disturbances = m is not None and m.disturbance is not None
         data: dict = {"title": scene.title, "scene": scene.source,
                       "scene_resolved": scene_dict(scene)}
+        if self.three_axis:
+            data["three_axis"] = True
 
         with self.stage("building models"):
             if scene.controller.lqr is not None:
-                self.lqr_frequency(self.exact_spacecraft().inertia)
+                self.lqr_frequency(self.rigid_inertia())
             for a in scene.appendages:
                 if a.design == "fit":
                     for match in a.fit.match:
@@ -136,56 +287,44 @@ class _Runner(ModelBuilder):
             "prune": scene.fidelity.prune, "chosen_from_tolerance": choice is not None,
             "bandwidth_factor": scene.fidelity.bandwidth_factor,
             **({"choice": choice.as_dict()} if choice is not None else {}),
+            **({"given": True} if self.given is not None else {}),
         }
 
         with self.stage("building plants"):
-            truth_models = [self.truth_model(a, n_modes) for a in scene.appendages]
-            truth_sc = self.spacecraft(("truth", n_modes), truth_models)
-            prune = scene.fidelity.prune
-            truth_verdict, truth_info = self.plant(truth_sc, ("truth", n_modes), prune=prune)
+            truth_sc = self.truth_spacecraft(n_modes)
+            truth_verdict = self.truth_plant(n_modes)
             truth_sim, sim_info = self.plant(truth_sc, ("truth", n_modes),
                                              tip=outputs.tip_deflection,
                                              root_loads=outputs.root_loads,
-                                             disturbances=disturbances, prune=prune)
+                                             disturbances=disturbances,
+                                             prune=scene.fidelity.prune)
             stats.modes_kept = sim_info["modes_kept"]
             stats.modes_dropped = sim_info["modes_dropped"]
-            data["truth"] = {
-                "models": {a.name: describe_model(m_) for a, m_ in zip(scene.appendages,
-                                                                        truth_models)},
-                "n_states": int(truth_sim.nstates), **sim_info,
-                "coupled_frequencies": truth_sc.modes()[0][3:3 + 8].tolist(),
-            }
+            data["truth"] = {"models": _described(truth_sc), "n_states": int(truth_sim.nstates),
+                             **sim_info, "coupled_frequencies": _coupled(truth_sc)}
             designs = {}
-            for variant in scene.design_variants:
-                models = [self.design_model(a, variant, n_modes) for a in scene.appendages]
+            for variant in self.variants:
                 sc = self.design_spacecraft(variant, n_modes)
                 design_plant, info = self.design_plant(variant, n_modes)
-                sim_plant, _ = self.plant(sc, self.design_key(variant, n_modes),
-                                          tip=outputs.tip_deflection,
-                                          root_loads=outputs.root_loads,
-                                          disturbances=disturbances, prune=prune)
+                sim_plant = self.simulation_plant("design", variant, n_modes)
                 designs[variant] = {"spacecraft": sc, "plant": design_plant,
                                     "sim_plant": sim_plant, "controllers": {}, "tuned": {},
-                                    "appendages": dict(zip([a.name for a in scene.appendages],
-                                                           models))}
+                                    "appendages": dict(zip(sc.names,
+                                                           (m_.appendage for m_ in sc.mounts)))}
                 data.setdefault("designs", {})[variant] = {
-                    "models": {a.name: describe_model(m_) for a, m_ in zip(scene.appendages,
-                                                                            models)},
-                    "n_states": int(sim_plant.nstates), **info,
-                    "coupled_frequencies": sc.modes()[0][3:3 + 8].tolist(),
-                }
+                    "models": _described(sc), "n_states": int(sim_plant.nstates), **info,
+                    "coupled_frequencies": _coupled(sc)}
 
         exact_frd = None
         if outputs.exact_reference:
             with self.stage("exact frequency-domain reference"):
                 exact_frd = self.exact_reference_frd()
                 data["exact"] = {"coupled_frequencies": self.exact_frequencies(8).tolist(),
-                                 "inertia": self.exact_spacecraft().inertia}
+                                 "inertia": self.rigid_inertia()}
 
         with self.stage("tuning controllers"):
-            c = scene.controller
             for variant, d in designs.items():
-                for kind in c.types:
+                for kind in scene.controller.types:
                     tuned = self.tuned(variant, kind, n_modes)
                     d["controllers"][kind] = tuned.controller
                     d["tuned"][kind] = tuned
@@ -193,19 +332,23 @@ class _Runner(ModelBuilder):
                         **tuned.description, "removed_modes": tuned.removed_modes}
 
         responses, disturbance_responses, loops, poles, rows = {}, {}, {}, {}, []
-        names = [a.name for a in scene.appendages]
         with self.stage("closing the loops"):
             for variant, d in designs.items():
-                for kind, K in d["controllers"].items():
-                    row = self.loop_row(variant, kind, K, d, truth_verdict, truth_sim,
-                                        exact_frd, names, responses, disturbance_responses,
-                                        loops, poles)
-                    rows.append(row)
+                for kind in d["controllers"]:
+                    c = self.closed_loops(variant, kind, exact_frd=exact_frd)
+                    rows.append(c.row)
+                    for which in c.loops:
+                        key = (variant, kind, which)
+                        loops[key], poles[key] = c.loops[which], c.poles[which]
+                        if which in c.responses:
+                            responses[key] = c.responses[which]
+                        if which in c.disturbance_responses:
+                            disturbance_responses[key] = c.disturbance_responses[which]
         data["closed_loops"] = rows
 
         models = {}
-        for a in scene.appendages:
-            entry = {"truth": truth_models[scene.appendages.index(a)]}
+        for k, a in enumerate(scene.appendages):
+            entry = {"truth": truth_sc.mounts[k].appendage}
             if a.beam is not None:
                 entry["beam"] = self.beam(a)
             if a.design == "fit":
@@ -233,53 +376,82 @@ class _Runner(ModelBuilder):
         return RunResult(scene, data, stats, truth, designs, responses, loops, models, exact_frd,
                          disturbance_responses, poles, basilisk)
 
-    # -- one loop ------------------------------------------------------------------------------
-    def loop_row(self, variant, kind, K, d, truth_verdict, truth_sim, exact_frd, names,
-                 responses, disturbance_responses, loops, poles) -> dict:
-        """Margins, verdicts, responses, metrics and status of one controller on its design
-        model and on the truth model (the row of ``closed_loops``)."""
+    # -- one controller ------------------------------------------------------------------------
+    def closed_loops(self, variant: str, kind: str, *, controller=None,
+                     models: tuple = ("design", "truth"), whole_manoeuvre: bool = False,
+                     exact_frd=None) -> ClosedLoops:
+        """One controller on its design model and on the truth model: margins, verdicts,
+        responses, metrics and status.
+
+        Parameters
+        ----------
+        variant : str
+            The design model (one of :attr:`variants`).
+        kind : str
+            ``"pd"`` or ``"lqr"`` (one of the scene's ``controller.types``).
+        controller : control.StateSpace, optional
+            A controller to judge instead of tuning ``kind`` on the design model (a sweep's
+            nominal controller).
+        models : tuple of str
+            The models to close the loop on and simulate: ``"design"`` (also gives the margins
+            on the design model and, for a digital controller, the sampling facts) and/or
+            ``"truth"``. The verdict on the truth model is always given.
+        whole_manoeuvre : bool
+            Simulate slew and disturbance at once (the response is what the spacecraft does
+            under both; its metrics are the whole manoeuvre's) instead of apart.
+        exact_frd : control.FrequencyResponseData, optional
+            The exact reference (:meth:`exact_reference_frd`) when the specification asks for
+            the exact beam's verdict; built here if needed and not given.
+
+        Returns
+        -------
+        ClosedLoops
+        """
         scene = self.scene
         m = scene.manoeuvre
-        row = {"design": variant, "controller": kind}
-        design_margins = self.design_margins(variant, kind, self.n_modes)
-        verdict = self.truth_spillover(truth_verdict, K)
-        row["design_margins"] = _margins(design_margins)
+        n_modes = self.n_modes
+        K = controller if controller is not None else self.tuned(variant, kind,
+                                                                 n_modes).controller
+        row: dict = {"design": variant, "controller": kind}
+        if "design" in models:
+            row["design_margins"] = margins_dict(self.design_margins(variant, kind, n_modes,
+                                                                     controller))
+        verdict = self.truth_spillover(self.truth_plant(n_modes), K)
         row["verdict"] = verdict_dict(verdict)
-        digital = None
-        if scene.controller.sample_time is not None:
-            digital = digital_facts(scene.controller.sample_time,
-                                    rigid_crossover(d["plant"], K))
-        if digital is not None:
-            row["digital"] = digital
-        if exact_frd is not None:
+        if "design" in models and scene.controller.sample_time is not None:
+            row["digital"] = digital_facts(scene.controller.sample_time, rigid_crossover(
+                self.design_plant(variant, n_modes)[0], K))
+        exact = None
+        if scene.outputs.exact_reference:
+            frd = exact_frd if exact_frd is not None else self.exact_reference_frd()
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 try:
-                    row["exact_verdict"] = verdict_dict(exact_loop_verdict(
-                        self.exact_spacecraft(), K, exact_frd.omega,
-                        theta=np.asarray(exact_frd.frdata)[0, 0]))
+                    exact = exact_loop_verdict(self.exact_spacecraft(), K, frd.omega,
+                                               theta=np.asarray(frd.frdata)[0, 0])
+                    row["exact_verdict"] = verdict_dict(exact)
                 except ValueError as exc:
                     row["exact_verdict"] = {"error": str(exc)}
-        plants = (("design", d["sim_plant"]), ("truth", truth_sim))
+        out = ClosedLoops(variant, kind, K, row, verdict, exact)
+        plants = {which: self.simulation_plant(which, variant, n_modes) for which in models}
         if m is None or not self.time_responses:
-            loop = controllers.close_loop(truth_sim, K)
-            loops[(variant, kind, "truth")] = loop
-            poles[(variant, kind, "truth")] = closed_loop_poles(loop)
-            return row
+            for which, plant in plants.items():
+                out.loops[which] = loop = controllers.close_loop(plant, K)
+                out.poles[which] = closed_loop_poles(loop)
+            return out
         for key in ("metrics", "metric_flags", "status", "appendages", "disturbance_metrics",
                     "disturbance_flags"):
             row[key] = {}
-        for which, plant in plants:
-            key = (variant, kind, which)
-            loop = controllers.close_loop(plant, K)
-            loops[key] = loop
-            poles[key] = closed_loop_poles(loop)
-            runs = self.simulate_runs(loop)
+        names = self.names
+        for which, plant in plants.items():
+            out.loops[which] = loop = controllers.close_loop(plant, K)
+            out.poles[which] = poles = closed_loop_poles(loop)
+            runs = self.simulate(loop, whole=whole_manoeuvre)
             slew, shock = runs["slew"], runs["disturbance"]
-            responses[key] = slew
+            out.responses[which] = slew
             with np.errstate(all="ignore"):
                 metrics = controllers.metrics(slew)
-            status = loop_status(poles[key], slew, m, metrics)
+            status = loop_status(poles, slew, m, metrics)
             row["status"][which] = status
             if which == "truth":
                 # the slew's status decides (its poles): a loop with undamped modes it does not
@@ -293,58 +465,70 @@ class _Runner(ModelBuilder):
                 peaks = {n: {k: None for k in p} for n, p in peaks.items()}
             row["appendages"][which] = peaks
             if shock is not None:
-                disturbance_responses[key] = shock
+                out.disturbance_responses[which] = shock
                 with np.errstate(all="ignore"):
                     values = controllers.metrics(shock)
-                shock_status = loop_status(poles[key], shock, None, values)
+                shock_status = loop_status(poles, shock, None, values)
                 row["disturbance_metrics"][which], row["disturbance_flags"][which] = (
                     withheld_metrics(values, shock_status))
                 row["disturbance_metrics"][which]["appendages"] = appendage_peaks(shock, names)
-        row["diverged"] = {w: diverged_at(responses[(variant, kind, w)]) for w, _ in plants}
-        gone = any(row["status"][w]["status"] in ("diverges", "unstable") for w, _ in plants)
-        diff, flags = {}, {}
-        pair = [responses[(variant, kind, w)] for w in ("truth", "design")]
-        for name in pair[1].output_labels:
-            a, b = trace(pair[0], name), trace(pair[1], name)
-            if a is None or b is None:
-                continue
-            if gone:
-                diff[name], flags[name] = None, "diverges"
-            else:
-                diff[name] = float(np.max(np.abs(a - b)))
-        row["peak_difference"] = diff
-        if flags:
-            row["peak_difference_flags"] = flags
-        return row
+        row["diverged"] = {w: diverged_at(r) for w, r in out.responses.items()}
+        if set(out.responses) == {"design", "truth"}:
+            gone = any(row["status"][w]["status"] in ("diverges", "unstable")
+                       for w in out.responses)
+            diff, flags = {}, {}
+            truth, design = out.responses["truth"], out.responses["design"]
+            for name in design.output_labels:
+                a, b = trace(truth, name), trace(design, name)
+                if a is None or b is None:
+                    continue
+                if gone:
+                    diff[name], flags[name] = None, "diverges"
+                else:
+                    diff[name] = float(np.max(np.abs(a - b)))
+            row["peak_difference"] = diff
+            if flags:
+                row["peak_difference_flags"] = flags
+        return out
 
-    def simulate_runs(self, loop, *, together: bool = False) -> dict:
+    def simulation_plant(self, which: str, variant: str, n_modes: int | None):
+        """The plant a manoeuvre is simulated on: the truth model (``which = "truth"``) or a
+        design model, with the outputs and disturbance inputs the specification asks for."""
+        scene = self.scene
+        m = scene.manoeuvre
+        if which == "truth":
+            sc, key = self.truth_spacecraft(n_modes), ("truth", n_modes)
+        else:
+            sc, key = self.design_spacecraft(variant, n_modes), self.design_key(variant, n_modes)
+        return self.plant(sc, key, tip=scene.outputs.tip_deflection,
+                          root_loads=scene.outputs.root_loads,
+                          disturbances=m is not None and m.disturbance is not None,
+                          prune=scene.fidelity.prune)[0]
+
+    def simulate(self, loop, *, whole: bool = False) -> dict:
         """The manoeuvre on a closed loop: ``{"slew": ..., "disturbance": ... or None}``
-        (see :func:`spacecraft.design.responses.simulate_manoeuvre`)."""
+        (:func:`spacecraft.design.responses.simulate_manoeuvre`; ``whole``: slew and
+        disturbance at once, in ``"slew"``). A response that leaves the float64 range stops
+        at its last finite sample (``diverged``, ``diverged_at``)."""
         m = self.scene.manoeuvre
         simulator = None
         if not loop.isdtime(strict=True):
             self.stats.simulator_setups += 1
             with self.scene_values("manoeuvre.step"):
                 simulator = controllers.Simulator(loop, m.step)
-        self.stats.simulations += 1 + (m.disturbance is not None and not together)
-        return simulate_manoeuvre(loop, m, simulator=simulator, together=together)
+        self.stats.simulations += 1 + (m.disturbance is not None and not whole)
+        return simulate_manoeuvre(loop, m, simulator=simulator, together=whole)
 
-    def simulate(self, loop) -> control.TimeResponseData:
-        """The whole manoeuvre's response of a closed loop (slew and disturbance at once;
-        outputs only): what :mod:`spacecraft.sweep` evaluates. A response that leaves the
-        float64 range stops at its last finite sample (``diverged``, ``diverged_at``)."""
-        return self.simulate_runs(loop, together=True)["slew"]
-
+    # -- what the run adds around the loops -----------------------------------------------------
     def truth_resolution(self, n_modes, rows) -> tuple[float | None, dict]:
         """The band the loops act in, bandwidth_factor x the fastest crossover [rad/s], and per
         beam appendage the frequency up to which its truth model resolves it."""
         scene = self.scene
-        crossovers = [r["design_margins"]["gain_crossover_frequency"] for r in rows]
-        crossovers = [w for w in crossovers if w is not None and math.isfinite(w)]
         if not rows:
             return None, {}
+        crossovers = [w for r in rows for w in _crossovers(r.get("design_margins", {}))]
         with self.scene_values("controller"):
-            wn = self.design_bandwidth(self.exact_spacecraft().inertia)
+            wn = self.design_bandwidth(self.rigid_inertia())
         band = scene.fidelity.bandwidth_factor * max([wn] + crossovers)
         resolved = {}
         if n_modes is not None:
@@ -374,6 +558,45 @@ class _Runner(ModelBuilder):
         return tables
 
 
+def _crossovers(margins: dict) -> list[float]:
+    """The finite gain crossover frequencies [rad/s] of a loop's margins (a three-axis loop's
+    per axis)."""
+    values = [v for k, v in margins.items() if k.startswith("gain_crossover_frequency")]
+    return [w for w in values if w is not None and math.isfinite(w)]
+
+
+def _described(sc) -> dict:
+    """Each appendage model of a spacecraft, JSON-ready, by name."""
+    return {name: describe_model(mount.appendage) for name, mount in zip(sc.names, sc.mounts)}
+
+
+def _coupled(sc) -> list:
+    """The first 8 coupled elastic frequencies of a spacecraft model [rad/s]."""
+    return sc.modes()[0][sc.n_rigid:sc.n_rigid + 8].tolist()
+
+
+def _models_question(truth, design, exact, controller, manoeuvre, outputs):
+    """The scene of a Python user's own models and their :class:`GivenModels`."""
+    from ..dynamics.coupling import Spacecraft
+    from .models import GivenModels
+
+    if truth is None:
+        name = "design" if design is not None else "exact"
+        raise TypeError(f"{name}: your own models need a truth Spacecraft too (truth=...)")
+    designs = ({"design": truth} if design is None else
+               dict(design) if isinstance(design, Mapping) else {"design": design})
+    for name, sc in [("truth", truth), ("exact", exact)] + [
+            (f"design[{k!r}]", v) for k, v in designs.items()]:
+        if sc is not None and not isinstance(sc, Spacecraft):
+            raise TypeError(f"{name} must be a spacecraft.Spacecraft; got {type(sc).__name__}")
+    if controller is None:
+        raise TypeError("controller: your own models need a controller specification (a "
+                        "scene's [controller] table, e.g. {'pd': {'natural_frequency': 0.1}})")
+    scene = models_scene(truth.hub, truth.names, controller=controller, manoeuvre=manoeuvre,
+                         outputs=outputs, exact=exact is not None)
+    return scene, GivenModels(truth, designs, exact)
+
+
 def run(scene=None, *, progress: ProgressCallback | None = None,
         stats: RunStats | None = None, time_responses: bool = True) -> RunResult:
     """Run a scene: build the models it needs, tune, close the loops, collect the numbers.
@@ -401,11 +624,15 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     SceneError
         Invalid scene, or a controller that cannot be tuned on the design model.
 
+    See Also
+    --------
+    DesignLoop : the evaluator it runs (one controller at a time, or your own models).
+
     Examples
     --------
     >>> import spacecraft
-    >>> result = spacecraft.run("two_wings.toml")          # doctest: +SKIP
-    >>> [w["message"] for w in result.data["design_warnings"]]   # doctest: +SKIP
+    >>> result = spacecraft.run("two_wings")                          # doctest: +SKIP
+    >>> [w["message"] for w in result.data["design_warnings"]]        # doctest: +SKIP
     """
     check_options(progress=progress, time_responses=time_responses)
     if stats is not None and not isinstance(stats, RunStats):
@@ -416,18 +643,18 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
         return _run_three_axis(scene, progress, stats, time_responses)
     # the whole run sized like its largest loop (controllers/threads.py): the models' and
     # tables' own small products and factorisations single-threaded too, not only the
-    # controllers' entry points (with default threads a run spent ~0.1-0.2 s more CPU)
+    # controllers' entry points
     with warnings.catch_warnings(record=True) as caught, library_limits(scene.limits), \
             blas_threads_for(estimate_cost(scene).loop_states):
         warnings.simplefilter("default")
-        result = _Runner(scene, progress, stats, time_responses).run()
+        result = DesignLoop(scene, progress=progress, stats=stats,
+                            time_responses=time_responses).run()
     result.data["warnings"] = input_warning_lines(scene) + warning_lines(caught)
     return result
 
 
 def _run_three_axis(scene, progress, stats, time_responses) -> RunResult:
-    """A three-axis scene (:mod:`spacecraft.design.three_axis`) in a RunResult: ``data`` its
-    numbers, ``loops``/``responses``/``designs`` its systems."""
+    """A three-axis scene (:mod:`spacecraft.design.three_axis`) in a RunResult."""
     from .three_axis import run_three_axis
 
     with warnings.catch_warnings(record=True) as caught, library_limits(scene.limits):
@@ -467,14 +694,13 @@ def warning_lines(caught) -> list[str]:
     """Distinct warnings as one line each (``Category: message (module:line)``), at most 20,
     each at most about 300 characters: what the report and the command line show instead of
     numpy's or scipy's multi-line output."""
+    from ..scene.reader import shorten
+
     seen: dict = {}
     for w in caught:
         if issubclass(w.category, controllers.RemovedModesWarning):
             continue  # the report's section on the modes left out of the design
-        message = " ".join(str(w.message).split())
-        if len(message) > 250:
-            message = message[:250] + "..."
-        key = (w.category.__name__, message)
+        key = (w.category.__name__, shorten(str(w.message), 250, one_line=True))
         seen.setdefault(key, f"{Path(w.filename).name}:{w.lineno}")
     lines = [f"{category}: {message} ({where})"
              for (category, message), where in list(seen.items())[:_MAX_WARNINGS]]

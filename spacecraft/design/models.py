@@ -37,8 +37,8 @@ from ..scene.limits import estimate_cost
 from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
 from .verdicts import closed_loop_poles
 
-__all__ = ["ModelBuilder", "TruthLoop", "RunStats", "raised_by_flexsat", "LQR_FREQUENCY_RANGE",
-           "ProgressCallback"]
+__all__ = ["ModelBuilder", "GivenModels", "TruthLoop", "RunStats", "raised_by_flexsat",
+           "LQR_FREQUENCY_RANGE", "ProgressCallback"]
 
 #: Range of the rigid-body LQR natural frequency (q / (r J^2))^(1/4) [rad/s]: that of a PD's
 #: natural frequency in a scene (spacecraft.scene.read.RANGES["pd.frequency"]).
@@ -153,18 +153,69 @@ class TruthLoop:
         return self._verdict()
 
 
+@dataclasses.dataclass(frozen=True)
+class GivenModels:
+    """A Python user's own models of one spacecraft (``spacecraft.DesignLoop(truth=...)``).
+
+    Attributes
+    ----------
+    truth : Spacecraft
+        The model the loops are judged on.
+    designs : dict of str to Spacecraft
+        The models the controllers are tuned on, by label.
+    exact : Spacecraft or None
+        The spacecraft with its distributed appendages (exact frequency response).
+    """
+
+    truth: Spacecraft
+    designs: dict
+    exact: Spacecraft | None = None
+
+
 class ModelBuilder:
+    """The models of one scene (or a user's own, ``given``), built once and cached: beams,
+    chains, truncations, spacecraft, plants, tuned controllers and their margins."""
+
     def __init__(self, scene: Scene, progress: ProgressCallback | None, stats: RunStats,
-                 time_responses: bool = True):
+                 time_responses: bool = True, *, given: GivenModels | None = None):
         self.time_responses = time_responses
         self.scene = scene
+        self.given = given
         self.progress = progress or (lambda message: None)
         self.stats = stats
         self._index = {a.name: k for k, a in enumerate(scene.appendages)}
-        with self.scene_values("hub"):
-            self.hub = Hub(scene.hub.mass, scene.hub.inertia)
+        if given is not None:
+            self.hub = given.truth.hub
+        else:
+            with self.scene_values("hub"):
+                self.hub = Hub(scene.hub.mass, scene.hub.inertia)
         self._cache: dict = {}
         self._modal_spacecraft: set = set()
+
+    @property
+    def three_axis(self) -> bool:
+        """True for a three-axis spacecraft (a 3x3 hub inertia)."""
+        return bool(self.hub.three_axis)
+
+    @property
+    def names(self) -> list[str]:
+        """The appendages' names, in mount order."""
+        if self.given is not None:
+            return list(self.given.truth.names)
+        return [a.name for a in self.scene.appendages]
+
+    @property
+    def variants(self) -> tuple:
+        """Labels of the design models: one per fit criterion (or ``("design",)``), or the
+        labels of a user's own design models."""
+        if self.given is not None:
+            return tuple(self.given.designs)
+        return self.scene.design_variants
+
+    def rigid_inertia(self):
+        """The spacecraft's rigid-body inertia about its centre of mass [kg m^2] (a number,
+        or the 3x3 tensor in hub axes): the same for every model of it."""
+        return self.cached(("rigid inertia",), lambda: self.exact_spacecraft().inertia)
 
     # -- errors --------------------------------------------------------------------------------
     @contextlib.contextmanager
@@ -309,8 +360,17 @@ class ModelBuilder:
 
     def design_spacecraft(self, variant: str, n_modes: int | None) -> Spacecraft:
         """The spacecraft of a design variant (its design model of each appendage)."""
+        if self.given is not None:
+            return self.given.designs[variant]
         models = [self.design_model(a, variant, n_modes) for a in self.scene.appendages]
         return self.spacecraft(self.design_key(variant, n_modes), models)
+
+    def truth_spacecraft(self, n_modes: int | None) -> Spacecraft:
+        """The truth model: each appendage's truth model (beams truncated to ``n_modes``)."""
+        if self.given is not None:
+            return self.given.truth
+        models = [self.truth_model(a, n_modes) for a in self.scene.appendages]
+        return self.spacecraft(("truth", n_modes), models)
 
     def design_plant(self, variant: str, n_modes: int | None):
         """The plant the controllers are tuned on (tip deflections when the LQR weighs them)."""
@@ -336,14 +396,18 @@ class ModelBuilder:
                 return tune(kind, plant, self.scene.controller)
         return self.cached(("tuned", self.design_key(variant, n_modes), kind), build)
 
-    def design_margins(self, variant: str, kind: str, n_modes: int | None):
-        """:func:`controllers.margins` of a controller on its own design plant (once)."""
+    def design_margins(self, variant: str, kind: str, n_modes: int | None, controller=None):
+        """:func:`controllers.margins` of a controller on its design plant (once): the one
+        tuned there, or ``controller``."""
         def build():
             plant, _ = self.design_plant(variant, n_modes)
+            K = (controller if controller is not None
+                 else self.tuned(variant, kind, n_modes).controller)
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                return controllers.margins(plant, self.tuned(variant, kind, n_modes).controller)
-        return self.cached(("design margins", self.design_key(variant, n_modes), kind), build)
+                return controllers.margins(plant, K)
+        return self.cached(("design margins", self.design_key(variant, n_modes), kind,
+                            None if controller is None else id(controller)), build)
 
     def truth_spillover(self, plant, controller):
         """:func:`controllers.spillover` of a controller on a truth plant, once per (plant,
@@ -363,9 +427,8 @@ class ModelBuilder:
 
     def truth_plant(self, n_modes: int | None):
         """The truth plant of the verdicts (torque to theta, omega; pruned as the scene says)."""
-        models = [self.truth_model(a, n_modes) for a in self.scene.appendages]
-        sc = self.spacecraft(("truth", n_modes), models)
-        return self.plant(sc, ("truth", n_modes), prune=self.scene.fidelity.prune)[0]
+        return self.plant(self.truth_spacecraft(n_modes), ("truth", n_modes),
+                          prune=self.scene.fidelity.prune)[0]
 
     def truth_loops(self, n_modes: int) -> dict:
         """(variant, kind) -> :class:`TruthLoop` of every loop of the scene on the truth model
@@ -373,7 +436,7 @@ class ModelBuilder:
         plant = self.truth_plant(n_modes)
         return {(variant, kind): self.truth_loop(
                     plant, self.tuned(variant, kind, n_modes).controller)
-                for variant in self.scene.design_variants for kind in self.scene.controller.types}
+                for variant in self.variants for kind in self.scene.controller.types}
 
     def plant(self, sc: Spacecraft, key, *, tip=False, root_loads=False, disturbances=False,
               prune=True):
@@ -397,6 +460,9 @@ class ModelBuilder:
 
     # -- exact reference -----------------------------------------------------------------------
     def exact_spacecraft(self) -> Spacecraft:
+        """The spacecraft with its distributed appendages (chains where the truth is one)."""
+        if self.given is not None:
+            return self.given.exact if self.given.exact is not None else self.given.truth
         models = [self.beam(a) if a.truth == "beam" else self.truth_model(a, None)
                   for a in self.scene.appendages]
         return self.spacecraft("exact", models)
@@ -448,7 +514,7 @@ class ModelBuilder:
         if scene.fidelity.n_modes is not None:
             return scene.fidelity.n_modes, None
         with self.stage("choosing the number of modes"):
-            inertia = self.exact_spacecraft().inertia
+            inertia = self.rigid_inertia()
             bandwidth = self.design_bandwidth(inertia)
 
             # The choice compares undamped models (natural frequencies are undamped, and the
@@ -492,7 +558,7 @@ class ModelBuilder:
         if not scene.controller.types:
             return choice
         crossovers = [self.design_margins(variant, kind, choice.n_modes).gain_crossover_frequency
-                      for variant in scene.design_variants for kind in scene.controller.types]
+                      for variant in self.variants for kind in scene.controller.types]
         crossovers = [w for w in crossovers if math.isfinite(w)]
         band = max(scene.fidelity.bandwidth_factor * max([bandwidth] + crossovers),
                    float(choice.reference_frequencies[-1]))
@@ -526,7 +592,7 @@ class ModelBuilder:
     def exact_reference_frd(self):
         """Exact theta and omega per torque of hub + distributed beams, as an FRD."""
         scene = self.scene
-        inertia = self.exact_spacecraft().inertia
+        inertia = self.rigid_inertia()
         wb = self.design_bandwidth(inertia)
         w_lo, w_hi = wb * 1e-3, wb * 1e3
         frequencies = self.exact_frequencies(8)
@@ -534,8 +600,8 @@ class ModelBuilder:
             frequencies = self.exact_frequencies(2 * frequencies.size)
         n_dec = math.log10(w_hi / w_lo)
         grid = [np.geomspace(w_lo, w_hi, int(_POINTS_PER_DECADE * n_dec))]
-        zeta = max([a.beam.damping_ratio for a in scene.appendages if a.beam is not None]
-                   + [1e-4])
+        zeta = max([getattr(m.appendage, "damping_ratio", 0.0)
+                    for m in self.exact_spacecraft().mounts] + [1e-4])
         # an even count: no point exactly at a mode (an undamped beam's W is infinite there)
         spread = np.tan(np.linspace(-1.5, 1.5, 60))
         for f in frequencies[frequencies < w_hi]:

@@ -20,6 +20,8 @@ import numpy as np
 
 import controllers
 
+from .verdicts import s_plane_poles
+
 __all__ = ["Tuned", "tune", "digital_facts", "rigid_crossover"]
 
 
@@ -45,13 +47,10 @@ class Tuned:
 
 
 def _poles(values, sample_time: float | None = None) -> list:
-    """Poles as ``{"re", "im"}`` [1/s]; a digital design's z-plane poles mapped to the s-plane
-    by s = ln(z) / T (poles at z = 0, deadbeat, left out: they have no s-plane image)."""
-    p = np.asarray(values, complex).reshape(-1)
-    if sample_time is not None:
-        p = p[np.abs(p) > 1e-300]
-        p = np.log(p) / sample_time
-    return [{"re": float(z.real), "im": float(z.imag)} for z in p]
+    """Poles as ``{"re", "im"}`` [1/s], a digital design's mapped from the z-plane
+    (:func:`spacecraft.design.verdicts.s_plane_poles`)."""
+    return [{"re": float(z.real), "im": float(z.imag)}
+            for z in s_plane_poles(values, sample_time)]
 
 
 def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:

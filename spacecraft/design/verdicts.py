@@ -77,8 +77,8 @@ import numpy as np
 __all__ = ["MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "MIN_MODULUS_MARGIN", "MIN_DISK_MARGIN",
            "MIN_DAMPING", "DAMPING_DROP", "CAUTIONS", "MODE_ERROR", "MARGINAL", "STATUS_TEXT",
            "closed_loop_poles", "loop_status", "withheld_metrics", "design_warnings",
-           "loop_warnings", "margin_flags", "verdict_dict", "growing", "resolved_frequency", "TIME_METRICS",
-           "exact_loop_verdict"]
+           "loop_warnings", "margin_flags", "verdict_dict", "margins_dict", "growing",
+           "resolved_frequency", "TIME_METRICS", "exact_loop_verdict", "s_plane_poles"]
 
 #: Smallest acceptable |gain margin| on the truth model [dB] (a factor of 2).
 MIN_GAIN_MARGIN = 6.0
@@ -118,17 +118,24 @@ STATUS_TEXT = {
 }
 
 
+def s_plane_poles(poles, sample_time: float | None = None) -> np.ndarray:
+    """Poles [1/s] in the s-plane: as given for a continuous system; a digital system's
+    z-plane poles (``sample_time`` T [s]) mapped by s = log(z) / T, the poles at z = 0
+    (deadbeat: no s-plane image) left out."""
+    lam = np.asarray(poles, dtype=complex).reshape(-1)
+    if sample_time is None:
+        return lam
+    lam = lam[np.abs(lam) > 1e-300]
+    return np.log(lam) / float(sample_time)
+
+
 def closed_loop_poles(loop) -> np.ndarray:
-    """Poles of a closed loop in the s-plane [1/s]; a digital loop's z-plane poles mapped by
-    s = log(z) / T (poles at z = 0, deadbeat, left out)."""
+    """Poles of a closed loop in the s-plane [1/s] (:func:`s_plane_poles`)."""
     A = np.asarray(loop.A, dtype=float)
     if A.size == 0:
         return np.zeros(0, dtype=complex)
-    lam = np.linalg.eigvals(A).astype(complex)
-    if loop.isdtime(strict=True):
-        lam = lam[np.abs(lam) > 1e-300]
-        lam = np.log(lam) / float(loop.dt)
-    return lam
+    return s_plane_poles(np.linalg.eigvals(A),
+                         float(loop.dt) if loop.isdtime(strict=True) else None)
 
 
 def loop_status(poles: np.ndarray, response, manoeuvre, metrics: dict | None) -> dict:
@@ -387,20 +394,35 @@ def margin_flags(margins: dict, stable: bool) -> dict:
     return out
 
 
+def margins_dict(margins) -> dict:
+    """A loop's :func:`controllers.margins`, JSON-ready, with the frequencies where they are
+    attained: planar ``gain_margin`` [dB], ``phase_margin`` [deg], ``modulus_margin`` and
+    ``gain_crossover_frequency``, ``phase_crossover_frequency``,
+    ``modulus_margin_frequency`` [rad/s]; three axes per axis (``gain_margin_x``... and
+    ``gain_crossover_frequency_x``...) and the disk margin and smallest singular value of
+    the return difference with their frequencies."""
+    m = margins
+    out = dict(m.as_dict())
+    if hasattr(m, "gain_crossover_frequency"):
+        out.update(gain_crossover_frequency=m.gain_crossover_frequency,
+                   phase_crossover_frequency=m.phase_crossover_frequency,
+                   modulus_margin_frequency=m.modulus_margin_frequency)
+    else:
+        for axis, a in m.loop_at_a_time.items():
+            out.update({f"gain_crossover_frequency_{axis}": a.gain_crossover_frequency,
+                        f"phase_crossover_frequency_{axis}": a.phase_crossover_frequency,
+                        f"modulus_margin_frequency_{axis}": a.modulus_margin_frequency})
+        out.update(disk_margin_frequency=m.disk_margin_frequency,
+                   min_singular_value_frequency=m.min_singular_value_frequency)
+    return out
+
+
 def verdict_dict(verdict) -> dict:
     """A :class:`controllers.SpilloverVerdict` as the JSON-ready ``verdict`` of a loop: stable,
     unstable poles, least-damped pole, method, the margins (planar: gain, phase, modulus and
     their frequencies; three axes: per axis and the disk margin), the flexible modes' open-
     and closed-loop damping (``modes``) and the margins' flags (:func:`margin_flags`)."""
-    m = verdict.margins
-    margins = dict(m.as_dict())
-    if hasattr(m, "gain_crossover_frequency"):
-        margins.update(gain_crossover_frequency=m.gain_crossover_frequency,
-                       phase_crossover_frequency=m.phase_crossover_frequency,
-                       modulus_margin_frequency=m.modulus_margin_frequency)
-    else:
-        margins.update(disk_margin_frequency=m.disk_margin_frequency,
-                       min_singular_value_frequency=m.min_singular_value_frequency)
+    margins = margins_dict(verdict.margins)
     out = {"stable": bool(verdict.stable), "n_unstable_poles": int(verdict.n_unstable_poles),
            "least_damping_ratio": verdict.least_damping_ratio,
            "least_damped_frequency": verdict.least_damped_frequency,

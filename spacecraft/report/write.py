@@ -276,7 +276,8 @@ def _fidelity_line(data: dict) -> str:
         return (f"truth model: {plural(fid['n_modes'], 'bending mode')} per beam "
                 f"({fid['method']}, {how}); plant {plural(truth['n_states'], 'state')}, "
                 f"{plural(truth['modes_dropped'], 'mode')} pruned")
-    return f"truth model: the chains as given; plant {plural(truth['n_states'], 'state')}"
+    what = "as given (your Spacecraft)" if fid.get("given") else "the chains as given"
+    return f"truth model: {what}; plant {plural(truth['n_states'], 'state')}"
 
 
 def _loop_line(r: dict, warnings: list = ()) -> str | Tone:
@@ -430,7 +431,8 @@ def _models(data: dict) -> list:
                     else text + "."
             b.append(("p", text))
     else:
-        b.append(("p", f"Truth model: the chains as given; the plant has "
+        what = "as given (your Spacecraft)" if fid.get("given") else "the chains as given"
+        b.append(("p", f"Truth model: {what}; the plant has "
                        f"{plural(truth['n_states'], 'state')} ({truth['modes_dropped']} of "
                        f"{plural(truth['modes_total'], 'mode')} pruned)."))
     header = ["mode"]

@@ -270,7 +270,7 @@ from appendages.unit_slips import damping_in_percent, modulus_in_megapascals, ra
 
 from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, estimate_cost
 from .reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
-                           _NAME, _Reader, _kind, _quoted, _short, _shown)
+                           _NAME, _Reader, _kind, _quoted, _shown, shorten)
 from .given import read_given
 from .specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLOT_ALIASES,
                           PLOTS, SECTIONS, SIMULATORS, AppendageSpec, BeamSpec, ChainSpec,
@@ -302,6 +302,7 @@ __all__ = [
     "example_scenes",
     "scene_path",
     "scene_dict",
+    "models_scene",
     "read_limits",
     "with_simulator",
     "RANGES",
@@ -994,7 +995,7 @@ def with_simulator(scene: Scene, name: str) -> Scene:
     """
     if name not in SIMULATORS:
         raise SceneError(f"simulator must be one of {', '.join(map(repr, SIMULATORS))}; got "
-                         f"{_short(repr(name))}")
+                         f"{shorten(repr(name))}")
     if name == scene.simulator.name:
         return scene
     simulator = (SimulatorSpec() if name == "flexsat"
@@ -1047,7 +1048,7 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         return _guarded(lambda: _read_scene(scene, name, overrides), name)
     if not isinstance(scene, (str, os.PathLike)):
         raise SceneError(f"scene must be a TOML file path, a dict or a Scene; got "
-                         f"{_short(type(scene).__name__)}")
+                         f"{shorten(type(scene).__name__)}")
     path = Path(scene)
     if (isinstance(scene, str) and not path.exists() and path.suffix == ""
             and path.parent == Path(".")):
@@ -1059,10 +1060,10 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         import difflib
 
         close = difflib.get_close_matches(scene, names, n=1)
-        raise SceneError(f"{_short(scene)}: no such scene file or embedded scene (embedded: "
+        raise SceneError(f"{shorten(scene)}: no such scene file or embedded scene (embedded: "
                          f"{', '.join(names)})" + (f"; did you mean {close[0]!r}?" if close
                                                    else ""))
-    shown = _short(str(path)) if str(path).isprintable() else _shown(str(path))
+    shown = shorten(str(path)) if str(path).isprintable() else _shown(str(path))
     file_size = overrides.get("file_size", Limits().file_size)
     try:
         with open(path, "rb") as stream:
@@ -1087,7 +1088,7 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         try:
             data = tomllib.loads(decoded)
         except tomllib.TOMLDecodeError as exc:
-            raise SceneError(f"{name}: invalid TOML ({_short(str(exc), 200)})") from None
+            raise SceneError(f"{name}: invalid TOML ({shorten(str(exc), 200)})") from None
         return _read_scene(data, name, overrides)
     return _guarded(parse, name)
 
@@ -1124,3 +1125,64 @@ def default_scene(*, limits: Mapping[str, Any] | None = None) -> Scene:
     """The embedded default scene: the paper's steel rod on a 100 kg, 50 kg m^2 hub."""
     path = scene_path("default")
     return load_scene(path, source="default scene", limits=limits)
+
+
+def models_scene(hub, names, *, controller, manoeuvre=None, outputs=None, exact: bool = False,
+                 source: str = "your models") -> Scene:
+    """The question a Python user asks of their own models (``spacecraft.DesignLoop(truth=...)``):
+    a scene without appendage tables, whose controller, manoeuvre and outputs are read and
+    checked as a scene file's are.
+
+    Parameters
+    ----------
+    hub : spacecraft.Hub
+        The truth model's hub (mass [kg], inertia [kg m^2]: a number, or a 3x3 tensor).
+    names : sequence of str
+        The appendages' names (the truth model's mounts), for tip-force disturbances.
+    controller : mapping or ControllerSpec
+        A scene's ``[controller]`` table (file units: Hz for ``sample_rate``) or a validated
+        specification.
+    manoeuvre : mapping or ManoeuvreSpec, optional
+        A scene's ``[manoeuvre]`` table (degrees) or a validated specification.
+    outputs : mapping, optional
+        A scene's ``[outputs]`` table without ``exact_reference``.
+    exact : bool
+        An exact spacecraft is given: the loops are judged on it too.
+    source : str
+        Name in messages.
+
+    Returns
+    -------
+    Scene
+        ``appendages`` empty; fidelity: the models as given, pruned; no FMUs, no plots.
+
+    Raises
+    ------
+    SceneError
+        A table's key or value, named as in a scene file.
+    """
+    import numpy as np
+
+    three_axis = bool(getattr(hub, "three_axis", False))
+    inertia = (tuple(tuple(float(v) for v in row) for row in np.asarray(hub.inertia))
+               if three_axis else float(hub.inertia))
+    r = _Reader(source)
+    r.three_axis = three_axis
+    if not isinstance(controller, ControllerSpec):
+        controller = _read_controller(r, controller, "controller")
+    if manoeuvre is not None and not isinstance(manoeuvre, ManoeuvreSpec):
+        manoeuvre = _read_manoeuvre(r, manoeuvre, "manoeuvre", list(names),
+                                    controller.sample_time)
+    ot = r.table({} if outputs is None else outputs, "outputs")
+    wanted = OutputsSpec(r.boolean(ot, "tip_deflection", "outputs", False),
+                         r.boolean(ot, "root_loads", "outputs", False), bool(exact))
+    r.done(ot, "outputs", {"tip_deflection", "root_loads"})
+    if (controller.lqr is not None and controller.lqr.deflection_weight is not None
+            and not wanted.tip_deflection):
+        raise r.error("controller.lqr.deflection_weight", "needs tip-deflection outputs: set "
+                      "outputs.tip_deflection = true")
+    return Scene(title="", source=source, hub=HubSpec(float(hub.mass), inertia), appendages=(),
+                 fidelity=FidelitySpec(n_modes=None, tolerance=None), controller=controller,
+                 manoeuvre=manoeuvre, outputs=wanted, export=ExportSpec(),
+                 report=ReportSpec(plots=(), equivalence=False), limits=r.limits,
+                 input_warnings=tuple(r.warnings))

@@ -24,8 +24,8 @@ from appendages.interface import FlexsatError
 
 from .limits import LIMIT_UNITS, Limits
 
-__all__ = ["SceneError", "RANGES", "BEAM_FREQUENCY_RANGE", "NAME_LENGTH", "suggestion",
-           "closest"]
+__all__ = ["SceneError", "RANGES", "BEAM_FREQUENCY_RANGE", "NAME_LENGTH", "SHOWN", "suggestion",
+           "closest", "shorten"]
 
 
 class SceneError(FlexsatError, ValueError):
@@ -134,7 +134,7 @@ NAME_LENGTH = 64
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 #: Longest value shown in a message [characters].
-_SHOWN = 100
+SHOWN = 100
 
 # ---------------------------------------------------------------------------------------------
 # the reader
@@ -142,8 +142,12 @@ _SHOWN = 100
 _MISSING = object()
 
 
-def _short(text: str, limit: int = _SHOWN) -> str:
-    """``text`` cut to ``limit`` characters, saying how long it was."""
+def shorten(text: str, limit: int = SHOWN, *, one_line: bool = False) -> str:
+    """A text for a message: cut to ``limit`` characters, saying how long it was; with
+    ``one_line`` its white space (newlines included) folded to single spaces first."""
+    text = str(text)
+    if one_line:
+        text = " ".join(text.split())
     return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
 
@@ -153,7 +157,7 @@ def _shown(value) -> str:
         text = repr(value)
     except Exception:  # a foreign object whose repr fails: its type is enough
         text = f"<{type(value).__name__}>"
-    return _short(text)
+    return shorten(text)
 
 
 def _key(key) -> str:
@@ -345,14 +349,14 @@ def _kind(value) -> str:
     if isinstance(value, numbers.Real):
         return f"number {_shown(value)}"
     if isinstance(value, numbers.Number):
-        return f"{_short(type(value).__name__)} {_shown(value)}"
+        return f"{shorten(type(value).__name__)} {_shown(value)}"
     if isinstance(value, str):
         return f"string {_shown(value)}"
     if isinstance(value, Mapping):
         return "a table"
     if isinstance(value, (list, tuple)):
         return f"an array of {len(value)}"
-    return _short(type(value).__name__)
+    return shorten(type(value).__name__)
 
 
 def _quoted(choices) -> str:

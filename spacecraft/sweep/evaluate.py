@@ -66,7 +66,7 @@ import warnings
 import numpy as np
 
 from ..scene.given import controller_record
-from ..design.loop import RunStats, _Runner
+from ..design.loop import DesignLoop, RunStats
 from ..scene.read import SceneError, load_scene
 from ..design.tuning import tune
 from ..design.verdicts import TIME_METRICS, closed_loop_poles, loop_status, withheld_metrics
@@ -206,7 +206,7 @@ def signed_margin(value, stable) -> float:
     return abs(float(value)) if stable else -abs(float(value))
 
 
-class SampleRunner(_Runner):
+class SampleRunner(DesignLoop):
     """The runner's model builders for one sample (time responses on, no output folder).
 
     Chains come from the runner's own fit (:meth:`_Runner.fit`): ``fit_chain`` memoises the
@@ -215,7 +215,7 @@ class SampleRunner(_Runner):
     """
 
     def __init__(self, scene):
-        super().__init__(scene, None, RunStats(), time_responses=True)
+        super().__init__(scene)
 
 
 def design_controller(runner: SampleRunner, context: Context):
@@ -254,7 +254,7 @@ def controller_description(tuned, kind: str) -> dict:
     return record
 
 
-def _grid_parts(runner: _Runner) -> tuple[np.ndarray, np.ndarray, float]:
+def _grid_parts(runner: DesignLoop) -> tuple[np.ndarray, np.ndarray, float]:
     """(logarithmic grid, coupled modes below its top, damping ratio of the spread)."""
     scene = runner.scene
     exact = runner.exact_spacecraft()
@@ -288,7 +288,7 @@ def _spread(modes: np.ndarray, zeta: float) -> np.ndarray:
     return np.concatenate([w * (1.0 + zeta * spread) for w in modes])
 
 
-def exact_grid(runner: _Runner) -> np.ndarray:
+def exact_grid(runner: DesignLoop) -> np.ndarray:
     """Frequencies [rad/s] of the exact reference of a sample, every mode resolved.
 
     Logarithmic from 1e-3 to 1e3 times the design bandwidth wb (:data:`POINTS_PER_DECADE`),
@@ -362,7 +362,7 @@ def _margin_brackets(L: np.ndarray) -> list[tuple[int, int]]:
     return brackets
 
 
-def exact_verdict(runner: _Runner, controller):
+def exact_verdict(runner: DesignLoop, controller):
     """The loop on the exact beams: Nyquist verdict and margins (module docstring).
 
     The grid is :func:`exact_grid`'s, with one economy and one refinement:
@@ -487,7 +487,7 @@ def _evaluate_scene(context: Context, scene) -> dict:
                                     root_loads=scene.outputs.root_loads,
                                     disturbances=m.disturbance is not None, prune=prune)
         loop = controllers.close_loop(truth_sim, K)
-        response = runner.simulate(loop)
+        response = runner.simulate(loop, whole=True)["slew"]
         with np.errstate(all="ignore"):
             metrics = controllers.metrics(response)
         status = loop_status(closed_loop_poles(loop), response, m, metrics)
@@ -648,7 +648,7 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
             n_modes = scene.fidelity.n_modes
         else:
             try:
-                n_modes, _ = _Runner(scene, None, RunStats()).choose_fidelity()
+                n_modes, _ = DesignLoop(scene).choose_fidelity()
             except ValueError as exc:
                 raise SceneError(f"{source}: fidelity: {exc}") from None
     base, variant, kind = _trim(raw, scene, spec, n_modes)
