@@ -8,7 +8,7 @@ Works on any python-control LTI plant with input ``'torque'`` and outputs ``'the
 from .frequency import frequency_response_data
 from .loop import close_loop, loop_frequency_response
 from .margins import (Margins, ModeSpillover, MultiLoopMargins, SpilloverVerdict, loop_margins,
-                      margins, spillover)
+                      margins, nyquist_count, spillover)
 from .modes import INFLUENCE_TOL, FlexibleMode, flexible_modes, rigid_body_inertia
 from .timeresp import (METRIC_UNITS, disturbance_response, manoeuvre_metrics, metrics,
                        profile_response, slew, slew_profile, step_response)
@@ -70,6 +70,7 @@ __all__ = [
     "lqr_design",
     "manoeuvre_metrics",
     "margins",
+    "nyquist_count",
     "metrics",
     "minimum_time",
     "mode_shaper",

@@ -44,14 +44,14 @@ import scipy.optimize
 
 from .delay import check_delay, total_delay
 from .loop import LoopTransfer, close_loop, loop_frequency_response
-from .arguments import frequency_grid
+from .arguments import describe, frequency_grid
 from .signals import check_controller, check_pair, check_plant, is_digital
 from .stability import continuous_poles
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "margins",
-           "spillover", "disk_margin_gain", "disk_margin_phase", "loop_margins",
-           "MAX_DELAY_GRID", "zero_crossings"]
+           "spillover", "nyquist_count", "disk_margin_gain", "disk_margin_phase",
+           "loop_margins", "MAX_DELAY_GRID", "zero_crossings"]
 
 #: Most frequencies a delayed loop's grid may hold (omega tau resolved to pi/4 up to the grid's
 #: top): beyond, margins() refuses the delay by name before evaluating anything.
@@ -924,11 +924,69 @@ def spillover(truth_plant, controller, *, delay: float = 0.0,
             least_damping_ratio=None if i is None else float(zeta[i]),
             least_damped_frequency=None if i is None else float(w[i]),
             margins=mg, method="eigenvalues", modes=_mode_spillover(truth_plant, s))
+    n_unstable = nyquist_count(truth_plant, controller)
+    if continuous_delay:
+        n_unstable, margin = _roots_at_delay(max(n_unstable, 0), _delay_free_crossings(
+            truth_plant, controller), tau)
+        return SpilloverVerdict(stable=n_unstable == 0, n_unstable_poles=n_unstable,
+                                least_damping_ratio=None, least_damped_frequency=None,
+                                margins=dataclasses.replace(mg, delay_margin=margin),
+                                method="nyquist+delay")
+    return SpilloverVerdict(stable=n_unstable == 0, n_unstable_poles=max(n_unstable, 0),
+                            least_damping_ratio=None, least_damped_frequency=None,
+                            margins=mg, method="nyquist")
+
+
+def nyquist_count(truth_plant: control.FrequencyResponseData, controller, *,
+                  response: tuple | None = None) -> int:
+    """Closed-loop poles in the right half-plane of a controller on a frequency-response plant,
+    by the Nyquist criterion: the count :func:`spillover` gives an FRD truth plant, without
+    its margins.
+
+    Parameters
+    ----------
+    truth_plant : control.FrequencyResponseData
+        A planar plant with no poles in the open right half-plane and n0 poles at s = 0 (n0
+        from the low-frequency slope of |L|, 2 for a free-floating plant), on a grid that
+        resolves every mode the loop feels, with |L| > 10 at its lowest and < 0.1 at its
+        highest frequency.
+    controller : control.StateSpace
+        Continuous controller.
+    response : (ndarray, ndarray), optional
+        ``loop_frequency_response(truth_plant, controller)``, if already computed.
+
+    Returns
+    -------
+    int
+        Z = P - (2 Delta - n0 pi) / (2 pi) (the contour indented to the right around s = 0):
+        Delta the phase change of 1 + L(j omega) over the grid, P the controller's open
+        right-half-plane poles; 0 for a stable loop. May be negative for a grid that does not
+        resolve the loop (then the count is not to be trusted).
+
+    Raises
+    ------
+    ValueError
+        A digital controller, or a grid too narrow for the criterion (named with |L| at its
+        ends).
+
+    References
+    ----------
+    Skogestad & Postlethwaite, Multivariable Feedback Control, 2nd ed., sec. 4.9 (Nyquist
+    criterion with poles on the imaginary axis).
+    """
+    check_plant(truth_plant, "truth_plant", allow_frd=True)
+    check_controller(controller)
+    if not isinstance(truth_plant, control.FrequencyResponseData):
+        raise TypeError(f"truth_plant must be a control.FrequencyResponseData; got "
+                        f"{type(truth_plant).__name__}")
     if is_digital(controller):
         raise ValueError("spillover on a FrequencyResponseData truth_plant needs a continuous "
                          "controller (the sampled-data Nyquist count would need the aliased "
                          f"plant response); got dt={controller.dt}: use a StateSpace truth_plant")
-    omega, L = loop_frequency_response(truth_plant, controller)
+    if response is None:
+        omega, L = loop_frequency_response(truth_plant, controller)
+    else:
+        omega, L = _loop_response(response)
     if abs(L[0]) < 10 or abs(L[-1]) > 0.1:
         raise ValueError(
             "truth_plant frequency grid too narrow for the Nyquist criterion: need |L| > 10 at the "
@@ -941,17 +999,26 @@ def spillover(truth_plant, controller, *, delay: float = 0.0,
     lam_c = continuous_poles(controller)
     p_rhp = int(np.sum(lam_c.real > 1e-10 * np.maximum(1.0, np.abs(lam_c))))
     z = p_rhp - (2.0 * delta - n0 * math.pi) / (2.0 * math.pi)
-    n_unstable = int(round(z))
-    if continuous_delay:
-        n_unstable, margin = _roots_at_delay(max(n_unstable, 0), _delay_free_crossings(
-            truth_plant, controller), tau)
-        return SpilloverVerdict(stable=n_unstable == 0, n_unstable_poles=n_unstable,
-                                least_damping_ratio=None, least_damped_frequency=None,
-                                margins=dataclasses.replace(mg, delay_margin=margin),
-                                method="nyquist+delay")
-    return SpilloverVerdict(stable=n_unstable == 0, n_unstable_poles=max(n_unstable, 0),
-                            least_damping_ratio=None, least_damped_frequency=None,
-                            margins=mg, method="nyquist")
+    return int(round(z))
+
+
+def _loop_response(response) -> tuple[np.ndarray, np.ndarray]:
+    """``(omega, L)`` of :func:`loop_frequency_response`, checked: increasing positive finite
+    frequencies [rad/s] and as many complex values, at least two."""
+    expected = ("response must be (omega, L) of loop_frequency_response: increasing positive "
+                "frequencies [rad/s] and the loop's values there, at least two")
+    if not isinstance(response, (tuple, list)) or len(response) != 2:
+        raise TypeError(f"{expected}; got {describe(response)}")
+    try:
+        omega = np.asarray(response[0], dtype=float).reshape(-1)
+        L = np.asarray(response[1], dtype=complex).reshape(-1)
+    except (TypeError, ValueError):
+        raise TypeError(f"{expected}; got {describe(response)}") from None
+    if (omega.size < 2 or L.size != omega.size or not np.all(np.isfinite(omega))
+            or np.any(omega <= 0) or np.any(np.diff(omega) <= 0)):
+        raise ValueError(f"{expected}; got {omega.size} frequencies and {L.size} values "
+                         f"{describe(response)}")
+    return omega, L
 
 
 def _delay_free_crossings(plant, controller) -> list[tuple[float, complex, int]]:

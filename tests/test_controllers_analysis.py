@@ -344,6 +344,26 @@ def test_spillover_verdict_stable_and_unstable():
         controllers.spillover(control.frd(COLLOCATED, w), digital)
 
 
+def test_the_nyquist_count_alone_is_the_verdicts():
+    """nyquist_count gives spillover's count on frequency-response data (the two unstable
+    poles of the non-collocated loop, none of the collocated one), from the loop's response
+    when it is given, and refuses what the criterion cannot take, by name."""
+    K = controllers.pd(COLLOCATED, natural_frequency=1.0)
+    w = np.logspace(-4, 4, 20000)
+    for plant, expected in ((COLLOCATED, 0), (NONCOLLOCATED, 2)):
+        frd = control.frd(plant, w)
+        assert controllers.nyquist_count(frd, K) == expected
+        assert controllers.spillover(frd, K).n_unstable_poles == expected
+        response = controllers.loop_frequency_response(frd, K)
+        assert controllers.nyquist_count(frd, K, response=response) == expected
+    with pytest.raises(ValueError, match="frequency grid too narrow"):
+        controllers.nyquist_count(control.frd(COLLOCATED, np.logspace(-1, 1, 100)), K)
+    with pytest.raises(ValueError, match=r"response must be \(omega, L\)"):
+        controllers.nyquist_count(control.frd(COLLOCATED, w), K, response=(w, w[:3]))
+    with pytest.raises(TypeError, match="truth_plant must be a control.FrequencyResponseData"):
+        controllers.nyquist_count(COLLOCATED, K)
+
+
 def test_spillover_least_damped_pole_closed_form():
     """Rigid hub under PD: the closed-loop poles are those of s^2 + 2 zeta wn s + wn^2."""
     K = controllers.pd(RIGID, natural_frequency=0.7, damping=0.35)

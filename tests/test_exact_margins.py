@@ -137,7 +137,7 @@ def test_the_exact_verdict_keeps_the_nyquist_count_and_refines_only_margins(loop
 def test_a_loop_delay_enters_the_exact_margins(loop):
     # a delay tau multiplies L by exp(-j omega tau): |L| unchanged, the phase lowered by
     # omega tau. At the delayed loop's own gain crossover (on this undamped rod a resonance's:
-    # 10 ms is beyond what its undamped modes tolerate at 71 rad/s), the reference's |L| is 1
+    # 10 ms is beyond what its undamped modes tolerate, at 92 rad/s), the reference's |L| is 1
     # and its phase margin less omega tau is the delayed margin.
     from spacecraft.design.verdicts import exact_loop_verdict
 
@@ -150,8 +150,11 @@ def test_a_loop_delay_enters_the_exact_margins(loop):
     w = delayed.gain_crossover_frequency
     with mp.workdps(DPS):
         L = ref.L(mp.mpf(w))
+        # the crossover is found to 1e-13 relative in frequency: at a resonance's steep
+        # crossing |L| is 1 to within its change over that step
+        step = abs(float(abs(ref.L(mp.mpf(w) * (1 + mp.mpf("1e-13")))) - abs(L)))
         pm = float(mp.degrees(mp.arg(L))) + 180.0 - math.degrees(w * tau)
     pm = (pm + 180.0) % 360.0 - 180.0
-    assert abs(float(abs(L)) - 1.0) < 1e-9
+    assert abs(float(abs(L)) - 1.0) < 1e-9 + 2.0 * step
     assert abs(delayed.phase_margin - pm) < 1e-9
     assert delayed.delay == tau

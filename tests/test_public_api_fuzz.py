@@ -143,6 +143,8 @@ def _modal_file(tmp: Path, appendage) -> Path:
 
 
 def _valid_table(tmp: Path) -> dict:
+    import control
+
     import controllers
     from appendages import ModalAppendage, RootModel
     from spacecraft import Hub
@@ -174,6 +176,9 @@ def _valid_table(tmp: Path) -> dict:
         # controllers
         "plant": o["plant"], "controller": o["pd"], "closed_loop": o["loop"],
         "design_plant": o["plant"], "truth_plant": o["plant"], "response": o["response"],
+        "controllers.nyquist_count.truth_plant": Lazy(
+            lambda: control.frd(o["plant"], np.logspace(-4.0, 4.0, 2000))),
+        "controllers.nyquist_count.response": None,
         "controllers.assert_closed_loops_close.actual": o["loop"],
         "controllers.assert_closed_loops_close.expected": o["loop"],
         "controllers.assert_closed_loops_close.angle": 0.1, "controllers.compare.slew_time": 10.0,

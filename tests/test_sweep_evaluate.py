@@ -33,21 +33,22 @@ def context_of(raw, **settings):
 
 @pytest.mark.slow
 def test_a_sample_is_the_runners_design_loop():
-    """Truth-model margins and slew metrics equal the runner's on the same one-loop scene
-    (flexsat's poles-and-zeros fit: the sample's chain is the runner's, from the same memoised
-    dimensionless fit); the exact-beam verdict agrees with the runner's (its denser grid
-    through exact coupled frequencies): same verdict, margins within the grids' interpolation
-    error."""
+    """A sample is one evaluation of the design loop: its truth-model margins, slew metrics
+    and exact-beam verdict equal those of flexsat run on the same one-loop scene (flexsat's
+    poles-and-zeros fit: the sample's chain is the run's, from the same memoised
+    dimensionless fit); the exact-beam margins, found on the exact loop function, do not
+    depend on the grid (a grid four times as dense gives them to 1e-9)."""
     raw = scene()
     context, spec = context_of(raw, design="per-sample")
     values = [45.0, 0.003]
     row = evaluate(context, values)
     assert row["error"] == "" and row["warning"] == ""
-    result = run(load_scene(apply_values(context.base, context.parameters, values)))
+    sample_scene = load_scene(apply_values(context.base, context.parameters, values))
+    result = run(sample_scene)
     loop = result.data["closed_loops"][0]
     truth, exact = loop["verdict"], loop["exact_verdict"]
     # the sweep withholds the time metrics as the report does (None where the report has
-    # None); the others equal the metrics of the runner's own response
+    # None); the others are those of the run's own response to the whole manoeuvre
     key = (loop["design"], loop["controller"], "truth")
     with np.errstate(all="ignore"):
         metrics = controllers.metrics(result.responses[key])
@@ -65,27 +66,24 @@ def test_a_sample_is_the_runners_design_loop():
         else:
             assert row[name] == pytest.approx(metrics[name], rel=1e-9, abs=1e-15), name
     assert row["exact_stable"] == exact["stable"]
-    # Margins on the exact beam interpolate the plant between grid points. Against a dense
-    # grid (600 points a mode, 400 a decade; converged to 1e-6 by doubling), the sweep's
-    # refined grid is within 5e-4 (measured 1.2e-4), the runner's 60 points a mode within
-    # 5e-3 (measured 3e-3).
-    import spacecraft.sweep.evaluate as module
-    from spacecraft.sweep.evaluate import SampleRunner, design_controller, exact_verdict
-
-    runner = SampleRunner(load_scene(apply_values(context.base, context.parameters, values)))
-    K = design_controller(runner, context).controller
-    saved = module.POINTS_PER_DECADE, module.POINTS_PER_MODE
-    module.POINTS_PER_DECADE, module.POINTS_PER_MODE = 400, 600
-    try:
-        dense = exact_verdict(runner, K)
-    finally:
-        module.POINTS_PER_DECADE, module.POINTS_PER_MODE = saved
-    assert dense.stable == row["exact_stable"]
-    sign = 1.0 if dense.stable else -1.0
+    sign = 1.0 if exact["stable"] else -1.0
     for name in ("modulus_margin", "phase_margin", "gain_margin"):
-        reference = getattr(dense.margins, name)
-        assert row[f"exact_{name}"] == pytest.approx(sign * abs(reference), rel=5e-4), name
-        assert exact[name] == pytest.approx(reference, rel=5e-3), name
+        assert row[f"exact_{name}"] == pytest.approx(sign * abs(exact[name]), rel=1e-9), name
+    # a grid four times as dense: the same verdict, the same margins (found on the exact L)
+    from spacecraft import DesignLoop
+    from spacecraft.design.verdicts import exact_loop_verdict
+    from spacecraft.sweep.evaluate import SAMPLE_GRID
+    from spacecraft.sweep.worst import DENSE_GRID
+
+    dense_loop = DesignLoop(sample_scene)
+    frd = dense_loop.exact_reference_frd(**DENSE_GRID)
+    assert frd.omega.size > 3 * dense_loop.exact_grid(**SAMPLE_GRID).size
+    K = result.designs[loop["design"]]["controllers"][loop["controller"]]
+    dense = exact_loop_verdict(dense_loop.exact_spacecraft(), K, frd.omega,
+                               theta=np.asarray(frd.frdata)[0, 0])
+    assert dense.stable == row["exact_stable"]
+    for name in ("modulus_margin", "phase_margin", "gain_margin"):
+        assert getattr(dense.margins, name) == pytest.approx(exact[name], rel=1e-9), name
     assert row["n_modes"] == result.data["fidelity"]["n_modes"]
 
 
@@ -137,22 +135,3 @@ def test_exact_frequencies_of_a_sample_that_once_failed():
     exact = Spacecraft(hub, [Mount(beam, (0.5, 0.0), 0.0)]).natural_frequencies(3, exact=True)
     truncated = Spacecraft(hub, [Mount(beam.truncated(40), (0.5, 0.0), 0.0)])
     np.testing.assert_allclose(exact, truncated.natural_frequencies(3), rtol=1e-8)
-
-
-def test_margin_brackets_follow_the_margin_rules():
-    """The intervals the exact verdict refines (:func:`_margin_brackets`) on a loop gain given
-    point by point: the grid minimum of |1 + L|; the gain crossovers whose phase margin (at
-    the end nearer |L| = 1) is within 10 deg of the smallest (40 and 45 deg in, 80 deg out);
-    the phase crossovers (Im L changes sign, Re L < 0) whose gain margin is within 3 dB of
-    the smallest (10.5 dB in; 20 and 26 dB out)."""
-    from spacecraft.sweep.evaluate import REFINE_POINTS, _margin_brackets, _refinement
-
-    magnitude = np.array([10, 5, 2, 0.9, 0.8, 1.2, 1.5, 0.5, 0.3, 0.1, 0.05, 0.02])
-    phase = np.radians([-120, -130, -140, -140, -135, -135, -100, -175, -185, -175, -185, -90])
-    L = magnitude * np.exp(1j * phase)
-    minimum = int(np.argmin(np.abs(1 + L)))
-    assert sorted(_margin_brackets(L)) == sorted([(minimum, minimum), (2, 3), (4, 5), (7, 8)])
-    omega = np.geomspace(0.1, 10.0, L.size)
-    new = _refinement(omega, [(4, 5)], 2)
-    assert new.size == REFINE_POINTS and not np.isin(new, omega).any()
-    assert new.min() > omega[3] and new.max() < omega[6]

@@ -66,7 +66,8 @@ from appendages import limits
 from appendages.interface import describe
 
 __all__ = ["FidelityChoice", "choose_n_modes", "low_band", "transfer_theta_torque",
-           "closed_loop_change", "refine_for_closed_loop", "DAMPING_SCALE"]
+           "closed_loop_change", "refine_for_closed_loop", "DAMPING_SCALE",
+           "clamped_frequencies"]
 
 #: Largest number of modes per beam the search from a tolerance tries (also within the scene's
 #: limits.modes), whatever limits.modes allows: Craig-Bampton frequency errors fall like n**-4,
@@ -124,6 +125,23 @@ class FidelityChoice:
                 "open_loop_n_modes": (self.n_modes if self.open_loop_n_modes is None
                                       else self.open_loop_n_modes),
                 **({"closed_loop": self.closed_loop} if self.closed_loop is not None else {})}
+
+
+def clamped_frequencies(beam, omega_max: float, *, three_axis: bool = False) -> np.ndarray:
+    """A beam's natural frequencies with its attachment end clamped [rad/s], ascending: every
+    one up to ``omega_max`` and the first above it (the zeros of the coupled plant's attitude
+    response, and what a Craig-Bampton truncation keeps). Planar: bending in the x-y plane;
+    ``three_axis``: every motion (both bending planes, torsion, axial), as a three-axis
+    truncation ranks them together (:meth:`appendages.Beam.clamped_frequencies6`)."""
+    if three_axis:
+        w = beam.clamped_frequencies6(omega_max)
+    else:
+        n = 8
+        w = beam.cantilever_frequencies(n)
+        while w[-1] <= omega_max:
+            n *= 2
+            w = beam.cantilever_frequencies(n)
+    return w[:int(np.searchsorted(w, omega_max, side="right")) + 1]
 
 
 def low_band(bandwidth: float, factor: float, first_frequency: float,

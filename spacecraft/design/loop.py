@@ -251,7 +251,20 @@ class DesignLoop(ModelBuilder):
             scene = load_scene(scene)
         super().__init__(scene, progress, RunStats() if stats is None else stats,
                          bool(time_responses), given=given)
-        self.n_modes: int | None = None
+        self._fidelity = None
+
+    @property
+    def n_modes(self) -> int | None:
+        """Modes per truncated beam of the truth model: the scene's ``fidelity.n_modes``, or
+        chosen from its tolerance when first asked (None: no beam truth, or your own
+        models)."""
+        if self._fidelity is None:
+            self._fidelity = self.choose_fidelity()
+        return self._fidelity[0]
+
+    @n_modes.setter
+    def n_modes(self, value: int | None) -> None:
+        self._fidelity = (value, None)
 
     # -- the whole loop ------------------------------------------------------------------------
     def run(self) -> RunResult:
@@ -280,8 +293,7 @@ class DesignLoop(ModelBuilder):
                 if a.design == "fit":
                     for match in a.fit.match:
                         self.fit(a, match)
-        n_modes, choice = self.choose_fidelity()
-        self.n_modes = n_modes
+        self._fidelity = n_modes, choice = self.choose_fidelity()
         data["fidelity"] = {
             "n_modes": n_modes, "method": scene.fidelity.method if n_modes else None,
             "prune": scene.fidelity.prune, "chosen_from_tolerance": choice is not None,

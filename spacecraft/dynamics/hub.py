@@ -280,6 +280,14 @@ class Mount:
             [0.0, 0.0, 1.0],
         ])
 
+    def with_appendage(self, appendage) -> "Mount":
+        """The same mount (position, direction or orientation, name) carrying another model
+        of the appendage (e.g. a truncation of the beam mounted here)."""
+        if self._orientation is not None:
+            return Mount(appendage, self.position, orientation=self._orientation,
+                         name=self.name)
+        return Mount(appendage, self.position, self.angle, name=self.name)
+
     def transformation(self) -> np.ndarray:
         """G (6x6): root motions (u, v, w, theta_x, theta_y, theta_z) in the appendage's axes
         from hub motions (X, Y, Z, theta_x, theta_y, theta_z) (:mod:`spacecraft.dynamics.kinematics`).

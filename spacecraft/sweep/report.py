@@ -454,7 +454,7 @@ def _blocks(summary: dict, images: list) -> list:
                          (_f(exact.get("stable")) if exact.get("stable") else
                           bad("no: UNSTABLE")) if "stable" in exact else "n/a"])
         b.append(("table", ["margin", "worst parameters", "signed margin (sweep)",
-                            "evaluations", "signed margin on the runner's exact grid",
+                            "evaluations", "signed margin on a grid four times as dense",
                             "stable"], rows))
         for w in s["worst_case"]:
             ver = w.get("verification") or {}

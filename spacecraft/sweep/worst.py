@@ -28,8 +28,8 @@ Verification
     numbers, without ``[sweep]``, the exact reference on, and the very controller the sweep
     closed there as ``[controller.given]``, :mod:`spacecraft.scene.given`: the nominal one,
     or the one tuned on that sample) and run by :func:`spacecraft.design.loop.run` itself, whose
-    verdict and margins on the exact beam (its own dense grid through W(s), exact coupled
-    frequencies) are reported beside the sweep's: ``flexsat run worst.toml`` gives the sweep's
+    verdict and margins on the exact beam are reported beside the sweep's, with a check on a
+    grid four times as dense (:func:`verify`): ``flexsat run worst.toml`` gives the sweep's
     verdict.
 
 References
@@ -51,10 +51,11 @@ import re
 import numpy as np
 
 from ..scene.read import SceneError
-from .evaluate import SampleRunner, signed_margin
+from .evaluate import signed_margin
 from .parameters import SweepSpec, apply_values
 
-__all__ = ["CAP", "WorstCase", "objective", "search", "worst_scene", "to_toml", "verify"]
+__all__ = ["CAP", "DENSE_GRID", "WorstCase", "objective", "search", "worst_scene", "to_toml",
+           "verify"]
 
 #: Size of the objective of an infinite margin (its sign is the verdict's).
 CAP = {"modulus_margin": 10.0, "phase_margin": 180.0}
@@ -362,33 +363,38 @@ def _verdict(v) -> dict:
                for k in ("gain_margin", "phase_margin", "modulus_margin")}}
 
 
+#: The grid of the dense check of a worst case (:func:`verify`): points per decade and across
+#: each coupled mode's half-power band, four times a sample's (:data:`.evaluate.SAMPLE_GRID`).
+DENSE_GRID = {"points_per_decade": 400, "points_per_mode": 96}
+
+
 def verify(context, values: dict, raw: dict, source: str) -> dict:
     """Check a worst case on the exact beams two ways.
 
-    ``exact_reference``: the sweep's own loop (the same controller) closed on the runner's exact
-    reference (:meth:`spacecraft.design.loop._Runner.exact_reference_frd`: its dense grid placed at
-    the exact coupled frequencies), independent of the sweep's lighter grid. ``runner``: the
-    scene ``raw`` (``worst.toml``, the same controller given) run by
-    :func:`spacecraft.design.loop.run`: what a user re-running it gets, its margins signed as the
-    sweep's. Failures are recorded as ``error`` texts.
+    ``exact_reference``: the sweep's own loop (the same controller) judged on the exact beams
+    through a grid four times as dense as a sample's (:data:`DENSE_GRID`, the design loop's
+    :meth:`~spacecraft.design.models.ModelBuilder.exact_grid`): the sweep's verdict does not
+    hang on its grid. ``runner``: the scene ``raw`` (``worst.toml``, the same controller
+    given) run by :func:`spacecraft.design.loop.run`: what a user re-running it gets, its
+    margins signed as the sweep's. Failures are recorded as ``error`` texts.
     """
     import warnings
 
-    import controllers
-
+    from ..design.loop import DesignLoop, run
+    from ..design.verdicts import exact_loop_verdict
     from ..scene.given import given_state_space
-    from ..design.loop import run
     from ..scene.read import load_scene
 
     out: dict = {}
     try:
         scene = load_scene(copy.deepcopy(raw), source=source)
-        runner = SampleRunner(scene)
+        loop = DesignLoop(scene)
         K = given_state_space(scene.controller.given, scene.controller.sample_time)
-        with warnings.catch_warnings():
+        frd = loop.exact_reference_frd(**DENSE_GRID)
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore", RuntimeWarning)
-            out["exact_reference"] = _verdict(controllers.spillover(
-                runner.exact_reference_frd(), K))
+            out["exact_reference"] = _verdict(exact_loop_verdict(
+                loop.exact_spacecraft(), K, frd.omega, theta=np.asarray(frd.frdata)[0, 0]))
     except (SceneError, ValueError, ArithmeticError) as exc:
         out["exact_reference"] = {"error": f"{type(exc).__name__}: {exc}"}
     try:
