@@ -310,12 +310,12 @@ def test_results_json_is_numbers_only_with_flags_scene_gains_and_time_series(def
 # ---------------------------------------------------------------------------------------------
 # the digital check: a 0.2 rad/s PD at 5 and 20 Hz on the paper's rod
 # ---------------------------------------------------------------------------------------------
-def _digital_pd(rate):
+def _digital_pd(rate, damping_ratio=0.005):
     return scene_with(**{"appendages.0.fit.match": "poles-and-zeros", "fidelity.n_modes": 2,
                          "controller": {"types": ["pd"], "sample_rate": rate,
                                         "pd": {"natural_frequency": 0.2}},
                          "manoeuvre.step": None, "report.equivalence": False,
-                         "appendages.0.beam.damping_ratio": 0.005})
+                         "appendages.0.beam.damping_ratio": damping_ratio})
 
 
 @pytest.mark.parametrize("rate", [5.0, 20.0])
@@ -333,13 +333,19 @@ def test_a_0_2_rad_s_pd_works_at_typical_sample_rates(rate):
 
 
 def test_at_1_hz_the_pd_is_refused_for_the_mode_it_destabilises():
-    """At 1 Hz the chain's 2.98 rad/s mode lies near the Nyquist frequency pi rad/s and the
-    sampled PD drives it unstable (checked independently: the ZOH-discretised design plant
-    under u = -Kp theta - Kd omega has a pole at s = ln(z) = 0.00483 + 2.98j)."""
+    """At 1 Hz the undamped chain's 2.98 rad/s mode lies near the Nyquist frequency pi rad/s
+    and the sampled PD drives it unstable: refused when tuned (the design plant's sampled loop
+    has a pole at 0.022 + 2.98j). With the rod damped at 0.005 in its cantilever modes the
+    fitted chain's hinges damp that mode at about 0.035 (stiffness-proportional damping whose
+    ratio is the rod's at its first cantilever frequency, 0.45 rad/s): the design loop is
+    stable, and the truth model, whose mode there is damped at about 0.006, says it is not."""
     from spacecraft.scene.read import SceneError
 
     with pytest.raises(SceneError, match=r"controller\.pd: .*2\.98\d* rad/s"):
-        run(_digital_pd(1.0))
+        run(_digital_pd(1.0, damping_ratio=0.0))
+    # tuned (a design loop that is not stable is refused), and judged on the truth model
+    row = run(_digital_pd(1.0), time_responses=False).data["closed_loops"][0]
+    assert not row["verdict"]["stable"]
 
 
 def test_one_mode_is_singular_in_the_W_legend():

@@ -156,7 +156,7 @@ def _written(scene, folder):
 def lqr(tmp_path_factory):
     folder = tmp_path_factory.mktemp("lqr")
     scene = scene_with(**{
-        "appendages.0.beam.damping_ratio": 0.005,
+        "appendages.0.beam.damping_ratio": 0.002,
         "appendages.0.fit": {"match": ["poles-and-zeros", "frequencies"]},
         "fidelity.n_modes": 2,
         "controller": {"types": ["lqr"], "lqr": {"attitude_weight": 7.6, "torque_weight": 1.0}},
@@ -194,8 +194,10 @@ def test_an_lqr_that_lowers_a_modes_damping_is_warned_and_marked(lqr):
     folder, result, data, _ = lqr
     row = _row(data, "poles-and-zeros")
     mode = [m for m in row["verdict"]["modes"] if abs(m["frequency"] - 3.07) < 0.01][0]
-    # the default scene's finding (0.0030 open loop, 0.00246 closed loop with free-free damping;
-    # 0.0059 and 0.0053 with cantilever damping): lowered by more than DAMPING_DROP
+    # the rod damped at 0.002 in its cantilever modes: 0.00235 open loop, 0.00217 closed loop
+    # (at 0.005 the chain fitted to it, its hinges damped stiffness-proportionally at the rod's
+    # first cantilever frequency, damps this mode at about 0.035 and the LQR designed on it
+    # raises the truth's 0.0059 to 0.0061): lowered by more than DAMPING_DROP
     assert mode["closed_loop_damping"] < (1 - DAMPING_DROP) * mode["open_loop_damping"]
     codes = [w["code"] for w in data["design_warnings"] if w.get("design") == "poles-and-zeros"]
     assert codes == ["damping_lowered"]

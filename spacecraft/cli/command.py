@@ -5,11 +5,13 @@ Subcommands
 ``flexsat run [SCENE] [--out DIR] [--json] [--no-fmu] [--no-plots] [--quiet]``
     Run a scene (a TOML file, or the name of an embedded scene such as ``two_wings``; the
     default scene without argument) and write its report folder.
-``flexsat table [beam options | --scene SCENE] [--n-bodies N] [--json]``
-    The paper's equivalence table for a beam: exact beam, the paper's two-mode beam, the chains
-    fitted by flexsat and by the paper's criterion, with errors against the exact beam.
-``flexsat fit [beam options | --scene SCENE] [--n-bodies N] [--match M] [--json]``
-    Fit a chain to a beam and print its parameters.
+``flexsat table [beam options | --scene SCENE [--appendage NAME]] [--n-bodies N] [--json]``
+    The paper's equivalence table for a beam (with ``--tip-mass``... a tip body) or for any
+    appendage of a scene (a stepped or tapered beam, modal data): its exact model, the paper's
+    two-mode beam (bare uniform beams), the chains fitted by flexsat and by the paper's
+    criterion (bare uniform beams), with errors against the exact model.
+``flexsat fit [beam options | --scene SCENE [--appendage NAME]] [--n-bodies N] [--match M] [--json]``
+    Fit a chain to a beam or a scene's appendage and print its parameters.
 ``flexsat export [SCENE] [--out DIR] [--quiet]``
     FMUs only (plant, controllers, closed loops) with their cross-check files.
 ``flexsat sweep [SCENE] [--samples N] [--out DIR] [--scheduler ADDRESS] [--workers N] [--resume]``
@@ -86,7 +88,13 @@ _BEAM_OPTIONS = (
     ("--bending-stiffness", float, "uniform: EJ [N m^2]"),
     ("--linear-density", float, "uniform: mass per length [kg/m]"),
     ("--damping-ratio", float, "modal damping ratio [-] (default 0)"),
+    ("--tip-mass", float, "a tip body at the free end: its mass [kg]"),
+    ("--tip-inertia", float, "its moment of inertia about z through its centre of mass "
+                             "[kg m^2] (default 0)"),
+    ("--tip-offset", float, "its centre of mass beyond the free end, along the beam [m] "
+                            "(default 0)"),
 )
+_TIP_OPTIONS = {"tip_mass": "mass", "tip_inertia": "inertia", "tip_offset": "offset"}
 
 
 class _UserError(Exception):
@@ -214,7 +222,9 @@ def build_parser(*, sweep_arguments: bool = True) -> argparse.ArgumentParser:
              "Fit a chain of rigid bodies to a beam (default: the paper's steel rod) and print "
              "its body lengths, masses, inertias and hinge stiffnesses.")):
         p = command(name, help=helptext, description=description)
-        p.add_argument("--scene", help="take the beam of the scene's first beam appendage")
+        p.add_argument("--scene", help="take the scene's first appendage with a structure "
+                                       "(a beam, stepped or tapered beam, or modal data)")
+        p.add_argument("--appendage", help="with --scene: the appendage of that name")
         for option, kind, text in _BEAM_OPTIONS:
             p.add_argument(option, type=kind, help=text)
         p.add_argument("--n-bodies", type=int, default=3, help="bodies of the chain (default 3)")
@@ -340,19 +350,38 @@ def _scene(argument, limits=None):
 
 
 def _beam_from(args):
-    from ..scene.read import SceneError, _Reader, _read_beam
+    """The appendage of ``table`` and ``fit``: the scene's (``--scene``, ``--appendage``) or
+    the beam of the beam options; with its source for the printout and the reader's unit-slip
+    warnings (printed as ``flexsat: warning:`` lines)."""
+    from ..scene.read import SceneError, _Reader, _read_beam, _read_tip
 
     given = {option[2:].replace("-", "_"): getattr(args, option[2:].replace("-", "_"))
              for option, _, _ in _BEAM_OPTIONS}
     given = {k: v for k, v in given.items() if v is not None}
+    name = getattr(args, "appendage", None)
     if args.scene is not None:
         if given:
             raise _UserError("give either --scene or beam options, not both")
         scene = _scene(args.scene, _limits(args))
+        for line in scene.input_warnings:
+            print(f"flexsat: warning: {_one_line(line)}", file=sys.stderr)
+        names = [a.name for a in scene.appendages]
         for a in scene.appendages:
-            if a.beam is not None:
+            if (name is None or a.name == name) and a.beam is not None:
                 return a.beam.build(), f"{scene.source}: {a.name}"
-        raise SceneError(f"{scene.source}: no appendage has a beam table")
+        if name is not None and name not in names:
+            raise _UserError(f"--appendage {_one_line(name)[:100]}: {scene.source} has no such "
+                             f"appendage (it has {', '.join(names)})")
+        raise SceneError(f"{scene.source}: " + (f"appendage {name!r} has no structure to fit "
+                                                "(a chain only)" if name is not None else
+                                                "no appendage has a structure to fit (chains "
+                                                "only)"))
+    if name is not None:
+        raise _UserError("--appendage chooses an appendage of --scene; give --scene too")
+    tip = {_TIP_OPTIONS[k]: given.pop(k) for k in list(given) if k in _TIP_OPTIONS}
+    if tip and "mass" not in tip:
+        raise _UserError("--tip-inertia and --tip-offset describe a tip body: give its "
+                         "--tip-mass [kg] too")
     section = given.get("section", "rod")
     if section == "rod":
         spec = {**PAPER_ROD, **given}
@@ -361,7 +390,28 @@ def _beam_from(args):
     else:
         spec = {"length": PAPER_ROD["length"]} | given
     spec["section"] = section
-    return _read_beam(_Reader("command line"), spec, "beam").build(), "command line"
+    reader = _Reader("command line")
+    tip_spec = _read_tip(reader, tip, "tip") if tip else None
+    beam = _read_beam(reader, spec, "beam", tip=tip_spec)
+    for line in reader.warnings:
+        print(f"flexsat: warning: {_one_line(line)}", file=sys.stderr)
+    return beam.build(), "command line"
+
+
+def _matches(model, asked: str | None = None) -> tuple:
+    """The fits ``table`` and ``fit`` make of a model: the paper's frequency fit needs a bare
+    uniform beam (a _UserError if ``asked`` for another)."""
+    from ..design.tables import reference_name
+
+    paper = bool(getattr(model, "is_uniform", False))
+    if asked == "frequencies" and not paper:
+        raise _UserError(f"--match frequencies (the paper's fit: a symmetric chain of frozen "
+                         f"pieces of a uniform rod) needs a uniform beam without a tip body; "
+                         f"this is a {reference_name(model).split(' (')[0]}: use --match "
+                         "poles-and-zeros")
+    if asked is not None:
+        return (asked,)
+    return ("poles-and-zeros", "frequencies") if paper else ("poles-and-zeros",)
 
 
 def _cmd_run(args, *, export_only: bool = False) -> int:
@@ -447,7 +497,7 @@ def _equivalence(args):
     fits = {}
     with warnings.catch_warnings(), library_limits(args.checked_limits):
         warnings.simplefilter("ignore", RuntimeWarning)
-        for match in ("poles-and-zeros", "frequencies"):
+        for match in _matches(beam):
             progress(_fit_message(args.n_bodies, match))
             fits[match] = fit_chain(beam, args.n_bodies, match=match)
     progress("equivalence table")
@@ -468,8 +518,7 @@ def _cmd_table(args) -> int:
         print(to_json({"beam": _beam_dict(beam), "source": source, **table}))
         return 0
     header, rows = equivalence_markdown(table)
-    print(f"beam ({source}): length {beam.length:g} m, EJ {beam.bending_stiffness:.6g} N m^2, "
-          f"rho*A {beam.linear_density:.6g} kg/m, mass {beam.mass:.5g} kg")
+    print(_appendage_line(beam, source, table["reference"]))
     cells = [header] + rows
     widths = [max(len(str(r[i])) for r in cells) for i in range(len(header))]
     for k, row in enumerate(cells):
@@ -477,13 +526,39 @@ def _cmd_table(args) -> int:
                         for i, (c, w) in enumerate(zip(row, widths))).rstrip())
         if k == 0:
             print("  ".join("-" * w for w in widths))
+    for note in table.get("notes", []):
+        print(note)
     return 0
 
 
+def _appendage_line(model, source: str, reference: str) -> str:
+    """One line saying what the appendage is: a uniform beam's EJ and rho*A, any other's
+    kind, length and mass."""
+    kind = reference.split(" (")[0]
+    if getattr(model, "is_uniform", False):
+        return (f"beam ({source}): length {model.length:g} m, EJ {model.bending_stiffness:.6g} "
+                f"N m^2, rho*A {model.linear_density:.6g} kg/m, mass {model.mass:.5g} kg")
+    return (f"{kind} ({source}): length {model.length:g} m, mass {model.mass:.5g} kg, inertia "
+            f"about its centre of mass {model.inertia:.5g} kg m^2")
+
+
 def _beam_dict(beam) -> dict:
-    return {"length": beam.length, "bending_stiffness": beam.bending_stiffness,
-            "linear_density": beam.linear_density, "damping_ratio": beam.damping_ratio,
-            "mass": beam.mass, "inertia": beam.inertia}
+    """The appendage of ``table``/``fit`` as JSON: a uniform beam's section properties, any
+    other's kind and rigid properties."""
+    from ..design.tables import describe_model, reference_name
+
+    if getattr(beam, "is_uniform", False):
+        return {"length": beam.length, "bending_stiffness": beam.bending_stiffness,
+                "linear_density": beam.linear_density, "damping_ratio": beam.damping_ratio,
+                "mass": beam.mass, "inertia": beam.inertia}
+    return {"kind": reference_name(beam).split(" (")[0], **describe_model(beam)}
+
+
+def _natural_frequencies(model, n: int) -> list:
+    """The first n free-free natural frequencies [rad/s] of an appendage (its poles)."""
+    if hasattr(model, "natural_frequencies"):
+        return model.natural_frequencies(n).tolist()
+    return [float(w) for w in model.poles()[:n]]
 
 
 def _cmd_fit(args) -> int:
@@ -498,6 +573,7 @@ def _cmd_fit(args) -> int:
 
     limits = _check_n_bodies(args)
     beam, source = _beam_from(args)
+    _matches(beam, args.match)
     progress = Progress(args.quiet)
     progress(_fit_message(args.n_bodies, args.match))
     with warnings.catch_warnings(), library_limits(limits):
@@ -506,13 +582,13 @@ def _cmd_fit(args) -> int:
     progress("done")
     data = {"beam": _beam_dict(beam), "source": source, "match": args.match,
             "n_bodies": args.n_bodies, "chain": _describe(chain),
-            "beam_frequencies": beam.natural_frequencies(args.n_bodies - 1).tolist()}
+            "beam_frequencies": _natural_frequencies(beam, args.n_bodies - 1)}
     if args.json:
         print(to_json(data))
         return 0
     c = data["chain"]
-    print(f"chain of {args.n_bodies} bodies fitted to the beam ({source}) by "
-          f"match = {args.match!r}")
+    print(f"chain of {args.n_bodies} bodies fitted to the {_beam_dict(beam).get('kind', 'beam')}"
+          f" ({source}) by match = {args.match!r}")
     print(f"{'body':>4}  {'length [m]':>12}  {'mass [kg]':>12}  {'inertia [kg m^2]':>16}  "
           f"{'com offset [m]':>14}")
     for k in range(args.n_bodies):

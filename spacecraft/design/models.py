@@ -265,7 +265,7 @@ class ModelBuilder:
     # -- appendage models ----------------------------------------------------------------------
     def beam(self, spec: AppendageSpec):
         def build():
-            with self.scene_values(self.key(spec, "beam")):
+            with self.scene_values(self.key(spec, spec.beam.kind)):
                 return spec.beam.build()
         return self.cached(("beam", spec.beam), build)
 
@@ -295,9 +295,10 @@ class ModelBuilder:
         return self.cached(("chain", spec.name, id(chain)), build)
 
     def fit(self, spec: AppendageSpec, match: str):
-        """Chain fitted to the beam, with the beam's modal damping at its first frequency."""
+        """Chain fitted to the appendage's structure, damped as it is
+        (:func:`appendages.fit_chain`: stiffness-proportional hinge damping with the
+        appendage's damping ratio at its first cantilever frequency)."""
         def build():
-            from appendages.chain import HingedChain
             from appendages.equivalence import fit_chain
 
             beam = self.beam(spec)
@@ -305,29 +306,14 @@ class ModelBuilder:
             with warnings.catch_warnings(), self.scene_values(
                     self.key(spec, "fit"), f"cannot fit a chain (match = {match!r}): "):
                 warnings.simplefilter("ignore", RuntimeWarning)
-                chain = fit_chain(beam, spec.fit.n_bodies, match=match)
-            zeta = beam.damping_ratio
-            if zeta == 0.0:
-                return chain
-            # hinge damping 2 zeta c / w_1: damping ratio zeta at the chain's first mode, as the
-            # beam's modal damping (stiffness-proportional, Rayleigh)
-            w1 = float(chain.poles()[0])
-            return HingedChain(chain.lengths, chain.masses, chain.inertias,
-                               chain.hinge_stiffnesses,
-                               hinge_dampings=2.0 * zeta * chain.hinge_stiffnesses / w1,
-                               com_offsets=chain.com_offsets, root=chain.root)
+                return fit_chain(beam, spec.fit.n_bodies, match=match)
         # identical beams (two symmetric wings) share one fit
         return self.cached(("fit", spec.beam, spec.fit.n_bodies, match), build)
 
     def undamped_beam(self, spec: AppendageSpec):
         """The appendage's beam without damping (for the choice of the number of modes)."""
-        from appendages import Beam
-
         def build():
-            beam = self.beam(spec)
-            if beam.damping_ratio == 0.0:
-                return beam
-            return Beam(beam.length, beam.bending_stiffness, beam.linear_density)
+            return self.beam(spec).undamped()
         return self.cached(("undamped beam", spec.beam), build)
 
     def truth_model(self, spec: AppendageSpec, n_modes: int | None):

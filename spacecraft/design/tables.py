@@ -1,8 +1,9 @@
 """Tables of models: the paper's equivalence table against the exact beam, model parameters.
 
 :func:`equivalence_table` tabulates the paper's quantities (m, J, L, gains k_r, zeros n_r1,
-n_r2, natural frequencies w1, w2) of the paper's two-mode free-free beam and of each chain
-fitted to a beam, with their relative errors against the exact distributed beam and the largest
+n_r2, natural frequencies w1, w2) of each chain fitted to an appendage (and, for a bare uniform
+beam, of the paper's two-mode free-free beam), with their relative errors against the
+appendage's exact model (a distributed beam's exact W; modal data's own W) and the largest
 |ln(W_r / W_r,exact)| over the band (:func:`appendages.equivalence.criterion`).
 :func:`describe_model` gives an appendage model's parameters, JSON-ready.
 """
@@ -15,16 +16,34 @@ import numpy as np
 
 from .naming import FIT_LABELS
 
-__all__ = ["equivalence_table", "describe_model"]
+__all__ = ["equivalence_table", "describe_model", "reference_name"]
+
+
+def reference_name(model) -> str:
+    """The name of an appendage model as the reference of an equivalence table: what kind of
+    exact model it is (``"beam (exact)"``, ``"stepped beam (exact)"``, ``"modal data
+    (FE-exact)"``...)."""
+    if getattr(model, "is_uniform", False):
+        return "beam (exact)"
+    if hasattr(model, "segments"):
+        return ("stepped beam with tip body (exact)" if getattr(model, "tip", None) is not None
+                else "stepped beam (exact)")
+    if hasattr(model, "participation"):
+        return "modal data (FE-exact)"
+    if hasattr(model, "tip"):
+        return "beam with tip body (exact)"
+    return f"{type(model).__name__} (exact)"
 
 
 def equivalence_table(beam, fits: dict, *, stats=None) -> dict:
-    """The paper's equivalence table against the exact beam, JSON-ready.
+    """The paper's equivalence table against the appendage's exact model, JSON-ready.
 
     Parameters
     ----------
-    beam : appendages.Beam
-        The distributed beam (reference: its exact W, poles and zeros).
+    beam : appendage model
+        The reference: a distributed beam (uniform, with a tip body, stepped or tapered; its
+        exact W, poles and zeros) or modal data (:class:`appendages.ModalAppendage`: its own
+        W, "FE-exact": exact for the modes it holds).
     fits : dict
         ``match -> HingedChain`` (keys of :data:`FIT_LABELS`) or ``label -> model``.
     stats : RunStats, optional
@@ -33,14 +52,27 @@ def equivalence_table(beam, fits: dict, *, stats=None) -> dict:
     Returns
     -------
     dict
-        ``quantities``, ``units``, ``exact`` (the exact beam's values, None where not defined)
-        and ``columns``: for the paper's 2-mode free-free beam and each chain, ``name``,
-        ``values``, ``relative_error`` against the exact beam and ``max_log_error`` of
-        W1..W4 over the band (see :func:`appendages.equivalence.criterion`).
+        ``reference`` (the reference's name, :func:`reference_name`), ``quantities``,
+        ``units``, ``exact`` (the reference's values, None where not defined), ``columns``
+        (for each model: ``name``, ``values``, ``relative_error`` against the reference and
+        ``max_log_error`` of W1..W4 over the band, see
+        :func:`appendages.equivalence.criterion`) and ``notes``. The paper's two-mode
+        free-free beam is a column for a bare uniform beam only (the paper's model of the
+        uniform rod): a note says so for any other appendage.
     """
     from appendages.equivalence import criterion
 
-    candidates = [("beam, 2 modes (paper)", beam.truncated(2, method="free-free"))]
+    reference_label = reference_name(beam)
+    candidates, notes = [], []
+    if getattr(beam, "is_uniform", False):
+        candidates.append(("beam, 2 modes (paper)", beam.truncated(2, method="free-free")))
+    else:
+        kind = reference_label.split(" (")[0]
+        how = ("its own W, exact for the modes it holds" if "FE-exact" in reference_label
+               else "its exact W")
+        notes.append(f"The paper's two-mode free-free beam and its frequency fit are models of "
+                     f"a bare uniform beam; the reference here is the {kind} ({how}), so "
+                     "neither is a column.")
     candidates += [(FIT_LABELS.get(k, k), model) for k, model in fits.items()]
     columns, reference, units = [], None, None
     for label, model in candidates:
@@ -48,7 +80,7 @@ def equivalence_table(beam, fits: dict, *, stats=None) -> dict:
             stats.exact_reference_evaluations += 1
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            result = criterion(beam, model, names=("beam (exact)", label))
+            result = criterion(beam, model, names=(reference_label, label))
         rows = result.rows()
         if reference is None:
             reference = [r[2] for r in rows]
@@ -59,8 +91,9 @@ def equivalence_table(beam, fits: dict, *, stats=None) -> dict:
         if hasattr(model, "hinge_stiffnesses"):
             column["parameters"] = describe_model(model)
         columns.append(column)
-    return {"quantities": [u[0] for u in units], "units": [u[1] for u in units],
-            "exact": reference, "columns": columns}
+    return {"reference": reference_label, "quantities": [u[0] for u in units],
+            "units": [u[1] for u in units], "exact": reference, "columns": columns,
+            "notes": notes}
 
 
 def describe_model(model) -> dict:

@@ -38,6 +38,7 @@ from ..design.naming import controller_label, design_label, plural
 from .output import MARKER, default_output_folder, output_folder
 from .pages import Tone, bad, markdown, markdown_text, render_html, warn
 from .results import to_json, write_timeseries
+from .structures import structure_text, truth_text
 
 __all__ = ["write_report", "output_folder", "default_output_folder", "to_json", "markdown",
            "render_html", "equivalence_markdown", "metric_rows", "summary_lines", "MARKER",
@@ -78,8 +79,8 @@ def _label(variant: str) -> str:
 # tables
 # ---------------------------------------------------------------------------------------------
 def equivalence_markdown(table: dict) -> tuple[list, list]:
-    """Header and rows of the paper's table with errors against the exact beam."""
-    header = ["quantity", "beam (exact)"]
+    """Header and rows of the paper's table with errors against the exact model."""
+    header = ["quantity", table.get("reference", "beam (exact)")]
     for column in table["columns"]:
         header += [column["name"], "error"]
     rows = []
@@ -351,18 +352,11 @@ def _question(data: dict) -> list:
     items = [f"hub: mass {_fmt(s['hub']['mass'])} kg, inertia {_fmt(s['hub']['inertia'])} "
              "kg m^2 about its centre of mass"]
     for a in s["appendages"]:
-        truth = ("distributed beam" if a["truth"] == "beam" else "chain")
-        design = {"fit": "chains fitted to the beam (" + " and ".join(
+        truth = truth_text(a)
+        design = {"fit": "chains fitted to it (" + " and ".join(
             _label(m) for m in (a["fit"] or {}).get("match", [])) + ")",
                   "chain": "the given chain", "truth": "the truth model itself"}[a["design"]]
-        beam = a.get("beam")
-        what = ""
-        if beam:
-            dims = ", ".join(f"{k} {_fmt(v)}" for k, v in beam["dimensions"].items())
-            what = (f" ({beam['section']}, length {_fmt(beam['length'])} m, {dims}"
-                    + (f", density {_fmt(beam['density'])} kg/m^3, E {_fmt(beam['youngs_modulus'])} Pa"
-                       if beam.get("density") else "")
-                    + f", damping ratio {_fmt(beam['damping_ratio'])})")
+        what = structure_text(a)
         items.append(f"appendage {a['name']}{what} at ({_fmt(a['position'][0])}, "
                      f"{_fmt(a['position'][1])}) m, direction "
                      f"{_fmt(math.degrees(a['direction']), 4)} deg: truth model {truth}, "
@@ -652,11 +646,13 @@ def report_blocks(data: dict, images: list) -> list:
     for table in data.get("equivalence", []):
         b.append(("h2", f"Equivalence criterion: {table['appendage']}"))
         b.append(("p", "The paper's quantities (m, J, L, gains k_r, zeros n_r1, n_r2, natural "
-                       "frequencies w1, w2) of the paper's two-mode beam and of each fitted "
-                       "chain, with relative errors against the exact distributed beam, and the "
-                       "largest |ln(W_r/W_r,exact)| over the band (gain and phase error of W)."))
+                       "frequencies w1, w2) of each model, with relative errors against "
+                       f"the {table.get('reference', 'beam (exact)')}, and the largest "
+                       "|ln(W_r/W_r,exact)| over the band (gain and phase error of W)."))
         header, rows = equivalence_markdown(table)
         b.append(("table", header, rows))
+        for note in table.get("notes", []):
+            b.append(("p", note))
     b += _closed_loops(data)
     b += _basilisk(data)
     if images:

@@ -28,12 +28,16 @@ key                                    unit       meaning
                                                   axes, from the hub's centre of mass; [0, 0]
 ``appendages[i].direction``            deg        angle of the appendage's axis from hub +x, or
                                                   a vector ``[x, y]``; default 0
-``appendages[i].truth``                -          ``"beam"`` (the distributed beam; default when
-                                                  ``beam`` is given) or ``"chain"``
-``appendages[i].design``               -          ``"fit"`` (chain fitted to the beam; default
-                                                  with a beam), ``"chain"`` (the ``chain``
+``appendages[i].truth``                -          ``"beam"`` (the distributed beam: uniform,
+                                                  with a tip body, stepped or tapered; default
+                                                  when one is given) or ``"chain"``
+``appendages[i].design``               -          ``"fit"`` (chain fitted to the structure;
+                                                  default with one), ``"chain"`` (the ``chain``
                                                   table; default without beam) or ``"truth"``
-                                                  (the truth model itself)
+                                                  (the truth model itself). An appendage's
+                                                  structure is one of the tables ``beam``,
+                                                  ``stepped_beam``, ``tapered_beam`` (or a
+                                                  ``chain`` alone)
 ``appendages[i].beam.section`` *       -          ``"rod"``, ``"tube"``, ``"rectangular"`` or
                                                   ``"uniform"``
 ``appendages[i].beam.length`` *        m          beam length
@@ -46,14 +50,45 @@ key                                    unit       meaning
 ``appendages[i].beam.youngs_modulus``  Pa         rod, tube, rectangular: Young's modulus
 ``appendages[i].beam.bending_stiffness``  N m^2   uniform: EJ
 ``appendages[i].beam.linear_density``  kg/m       uniform: mass per length
-``appendages[i].beam.damping_ratio``   -          modal damping ratio in [0, 1); default 0
+``appendages[i].beam.damping_ratio``   -          modal damping ratio in [0, 1) of the
+                                                  cantilever (fixed-root) modes; default 0
+``appendages[i].tip.mass`` *           kg         a rigid body at the beam's free end (any
+                                                  beam, stepped or tapered): its mass
+``appendages[i].tip.inertia``          kg m^2     about its own centre of mass: a number
+                                                  (about z) in a planar scene, a 3x3 tensor in
+                                                  the appendage's axes in a three-axis one;
+                                                  default 0
+``appendages[i].tip.offset``           m          its centre of mass from the free end: a
+                                                  number along the beam (planar), or also
+                                                  ``[x, y, z]`` in the appendage's axes (three
+                                                  axes); default 0
+``appendages[i].stepped_beam.segments`` *  -      array of tables, one per uniform segment from
+                                                  the root outward, each with the keys of a
+                                                  beam table (section, length, dimensions,
+                                                  material) but no damping_ratio
+``appendages[i].stepped_beam.damping_ratio``  -   modal damping ratio of its cantilever modes;
+                                                  default 0
+``appendages[i].tapered_beam.section`` *  -       ``"rod"``, ``"tube"`` or ``"rectangular"``
+``appendages[i].tapered_beam.length`` *  m        beam length
+``appendages[i].tapered_beam.root_dimensions`` *  m  the section's dimensions at the root (a
+                                                  table: ``diameter``; ``outer_diameter``,
+                                                  ``wall_thickness``; ``width``, ``thickness``)
+``appendages[i].tapered_beam.tip_dimensions`` *  m   the same at the free end (linear between)
+``appendages[i].tapered_beam.n_segments``  -      uniform segments approximating it (the
+                                                  frequencies' error falls like n**-2);
+                                                  default 20
+``appendages[i].tapered_beam.density`` *,  as a   as a beam table's (``youngs_modulus`` *,
+                                       beam's     ``poisson_ratio``, ``damping_ratio``)
 ``appendages[i].truth_chain``          -          a separate truth chain (same keys as
                                                   ``chain``) when ``chain`` is the design model
 ``appendages[i].fit.n_bodies``         -          bodies of the fitted chain (>= 2); default 3
-``appendages[i].fit.match``            -          ``"poles-and-zeros"`` (flexsat's fit),
-                                                  ``"frequencies"`` (the paper's) or a list of
-                                                  both (one design model per entry); default
-                                                  ``["poles-and-zeros", "frequencies"]``
+``appendages[i].fit.match``            -          ``"poles-and-zeros"`` (flexsat's fit, any
+                                                  structure), ``"frequencies"`` (the paper's: a
+                                                  bare uniform beam only) or a list of both
+                                                  (one design model per entry); default
+                                                  ``["poles-and-zeros", "frequencies"]`` for a
+                                                  bare uniform beam, else
+                                                  ``"poles-and-zeros"``
 ``appendages[i].chain.lengths``        m          explicit chain: body lengths
 ``appendages[i].chain.masses``         kg         body masses
 ``appendages[i].chain.inertias``       kg m^2     body inertias about their centres of mass
@@ -62,7 +97,8 @@ key                                    unit       meaning
 ``appendages[i].chain.com_offsets``    m          centre of mass from each body's start
 ``appendages[i].chain.root``           -          ``"rigid"`` (default) or ``"hinged"``
 ``appendages[i].chain.from_beam``      -          instead of the arrays: ``"rfem"`` (rigid
-                                                  finite elements of the beam) with
+                                                  finite elements of the ``beam`` table's
+                                                  uniform beam, its tip body included) with
 ``appendages[i].chain.n_bodies``       -          its number of bodies (>= 2)
 ``appendages[i].chain.root_stiffness``  N m/rad   ``root = "hinged"`` with ``from_beam``: the
                                                   drive hinge between mount and first body
@@ -189,7 +225,13 @@ keys                                                  accepted             unit
 ``beam.bending_stiffness``                            1e-6 .. 1e12         N m^2
 ``beam.linear_density``                               1e-6 .. 1e5          kg/m
 ``beam.damping_ratio``                                0 .. < 1             -
-first bending frequency of a beam (derived)           1e-4 .. 1e5          rad/s
+``tip.mass``                                          0 or 1e-6 .. 1e7     kg
+``tip.inertia`` (a number)                            0 or 1e-12 .. 1e10   kg m^2
+``tip.inertia`` (a 3x3 tensor, entries)               |x| <= 1e10          kg m^2
+``tip.offset``                                        |x| <= 1e3           m
+``tapered_beam.n_segments``                           1 .. limits.bodies   -
+first bending frequency of a beam (derived; of a      1e-4 .. 1e5          rad/s
+stepped or tapered beam: its segments assembled)
 ``chain.lengths``                                     1e-3 .. 1e3          m
 ``chain.masses``                                      1e-6 .. 1e7          kg
 ``chain.inertias``                                    0 or 1e-12 .. 1e10   kg m^2
@@ -268,7 +310,10 @@ import numpy as np
 
 from appendages.unit_slips import damping_in_percent, modulus_in_megapascals, radians_in_degrees
 
-from .limits import DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, estimate_cost
+from appendages.errors import FlexsatError
+
+from .limits import (DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, estimate_cost,
+                     library_limits)
 from .reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
                            _NAME, _Reader, _kind, _quoted, _shown, shorten)
 from .given import read_given
@@ -276,7 +321,9 @@ from .specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLO
                           PLOTS, SECTIONS, SIMULATORS, AppendageSpec, BeamSpec, ChainSpec,
                           ControllerSpec, DisturbanceSpec, ExportSpec, FidelitySpec, FitSpec,
                           HubSpec, LQRSpec, ManoeuvreSpec, OutputsSpec, PDSpec,
-                          ReactionWheelSpec, ReportSpec, Scene, SimulatorSpec, scene_dict)
+                          ReactionWheelSpec, ReportSpec, Scene, SimulatorSpec,
+                          SteppedBeamSpec, TAPERED_SECTIONS, TaperedBeamSpec, TipSpec,
+                          scene_dict)
 
 __all__ = [
     "SceneError",
@@ -322,6 +369,10 @@ _SECTION_RANGES = {"diameter": "beam.section", "outer_diameter": "beam.section",
                    "wall_thickness": "beam.wall_thickness", "width": "beam.section",
                    "thickness": "beam.section", "bending_stiffness": "beam.bending_stiffness",
                    "linear_density": "beam.linear_density"}
+#: Segments of a tapered beam when ``tapered_beam.n_segments`` is not given (the frequencies'
+#: error falls like n_segments**-2: appendages.stepped).
+TAPERED_SEGMENTS = 20
+
 # section dimensions in the bending plane: a beam is longer than it is deep
 _IN_PLANE = ("diameter", "outer_diameter", "thickness")
 
@@ -342,7 +393,10 @@ def _section_properties(section: str, d: dict, density, youngs) -> tuple[float, 
     return youngs * second_moment, density * area
 
 
-def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
+def _read_beam(r: _Reader, data, path: str, *, segment: bool = False,
+               tip: TipSpec | None = None, damping: float | None = None) -> BeamSpec:
+    """A beam table (``segment``: one segment of a stepped beam, whose damping ratio is the
+    stepped beam's ``damping``, without its own frequency check)."""
     t = r.table(data, path)
     section = r.choice(t, "section", path, SECTIONS)
     length = r.number(t, "length", path, "beam.length")
@@ -354,11 +408,16 @@ def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
                                                   "beam.youngs_modulus"),
                                  t.get("youngs_modulus"), _modulus_hint)
         r.warn(f"{path}.youngs_modulus", modulus_in_megapascals(youngs, density))
-    damping = _with_unit_hint(lambda: r.number(t, "damping_ratio", path, "beam.damping_ratio",
-                                               default=0.0),
-                              t.get("damping_ratio"), _percent_hint)
-    r.warn(f"{path}.damping_ratio", damping_in_percent(damping))
-    allowed = {"section", "length", "damping_ratio", *_SECTION_KEYS[section]}
+    if segment:
+        if "damping_ratio" in t:
+            raise r.error(f"{path}.damping_ratio", "a segment has no damping ratio of its own: "
+                          "the stepped beam's damping_ratio [-] damps its cantilever modes "
+                          "(give it beside segments)")
+        damping = 0.0 if damping is None else damping
+    else:
+        damping = _read_damping_ratio(r, t, path)
+    allowed = {"section", "length", *_SECTION_KEYS[section]} | (set() if segment
+                                                                 else {"damping_ratio"})
     if section != "uniform":
         allowed |= {"density", "youngs_modulus", "poisson_ratio"}
     poisson = (r.number(t, "poisson_ratio", path, "beam.poisson_ratio", default=0.3)
@@ -367,7 +426,29 @@ def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
         if key in _SECTION_RANGES or key in ("density", "youngs_modulus"):
             raise r.error(f"{path}.{key}", f"does not apply to section {section!r}; it needs "
                           + ", ".join(sorted(allowed - {'section'})))
+        if key == "tip":
+            raise r.error(f"{path}.tip", "a tip body is a table of the appendage "
+                          "(appendages[i].tip: mass, inertia, offset), beside its beam")
     r.done(t, path, allowed)
+    _check_section_shape(r, path, section, length, dims)
+    if not segment:
+        bending_stiffness, linear_density = _section_properties(section, dims, density, youngs)
+        omega_1 = _BETA1_L**2 * math.sqrt(bending_stiffness / linear_density) / length**2
+        _check_first_frequency(r, path, omega_1, "from length, section and material")
+    return BeamSpec(section, length, tuple(dims.items()), density, youngs, damping, poisson, tip)
+
+
+def _read_damping_ratio(r: _Reader, t: dict, path: str) -> float:
+    """``damping_ratio`` [-] of a beam (default 0), with its unit-slip hint and warning."""
+    damping = _with_unit_hint(lambda: r.number(t, "damping_ratio", path, "beam.damping_ratio",
+                                               default=0.0),
+                              t.get("damping_ratio"), _percent_hint)
+    r.warn(f"{path}.damping_ratio", damping_in_percent(damping))
+    return damping
+
+
+def _check_section_shape(r: _Reader, path: str, section: str, length: float, dims: dict):
+    """A tube's wall at most half its diameter; a beam no deeper than it is long."""
     if section == "tube" and dims["wall_thickness"] > dims["outer_diameter"] / 2:
         raise r.error(f"{path}.wall_thickness", "must be at most outer_diameter/2 = "
                       f"{dims['outer_diameter'] / 2:g} [m]; got {dims['wall_thickness']:g}")
@@ -375,14 +456,128 @@ def _read_beam(r: _Reader, data, path: str) -> BeamSpec:
         if key in dims and dims[key] > length:
             raise r.error(f"{path}.{key}", f"must not exceed the beam's length {length:g} [m] "
                           f"(a beam is slender); got {dims[key]:g}")
-    bending_stiffness, linear_density = _section_properties(section, dims, density, youngs)
-    omega_1 = _BETA1_L**2 * math.sqrt(bending_stiffness / linear_density) / length**2
+
+
+def _check_first_frequency(r: _Reader, path: str, omega_1: float, origin: str) -> None:
+    """Refuse a beam whose first free-free bending frequency [rad/s] lies outside
+    BEAM_FREQUENCY_RANGE."""
     lo, hi = BEAM_FREQUENCY_RANGE
     if not lo <= omega_1 <= hi:
-        raise r.error(path, f"first bending frequency {omega_1:.3g} rad/s (from length, section "
-                      f"and material) lies outside [{lo:g}, {hi:g}] rad/s, the range flexsat's "
-                      "models are verified for; check the units of length, section and material")
-    return BeamSpec(section, length, tuple(dims.items()), density, youngs, damping, poisson)
+        raise r.error(path, f"first bending frequency {omega_1:.3g} rad/s ({origin}) lies "
+                      f"outside [{lo:g}, {hi:g}] rad/s, the range flexsat's models are verified "
+                      "for; check the units of length, section and material")
+
+
+def _read_tip(r: _Reader, data, path: str) -> TipSpec:
+    """``appendages[i].tip``: a rigid body at the beam's free end."""
+    t = r.table(data, path)
+    three_axis = getattr(r, "three_axis", False)
+    mass = r.number(t, "mass", path, "tip.mass")
+    value, full = r.take(t, "inertia", path, 0.0)
+    if three_axis:
+        if not isinstance(value, (list, tuple)):
+            raise r.error(full, "must be a 3x3 array [kg m^2] in a three-axis scene: the body's "
+                          "inertia tensor about its own centre of mass, appendage axes; got "
+                          f"{_kind(value)}")
+        inertia = _read_inertia_tensor(r, value, full, kind="tip.inertia tensor",
+                                       about="about the body's own centre of mass, appendage "
+                                             "axes")
+    else:
+        if isinstance(value, (list, tuple)):
+            raise r.error(full, "must be a number [kg m^2] in a planar scene: the body's moment "
+                          "of inertia about z through its own centre of mass")
+        inertia = r.check_number(value, full, "tip.inertia")
+    offset_value, full = r.take(t, "offset", path, 0.0)
+    if isinstance(offset_value, (list, tuple)):
+        if not three_axis:
+            raise r.error(full, "must be a number [m] in a planar scene: the body's centre of "
+                          "mass beyond the free end, along the appendage's x axis (an offset "
+                          "across the axis couples axial motion, which a planar model has not)")
+        offset = r.vector({"offset": offset_value}, "offset", path, "tip.offset", size=3)
+    else:
+        offset = r.check_number(offset_value, full, "tip.offset")
+    r.done(t, path, {"mass", "inertia", "offset"})
+    spec = TipSpec(mass, inertia, offset)
+    try:
+        spec.build()
+    except (TypeError, ValueError) as exc:
+        raise r.error(path, str(exc)) from None
+    return spec
+
+
+#: The tables that give an appendage's structure (one per appendage).
+STRUCTURES = ("beam", "stepped_beam", "tapered_beam")
+
+
+def _structure_name(spec) -> str:
+    """What an appendage's structure is, for messages."""
+    if isinstance(spec, BeamSpec):
+        return "a beam with a tip body" if spec.tip is not None else "a uniform beam"
+    if isinstance(spec, SteppedBeamSpec):
+        return "a stepped beam"
+    return "a tapered beam"
+
+
+def _read_stepped(r: _Reader, data, path: str, tip: TipSpec | None) -> SteppedBeamSpec:
+    """``appendages[i].stepped_beam``: ``segments`` (beam tables from the root outward) and
+    one ``damping_ratio``."""
+    t = r.table(data, path)
+    damping = _read_damping_ratio(r, t, path)
+    items, full = r.take(t, "segments", path)
+    if not isinstance(items, (list, tuple)) or not items:
+        raise r.error(full, "must be a non-empty array of tables, one per segment from the root "
+                      f"outward ([[{path.split('[')[0]}.stepped_beam.segments]]); got "
+                      f"{_kind(items)}")
+    r.check_limit(full, len(items), "bodies", f"{len(items)} segments")
+    segments = tuple(_read_beam(r, item, f"{full}[{k}]", segment=True, damping=damping)
+                     for k, item in enumerate(items))
+    r.done(t, path, {"segments", "damping_ratio"})
+    spec = SteppedBeamSpec(segments, damping, tip)
+    _check_built_frequency(r, path, spec)
+    return spec
+
+
+def _read_tapered(r: _Reader, data, path: str, tip: TipSpec | None) -> TaperedBeamSpec:
+    """``appendages[i].tapered_beam``: a section whose dimensions vary linearly from
+    ``root_dimensions`` to ``tip_dimensions``, as ``n_segments`` uniform segments."""
+    t = r.table(data, path)
+    section = r.choice(t, "section", path, tuple(TAPERED_SECTIONS))
+    length = r.number(t, "length", path, "beam.length")
+    n_segments = r.integer(t, "n_segments", path, minimum=1, limit="bodies",
+                           default=TAPERED_SEGMENTS)
+    ends = []
+    for key in ("root_dimensions", "tip_dimensions"):
+        p = f"{path}.{key}"
+        dt = r.table(r.take(t, key, path)[0], p)
+        dims = {name: r.number(dt, name, p, _SECTION_RANGES[name])
+                for name in _SECTION_KEYS[section]}
+        r.done(dt, p, set(_SECTION_KEYS[section]))
+        _check_section_shape(r, p, section, length, dims)
+        ends.append(tuple(dims.items()))
+    density = r.number(t, "density", path, "beam.density")
+    youngs = _with_unit_hint(lambda: r.number(t, "youngs_modulus", path, "beam.youngs_modulus"),
+                             t.get("youngs_modulus"), _modulus_hint)
+    r.warn(f"{path}.youngs_modulus", modulus_in_megapascals(youngs, density))
+    poisson = r.number(t, "poisson_ratio", path, "beam.poisson_ratio", default=0.3)
+    damping = _read_damping_ratio(r, t, path)
+    r.done(t, path, {"section", "length", "n_segments", "root_dimensions", "tip_dimensions",
+                     "density", "youngs_modulus", "poisson_ratio", "damping_ratio"})
+    spec = TaperedBeamSpec(section, length, n_segments, ends[0], ends[1], density, youngs,
+                           damping, poisson, tip)
+    _check_built_frequency(r, path, spec)
+    return spec
+
+
+def _check_built_frequency(r: _Reader, path: str, spec) -> None:
+    """Build a stepped or tapered beam (refusals of the library by key) and check its first
+    free-free bending frequency."""
+    try:
+        with library_limits(r.limits):
+            structure = spec.build()
+            omega_1 = float(structure.natural_frequencies(1)[0])
+    except (TypeError, ValueError, FlexsatError) as exc:
+        raise r.error(path, str(exc)) from None
+    _check_first_frequency(r, path, omega_1, "of the assembled segments")
 
 
 def _with_unit_hint(read, value, hint):
@@ -423,7 +618,9 @@ def _read_chain(r: _Reader, data, path: str, has_beam: bool) -> ChainSpec:
     if "from_beam" in t:
         from_beam = r.choice(t, "from_beam", path, ("rfem",))
         if not has_beam:
-            raise r.error(f"{path}.from_beam", "needs a beam table in the same appendage")
+            raise r.error(f"{path}.from_beam", "'rfem' (rigid finite elements of a uniform "
+                          "beam) needs a beam table in the same appendage (a stepped or "
+                          "tapered beam or modal data get a fitted chain: design = 'fit')")
         n_bodies = r.integer(t, "n_bodies", path, minimum=2, limit="bodies")
         root_stiffness = None
         root_damping = 0.0
@@ -492,19 +689,38 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
         degrees = r.check_number(direction_value, full, "direction")
         r.warn(full, radians_in_degrees(degrees))
         direction = math.radians(degrees)
-    beam = _read_beam(r, t.pop("beam"), f"{path}.beam") if "beam" in t else None
+    given = [key for key in STRUCTURES if key in t]
+    if len(given) > 1:
+        raise r.error(f"{path}.{given[1]}", f"an appendage is one structure: give one of "
+                      f"{', '.join(STRUCTURES)}; got {given[0]} and {given[1]}")
+    tip = _read_tip(r, t.pop("tip"), f"{path}.tip") if "tip" in t else None
+    if tip is not None and not set(given) & {"beam", "stepped_beam", "tapered_beam"}:
+        raise r.error(f"{path}.tip", "a tip body sits at the free end of a beam (a beam, "
+                      "stepped_beam or tapered_beam table)" + (
+                          "; modal data carry their tip body in the finite-element model"
+                          if "modal" in given else ""))
+    beam = None
+    if "beam" in t:
+        beam = _read_beam(r, t.pop("beam"), f"{path}.beam", tip=tip)
+    elif "stepped_beam" in t:
+        beam = _read_stepped(r, t.pop("stepped_beam"), f"{path}.stepped_beam", tip)
+    elif "tapered_beam" in t:
+        beam = _read_tapered(r, t.pop("tapered_beam"), f"{path}.tapered_beam", tip)
     if three_axis:
         _check_three_axis_appendage(r, t, path, beam)
-    chain = (_read_chain(r, t.pop("chain"), f"{path}.chain", beam is not None)
+    uniform_beam = isinstance(beam, BeamSpec)
+    chain = (_read_chain(r, t.pop("chain"), f"{path}.chain", uniform_beam)
              if "chain" in t else None)
-    truth_chain = (_read_chain(r, t.pop("truth_chain"), f"{path}.truth_chain", beam is not None)
+    truth_chain = (_read_chain(r, t.pop("truth_chain"), f"{path}.truth_chain", uniform_beam)
                    if "truth_chain" in t else None)
     if beam is None and chain is None:
-        raise r.error(path, "needs a beam table or a chain table (or both)")
+        raise r.error(path, "needs a structure (a beam, stepped_beam or tapered_beam table) or "
+                      "a chain table (or both)")
     truth = r.choice(t, "truth", path, ("beam", "chain"),
                      default="beam" if beam is not None else "chain")
     if truth == "beam" and beam is None:
-        raise r.error(f"{path}.truth", "is 'beam' but the appendage has no beam table")
+        raise r.error(f"{path}.truth", "is 'beam' but the appendage has no beam table (beam, "
+                      "stepped_beam or tapered_beam)")
     if truth == "chain" and chain is None and truth_chain is None:
         raise r.error(f"{path}.truth", "is 'chain' but the appendage has no chain table")
     if truth_chain is not None and truth != "chain":
@@ -519,18 +735,26 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
         ft = r.table(t.pop("fit", {}), f"{path}.fit")
         n_bodies = r.integer(ft, "n_bodies", f"{path}.fit", minimum=2, limit="fit_bodies",
                              default=3)
-        match = r.choices(ft, "match", f"{path}.fit", MATCHES, default=list(MATCHES))
+        # the paper's frequency fit is a symmetric chain of frozen pieces of a uniform rod
+        paper = beam.uniform
+        match = r.choices(ft, "match", f"{path}.fit", MATCHES,
+                          default=list(MATCHES) if paper else ["poles-and-zeros"])
         if not match:
             raise r.error(f"{path}.fit.match", "must name at least one criterion")
+        if "frequencies" in match and not paper:
+            raise r.error(f"{path}.fit.match", "'frequencies' (the paper's fit: a symmetric "
+                          "chain of frozen pieces of a uniform rod) needs a uniform beam "
+                          f"without a tip body; this appendage is {_structure_name(beam)}: "
+                          "use 'poles-and-zeros' (flexsat's fit, any appendage)")
         r.done(ft, f"{path}.fit", {"n_bodies", "match"})
         fit = FitSpec(n_bodies, match)
     elif "fit" in t:
         raise r.error(f"{path}.fit", f"applies to design = 'fit' only; design is {design!r}")
     if design == "chain" and chain is None:
         raise r.error(f"{path}.design", "is 'chain' but the appendage has no chain table")
-    r.done(t, path, {"name", "position", "direction", "beam", "chain", "truth_chain", "truth",
-                     "design", "fit"} | ({"orientation", "orientation_sequence"} if three_axis
-                                         else set()))
+    r.done(t, path, {"name", "position", "direction", *STRUCTURES, "tip", "chain",
+                     "truth_chain", "truth", "design", "fit"}
+           | ({"orientation", "orientation_sequence"} if three_axis else set()))
     return AppendageSpec(name, position, direction, truth, design, beam, chain, fit, truth_chain,
                          orientation)
 
@@ -551,23 +775,31 @@ def _check_three_axis_scene(r: _Reader, simulator, outputs, export, plots) -> No
                       f"in both planes) and 'poles'; got {_shown(unsupported)}")
 
 
-def _read_inertia_tensor(r: _Reader, value, full: str) -> tuple:
-    """A 3x3 symmetric positive definite inertia tensor of a body [kg m^2] (the checks of
-    :func:`spacecraft.dynamics.kinematics.check_inertia_tensor`), rows as tuples."""
+def _read_inertia_tensor(r: _Reader, value, full: str, *, kind: str = "hub.inertia tensor",
+                         about: str = "about the hub's centre of mass, hub axes") -> tuple:
+    """A 3x3 inertia tensor of a body [kg m^2], rows as tuples: the hub's symmetric positive
+    definite (the checks of :class:`~spacecraft.dynamics.hub.Hub`), a tip body's positive
+    semi-definite (:func:`appendages.tip.check_inertia_tensor`; ``kind`` its range)."""
     import numpy as np
+
+    from appendages.tip import check_inertia_tensor
 
     from ..dynamics.hub import Hub
 
     if len(value) != 3 or not all(isinstance(row, (list, tuple)) and len(row) == 3
                                   for row in value):
-        raise r.error(full, "must be a number (planar) or a 3x3 array of numbers [kg m^2] "
-                      "(three axes: the tensor about the hub's centre of mass, hub axes)")
-    rows = tuple(tuple(r.check_number(v, f"{full}[{i}][{j}]", "hub.inertia tensor")
+        raise r.error(full, f"must be a number (planar) or a 3x3 array of numbers [kg m^2] "
+                      f"(three axes: the tensor {about})")
+    rows = tuple(tuple(r.check_number(v, f"{full}[{i}][{j}]", kind)
                        for j, v in enumerate(row)) for i, row in enumerate(value))
     try:
-        Hub(1.0, np.array(rows))
+        if kind == "hub.inertia tensor":
+            Hub(1.0, np.array(rows))
+        else:
+            check_inertia_tensor("inertia", rows)
     except ValueError as exc:
-        raise r.error(full, str(exc).replace("hub inertia ", "", 1)) from None
+        message = str(exc).replace("hub inertia ", "", 1).replace("inertia ", "", 1)
+        raise r.error(full, message) from None
     return rows
 
 
@@ -591,17 +823,25 @@ def _read_orientation(r: _Reader, t: dict, path: str) -> tuple:
 def _check_three_axis_appendage(r: _Reader, t: dict, path: str, beam) -> None:
     """A three-axis scene needs beams that twist and stretch (sections give GJ, rho I_p, EA) and
     fitted design chains (3-D chains in every motion)."""
-    if beam is not None and beam.section == "uniform":
-        raise r.error(f"{path}.beam.section", "a three-axis scene needs the torsional and axial "
-                      "properties that a section gives (GJ [N m^2] with Poisson's ratio, "
-                      "rho*I_p [kg m], EA [N]): 'rod', 'tube' or 'rectangular'; got 'uniform' "
-                      "(bending only)")
+    sections = []
+    if isinstance(beam, BeamSpec):
+        sections = [(f"{path}.beam.section", beam.section)]
+    elif isinstance(beam, SteppedBeamSpec):
+        sections = [(f"{path}.stepped_beam.segments[{k}].section", segment.section)
+                    for k, segment in enumerate(beam.segments)]
+    for key, section in sections:
+        if section == "uniform":
+            raise r.error(key, "a three-axis scene needs the torsional and axial properties "
+                          "that a section gives (GJ [N m^2] with Poisson's ratio, rho*I_p "
+                          "[kg m], EA [N]): 'rod', 'tube' or 'rectangular'; got 'uniform' "
+                          "(bending only)")
     for key in ("chain", "truth_chain"):
         if key in t:
             raise r.error(f"{path}.{key}", "explicit chains are planar; a three-axis scene "
                           "fits 3-D chains to the beams (design = 'fit')")
     if beam is None:
-        raise r.error(path, "a three-axis appendage needs a beam table")
+        raise r.error(path, "a three-axis appendage needs a beam table (beam, stepped_beam or "
+                      "tapered_beam)")
     for key, allowed in (("truth", "beam"), ("design", "fit")):
         if key in t and t[key] != allowed:
             raise r.error(f"{path}.{key}", f"must be {allowed!r} in a three-axis scene; got "

@@ -14,14 +14,16 @@ import dataclasses
 import math
 import warnings
 
+import numpy as np
+
 from .limits import Limits
 
 __all__ = [
-    "HubSpec", "BeamSpec", "ChainSpec", "FitSpec", "AppendageSpec", "FidelitySpec", "PDSpec",
+    "HubSpec", "TipSpec", "BeamSpec", "SteppedBeamSpec", "TaperedBeamSpec", "ChainSpec", "FitSpec", "AppendageSpec", "FidelitySpec", "PDSpec",
     "LQRSpec", "ControllerSpec", "DisturbanceSpec", "ManoeuvreSpec", "OutputsSpec", "ExportSpec",
     "ReportSpec", "ReactionWheelSpec", "SimulatorSpec", "Scene", "scene_dict", "PLOTS",
     "PLOT_ALIASES", "EXPORTABLE", "SECTIONS", "MATCHES", "METHODS", "CONTROLLERS",
-    "FMI_VERSIONS", "SIMULATORS", "quiet_unit_slips",
+    "FMI_VERSIONS", "SIMULATORS", "TAPERED_SECTIONS", "quiet_unit_slips",
 ]
 
 #: Plots a scene may ask for (``report.plots``): the slew responses, the open-loop transfer
@@ -67,8 +69,29 @@ class HubSpec:
 
 
 @dataclasses.dataclass(frozen=True)
+class TipSpec:
+    """A rigid body at a beam's free end (:class:`appendages.TipBody`): mass [kg]; inertia
+    about its own centre of mass [kg m^2], a number (about z, planar) or a 3x3 tensor in the
+    appendage's axes, rows as tuples (three axes); offset of its centre from the free end [m],
+    a number along x or an ``(x, y, z)`` vector in the appendage's axes."""
+
+    mass: float
+    inertia: float | tuple
+    offset: float | tuple = 0.0
+
+    def build(self):
+        """The :class:`appendages.TipBody`."""
+        from appendages import TipBody
+
+        inertia = self.inertia if not isinstance(self.inertia, tuple) else np.array(self.inertia)
+        offset = self.offset if not isinstance(self.offset, tuple) else np.array(self.offset)
+        return TipBody(self.mass, inertia, offset)
+
+
+@dataclasses.dataclass(frozen=True)
 class BeamSpec:
-    """A uniform beam by section and material (SI units; see the module table)."""
+    """A uniform beam by section and material, optionally with a tip body (SI units; see the
+    module table)."""
 
     section: str
     length: float
@@ -78,28 +101,107 @@ class BeamSpec:
     youngs_modulus: float | None  # Pa
     damping_ratio: float
     poisson_ratio: float = 0.3  # - (shear modulus G = E / (2 (1 + nu)): torsion)
+    tip: TipSpec | None = None
+    kind: str = "beam"
+
+    @property
+    def uniform(self) -> bool:
+        """True for a bare uniform beam (no tip body): the paper's closed forms apply (its
+        two-mode free-free beam, its frequency fit, RFEM without a tip)."""
+        return self.tip is None
 
     def build(self):
         """The :class:`appendages.Beam` (every property of a section filled: both bending
         planes, torsion and axial motion). The values that look like unit slips were reported
         by key when the scene was read: the constructors' own warnings are left out."""
         with quiet_unit_slips():
-            return self._build()
+            return self._build(None if self.tip is None else self.tip.build())
 
-    def _build(self):
+    def _build(self, tip=None):
         from appendages import Beam
 
         d, z, nu = dict(self.dimensions), self.damping_ratio, self.poisson_ratio
         if self.section == "rod":
             return Beam.circular_rod(self.length, d["diameter"], self.density,
-                                     self.youngs_modulus, poisson_ratio=nu, damping_ratio=z)
+                                     self.youngs_modulus, poisson_ratio=nu, damping_ratio=z,
+                                     tip=tip)
         if self.section == "tube":
             return Beam.tube(self.length, d["outer_diameter"], d["wall_thickness"], self.density,
-                             self.youngs_modulus, poisson_ratio=nu, damping_ratio=z)
+                             self.youngs_modulus, poisson_ratio=nu, damping_ratio=z, tip=tip)
         if self.section == "rectangular":
             return Beam.rectangular(self.length, d["width"], d["thickness"], self.density,
-                                    self.youngs_modulus, poisson_ratio=nu, damping_ratio=z)
-        return Beam(self.length, d["bending_stiffness"], d["linear_density"], damping_ratio=z)
+                                    self.youngs_modulus, poisson_ratio=nu, damping_ratio=z,
+                                    tip=tip)
+        return Beam(self.length, d["bending_stiffness"], d["linear_density"], damping_ratio=z,
+                    tip=tip)
+
+
+@dataclasses.dataclass(frozen=True)
+class SteppedBeamSpec:
+    """Uniform segments end to end from the root (:class:`appendages.SteppedBeam`): each a
+    :class:`BeamSpec` without tip body, all with the beam's damping ratio (of its cantilever
+    modes); optionally a tip body at the free end."""
+
+    segments: tuple
+    damping_ratio: float
+    tip: TipSpec | None = None
+    kind: str = "stepped_beam"
+
+    uniform = False
+
+    @property
+    def length(self) -> float:
+        """Length of the beam [m]."""
+        return math.fsum(segment.length for segment in self.segments)
+
+    def build(self):
+        """The :class:`appendages.SteppedBeam`; planar segments throughout when one of them is
+        ``"uniform"`` (bending only: a planar scene's beam)."""
+        from appendages import SteppedBeam
+
+        with quiet_unit_slips():
+            beams = [segment.build() for segment in self.segments]
+            if any(segment.section == "uniform" for segment in self.segments):
+                beams = [beam.planar_view("xy") for beam in beams]
+            return SteppedBeam(beams, tip=None if self.tip is None else self.tip.build())
+
+
+#: Section names of a scene and of :meth:`appendages.SteppedBeam.tapered`.
+TAPERED_SECTIONS = {"rod": "circular_rod", "tube": "tube", "rectangular": "rectangular"}
+
+
+@dataclasses.dataclass(frozen=True)
+class TaperedBeamSpec:
+    """A beam whose section dimensions vary linearly from root to free end, as
+    ``n_segments`` uniform segments (:meth:`appendages.SteppedBeam.tapered`), optionally
+    with a tip body (SI units)."""
+
+    section: str
+    length: float
+    n_segments: int
+    root_dimensions: tuple     # (key, value) pairs [m]
+    tip_dimensions: tuple      # (key, value) pairs [m]
+    density: float
+    youngs_modulus: float
+    damping_ratio: float
+    poisson_ratio: float = 0.3
+    tip: TipSpec | None = None
+    kind: str = "tapered_beam"
+
+    uniform = False
+
+    def build(self):
+        """The :class:`appendages.SteppedBeam` of ``n_segments`` segments."""
+        from appendages import SteppedBeam
+
+        with quiet_unit_slips():
+            return SteppedBeam.tapered(
+                self.length, self.n_segments, section=TAPERED_SECTIONS[self.section],
+                root_dimensions=dict(self.root_dimensions),
+                tip_dimensions=dict(self.tip_dimensions), density=self.density,
+                youngs_modulus=self.youngs_modulus, poisson_ratio=self.poisson_ratio,
+                damping_ratio=self.damping_ratio,
+                tip=None if self.tip is None else self.tip.build())
 
 
 @dataclasses.dataclass(frozen=True)
