@@ -143,7 +143,8 @@ def test_exact_reference_needs_a_beam_truth():
     data = scene_with(**{"appendages.0.beam": None, "appendages.0.fit": None,
                          "appendages.0.chain": chain, "outputs.exact_reference": True})
     with pytest.raises(SceneError, match=r"outputs\.exact_reference: needs an appendage whose "
-                                         r"truth is a distributed beam"):
+                                         r"truth has an exact W \(a distributed beam, truth = "
+                                         r"'beam', or modal data, truth = 'modal'\)"):
         load_scene(data)
     del data["outputs"]
     assert load_scene(data).appendages[0].truth == "chain"

@@ -169,7 +169,7 @@ def _change(edit):
         "tapered_beam"), r"appendages\[1\]\.tip: a tip body sits at the free end of a beam"),
     (lambda d: d["appendages"][1].update(beam=d["appendages"][2]["beam"]),
      r"appendages\[1\]\.tapered_beam: an appendage is one structure: give one of beam, "
-     r"stepped_beam, tapered_beam; got beam and tapered_beam"),
+     r"stepped_beam, tapered_beam, modal; got beam and tapered_beam"),
     (lambda d: d["appendages"][0].update(fit={"match": "frequencies"}),
      r"appendages\[0\]\.fit\.match: 'frequencies' \(the paper's fit.*needs a uniform beam "
      r"without a tip body; this appendage is a stepped beam"),

@@ -611,8 +611,9 @@ def _cmd_scenes(args) -> int:
 
         print(json.dumps(scenes, indent=2))
         return 0
+    width = max(len(s["name"]) for s in scenes)
     for s in scenes:
-        print(f"{s['name']:14s} {s['title']}")
+        print(f"{s['name']:{width}s}  {s['title']}")
     return 0
 
 

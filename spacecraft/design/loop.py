@@ -40,6 +40,7 @@ import numpy as np
 import controllers
 from controllers.threads import blas_threads_for
 
+from ..dynamics.survey import modal_survey
 from ..scene.limits import estimate_cost, library_limits
 from ..scene.read import Scene, load_scene, models_scene, scene_dict
 from .models import ModelBuilder, ProgressCallback, RunStats
@@ -52,6 +53,9 @@ from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, g
 
 __all__ = ["DesignLoop", "ClosedLoops", "RunResult", "RunStats", "run", "warning_lines",
            "input_warning_lines", "check_options"]
+
+#: Coupled modes of the open-loop truth model in the report's modal table (from the lowest).
+MODAL_TABLE_MODES = 12
 
 # Most distinct warnings kept in a run's results.
 _MAX_WARNINGS = 20
@@ -313,7 +317,9 @@ class DesignLoop(ModelBuilder):
             stats.modes_kept = sim_info["modes_kept"]
             stats.modes_dropped = sim_info["modes_dropped"]
             data["truth"] = {"models": _described(truth_sc), "n_states": int(truth_sim.nstates),
-                             **sim_info, "coupled_frequencies": _coupled(truth_sc)}
+                             **sim_info, "coupled_frequencies": _coupled(truth_sc),
+                             "modes": [mode.as_dict() for mode in
+                                       modal_survey(truth_sc, MODAL_TABLE_MODES)]}
             designs = {}
             for variant in self.variants:
                 sc = self.design_spacecraft(variant, n_modes)
@@ -559,7 +565,7 @@ class DesignLoop(ModelBuilder):
         for a in self.scene.appendages:
             if a.design != "fit":
                 continue
-            key = (a.beam, a.fit.n_bodies, a.fit.match)
+            key = (a.structure, a.fit.n_bodies, a.fit.match)
             if key in done:
                 continue
             done.add(key)

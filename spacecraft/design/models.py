@@ -264,10 +264,12 @@ class ModelBuilder:
 
     # -- appendage models ----------------------------------------------------------------------
     def beam(self, spec: AppendageSpec):
+        """The appendage's structure, its exact model: a distributed beam (uniform, with a tip
+        body, stepped, tapered) or its modal data (exact for the modes they hold)."""
         def build():
-            with self.scene_values(self.key(spec, spec.beam.kind)):
-                return spec.beam.build()
-        return self.cached(("beam", spec.beam), build)
+            with self.scene_values(self.key(spec, spec.structure.kind)):
+                return spec.structure.build()
+        return self.cached(("beam", spec.structure), build)
 
     def chain(self, spec: AppendageSpec, chain: ChainSpec):
         from appendages.chain import HingedChain
@@ -308,7 +310,7 @@ class ModelBuilder:
                 warnings.simplefilter("ignore", RuntimeWarning)
                 return fit_chain(beam, spec.fit.n_bodies, match=match)
         # identical beams (two symmetric wings) share one fit
-        return self.cached(("fit", spec.beam, spec.fit.n_bodies, match), build)
+        return self.cached(("fit", spec.structure, spec.fit.n_bodies, match), build)
 
     def undamped_beam(self, spec: AppendageSpec):
         """The appendage's beam without damping (for the choice of the number of modes)."""
@@ -317,6 +319,8 @@ class ModelBuilder:
         return self.cached(("undamped beam", spec.beam), build)
 
     def truth_model(self, spec: AppendageSpec, n_modes: int | None):
+        if spec.truth == "modal":
+            return self.beam(spec)  # all the modes of the data: FE-exact
         if spec.truth == "beam":
             def build():
                 with self.scene_values("fidelity"):
@@ -454,7 +458,7 @@ class ModelBuilder:
         """The spacecraft with its distributed appendages (chains where the truth is one)."""
         if self.given is not None:
             return self.given.exact if self.given.exact is not None else self.given.truth
-        models = [self.beam(a) if a.truth == "beam" else self.truth_model(a, None)
+        models = [self.beam(a) if a.truth in ("beam", "modal") else self.truth_model(a, None)
                   for a in self.scene.appendages]
         return self.spacecraft("exact", models)
 
@@ -577,6 +581,8 @@ class ModelBuilder:
         for a in self.scene.appendages:
             if a.truth == "beam":
                 values.append(float(self.beam(a).cantilever_frequencies(1)[0]))
+            elif a.truth == "modal":
+                values.append(float(self.beam(a).frequencies[0]))
         return min(values, default=math.inf)
 
 
@@ -606,8 +612,10 @@ class ModelBuilder:
                                              in zip(exact.mounts, models)])
             modes = located.modes()[0][located.n_rigid:]
             modes = modes[modes < w_hi]
+            # a beam's damping ratio, or modal data's largest
             zeta = max([getattr(m.appendage, "damping_ratio", 0.0) for m in exact.mounts]
-                       + [1e-4])
+                       + [float(np.max(m.appendage.damping_ratios)) for m in exact.mounts
+                          if hasattr(m.appendage, "damping_ratios")] + [1e-4])
             n_log = int(round(points_per_decade * math.log10(w_hi / w_lo)))
             spread = np.tan(np.linspace(-1.5, 1.5, points_per_mode))
             omega = np.unique(np.concatenate([np.geomspace(w_lo, w_hi, n_log), modes]

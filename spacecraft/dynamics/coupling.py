@@ -39,6 +39,7 @@ References
 from __future__ import annotations
 
 import dataclasses
+import warnings
 
 import numpy as np
 import scipy.linalg
@@ -407,7 +408,8 @@ class Spacecraft:
             Planar: add outputs ``<name>_tip_deflection`` [m] (elastic, relative to the
             mount's tangent). Three axes: ``<name>_tip_deflection_y``,
             ``<name>_tip_deflection_z`` [m] and ``<name>_tip_twist`` [rad] (elastic, relative
-            to the rigidly moving root section, the appendage's axes).
+            to the rigidly moving root section, the appendage's axes). Modal data without tip
+            motion (``has_tip_motion`` False) give zero rows: a UserWarning says so.
         root_loads : bool
             Planar: add outputs ``<name>_root_force`` [N] and ``<name>_root_moment`` [N*m], the
             load the hub applies to each appendage at its attachment end (F_y, M of PAPER.md).
@@ -454,6 +456,13 @@ class Spacecraft:
             rm = (mount.appendage.root_model() if not self.three_axis
                   else mount.appendage.root_model(6))
             tips = self._tip_rows(rm, mount.appendage.length)
+            if (tip_deflection or disturbances) and \
+                    getattr(mount.appendage, "has_tip_motion", True) is False:
+                warnings.warn(
+                    f"appendage {label!r}: its modal data have no tip motion "
+                    "(ModalAppendage(tip_motion=...); a NASTRAN solution's tip grid): its tip "
+                    "deflection outputs are zero and a tip force moves it rigidly only, "
+                    "whatever its modes do", UserWarning, stacklevel=2)
             if disturbances:
                 for _, force, _, absolute in tips:
                     if force is not None:

@@ -65,10 +65,9 @@ def structure_text(appendage: dict) -> str:
         where = {"file": f"modal data file {modal.get('path')}",
                  "nastran": f"NASTRAN solution {modal.get('path')}",
                  "inline": "modal data given in the scene"}[modal["source"]]
-        damping = modal.get("damping")
-        damping = ("" if damping is None else
-                   f", damping ratio {_n(damping)}" if not isinstance(damping, list) else
-                   f", damping ratios {_n(min(damping))} to {_n(max(damping))}")
+        low, high = modal["damping_range"]
+        damping = (f", damping ratio {_n(low)}" if low == high else
+                   f", damping ratios {_n(low)} to {_n(high)}")
         return (f" ({where}: {modal['n_modes']} cantilever modes, "
                 f"{_n(modal['first_frequency'])} to {_n(modal['last_frequency'])} rad/s, "
                 f"mass {_n(modal['mass'])} kg{damping})")

@@ -38,6 +38,7 @@ from ..design.naming import controller_label, design_label, plural
 from .output import MARKER, default_output_folder, output_folder
 from .pages import Tone, bad, markdown, markdown_text, render_html, warn
 from .results import to_json, write_timeseries
+from .modes import modal_table_blocks
 from .structures import structure_text, truth_text
 
 __all__ = ["write_report", "output_folder", "default_output_folder", "to_json", "markdown",
@@ -425,14 +426,17 @@ def _models(data: dict) -> list:
                     else text + "."
             b.append(("p", text))
     else:
-        what = "as given (your Spacecraft)" if fid.get("given") else "the chains as given"
+        what = ("as given (your Spacecraft)" if fid.get("given") else
+                "the modal data (all their modes) and chains as given" if any(
+                    a.get("truth") == "modal" for a in data.get("scene_resolved", {}).get(
+                        "appendages", [])) else "the chains as given")
         b.append(("p", f"Truth model: {what}; the plant has "
                        f"{plural(truth['n_states'], 'state')} ({truth['modes_dropped']} of "
                        f"{plural(truth['modes_total'], 'mode')} pruned)."))
     header = ["mode"]
     columns = []
     if "exact" in data:
-        header.append("exact beam")
+        header.append("exact (through W)")
         columns.append(data["exact"]["coupled_frequencies"])
     header.append("truth model")
     columns.append(truth["coupled_frequencies"])
@@ -443,6 +447,7 @@ def _models(data: dict) -> list:
     b.append(("h3", "Coupled natural frequencies [rad/s]"))
     b.append(("table", header, [[k + 1] + [_fmt(c[k]) if k < len(c) else "-" for c in columns]
                                 for k in range(n)]))
+    b += modal_table_blocks(data)
     return b
 
 

@@ -202,6 +202,8 @@ def appendage_dof(spec, which: str, n_modes: int | None) -> tuple[int, str]:
         return appendage_dof(spec, "truth", n_modes)
     if kind == "beam":
         return (1 if n_modes is None else n_modes), "fidelity.n_modes"
+    if kind == "modal":
+        return spec.modal.n_modes, "modal"
     if kind == "fit":
         return spec.fit.n_bodies - 1, "fit.n_bodies"
     chain, key = ((spec.truth_chain, "truth_chain") if which == "truth" and spec.truth_chain

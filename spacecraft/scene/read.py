@@ -30,14 +30,15 @@ key                                    unit       meaning
                                                   a vector ``[x, y]``; default 0
 ``appendages[i].truth``                -          ``"beam"`` (the distributed beam: uniform,
                                                   with a tip body, stepped or tapered; default
-                                                  when one is given) or ``"chain"``
+                                                  when one is given), ``"modal"`` (modal data;
+                                                  default with them) or ``"chain"``
 ``appendages[i].design``               -          ``"fit"`` (chain fitted to the structure;
                                                   default with one), ``"chain"`` (the ``chain``
                                                   table; default without beam) or ``"truth"``
                                                   (the truth model itself). An appendage's
                                                   structure is one of the tables ``beam``,
-                                                  ``stepped_beam``, ``tapered_beam`` (or a
-                                                  ``chain`` alone)
+                                                  ``stepped_beam``, ``tapered_beam``, ``modal``
+                                                  (or a ``chain`` alone)
 ``appendages[i].beam.section`` *       -          ``"rod"``, ``"tube"``, ``"rectangular"`` or
                                                   ``"uniform"``
 ``appendages[i].beam.length`` *        m          beam length
@@ -79,6 +80,44 @@ key                                    unit       meaning
                                                   default 20
 ``appendages[i].tapered_beam.density`` *,  as a   as a beam table's (``youngs_modulus`` *,
                                        beam's     ``poisson_ratio``, ``damping_ratio``)
+``appendages[i].modal``                -          instead of a beam: the cantilever (root
+                                                  clamped) modes of a finite-element model
+                                                  (:class:`appendages.ModalAppendage`), truth
+                                                  ``"modal"``: all its modes, exact for them
+                                                  ("FE-exact"); from one of ``file``,
+                                                  ``nastran`` or the numbers below
+``appendages[i].modal.file``           -          a modal data file (TOML, units in the file:
+                                                  :mod:`appendages.modal_file`), relative to
+                                                  the scene's folder
+``appendages[i].modal.nastran``        -          a NASTRAN normal-modes solution: an OP2 file
+                                                  (needs ``flexsat[nastran]``) or its ``.npz``
+                                                  extract (:mod:`appendages.nastran`), with
+``appendages[i].modal.root`` *         -          its root grid (clamped there, and only there)
+``appendages[i].modal.units`` *        -          the model's ``[length, mass]`` units, e.g.
+                                                  ``["mm", "t"]``, ``["in", "slinch"]``
+``appendages[i].modal.mass_matrix``    -          its mass matrix: ``.npy`` (dense) or ``.npz``
+                                                  (scipy.sparse) over the solution's grids
+                                                  (else MEFFMASS or SPCFORCES of the file)
+``appendages[i].modal.tip_grid``       -          the grid whose motion is the tip's (tip
+                                                  outputs; without it they are zero, warned)
+``appendages[i].modal.axes``           -          3x3: the appendage's x, y, z axes (columns)
+                                                  in the model's basic system; default identity
+``appendages[i].modal.subcase``        -          which subcase's modes; default the only one
+``appendages[i].modal.frequencies``    rad/s      numbers in the scene (SI): the cantilever
+                                                  frequencies (or ``frequencies_hz`` [Hz])
+``appendages[i].modal.participation``  sqrt(kg), sqrt(kg) m  one row per mode: root y, rotation
+                                                  z (planar) or x, y, z, rotations (six)
+``appendages[i].modal.rigid_mass``     kg, kg m, kg m^2  the rigid mass about the root, 2x2/6x6
+``appendages[i].modal.tip_motion``     m/sqrt(kg)  each mode's elastic tip deflection (six
+                                                  axes: y, z deflections, twist per mode)
+``appendages[i].modal.damping``        -          damping ratio of the modes: one, or one per
+                                                  mode (replaces a file's); default the data's,
+                                                  0 for a NASTRAN solution
+``appendages[i].modal.length``         m          the appendage's extent along x from the root
+                                                  (default the data's: a file's, the farthest
+                                                  NASTRAN grid)
+``appendages[i].modal.n_modes``        -          keep the first n_modes modes (the rest's mass
+                                                  joins the residual mass); default all
 ``appendages[i].truth_chain``          -          a separate truth chain (same keys as
                                                   ``chain``) when ``chain`` is the design model
 ``appendages[i].fit.n_bodies``         -          bodies of the fitted chain (>= 2); default 3
@@ -230,6 +269,13 @@ keys                                                  accepted             unit
 ``tip.inertia`` (a 3x3 tensor, entries)               |x| <= 1e10          kg m^2
 ``tip.offset``                                        |x| <= 1e3           m
 ``tapered_beam.n_segments``                           1 .. limits.bodies   -
+``modal.frequencies`` (each; the data's too)          1e-4 .. 1e7          rad/s
+``modal.frequencies_hz``                              1e-5 .. 2e6          Hz
+``modal.participation``, ``tip_motion`` (entries)     |x| <= 1e8           SI
+``modal.rigid_mass`` (entries)                        |x| <= 1e10          kg, kg m, kg m^2
+``modal.axes`` (entries)                              |x| <= 1             -
+``modal.damping``                                     0 .. < 1             -
+``modal.length`` (given or the data's)                1e-2 .. 1e3          m
 first bending frequency of a beam (derived; of a      1e-4 .. 1e5          rad/s
 stepped or tapered beam: its segments assembled)
 ``chain.lengths``                                     1e-3 .. 1e3          m
@@ -311,17 +357,18 @@ import numpy as np
 from appendages.unit_slips import damping_in_percent, modulus_in_megapascals, radians_in_degrees
 
 from appendages.errors import FlexsatError
+from appendages.units import LENGTH_UNITS, MASS_UNITS
 
 from .limits import (DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, estimate_cost,
                      library_limits)
 from .reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
-                           _NAME, _Reader, _kind, _quoted, _shown, shorten)
+                           _NAME, _Reader, _kind, _quoted, _shown, shorten, suggestion)
 from .given import read_given
 from .specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLOT_ALIASES,
                           PLOTS, SECTIONS, SIMULATORS, AppendageSpec, BeamSpec, ChainSpec,
                           ControllerSpec, DisturbanceSpec, ExportSpec, FidelitySpec, FitSpec,
                           HubSpec, LQRSpec, ManoeuvreSpec, OutputsSpec, PDSpec,
-                          ReactionWheelSpec, ReportSpec, Scene, SimulatorSpec,
+                          ModalSpec, ReactionWheelSpec, ReportSpec, Scene, SimulatorSpec,
                           SteppedBeamSpec, TAPERED_SECTIONS, TaperedBeamSpec, TipSpec,
                           scene_dict)
 
@@ -506,7 +553,189 @@ def _read_tip(r: _Reader, data, path: str) -> TipSpec:
 
 
 #: The tables that give an appendage's structure (one per appendage).
-STRUCTURES = ("beam", "stepped_beam", "tapered_beam")
+STRUCTURES = ("beam", "stepped_beam", "tapered_beam", "modal")
+
+#: Keys of a ``modal`` table by source; ``damping``, ``length`` and ``n_modes`` go with any.
+_MODAL_KEYS = {"file": ("file",),
+               "nastran": ("nastran", "root", "units", "mass_matrix", "tip_grid", "axes",
+                           "subcase"),
+               "inline": ("frequencies", "frequencies_hz", "participation", "rigid_mass",
+                          "tip_motion")}
+
+
+_MODAL_ORIGINS = {"file": "a modal data file", "nastran": "a NASTRAN solution",
+                  "inline": "numbers in the scene"}
+
+
+def _data_path(r: _Reader, value, full: str, suffixes: tuple) -> str:
+    """A data file named in the scene: a string, relative to the scene's folder (or absolute),
+    an existing file with one of ``suffixes``; returned absolute."""
+    if not isinstance(value, str) or not value:
+        raise r.error(full, f"must be a file path (a string, relative to the scene's folder); "
+                      f"got {_kind(value)}")
+    base = getattr(r, "base", None) or Path.cwd()
+    path = (Path(base) / value).resolve()
+    if not path.is_file():
+        raise r.error(full, f"no such file: {shorten(str(path))} (a path relative to the "
+                      f"scene's folder {shorten(str(base))})")
+    if not path.name.lower().endswith(suffixes):
+        raise r.error(full, f"must be a {' or '.join(suffixes)} file; got {_shown(value)}")
+    return str(path)
+
+
+def _matrix(r: _Reader, t: dict, key: str, path: str, kind: str, *, rows: int | None = None,
+            columns: tuple = ()) -> tuple | None:
+    """An array of rows of numbers of the range ``RANGES[kind]`` (``columns``: the accepted
+    row lengths), or None when absent."""
+    value, full = r.take(t, key, path, None)
+    if value is None:
+        return None
+    unit = RANGES[kind].unit
+    if not isinstance(value, (list, tuple)) or not value or not all(
+            isinstance(row, (list, tuple)) for row in value):
+        raise r.error(full, f"must be an array of rows of numbers [{unit}]; got {_kind(value)}")
+    r.check_limit(full, len(value), "modes", f"an array of {len(value)} rows")
+    if rows is not None and len(value) != rows:
+        raise r.error(full, f"must have {rows} rows [{unit}]; got {len(value)}")
+    width = len(value[0])
+    if width not in columns or any(len(row) != width for row in value):
+        raise r.error(full, f"must have rows of {' or '.join(map(str, columns))} numbers "
+                      f"[{unit}], all alike; got rows of {sorted({len(row) for row in value})}")
+    return tuple(tuple(r.check_number(v, f"{full}[{i}][{j}]", kind) for j, v in enumerate(row))
+                 for i, row in enumerate(value))
+
+
+def _read_modal(r: _Reader, data, path: str) -> ModalSpec:
+    """``appendages[i].modal``: the cantilever modes of a finite-element model, from a modal
+    data file, a NASTRAN solution or the numbers given here."""
+    t = r.table(data, path)
+    three_axis = getattr(r, "three_axis", False)
+    sources = [k for k in ("file", "nastran", "frequencies", "frequencies_hz") if k in t]
+    if not sources:
+        raise r.error(path, "needs its data: file = \"modes.toml\" (a modal data file, units "
+                      "in the file), nastran = \"modes.op2\" (a NASTRAN normal-modes solution, "
+                      "or its .npz extract) or the numbers (frequencies [rad/s] or "
+                      "frequencies_hz [Hz], participation, rigid_mass)" + suggestion(
+                          next(iter(t), ""), ("file", "nastran", "frequencies")))
+    if len(sources) > 1:
+        raise r.error(f"{path}.{sources[1]}", f"give one source of modal data; got "
+                      f"{sources[0]} and {sources[1]}")
+    source = {"file": "file", "nastran": "nastran"}.get(sources[0], "inline")
+    fields: dict = {"source": source, "planar": not three_axis}
+    if source == "file":
+        fields["path"] = _data_path(r, r.take(t, "file", path)[0], f"{path}.file", (".toml",))
+    elif source == "nastran":
+        fields["path"] = _data_path(r, r.take(t, "nastran", path)[0], f"{path}.nastran",
+                                    (".op2", ".npz"))
+        fields["root"] = r.integer(t, "root", path, minimum=1)
+        units, full = r.take(t, "units", path)
+        if (not isinstance(units, (list, tuple)) or len(units) != 2
+                or not all(isinstance(u, str) for u in units)):
+            raise r.error(full, "must be [length unit, mass unit] of the finite-element model "
+                          "(NASTRAN has none), e.g. [\"m\", \"kg\"], [\"mm\", \"t\"], "
+                          f"[\"in\", \"slinch\"]; got {_kind(units)}")
+        for unit, table, what in zip(units, (LENGTH_UNITS, MASS_UNITS), ("length", "mass")):
+            if unit not in table:
+                raise r.error(full, f"the {what} unit must be one of {_quoted(table)}; got "
+                              f"{_shown(unit)}" + suggestion(unit, table))
+        fields["units"] = tuple(units)
+        if "mass_matrix" in t:
+            fields["mass_matrix"] = _data_path(r, t.pop("mass_matrix"), f"{path}.mass_matrix",
+                                               (".npy", ".npz"))
+        fields["tip_grid"] = r.integer(t, "tip_grid", path, minimum=1, default=None)
+        fields["subcase"] = r.integer(t, "subcase", path, minimum=1, default=None)
+        axes = _matrix(r, t, "axes", path, "modal.axes", rows=3, columns=(3,))
+        if axes is not None:
+            fields["axes"] = axes
+    else:
+        if "frequencies_hz" in t:
+            hz = r.vector(t, "frequencies_hz", path, "modal.frequencies_hz", limit="modes")
+            fields["frequencies"] = tuple(2.0 * math.pi * f for f in hz)
+        else:
+            fields["frequencies"] = r.vector(t, "frequencies", path, "modal.frequencies",
+                                             limit="modes")
+        n = len(fields["frequencies"])
+        width = (6,) if three_axis else (2, 6)
+        fields["participation"] = _matrix(r, t, "participation", path, "modal.participation",
+                                          rows=n, columns=width)
+        fields["rigid_mass"] = _matrix(r, t, "rigid_mass", path, "modal.rigid_mass",
+                                       columns=width)
+        for key in ("participation", "rigid_mass"):
+            if fields[key] is None:
+                raise r.error(f"{path}.{key}", "missing required value")
+        k = len(fields["participation"][0])
+        if len(fields["rigid_mass"]) != k or len(fields["rigid_mass"][0]) != k:
+            raise r.error(f"{path}.rigid_mass", f"must be {k}x{k} [kg, kg m, kg m^2] (one row "
+                          f"and column per root motion of participation); got "
+                          f"{len(fields['rigid_mass'])}x{len(fields['rigid_mass'][0])}")
+        if "tip_motion" in t:
+            if k == 2:
+                fields["tip_motion"] = r.vector(t, "tip_motion", path, "modal.tip_motion",
+                                                size=n)
+            else:
+                fields["tip_motion"] = _matrix(r, t, "tip_motion", path, "modal.tip_motion",
+                                               rows=n, columns=(3,))
+    fields["n_modes_kept"] = r.integer(t, "n_modes", path, minimum=1, limit="modes",
+                                       default=None)
+    if "damping" in t:
+        value = t["damping"]
+        if isinstance(value, (list, tuple)):
+            fields["damping"] = r.vector(t, "damping", path, "beam.damping_ratio",
+                                         limit="modes")
+            largest = max(fields["damping"])
+        else:
+            fields["damping"] = largest = _with_unit_hint(
+                lambda: r.number(t, "damping", path, "beam.damping_ratio"), value,
+                _percent_hint)
+        r.warn(f"{path}.damping", damping_in_percent(largest))
+    fields["length"] = r.number(t, "length", path, "beam.length", default=None)
+    allowed = {*_MODAL_KEYS[source], "damping", "length", "n_modes"}
+    for key in list(t):
+        for other, keys in _MODAL_KEYS.items():
+            if other != source and key in keys:
+                raise r.error(f"{path}.{key}", f"does not apply to modal data from "
+                              f"{_MODAL_ORIGINS[source]}; it takes "
+                              + ", ".join(sorted(allowed)))
+    r.done(t, path, allowed)
+    spec = ModalSpec(**fields)
+    try:
+        with library_limits(r.limits):
+            model = spec.build()
+    except ImportError as exc:
+        raise r.error(f"{path}.nastran", str(exc)) from None
+    except (TypeError, ValueError, OSError, FlexsatError) as exc:
+        where = {"file": f"{path}.file", "nastran": f"{path}.nastran"}.get(source, path)
+        raise r.error(where, str(exc)) from None
+    if three_axis and not model.three_axis:
+        raise r.error(path, "a three-axis scene needs six-axis modal data (participation of "
+                      "n x 6, a 6x6 rigid_mass: translations x, y, z then rotations); these "
+                      "are planar (n x 2)")
+    try:
+        length = model.length
+    except ValueError:
+        raise r.error(f"{path}.length", "missing: the data do not give the appendage's length "
+                      "[m] (its extent along x from the root), which mounting it and fitting a "
+                      "chain need") from None
+    w = model.frequencies
+    lo, hi = RANGES["modal.frequencies"].lo, RANGES["modal.frequencies"].hi
+    if not (lo <= w[0] and w[-1] <= hi):
+        raise r.error(path, f"cantilever frequencies from {w[0]:.4g} to {w[-1]:.4g} rad/s: "
+                      f"outside [{lo:g}, {hi:g}] rad/s, the range flexsat's models are verified "
+                      "for; check the data's units")
+    if not 1e-2 <= length <= 1e3:
+        raise r.error(f"{path}.length", f"the appendage's length {length:.4g} m lies outside "
+                      "[0.01, 1000] m (beam.length's range); check the data's units")
+    return _with_facts(spec, model)
+
+
+def _with_facts(spec: ModalSpec, model) -> ModalSpec:
+    """The spec with the data's facts for the report (fields that take no part in equality)."""
+    w = model.frequencies
+    return dataclasses.replace(spec, n_modes=int(w.size), first_frequency=float(w[0]),
+                               last_frequency=float(w[-1]), mass=float(model.mass),
+                               has_tip_motion=bool(model.has_tip_motion),
+                               damping_range=(float(np.min(model.damping_ratios)),
+                                              float(np.max(model.damping_ratios))))
 
 
 def _structure_name(spec) -> str:
@@ -515,6 +744,8 @@ def _structure_name(spec) -> str:
         return "a beam with a tip body" if spec.tip is not None else "a uniform beam"
     if isinstance(spec, SteppedBeamSpec):
         return "a stepped beam"
+    if isinstance(spec, ModalSpec):
+        return "given by modal data"
     return "a tapered beam"
 
 
@@ -699,44 +930,52 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
                       "stepped_beam or tapered_beam table)" + (
                           "; modal data carry their tip body in the finite-element model"
                           if "modal" in given else ""))
-    beam = None
-    if "beam" in t:
+    beam = modal = None
+    if "modal" in t:
+        modal = _read_modal(r, t.pop("modal"), f"{path}.modal")
+    elif "beam" in t:
         beam = _read_beam(r, t.pop("beam"), f"{path}.beam", tip=tip)
     elif "stepped_beam" in t:
         beam = _read_stepped(r, t.pop("stepped_beam"), f"{path}.stepped_beam", tip)
     elif "tapered_beam" in t:
         beam = _read_tapered(r, t.pop("tapered_beam"), f"{path}.tapered_beam", tip)
+    structure = beam if beam is not None else modal
     if three_axis:
-        _check_three_axis_appendage(r, t, path, beam)
+        _check_three_axis_appendage(r, t, path, structure)
     uniform_beam = isinstance(beam, BeamSpec)
     chain = (_read_chain(r, t.pop("chain"), f"{path}.chain", uniform_beam)
              if "chain" in t else None)
     truth_chain = (_read_chain(r, t.pop("truth_chain"), f"{path}.truth_chain", uniform_beam)
                    if "truth_chain" in t else None)
-    if beam is None and chain is None:
-        raise r.error(path, "needs a structure (a beam, stepped_beam or tapered_beam table) or "
-                      "a chain table (or both)")
-    truth = r.choice(t, "truth", path, ("beam", "chain"),
-                     default="beam" if beam is not None else "chain")
+    if structure is None and chain is None:
+        raise r.error(path, "needs a structure (a beam, stepped_beam, tapered_beam or modal "
+                      "table) or a chain table (or both)")
+    truth = r.choice(t, "truth", path, ("beam", "modal", "chain"),
+                     default="beam" if beam is not None else
+                     ("modal" if modal is not None else "chain"))
     if truth == "beam" and beam is None:
         raise r.error(f"{path}.truth", "is 'beam' but the appendage has no beam table (beam, "
-                      "stepped_beam or tapered_beam)")
+                      "stepped_beam or tapered_beam)" + ("; its modal data are truth = 'modal'"
+                                                         if modal is not None else ""))
+    if truth == "modal" and modal is None:
+        raise r.error(f"{path}.truth", "is 'modal' but the appendage has no modal table")
     if truth == "chain" and chain is None and truth_chain is None:
         raise r.error(f"{path}.truth", "is 'chain' but the appendage has no chain table")
     if truth_chain is not None and truth != "chain":
         raise r.error(f"{path}.truth_chain", "applies to truth = 'chain' only")
     design = r.choice(t, "design", path, ("fit", "chain", "truth"),
-                      default="fit" if beam is not None and truth == "beam" else
+                      default="fit" if structure is not None and truth != "chain" else
                       ("chain" if chain is not None else "truth"))
     fit = None
     if design == "fit":
-        if beam is None:
-            raise r.error(f"{path}.design", "is 'fit' but there is no beam table to fit")
+        if structure is None:
+            raise r.error(f"{path}.design", "is 'fit' but there is no structure to fit (a beam, "
+                          "stepped_beam, tapered_beam or modal table)")
         ft = r.table(t.pop("fit", {}), f"{path}.fit")
         n_bodies = r.integer(ft, "n_bodies", f"{path}.fit", minimum=2, limit="fit_bodies",
                              default=3)
         # the paper's frequency fit is a symmetric chain of frozen pieces of a uniform rod
-        paper = beam.uniform
+        paper = structure.uniform
         match = r.choices(ft, "match", f"{path}.fit", MATCHES,
                           default=list(MATCHES) if paper else ["poles-and-zeros"])
         if not match:
@@ -744,7 +983,7 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
         if "frequencies" in match and not paper:
             raise r.error(f"{path}.fit.match", "'frequencies' (the paper's fit: a symmetric "
                           "chain of frozen pieces of a uniform rod) needs a uniform beam "
-                          f"without a tip body; this appendage is {_structure_name(beam)}: "
+                          f"without a tip body; this appendage is {_structure_name(structure)}: "
                           "use 'poles-and-zeros' (flexsat's fit, any appendage)")
         r.done(ft, f"{path}.fit", {"n_bodies", "match"})
         fit = FitSpec(n_bodies, match)
@@ -756,7 +995,7 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
                      "truth_chain", "truth", "design", "fit"}
            | ({"orientation", "orientation_sequence"} if three_axis else set()))
     return AppendageSpec(name, position, direction, truth, design, beam, chain, fit, truth_chain,
-                         orientation)
+                         orientation, modal)
 
 
 def _check_three_axis_scene(r: _Reader, simulator, outputs, export, plots) -> None:
@@ -840,9 +1079,10 @@ def _check_three_axis_appendage(r: _Reader, t: dict, path: str, beam) -> None:
             raise r.error(f"{path}.{key}", "explicit chains are planar; a three-axis scene "
                           "fits 3-D chains to the beams (design = 'fit')")
     if beam is None:
-        raise r.error(path, "a three-axis appendage needs a beam table (beam, stepped_beam or "
-                      "tapered_beam)")
-    for key, allowed in (("truth", "beam"), ("design", "fit")):
+        raise r.error(path, "a three-axis appendage needs a structure (a beam, stepped_beam, "
+                      "tapered_beam or modal table)")
+    truth = "modal" if isinstance(beam, ModalSpec) else "beam"
+    for key, allowed in (("truth", truth), ("design", "fit")):
         if key in t and t[key] != allowed:
             raise r.error(f"{path}.{key}", f"must be {allowed!r} in a three-axis scene; got "
                           f"{_shown(t[key])}")
@@ -1072,8 +1312,10 @@ def _check_cost(r: _Reader, scene: Scene) -> None:
                       f"/ step {step:g} s)")
 
 
-def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) -> Scene:
+def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None,
+                base: Path | None = None) -> Scene:
     r = _Reader(source)
+    r.base = base  # the folder of data files named relative to the scene
     t = r.table(data, "")
     # the limits first: they bound what the rest may ask for
     limits = dict(read_limits(t.pop("limits", {}), source)) if "limits" in t else {}
@@ -1166,9 +1408,10 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None) ->
                    "outputs", "export", "report", "limits", "simulator"})
 
     # outputs the scene cannot produce
-    if outputs.exact_reference and not any(a.truth == "beam" for a in appendages):
-        raise r.error("outputs.exact_reference", "needs an appendage whose truth is a "
-                      "distributed beam (truth = 'beam'); this scene has only chains")
+    if outputs.exact_reference and not any(a.truth in ("beam", "modal") for a in appendages):
+        raise r.error("outputs.exact_reference", "needs an appendage whose truth has an exact "
+                      "W (a distributed beam, truth = 'beam', or modal data, truth = 'modal'); "
+                      "this scene has only chains")
     if fidelity.n_modes is None and not any(a.truth == "beam" for a in appendages):
         fidelity = dataclasses.replace(fidelity, tolerance=None, n_modes=None)
     if "slew" in plots and manoeuvre is None:
@@ -1252,7 +1495,8 @@ def with_simulator(scene: Scene, name: str) -> Scene:
 
 
 def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = None, *,
-               source: str | None = None, limits: Mapping[str, Any] | None = None) -> Scene:
+               source: str | None = None, limits: Mapping[str, Any] | None = None,
+               base: "str | os.PathLike | None" = None) -> Scene:
     """Read and validate a scene.
 
     Parameters
@@ -1267,6 +1511,10 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
     limits : mapping, optional
         Work limits that override the defaults and the scene's own ``[limits]`` table
         (names of :class:`~spacecraft.scene.limits.Limits`; the command line's ``--limit``).
+    base : path, optional
+        The folder that data files named in a dict scene (``modal.file``, ``modal.nastran``,
+        ``modal.mass_matrix``) are relative to; default the current folder. A scene file's
+        are relative to the file's own folder.
 
     Returns
     -------
@@ -1285,7 +1533,8 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         return default_scene(limits=overrides)
     if isinstance(scene, Mapping):
         name = source or "<dict>"
-        return _guarded(lambda: _read_scene(scene, name, overrides), name)
+        folder = Path.cwd() if base is None else Path(base)
+        return _guarded(lambda: _read_scene(scene, name, overrides, folder), name)
     if not isinstance(scene, (str, os.PathLike)):
         raise SceneError(f"scene must be a TOML file path, a dict or a Scene; got "
                          f"{shorten(type(scene).__name__)}")
@@ -1329,7 +1578,7 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
             data = tomllib.loads(decoded)
         except tomllib.TOMLDecodeError as exc:
             raise SceneError(f"{name}: invalid TOML ({shorten(str(exc), 200)})") from None
-        return _read_scene(data, name, overrides)
+        return _read_scene(data, name, overrides, path.resolve().parent)
     return _guarded(parse, name)
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import math
 import warnings
 
@@ -19,7 +20,8 @@ import numpy as np
 from .limits import Limits
 
 __all__ = [
-    "HubSpec", "TipSpec", "BeamSpec", "SteppedBeamSpec", "TaperedBeamSpec", "ChainSpec", "FitSpec", "AppendageSpec", "FidelitySpec", "PDSpec",
+    "HubSpec", "TipSpec", "BeamSpec", "SteppedBeamSpec", "TaperedBeamSpec", "ModalSpec",
+    "MODAL_SOURCES", "load_mass_matrix", "ChainSpec", "FitSpec", "AppendageSpec", "FidelitySpec", "PDSpec",
     "LQRSpec", "ControllerSpec", "DisturbanceSpec", "ManoeuvreSpec", "OutputsSpec", "ExportSpec",
     "ReportSpec", "ReactionWheelSpec", "SimulatorSpec", "Scene", "scene_dict", "PLOTS",
     "PLOT_ALIASES", "EXPORTABLE", "SECTIONS", "MATCHES", "METHODS", "CONTROLLERS",
@@ -204,6 +206,149 @@ class TaperedBeamSpec:
                 tip=None if self.tip is None else self.tip.build())
 
 
+#: Where modal data come from (``modal.file``, ``modal.nastran`` or the numbers in the scene).
+MODAL_SOURCES = ("file", "nastran", "inline")
+
+
+@dataclasses.dataclass(frozen=True)
+class ModalSpec:
+    """An appendage given by the cantilever modes of its finite-element model
+    (:class:`appendages.ModalAppendage`), from a modal data file (TOML, units in the file), a
+    NASTRAN normal-modes solution (an OP2 file read with pyNastran, or its ``.npz`` extract) or
+    numbers in the scene (SI). Paths are absolute (resolved against the scene's folder).
+
+    The facts after the fields (``n_modes``...) are the data's, filled when the scene is read,
+    for the report; they take no part in comparing or hashing specs.
+    """
+
+    source: str
+    path: str | None = None
+    # NASTRAN: the root grid, the model's (length, mass) units, its mass matrix file, the grid
+    # whose motion gives the tip motion, the appendage's axes in the basic system (rows), the
+    # subcase
+    root: int | None = None
+    units: tuple | None = None
+    mass_matrix: str | None = None
+    tip_grid: int | None = None
+    axes: tuple | None = None
+    subcase: int | None = None
+    # in the scene (SI): rad/s, sqrt(kg) and sqrt(kg) m, kg and kg m and kg m^2, m/sqrt(kg)...
+    frequencies: tuple | None = None
+    participation: tuple | None = None
+    rigid_mass: tuple | None = None
+    tip_motion: tuple | None = None
+    # any source: the first n_modes modes only, the damping ratio(s) and the length [m] (None:
+    # the data's)
+    n_modes_kept: int | None = None
+    damping: float | tuple | None = None
+    length: float | None = None
+    planar: bool = True
+    kind: str = "modal"
+    n_modes: int = dataclasses.field(default=0, compare=False)
+    first_frequency: float = dataclasses.field(default=0.0, compare=False)
+    last_frequency: float = dataclasses.field(default=0.0, compare=False)
+    mass: float = dataclasses.field(default=0.0, compare=False)
+    has_tip_motion: bool = dataclasses.field(default=False, compare=False)
+    damping_range: tuple = dataclasses.field(default=(0.0, 0.0), compare=False)
+
+    uniform = False
+
+    @property
+    def damping_ratio(self) -> float:
+        """The largest damping ratio of the modes [-] (the data's, or the scene's)."""
+        return self.damping_range[1]
+
+    def build(self):
+        """The :class:`appendages.ModalAppendage`: its x-y plane in a planar scene (held root
+        motions out of the plane), all six root motions in a three-axis one. Read once per
+        file version and options (memoised in the process)."""
+        stamps = tuple(_file_stamp(p) for p in (self.path, self.mass_matrix) if p is not None)
+        return _modal_appendage(self, stamps)
+
+
+def _file_stamp(path: str) -> tuple:
+    """(modification time [ns], size [bytes]) of a file: a changed file is read again."""
+    import os
+
+    try:
+        info = os.stat(path)
+    except OSError:
+        return (None, None)
+    return (info.st_mtime_ns, info.st_size)
+
+
+def load_mass_matrix(path: str):
+    """A finite-element mass matrix from a NumPy file: ``.npy`` (a dense square array) or
+    ``.npz`` (a scipy.sparse matrix saved with :func:`scipy.sparse.save_npz`).
+
+    Raises
+    ------
+    ValueError
+        Another suffix, or a file that is not such an array.
+    OSError
+        The file cannot be read.
+    """
+    import scipy.sparse
+
+    if path.lower().endswith(".npy"):
+        try:
+            return np.load(path, allow_pickle=False)
+        except ValueError as exc:
+            raise ValueError(f"mass_matrix {path}: not a NumPy array file ({exc})") from None
+    if path.lower().endswith(".npz"):
+        try:
+            return scipy.sparse.load_npz(path)
+        except (ValueError, KeyError) as exc:
+            raise ValueError(f"mass_matrix {path}: not a scipy.sparse .npz file ({exc})") \
+                from None
+    raise ValueError(f"mass_matrix must be a .npy file (a dense array) or a .npz file "
+                     f"(scipy.sparse.save_npz); got {path}")
+
+
+@functools.lru_cache(maxsize=16)
+def _modal_appendage(spec: ModalSpec, stamps: tuple):
+    """:meth:`ModalSpec.build`, memoised on the spec and its files' stamps."""
+    from appendages import ModalAppendage, read_modal_data, read_nastran
+
+    with quiet_unit_slips():
+        if spec.source == "file":
+            model = read_modal_data(spec.path)
+            if spec.damping is not None or spec.length is not None:
+                damping = model.damping_ratios if spec.damping is None else spec.damping
+                model = ModalAppendage(model.frequencies, model.participation,
+                                       model.rigid_mass, damping=damping,
+                                       length=spec.length if spec.length is not None else
+                                       _length_or_none(model), tip_motion=model.tip_motion)
+        elif spec.source == "nastran":
+            options = {"axes": None if spec.axes is None else np.array(spec.axes),
+                       "damping": 0.0 if spec.damping is None else spec.damping,
+                       "length": spec.length, "tip": spec.tip_grid}
+            if spec.mass_matrix is not None:
+                options["mass_matrix"] = load_mass_matrix(spec.mass_matrix)
+            model = read_nastran(spec.path, root=spec.root, units=spec.units,
+                                 subcase=spec.subcase, **options)
+        else:
+            model = ModalAppendage(
+                np.array(spec.frequencies), np.array(spec.participation),
+                np.array(spec.rigid_mass), damping=0.0 if spec.damping is None else
+                (np.array(spec.damping) if isinstance(spec.damping, tuple) else spec.damping),
+                length=spec.length,
+                tip_motion=None if spec.tip_motion is None else np.array(spec.tip_motion))
+        if spec.n_modes_kept is not None:
+            model = model.truncated(spec.n_modes_kept)
+        if spec.planar and model.three_axis:
+            model = model.planar_view("xy")
+    return model
+
+
+def _length_or_none(model):
+    """A modal appendage's length [m], or None when its data give none."""
+    try:
+        return model.length
+    except ValueError:
+        return None
+
+
 @dataclasses.dataclass(frozen=True)
 class ChainSpec:
     """A hinged chain: explicit arrays, or rigid finite elements of the appendage's beam."""
@@ -231,7 +376,10 @@ class FitSpec:
 
 @dataclasses.dataclass(frozen=True)
 class AppendageSpec:
-    """One mounted appendage: name, mount (position [m], direction [rad]) and its models."""
+    """One mounted appendage: name, mount (position [m], direction [rad]) and its models: its
+    structure (``beam``: a :class:`BeamSpec`, :class:`SteppedBeamSpec` or
+    :class:`TaperedBeamSpec`; or ``modal``: a :class:`ModalSpec`), its chains, the fit. Its
+    ``truth`` is ``"beam"``, ``"modal"`` or ``"chain"``."""
 
     name: str
     position: tuple
@@ -243,6 +391,13 @@ class AppendageSpec:
     fit: FitSpec | None
     truth_chain: ChainSpec | None = None
     orientation: tuple | None = None  # three axes: 3x3 rotation, rows (columns: local x, y, z)
+    modal: ModalSpec | None = None
+
+    @property
+    def structure(self):
+        """The spec of the appendage's structure (its exact model): a beam (uniform, stepped,
+        tapered) or modal data; None for a chain alone."""
+        return self.beam if self.beam is not None else self.modal
 
 
 @dataclasses.dataclass(frozen=True)
@@ -400,6 +555,12 @@ class Scene:
     def has_beam_truth(self) -> bool:
         """True if some appendage's truth model is a distributed beam."""
         return any(a.truth == "beam" for a in self.appendages)
+
+    @property
+    def has_exact_truth(self) -> bool:
+        """True if some appendage's truth model has an exact W: a distributed beam, or modal
+        data (exact for the modes they hold)."""
+        return any(a.truth in ("beam", "modal") for a in self.appendages)
 
     @property
     def design_variants(self) -> tuple:
