@@ -1037,7 +1037,11 @@ def _read_inertia_tensor(r: _Reader, value, full: str, *, kind: str = "hub.inert
         else:
             check_inertia_tensor("inertia", rows)
     except ValueError as exc:
-        message = str(exc).replace("hub inertia ", "", 1).replace("inertia ", "", 1)
+        message = str(exc)
+        for name in ("hub inertia ", "inertia "):  # the name the check was given leads
+            if message.startswith(name):
+                message = message[len(name):]
+                break
         raise r.error(full, message) from None
     return rows
 
