@@ -63,7 +63,7 @@ KEYS = [
     ("limits", "samples"), ("limits", "memory"), ("limits", "states"),
 ]
 TOP = {"title", "hub", "appendages", "fidelity", "controller", "manoeuvre", "outputs", "export",
-       "report", "limits"}
+       "report", "limits", "wheels", "sensors"}
 DELETE = object()
 # one key of a key path in a message: a plain key, or the repr of an odd one (shortened to
 # about 100 characters, then without its closing quote)

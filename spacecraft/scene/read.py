@@ -167,15 +167,49 @@ key                                    unit       meaning
 ``controller.lqr.deflection_weight``   1/m^2      weight on each tip deflection (needs
                                                   ``outputs.tip_deflection``)
 ``controller.lqr.estimator_speed``     -          estimator / regulator bandwidth; default 3
+``controller.delay``                   s          loop delay (computation plus transport): the
+                                                  torque the plant receives is the command of
+                                                  ``delay`` earlier, exactly in every verdict
+                                                  (margins, Nyquist, the delay margin) and in
+                                                  the simulation; default 0
+``controller.computation_delay``       -          a digital controller's own computation delay:
+                                                  one sample added to ``delay``; default false
 ``controller.given``                   -          one controller given as state-space numbers
                                                   instead of tuned (``kind``, ``A``, ``B``,
                                                   ``C``, ``D``; units and shapes in
                                                   :mod:`spacecraft.scene.given`)
 ``manoeuvre.slew_angle`` *             deg        slew angle (non-zero)
-``manoeuvre.slew_time`` *              s          duration of the cycloidal slew profile
+``manoeuvre.slew_time`` *              s          duration of the slew profile (the profile
+                                                  ends then; rest at the target after)
 ``manoeuvre.duration``                 s          simulated time; default 3 x slew_time
 ``manoeuvre.step``                     s          output step; default slew_time / 500 (the
                                                   controller's sample time when digital)
+``manoeuvre.profile``                  -          the reference: ``"step"`` (the cycloid of
+                                                  theta_ref alone; default), ``"bang-coast-bang"``
+                                                  (time-optimal under torque and rate limits),
+                                                  ``"smooth"`` (jerk-limited, 7 segments) or
+                                                  ``"shaped"`` (a base profile convolved with
+                                                  an input shaper on the design model's modes)
+``manoeuvre.feedforward``              -          feed the profile's rate reference and torque
+                                                  J alpha_ref to controllers tuned to take them;
+                                                  default false (not with ``"step"``)
+``manoeuvre.torque_limit``             N m        the profile's rigid-body torque limit (its
+                                                  acceleration limit times the spacecraft's
+                                                  inertia); default none
+``manoeuvre.rate_limit``               deg/s      the profile's rate limit; default none
+``manoeuvre.jerk_limit``               deg/s^3    ``"smooth"`` (or a smooth base): jerk limit
+``manoeuvre.shaper.kind``              -          ``"shaped"``: ``"zv"`` or ``"zvd"`` (default;
+                                                  the shortest that holds frequency_error when
+                                                  that is given)
+``manoeuvre.shaper.modes``             -          the lowest flexible modes of each design
+                                                  model to shape (1 to 8); default 1
+``manoeuvre.shaper.base``              -          ``"bang-coast-bang"`` (default) or
+                                                  ``"smooth"``
+``manoeuvre.shaper.frequency_error``   -          the robustness asked: the residual vibration
+                                                  stays below ``tolerance`` for modes within
+                                                  +- this fraction of the design's frequency
+``manoeuvre.shaper.tolerance``         -          that residual vibration, a fraction of the
+                                                  unshaped one; default 0.05
 ``manoeuvre.disturbance.input``        -          ``"disturbance_torque"`` [N m],
                                                   ``"force_x"``, ``"force_y"`` [N] or
                                                   ``"<name>_tip_force"`` [N]
@@ -221,6 +255,33 @@ key                                    unit       meaning
 ``simulator.reaction_wheel.spin_inertia``  kg m^2  torque through a reaction wheel about z
 ``simulator.reaction_wheel.max_torque``  N m      its motor torque limit; default none
 ``simulator.reaction_wheel.max_speed``  rad/s     its speed limit; default none
+``wheels.torque_limit`` *              N m        reaction wheels fly the torque (planar: one
+                                                  wheel about z): each wheel's motor torque
+                                                  limit (a number, or one per wheel)
+``wheels.momentum_limit`` *            N m s      each wheel's momentum limit J_s Omega_max
+``wheels.spin_inertia``                kg m^2     each wheel's rotor inertia (its speed is
+                                                  reported); default none
+``wheels.viscous_friction``            N m s/rad  c_v Omega (needs spin_inertia); default 0
+``wheels.coulomb_friction``            N m        c_c sign(Omega); default 0
+``wheels.saturation``                  -          ``"scale"`` (the torque vector scaled to the
+                                                  limits, its direction kept; default) or
+                                                  ``"clip"`` (each wheel alone, as Basilisk)
+``sensors.attitude_density``           rad/       attitude sensor's white angle noise, the
+                                       sqrt(Hz)   square root of its two-sided intensity (one
+                                                  value, or three: x, y, z), or
+``sensors.attitude_rms``               rad        its rms per sample, with
+``sensors.attitude_rate``              Hz         its sample rate (density = rms / sqrt(rate))
+``sensors.angle_random_walk``          rad/       gyro's white rate noise N (IEEE 952)
+                                       sqrt(s)
+``sensors.bias_instability``           rad/s      gyro's Gauss-Markov bias, stationary sigma
+``sensors.bias_correlation_time``      s          its correlation time (with bias_instability)
+``sensors.rpe_window`` *               s          window of the relative pointing error (and
+                                                  of the MPE); a digital controller's: whole
+                                                  samples
+``sensors.placement``                  -          where t lies in its window: ``"random"``
+                                                  (uniform; default) or ``"end"``
+``sensors.probability``                -          the level the pointing figures are also
+                                                  given at (two-sided Gaussian); default 0.9973
 ``limits.<name>``                      -          raise (or lower) a work limit (table "Limits")
 **three axes** (``hub.inertia`` a 3x3)
 ``hub.inertia``                        kg m^2     ``[[Jxx, Jxy, Jxz], [..], [..]]``: symmetric
@@ -236,6 +297,11 @@ key                                    unit       meaning
 ``appendages[i].beam.poisson_ratio``   -          sections: G = E / (2 (1 + nu)) for torsion;
                                                   default 0.3 (a section is needed: torsion
                                                   and axial motion; no ``"uniform"``)
+``wheels.spin_axes``                   -          ``[[x, y, z], ...]``: each wheel's spin axis
+                                                  (hub axes; they must span x, y, z), or
+``wheels.pyramid.cant_angle``          deg        four wheels about +z, each at this angle from
+                                                  it; default 54.7356 (arccos(1/sqrt(3)))
+``wheels.pyramid.azimuth``             deg        the first wheel's azimuth from +x; default 0
 ``manoeuvre.slew_axis`` *              -          ``"x"``, ``"y"``, ``"z"`` or ``[x, y, z]`` (hub
                                                   axes): the eigen-axis slew of slew_angle
 =====================================  =========  ==============================================
@@ -308,6 +374,27 @@ rigid-body LQR frequency (q / (r J^2))^(1/4), derived 1e-5 .. 1e3          rad/s
 ``simulator.reaction_wheel.spin_inertia``             1e-9 .. 1e6          kg m^2
 ``simulator.reaction_wheel.max_torque``               1e-9 .. 1e6          N m
 ``simulator.reaction_wheel.max_speed``                1e-3 .. 1e6          rad/s
+``controller.delay``                                  0 or 1e-9 .. 1e3     s
+``manoeuvre.torque_limit``                            1e-9 .. 1e6          N m
+``manoeuvre.rate_limit``                              1e-6 .. 1e3          deg/s
+``manoeuvre.jerk_limit``                              1e-9 .. 1e6          deg/s^3
+``shaper.frequency_error``, ``shaper.tolerance``      1e-6 .. < 1          -
+``wheels.torque_limit``                               1e-9 .. 1e6          N m
+``wheels.momentum_limit``                             1e-9 .. 1e9          N m s
+``wheels.spin_inertia``                               1e-9 .. 1e6          kg m^2
+``wheels.viscous_friction``                           0 or 1e-12 .. 1e6    N m s/rad
+``wheels.coulomb_friction``                           0 or 1e-12 .. 1e6    N m
+``wheels.spin_axes``                                  |x| <= 1e6           -
+``wheels.pyramid.cant_angle``                         1e-3 .. < 90         deg
+``wheels.pyramid.azimuth``                            |x| <= 360           deg
+``sensors.attitude_density``                          0 or 1e-15 .. 1      rad/sqrt(Hz)
+``sensors.attitude_rms``                              0 or 1e-15 .. 1      rad
+``sensors.attitude_rate``                             1e-3 .. 1e6          Hz
+``sensors.angle_random_walk``                         0 or 1e-15 .. 1      rad/sqrt(s)
+``sensors.bias_instability``                          0 or 1e-15 .. 1      rad/s
+``sensors.bias_correlation_time``                     1e-6 .. 1e9          s
+``sensors.rpe_window``                                1e-6 .. 1e8          s
+``sensors.probability``                               1e-6 .. < 1          -
 ====================================================  ===================  ==================
 
 Limits (work a scene may ask for; :mod:`spacecraft.scene.limits` has the measurements behind them).
@@ -364,6 +451,9 @@ from .limits import (DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, esti
 from .reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
                            _NAME, _Reader, _kind, _quoted, _shown, shorten, suggestion)
 from .given import read_given
+from .specs import SensorsSpec, ShaperSpec, WheelsSpec  # noqa: F401  (public through this module)
+from .flown import (MANOEUVRE_KEYS, check_flown_scene, read_delay, read_profile, read_sensors,
+                    read_wheels)
 from .specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLOT_ALIASES,
                           PLOTS, SECTIONS, SIMULATORS, AppendageSpec, BeamSpec, ChainSpec,
                           ControllerSpec, DisturbanceSpec, ExportSpec, FidelitySpec, FitSpec,
@@ -391,6 +481,9 @@ __all__ = [
     "ReportSpec",
     "SimulatorSpec",
     "ReactionWheelSpec",
+    "ShaperSpec",
+    "WheelsSpec",
+    "SensorsSpec",
     "load_scene",
     "default_scene",
     "example_scenes",
@@ -1096,14 +1189,14 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
     t = r.table(data, path)
     # unknown keys first: a misspelt table ([controller.pid]) is named as such, not taken for
     # a missing [controller.pd]
-    r.done({k: v for k, v in t.items() if k not in ("types", "sample_rate", "given",
-                                                    *CONTROLLERS)},
-           path, {"types", "sample_rate", "given", *CONTROLLERS})
+    own = ("types", "sample_rate", "given", "delay", "computation_delay", *CONTROLLERS)
+    r.done({k: v for k, v in t.items() if k not in own}, path, set(own))
     present = tuple(c for c in CONTROLLERS if c in t)
     types = r.choices(t, "types", path, CONTROLLERS, default=list(present or ("pd",)))
     if not types:
         raise r.error(f"{path}.types", "must name at least one controller")
     rate = r.number(t, "sample_rate", path, "controller.sample_rate", default=None)
+    delay, computation_delay = read_delay(r, t, path, None if rate is None else 1.0 / rate)
     pd_spec = lqr_spec = None
     if "pd" in types:
         p = f"{path}.pd"
@@ -1143,10 +1236,12 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
         given = read_given(t.pop("given"), f"{path}.given", types, r.error,
                            three_axis=getattr(r, "three_axis", False), max_states=r.limits.states)
     r.done(t, path, {"types", "sample_rate", "pd", "lqr"})
-    return ControllerSpec(types, pd_spec, lqr_spec, None if rate is None else 1.0 / rate, given)
+    return ControllerSpec(types, pd_spec, lqr_spec, None if rate is None else 1.0 / rate, given,
+                          delay, computation_delay)
 
 
-def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> ManoeuvreSpec:
+def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time,
+                    delay: float = 0.0) -> ManoeuvreSpec:
     t = r.table(data, path)
     degrees = r.number(t, "slew_angle", path, "manoeuvre.slew_angle")
     r.warn(f"{path}.slew_angle", radians_in_degrees(degrees))
@@ -1155,7 +1250,16 @@ def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> Manoeuvr
     duration = r.number(t, "duration", path, "manoeuvre.duration", default=None)
     duration = 3.0 * slew_time if duration is None else duration
     default_step = sample_time if sample_time is not None else slew_time / 500.0
+    if sample_time is None and delay > 0:
+        # a continuous controller's delayed loop is simulated with the command held every step:
+        # at most 2 x delay (controllers.delay)
+        default_step = min(default_step, 2.0 * delay)
     step = r.number(t, "step", path, "manoeuvre.step", default=None)
+    if step is not None and sample_time is None and step > 2.0 * delay * (1 + 1e-12) > 0:
+        raise r.error(f"{path}.step", f"must be at most 2 x controller.delay = {2 * delay:g} s "
+                      "for a continuous controller with a delay (its delayed loop is simulated "
+                      f"with the command held every step, controllers.delay); got {step:g}: "
+                      "shorten it or remove it (the default then fits)")
     step = default_step if step is None else step
     if sample_time is not None and not math.isclose(step, sample_time, rel_tol=1e-9):
         raise r.error(f"{path}.step", f"must equal the controller's sample time "
@@ -1187,8 +1291,10 @@ def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time) -> Manoeuvr
                       "3x3 tensor [kg m^2]); a planar slew turns about the hub's z axis")
     if disturbance is not None and getattr(r, "three_axis", False):
         raise r.error(f"{path}.disturbance", "is not supported in three-axis scenes yet")
-    r.done(t, path, {"slew_angle", "slew_time", "duration", "step", "disturbance", "slew_axis"})
-    return ManoeuvreSpec(angle, slew_time, duration, step, disturbance, slew_axis)
+    flown = read_profile(r, t, path)
+    r.done(t, path, {"slew_angle", "slew_time", "duration", "step", "disturbance", "slew_axis",
+                     *MANOEUVRE_KEYS})
+    return ManoeuvreSpec(angle, slew_time, duration, step, disturbance, slew_axis, **flown)
 
 
 def _read_slew_axis(r: _Reader, t: dict, path: str) -> tuple:
@@ -1366,7 +1472,7 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None,
     if "manoeuvre" in t:
         manoeuvre = _read_manoeuvre(r, t.pop("manoeuvre"), "manoeuvre", [a.name for a in
                                                                            appendages],
-                                    controller.sample_time)
+                                    controller.sample_time, controller.delay)
 
     ot = r.table(t.pop("outputs", {}), "outputs")
     outputs = OutputsSpec(r.boolean(ot, "tip_deflection", "outputs", False),
@@ -1408,8 +1514,12 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None,
     r.done(rt, "report", {"plots", "equivalence", "timeseries"})
     simulator = (_read_simulator(r, t.pop("simulator"), "simulator") if "simulator" in t
                  else SimulatorSpec())
+    wheels = (read_wheels(r, t.pop("wheels"), "wheels", hub.three_axis) if "wheels" in t
+              else None)
+    sensors = (read_sensors(r, t.pop("sensors"), "sensors", hub.three_axis,
+                            controller.sample_time) if "sensors" in t else None)
     r.done(t, "", {"title", "hub", "appendages", "fidelity", "controller", "manoeuvre",
-                   "outputs", "export", "report", "limits", "simulator"})
+                   "outputs", "export", "report", "limits", "simulator", "wheels", "sensors"})
 
     # outputs the scene cannot produce
     if outputs.exact_reference and not any(a.truth in ("beam", "modal") for a in appendages):
@@ -1428,13 +1538,17 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None,
     if export.fmu and manoeuvre is None and export.step is None:
         raise r.error("export.step", "missing: without a manoeuvre table the FMU step must be "
                       "given [s]")
+    check_flown_scene(r, controller=controller, manoeuvre=manoeuvre, wheels=wheels,
+                      sensors=sensors, simulator=simulator, export=export,
+                      three_axis=hub.three_axis)
     if hub.three_axis:
         _check_three_axis_scene(r, simulator, outputs, export, plots)
     scene = Scene(title=title, source=source or "<dict>", hub=hub, appendages=appendages,
                   fidelity=fidelity, controller=controller, manoeuvre=manoeuvre,
                   outputs=outputs, export=export,
                   report=ReportSpec(plots, equivalence, timeseries), limits=r.limits,
-                  simulator=simulator, input_warnings=tuple(r.warnings))
+                  simulator=simulator, input_warnings=tuple(r.warnings), wheels=wheels,
+                  sensors=sensors)
     _check_cost(r, scene)
     return scene
 

@@ -23,7 +23,8 @@ __all__ = [
     "HubSpec", "TipSpec", "BeamSpec", "SteppedBeamSpec", "TaperedBeamSpec", "ModalSpec",
     "MODAL_SOURCES", "load_mass_matrix", "ChainSpec", "FitSpec", "AppendageSpec", "FidelitySpec", "PDSpec",
     "LQRSpec", "ControllerSpec", "DisturbanceSpec", "ManoeuvreSpec", "OutputsSpec", "ExportSpec",
-    "ReportSpec", "ReactionWheelSpec", "SimulatorSpec", "Scene", "scene_dict", "PLOTS",
+    "ReportSpec", "ReactionWheelSpec", "SimulatorSpec", "ShaperSpec", "WheelsSpec",
+    "SensorsSpec", "Scene", "scene_dict", "PLOTS",
     "PLOT_ALIASES", "EXPORTABLE", "SECTIONS", "MATCHES", "METHODS", "CONTROLLERS",
     "FMI_VERSIONS", "SIMULATORS", "TAPERED_SECTIONS", "quiet_unit_slips",
 ]
@@ -443,6 +444,13 @@ class ControllerSpec:
     lqr: LQRSpec | None
     sample_time: float | None = None
     given: object = None
+    delay: float = 0.0             # s: loop delay (computation plus transport)
+    computation_delay: bool = False  # a digital controller's one sample added to the delay
+
+    @property
+    def total_delay(self) -> float:
+        """The loop's delay [s]: ``delay`` plus one sample with ``computation_delay``."""
+        return self.delay + (self.sample_time if self.computation_delay else 0.0)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -456,8 +464,28 @@ class DisturbanceSpec:
 
 
 @dataclasses.dataclass(frozen=True)
+class ShaperSpec:
+    """Input shaper of a ``"shaped"`` profile: ``kind`` ("zv", "zvd") on the ``modes`` lowest
+    flexible modes of each design model, convolved with a ``base`` profile
+    ("bang-coast-bang", "smooth"); the residual vibration stays at or below ``tolerance`` (a
+    fraction of the unshaped one) for a frequency error of +-``frequency_error`` (a fraction;
+    None: not asked)."""
+
+    kind: str = "zvd"
+    modes: int = 1
+    base: str = "bang-coast-bang"
+    frequency_error: float | None = None
+    tolerance: float = 0.05
+
+
+@dataclasses.dataclass(frozen=True)
 class ManoeuvreSpec:
-    """Slew of slew_angle [rad] in slew_time [s], simulated for duration [s] at step [s]."""
+    """Slew of slew_angle [rad] in slew_time [s], simulated for duration [s] at step [s].
+
+    ``profile`` is the reference (:data:`controllers.PROFILE_KINDS`): ``"step"``, the cycloid
+    of theta_ref alone, or a rest-to-rest profile under ``torque_limit`` [N m], ``rate_limit``
+    [rad/s] and ``jerk_limit`` [rad/s^3] ending at slew_time; ``feedforward`` feeds its rate
+    reference and feedforward torque to controllers tuned to take them."""
 
     slew_angle: float
     slew_time: float
@@ -465,6 +493,18 @@ class ManoeuvreSpec:
     step: float
     disturbance: DisturbanceSpec | None = None
     slew_axis: tuple | None = None  # three axes: unit vector of the eigen-axis slew, hub axes
+    profile: str = "step"
+    feedforward: bool = False
+    torque_limit: float | None = None   # N m
+    rate_limit: float | None = None     # rad/s
+    jerk_limit: float | None = None     # rad/s^3
+    shaper: ShaperSpec | None = None
+
+    @property
+    def flown(self) -> bool:
+        """True for anything but today's reference: a profile other than the step, or
+        feedforward."""
+        return self.profile != "step" or self.feedforward
 
 
 @dataclasses.dataclass(frozen=True)
@@ -510,6 +550,88 @@ class ReactionWheelSpec:
 
 
 @dataclasses.dataclass(frozen=True)
+class WheelsSpec:
+    """Reaction wheels between the controller's torque command and the hub
+    (:class:`controllers.WheelSet`): per wheel (a number for every wheel, or one per wheel)
+    torque limit [N m], momentum limit [N m s], spin inertia [kg m^2] (None: not given),
+    viscous [N m s/rad] and Coulomb [N m] friction; three axes: the wheels' unit spin axes
+    (hub axes, rows) or a 4-wheel pyramid about +z ``(cant_angle, azimuth)`` [rad], and the
+    torque saturation rule."""
+
+    torque_limit: float | tuple
+    momentum_limit: float | tuple
+    spin_inertia: float | tuple | None = None
+    viscous_friction: float | tuple = 0.0
+    coulomb_friction: float | tuple = 0.0
+    spin_axes: tuple | None = None
+    pyramid: tuple | None = None
+    saturation: str = "scale"
+
+    @property
+    def n_wheels(self) -> int:
+        """1 (planar), the rows of ``spin_axes``, or 4 (pyramid)."""
+        if self.spin_axes is not None:
+            return len(self.spin_axes)
+        return 4 if self.pyramid is not None else 1
+
+    def value(self, name: str, k: int):
+        """Wheel ``k``'s value of a per-wheel field."""
+        v = getattr(self, name)
+        return v[k] if isinstance(v, tuple) else v
+
+    def build(self):
+        """The :class:`controllers.WheelSet`."""
+        import controllers
+
+        wheels = [controllers.ReactionWheel(
+            torque_limit=self.value("torque_limit", k),
+            momentum_limit=self.value("momentum_limit", k),
+            spin_inertia=self.value("spin_inertia", k),
+            viscous_friction=self.value("viscous_friction", k),
+            coulomb_friction=self.value("coulomb_friction", k)) for k in range(self.n_wheels)]
+        if self.pyramid is not None:
+            if len(set(wheels)) == 1:
+                return controllers.WheelSet.pyramid(wheels[0], self.pyramid[0],
+                                                    azimuth=self.pyramid[1],
+                                                    saturation=self.saturation)
+            import numpy as np
+
+            beta, a0 = self.pyramid
+            a = a0 + 0.5 * math.pi * np.arange(4)
+            axes = np.column_stack([math.sin(beta) * np.cos(a), math.sin(beta) * np.sin(a),
+                                    np.full(4, math.cos(beta))])
+            return controllers.WheelSet(wheels, axes, saturation=self.saturation)
+        return controllers.WheelSet(wheels if self.spin_axes is not None else wheels[0],
+                                    self.spin_axes, saturation=self.saturation)
+
+
+@dataclasses.dataclass(frozen=True)
+class SensorsSpec:
+    """Sensor noise (:class:`controllers.SensorNoise`; a number for every axis or three):
+    attitude sensor white-noise density [rad/sqrt(Hz)], gyro angle random walk [rad/sqrt(s)],
+    bias instability [rad/s] and its correlation time [s]; the pointing figures' RPE window
+    [s], where t lies in it (``"random"``, ``"end"``) and the probability level they are also
+    given at."""
+
+    attitude_density: float | tuple = 0.0
+    angle_random_walk: float | tuple = 0.0
+    bias_instability: float | tuple = 0.0
+    bias_correlation_time: float | tuple | None = None
+    rpe_window: float = 1.0
+    placement: str = "random"
+    probability: float = 0.9973
+
+    def noise(self):
+        """The :class:`controllers.SensorNoise`."""
+        import controllers
+
+        return controllers.SensorNoise(
+            attitude_density=self.attitude_density, angle_random_walk=self.angle_random_walk,
+            bias_instability=self.bias_instability,
+            bias_correlation_time=self.bias_correlation_time)
+
+
+@dataclasses.dataclass(frozen=True)
 class SimulatorSpec:
     """Who simulates the manoeuvre besides flexsat: ``"flexsat"`` (nobody else) or
     ``"basilisk"`` (the design chains in Basilisk, flight-software sample time [s], RK4 step
@@ -541,6 +663,8 @@ class Scene:
     #: Values that look like unit slips, one line each naming the key and the likely mistake
     #: (:mod:`appendages.unit_slips`); the run reports them with its warnings.
     input_warnings: tuple = ()
+    wheels: WheelsSpec | None = None
+    sensors: SensorsSpec | None = None
 
     @property
     def three_axis(self) -> bool:
