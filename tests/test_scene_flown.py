@@ -12,9 +12,9 @@ from spacecraft.scene.read import SceneError, load_scene
 from test_scene import BASE, scene_with
 
 FLOWN = {"manoeuvre.profile": "shaped", "manoeuvre.feedforward": True,
-         "manoeuvre.torque_limit": 0.05, "manoeuvre.rate_limit": 0.5,
+         "manoeuvre.torque_limit": 0.1, "manoeuvre.rate_limit": 0.5,
          "controller.delay": 0.2, "manoeuvre.step": 0.1,
-         "wheels": {"torque_limit": 0.1, "momentum_limit": 4.0, "spin_inertia": 0.02},
+         "wheels": {"torque_limit": 0.2, "momentum_limit": 4.0, "spin_inertia": 0.02},
          "sensors": {"attitude_density": 1e-5, "angle_random_walk": 1e-6, "rpe_window": 10.0}}
 
 THREE = {"hub": {"mass": 820.0, "inertia": [[950.0, 12.0, -8.0], [12.0, 780.0, 15.0],
@@ -48,15 +48,15 @@ def test_a_flown_scene_in_si_units():
     scene = load_scene(flown())
     m = scene.manoeuvre
     assert (m.profile, m.feedforward, m.flown) == ("shaped", True, True)
-    assert m.torque_limit == 0.05
+    assert m.torque_limit == 0.1
     # the file's deg/s and deg/s^3 are rad/s and rad/s^3 inside
     assert m.rate_limit == pytest.approx(math.radians(0.5), rel=1e-15)
     assert m.shaper.kind == "zvd" and m.shaper.modes == 1 and m.shaper.base == "bang-coast-bang"
     assert scene.controller.delay == 0.2
     w = scene.wheels
-    assert (w.torque_limit, w.momentum_limit, w.spin_inertia, w.n_wheels) == (0.1, 4.0, 0.02, 1)
+    assert (w.torque_limit, w.momentum_limit, w.spin_inertia, w.n_wheels) == (0.2, 4.0, 0.02, 1)
     wheels = w.build()
-    assert wheels.planar and wheels.torque_limits.tolist() == [0.1]
+    assert wheels.planar and wheels.torque_limits.tolist() == [0.2]
     s = scene.sensors
     assert (s.attitude_density, s.angle_random_walk, s.rpe_window) == (1e-5, 1e-6, 10.0)
     assert s.placement == "random" and s.probability == 0.9973

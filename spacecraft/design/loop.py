@@ -43,6 +43,8 @@ from controllers.threads import blas_threads_for
 from ..dynamics.survey import modal_survey
 from ..scene.limits import estimate_cost, library_limits
 from ..scene.read import Scene, load_scene, models_scene, scene_dict
+from .manoeuvre import (FlownManoeuvre, check_slew_limits, close_flown_loop, delay_facts, flies,
+                        loop_delay)
 from .models import ModelBuilder, ProgressCallback, RunStats
 from .responses import appendage_peaks, diverged_at, simulate_manoeuvre, trace
 from .tables import describe_model, equivalence_table
@@ -256,6 +258,7 @@ class DesignLoop(ModelBuilder):
         super().__init__(scene, progress, RunStats() if stats is None else stats,
                          bool(time_responses), given=given)
         self._fidelity = None
+        self.flown = FlownManoeuvre(self) if self.scene.manoeuvre is not None else None
 
     @property
     def n_modes(self) -> int | None:
@@ -297,6 +300,9 @@ class DesignLoop(ModelBuilder):
                 if a.design == "fit":
                     for match in a.fit.match:
                         self.fit(a, match)
+            if m is not None and flies(scene):
+                # limits that cannot fly the slew: refused before the work
+                check_slew_limits(scene, self.rigid_inertia())
         self._fidelity = n_modes, choice = self.choose_fidelity()
         data["fidelity"] = {
             "n_modes": n_modes, "method": scene.fidelity.method if n_modes else None,
@@ -363,6 +369,8 @@ class DesignLoop(ModelBuilder):
                         if which in c.disturbance_responses:
                             disturbance_responses[key] = c.disturbance_responses[which]
         data["closed_loops"] = rows
+        if self.flown is not None and self.time_responses:
+            data["manoeuvre"] = self.flown.facts(truth_verdict)
 
         models = {}
         for k, a in enumerate(scene.appendages):
@@ -389,6 +397,8 @@ class DesignLoop(ModelBuilder):
                                      for k, (w, what) in resolved.items()}
         data["truth"]["loop_band"] = loop_band
         data["design_warnings"] = design_warnings(data, loop_band=loop_band, resolved=resolved)
+        if self.flown is not None:
+            data["design_warnings"] += self.flown.warnings(data)
         data["stats"] = stats.as_dict()
         truth = {"spacecraft": truth_sc, "verdict": truth_verdict, "sim": truth_sim}
         return RunResult(scene, data, stats, truth, designs, responses, loops, models, exact_frd,
@@ -432,10 +442,14 @@ class DesignLoop(ModelBuilder):
                                                                  n_modes).controller
         row: dict = {"design": variant, "controller": kind}
         if "design" in models:
-            row["design_margins"] = margins_dict(self.design_margins(variant, kind, n_modes,
-                                                                     controller))
-        verdict = self.truth_spillover(self.truth_plant(n_modes), K)
-        row["verdict"] = verdict_dict(verdict)
+            design_margins = self.design_margins(variant, kind, n_modes, controller)
+            row["design_margins"] = {**margins_dict(design_margins),
+                                     **delay_facts(design_margins)}
+        verdict = self.truth_spillover(self.truth_plant(n_modes), K, delayed=True)
+        row["verdict"] = {**verdict_dict(verdict), **delay_facts(verdict.margins)}
+        if scene.controller.total_delay > 0:
+            row["undelayed_stable"] = bool(self.truth_spillover(self.truth_plant(n_modes),
+                                                                K).stable)
         if "design" in models and scene.controller.sample_time is not None:
             row["digital"] = digital_facts(scene.controller.sample_time, rigid_crossover(
                 self.design_plant(variant, n_modes)[0], K))
@@ -446,15 +460,16 @@ class DesignLoop(ModelBuilder):
                 warnings.simplefilter("ignore", RuntimeWarning)
                 try:
                     exact = exact_loop_verdict(self.exact_spacecraft(), K, frd.omega,
-                                               theta=np.asarray(frd.frdata)[0, 0])
-                    row["exact_verdict"] = verdict_dict(exact)
+                                               theta=np.asarray(frd.frdata)[0, 0],
+                                               delay=scene.controller.total_delay)
+                    row["exact_verdict"] = {**verdict_dict(exact), **delay_facts(exact.margins)}
                 except ValueError as exc:
                     row["exact_verdict"] = {"error": str(exc)}
         out = ClosedLoops(variant, kind, K, row, verdict, exact)
         plants = {which: self.simulation_plant(which, variant, n_modes) for which in models}
         if m is None or not self.time_responses:
             for which, plant in plants.items():
-                out.loops[which] = loop = controllers.close_loop(plant, K)
+                out.loops[which] = loop = close_flown_loop(plant, K, scene)
                 out.poles[which] = closed_loop_poles(loop)
             return out
         for key in ("metrics", "metric_flags", "status", "appendages", "disturbance_metrics",
@@ -462,9 +477,11 @@ class DesignLoop(ModelBuilder):
             row[key] = {}
         names = self.names
         for which, plant in plants.items():
-            out.loops[which] = loop = controllers.close_loop(plant, K)
+            flight = (self.flown.fly(variant, plant, K, whole=whole_manoeuvre)
+                      if flies(scene) else None)
+            out.loops[which] = loop = flight.loop if flight else controllers.close_loop(plant, K)
             out.poles[which] = poles = closed_loop_poles(loop)
-            runs = self.simulate(loop, whole=whole_manoeuvre)
+            runs = flight.runs if flight else self.simulate(loop, whole=whole_manoeuvre)
             slew, shock = runs["slew"], runs["disturbance"]
             out.responses[which] = slew
             with np.errstate(all="ignore"):
@@ -482,6 +499,7 @@ class DesignLoop(ModelBuilder):
             if status["status"] in ("diverges", "unstable"):
                 peaks = {n: {k: None for k in p} for n, p in peaks.items()}
             row["appendages"][which] = peaks
+            self.flown.record(row, which, flight, slew, status, plant, K)
             if shock is not None:
                 out.disturbance_responses[which] = shock
                 with np.errstate(all="ignore"):

@@ -36,6 +36,7 @@ from .fidelity import (MAX_MODES, FidelityChoice, choose_n_modes, clamped_freque
 from ..dynamics.hub import Hub, Mount
 from ..scene.limits import estimate_cost
 from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
+from .manoeuvre import loop_delay
 from .verdicts import closed_loop_poles
 
 __all__ = ["ModelBuilder", "GivenModels", "TruthLoop", "RunStats", "raised_by_flexsat",
@@ -95,6 +96,8 @@ class RunStats:
         Requests answered from the run's caches.
     basilisk_runs : int
         Manoeuvres run in Basilisk.
+    pointing_analyses : int
+        Pointing budgets computed (covariance analyses under the sensors' noise).
     seconds : dict
         Wall time per stage [s] (informative, never asserted).
     """
@@ -114,6 +117,7 @@ class RunStats:
     modes_kept: int = 0
     modes_dropped: int = 0
     cache_hits: int = 0
+    pointing_analyses: int = 0
     basilisk_runs: int = 0
     seconds: dict = dataclasses.field(default_factory=dict)
 
@@ -388,7 +392,9 @@ class ModelBuilder:
                     self.stats.pd_designs += 1
                 else:
                     self.stats.lqr_designs += 1
-                return tune(kind, plant, self.scene.controller)
+                m = self.scene.manoeuvre
+                return tune(kind, plant, self.scene.controller,
+                            feedforward=m is not None and m.feedforward)
         return self.cached(("tuned", self.design_key(variant, n_modes), kind), build)
 
     def design_margins(self, variant: str, kind: str, n_modes: int | None, controller=None):
@@ -400,18 +406,22 @@ class ModelBuilder:
                  else self.tuned(variant, kind, n_modes).controller)
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                return controllers.margins(plant, K)
+                return controllers.margins(plant, K, **loop_delay(self.scene.controller))
         return self.cached(("design margins", self.design_key(variant, n_modes), kind,
                             None if controller is None else id(controller)), build)
 
-    def truth_spillover(self, plant, controller):
+    def truth_spillover(self, plant, controller, *, delayed: bool = False):
         """:func:`controllers.spillover` of a controller on a truth plant, once per (plant,
-        controller) of the run."""
+        controller) of the run; ``delayed``: with the scene's loop delay (the run's verdict;
+        the fidelity rule compares the loops without it)."""
+        delay = loop_delay(self.scene.controller) if delayed else {}
+
         def build():
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                return controllers.spillover(plant, controller)
-        return self.cached(("spillover", id(plant), id(controller)), build)
+                return controllers.spillover(plant, controller, **delay)
+        return self.cached(("spillover", id(plant), id(controller), tuple(delay.items())),
+                           build)
 
     def truth_loop(self, plant, controller) -> "TruthLoop":
         """A controller closed on a truth plant: its poles at once, its verdict when read."""

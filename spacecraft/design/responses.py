@@ -25,7 +25,8 @@ import numpy as np
 import controllers
 
 __all__ = ["simulate_manoeuvre", "diverged_at", "time_grid", "trace", "appendage_peaks",
-           "outputs_until_overflow", "slew_and_disturbance_inputs"]
+           "outputs_until_overflow", "slew_and_disturbance_inputs", "disturbance_inputs",
+           "discrete_outputs", "response_data"]
 
 
 def time_grid(manoeuvre) -> np.ndarray:
@@ -41,13 +42,20 @@ def slew_and_disturbance_inputs(loop, manoeuvre, T: np.ndarray):
     U = np.zeros((loop.ninputs, T.size))
     U[labels.index("theta_ref")] = controllers.slew_profile(T, manoeuvre.slew_angle,
                                                             manoeuvre.slew_time)
-    D = None
-    if manoeuvre.disturbance is not None:
-        d = manoeuvre.disturbance
-        end = math.inf if d.length is None else d.start + d.length
-        D = np.zeros((loop.ninputs, T.size))
-        D[labels.index(d.input)] = np.where((T >= d.start) & (T < end), d.amplitude, 0.0)
-    return U, D
+    return U, disturbance_inputs(labels, manoeuvre, T)
+
+
+def disturbance_inputs(labels, manoeuvre, T: np.ndarray) -> np.ndarray | None:
+    """Input array (len(labels), n) of the manoeuvre's disturbance pulse alone at the times T
+    (None without a disturbance)."""
+    if manoeuvre.disturbance is None:
+        return None
+    labels = list(labels)
+    d = manoeuvre.disturbance
+    end = math.inf if d.length is None else d.start + d.length
+    D = np.zeros((len(labels), T.size))
+    D[labels.index(d.input)] = np.where((T >= d.start) & (T < end), d.amplitude, 0.0)
+    return D
 
 
 def simulate_manoeuvre(loop, manoeuvre, *, simulator=None, together: bool = False) -> dict:
@@ -75,28 +83,31 @@ def simulate_manoeuvre(loop, manoeuvre, *, simulator=None, together: bool = Fals
     if together and D is not None:
         U, D = U + D, None
     if loop.isdtime(strict=True):
-        outputs = _discrete_outputs
+        outputs = discrete_outputs
     else:
         if simulator is None:
             simulator = controllers.Simulator(loop, manoeuvre.step)
 
         def outputs(loop, T, U):
             return outputs_until_overflow(simulator, T, U)
-    out = {"slew": _response(loop, T, U, outputs(loop, T, U), "slew"), "disturbance": None}
+    out = {"slew": response_data(loop, T, U, outputs(loop, T, U), "slew"), "disturbance": None}
     if D is not None:
-        out["disturbance"] = _response(loop, T, D, outputs(loop, T, D), "disturbance")
+        out["disturbance"] = response_data(loop, T, D, outputs(loop, T, D), "disturbance")
     return out
 
 
-def _discrete_outputs(loop, T, U) -> np.ndarray:
+def discrete_outputs(loop, T, U) -> np.ndarray:
+    """Outputs (noutputs, n) of a discrete loop driven by U at its samples T (non-finite
+    where its response leaves the float range)."""
     with np.errstate(over="ignore", invalid="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         response = control.forced_response(loop, T, U, squeeze=False)
     return np.asarray(response.y).reshape(loop.noutputs, -1)
 
 
-def _response(loop, T, U, Y, what: str) -> control.TimeResponseData:
-    """The response up to its first sample outside the float range."""
+def response_data(loop, T, U, Y, what: str) -> control.TimeResponseData:
+    """The response of ``loop`` (outputs Y, inputs U at the times T) up to its first sample
+    outside the float range, with ``diverged`` and ``diverged_at`` [s] (None)."""
     n = T.size
     with np.errstate(invalid="ignore"):
         finite = np.all(np.isfinite(Y), axis=0)

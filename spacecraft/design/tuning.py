@@ -53,7 +53,7 @@ def _poles(values, sample_time: float | None = None) -> list:
             for z in s_plane_poles(values, sample_time)]
 
 
-def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
+def tune(kind: str, plant: control.StateSpace, spec, *, feedforward: bool = False) -> Tuned:
     """Tune the controller ``kind`` ("pd" or "lqr") of a scene's controller table on a plant
     (or take it as given: ``spec.given`` of that kind, :mod:`spacecraft.scene.given`).
 
@@ -63,6 +63,10 @@ def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
     plant : control.StateSpace
         Design plant (inputs ``torque``; outputs ``theta``, ``omega``).
     spec : spacecraft.scene.read.ControllerSpec
+    feedforward : bool
+        Tune the controller to take a profile's rate reference ``omega_ref`` [rad/s] and
+        feedforward torque ``torque_ff`` [N m] besides theta_ref (the same gains:
+        :func:`controllers.pd`, :func:`controllers.lqr`).
 
     Returns
     -------
@@ -79,11 +83,11 @@ def tune(kind: str, plant: control.StateSpace, spec) -> Tuned:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", controllers.RemovedModesWarning)
         if kind == "pd":
-            tuned = _pd(plant, spec)
+            tuned = _pd(plant, spec, feedforward)
         else:
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                tuned = _lqr(plant, spec)
+                tuned = _lqr(plant, spec, feedforward)
     removed = [" ".join(str(w.message).split()) for w in caught
                if issubclass(w.category, controllers.RemovedModesWarning)]
     for w in caught:  # anything else goes on to the caller's record
@@ -117,11 +121,11 @@ def _given(given, sample_time: float | None) -> Tuned:
     return Tuned(K, description, [])
 
 
-def _pd(plant, spec) -> Tuned:
+def _pd(plant, spec, feedforward: bool = False) -> Tuned:
     p = spec.pd
     K = controllers.pd(plant, natural_frequency=p.natural_frequency, bandwidth=p.bandwidth,
                        damping=p.damping, roll_off=p.roll_off, notch=p.notch,
-                       sample_time=spec.sample_time)
+                       sample_time=spec.sample_time, feedforward=feedforward)
     J = controllers.rigid_body_inertia(plant)
     wn = (p.natural_frequency if p.natural_frequency is not None
           else controllers.natural_frequency_from_bandwidth(p.bandwidth, p.damping))
@@ -131,29 +135,34 @@ def _pd(plant, spec) -> Tuned:
         notch = float(controllers.flexible_modes(plant)[0].frequency)
     filters = (["N(s) notch"] if notch is not None else []) + (
         ["F(s) roll-off"] if p.roll_off is not None else [])
-    law = "Kp (theta_ref - theta) - Kd omega"
+    law = ("Kp (theta_ref - theta) + Kd (omega_ref - omega)" if feedforward
+           else "Kp (theta_ref - theta) - Kd omega")
     structure = (f"torque = {' '.join(f.split()[0] for f in filters)} [{law}]" if filters
-                 else f"torque = {law}")
+                 else f"torque = {law}") + (" + torque_ff" if feedforward else "")
     description = {
         "kind": "pd", "structure": structure, "inertia": J, "natural_frequency": wn,
         "damping": p.damping, "Kp": Kp, "Kd": Kd, "roll_off": p.roll_off, "notch": notch,
         "notch_spec": p.notch if isinstance(p.notch, str) else None,
+        "feedforward": feedforward,
     }
     return Tuned(K, description, [])
 
 
-def _lqr(plant, spec) -> Tuned:
+def _lqr(plant, spec, feedforward: bool = False) -> Tuned:
     q = spec.lqr
     design = controllers.lqr_design(plant, attitude_weight=q.attitude_weight,
                                      rate_weight=q.rate_weight, torque_weight=q.torque_weight,
                                      deflection_weight=q.deflection_weight,
                                      estimator_speed=q.estimator_speed,
-                                     sample_time=spec.sample_time)
+                                     sample_time=spec.sample_time, feedforward=feedforward)
     n = design.controller.nstates
     description = {
         "kind": "lqr",
-        "structure": ("torque = -K (x_hat - x_ref theta_ref), x_hat from a Kalman filter on "
-                      "theta and omega (output feedback; x_hat: the design model's states)"),
+        "structure": (("torque = -K (x_hat - x_ref theta_ref - x_rate omega_ref) + torque_ff"
+                       if feedforward else "torque = -K (x_hat - x_ref theta_ref)")
+                      + ", x_hat from a Kalman filter on theta and omega (output feedback; "
+                      "x_hat: the design model's states)"),
+        "feedforward": feedforward,
         "attitude_weight": q.attitude_weight, "rate_weight": q.rate_weight,
         "torque_weight": q.torque_weight, "deflection_weight": q.deflection_weight,
         "estimator_speed": q.estimator_speed,

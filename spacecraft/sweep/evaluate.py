@@ -62,6 +62,7 @@ import numpy as np
 from ..design.loop import DesignLoop
 from ..design.verdicts import TIME_METRICS, withheld_metrics
 from ..scene.given import controller_record
+from ..design.manoeuvre import flown_keys
 from ..scene.read import SceneError, load_scene
 from ..scene.reader import shorten
 from .parameters import SweepError, SweepSpec, apply_values
@@ -397,6 +398,11 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
                          "be swept yet (a sample is the planar design loop: one torque, theta "
                          "and omega about z); sweep a planar scene, or run this one with "
                          "flexsat run")
+    flown = flown_keys(scene)
+    if flown:
+        raise SweepError(f"{source}: {flown[0]}: a sweep's sample is the ideal slew (the step "
+                         "reference, no loop delay, wheels or sensor noise); sweep a scene "
+                         "without it, or run this one with flexsat run")
     n_modes = None
     if scene.has_beam_truth:
         if scene.fidelity.n_modes is not None:
