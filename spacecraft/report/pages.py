@@ -11,9 +11,10 @@ escaped: a title cannot inject markup into either page.
 from __future__ import annotations
 
 import html
+import math
 import re
 
-__all__ = ["Tone", "bad", "warn", "markdown_text", "markdown", "render_html"]
+__all__ = ["Tone", "bad", "warn", "number", "markdown_text", "markdown", "render_html"]
 
 
 class Tone(str):
@@ -35,6 +36,25 @@ def bad(text) -> Tone:
 def warn(text) -> Tone:
     """A text that reports a warning (orange in HTML)."""
     return Tone(str(text), "warn")
+
+
+def number(value, digits: int = 5) -> str:
+    """A value as a report shows it: ``digits`` significant digits, ``n/a`` for None or NaN,
+    ``inf``, ``yes``/``no`` for a bool, an int or a str as it is."""
+    if value is None:
+        return "n/a"
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, int):
+        return str(value)
+    value = float(value)
+    if math.isnan(value):
+        return "n/a"
+    if math.isinf(value):
+        return "inf" if value > 0 else "-inf"
+    return f"{value:.{digits}g}"
 
 
 # Inline Markdown markup (CommonMark + GFM): code, emphasis, links and images, tables,

@@ -18,7 +18,12 @@ four PNG files, drawn on matplotlib's Agg canvas without pyplot):
   against natural frequency for every pole (the flexible modes far above the bandwidth);
   unstable poles red, the right half-plane shaded;
 - ``W.png``: |W1|, |W2| = |W3|, |W4| of every (distinct) appendage: the exact beam, the truth
-  model and the design chains, with the band where the truth model is resolved.
+  model and the design chains, with the band where the truth model is resolved;
+- ``profile.png``: the reference profile per design model: theta_ref [deg], omega_ref [deg/s]
+  and the feedforward torque J alpha_ref [N m] against the profile's limits, the end of the
+  profile and (shaped) the shaper's impulses;
+- ``wheels.png``: per controller, each wheel's torque (applied, and the controller's command)
+  and momentum against their limits, the time a limit acts shaded; Basilisk's wheel dotted.
 
 Names and colours are those of :mod:`spacecraft.design.naming`: one colour per design model, the loop
 on the truth model solid, on the design model dashed, the exact beam black, Basilisk dotted,
@@ -37,11 +42,12 @@ from ..design.naming import (BASILISK_COLOUR, BASILISK_STYLE, CAUTION_COLOUR, DE
                      variant_colour)
 from ..design.responses import trace
 
-__all__ = ["plot_slew", "plot_loop", "plot_poles", "plot_W", "draw", "PLOT_FILES",
-           "envelope", "identical"]
+__all__ = ["plot_slew", "plot_loop", "plot_poles", "plot_W", "plot_profile", "plot_wheels",
+           "draw", "PLOT_FILES", "envelope", "identical"]
 
 #: File of each plot of ``report.plots``.
-PLOT_FILES = {"slew": "slew.png", "loop": "loop.png", "poles": "poles.png", "W": "W.png"}
+PLOT_FILES = {"slew": "slew.png", "loop": "loop.png", "poles": "poles.png", "W": "W.png",
+              "profile": "profile.png", "wheels": "wheels.png"}
 
 #: Points drawn per curve: a longer response is drawn as its min/max envelope (peaks kept).
 _PLOT_POINTS = 4000
@@ -236,9 +242,8 @@ def plot_slew(result, path: Path) -> str:
                         label=f"Basilisk: {design_label(variant)}, nonlinear", zorder=3)
             if signal == "theta":
                 t = np.asarray(first.t, float).reshape(-1)
-                import controllers
-
-                ref = np.degrees(controllers.slew_profile(t, m.slew_angle, m.slew_time))
+                # the reference the loops read (the scene's profile)
+                ref = np.degrees(trace(first, "theta_ref", "input"))
                 handles += ax.plot(t, ref, ":", color=REFERENCE_COLOUR, lw=1.2,
                                    label="theta_ref (reference)")
             if signal == "error":
@@ -260,6 +265,11 @@ def plot_slew(result, path: Path) -> str:
                "band; torque; tip deflection of each appendage")
     if result.disturbance_responses:
         caption += "; the attitude response to the disturbance alone"
+    if result.scene.wheels is not None:
+        caption += ("; through the reaction wheels (the slew and the disturbance together: the "
+                    "wheels are nonlinear)")
+    if result.scene.controller.total_delay > 0:
+        caption += f"; with the loop delay of {result.scene.controller.total_delay:g} s"
     if result.basilisk:
         caption += ("; dotted black: Basilisk's nonlinear run of the design chains (the whole "
                     "manoeuvre, flight software at its sample time)")
@@ -722,5 +732,184 @@ def draw(result, folder: Path, wanted, stats, *, exact: bool) -> list:
     if "W" in wanted:
         path = folder / PLOT_FILES["W"]
         out.append((path, plot_W(result, path, stats, exact)))
+    if "profile" in wanted and result.scene.manoeuvre is not None and result.designs:
+        path = folder / PLOT_FILES["profile"]
+        out.append((path, plot_profile(result, path)))
+    if "wheels" in wanted and (_wheel_runs(result) or _basilisk_wheels(result)):
+        path = folder / PLOT_FILES["wheels"]
+        out.append((path, plot_wheels(result, path)))
     stats.plots += len(out)
     return out
+
+
+# ---------------------------------------------------------------------------------------------
+# the manoeuvre as flown: the profile and the wheels
+# ---------------------------------------------------------------------------------------------
+def plot_profile(result, path: Path) -> str:
+    """Draw ``profile.png``; returns its caption."""
+    from ..design.manoeuvre import build_profile
+
+    scene = result.scene
+    m = scene.manoeuvre
+    t = np.linspace(0.0, m.duration, 4001)
+    fig, axes = _figure(3, 1, (7.4, 7.6), top=0.86, left=0.12)
+    handles: list = []
+    end = None
+    for variant, d in result.designs.items():
+        profile, facts = build_profile(scene, d["plant"], variant)
+        colour = variant_colour(variant)
+        end = profile.end_time
+        label = design_label(variant)
+        handles += axes[0, 0].plot(t, np.degrees(profile.theta_ref(t)), color=colour,
+                                   lw=1.3, label=f"profile for {label}")
+        axes[1, 0].plot(t, np.degrees(profile.omega_ref(t)), color=colour, lw=1.3)
+        axes[2, 0].plot(t, profile.torque_ff(t, facts["inertia"]), color=colour, lw=1.3)
+        if profile.shaper is not None:
+            for time in profile.shaper.times:
+                axes[2, 0].axvline(time, color=colour, lw=0.6, ls=":")
+    limits = [(1, None if m.rate_limit is None else math.degrees(m.rate_limit), "rate limit"),
+              (2, m.torque_limit, "torque limit")]
+    for row, value, text in limits:
+        if value is not None:
+            for sign in (1.0, -1.0):
+                line = axes[row, 0].axhline(sign * value, color=CAUTION_COLOUR, lw=0.9, ls="--",
+                                            label=f"the profile's {text}s")
+            handles.append(line)
+    for ax in axes[:, 0]:
+        if end is not None:
+            handles.append(ax.axvline(end, color=REFERENCE_COLOUR, lw=0.6, ls="--",
+                                      label="end of the profile"))
+        ax.grid(True, alpha=0.4)
+        ax.tick_params(labelsize="small")
+    axes[0, 0].set_ylabel("theta_ref [deg]", fontsize="small")
+    axes[1, 0].set_ylabel("omega_ref [deg/s]", fontsize="small")
+    axes[2, 0].set_ylabel("J alpha_ref [N m]", fontsize="small")
+    axes[2, 0].set_xlabel("time [s]")
+    kinds = {"step": "the step reference (the cycloid of theta_ref alone)",
+             "bang-coast-bang": "a bang-coast-bang profile", "smooth": "a jerk-limited profile",
+             "shaped": f"a {m.shaper.kind.upper()}-shaped {m.shaper.base} profile"
+             if m.shaper is not None else "a shaped profile"}
+    axes[0, 0].set_title(f"{kinds[m.profile]} of {math.degrees(m.slew_angle):g} deg in "
+                         f"{m.slew_time:g} s", fontsize="medium")
+    _legend(fig, handles)
+    _save(fig, path)
+    caption = (f"The reference profile ({kinds[m.profile]}) for the controllers tuned on each "
+               "design model: theta_ref, omega_ref and the feedforward torque J alpha_ref (J "
+               "the design model's rigid-body inertia)")
+    if m.shaper is not None:
+        caption += "; dotted: the shaper's impulses"
+    caption += ("; dashed orange: the profile's limits" if any(v is not None for _, v, _ in
+                                                               limits) else "")
+    if not m.feedforward:
+        caption += (". The controllers read theta_ref only (manoeuvre.feedforward = false): "
+                    "omega_ref and the torque are the profile's, not fed")
+    return caption + "."
+
+
+def _wheel_runs(result) -> list:
+    """(key, response) of the loops flown through flexsat's wheels."""
+    return [(key, r) for key, r in result.responses.items()
+            if any(name.endswith("_momentum_saturated") for name in r.output_labels)]
+
+
+def _basilisk_wheels(result) -> dict:
+    """kind -> (t, torque applied, torque command, momentum, limits) of Basilisk's wheel runs:
+    its speed times the spin inertia, the command clipped to the torque limit (and held at
+    zero where the wheel is at its speed limit and the command drives it further), as
+    Basilisk's reactionWheelStateEffector applies it."""
+    wheel = result.scene.simulator.reaction_wheel
+    out = {}
+    if wheel is None:
+        return out
+    for kind, comparison in result.basilisk.items():
+        resp = comparison.basilisk.response
+        speed, command = trace(resp, "wheel_speed"), trace(resp, "torque")
+        if speed is None or command is None:
+            continue
+        applied = (command if wheel.max_torque is None
+                   else np.clip(command, -wheel.max_torque, wheel.max_torque))
+        if wheel.max_speed is not None:
+            # the wheel's momentum changes at minus the hub torque: a command that would spin
+            # it beyond its limit (command x speed < 0) is not applied
+            held = (np.abs(speed) >= wheel.max_speed * (1 - 1e-9)) & (command * speed < 0)
+            applied = np.where(held, 0.0, applied)
+        out[kind] = (np.asarray(resp.t, float).reshape(-1), applied, command,
+                     wheel.spin_inertia * speed,
+                     (wheel.max_torque, None if wheel.max_speed is None
+                      else wheel.spin_inertia * wheel.max_speed))
+    return out
+
+
+def plot_wheels(result, path: Path) -> str:
+    """Draw ``wheels.png``; returns its caption."""
+    runs = _wheel_runs(result)
+    basilisk = _basilisk_wheels(result)
+    kinds = list(dict.fromkeys([k[1] for k, _ in runs] + list(basilisk)))
+    spec = (result.data.get("manoeuvre") or {}).get("wheels") or {}
+    names = spec.get("names", ["wheel"] if runs else [])
+    n_cols = len(kinds)
+    fig, axes = _figure(2, n_cols, (6.2 * n_cols + 0.6, 6.4), top=0.86,
+                        left=0.1 if n_cols == 1 else 0.07)
+    handles: list = []
+    for col, kind in enumerate(kinds):
+        ax_t, ax_h = axes[0, col], axes[1, col]
+        for (variant, k, which), resp in runs:
+            if k != kind:
+                continue
+            t = np.asarray(resp.t, float).reshape(-1)
+            style = TRUTH_STYLE if which == "truth" else DESIGN_STYLE
+            colour = variant_colour(variant)
+            for w, name in enumerate(names):
+                suffix = f", {name}" if len(names) > 1 else ""
+                label = f"{design_label(variant)}: loop on the {which} model{suffix}"
+                handles += ax_t.plot(*envelope(t, trace(resp, f"{name}_torque")), style,
+                                     color=colour, lw=1.2, label=label)
+                ax_h.plot(*envelope(t, trace(resp, f"{name}_momentum")), style, color=colour,
+                          lw=1.2)
+                if which == "truth":
+                    command = trace(resp, f"{name}_torque_command")
+                    handles += ax_t.plot(*envelope(t, command), "-", color=colour, lw=0.6,
+                                         alpha=0.5, label="the controller's command (truth)")
+                    flag = (trace(resp, f"{name}_torque_saturated")
+                            + trace(resp, f"{name}_momentum_saturated")) > 0
+                    for ax in (ax_t, ax_h):
+                        if flag.any():
+                            handles.append(ax.fill_between(
+                                t, 0, 1, where=flag, transform=ax.get_xaxis_transform(),
+                                color=CAUTION_COLOUR, alpha=0.15, lw=0,
+                                label="a limit acts (truth model)"))
+        if kind in basilisk:
+            t, applied, command, momentum, _ = basilisk[kind]
+            handles += ax_t.plot(*envelope(t, applied), BASILISK_STYLE, color=BASILISK_COLOUR,
+                                 lw=1.4, label="Basilisk's wheel (design chains, nonlinear)")
+            ax_h.plot(*envelope(t, momentum), BASILISK_STYLE, color=BASILISK_COLOUR, lw=1.4)
+        limits = [(spec.get("torque_limits") or [None])[0],
+                  (spec.get("momentum_limits") or [None])[0]]
+        if kind in basilisk and not runs:
+            limits = list(basilisk[kind][4])
+        for ax, value in zip((ax_t, ax_h), limits):
+            if value is not None and math.isfinite(value):
+                for sign in (1.0, -1.0):
+                    line = ax.axhline(sign * value, color=UNSTABLE_COLOUR, lw=0.9, ls="--",
+                                      label="the wheel's limits")
+                handles.append(line)
+            ax.grid(True, alpha=0.4)
+            ax.tick_params(labelsize="small")
+        saturated = [r for r in _rows(result, kind) if (r.get("wheels") or {}).get("truth", {})
+                     .get("saturated")]
+        ax_t.set_title(f"{controller_label(kind)}: " + ("a wheel SATURATES on the truth model"
+                                                        if saturated else
+                                                        "the wheels stay within their limits"),
+                       fontsize="medium", color=CAUTION_COLOUR if saturated else "black")
+        ax_t.set_ylabel("wheel torque on the hub [N m]", fontsize="small")
+        ax_h.set_ylabel("wheel momentum J_s Omega [N m s]", fontsize="small")
+        ax_h.set_xlabel("time [s]")
+    _legend(fig, handles)
+    _save(fig, path)
+    caption = ("Reaction wheels: the torque each applies to the hub (thin: the controller's "
+               "command, on the truth model) and its momentum, against the wheel's limits "
+               "(dashed red); shaded: a limit acts on the truth model")
+    if basilisk:
+        caption += ("; dotted black: Basilisk's wheel (its speed times the spin inertia; the "
+                    "command clipped to the torque limit as Basilisk applies it)")
+    return caption + ". Solid: loop on the truth model, dashed: on the design model."

@@ -27,7 +27,9 @@ __all__ = ["clean", "to_json", "write_timeseries", "SIGNAL_UNITS", "signal_unit"
 SIGNAL_UNITS = {"time": "s", "theta": "rad", "theta_ref": "rad", "omega": "rad/s",
                 "torque": "N*m", "disturbance_torque": "N*m", "force_x": "N", "force_y": "N",
                 "_tip_deflection": "m", "_tip_force": "N", "_root_force": "N",
-                "_root_moment": "N*m", "wheel_speed": "rad/s"}
+                "_root_moment": "N*m", "wheel_speed": "rad/s", "omega_ref": "rad/s",
+                "torque_ff": "N*m", "torque_command": "N*m", "_torque_command": "N*m",
+                "_torque": "N*m", "_momentum": "N*m*s", "_speed": "rad/s", "_saturated": "-"}
 
 
 def signal_unit(name: str) -> str:

@@ -35,8 +35,9 @@ import os
 from pathlib import Path
 
 from ..design.naming import controller_label, design_label, plural
+from .flown import flown_blocks, flown_summary_lines
 from .output import MARKER, default_output_folder, output_folder
-from .pages import Tone, bad, markdown, markdown_text, render_html, warn
+from .pages import Tone, bad, markdown, markdown_text, number, render_html, warn
 from .results import to_json, write_timeseries
 from .modes import modal_table_blocks
 from .structures import structure_text, truth_text
@@ -49,21 +50,7 @@ __all__ = ["write_report", "output_folder", "default_output_folder", "to_json", 
 # ---------------------------------------------------------------------------------------------
 # numbers
 # ---------------------------------------------------------------------------------------------
-def _fmt(value, digits: int = 5) -> str:
-    if value is None:
-        return "n/a"
-    if isinstance(value, str):
-        return value
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, int):
-        return str(value)
-    value = float(value)
-    if math.isnan(value):
-        return "n/a"
-    if math.isinf(value):
-        return "inf" if value > 0 else "-inf"
-    return f"{value:.{digits}g}"
+_fmt = number
 
 
 def _percent(value) -> str:
@@ -338,6 +325,7 @@ def summary_lines(data: dict) -> list:
     if b:
         for kind, entry in b.items():
             lines.append(f"Basilisk, {controller_label(kind)}: " + entry["summary"])
+    lines += flown_summary_lines(data)
     lines += [warn(f"warning: {w['message']}") for w in data.get("design_warnings", [])]
     return lines
 
@@ -659,6 +647,7 @@ def report_blocks(data: dict, images: list) -> list:
         for note in table.get("notes", []):
             b.append(("p", note))
     b += _closed_loops(data)
+    b += flown_blocks(data)
     b += _basilisk(data)
     if images:
         b.append(("h2", "Plots"))

@@ -43,7 +43,7 @@ from .specs import SensorsSpec, ShaperSpec, WheelsSpec
 
 __all__ = ["PROFILES", "SHAPERS", "SHAPER_BASES", "SATURATIONS", "PLACEMENTS",
            "PLAUSIBLE_DELAY", "read_delay", "read_profile", "read_wheels", "read_sensors",
-           "check_flown_scene", "shaper_band", "MANOEUVRE_KEYS"]
+           "check_flown_scene", "flown_plots", "shaper_band", "MANOEUVRE_KEYS"]
 
 #: Reference profiles (``manoeuvre.profile``; :data:`controllers.PROFILE_KINDS`).
 PROFILES = ("step", "bang-coast-bang", "smooth", "shaped")
@@ -370,6 +370,23 @@ def read_sensors(r, data, path: str, three_axis: bool,
 # --------------------------------------------------------------------------------------------
 # the scene as a whole
 # --------------------------------------------------------------------------------------------
+def flown_plots(r, plots: tuple, all_plots: bool, *, manoeuvre, wheels, simulator) -> tuple:
+    """``report.plots`` with the flown plots: ``plots = true`` draws ``"profile"`` only for a
+    flown profile and ``"wheels"`` only with wheels (flexsat's or Basilisk's); asked by name
+    without them, refused by key."""
+    has_wheels = wheels is not None or simulator.reaction_wheel is not None
+    flown = manoeuvre is not None and manoeuvre.flown
+    if all_plots:
+        return tuple(p for p in plots if (p != "profile" or flown)
+                     and (p != "wheels" or has_wheels))
+    if "profile" in plots and manoeuvre is None:
+        raise r.error("report.plots", "asks for 'profile' but the scene has no manoeuvre table")
+    if "wheels" in plots and not has_wheels:
+        raise r.error("report.plots", "asks for 'wheels' but the scene has none: give a "
+                      "[wheels] table (or simulator.reaction_wheel for Basilisk)")
+    return plots
+
+
 def check_flown_scene(r, *, controller, manoeuvre, wheels, sensors, simulator, export,
                       three_axis: bool) -> None:
     """Cross-checks of the flown keys against the rest of the scene, by key."""

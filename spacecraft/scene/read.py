@@ -238,7 +238,11 @@ key                                    unit       meaning
 ``report.plots``                       -          true (all), false, or a list of ``"slew"``
                                                   (responses), ``"loop"`` (Bode and Nyquist of
                                                   L(j omega)), ``"poles"`` (closed-loop poles),
-                                                  ``"W"`` (W(s) of every appendage); default
+                                                  ``"W"`` (W(s) of every appendage),
+                                                  ``"profile"`` (the reference profile; with
+                                                  true for a flown profile only), ``"wheels"``
+                                                  (wheel torque and momentum against their
+                                                  limits; with true when there are wheels); default
                                                   false (``"bode"``, ``"pole_zero"``: old names
                                                   of ``"W"``, ``"poles"``)
 ``report.equivalence``                 -          equivalence table of fitted chains; default
@@ -452,8 +456,8 @@ from .reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BET
                            _NAME, _Reader, _kind, _quoted, _shown, shorten, suggestion)
 from .given import read_given
 from .specs import SensorsSpec, ShaperSpec, WheelsSpec  # noqa: F401  (public through this module)
-from .flown import (MANOEUVRE_KEYS, check_flown_scene, read_delay, read_profile, read_sensors,
-                    read_wheels)
+from .flown import (MANOEUVRE_KEYS, check_flown_scene, flown_plots, read_delay, read_profile,
+                    read_sensors, read_wheels)
 from .specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLOT_ALIASES,
                           PLOTS, SECTIONS, SIMULATORS, AppendageSpec, BeamSpec, ChainSpec,
                           ControllerSpec, DisturbanceSpec, ExportSpec, FidelitySpec, FitSpec,
@@ -1541,6 +1545,8 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None,
     check_flown_scene(r, controller=controller, manoeuvre=manoeuvre, wheels=wheels,
                       sensors=sensors, simulator=simulator, export=export,
                       three_axis=hub.three_axis)
+    plots = flown_plots(r, plots, plots_value is True, manoeuvre=manoeuvre, wheels=wheels,
+                        simulator=simulator)
     if hub.three_axis:
         _check_three_axis_scene(r, simulator, outputs, export, plots)
     scene = Scene(title=title, source=source or "<dict>", hub=hub, appendages=appendages,

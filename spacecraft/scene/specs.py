@@ -30,8 +30,10 @@ __all__ = [
 ]
 
 #: Plots a scene may ask for (``report.plots``): the slew responses, the open-loop transfer
-#: L(j omega) (Bode and Nyquist), the closed-loop poles, and W(s) of every appendage.
-PLOTS = ("slew", "loop", "poles", "W")
+#: L(j omega) (Bode and Nyquist), the closed-loop poles, W(s) of every appendage, the reference
+#: profile (theta_ref, omega_ref, feedforward torque) and the reaction wheels' torque and
+#: momentum against their limits.
+PLOTS = ("slew", "loop", "poles", "W", "profile", "wheels")
 #: Earlier names of plots, still accepted: ``bode`` (W(s) of the appendage), ``pole_zero``.
 PLOT_ALIASES = {"bode": "W", "pole_zero": "poles"}
 EXPORTABLE = ("plant", "controller", "closed_loop")
