@@ -604,3 +604,30 @@ def test_a_wheel_no_motor_could_spin_is_warned_about_by_key():
     assert "simulator.reaction_wheel.spin_inertia = 1e-08 kg m^2 spins the wheel up to" in said
     clean = run(hinged_wing(reaction_wheel={"spin_inertia": 0.1}))
     assert not [w for w in clean.data["warnings"] if "spin_inertia" in w]
+
+
+@needs_bsk
+def test_basilisks_wheel_is_reported_in_the_words_of_flexsats(tmp_path):
+    """A wheel of half the slew's peak torque: results.json says in words that it saturated,
+    the Basilisk summary says its limits, not the chain's nonlinearity, make the difference, a
+    design warning names it, and the wheel plot draws it (the torque it applies, within its
+    limit)."""
+    from spacecraft import run
+    from spacecraft.report.write import write_report
+
+    free = run(hinged_wing(reaction_wheel={"spin_inertia": 0.1}))
+    entry = free.data["basilisk"]["pd"]["wheel"]
+    assert entry["words"].startswith("no wheel reached a limit")
+    limit = 0.5 * entry["peak_torque"]["wheel"]
+    data = hinged_wing(reaction_wheel={"spin_inertia": 0.1, "max_torque": limit})
+    data["report"] = {"plots": ["wheels"]}
+    result = run(data)
+    entry = result.data["basilisk"]["pd"]
+    assert entry["wheel"]["saturated"] and entry["wheel"]["time_torque_saturated"]["wheel"] > 0
+    assert entry["wheel"]["peak_torque"]["wheel"] == pytest.approx(limit, rel=1e-12)
+    assert "the wheels SATURATED from t = " in entry["wheel"]["words"]
+    assert "not the chain's nonlinearity" in entry["summary"]
+    assert any(w["code"] == "wheel_saturation" for w in result.data["design_warnings"])
+    write_report(result, tmp_path)
+    assert "Basilisk's reaction wheel: the wheels SATURATED" in (tmp_path / "report.md").read_text()
+    assert (tmp_path / "plots" / "wheels.png").stat().st_size > 10_000

@@ -522,6 +522,14 @@ class FlownManoeuvre:
                             f"its loop delay and UNSTABLE with {scene.controller.total_delay:g}"
                             " s (at or beyond its delay margin): shorten the delay or lower "
                             "the bandwidth (a slower loop tolerates more delay)", **tag})
+        for kind, entry in (data.get("basilisk") or {}).items():
+            wheel = entry.get("wheel")
+            if wheel is not None and wheel["saturated"]:
+                out.append({"code": "wheel_saturation", "message": (
+                    f"{controller_label(kind)} in Basilisk: {wheel['words']}: the run is not "
+                    "the linear loop flexsat's margins describe while a limit acts; raise "
+                    "simulator.reaction_wheel.max_torque / max_speed or slew slower"),
+                    "controller": kind, "design": entry.get("design")})
         for variant, facts in (data.get("manoeuvre") or {}).get("profiles", {}).items():
             tolerance = (facts.get("shaper") or {}).get("tolerance")
             for r in facts.get("truth_residual", []):

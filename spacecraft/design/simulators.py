@@ -34,8 +34,8 @@ import warnings
 
 import numpy as np
 
-__all__ = ["basilisk_runs", "basilisk_disturbances", "summary", "SIGNALS", "MIN_SAMPLES",
-           "ACCURATE_STEP", "WHEEL_SPEED_WARNING"]
+__all__ = ["basilisk_runs", "basilisk_disturbances", "summary", "basilisk_wheel_summary",
+           "SIGNALS", "MIN_SAMPLES", "ACCURATE_STEP", "WHEEL_SPEED_WARNING"]
 
 #: Signals compared, in the report's order (those both responses have).
 SIGNALS = ("theta", "omega", "torque")
@@ -147,6 +147,65 @@ def _check_wheel_speed(scene, response) -> None:
             "check the unit of spin_inertia [kg m^2]", UserWarning, stacklevel=2)
 
 
+def basilisk_wheel_summary(response, wheel) -> dict | None:
+    """Basilisk's reaction wheel in the words and numbers of flexsat's wheels
+    (:meth:`controllers.WheelResponse.summary`, :func:`spacecraft.design.manoeuvre.wheel_words`).
+
+    From the run's ``wheel_speed`` [rad/s] and the flight software's ``torque`` request [N m]
+    at its samples, as Basilisk's reactionWheelStateEffector applies them: the torque limit acts
+    where |request| > max_torque (the motor torque is clipped), the speed limit where |Omega| >=
+    max_speed and the request would spin the wheel further (request x Omega < 0: the wheel's
+    momentum changes at minus the hub torque); each sample's state lasts until the next.
+    Momentum J_s Omega [N m s], its limit J_s max_speed.
+
+    Parameters
+    ----------
+    response : control.TimeResponseData
+        Basilisk's run (outputs ``wheel_speed``, ``torque``).
+    wheel : spacecraft.scene.specs.ReactionWheelSpec
+
+    Returns
+    -------
+    dict or None
+        The summary's fields for one wheel named ``"wheel"``, and ``words``; None without a
+        wheel speed in the response.
+    """
+    from .manoeuvre import wheel_words
+    from .responses import trace
+
+    speed, request = trace(response, "wheel_speed"), trace(response, "torque")
+    if speed is None or request is None:
+        return None
+    t = np.asarray(response.t, dtype=float).reshape(-1)
+    dt = np.diff(t)
+    torque_limit = math.inf if wheel.max_torque is None else wheel.max_torque
+    speed_limit = math.inf if wheel.max_speed is None else wheel.max_speed
+    at_torque = np.abs(request) > torque_limit
+    at_speed = (np.abs(speed) >= speed_limit * (1 - 1e-9)) & (request * speed < 0)
+    applied = np.where(at_speed, 0.0, np.clip(request, -torque_limit, torque_limit))
+    momentum = wheel.spin_inertia * np.abs(speed)
+    limit = wheel.spin_inertia * speed_limit
+    any_flag = at_torque | at_speed
+    first = np.flatnonzero(any_flag)
+    peak = float(np.max(momentum))
+
+    def held(flags):
+        return float(np.sum(dt[flags[:-1]]))
+    summary = {
+        "saturated": bool(first.size),
+        "first_saturation": float(t[first[0]]) if first.size else None,
+        "time_saturated": held(any_flag),
+        "time_torque_saturated": {"wheel": held(at_torque)},
+        "time_momentum_saturated": {"wheel": held(at_speed)},
+        "peak_momentum": {"wheel": peak},
+        "momentum_margin": {"wheel": None if math.isinf(limit) else limit - peak},
+        "momentum_margin_fraction": {"wheel": None if math.isinf(limit)
+                                     else (limit - peak) / limit},
+        "peak_torque": {"wheel": float(np.max(np.abs(applied)))}}
+    summary["words"] = wheel_words(summary, duration=float(t[-1]))
+    return summary
+
+
 def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
     """Run the manoeuvre in Basilisk for every controller of the first design model.
 
@@ -220,6 +279,13 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
                       "dt": b.dt, "seconds": dict(b.seconds), "out_of_plane": b.out_of_plane,
                       "differences": differences, "truth": truth,
                       "summary": summary(differences, truth)}
+        if sim.reaction_wheel is not None:
+            wheel = data[kind]["wheel"] = basilisk_wheel_summary(b.response, sim.reaction_wheel)
+            if wheel is not None and wheel["saturated"]:
+                data[kind]["summary"] += (f"; Basilisk's wheel: {wheel['words']} (flexsat's "
+                                          "linear predictions have no wheel: the differences "
+                                          "are mostly the wheel's limits, not the chain's "
+                                          "nonlinearity)")
     return comparisons, data
 
 

@@ -27,7 +27,7 @@ from ..design.manoeuvre import MANOEUVRE_METRIC_LABELS
 from ..design.naming import controller_label, design_label
 from .pages import bad, number, warn
 
-__all__ = ["flown_blocks", "flown_summary_lines", "ARCSEC"]
+__all__ = ["flown_blocks", "flown_summary_lines", "basilisk_wheel_blocks", "ARCSEC"]
 
 #: Radians per arcsecond (the pointing figures are also shown in arcsec).
 ARCSEC = math.pi / (180.0 * 3600.0)
@@ -320,3 +320,16 @@ def flown_summary_lines(data: dict) -> list:
             text = f"{_who(r)}: " + "; ".join(str(p) for p in parts)
             lines.append(warn(text) if w is not None and w["saturated"] else text)
     return lines
+
+
+def basilisk_wheel_blocks(kind: str, entry: dict) -> list:
+    """Basilisk's reaction wheel in one controller's Basilisk run, in the words of flexsat's
+    wheels (:func:`spacecraft.design.simulators.basilisk_wheel_summary`): orange when it
+    saturated, with the time saturated and the momentum margin."""
+    w = entry.get("wheel")
+    if not w:
+        return []
+    text = (f"{controller_label(kind)}, Basilisk's reaction wheel: {w['words']}; peak torque "
+            f"applied {number(w['peak_torque']['wheel'], 4)} N m, peak momentum "
+            f"{number(w['peak_momentum']['wheel'], 4)} N m s")
+    return [("p", warn(text) if w["saturated"] else text)]

@@ -200,6 +200,7 @@ def plot_slew(result, path: Path) -> str:
                         left=0.1 if n_cols == 1 else 0.07)
     handles = []
     angle = math.degrees(m.slew_angle)
+    wheels = _basilisk_wheels(result)
     for col, kind in enumerate(kinds):
         rows = {r["design"]: r for r in _rows(result, kind)}
         bad = [v for v, r in rows.items() if _unstable(r)]
@@ -232,6 +233,8 @@ def plot_slew(result, path: Path) -> str:
             if comparison is not None and signal != "disturbance":
                 resp = comparison.basilisk.response
                 y = _slew_signal(resp, signal)
+                if signal == "torque" and kind in wheels:
+                    y = wheels[kind][1]     # what Basilisk's wheel applies, not the request
                 if y is not None:
                     variant = result.data["basilisk"][kind]["design"]
                     t = np.asarray(resp.t, float).reshape(-1)
@@ -272,7 +275,9 @@ def plot_slew(result, path: Path) -> str:
         caption += f"; with the loop delay of {result.scene.controller.total_delay:g} s"
     if result.basilisk:
         caption += ("; dotted black: Basilisk's nonlinear run of the design chains (the whole "
-                    "manoeuvre, flight software at its sample time)")
+                    "manoeuvre, flight software at its sample time"
+                    + ("; the torque its reaction wheel applies, within its limits" if wheels
+                       else "") + ")")
     return caption + (". Solid: loop on the truth model, dashed: on the design model; one "
                       "colour per design model; red: unstable.")
 
@@ -897,10 +902,13 @@ def plot_wheels(result, path: Path) -> str:
             ax.tick_params(labelsize="small")
         saturated = [r for r in _rows(result, kind) if (r.get("wheels") or {}).get("truth", {})
                      .get("saturated")]
-        ax_t.set_title(f"{controller_label(kind)}: " + ("a wheel SATURATES on the truth model"
-                                                        if saturated else
-                                                        "the wheels stay within their limits"),
-                       fontsize="medium", color=CAUTION_COLOUR if saturated else "black")
+        in_basilisk = (((result.data.get("basilisk") or {}).get(kind) or {}).get("wheel")
+                       or {}).get("saturated", False)
+        said = ("a wheel SATURATES on the truth model" if saturated else
+                "Basilisk's wheel SATURATES" if in_basilisk else
+                "the wheels stay within their limits")
+        ax_t.set_title(f"{controller_label(kind)}: {said}", fontsize="medium",
+                       color=CAUTION_COLOUR if saturated or in_basilisk else "black")
         ax_t.set_ylabel("wheel torque on the hub [N m]", fontsize="small")
         ax_h.set_ylabel("wheel momentum J_s Omega [N m s]", fontsize="small")
         ax_h.set_xlabel("time [s]")

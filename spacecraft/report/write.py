@@ -35,7 +35,7 @@ import os
 from pathlib import Path
 
 from ..design.naming import controller_label, design_label, plural
-from .flown import flown_blocks, flown_summary_lines
+from .flown import basilisk_wheel_blocks, flown_blocks, flown_summary_lines
 from .output import MARKER, default_output_folder, output_folder
 from .pages import Tone, bad, markdown, markdown_text, number, render_html, warn
 from .results import to_json, write_timeseries
@@ -620,6 +620,7 @@ def _basilisk(data: dict) -> list:
                            if v["relative"] is not None else _fmt(v["peak_difference"], 3))
             out.append(row)
         b.append(("p", f"{controller_label(kind)}: {e['summary']}"))
+        b += basilisk_wheel_blocks(kind, e)
     b.append(("table", header, out))
     return b
 
