@@ -287,3 +287,37 @@ def test_a_delayed_continuous_loop_converges_at_second_order_in_the_step():
         e2 = np.max(np.abs(theta[0.05][k] - theta[0.025][k]))
         assert e1 / e2 > 4.0, (k, e1, e2)
         assert e1 < 5e-4 * np.max(np.abs(theta[0.025][k]))
+
+
+@pytest.mark.slow
+def test_the_embedded_default_flown_scene_flies_its_slew():
+    """default_flown: the default scene's models and controllers, the slew shaped and fed
+    forward, through a wheel with friction, with a 0.1 s delay and sensor noise."""
+    result = spacecraft.run("default_flown")
+    scene = result.scene
+    assert scene.manoeuvre.profile == "shaped" and scene.manoeuvre.feedforward
+    assert scene.controller.delay == 0.1 and scene.wheels is not None and scene.sensors
+    default = load_scene("default")
+    assert (scene.hub, scene.appendages, scene.fidelity) == (
+        default.hub, default.appendages, default.fidelity)
+    facts = result.data["manoeuvre"]
+    for variant, profile in facts["profiles"].items():
+        assert profile["kind"] == "shaped" and profile["end_time"] == pytest.approx(60.0)
+        assert profile["peak_torque"] <= 0.08 * (1 + 1e-12)
+    for row in result.data["closed_loops"]:
+        assert row["verdict"]["delay"] == 0.1
+        assert {"design", "truth"} == set(row["wheels"]) == set(row["pointing"])
+        assert "words" in row["wheels"]["truth"]
+        if row["verdict"]["stable"]:
+            # stable with the delay: some margin left, and pointing figures
+            assert row["verdict"]["delay_margin"] > 0
+            assert 0 < row["pointing"]["truth"]["rpe"]["theta"] < row["pointing"]["truth"][
+                "ape"]["theta"]
+            assert row["exact_verdict"]["delay_margin"] == pytest.approx(
+                row["verdict"]["delay_margin"], rel=1e-3)
+        else:
+            assert "error" in row["pointing"]["truth"]
+    # flexsat's fit flies the slew stably with both controllers
+    pz = {r["controller"]: r for r in result.data["closed_loops"]
+          if r["design"] == "poles-and-zeros"}
+    assert all(r["verdict"]["stable"] for r in pz.values())
