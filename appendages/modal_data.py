@@ -359,10 +359,12 @@ class ModalAppendage(FiniteAppendage):
     what a planar spacecraft, which moves only in its plane, imposes on it. For a straight
     appendage whose section is symmetric the motions are uncoupled and this is exact.
 
-    :attr:`center_of_mass` is the centre's coordinate along x; a spacecraft's rigid
-    properties (``Spacecraft.center_of_mass``, ``inertia``) place it on the appendage's axis
-    (a warning says so at construction if it lies off the axis), while the dynamics, which go
-    through the rigid mass matrix, are exact.
+    :attr:`center_of_mass` is the centre's coordinate along x and
+    :attr:`center_of_mass_vector` the centre itself (off the axis where the rigid mass matrix
+    puts it there); a spacecraft's rigid properties (``Spacecraft.center_of_mass``,
+    ``inertia``) and its three-axis dynamics use both exactly. A planar spacecraft moves the
+    root's axial motion rigidly, without the coupling to rotation that a centre off the axis
+    in the plane brings: it warns of such an appendage.
 
     References
     ----------
@@ -396,12 +398,6 @@ class ModalAppendage(FiniteAppendage):
         self._residual = _read_only(residual)
         self._tip = None if tip is None else _read_only(tip)
         self._rigid = rigid
-        off_axis = float(np.hypot(rigid.center[1], rigid.center[2]))
-        if off_axis > 1e-6 * max(abs(rigid.center[0]), 1e-300):
-            warnings.warn(
-                f"the centre of mass lies {off_axis:.3g} m off the appendage's x axis: a "
-                f"spacecraft's rigid properties (center_of_mass, inertia) place it on the axis; "
-                f"the dynamics (through rigid_mass) are exact", UserWarning, stacklevel=2)
         if self._length is not None and not 0.0 <= rigid.center[0] <= self._length:
             warnings.warn(
                 f"the centre of mass lies at x = {rigid.center[0]:.6g} m, outside [0, length = "

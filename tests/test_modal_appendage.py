@@ -235,8 +235,7 @@ def test_three_axis_round_trip_with_an_off_axis_tip_body(three_axis_case):
     # modes' dense solve here (a stiffness of condition ~1e10) to 5e-9 on the first (measured
     # against that iteration), which the data carry into the coupled modes: rtol 1e-8.
     c = three_axis_case
-    with pytest.warns(UserWarning, match="off the appendage's x axis"):
-        app = ModalAppendage(c["w"], c["G"], c["rigid"], length=c["L"])
+    app = ModalAppendage(c["w"], c["G"], c["rigid"], length=c["L"])
     spacecraft = Spacecraft(Hub(*c["hub"]), [Mount(app, c["position"], orientation=c["R"])])
     for exact in (False, True):
         np.testing.assert_allclose(spacecraft.natural_frequencies(8, exact=exact), c["truth"],
@@ -244,6 +243,13 @@ def test_three_axis_round_trip_with_an_off_axis_tip_body(three_axis_case):
     np.testing.assert_allclose(app.center_of_mass_vector,
                                [(18.0 * 3.0 + 4.0 * 6.4) / 22.0, 4.0 * 0.15 / 22.0,
                                 -4.0 * 0.1 / 22.0], rtol=1e-12)
+    # the spacecraft places the centre off the axis where the data put it (hub at the origin)
+    centre = c["position"] + c["R"] @ app.center_of_mass_vector
+    np.testing.assert_allclose(spacecraft.center_of_mass, 22.0 * centre / (22.0 + c["hub"][0]),
+                               rtol=1e-12)
+    # a planar spacecraft cannot couple the offset's axial motion to rotation: it says so
+    with pytest.warns(UserWarning, match="off its axis in the plane"):
+        Spacecraft(Hub(c["hub"][0], 300.0), [Mount(app, (0.5, 0.3), 0.2)])
 
 
 def test_three_axis_W6_state_space_and_planar_view(three_axis_case):

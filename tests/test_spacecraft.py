@@ -378,3 +378,85 @@ def test_clamped_frequencies_of_different_rods_coinciding_to_an_ulp():
     assert np.all(np.diff(w) > 0)
     between = 0.5 * (w[1:] + w[:-1])
     np.testing.assert_array_equal(craft.exact.count(between), np.arange(between.size) + 4)
+
+
+def _rotation(a: float, b: float, c: float) -> np.ndarray:
+    """R_z(a) R_y(b) R_x(c)."""
+    ca, sa, cb, sb, cc, sc = (math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c),
+                              math.sin(c))
+    return (np.array([[ca, -sa, 0.0], [sa, ca, 0.0], [0.0, 0.0, 1.0]])
+            @ np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
+            @ np.array([[1.0, 0.0, 0.0], [0.0, cc, -sc], [0.0, sc, cc]]))
+
+
+def test_rigid_properties_place_an_off_axis_tip_body_where_it_is():
+    # Three axes: a tube with a tip body whose centre lies off the beam's axis (0.3 m along y,
+    # -0.2 m along z) and a stepped tube with a body on the axis, mounted at general points
+    # and orientations on a hub with products of inertia. The spacecraft's centre of mass and
+    # its inertia about that centre against the rigid-body sum written out here by hand: the
+    # hub at the origin, each uniform segment a slender body (m l^2/12 across, rho I_p l about
+    # its axis) at its mid-point, each tip body with its own inertia tensor at the free end plus
+    # its offset, all turned into hub axes. Both sides sum a few terms of size ~1e3 in
+    # float64: rtol 1e-13.
+    from appendages import SteppedBeam, TipBody
+
+    tip_inertia = np.array([[0.4, 0.05, -0.02], [0.05, 0.3, 0.01], [-0.02, 0.01, 0.5]])
+    tube = Beam.tube(4.0, 0.1, 0.002, 2700.0, 70e9,
+                     tip=TipBody(6.0, tip_inertia, (0.15, 0.3, -0.2)))
+    segments = [Beam.tube(1.0, 0.08, 0.003, 1600.0, 1e11), Beam.tube(3.0, 0.05, 0.001, 1600.0,
+                                                                     1e11)]
+    stepped = SteppedBeam(segments, tip=TipBody(2.0, np.diag([0.1, 0.2, 0.2]), 0.1))
+    hub_inertia = np.array([[300.0, 10.0, 0.0], [10.0, 250.0, 5.0], [0.0, 5.0, 400.0]])
+    mounts = [((0.5, 0.3, -0.2), _rotation(0.3, 0.2, 0.4)),
+              ((-0.6, 0.1, 0.4), _rotation(2.9, -0.3, 1.1))]
+    craft = Spacecraft(Hub(500.0, hub_inertia),
+                       [Mount(tube, mounts[0][0], orientation=mounts[0][1], name="tube"),
+                        Mount(stepped, mounts[1][0], orientation=mounts[1][1], name="stepped")])
+    bodies = [(500.0, np.zeros(3), hub_inertia)]     # (mass, centre, inertia about it), hub axes
+    for (p, R), parts, tip in ((mounts[0], [tube], tube.tip), (mounts[1], segments,
+                                                                stepped.tip)):
+        x = 0.0
+        for seg in parts:
+            m, l = seg.linear_density * seg.length, seg.length
+            J = np.diag([seg.torsional_inertia * l, m * l**2 / 12.0, m * l**2 / 12.0])
+            bodies.append((m, np.array(p) + R @ [x + 0.5 * l, 0.0, 0.0], R @ J @ R.T))
+            x += l
+        bodies.append((tip.mass, np.array(p) + R @ (np.array([x, 0.0, 0.0]) + tip.offset),
+                       R @ tip.inertia_tensor @ R.T))
+    mass = sum(b[0] for b in bodies)
+    c = sum(b[0] * b[1] for b in bodies) / mass
+    J = sum(b[2] + b[0] * ((b[1] - c) @ (b[1] - c) * np.eye(3) - np.outer(b[1] - c, b[1] - c))
+            for b in bodies)
+    assert craft.mass == pytest.approx(mass, rel=1e-14)
+    np.testing.assert_allclose(craft.center_of_mass, c, rtol=1e-13, atol=1e-15)
+    assert abs(craft.center_of_mass[2] - c[2]) < 1e-15 and c[2] != 0.0
+    np.testing.assert_allclose(craft.inertia, J, rtol=1e-13, atol=1e-13 * np.abs(J).max())
+    # the dynamics agree: the assembled model's rigid-body mass matrix about the hub's origin
+    # (its first 6 x 6 block: Craig-Bampton internal coordinates stay at rest in rigid motion)
+    # is that of the rigid body with this mass, centre and inertia
+    X = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0]])
+    rigid = np.block([[mass * np.eye(3), -mass * X],
+                      [mass * X, J + mass * (c @ c * np.eye(3) - np.outer(c, c))]])
+    truncated = Spacecraft(craft.hub, [m.with_appendage(m.appendage.truncated(4))
+                                       for m in craft.mounts])
+    np.testing.assert_allclose(truncated.second_order_model().mass[:6, :6], rigid, rtol=1e-12,
+                               atol=1e-12 * np.abs(rigid).max())
+
+
+def test_rigid_properties_of_a_planar_tip_body_beyond_the_free_end():
+    # Planar: a rod with a 5 kg tip body 0.4 m beyond its free end (inertia 0.2 kg m^2) on a
+    # hub, by hand: rigid body sum of hub, rod (m L^2/12 at mid-length) and body; rtol 1e-14.
+    from appendages import TipBody
+
+    rod = Beam.circular_rod(3.0, 0.02, 7800.0, 2.06e11, tip=TipBody(5.0, 0.2, 0.4))
+    craft = Spacecraft(Hub(80.0, 30.0), [Mount(rod, (1.0, 0.4), 0.3)])
+    e = np.array([math.cos(0.3), math.sin(0.3)])
+    m_rod = rod.linear_density * 3.0
+    bodies = [(80.0, np.zeros(2), 30.0), (m_rod, np.array([1.0, 0.4]) + 1.5 * e,
+                                           m_rod * 9.0 / 12.0),
+              (5.0, np.array([1.0, 0.4]) + 3.4 * e, 0.2)]
+    mass = sum(b[0] for b in bodies)
+    c = sum(b[0] * b[1] for b in bodies) / mass
+    J = sum(b[2] + b[0] * (b[1] - c) @ (b[1] - c) for b in bodies)
+    np.testing.assert_allclose(craft.center_of_mass, c, rtol=1e-14, atol=1e-15)
+    assert craft.inertia == pytest.approx(J, rel=1e-14)

@@ -130,6 +130,8 @@ class Spacecraft:
                     "inertia tensor [kg*m^2] or the mount a planar direction")
             if self.three_axis and not mount.three_axis:
                 self._check_three_axis_appendage(name, mount.appendage)
+            if not self.three_axis:
+                self._warn_off_axis_in_plane(name, mount.appendage)
         self.hub = hub
         self.mounts = mounts
         self.names = names
@@ -145,6 +147,26 @@ class Spacecraft:
             appendage.inertia_tensor
         except ValueError as exc:
             raise ValueError(f"mount '{name}' on a three-axis hub: {exc}") from None
+
+    @staticmethod
+    def _warn_off_axis_in_plane(name: str, appendage) -> None:
+        """Warn of an appendage whose centre of mass lies off its axis in the plane: the
+        planar coupling moves its root's axial motion rigidly, without the coupling of that
+        motion to rotation which the offset brings (exact in three axes)."""
+        vector = getattr(appendage, "center_of_mass_vector", None)
+        if vector is None:
+            return
+        try:
+            c = np.asarray(vector, dtype=float)
+        except ValueError:
+            return
+        if c.shape == (3,) and abs(c[1]) > 1e-6 * max(abs(c[0]), 1e-300):
+            warnings.warn(
+                f"mount '{name}': the appendage's centre of mass lies {c[1]:.3g} m off its "
+                "axis in the plane (along its y); a planar spacecraft carries its axial motion "
+                "as rigid, without the coupling to rotation this offset brings: the rigid "
+                "properties are exact, the planar dynamics are not (use a three-axis hub)",
+                UserWarning, stacklevel=3)
 
     def __repr__(self) -> str:
         return f"Spacecraft({self.hub!r}, {self.mounts!r})"
@@ -167,22 +189,40 @@ class Spacecraft:
     def center_of_mass(self) -> np.ndarray:
         """Centre of mass of the undeformed spacecraft in hub axes [m] (2 or 3 coordinates).
 
-        Appendage centres are taken at mid-length, exact for uniform beams; for chains the
-        chain's own centre of mass is used when it offers ``center_of_mass`` (from its root).
+        Each appendage's centre is its own ``center_of_mass_vector`` (from its root, in its
+        axes: a tip body offset across the axis moves it off the axis), else its
+        ``center_of_mass`` along its axis, else mid-length (a uniform body).
         """
         moment = np.zeros(3 if self.three_axis else 2)
         for mount in self.mounts:
-            moment += mount.appendage.mass * self._centre(mount)
+            moment += mount.appendage.mass * self.appendage_center(mount)
         return moment / self.mass
 
-    def _centre(self, mount: Mount) -> np.ndarray:
+    def appendage_center(self, mount: Mount) -> np.ndarray:
+        """Centre of mass of the undeformed appendage on ``mount`` in hub axes [m].
+
+        Parameters
+        ----------
+        mount : Mount
+            One of this spacecraft's mounts.
+
+        Returns
+        -------
+        ndarray, shape (2,) planar or (3,) three-axis, m
+            ``p + R c``: the mount point ``p`` plus the appendage's centre ``c`` (appendage
+            axes, from its root) turned into hub axes by the mount's orientation ``R``. In
+            the plane the out-of-plane coordinate of ``c`` does not enter.
+        """
         a = mount.appendage
-        distance = getattr(a, "center_of_mass", None)
-        if distance is None:
-            distance = 0.5 * a.length
+        vector = getattr(a, "center_of_mass_vector", None)
+        if vector is not None:
+            c = np.asarray(vector, dtype=float)
+        else:
+            distance = getattr(a, "center_of_mass", None)
+            c = np.array([0.5 * a.length if distance is None else float(distance), 0.0, 0.0])
         if self.three_axis:
-            return mount.point + float(distance) * mount.orientation[:, 0]
-        return mount.position + float(distance) * mount.axis
+            return mount.point + mount.orientation @ c
+        return mount.position + c[0] * mount.axis + c[1] * mount.normal
 
     @property
     def inertia(self):
@@ -190,13 +230,14 @@ class Spacecraft:
 
         Planar: the moment of inertia about +z (a float). Three axes: the 3x3 tensor in hub
         axes, ``J_hub + sum R J_i R^T`` plus the parallel-axis terms
-        ``m (|d|**2 I - d d^T)``.
+        ``m (|d|**2 I - d d^T)``, ``d`` from the spacecraft's centre of mass to each body's
+        (:meth:`appendage_center`; each appendage's inertia is about its own centre).
         """
         c = self.center_of_mass
         if not self.three_axis:
             J = self.hub.inertia + self.hub.mass * float(c @ c)
             for mount in self.mounts:
-                d = self._centre(mount) - c
+                d = self.appendage_center(mount) - c
                 J += mount.appendage.inertia + mount.appendage.mass * float(d @ d)
             return J
 
@@ -207,7 +248,7 @@ class Spacecraft:
         for mount in self.mounts:
             R = mount.orientation
             J = J + R @ mount.appendage.inertia_tensor @ R.T
-            J = J + parallel(mount.appendage.mass, self._centre(mount) - c)
+            J = J + parallel(mount.appendage.mass, self.appendage_center(mount) - c)
         return 0.5 * (J + J.T)
 
     # -- finite assembly ----------------------------------------------------------------------
