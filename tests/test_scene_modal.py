@@ -223,3 +223,20 @@ def test_the_op2_file_itself_gives_the_extracts_appendage():
     from_op2 = load_scene(scene(dict(NASTRAN, nastran=str(op2)))).appendages[0].modal.build()
     from_npz = load_scene(scene(NASTRAN)).appendages[0].modal.build()
     np.testing.assert_array_equal(from_op2.W(S), from_npz.W(S))
+
+
+def test_table_and_fit_take_a_scenes_modal_appendage():
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "spacecraft.cli", "table", "--scene",
+                           "real_appendages", "--appendage", "boom", "--quiet"],
+                          capture_output=True, text=True, timeout=600,
+                          cwd=Path(__file__).resolve().parents[1])
+    assert done.returncode == 0, done.stderr
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("modal data (real_appendages (embedded scene): boom): length "
+                               "0.254 m, mass 4.5717 kg")
+    assert "modal data (FE-exact)" in lines[1]
+    assert lines[-1].startswith("The gains k_r of modal data, lim s^2 W_r, are the inverse of "
+                                "their residual mass")

@@ -353,6 +353,7 @@ def _beam_from(args):
     """The appendage of ``table`` and ``fit``: the scene's (``--scene``, ``--appendage``) or
     the beam of the beam options; with its source for the printout and the reader's unit-slip
     warnings (printed as ``flexsat: warning:`` lines)."""
+    from ..scene.limits import library_limits
     from ..scene.read import SceneError, _Reader, _read_beam, _read_tip
 
     given = {option[2:].replace("-", "_"): getattr(args, option[2:].replace("-", "_"))
@@ -367,8 +368,9 @@ def _beam_from(args):
             print(f"flexsat: warning: {_one_line(line)}", file=sys.stderr)
         names = [a.name for a in scene.appendages]
         for a in scene.appendages:
-            if (name is None or a.name == name) and a.beam is not None:
-                return a.beam.build(), f"{scene.source}: {a.name}"
+            if (name is None or a.name == name) and a.structure is not None:
+                with library_limits(scene.limits):
+                    return a.structure.build(), f"{scene.source}: {a.name}"
         if name is not None and name not in names:
             raise _UserError(f"--appendage {_one_line(name)[:100]}: {scene.source} has no such "
                              f"appendage (it has {', '.join(names)})")

@@ -73,6 +73,11 @@ def equivalence_table(beam, fits: dict, *, stats=None) -> dict:
         notes.append(f"The paper's two-mode free-free beam and its frequency fit are models of "
                      f"a bare uniform beam; the reference here is the {kind} ({how}), so "
                      "neither is a column.")
+        if "FE-exact" in reference_label:
+            notes.append("The gains k_r of modal data, lim s^2 W_r, are the inverse of their "
+                         "residual mass (the mass their modes do not carry): a property of "
+                         "where the data were truncated, not of the structure (a distributed "
+                         "beam has none); compare the chains' poles, zeros and W over the band.")
     candidates += [(FIT_LABELS.get(k, k), model) for k, model in fits.items()]
     columns, reference, units = [], None, None
     for label, model in candidates:
