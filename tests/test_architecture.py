@@ -27,6 +27,7 @@ def imported_packages(path: pathlib.Path) -> set[str]:
     return found & set(PACKAGES)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("package", PACKAGES)
 def test_package_imports_only_what_it_may(package):
     sources = sorted((ROOT / package).rglob("*.py"))
@@ -36,6 +37,7 @@ def test_package_imports_only_what_it_may(package):
         assert not illegal, f"{source.relative_to(ROOT)} imports {sorted(illegal)}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("package", PACKAGES)
 def test_every_module_declares_all(package):
     for source in sorted((ROOT / package).rglob("*.py")):
@@ -277,6 +279,7 @@ def _cases(remaining: dict[str, str]):
             if p in remaining else p for p in PACKAGES]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("package", _cases(REMAINING_CIRCLES))
 def test_no_import_circle(package):
     edges, _ = _import_graph()

@@ -276,6 +276,7 @@ def test_compare_interpolates_a_reference_on_another_grid():
     assert d["peak_difference"] == pytest.approx(1e-3, abs=1.25e-5)
 
 
+@pytest.mark.slow
 def test_importing_flexsat_does_not_import_basilisk():
     code = ("import sys, spacecraft, spacecraft.basilisk; "
             "sys.exit(1 if 'Basilisk' in sys.modules else 0)")
@@ -288,6 +289,7 @@ def _root():
 
 
 # -- Basilisk against flexsat's linear loop -----------------------------------------------------
+@pytest.mark.slow
 @needs_bsk
 @pytest.mark.parametrize("n_bodies, root", [(3, "rigid"), (5, "rigid"), (10, "rigid"),
                                             (5, "hinged")])
@@ -300,6 +302,7 @@ def test_small_slew_agrees_with_the_linear_loop(n_bodies, root):
     assert result.highest_frequency * result.dt <= sb.simulation.DEFAULT_STEP_FACTOR
 
 
+@pytest.mark.slow
 @needs_bsk
 def test_the_remaining_difference_is_second_order_in_the_amplitude():
     # A wrong convention (sign, angle, offset) would leave a relative difference independent of
@@ -318,6 +321,7 @@ def test_the_remaining_difference_is_second_order_in_the_amplitude():
     assert on_axis["wing_tip_deflection"] < 1e-6
 
 
+@pytest.mark.slow
 @needs_bsk
 def test_two_chains_and_controller_kinds():
     # a rigid-root and a hinged-root chain on one hub; a continuous PD with roll-off run at the
@@ -394,6 +398,7 @@ def test_rigid_spacecraft_slews_past_180_degrees_exactly():
     assert np.max(result.response.outputs[0]) > math.radians(260.0)  # well past 180 deg
 
 
+@pytest.mark.slow
 @needs_bsk
 def test_large_slew_documents_the_nonlinear_difference():
     # 10 deg: the linear model drops terms second order in the amplitude (centrifugal loads),
@@ -437,6 +442,7 @@ def test_reaction_wheel_applies_the_commanded_torque(spin_inertia):
 
 
 # -- conservation ---------------------------------------------------------------------------------
+@pytest.mark.slow
 @needs_bsk
 def test_energy_and_momentum_are_conserved_to_rk4_accuracy():
     # No control, no damping: a spinning chain vibrating in all its modes (initial hinge angles)
@@ -591,6 +597,7 @@ def test_the_summary_names_the_truth_model_it_compares_with():
     assert "beam" not in said
 
 
+@pytest.mark.slow
 @needs_bsk
 def test_a_wheel_no_motor_could_spin_is_warned_about_by_key():
     """1e-8 kg m^2: Basilisk now follows flexsat (its wheel-acceleration guard is lifted), and
@@ -606,6 +613,7 @@ def test_a_wheel_no_motor_could_spin_is_warned_about_by_key():
     assert not [w for w in clean.data["warnings"] if "spin_inertia" in w]
 
 
+@pytest.mark.slow
 @needs_bsk
 def test_basilisks_wheel_is_reported_in_the_words_of_flexsats(tmp_path):
     """A wheel of half the slew's peak torque: results.json says in words that it saturated,

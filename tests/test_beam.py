@@ -206,6 +206,7 @@ def test_W_poles_at_natural_frequencies(rod):
 
 
 # -- mode shapes -------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_mode_shapes_orthonormal_at_high_mode_numbers():
     # Gauss-Legendre quadrature of rho*A phi_j phi_k over [0, L] must give the identity; the
     # textbook form loses this beyond ~16 modes (Tang 2003); the stable form keeps it at 200.
@@ -376,6 +377,7 @@ def test_undamped_pole_is_an_error_not_a_nan():
         assert np.all(np.isfinite(W))
 
 
+@pytest.mark.slow
 def test_free_cantilever_overlap_against_quadrature():
     # Closed form from the beam equation (docstring) against 4000-point Gauss-Legendre
     # quadrature of the stable shapes, including the nearly coincident pairs (free-free k,

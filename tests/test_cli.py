@@ -106,6 +106,7 @@ def test_progress_goes_to_stderr(scene_file, tmp_path, capsys):
     assert "closing the loops" in captured.err and "closing the loops" not in captured.out
 
 
+@pytest.mark.slow
 def test_no_plots_flag_and_plots_when_asked(scene_file, tmp_path):
     text = SCENE.replace("equivalence = false", "equivalence = false\nplots = [\"slew\", "
                                                 "\"poles\"]")
@@ -224,6 +225,7 @@ def test_help_everywhere(capsys):
         assert "usage: flexsat" in capsys.readouterr().out
 
 
+@pytest.mark.slow
 def test_console_entry_point_runs_as_a_module():
     done = subprocess.run([sys.executable, "-m", "spacecraft.cli", "scenes"],
                           capture_output=True, text=True, timeout=120)
@@ -309,6 +311,7 @@ def test_debug_after_the_subcommand_shows_the_traceback(scene_file, tmp_path, ca
     assert "Traceback" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_scenes_json_lists_name_title_and_a_loadable_path(capsys):
     from spacecraft.scene.read import example_scenes, load_scene
 
@@ -399,6 +402,7 @@ def test_export_options_refuse_contradictions(scene_file, tmp_path, capsys):
 # ---------------------------------------------------------------------------------------------
 # issue 12, items 3-4: flexsat run --simulator basilisk
 # ---------------------------------------------------------------------------------------------
+@pytest.mark.slow
 @pytest.mark.basilisk
 def test_simulator_basilisk_adds_basilisks_run_to_report_json_and_time_series(scene_file,
                                                                               tmp_path, capsys):

@@ -77,6 +77,7 @@ def test_debug_shows_the_traceback(scene_file, tmp_path, capsys, monkeypatch):
     assert "Traceback" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_diverging_loop_exits_0_and_the_report_says_where_it_stopped(scene_file, tmp_path,
                                                                        capsys):
     """The LQR on the paper's chain, UNSTABLE on the damped truth beam, for 40000 s: before, the
@@ -453,6 +454,7 @@ def wait_for_partial(folder: Path, process, timeout: float = 120.0):
     time.sleep(0.2)   # its owner record is written right after the folder
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum, code, text", [
     (signal.SIGINT, 130, "flexsat: interrupted; nothing half-written was kept"),
     (signal.SIGTERM, 143, "flexsat: terminated by SIGTERM; nothing half-written was kept"),
@@ -470,6 +472,7 @@ def test_signals_clean_up_and_exit_128_plus_n(scene_file, tmp_path, signum, code
     assert sorted(p.name for p in tmp_path.iterdir()) == ["boom.toml"]
 
 
+@pytest.mark.slow
 def test_sigkill_leaves_a_partial_folder_that_the_next_run_takes_over(scene_file, tmp_path):
     out = tmp_path / "o"
     process = start(["run", scene_file, "--out", out, "--quiet", "--no-fmu"], 120)
@@ -481,6 +484,7 @@ def test_sigkill_leaves_a_partial_folder_that_the_next_run_takes_over(scene_file
     assert sorted(p.name for p in tmp_path.iterdir()) == ["boom.toml", "o"]
 
 
+@pytest.mark.slow
 def test_broken_pipe_exits_0_quietly(scene_file, tmp_path):
     out = tmp_path / "o"
     process = subprocess.Popen([sys.executable, "-m", "spacecraft.cli", "run", str(scene_file),

@@ -40,6 +40,7 @@ def test_slew_time_is_the_keyword_and_duration_is_deprecated(loops):
         controllers.compare(design, truth, K, angle=0.1)
 
 
+@pytest.mark.slow
 def test_plot_saves_to_a_path_or_returns_the_figure(loops, tmp_path):
     design, truth, K = loops
     result = controllers.compare(design, truth, K, angle=0.1, slew_time=60.0, dt=0.5)

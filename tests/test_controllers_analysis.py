@@ -265,6 +265,7 @@ def test_margins_flexible_loop_agree_with_python_control():
     assert m.modulus_margin <= ref + 1e-12 and m.modulus_margin == pytest.approx(ref, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_margins_on_frequency_response_data():
     """On a dense FRD of the same plant the margins agree to the interpolation error."""
     plant = modal_plant(J, [(2.0, 0.005, 1.0, 0.004)])
@@ -320,6 +321,7 @@ def test_digital_margins_lose_phase_to_the_hold():
 
 
 # ----- spillover -------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_spillover_verdict_stable_and_unstable():
     """A PD on a collocated plant is stable at any gain (passive loop); the same PD on a plant
     whose mode is seen with the opposite sign (non-collocated) is destabilised."""
@@ -344,6 +346,7 @@ def test_spillover_verdict_stable_and_unstable():
         controllers.spillover(control.frd(COLLOCATED, w), digital)
 
 
+@pytest.mark.slow
 def test_the_nyquist_count_alone_is_the_verdicts():
     """nyquist_count gives spillover's count on frequency-response data (the two unstable
     poles of the non-collocated loop, none of the collocated one), from the loop's response
@@ -412,6 +415,7 @@ def test_compare_design_vs_truth():
         controllers.compare(design, control.frd(truth, [1.0]), K, angle=0.2, slew_time=20.0)
 
 
+@pytest.mark.slow
 def test_controllers_import_no_other_flexsat_package():
     """DESIGN.md: controllers works on any LTI plant and imports no other package of ours."""
     ours = {"appendages", "spacecraft", "fmu"}

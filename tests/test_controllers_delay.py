@@ -261,6 +261,7 @@ def test_delayed_zoh_loop_against_a_fine_step_realisation():
     np.testing.assert_allclose(y[0], theta, rtol=0, atol=1e-11 * 0.1)
 
 
+@pytest.mark.slow
 def test_continuous_delayed_loop_converges_at_second_order():
     """The continuous PD with a 0.1 s delay, simulated on steps dt (command held, delayed by
     0.1 - dt/2): against dt / 64, halving dt divides the error by about 4 (O(dt^2))."""

@@ -57,6 +57,7 @@ def assert_names_a_parameter(error, names):
     assert "nan" not in message.lower().split()
 
 
+@pytest.mark.slow
 @FUZZ
 @given(plant=st.sampled_from(sorted(PLANTS)), wn=decades(-16, 16),
        damping=decades(-8, 4), roll_off=st.one_of(st.none(), decades(0.2, 4)),
@@ -91,6 +92,7 @@ def weight(r, w, power):
     return min(max(value, 1e-300), 1e300)
 
 
+@pytest.mark.slow
 @FUZZ
 @given(plant=st.sampled_from(sorted(PLANTS)), r=decades(-300, 300), w_r=decades(-40, 40),
        w_rate=st.one_of(st.none(), decades(-40, 40)), speed=decades(-3, 3),

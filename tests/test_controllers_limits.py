@@ -37,6 +37,7 @@ def test_compare_refuses_a_huge_sample_count_before_allocating(unstable_on_truth
     assert np.asarray(response.t).size == 1001
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sample_time, t_final, growth", [(None, 40000.0, 0.0261),
                                                           (0.2, 8000.0, 0.166)])
 def test_a_diverging_loop_is_a_result_not_a_crash(unstable_on_truth, sample_time, t_final,
@@ -117,6 +118,7 @@ def test_extreme_lqr_weights_are_refused_by_name():
         assert "bandwidth" in str(info.value)
 
 
+@pytest.mark.slow
 def test_no_runtime_warning_leaks_from_designs_and_analysis():
     """Undamped modes (L infinite on the grid), a diverging loop, a digital loop on an undamped
     plant, extreme but accepted specifications: RuntimeWarnings are turned into results or

@@ -383,6 +383,7 @@ def test_fits_of_different_beams_are_one_dimensionless_chain(rod, match):
                                    reference, rtol=1e-15, atol=0)
 
 
+@pytest.mark.slow
 def test_memoised_fit_equals_a_fresh_fit(rod):
     """The memo holds the dimensionless chain of (n_bodies, options): a fit of another beam
     served from it is bit for bit the chain that a fresh, unmemoised fit of that beam gives
@@ -401,6 +402,7 @@ def test_memoised_fit_equals_a_fresh_fit(rod):
     assert not np.allclose(fit_chain(beam, 5, pole_weight=1.0).masses, fresh.masses)
 
 
+@pytest.mark.slow
 def test_scaled_chain_fits_its_own_beam(rod):
     """Why scaling is right: the rod's fitted chain has the rod's m, J, L and centre of mass
     (rtol 1e-13: sums of n products), and its poles and zeros divided by the rod's frequency

@@ -241,6 +241,7 @@ def test_parameter_edges(case):
         check(case[1], value)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", CASES, ids="-".join)
 @SWEEP
 @given(value=magnitudes, negative=st.booleans())

@@ -153,6 +153,7 @@ def test_three_axis_chain_of_nastran_data(nastran_boom):
         assert pole == pytest.approx(rod.free, rel=1e-10)
 
 
+@pytest.mark.slow
 def test_three_axis_chain_with_unequal_planes():
     # A 3-D FE beam with EI_y = 0.625 EI_z and a tip mass on its axis: the x-z plane is not a
     # scaled copy of the x-y plane once the tip body's inertias differ (0.8 about y, 0.6 about

@@ -35,6 +35,7 @@ def test_seven_to_nine_bodies_reach_the_modal_bound(n_bodies, bound):
     assert fitting.fit_poles_and_zeros(n_bodies).cost == pytest.approx(bound, rel=1e-3)
 
 
+@pytest.mark.slow
 def test_fit_spends_exactly_its_budget(monkeypatch):
     """The work schedule: a fit runs exactly ``evaluation_budget(n)`` = 15 n (n - 1) residual
     evaluations, whatever its paths' lengths, so its work grows with n by (n + 1)/(n - 1)
@@ -94,6 +95,7 @@ def test_paths_are_distinct_uniform_starts():
                                    [1.0, 1.0, 1.0 / 12.0], rtol=1e-14)  # sums of 6 terms: ulps
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n_bodies", [3, 7])
 def test_fit_does_not_depend_on_the_memo(n_bodies):
     """A memoised fit and a fresh one are the same chain (the paths are deterministic)."""

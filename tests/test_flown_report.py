@@ -25,6 +25,7 @@ def written(tmp_path_factory):
     return result, folder
 
 
+@pytest.mark.slow
 def test_the_report_shows_the_profile_the_delay_the_wheels_and_the_pointing(written):
     result, folder = written
     text = (folder / "report.md").read_text()

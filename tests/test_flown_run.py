@@ -264,6 +264,7 @@ def test_a_sweep_refuses_a_flown_scene_by_key():
         prepare(raw, spec, "test")
 
 
+@pytest.mark.slow
 def test_a_delayed_continuous_loop_converges_at_second_order_in_the_step():
     # the delayed continuous loop is simulated with the command held every step and delayed by
     # delay - step / 2 (controllers.delay); the references read at the samples (the feedforward

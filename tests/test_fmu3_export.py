@@ -27,6 +27,7 @@ from fmu_cases import exported, hub
 NAMES = ["hub", "pd", "plant", "lqr", "sampled"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("version", ["2.0", "3.0"])
 @pytest.mark.parametrize("name", NAMES)
 def test_validate_fmu_finds_no_problems(name, version):

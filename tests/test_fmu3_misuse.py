@@ -357,6 +357,7 @@ int main(void)
 """
 
 
+@pytest.mark.slow
 def test_two_fmus_sources_link_into_one_program(tmp_path):
     """FMI 3.0.2, section 2.2.1: with FMI3_FUNCTION_PREFIX per FMU, the sources of several
     FMUs compile into one program (with the importer's headers: fmpy's)."""
@@ -413,6 +414,7 @@ int main(void)
 """
 
 
+@pytest.mark.slow
 def test_double_free_reads_no_freed_memory(tmp_path):
     """Under AddressSanitizer: a second fmi3FreeInstance, calls on the freed handle and on
     a state freed with its instance neither read nor free freed memory."""

@@ -125,6 +125,7 @@ def test_a_description_or_model_name_over_its_limit_is_refused_before_any_work(t
     assert read_model_description(str(path)).description == text
 
 
+@pytest.mark.slow
 def test_a_compiler_that_cannot_compile_anything_is_named_not_called_a_bug(tmp_path):
     """A compiler that fails a trivial C file (here /bin/false) is an environment error,
     FMUCompilerError, one line naming it; one that compiles a trivial file but fails on our
@@ -229,6 +230,7 @@ export(body, {target!r}, description={text}, reference=True, stop_time=0.1)
 """
 
 
+@pytest.mark.slow
 def test_files_are_utf8_in_an_ascii_locale(tmp_path):
     """LC_ALL=C without Python's C-locale coercion and UTF-8 mode: the locale's encoding is
     ASCII. modelDescription.xml declares UTF-8 and must be UTF-8."""
@@ -270,6 +272,7 @@ def test_a_symlink_at_the_target_is_replaced_not_followed(tmp_path):
     assert read_model_description(str(tmp_path / "b.fmu")).modelName == "b"
 
 
+@pytest.mark.slow
 def test_failed_export_leaves_nothing(tmp_path):
     """A compiler that fails: no FMU, no temporary file, and an existing FMU is kept."""
     cc = tmp_path / "bad-cc"

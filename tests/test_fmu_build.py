@@ -174,6 +174,7 @@ def test_processes_and_threads_exporting_at_once(tmp_path, cache_dir):
 # ---------------------------------------------------------------- the persistent cache
 
 
+@pytest.mark.slow
 def test_cold_cache_is_created_and_then_reused(tmp_path, cache_dir):
     """A missing cache folder is created; the second export compiles only model.c."""
     assert not cache_dir.exists()
@@ -191,6 +192,7 @@ def test_cold_cache_is_created_and_then_reused(tmp_path, cache_dir):
     assert_fmu_works(path, rigid_body(2.0))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("damage", ["truncated", "garbage", "no sidecar"])
 def test_damaged_cache_entry_is_detected_and_rebuilt(tmp_path, cache_dir, damage):
     export(rigid_body(), tmp_path / "a.fmu")
@@ -207,6 +209,7 @@ def test_damaged_cache_entry_is_detected_and_rebuilt(tmp_path, cache_dir, damage
     assert ObjectCache(cache_dir).read(victim.stem) is not None  # rebuilt and intact again
 
 
+@pytest.mark.slow
 def test_entry_that_passes_its_checks_but_does_not_link_is_rebuilt(tmp_path, cache_dir):
     """An object with a matching sidecar but wrong content (an object of another source)
     makes the link fail once; the entry is evicted, rebuilt, and the export succeeds."""
@@ -219,6 +222,7 @@ def test_entry_that_passes_its_checks_but_does_not_link_is_rebuilt(tmp_path, cac
     assert first.read_bytes() != second.read_bytes()
 
 
+@pytest.mark.slow
 def test_unwritable_cache_falls_back_to_a_process_folder(tmp_path, monkeypatch):
     blocker = tmp_path / "not-a-folder"
     blocker.write_text("a file where the cache folder would go")
@@ -228,6 +232,7 @@ def test_unwritable_cache_falls_back_to_a_process_folder(tmp_path, monkeypatch):
     assert_fmu_works(export(rigid_body(), tmp_path / "a.fmu"), rigid_body())
 
 
+@pytest.mark.slow
 def test_without_working_file_locks_nothing_is_cached(tmp_path, cache_dir, monkeypatch):
     """flock fails with ENOLCK on some network file systems: compile privately instead."""
     import errno
@@ -252,6 +257,7 @@ def test_cache_location_follows_the_environment(tmp_path, monkeypatch):
     assert object_cache_dir() == tmp_path / "mine" / "fmu-objects"
 
 
+@pytest.mark.slow
 def test_another_compiler_version_gets_its_own_objects(tmp_path, cache_dir):
     """The key holds the compiler's --version output: a wrapper that reports another
     version compiles its own templates instead of using gcc's."""
@@ -268,6 +274,7 @@ def test_another_compiler_version_gets_its_own_objects(tmp_path, cache_dir):
 # ---------------------------------------------------------------- verification
 
 
+@pytest.mark.slow
 def test_every_fmu_is_verified_before_it_is_written(tmp_path, cache_dir, monkeypatch):
     """A library that computes other numbers than the model (here: model.c written for
     twice the input gain) fails the check: FMUBuildError, and no file."""
@@ -283,6 +290,7 @@ def test_every_fmu_is_verified_before_it_is_written(tmp_path, cache_dir, monkeyp
     assert list(tmp_path.glob("wrong*")) == [] and list(tmp_path.glob(".wrong*")) == []
 
 
+@pytest.mark.slow
 def test_a_library_without_the_declared_functions_is_refused(tmp_path, cache_dir, monkeypatch):
     """Compiled for Model Exchange only while the description declares both interfaces:
     the Co-Simulation functions are missing."""
@@ -322,6 +330,7 @@ def test_elf_reader_lists_what_the_loader_can_bind(tmp_path):
         elf_exported_symbols(b"garbage" * 20)
 
 
+@pytest.mark.slow
 def test_cs_only_fmu_exports_exactly_the_cs_functions(tmp_path, cache_dir):
     path = export(rigid_body(), tmp_path / "cs.fmu", interfaces="cs")
     with zipfile.ZipFile(path) as archive:

@@ -129,6 +129,7 @@ int main(void)
 """
 
 
+@pytest.mark.slow
 def test_two_fmus_sources_link_into_one_program(tmp_path):
     """FMI 2.0.1, section 2.1.1: with FMI2_FUNCTION_PREFIX set per FMU, the sources of
     several FMUs compile into one program. Every other symbol must be static or take the
@@ -185,6 +186,7 @@ int main(void)
 """
 
 
+@pytest.mark.slow
 def test_double_free_reads_no_freed_memory(tmp_path):
     """Under AddressSanitizer, a second fmi2FreeInstance and a call on the freed handle
     neither read nor free freed memory, and the other instance is unharmed."""
@@ -232,6 +234,7 @@ def run_steps(tmp_path, system, steps, states):
     return json.loads(result.stdout)
 
 
+@pytest.mark.slow
 def test_any_finite_step_returns_at_once(tmp_path):
     """Hub with a rigid body and a flexible mode: steps up to the largest double. The rigid
     body's Gamma grows like h^2 / (2 J), finite up to h ~ 1.8e154 and infinite beyond:

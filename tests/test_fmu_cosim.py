@@ -89,6 +89,7 @@ def assert_equal_to_monolithic(result, t, expected):
                                    atol=1e-12 * np.max(np.abs(values)))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["gauss-seidel", "jacobi"])
 @pytest.mark.parametrize("controller", ["pd", "fpd"])
 def test_equals_monolithic_closed_loop(fmus, method, controller):

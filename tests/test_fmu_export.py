@@ -76,6 +76,7 @@ def fmus(tmp_path_factory):
     }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["hub", "pd", "rigid", "rigid_me", "modal"])
 def test_validate_fmu_finds_no_problems(fmus, name):
     assert validate_fmu(str(fmus[name])) == []

@@ -118,6 +118,7 @@ def cs_result(path_or_folder) -> np.ndarray:
                         output_interval=0.01, input=table)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("version", VERSIONS)
 def test_sources_only_fmu_compiles_as_its_build_description_says(version, tmp_path):
     path = export(hub(), tmp_path / "hub.fmu", fmi_version=version, sources_only=True)

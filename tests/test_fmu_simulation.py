@@ -250,6 +250,7 @@ def test_reference_files_cross_check_in_fmpy(fmus):
         np.testing.assert_allclose(result[name], expected, rtol=0, atol=1e-9 * np.max(np.abs(expected)))
 
 
+@pytest.mark.slow
 def test_200_states_any_step(tmp_path):
     """A 200-state modal plant (rigid body + 99 modes up to 1000 rad/s, damping 0.005):
     one step of 0.0123 s (computed in C, a 201 x 201 exponential) against scipy's augmented

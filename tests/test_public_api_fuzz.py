@@ -423,6 +423,7 @@ def test_every_public_callable_has_valid_values_for_its_required_parameters(tmp_
         "a SKIP entry names no public callable"
 
 
+@pytest.mark.slow
 def test_public_functions_refuse_bad_values_by_name(tmp_path):
     calls, failures = _run(_selected(expensive=False), tmp_path)
     assert calls > 3000

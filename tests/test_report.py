@@ -94,6 +94,7 @@ def _lines(ax):
 # ---------------------------------------------------------------------------------------------
 # slew plots
 # ---------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_slew_plot_has_the_reference_the_attitude_error_and_one_legend(default):
     _, result, _, figures = default
     fig = figures["slew.png"]
@@ -122,6 +123,7 @@ def test_identical_curves_are_drawn_once_and_unstable_ones_red(default):
     assert "UNSTABLE" in lqr_theta.get_title()
 
 
+@pytest.mark.slow
 def test_every_appendage_has_its_own_named_tip_deflection_panel(wings):
     _, result, _, figures = wings
     labels = [ax.get_ylabel() for ax in figures["slew.png"].axes]

@@ -290,6 +290,7 @@ def test_report_peaks_of_mirror_image_wings_are_equal_with_root_loads():
     assert peaks["boom"]["peak_root_force"] > 0
 
 
+@pytest.mark.slow
 def test_a_run_without_fmus_loads_no_fmu_toolchain_nor_dask():
     """issue 10: fmpy and the FMU exporter only when FMUs are built, Dask only for sweeps."""
     import subprocess

@@ -142,6 +142,7 @@ def check(load, source: str, unknown: set):
     assert math.isfinite(scene.hub.mass) and scene.hub.mass > 0
 
 
+@pytest.mark.slow
 @FUZZ
 @given(st.lists(mutation, min_size=1, max_size=4), st.integers(min_value=1, max_value=70))
 def test_mutated_scene_dicts_give_a_scene_or_one_line_naming_a_key(mutations, n_appendages):

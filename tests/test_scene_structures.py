@@ -67,6 +67,7 @@ def python_models():
 
 
 # -- read as the Python API builds them --------------------------------------------------------
+@pytest.mark.slow
 def test_each_structure_is_the_python_apis_bit_for_bit():
     scene = load_scene(scene_data())
     for spec, model in zip(scene.appendages, python_models()):
@@ -79,6 +80,7 @@ def test_each_structure_is_the_python_apis_bit_for_bit():
     assert scene.appendages[0].beam.tip.mass == 5.0 and scene.appendages[1].beam.tip is None
 
 
+@pytest.mark.slow
 def test_defaults_fit_and_truth_of_a_real_appendage():
     scene = load_scene(scene_data())
     for a in scene.appendages:
@@ -93,6 +95,7 @@ def test_defaults_fit_and_truth_of_a_real_appendage():
     assert load_scene(data).appendages[1].beam.n_segments == 20
 
 
+@pytest.mark.slow
 def test_a_null_tip_body_is_the_bare_beam():
     data = scene_data()
     data["appendages"][2]["tip"] = {"mass": 0.0}
@@ -101,6 +104,7 @@ def test_a_null_tip_body_is_the_bare_beam():
     np.testing.assert_array_equal(beam.W(S), bare.W(S))
 
 
+@pytest.mark.slow
 def test_a_stepped_beam_with_a_uniform_segment_is_planar():
     data = scene_data()
     data["appendages"][0]["stepped_beam"]["segments"][0] = {
@@ -110,6 +114,7 @@ def test_a_stepped_beam_with_a_uniform_segment_is_planar():
     assert not beam.three_axis and beam.length == 7.0
 
 
+@pytest.mark.slow
 def test_the_resolved_scene_names_each_structure():
     from spacecraft.scene.specs import scene_dict
 
@@ -129,6 +134,7 @@ def _change(edit):
     return data
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("edit, match", [
     (lambda d: d["appendages"][0]["tip"].update(mass=-1.0),
      r"appendages\[0\]\.tip\.mass: must be non-negative \[kg\]; got -1\.0"),
@@ -345,6 +351,7 @@ def test_table_and_fit_take_any_appendage_of_a_scene(tmp_path):
     assert done.returncode == 2 and "has no such appendage (it has wing)" in done.stderr
 
 
+@pytest.mark.slow
 def test_the_command_line_tip_body_and_a_refused_paper_fit():
     done = _flexsat("fit", "--tip-mass", "0.5", "--tip-inertia", "0.001", "--match",
                     "frequencies", "--quiet")

@@ -38,6 +38,7 @@ J_TIP = np.array([[0.02, 0.001, 0.0], [0.001, 0.03, 0.002], [0.0, 0.002, 0.04]])
 
 
 # -- limiting cases -----------------------------------------------------------------------------
+@pytest.mark.slow
 def test_equal_segments_are_the_uniform_beam():
     """Three equal segments of the uniform beam: W to 1e-13, its free-free, cantilever and zero
     frequencies to 1e-12 (the closed forms of appendages.beam; measured 2e-13)."""
@@ -153,6 +154,7 @@ def test_tapered_beam_converges_like_n_squared():
     assert np.all((3.6 < ratio) & (ratio < 4.4))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method, bound", [("craig-bampton", 1e-6), ("residual", 1e-8),
                                            ("free-free", 5e-3)])
 def test_truncations_converge_to_the_stepped_beam(method, bound):

@@ -1,10 +1,12 @@
 """``flexsat sweep``: the subcommand of the ``flexsat`` command (spacecraft/cli/command.py)."""
+import pytest
 import json
 
 from spacecraft import cli
 from spacecraft.scene.read import scene_path
 
 
+@pytest.mark.slow
 def test_flexsat_sweep_runs_the_shipped_sweep_scene(tmp_path, capsys):
     out = tmp_path / "sweep"
     assert cli.main(["sweep", "--samples", "4", "--workers", "1", "--no-worst-case",

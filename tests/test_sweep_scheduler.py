@@ -60,6 +60,7 @@ def within(bound: float, function, *args, **kwargs):
     return box["value"]
 
 
+@pytest.mark.slow
 def test_an_address_that_accepts_but_never_answers_times_out():
     """A listener that accepts connections and says nothing (not a scheduler, or a hung one):
     refused after the timeout (1 s here), not hung (it once waited past 150 s)."""
@@ -85,6 +86,7 @@ def test_an_address_that_accepts_but_never_answers_times_out():
             c.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("address", ["garbage://x", "tcp://127.0.0.1:9"])
 def test_the_command_says_one_line_and_leaves_nothing(tmp_path, address):
     """In a process of its own with every warning shown (-X dev): one line, exit 2, no

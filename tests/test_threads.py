@@ -73,6 +73,7 @@ def test_decorator(two_threads):
     assert threads_inside.__name__ == "threads_inside"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n_states, n_samples", [(60, 5000), (500, 400)])
 def test_simulation_does_not_depend_on_the_callers_threads(n_states, n_samples):
     """Same results, bit for bit, whatever the caller's BLAS threads: a simulation runs

@@ -67,6 +67,7 @@ def test_rod_limits_and_frequencies():
     assert D[0] == 0 and np.isfinite(D[1])
 
 
+@pytest.mark.slow
 def test_damped_rod_digamma_form_is_the_modal_sum():
     """W = 1/(m s^2) + (2/m) sum_k 1/(s^2 + 2 zeta w_k s + w_k^2), summed by mpmath (nsum
     with its Richardson extrapolation, 30 digits) against the digamma closed form: rtol 1e-12
@@ -325,6 +326,7 @@ def test_craig_bampton_W_is_linear_in_modes_and_bounded_in_memory():
     assert np.all(relative(W[pick], direct) < 1e-9)
 
 
+@pytest.mark.slow
 def test_damped_craig_bampton_build_at_many_modes_uses_closed_form_overlaps():
     """The damping projection needs 4 n + 400 free-free modes' overlaps with n cantilever
     modes: closed forms now (appendages.beam._shape_products), checked at the nearly

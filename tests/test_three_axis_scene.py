@@ -123,6 +123,7 @@ def report(tmp_path_factory):
     return out, json.loads((out / "results.json").read_text())
 
 
+@pytest.mark.slow
 def test_run_writes_the_per_axis_report_plots_and_fmus(report):
     out, data = report
     assert data["three_axis"] and [r["controller"] for r in data["closed_loops"]] == ["pd", "lqr"]
