@@ -61,13 +61,15 @@ EXPENSIVE = {"fmu.export", "fmu.cosimulate", "fmu.write_ssp", "fmu.cosimulate_ss
              "spacecraft.run", "spacecraft.write_report", "spacecraft.default_scene", "spacecraft.sweep.load_sweep",
              "spacecraft.basilisk.simulate", "spacecraft.basilisk.simulate_slew",
              "spacecraft.basilisk.slew_comparison", "spacecraft.basilisk.linear_slew",
+             "spacecraft.basilisk.linearised",
              "appendages.fit_chain", "appendages.fit_chain_3d", "appendages.criterion",
              "controllers.compare", "controllers.assert_closed_loops_close",
              "controllers.lqr", "controllers.lqr_design"}
 #: Callables that run Basilisk (the optional basilisk extra, not in the test install): fuzzed
 #: by the test marked ``basilisk`` only (CI's Basilisk pass; skipped, saying why, without bsk).
 NEEDS_BASILISK = {"spacecraft.basilisk.require_basilisk", "spacecraft.basilisk.simulate",
-                  "spacecraft.basilisk.simulate_slew", "spacecraft.basilisk.slew_comparison"}
+                  "spacecraft.basilisk.simulate_slew", "spacecraft.basilisk.slew_comparison",
+                  "spacecraft.basilisk.linearised"}
 #: Longest call [s] before it counts as a failure (work not estimated before it is done).
 TIMEOUT = 20.0
 
@@ -228,6 +230,8 @@ def _valid_table(tmp: Path) -> dict:
         "spacecraft.basilisk.linear_slew.controller": o["digital"],
         "spacecraft.basilisk.simulate_slew.controller": o["digital"],
         "spacecraft.basilisk.slew_comparison.controller": o["digital"],
+        "spacecraft.basilisk.basilisk_chain.chain": o["chain"],
+        "spacecraft.basilisk.inextensible.chain": o["chain"], "sigma": [0.0, 0.0, 0.1],
         "spin_inertia": 0.1, "highest_frequency": 10.0, "sample_time": 0.1, "dt": 0.01,
         "n_bodies": 3, "slew_time": 10.0, "spacecraft.basilisk.simulate.duration": 1.0,
         "spacecraft.sweep.sweep_scene_path.name": "default",

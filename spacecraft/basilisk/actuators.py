@@ -17,6 +17,21 @@ expects the rotor's spin inertia inside the hub's ``IHubPntBc_B``. The adapter t
 J_s about z to the hub it gives Basilisk; the hub's equation is then flexsat's. Torque
 (``u_max``) and speed (``Omega_max``) limits are Basilisk's.
 
+Three axes: a triad
+    On a three-axis spacecraft the wheel becomes three such wheels, spinning about the hub's
+    x, y and z axes, each commanded ``u_s = -torque`` of its axis; the adapter adds
+    ``sum_k J_s g_k g_k^T = J_s E`` to the hub's inertia (:func:`triad_inertia`), which
+    Basilisk takes out again. The hub then obeys
+
+        J_B omega' + omega x (J_B omega + h) = torque,    h = J_s (Omega + omega),
+
+    with h the wheels' momentum. Started at rest relative to the hub (``initial_speed`` 0) the
+    wheels hold only the momentum the commands gave them, first order in the motion, so the
+    gyroscopic torque ``omega x h`` is second order, as the other terms flexsat's linear plant
+    drops: the loop is flexsat's to second order. A wheel spinning at the start (a momentum
+    bias) makes ``omega x h`` first order, a gyroscopic stiffness flexsat's plant does not
+    have: the adapter refuses it on a three-axis spacecraft.
+
 References
 ----------
 .. [1] H. Schaub, J. L. Junkins, "Analytical Mechanics of Space Systems", 4th ed., AIAA 2018,
@@ -34,7 +49,8 @@ import numpy as np
 
 from appendages.interface import check_positive
 
-__all__ = ["ReactionWheel", "WHEEL_ACCELERATION_GUARD", "rotor_inertia", "wheel_config"]
+__all__ = ["ReactionWheel", "WHEEL_ACCELERATION_GUARD", "rotor_inertia", "triad_inertia",
+           "wheel_config"]
 
 #: Basilisk's ``maxWheelAcceleration`` [rad/s**2] set by the adapter: no clipping (module
 #: docstring, "Basilisk's wheel-acceleration guard").
@@ -85,16 +101,30 @@ def rotor_inertia(wheel: ReactionWheel) -> np.ndarray:
     return np.diag([0.5, 0.5, 1.0]) * wheel.spin_inertia
 
 
-def wheel_config(wheel: ReactionWheel):
-    """Basilisk's ``RWConfigPayload`` for the wheel (needs Basilisk)."""
+def triad_inertia(wheel: ReactionWheel) -> np.ndarray:
+    """The spin inertias of three such wheels on the hub's x, y and z axes, ``J_s E``
+    [kg*m**2] (3, 3): what Basilisk's balanced wheels take out of the hub's inertia."""
+    return np.eye(3) * wheel.spin_inertia
+
+
+#: A wheel's spin axis and the two transverse axes Basilisk asks for, by hub axis.
+_WHEEL_AXES = {"z": ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0)),
+               "x": ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)),
+               "y": ((0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (1.0, 0.0, 0.0))}
+
+
+def wheel_config(wheel: ReactionWheel, axis: str = "z"):
+    """Basilisk's ``RWConfigPayload`` for the wheel spinning about the hub's ``axis`` (needs
+    Basilisk)."""
     from Basilisk.architecture import messaging
     from Basilisk.simulation import reactionWheelStateEffector
 
+    spin, w2, w3 = _WHEEL_AXES[axis]
     config = reactionWheelStateEffector.RWConfigPayload()
     config.RWModel = messaging.BalancedWheels
-    config.gsHat_B = [[0.0], [0.0], [1.0]]
-    config.w2Hat0_B = [[1.0], [0.0], [0.0]]
-    config.w3Hat0_B = [[0.0], [1.0], [0.0]]
+    config.gsHat_B = [[v] for v in spin]
+    config.w2Hat0_B = [[v] for v in w2]
+    config.w3Hat0_B = [[v] for v in w3]
     config.rWB_B = [[0.0], [0.0], [0.0]]
     config.Js = wheel.spin_inertia
     config.Jt = config.Jg = 0.5 * wheel.spin_inertia  # unused by the balanced model
@@ -107,5 +137,5 @@ def wheel_config(wheel: ReactionWheel):
     config.fCoulomb = config.fStatic = config.cViscous = 0.0
     config.betaStatic = -1.0
     config.P_max = -1.0
-    config.label = "RW1"
+    config.label = f"RW_{axis}"
     return config

@@ -31,7 +31,7 @@ from .actuators import ReactionWheel
 from .flight_software import flight_software_law
 from .layout import chain_spacecraft
 from .simulation import (MAX_SECONDS, BasiliskResult, default_duration, disturbance_values,
-                         nanoseconds, sample_count, simulate_slew)
+                         nanoseconds, sample_count, simulate_slew, slew_reference)
 
 __all__ = ["SlewComparison", "linear_slew", "compare", "slew_comparison"]
 
@@ -41,15 +41,17 @@ _NANO = 1e-9
 def linear_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: float,
                 slew_time: float, *, duration: float | None = None,
                 sample_time: float | None = None, chains: Mapping | None = None,
-                disturbances: Mapping | None = None, plant: control.StateSpace | None = None
-                ) -> control.TimeResponseData:
+                disturbances: Mapping | None = None, plant: control.StateSpace | None = None,
+                axis=None) -> control.TimeResponseData:
     """flexsat's linear prediction of :func:`simulate_slew`: the same sampled-data loop.
 
-    The plant is the linear hub + chains (``plant(tip_deflection=True)`` of the same chains, or
-    ``plant``: any flexsat plant, e.g. hub + beam for the beam's prediction), the controller the
-    same digital law (:func:`.flight_software_law`), closed by :func:`controllers.close_loop`
-    (zero-order hold, exact at the sample instants), driven by the same reference and
-    disturbances sampled at k T.
+    The plant is the linear hub + chains (``plant(tip_deflection=True)`` of the same chains as
+    Basilisk models them, :func:`.chain_spacecraft`, or ``plant``: any flexsat plant, e.g. hub
+    + beam for the beam's prediction), the controller the same digital law
+    (:func:`.flight_software_law`), closed by :func:`controllers.close_loop` (zero-order hold,
+    exact at the sample instants), driven by the same reference and disturbances sampled at
+    k T. A three-axis spacecraft needs ``axis``, the slew's eigen-axis (hub axes): the reference
+    is ``theta_ref = e * profile`` (:func:`.slew_reference`).
 
     Returns
     -------
@@ -65,6 +67,12 @@ def linear_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: f
         raise TypeError(f"angle must be a finite real number [rad]; got {angle!r:.60}")
     slew_time = check_positive("slew_time", slew_time, "s")
     duration = default_duration(slew_time, duration)
+    if law.three_axis and axis is None:
+        raise ValueError("axis is required for a three-axis controller: the slew's eigen-axis "
+                         "('x', 'y', 'z' or three numbers, hub axes)")
+    if not law.three_axis and axis is not None:
+        raise ValueError(f"axis is for three-axis controllers; a planar one slews about z (got "
+                         f"axis {axis!r:.60})")
     if disturbances is not None and not isinstance(disturbances, Mapping):
         raise TypeError(f"disturbances must be a mapping name -> function of time or array; "
                         f"got {type(disturbances).__name__}")
@@ -79,8 +87,13 @@ def linear_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: f
     times = np.arange(n) * (nanoseconds(T, "sample_time") * _NANO)
     U = np.zeros((loop.ninputs, n))
     labels = list(loop.input_labels)
-    U[labels.index("theta_ref")] = controllers.slew_profile(times, float(angle), slew_time)
-    for name, value in disturbance_values(disturbances, times).items():
+    reference = slew_reference(angle, slew_time, axis)(times)
+    if law.three_axis:
+        for k, a in enumerate("xyz"):
+            U[labels.index(f"theta_ref_{a}")] = reference[:, k]
+    else:
+        U[labels.index("theta_ref")] = reference
+    for name, value in disturbance_values(disturbances, times, law.three_axis).items():
         U[labels.index(name)] = value
     return control.forced_response(loop, times, U, squeeze=False)
 
@@ -168,14 +181,15 @@ def slew_comparison(spacecraft: Spacecraft, controller: control.StateSpace, angl
                     dt: float | None = None, chains: Mapping | None = None,
                     disturbances: Mapping | None = None,
                     reaction_wheel: ReactionWheel | None = None,
-                    max_seconds: float = MAX_SECONDS) -> SlewComparison:
+                    max_seconds: float = MAX_SECONDS, axis=None) -> SlewComparison:
     """Run a slew in Basilisk and compare it with flexsat's chain and truth predictions.
 
     Parameters
     ----------
     spacecraft, controller, angle, slew_time, duration, sample_time, dt, chains, disturbances,
-    reaction_wheel, max_seconds
-        As for :func:`.simulate_slew` (``spacecraft`` with its design chains).
+    reaction_wheel, max_seconds, axis
+        As for :func:`.simulate_slew` (``spacecraft`` with its design chains; ``axis`` the
+        eigen-axis of a three-axis slew).
     truth_plant : control.StateSpace, optional
         flexsat's truth plant (e.g. ``Spacecraft(hub, [Mount(beam.truncated(...), ...)]).plant(
         tip_deflection=True)``, the runner's truth); its outputs are compared by name.
@@ -190,8 +204,9 @@ def slew_comparison(spacecraft: Spacecraft, controller: control.StateSpace, angl
     basilisk = simulate_slew(spacecraft, controller, angle, slew_time, duration=duration,
                              sample_time=sample_time, dt=dt, chains=chains,
                              disturbances=disturbances, reaction_wheel=reaction_wheel,
-                             max_seconds=max_seconds)
-    kwargs = dict(duration=duration, sample_time=basilisk.sample_time, disturbances=disturbances)
+                             max_seconds=max_seconds, axis=axis)
+    kwargs = dict(duration=duration, sample_time=basilisk.sample_time, disturbances=disturbances,
+                  axis=axis)
     chain = linear_slew(basilisk.layout.spacecraft, controller, angle, slew_time, **kwargs)
     differences = {"basilisk_vs_chain": compare(basilisk.response, chain)}
     truth = None

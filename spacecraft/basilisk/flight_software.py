@@ -24,6 +24,19 @@ task has the higher priority), forms flexsat's signals
 effector that applies it sits in the same task after the law, so the torque computed at t_k
 drives the integration over [t_k, t_(k+1)) exactly as the sampled-data model assumes.
 
+Three axes
+    A three-axis controller (outputs ``torque_x``, ``torque_y``, ``torque_z``; inputs among
+    ``theta_ref_x/_y/_z``, ``theta_x/_y/_z``, ``omega_x/_y/_z``, :data:`SIGNALS_3`) runs the same
+    way. The attitude it reads is the rotation vector of the hub's MRP,
+
+        theta = 4 atan(|sigma|) sigma / |sigma|,
+
+    unwrapped along its axis across shadow-set switches (+-2 pi), the rate ``omega_BN_B``, and
+    the reference the eigen-axis slew ``theta_ref = e * profile(t)``: for a rotation about a
+    fixed axis e the rotation vector is exactly ``phi e``, so the law sees what flexsat's
+    small-angle loop (``theta`` the small rotation vector in hub axes) sees, up to terms second
+    order in the attitude. ``torqueRequestBody = (torque_x, torque_y, torque_z)``.
+
 References
 ----------
 .. [1] H. Schaub, J. L. Junkins, "Analytical Mechanics of Space Systems", 4th ed., AIAA 2018,
@@ -47,10 +60,15 @@ from appendages.interface import check_positive
 from .install import BasiliskModelError
 
 __all__ = ["FlightSoftwareLaw", "flight_software_law", "default_sample_time",
-           "SIGNALS", "SAMPLES_PER_CROSSOVER", "flight_software_class"]
+           "SIGNALS", "SIGNALS_3", "TORQUES_3", "SAMPLES_PER_CROSSOVER",
+           "flight_software_class", "rotation_vector"]
 
 #: The signals the flight software forms, in flexsat's names.
 SIGNALS = ("theta_ref", "theta", "omega")
+#: The signals a three-axis flight software forms (hub axes).
+SIGNALS_3 = tuple(f"{name}_{axis}" for name in SIGNALS for axis in "xyz")
+#: A three-axis controller's outputs (hub axes).
+TORQUES_3 = ("torque_x", "torque_y", "torque_z")
 
 #: Default flight-software rate for a continuous controller: this many samples per period of
 #: the highest gain crossover or controller pole (the top of Franklin, Powell & Workman's 10-30
@@ -65,13 +83,16 @@ class FlightSoftwareLaw:
     Attributes
     ----------
     A, B, C, D : ndarray
-        ``x[k+1] = A x + B u``, ``torque = C x + D u`` (C, D one row).
+        ``x[k+1] = A x + B u``, ``torque = C x + D u`` (C, D one row; three axes: three).
     inputs : tuple of str
-        The meaning of each entry of u (names from :data:`SIGNALS`).
+        The meaning of each entry of u (names from :data:`SIGNALS`; three axes
+        :data:`SIGNALS_3`).
     sample_time : float, s
     controller : control.StateSpace
         The same law as a discrete StateSpace with ``dt = sample_time`` (for
         :func:`controllers.close_loop`).
+    outputs : tuple of str
+        ``("torque",)``, or three axes the controller's order of :data:`TORQUES_3`.
     """
 
     A: np.ndarray
@@ -81,6 +102,12 @@ class FlightSoftwareLaw:
     inputs: tuple
     sample_time: float
     controller: control.StateSpace
+    outputs: tuple = ("torque",)
+
+    @property
+    def three_axis(self) -> bool:
+        """True for a three-axis law (torques about x, y and z)."""
+        return self.outputs != ("torque",)
 
 
 def flight_software_law(controller: control.StateSpace, sample_time: float | None = None
@@ -91,7 +118,9 @@ def flight_software_law(controller: control.StateSpace, sample_time: float | Non
     ----------
     controller : control.StateSpace
         Output ``torque`` [N*m]; inputs among ``theta_ref`` [rad], ``theta`` [rad], ``omega``
-        [rad/s]. Continuous (dt = 0, or None for a static gain) or digital (dt > 0).
+        [rad/s]. Three axes: outputs ``torque_x/_y/_z`` [N*m], inputs among
+        ``theta_ref_x/_y/_z``, ``theta_x/_y/_z`` [rad], ``omega_x/_y/_z`` [rad/s] (hub axes).
+        Continuous (dt = 0, or None for a static gain) or digital (dt > 0).
     sample_time : float, s, optional
         Flight-software sample time. Required for a continuous controller (it is discretised
         exactly, zero-order hold, at this rate); for a digital one it must equal its dt
@@ -112,15 +141,18 @@ def flight_software_law(controller: control.StateSpace, sample_time: float | Non
     if not isinstance(controller, control.StateSpace):
         raise TypeError(f"controller must be a control.StateSpace; got {type(controller).__name__}")
     outputs = list(controller.output_labels)
-    if outputs != ["torque"]:
+    three_axis = sorted(outputs) == list(TORQUES_3)
+    if outputs != ["torque"] and not three_axis:
         raise BasiliskModelError(f"controller must have the single output 'torque' [N*m] (the "
-                                 f"hub torque Basilisk applies); got outputs {outputs}")
+                                 f"hub torque Basilisk applies), or three axes the outputs "
+                                 f"{list(TORQUES_3)}; got outputs {outputs}")
+    signals = SIGNALS_3 if three_axis else SIGNALS
     inputs = list(controller.input_labels)
-    unknown = [name for name in inputs if name not in SIGNALS]
+    unknown = [name for name in inputs if name not in signals]
     if unknown:
         raise BasiliskModelError(
             f"controller inputs {unknown} are not signals the Basilisk flight software forms: it "
-            f"reads the hub's attitude and rate and the reference, {list(SIGNALS)}")
+            f"reads the hub's attitude and rate and the reference, {list(signals)}")
     dt = controller.dt
     if dt is True:
         raise ValueError("controller has an unspecified sample time (dt=True); give it dt > 0 [s]")
@@ -140,11 +172,11 @@ def flight_software_law(controller: control.StateSpace, sample_time: float | Non
         digital = control.c2d(continuous, T, method="zoh")
     A, B, C, D = (np.asarray(M, dtype=float) for M in (digital.A, digital.B, digital.C, digital.D))
     n = A.shape[0]
-    A, B, C = A.reshape(n, n), B.reshape(n, len(inputs)), C.reshape(1, n)
-    D = D.reshape(1, len(inputs))
-    system = control.ss(A, B, C, D, T, inputs=inputs, outputs=["torque"],
+    A, B, C = A.reshape(n, n), B.reshape(n, len(inputs)), C.reshape(len(outputs), n)
+    D = D.reshape(len(outputs), len(inputs))
+    system = control.ss(A, B, C, D, T, inputs=inputs, outputs=outputs,
                         name=controller.name or "controller")
-    return FlightSoftwareLaw(A, B, C, D, tuple(inputs), T, system)
+    return FlightSoftwareLaw(A, B, C, D, tuple(inputs), T, system, tuple(outputs))
 
 
 def default_sample_time(plant: control.StateSpace, controller: control.StateSpace) -> float:
@@ -152,7 +184,8 @@ def default_sample_time(plant: control.StateSpace, controller: control.StateSpac
 
     The largest of 1, 2, 5 x 10**k seconds with at least :data:`SAMPLES_PER_CROSSOVER` samples
     per period of the fastest of (a) the loop's highest gain crossover on ``plant`` (above it
-    |L(j omega)| < 1 for good) and (b) the controller's own fastest pole (an estimator's copy of
+    |L(j omega)| < 1 for good; three axes: the largest singular value of the 3x3 L, every
+    loop's gain in every direction) and (b) the controller's own fastest pole (an estimator's copy of
     the chain modes, a roll-off filter): the sampled law then stays close to the continuous one
     the user designed. A digital controller's own dt is returned as it is.
 
@@ -174,7 +207,8 @@ def default_sample_time(plant: control.StateSpace, controller: control.StateSpac
     if controller.dt not in (None, 0) and controller.dt is not True:
         return float(controller.dt)
     omega, L = controllers.loop_frequency_response(plant, controller)
-    above = np.nonzero(np.abs(L) >= 1.0)[0]
+    gain = np.abs(L) if L.ndim == 1 else np.linalg.norm(L, ord=2, axis=(1, 2))
+    above = np.nonzero(gain >= 1.0)[0]
     fastest = float(omega[above[-1]]) if above.size else 0.0
     if controller.nstates:
         fastest = max(fastest, float(np.max(np.abs(np.linalg.eigvals(
@@ -192,15 +226,65 @@ def _unwrap(angle: float, previous: float) -> float:
     return angle + 2.0 * math.pi * round((previous - angle) / (2.0 * math.pi))
 
 
+def _three_finite(value, name: str, unit: str) -> np.ndarray:
+    """``value`` as three finite floats (3,), or a ValueError naming ``name``."""
+    try:
+        v = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise ValueError(f"{name} must be three finite numbers (x, y, z) [{unit}], hub axes; "
+                         f"got {value!r:.100}")
+    return v
+
+
+def rotation_vector(sigma, previous=None) -> np.ndarray:
+    """The rotation vector [rad] (3,) of an MRP ``sigma``, unwrapped towards ``previous``.
+
+    ``theta = 4 atan(|sigma|) sigma / |sigma|`` [1]_, shifted along its axis by the multiple of
+    2 pi that brings it closest to ``previous`` (a rotation vector [rad], e.g. the last
+    sample's): continuous across the MRP's shadow-set switch at 180 deg, where sigma jumps to
+    ``-sigma / |sigma|**2`` and the rotation vector by 2 pi along its axis.
+
+    Parameters
+    ----------
+    sigma : array_like (3,)
+        Modified Rodrigues parameters (dimensionless), finite.
+    previous : array_like (3,), rad, optional
+        The rotation vector to unwrap towards.
+
+    Returns
+    -------
+    ndarray (3,), rad
+    """
+    sigma = _three_finite(sigma, "sigma", "-")
+    if previous is not None:
+        previous = _three_finite(previous, "previous", "rad")
+    return _rotation_vector(sigma, previous)
+
+
+def _rotation_vector(sigma: np.ndarray, previous: np.ndarray | None) -> np.ndarray:
+    """:func:`rotation_vector` without its checks (the flight software's, every sample)."""
+    s = math.sqrt(float(sigma @ sigma))
+    if s == 0.0:
+        return np.zeros(3)
+    axis = sigma / s
+    angle = 4.0 * math.atan(s)
+    if previous is not None:
+        angle = _unwrap(angle, float(axis @ previous))
+    return angle * axis
+
+
 @functools.cache
 def flight_software_class():
     """The Basilisk ``SysModel`` subclass that runs a :class:`FlightSoftwareLaw` (built once).
 
     Instances take ``(law, reference_values)``: the law, and theta_ref [rad] at every sample
-    instant k T (evaluated once, before the run). Attributes ``stateInMsg``
-    (``SCStatesMsgReader``), ``torqueOutMsg`` (``CmdTorqueBodyMsg``, the hub torque for
-    ``extForceTorque``) and ``motorTorqueOutMsg`` (``ArrayMotorTorqueMsg``, -torque for a
-    reaction wheel) are connected by the caller.
+    instant k T (evaluated once, before the run; three axes: an (n, 3) array in hub axes).
+    Attributes ``stateInMsg`` (``SCStatesMsgReader``), ``torqueOutMsg`` (``CmdTorqueBodyMsg``,
+    the hub torque for ``extForceTorque``) and ``motorTorqueOutMsg`` (``ArrayMotorTorqueMsg``,
+    -torque for a reaction wheel; three axes for wheels along x, y, z) are connected by the
+    caller.
     """
     from Basilisk.architecture import messaging, sysModel
 
@@ -216,38 +300,66 @@ def flight_software_class():
             self.reference_values = np.asarray(reference_values, dtype=float)
             self.period_nanos = round(law.sample_time * 1e9)
             self.x = np.zeros(law.A.shape[0])
-            self.theta = 0.0
-            self._where = [SIGNALS.index(name) for name in law.inputs]
+            if law.three_axis:
+                self.theta = np.zeros(3)
+                self._where = [SIGNALS_3.index(name) for name in law.inputs]
+                # torque_x, _y, _z from the law's outputs, in whatever order it gives them
+                self._axes = [law.outputs.index(name) for name in TORQUES_3]
+            else:
+                self.theta = 0.0
+                self._where = [SIGNALS.index(name) for name in law.inputs]
 
         def Reset(self, CurrentSimNanos):
             self.x = np.zeros(self.law.A.shape[0])
-            self.theta = 0.0
+            self.theta = np.zeros(3) if self.law.three_axis else 0.0
             self.torqueOutMsg.write(messaging.CmdTorqueBodyMsgPayload(), CurrentSimNanos,
                                     self.moduleID)
             self.motorTorqueOutMsg.write(messaging.ArrayMotorTorqueMsgPayload(), CurrentSimNanos,
                                          self.moduleID)
 
         def UpdateState(self, CurrentSimNanos):
-            state = self.stateInMsg()
-            sigma, rate = state.sigma_BN[2], state.omega_BN_B[2]
-            if math.isfinite(sigma) and math.isfinite(rate):
-                self.theta = _unwrap(4.0 * math.atan(sigma), self.theta)
-                k = min(CurrentSimNanos // self.period_nanos, self.reference_values.size - 1)
-                signals = np.array([self.reference_values[k], self.theta, rate])
-                u = signals[self._where]
-                law = self.law
-                torque = float((law.C @ self.x + law.D @ u)[0])
-                self.x = law.A @ self.x + law.B @ u
+            if self.law.three_axis:
+                torque = self._three_axis(CurrentSimNanos)
             else:
-                # diverged dynamics: command nothing (an exception here would only print a
-                # traceback from inside Basilisk); the run's collection reports the divergence
-                torque = 0.0
+                torque = (0.0, 0.0, self._planar(CurrentSimNanos))
             payload = messaging.CmdTorqueBodyMsgPayload()
-            payload.torqueRequestBody = [0.0, 0.0, torque]
+            payload.torqueRequestBody = list(torque)
             self.torqueOutMsg.write(payload, CurrentSimNanos, self.moduleID)
             # a wheel's motor torque u_s reacts on the hub as -u_s: command u_s = -torque
             motor = messaging.ArrayMotorTorqueMsgPayload()
-            motor.motorTorque = [-torque]
+            motor.motorTorque = ([-t for t in torque] if self.law.three_axis
+                                 else [-torque[2]])
             self.motorTorqueOutMsg.write(motor, CurrentSimNanos, self.moduleID)
+
+        def _planar(self, nanos) -> float:
+            state = self.stateInMsg()
+            sigma, rate = state.sigma_BN[2], state.omega_BN_B[2]
+            if not (math.isfinite(sigma) and math.isfinite(rate)):
+                # diverged dynamics: command nothing (an exception here would only print a
+                # traceback from inside Basilisk); the run's collection reports the divergence
+                return 0.0
+            self.theta = _unwrap(4.0 * math.atan(sigma), self.theta)
+            k = min(nanos // self.period_nanos, self.reference_values.size - 1)
+            signals = np.array([self.reference_values[k], self.theta, rate])
+            return self._step(signals)[0]
+
+        def _three_axis(self, nanos) -> tuple:
+            state = self.stateInMsg()
+            sigma, rate = np.array(state.sigma_BN, dtype=float), np.array(state.omega_BN_B,
+                                                                          dtype=float)
+            if not (np.all(np.isfinite(sigma)) and np.all(np.isfinite(rate))):
+                return (0.0, 0.0, 0.0)  # diverged: as in _planar
+            self.theta = _rotation_vector(sigma, self.theta)
+            k = min(nanos // self.period_nanos, self.reference_values.shape[0] - 1)
+            signals = np.concatenate([self.reference_values[k], self.theta, rate])
+            torque = self._step(signals)
+            return tuple(float(torque[i]) for i in self._axes)
+
+        def _step(self, signals: np.ndarray) -> np.ndarray:
+            u = signals[self._where]
+            law = self.law
+            torque = law.C @ self.x + law.D @ u
+            self.x = law.A @ self.x + law.B @ u
+            return torque
 
     return AttitudeFlightSoftware

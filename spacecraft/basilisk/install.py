@@ -19,6 +19,7 @@ __all__ = [
     "BasiliskRunTooLong",
     "BasiliskIntegrationError",
     "BasiliskVersionWarning",
+    "BasiliskModelWarning",
     "INSTALL_HINT",
     "TESTED_VERSIONS",
     "require_basilisk",
@@ -59,6 +60,11 @@ class BasiliskRunTooLong(BasiliskModelError):
 
 class BasiliskIntegrationError(FlexsatError, ArithmeticError):
     """Basilisk's integration produced non-finite states (e.g. an unstable step size)."""
+
+
+class BasiliskModelWarning(UserWarning):
+    """The Basilisk model differs from the chain given (in a way the message names), and so
+    does the linear chain it is compared with."""
 
 
 class BasiliskVersionWarning(UserWarning):

@@ -29,6 +29,17 @@ Integrator and step
     3.5) but run at 10 (0.86) and 16 (2.24) (``benchmarks/basilisk_vs_flexsat.py``); the
     adapter refuses such a dt before the run.
 
+Three axes
+    A three-axis spacecraft runs the same way: the hub's full inertia tensor, three spinning
+    bodies per joint (:mod:`.layout`), a three-axis law commanding torques about x, y and z
+    (:mod:`.flight_software`), the eigen-axis slew ``theta_ref = e * profile(t)``, and the
+    outputs of flexsat's three-axis plant: ``theta_x/_y/_z`` (the rotation vector of the hub's
+    MRP), ``omega_x/_y/_z``, per appendage ``<name>_tip_deflection_y``, ``_z`` and
+    ``<name>_tip_twist``, ``torque_x/_y/_z``. A reaction wheel becomes a triad, one such wheel
+    on each hub axis (:mod:`.actuators`). :func:`linearised` gives Basilisk's own equations of
+    motion linearised about rest, by central differences, for checking a layout against
+    flexsat's linear model.
+
 References
 ----------
 .. [1] E. Hairer, G. Wanner, "Solving Ordinary Differential Equations II", 2nd ed., Springer
@@ -53,15 +64,18 @@ from appendages.interface import check_positive
 
 from ..dynamics.coupling import Spacecraft
 from ..scene.limits import Limits
-from .actuators import WHEEL_ACCELERATION_GUARD, ReactionWheel, rotor_inertia, wheel_config
-from .flight_software import FlightSoftwareLaw, flight_software_class, flight_software_law
+from .actuators import (WHEEL_ACCELERATION_GUARD, ReactionWheel, rotor_inertia,
+                        triad_inertia, wheel_config)
+from .flight_software import (TORQUES_3, FlightSoftwareLaw, flight_software_class,
+                              flight_software_law, rotation_vector)
 from .install import (BasiliskIntegrationError, BasiliskModelError, BasiliskRunTooLong,
                       require_basilisk)
 from .layout import SpacecraftLayout, layout
 
-__all__ = ["BasiliskResult", "simulate", "simulate_slew", "dynamics_step", "estimated_seconds", "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR",
-           "DISTURBANCES", "MAX_SECONDS", "MAX_SAMPLES", "nanoseconds", "disturbance_values",
-           "sample_count", "default_duration"]
+__all__ = ["BasiliskResult", "simulate", "simulate_slew", "dynamics_step", "estimated_seconds",
+           "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR", "DISTURBANCES", "DISTURBANCES_3",
+           "MAX_SECONDS", "MAX_SAMPLES", "nanoseconds", "disturbance_values", "sample_count",
+           "default_duration", "linearised", "LinearisedModel", "slew_reference"]
 
 #: RK4 is stable on the imaginary axis for |w dt| <= 2 sqrt(2) [1]_.
 RK4_STABILITY_LIMIT = 2.0 * math.sqrt(2.0)
@@ -69,6 +83,9 @@ RK4_STABILITY_LIMIT = 2.0 * math.sqrt(2.0)
 DEFAULT_STEP_FACTOR = 0.5
 #: Disturbance inputs the Basilisk model applies (hub torque; force at the hub's centre of mass).
 DISTURBANCES = ("disturbance_torque", "force_x", "force_y")
+#: The same in three axes (hub axes).
+DISTURBANCES_3 = ("disturbance_torque_x", "disturbance_torque_y", "disturbance_torque_z",
+                  "force_x", "force_y", "force_z")
 #: Work model of a run [s]: per RK4 step STEP_SECONDS + BODY_SECONDS * N**3 (the N-DOF effector
 #: builds and inverts its N x N mass matrix in O(N**3) per derivative evaluation), per
 #: flight-software sample SAMPLE_SECONDS (the Python law). Measured with bsk 2.12.1 on a shared
@@ -96,7 +113,9 @@ class BasiliskResult:
         At the flight-software sample instants k T: outputs ``theta`` [rad], ``omega`` [rad/s],
         ``<name>_tip_deflection`` [m] per appendage, ``torque`` [N*m] (the names of flexsat's
         closed loops), with a reaction wheel ``wheel_speed`` [rad/s] (relative to the hub);
-        inputs ``theta_ref`` [rad] and any disturbance.
+        inputs ``theta_ref`` [rad] and any disturbance. Three axes: ``theta_x/_y/_z``,
+        ``omega_x/_y/_z``, ``<name>_tip_deflection_y``, ``_z`` [m], ``<name>_tip_twist`` [rad],
+        ``torque_x/_y/_z``, with wheels ``wheel_speed_x/_y/_z``; inputs ``theta_ref_x/_y/_z``.
     sample_time : float, s
         Flight-software (and output) step.
     dt : float, s
@@ -110,7 +129,7 @@ class BasiliskResult:
         Wall time [s] of ``build`` (Python objects and InitializeSimulation) and ``run``.
     out_of_plane : float
         Largest |sigma_BN_x|, |sigma_BN_y|, |omega_BN_B_x|, |omega_BN_B_y| seen (0 for planar
-        motion).
+        motion; a three-axis run moves in every direction and reports NaN).
     conservation : dict or None
         When asked: ``time`` [s], ``rotational_energy`` [J] (kinetic + hinge springs, Basilisk's
         ``totRotEnergy``), ``angular_momentum`` [N*m*s] (n, 3), about the system's centre of mass
@@ -236,6 +255,23 @@ def estimated_seconds(n_bodies: int, duration: float, dt: float, sample_time: fl
             + duration / sample_time * SAMPLE_SECONDS)
 
 
+def _initial_rate(value, three_axis: bool):
+    """The initial hub rate: a finite float (about z), three axes a finite (3,) array."""
+    if not three_axis:
+        return _finite(value, "initial_rate", "rad/s")
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
+            and value == 0:
+        return np.zeros(3)
+    try:
+        rate = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        rate = None
+    if rate is None or rate.shape != (3,) or not np.all(np.isfinite(rate)):
+        raise ValueError(f"initial_rate must be three finite rates (x, y, z) [rad/s] on a "
+                         f"three-axis spacecraft; got {value!r:.100}")
+    return rate
+
+
 def _finite(value, name: str, unit: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise TypeError(f"{name} must be a real number [{unit}]; got {type(value).__name__}")
@@ -285,16 +321,20 @@ def _initial_angles(lay: SpacecraftLayout, initial_angles: Mapping | None) -> di
     return angles
 
 
-def disturbance_values(disturbances: Mapping | None, times: np.ndarray) -> dict:
+def disturbance_values(disturbances: Mapping | None, times: np.ndarray,
+                       three_axis: bool = False) -> dict:
+    """name -> the disturbance's value at each sample instant (checked: names the Basilisk
+    model applies, :data:`DISTURBANCES` or :data:`DISTURBANCES_3`, one finite value each)."""
     if disturbances is not None and not isinstance(disturbances, Mapping):
         raise TypeError(f"disturbances must be a mapping name -> function of time or array; got "
                         f"{type(disturbances).__name__}")
+    applied = DISTURBANCES_3 if three_axis else DISTURBANCES
     values = {}
     for name, profile in ({} if disturbances is None else dict(disturbances)).items():
-        if name not in DISTURBANCES:
+        if name not in applied:
             raise BasiliskModelError(
                 f"disturbance {name!r} is not applied by the Basilisk model: it applies "
-                f"{list(DISTURBANCES)} (a tip force would need a force effector on a spinning "
+                f"{list(applied)} (a tip force would need a force effector on a spinning "
                 "body)")
         v = np.asarray(profile(times) if callable(profile) else profile, dtype=float)
         if v.shape != times.shape or not np.all(np.isfinite(v)):
@@ -308,7 +348,7 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
              duration: float, reference: Callable[[np.ndarray], np.ndarray] | None = None,
              sample_time: float | None = None, dt: float | None = None,
              chains: Mapping | None = None, disturbances: Mapping | None = None,
-             initial_rate: float = 0.0, initial_angles: Mapping | None = None,
+             initial_rate=0.0, initial_angles: Mapping | None = None,
              conservation: bool = False, reaction_wheel: ReactionWheel | None = None,
              max_seconds: float = MAX_SECONDS) -> BasiliskResult:
     """Simulate a flexsat spacecraft (chains) and controller in Basilisk.
@@ -316,13 +356,16 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
     Parameters
     ----------
     spacecraft : Spacecraft
-        Planar hub with appendages that are chains (or replaced through ``chains``).
+        Planar or three-axis hub with appendages that are chains (or replaced through
+        ``chains``; three axes: chains from :func:`appendages.fit_chain_3d`, held
+        inextensible, :mod:`.layout`).
     controller : control.StateSpace, optional
         Any flexsat controller (see :func:`.flight_software_law`); None: no control torque.
     duration : float, s
         Simulated time (from 0).
     reference : callable, optional
-        theta_ref(t) [rad] for an array of times [s]; default 0.
+        theta_ref(t) [rad] for an array of times [s] (three axes: an array (n, 3) of
+        theta_ref_x, _y, _z, e.g. :func:`slew_reference`); default 0.
     sample_time : float, s, optional
         Flight-software and output step; default the digital controller's dt. Required for a
         continuous controller and without controller.
@@ -333,16 +376,19 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
     disturbances : mapping name -> callable or array, optional
         ``disturbance_torque`` [N*m], ``force_x``, ``force_y`` [N] (hub axes, at the hub's centre
         of mass) as functions of time, held over each sample (as flexsat's sampled loop holds
-        them).
-    initial_rate : float, rad/s
-        Initial hub rate about z.
+        them); three axes :data:`DISTURBANCES_3`.
+    initial_rate : float or (3,) array, rad/s
+        Initial hub rate about z (three axes: the rate vector, hub axes).
     initial_angles : mapping name -> array, optional
-        Initial hinge angles [rad] of each chain, relative rotation at each hinge from the root.
+        Initial hinge angles [rad] of each chain, relative rotation at each hinge from the root
+        (one per spinning body: three axes, z, y and x at each joint, :mod:`.layout`).
     conservation : bool
         Record Basilisk's energy and angular momentum (:attr:`BasiliskResult.conservation`).
     reaction_wheel : ReactionWheel, optional
         Apply the torque through a reaction wheel about z instead of an external torque
-        (:mod:`.actuators`); the response gains the output ``wheel_speed`` [rad/s].
+        (:mod:`.actuators`); the response gains the output ``wheel_speed`` [rad/s]. Three axes:
+        one such wheel on each hub axis, outputs ``wheel_speed_x/_y/_z``; it must start at rest
+        relative to the hub (``initial_speed`` 0, see :mod:`.actuators`).
     max_seconds : float, s
         Refuse a run whose estimated wall time (:func:`estimated_seconds`) exceeds this.
 
@@ -365,6 +411,12 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
     t_build = time.perf_counter()
     lay = layout(spacecraft, chains=chains)
     law = None if controller is None else flight_software_law(controller, sample_time)
+    if law is not None and law.three_axis != lay.three_axis:
+        which = "three-axis" if lay.three_axis else "planar"
+        raise BasiliskModelError(
+            f"the spacecraft is {which} but the controller's outputs are "
+            f"{list(law.outputs)}: a {which} spacecraft needs "
+            f"{TORQUES_3 if lay.three_axis else ('torque',)}")
     if law is not None:
         T = law.sample_time
     elif sample_time is None:
@@ -394,20 +446,28 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
             f"{work}, above max_seconds = {max_seconds:g} s: use a chain with fewer or softer "
             "bodies, a shorter duration, or raise max_seconds", work=work, estimate=estimate,
             limit=max_seconds)
-    initial_rate = _finite(initial_rate, "initial_rate", "rad/s")
+    initial_rate = _initial_rate(initial_rate, lay.three_axis)
     angles = _initial_angles(lay, initial_angles)
     times = np.arange(n_samples) * (nanoseconds(T, "sample_time") * _NANO)
-    ref = np.zeros(n_samples) if reference is None else np.asarray(reference(times), dtype=float)
-    if ref.shape != times.shape or not np.all(np.isfinite(ref)):
-        raise ValueError(f"reference must give one finite angle [rad] per sample ({n_samples}); "
+    shape = times.shape + ((3,) if lay.three_axis else ())
+    ref = np.zeros(shape) if reference is None else np.asarray(reference(times), dtype=float)
+    if ref.shape != shape or not np.all(np.isfinite(ref)):
+        what = "three finite angles [rad] (x, y, z)" if lay.three_axis else "one finite angle [rad]"
+        raise ValueError(f"reference must give {what} per sample ({n_samples}); "
                          f"got shape {ref.shape}")
-    pushes = disturbance_values(disturbances, times)
+    pushes = disturbance_values(disturbances, times, lay.three_axis)
     if reaction_wheel is not None:
         if not isinstance(reaction_wheel, ReactionWheel):
             raise TypeError("reaction_wheel must be a spacecraft.basilisk.ReactionWheel; got "
                             f"{type(reaction_wheel).__name__}")
         if law is None:
             raise ValueError("a reaction wheel needs a controller to command it")
+        if lay.three_axis and reaction_wheel.initial_speed != 0.0:
+            raise BasiliskModelError(
+                f"reaction_wheel.initial_speed must be 0 [rad/s] on a three-axis spacecraft; "
+                f"got {reaction_wheel.initial_speed!r}: a spinning wheel's momentum h turns the "
+                "hub's rates into torques omega x h, first order in the motion, which flexsat's "
+                "linear plant (no wheel momentum) leaves out, so the comparison would not hold")
 
     run = _BasiliskRun(lay, law, ref, pushes, T, step, initial_rate, angles,
                        conservation, reaction_wheel)
@@ -441,13 +501,16 @@ class _BasiliskRun:
         craft.hub.mHub = hub.mHub
         craft.hub.r_BcB_B = hub.r_BcB_B.reshape(3, 1).tolist()
         inertia = hub.IHubPntBc_B.copy()
+        axes = ("x", "y", "z") if lay.three_axis else ("z",)
         if wheel is not None:
             # Basilisk's balanced wheel expects its rotor's spin inertia inside the hub's and
             # removes J_s g g^T itself (matrixD -= Js gsHat gsHat^T): add the rotor, a disc
-            # (see .actuators)
-            inertia += rotor_inertia(wheel)
+            # (planar), or each wheel's J_s g g^T (three axes; see .actuators)
+            inertia += triad_inertia(wheel) if lay.three_axis else rotor_inertia(wheel)
         craft.hub.IHubPntBc_B = inertia.tolist()
-        craft.hub.omega_BN_BInit = [[0.0], [0.0], [initial_rate]]
+        rate = (np.asarray(initial_rate, dtype=float) if lay.three_axis
+                else np.array([0.0, 0.0, initial_rate]))
+        craft.hub.omega_BN_BInit = rate.reshape(3, 1).tolist()
         self.effectors, self.bodies = [], []
         for a in lay.appendages:
             if not a.bodies:
@@ -462,7 +525,7 @@ class _BasiliskRun:
                 b.setDCM_S0P(body.dcm_S0P.tolist())
                 b.setR_ScS_S(body.r_ScS_S.reshape(3, 1).tolist())
                 b.setR_SP_P(body.r_SP_P.reshape(3, 1).tolist())
-                b.setSHat_S([[0.0], [0.0], [1.0]])
+                b.setSHat_S(body.sHat_S.reshape(3, 1).tolist())
                 b.setK(body.k)
                 b.setC(body.c)
                 b.setThetaInit(float(angle))
@@ -486,10 +549,11 @@ class _BasiliskRun:
                 self.torque.cmdTorqueInMsg.subscribeTo(self.fsw.torqueOutMsg)
                 sim.AddModelToTask("flight_software", self.torque, 20)
             else:
-                self.wheel_config = wheel_config(wheel)
+                self.wheel_configs = [wheel_config(wheel, axis) for axis in axes]
                 self.wheel = reactionWheelStateEffector.ReactionWheelStateEffector()
                 self.wheel.ModelTag = "flexsat_reaction_wheel"
-                self.wheel.addReactionWheel(self.wheel_config)
+                for config in self.wheel_configs:
+                    self.wheel.addReactionWheel(config)
                 if hasattr(self.wheel, "setMaxWheelAcceleration"):
                     self.wheel.setMaxWheelAcceleration(WHEEL_ACCELERATION_GUARD)
                 craft.addStateEffector(self.wheel)
@@ -500,7 +564,7 @@ class _BasiliskRun:
             self.push = extForceTorque.ExtForceTorque()
             self.push.ModelTag = "flexsat_disturbance"
             craft.addDynamicEffector(self.push)
-            self.schedule = _disturbance_class()(self.push, pushes, period)
+            self.schedule = _disturbance_class()(self.push, pushes, period, lay.three_axis)
             self.schedule.ModelTag = "flexsat_disturbance_schedule"
             sim.AddModelToTask("flight_software", self.schedule, 40)
 
@@ -534,6 +598,44 @@ class _BasiliskRun:
                 raise
             raise BasiliskModelError(f"Basilisk rejected the model: {exc}") from None
 
+    def linearise(self, step: float) -> tuple[np.ndarray, list]:
+        """Central differences of Basilisk's equations of motion about the initial state.
+
+        States: hub position and velocity (of B, inertial axes), MRP and rate, then per
+        effector the spin angles and rates. Returns (A, state names)."""
+        dyn = self.craft.dynManager
+        hub = self.craft.hub
+        names = [(hub.nameOfHubPosition, "r_BN_N"), (hub.nameOfHubVelocity, "v_BN_N"),
+                 (hub.nameOfHubSigma, "sigma_BN"), (hub.nameOfHubOmega, "omega_BN_B")]
+        for a, effector in zip(self.lay.appendages, self.effectors):
+            if effector is not None:
+                names += [(effector.getNameOfThetaState(), f"{a.name}.theta"),
+                          (effector.getNameOfThetaDotState(), f"{a.name}.thetaDot")]
+        states = [dyn.getStateObject(name) for name, _ in names]
+        base = [np.asarray(state.getState(), dtype=float) for state in states]
+        sizes = [b.size for b in base]
+        labels = []
+        for (_, label), size in zip(names, sizes):
+            labels += [f"{label}[{k}]" for k in range(size)]
+
+        def derivative(x: np.ndarray) -> np.ndarray:
+            offset = 0
+            for state, b, size in zip(states, base, sizes):
+                state.setState(x[offset:offset + size].reshape(b.shape).tolist())
+                offset += size
+            self._call(self.craft.equationsOfMotion, 0.0, 1.0)
+            return np.concatenate([np.asarray(state.getStateDeriv(), dtype=float).ravel()
+                                   for state in states])
+
+        x0 = np.concatenate([b.ravel() for b in base])
+        A = np.zeros((x0.size, x0.size))
+        for k in range(x0.size):
+            e = np.zeros(x0.size)
+            e[k] = step
+            A[:, k] = (derivative(x0 + e) - derivative(x0 - e)) / (2.0 * step)
+        derivative(x0)
+        return A, labels
+
     def execute(self, t_final: float) -> None:
         self.sim.ConfigureStopTime(round(t_final * 1e9))
         self._call(self.sim.ExecuteSimulation)
@@ -547,15 +649,15 @@ class _BasiliskRun:
                                "flight-software instants")
         sigma = np.asarray(state.sigma_BN, dtype=float).reshape(n, 3)
         rate = np.asarray(state.omega_BN_B, dtype=float).reshape(n, 3)
+        if self.lay.three_axis:
+            return self._collect_three_axis(times, ref, pushes, sigma, rate)
         rows, labels = [], []
         theta = np.unwrap(4.0 * np.arctan(sigma[:, 2]))
         rows += [theta, rate[:, 2]]
         labels += ["theta", "omega"]
         for a in self.lay.appendages:
             if a.bodies:
-                angles = np.column_stack([np.asarray(r.theta, dtype=float).reshape(n)
-                                          for r in self.recorders[a.name]])
-                rows.append(a.tip_deflection(angles))
+                rows.append(a.tip_deflection(self._angles(a, n)))
             else:
                 rows.append(np.zeros(n))
             labels.append(f"{a.name}_tip_deflection")
@@ -568,25 +670,69 @@ class _BasiliskRun:
             rows.append(speeds.reshape(n, -1)[:, 0])
             labels.append("wheel_speed")
         outputs = np.vstack(rows)
+        self._check_finite(outputs, times)
+        out_of_plane = float(max(np.abs(sigma[:, :2]).max(), np.abs(rate[:, :2]).max()))
+        inputs = np.vstack([ref] + [pushes[name] for name in pushes])
+        response = control.TimeResponseData(
+            times, outputs, inputs=inputs, output_labels=labels,
+            input_labels=["theta_ref"] + list(pushes), issiso=False, sysname="basilisk")
+        return response, out_of_plane, self._energy()
+
+    def _angles(self, appendage, n: int) -> np.ndarray:
+        """The recorded spin angles of an appendage's bodies (n, n_bodies) [rad]."""
+        return np.column_stack([np.asarray(r.theta, dtype=float).reshape(n)
+                                for r in self.recorders[appendage.name]])
+
+    @staticmethod
+    def _check_finite(outputs: np.ndarray, times: np.ndarray) -> None:
         bad = ~np.all(np.isfinite(outputs), axis=0)
         if np.any(bad):
             k = int(np.flatnonzero(bad)[0])
             raise BasiliskIntegrationError(
                 f"Basilisk's integration diverged: non-finite states at t = {times[k]:.6g} s "
                 "(an RK4 step too long for the chain's highest mode, or an unstable loop)")
-        out_of_plane = float(max(np.abs(sigma[:, :2]).max(), np.abs(rate[:, :2]).max()))
-        inputs = np.vstack([ref] + [pushes[name] for name in pushes])
+
+    def _collect_three_axis(self, times, ref, pushes, sigma, rate):
+        """The three-axis outputs (module docstring) from the recorded states."""
+        n = times.size
+        if not (np.all(np.isfinite(sigma)) and np.all(np.isfinite(rate))):
+            self._check_finite(np.vstack([sigma.T, rate.T]), times)
+        theta = np.zeros((n, 3))
+        previous = np.zeros(3)
+        for k in range(n):  # unwrapped sample by sample, as the flight software does
+            theta[k] = previous = rotation_vector(sigma[k], previous)
+        rows = [theta.T, rate.T]
+        labels = [f"theta_{a}" for a in "xyz"] + [f"omega_{a}" for a in "xyz"]
+        for a in self.lay.appendages:
+            motions = (a.tip_motions(self._angles(a, n)) if a.bodies else np.zeros((n, 3)))
+            rows.append(motions.T)
+            labels += [f"{a.name}_tip_deflection_y", f"{a.name}_tip_deflection_z",
+                       f"{a.name}_tip_twist"]
+        if self.law is not None:
+            torque = np.asarray(self.recorders["torque"].torqueRequestBody, dtype=float)
+            rows.append(torque.reshape(n, 3).T)
+            labels += list(TORQUES_3)
+        if self.wheel is not None:
+            speeds = np.asarray(self.recorders["wheel"].wheelSpeeds, dtype=float)
+            rows.append(speeds.reshape(n, -1)[:, :3].T)
+            labels += [f"wheel_speed_{a}" for a in "xyz"]
+        outputs = np.vstack(rows)
+        self._check_finite(outputs, times)
+        inputs = np.vstack([ref.T] + [pushes[name] for name in pushes])
         response = control.TimeResponseData(
             times, outputs, inputs=inputs, output_labels=labels,
-            input_labels=["theta_ref"] + list(pushes), issiso=False, sysname="basilisk")
-        energy = None
-        if self.energy is not None:
-            energy = {"time": self.energy.times() * _NANO,
-                      "rotational_energy": np.asarray(self.energy.totRotEnergy, dtype=float),
-                      "angular_momentum": np.asarray(self.energy.totRotAngMomPntC_N,
-                                                     dtype=float).reshape(-1, 3),
-                      "orbital_energy": np.asarray(self.energy.totOrbEnergy, dtype=float)}
-        return response, out_of_plane, energy
+            input_labels=[f"theta_ref_{a}" for a in "xyz"] + list(pushes), issiso=False,
+            sysname="basilisk")
+        return response, math.nan, self._energy()
+
+    def _energy(self) -> dict | None:
+        if self.energy is None:
+            return None
+        return {"time": self.energy.times() * _NANO,
+                "rotational_energy": np.asarray(self.energy.totRotEnergy, dtype=float),
+                "angular_momentum": np.asarray(self.energy.totRotAngMomPntC_N,
+                                               dtype=float).reshape(-1, 3),
+                "orbital_energy": np.asarray(self.energy.totOrbEnergy, dtype=float)}
 
 
 @functools.cache
@@ -595,13 +741,19 @@ def _disturbance_class():
     from Basilisk.architecture import sysModel
 
     class DisturbanceSchedule(sysModel.SysModel):
-        def __init__(self, effector, values: dict, period: int):
+        def __init__(self, effector, values: dict, period: int, three_axis: bool = False):
             super().__init__()
             self.effector, self.values, self.period = effector, values, period
+            self.three_axis = three_axis
 
         def UpdateState(self, CurrentSimNanos):
             k = CurrentSimNanos // self.period
             get = {name: float(v[min(k, v.size - 1)]) for name, v in self.values.items()}
+            if self.three_axis:
+                self.effector.extTorquePntB_B = [[get.get(f"disturbance_torque_{a}", 0.0)]
+                                                 for a in "xyz"]
+                self.effector.extForce_B = [[get.get(f"force_{a}", 0.0)] for a in "xyz"]
+                return
             self.effector.extTorquePntB_B = [[0.0], [0.0], [get.get("disturbance_torque", 0.0)]]
             self.effector.extForce_B = [[get.get("force_x", 0.0)], [get.get("force_y", 0.0)],
                                         [0.0]]
@@ -609,12 +761,115 @@ def _disturbance_class():
     return DisturbanceSchedule
 
 
+@dataclasses.dataclass
+class LinearisedModel:
+    """Basilisk's equations of motion of a spacecraft linearised about rest.
+
+    Attributes
+    ----------
+    A : ndarray (n, n)
+        ``x' = A x`` with x the Basilisk states in :attr:`states` (SI, MRPs for the attitude).
+    states : list of str
+        ``r_BN_N[k]``, ``v_BN_N[k]`` [m, m/s], ``sigma_BN[k]`` [-], ``omega_BN_B[k]`` [rad/s],
+        then per chain ``<name>.theta[k]`` [rad] and ``<name>.thetaDot[k]`` [rad/s].
+    layout : SpacecraftLayout
+    bsk_version : str
+    """
+
+    A: np.ndarray
+    states: list
+    layout: SpacecraftLayout
+    bsk_version: str
+
+    def elastic_eigenvalues(self) -> np.ndarray:
+        """The eigenvalues of A [rad/s] without the free-floating rigid-body ones (two zeros for
+        each of the 6 rigid motions: 12, of a planar spacecraft too, whose Basilisk model
+        moves in three dimensions), sorted by imaginary part."""
+        lam = np.linalg.eigvals(self.A)
+        lam = lam[np.argsort(np.abs(lam))][12:]
+        return lam[np.lexsort((lam.real, lam.imag))]
+
+
+#: Central-difference step of :func:`linearised` (rad, m, rad/s, m/s and MRP alike): the
+#: truncation error is step**2 times the third derivatives (1e-12 relative), the rounding error
+#: eps times |A| (the equations are evaluated at states of size step).
+LINEARISATION_STEP = 1e-6
+
+
+def linearised(spacecraft: Spacecraft, *, chains: Mapping | None = None,
+               step: float = LINEARISATION_STEP) -> LinearisedModel:
+    """Basilisk's own model of a spacecraft, linearised about rest by central differences.
+
+    The spacecraft is laid out (:func:`.layout`) and built in Basilisk as :func:`simulate`
+    builds it (no controller), then its equations of motion (``Spacecraft.equationsOfMotion``:
+    the hub and every spinning body, back-substituted) are evaluated at the undeformed state
+    plus and minus ``step`` in each state: ``A[:, k] = (f(x + h e_k) - f(x - h e_k)) / 2h``,
+    exact for the linear part up to the third-order terms (the equations are smooth; the
+    second-order ones cancel). Its eigenvalues are the modes Basilisk integrates, to be set
+    against flexsat's linear model of the same chains (:attr:`SpacecraftLayout.spacecraft`).
+
+    Parameters
+    ----------
+    spacecraft : Spacecraft
+    chains : mapping name -> HingedChain, optional
+        As for :func:`simulate`.
+    step : float
+        Difference step (positive; default :data:`LINEARISATION_STEP`).
+
+    Returns
+    -------
+    LinearisedModel
+    """
+    version = require_basilisk()
+    lay = layout(spacecraft, chains=chains)
+    step = check_positive("step", step, "-")
+    angles = _initial_angles(lay, None)
+    rate = np.zeros(3) if lay.three_axis else 0.0
+    run = _BasiliskRun(lay, None, np.zeros(2), {}, 1.0, 1.0, rate, angles, False, None)
+    A, states = run.linearise(step)
+    return LinearisedModel(A, states, lay, version)
+
+
+def slew_reference(angle: float, slew_time: float, axis=None
+                   ) -> Callable[[np.ndarray], np.ndarray]:
+    """theta_ref(t) of a cycloidal slew (:func:`controllers.slew_profile`) for
+    :func:`simulate`: planar (``axis`` None) the profile, three axes the eigen-axis slew
+    ``e * profile(t)``, an (n, 3) array (e the unit ``axis``, hub axes)."""
+    import controllers
+
+    if isinstance(angle, bool) or not isinstance(angle, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(angle) or angle == 0:
+        raise ValueError(f"angle must be non-zero and finite [rad]; got {angle!r}")
+    slew_time = check_positive("slew_time", slew_time, "s")
+    if axis is None:
+        return lambda t: controllers.slew_profile(t, float(angle), slew_time)
+    e = _unit_axis(axis)
+    return lambda t: np.outer(controllers.slew_profile(t, float(angle), slew_time), e)
+
+
+def _unit_axis(axis) -> np.ndarray:
+    """The unit vector of a slew axis: 'x', 'y', 'z' or three finite numbers, not zero."""
+    if isinstance(axis, str):
+        if axis not in ("x", "y", "z"):
+            raise ValueError(f"axis must be 'x', 'y', 'z' or three numbers (hub axes); got "
+                             f"{axis!r:.60}")
+        return np.eye(3)["xyz".index(axis)]
+    try:
+        e = np.asarray(axis, dtype=float)
+    except (TypeError, ValueError):
+        e = None
+    if e is None or e.shape != (3,) or not np.all(np.isfinite(e)) or not np.any(e):
+        raise ValueError(f"axis must be 'x', 'y', 'z' or three finite numbers, not all zero "
+                         f"(the slew's eigen-axis, hub axes); got {axis!r:.100}")
+    return e / np.linalg.norm(e)
+
+
 def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle: float,
                   slew_time: float, *, duration: float | None = None,
                   sample_time: float | None = None, dt: float | None = None,
                   chains: Mapping | None = None, disturbances: Mapping | None = None,
                   reaction_wheel: ReactionWheel | None = None,
-                  max_seconds: float = MAX_SECONDS) -> BasiliskResult:
+                  max_seconds: float = MAX_SECONDS, axis=None) -> BasiliskResult:
     """A cycloidal slew (:func:`controllers.slew_profile`) of the spacecraft in Basilisk.
 
     Parameters
@@ -627,20 +882,35 @@ def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle:
         Duration of the reference profile.
     duration : float, s, optional
         Simulated time; default 3 * slew_time (as :func:`controllers.slew`).
+    axis : {'x', 'y', 'z'} or sequence of 3 floats, optional
+        Three-axis spacecraft only (and required there): the slew's eigen-axis e, hub axes
+        (as :func:`controllers.slew`).
 
     Returns
     -------
     BasiliskResult
         ``response`` has the closed-loop signal names of flexsat (``theta``, ``omega``,
-        ``<name>_tip_deflection``, ``torque``) at the flight-software instants.
+        ``<name>_tip_deflection``, ``torque``; three axes per axis) at the flight-software
+        instants.
     """
-    import controllers
-
     if isinstance(angle, bool) or not isinstance(angle, (int, float, np.integer, np.floating)) \
             or not math.isfinite(angle) or angle == 0:
         raise ValueError(f"angle must be non-zero and finite [rad]; got {angle!r}")
     slew_time = check_positive("slew_time", slew_time, "s")
     duration = default_duration(slew_time, duration)
+    _check_axis(spacecraft, axis)
     return simulate(spacecraft, controller, duration=duration, sample_time=sample_time, dt=dt,
                     chains=chains, disturbances=disturbances, reaction_wheel=reaction_wheel,
-                    max_seconds=max_seconds, reference=lambda t: controllers.slew_profile(t, float(angle), slew_time))
+                    max_seconds=max_seconds,
+                    reference=slew_reference(angle, slew_time, axis))
+
+
+def _check_axis(spacecraft, axis) -> None:
+    """A slew axis is given for a three-axis spacecraft and only there."""
+    three_axis = bool(getattr(spacecraft, "three_axis", False))
+    if three_axis and axis is None:
+        raise ValueError("axis is required for a three-axis spacecraft: the slew's eigen-axis "
+                         "('x', 'y', 'z' or three numbers, hub axes)")
+    if not three_axis and axis is not None:
+        raise ValueError(f"axis is for three-axis spacecraft; a planar one slews about z (got "
+                         f"axis {axis!r:.60})")
