@@ -829,6 +829,20 @@ class Beam:
                                          damping_convention=self.damping_convention)
         return self._cache["torsion"]
 
+    def rod_cantilever_frequencies(self, motion: str, n: int) -> np.ndarray:
+        """First n frequencies of the beam's torsion or axial motion alone with the root
+        clamped, the tip body's moment about the axis or its mass included [rad/s]
+        (:meth:`SegmentedBeam.rod_cantilever_frequencies
+        <appendages.segmented.SegmentedBeam.rod_cantilever_frequencies>`; without a tip body
+        the exact rod's, :meth:`torsion_rod`, :meth:`axial_rod`). Empty where the beam is
+        rigid in that motion."""
+        if self._segmented is not None:
+            return self._segmented.rod_cantilever_frequencies(motion, n)
+        if motion not in ("torsion", "axial"):
+            raise ValueError(f"motion must be 'torsion' or 'axial'; got {describe(motion)}")
+        rod = self.torsion_rod() if motion == "torsion" else self.axial_rod()
+        return np.zeros(0) if rod is None else rod.cantilever_frequencies(n)
+
     def axial_rod(self) -> Rod | None:
         """The beam's axial motion as an exact rod (EA, rho*A), or None when inextensible (the
         beam's own, without a tip body)."""

@@ -339,19 +339,41 @@ class HingedChain(FiniteAppendage):
         zeta, the hinges get stiffness-proportional damping ``2 zeta c / w_1`` (damping ratio
         zeta at the beam's first frequency w_1).
 
-        A three-axis beam (``beam.three_axis``) gives a three-axis chain by the same rule in
-        every motion: hinges ``EJ_y/H`` in the x-z plane, torsion springs ``GJ/H`` and axial
+        A three-axis beam (``beam.three_axis``; with a tip body, one given its 3x3 inertia:
+        a planar moment makes the x-y plane's chain) gives a three-axis chain by the same
+        rule in every motion: hinges ``EJ_y/H`` in the x-z plane, torsion springs ``GJ/H`` and axial
         springs ``EA/H`` (None where the beam is torsionally rigid or inextensible), body
         inertias about y equal to those about z (``m l**2/12``, no rotary inertia of the
         section, as the beam) and about x ``rho*I_p l``; each motion damped at its own first
         free-free frequency.
 
+        A stepped beam (:class:`~appendages.stepped.SteppedBeam`, uniform segments end to end)
+        gets the same hinges at the same places, each the series flexibility of the arc of
+        length H about it, ``1/c = integral dx/EJ(x)`` over ``[x_h - H/2, x_h + H/2]`` (pure
+        bending of that arc; ``EJ/H`` where the arc is uniform), and bodies that are the
+        frozen pieces of the stepped beam between the hinges (mass, centre and inertia of the
+        segments' parts they hold). Torsion and axial springs follow the same rule; the
+        torsion and axial damping is set at the stepped rod's first cantilever frequency
+        (:meth:`~appendages.segmented.SegmentedBeam.rod_cantilever_frequencies`). As for a
+        uniform beam, the chain converges to the beam as n_bodies grows.
+
+        A tip body (``beam.tip``) joins the last body (its mass, moment and parallel-axis
+        terms); the body must lie on the axis with its principal axes along the beam's (a
+        chain's bodies do), else ValueError names it.
+
         Parameters
         ----------
-        beam : Beam
-            Uniform beam (``length``, ``bending_stiffness``, ``linear_density``).
+        beam : Beam or SteppedBeam
+            Uniform beam (``length``, ``bending_stiffness``, ``linear_density``) or stepped
+            beam (``segment_properties``), with or without a tip body.
         n_bodies : int
             Number of rods, at least 2.
+
+        Raises
+        ------
+        TypeError
+            Anything else (finite-element modal data have no stiffness along their length to
+            discretise: fit a chain with :func:`appendages.equivalence.fit_chain`).
 
         References
         ----------
@@ -359,14 +381,16 @@ class HingedChain(FiniteAppendage):
         """
         n_bodies = _check_count("n_bodies", n_bodies, minimum=2)
         limits.check("n_bodies", n_bodies, "bodies", "bodies per chain")
+        segments = _stepped_segments(beam, "HingedChain.rfem")
+        if segments is not None:
+            return cls._stepped_rfem(beam, segments, n_bodies)
         L, EJ, rho = _beam_properties(beam)
         H = L / (n_bodies - 1)
         lengths = np.full(n_bodies, H)
         lengths[0] = lengths[-1] = H / 2.0
         masses, inertias = _frozen_pieces(lengths, rho)
         stiffnesses = np.full(n_bodies - 1, EJ / H)
-        three_axis = _three_axis_rfem(beam, lengths, H) if getattr(beam, "three_axis", False) \
-            else {}
+        three_axis = _three_axis_rfem(beam, lengths, H) if _three_axis_chain(beam) else {}
         masses, inertias, offsets = _with_tip(beam, lengths, masses, inertias, three_axis)
         with _derived_from(f"HingedChain.rfem(beam, n_bodies={n_bodies})", beam):
             return cls(lengths, masses, inertias, stiffnesses, com_offsets=offsets,
@@ -382,13 +406,27 @@ class HingedChain(FiniteAppendage):
         give a cantilever's static tip deflection and rotation under an end force and moment.
         The rigidly joined end rods of neighbouring superelements form one body of length
         2kl, so the chain has 2n + 1 bodies and 2n hinges; frozen pieces of the beam.
-        Damping as in :meth:`rfem`.
+        Damping as in :meth:`rfem`; a tip body as in :meth:`rfem`. A planar method: a
+        three-axis beam gives its x-y plane's chain.
+
+        A superelement is derived for a uniform piece. On a stepped beam
+        (:class:`~appendages.stepped.SteppedBeam`) each superelement takes the section of the
+        segment it lies in, which needs every step at a multiple of l = L/n (e.g. a 1 m and a
+        6 m segment with n = 7 or 14); other n are refused by name (the superelement across a
+        step is not defined; :meth:`rfem` or :func:`~appendages.equivalence.fit_chain` take
+        any stepped beam). The end rods of neighbouring superelements form one body, of two
+        sections where it spans a step.
 
         Parameters
         ----------
-        beam : Beam
+        beam : Beam or SteppedBeam
         n : int
             Number of superelements, at least 1.
+
+        Raises
+        ------
+        ValueError
+            A stepped beam whose steps are not at multiples of L/n (the message gives them).
 
         References
         ----------
@@ -396,6 +434,9 @@ class HingedChain(FiniteAppendage):
         """
         n = _check_count("n", n, minimum=1)
         limits.check("n (2 n + 1 bodies)", 2 * n + 1, "bodies", "bodies per chain")
+        segments = _stepped_segments(beam, "HingedChain.superelements")
+        if segments is not None:
+            return cls._stepped_superelements(beam, segments, n)
         L, EJ, rho = _beam_properties(beam)
         ell = L / n
         k = MOLENAAR_K
@@ -406,6 +447,74 @@ class HingedChain(FiniteAppendage):
         masses, inertias = _frozen_pieces(lengths, rho)
         stiffnesses = np.full(2 * n, 6.0 * EJ / ell * (1.0 - 2.0 * k) ** 2)
         masses, inertias, offsets = _with_tip(beam, lengths, masses, inertias, {})
+        with _derived_from(f"HingedChain.superelements(beam, n={n})", beam):
+            return cls(lengths, masses, inertias, stiffnesses, com_offsets=offsets,
+                       hinge_dampings=proportional_hinge_dampings(beam, stiffnesses))
+
+    @classmethod
+    def _stepped_rfem(cls, beam, segments, n_bodies: int) -> "HingedChain":
+        """:meth:`rfem` of a stepped beam (its docstring)."""
+        L = float(sum(seg.length for seg in segments))
+        H = L / (n_bodies - 1)
+        hinges = H * (0.5 + np.arange(n_bodies - 1))
+        hinges[-1] = L - 0.5 * H
+        edges = np.concatenate([[0.0], hinges, [L]])
+        lengths = np.diff(edges)
+        masses, offsets, inertias, torsional = _frozen_stepped_pieces(segments, edges)
+        arcs = [(x - 0.5 * H, x + 0.5 * H) for x in hinges]
+        stiffnesses = _arc_stiffnesses(segments, arcs, "bending_stiffness")
+        three_axis = {}
+        if _three_axis_chain(beam):
+            three_axis = {"inertias_y": inertias.copy(),
+                          "hinge_stiffnesses_y": _arc_stiffnesses(segments, arcs,
+                                                                  "bending_stiffness_y"),
+                          "torsional_inertias": torsional}
+            three_axis["hinge_dampings_y"] = proportional_hinge_dampings(
+                beam.planar_view("xz"), three_axis["hinge_stiffnesses_y"])
+            for name, attribute in (("torsion", "torsional_stiffness"),
+                                    ("axial", "axial_stiffness")):
+                if getattr(segments[0], attribute) is None:
+                    continue
+                springs = _arc_stiffnesses(segments, arcs, attribute)
+                three_axis[f"{name}_stiffnesses"] = springs
+                if beam.damping_ratio > 0.0:
+                    w1 = float(beam.rod_cantilever_frequencies(name, 1)[0])
+                    three_axis[f"{name}_dampings"] = 2.0 * beam.damping_ratio * springs / w1
+        masses, inertias, offsets = _with_tip(beam, lengths, masses, inertias, three_axis,
+                                              offsets)
+        with _derived_from(f"HingedChain.rfem(beam, n_bodies={n_bodies})", beam):
+            return cls(lengths, masses, inertias, stiffnesses, com_offsets=offsets,
+                       hinge_dampings=proportional_hinge_dampings(beam, stiffnesses),
+                       **three_axis)
+
+    @classmethod
+    def _stepped_superelements(cls, beam, segments, n: int) -> "HingedChain":
+        """:meth:`superelements` of a stepped beam (its docstring)."""
+        L = float(sum(seg.length for seg in segments))
+        ell = L / n
+        steps = np.cumsum([seg.length for seg in segments])[:-1]
+        # a step within 1e-9 of a piece's length of a multiple of ell is on it (the lengths
+        # were given to a few digits; the frozen pieces below integrate the exact lengths)
+        off = [x for x in steps if abs(x / ell - round(x / ell)) > 1e-9]
+        if off:
+            raise ValueError(
+                f"HingedChain.superelements(beam, n={n}): Molenaar's superelement is a uniform "
+                f"piece, so every step of a stepped beam must lie at a multiple of L/n = "
+                f"{ell:.6g} m; the steps at x = {describe([float(x) for x in off])} m do not "
+                f"(choose n so that L/n divides every segment's length, or use "
+                "HingedChain.rfem or appendages.equivalence.fit_chain, which take any stepped "
+                "beam)")
+        k = MOLENAAR_K
+        starts = ell * np.arange(n)
+        inner = np.sort(np.concatenate([starts + k * ell, starts + (1.0 - k) * ell]))
+        edges = np.concatenate([[0.0], inner, [L]])
+        lengths = np.diff(edges)
+        masses, offsets, inertias, _ = _frozen_stepped_pieces(segments, edges)
+        bounds = np.concatenate([[0.0], steps, [L]])
+        owner = np.searchsorted(bounds, starts + 0.5 * ell, side="right") - 1
+        EJ = np.array([segments[j].bending_stiffness for j in owner])
+        stiffnesses = np.repeat(6.0 * EJ / ell * (1.0 - 2.0 * k) ** 2, 2)
+        masses, inertias, offsets = _with_tip(beam, lengths, masses, inertias, {}, offsets)
         with _derived_from(f"HingedChain.superelements(beam, n={n})", beam):
             return cls(lengths, masses, inertias, stiffnesses, com_offsets=offsets,
                        hinge_dampings=proportional_hinge_dampings(beam, stiffnesses))
@@ -698,11 +807,93 @@ def _beam_properties(beam) -> tuple[float, float, float]:
     except AttributeError as exc:
         raise TypeError(
             "beam must be a uniform beam with length [m], bending_stiffness [N*m^2] and "
-            f"linear_density [kg/m]; got {type(beam).__name__}") from exc
+            "linear_density [kg/m], or a stepped beam (segment_properties); got "
+            f"{type(beam).__name__} (finite-element modal data or a chain carry no stiffness "
+            "along their length to discretise: fit a chain with "
+            "appendages.equivalence.fit_chain)") from exc
+
+
+def _three_axis_chain(beam) -> bool:
+    """Whether :meth:`HingedChain.rfem` builds a three-axis chain: a three-axis beam whose tip
+    body, if any, has its 3x3 inertia (a planar moment, a float, describes the x-y plane
+    only)."""
+    if not getattr(beam, "three_axis", False):
+        return False
+    tip = getattr(beam, "tip", None)
+    return tip is None or not isinstance(tip.inertia, float) or tip.inertia == 0.0
+
+
+def _stepped_segments(beam, method: str):
+    """The segments (:class:`~appendages.assembly.Segment`) of a stepped beam, or None for
+    a uniform beam (which has ``bending_stiffness``)."""
+    if hasattr(beam, "bending_stiffness"):
+        return None
+    segments = getattr(beam, "segment_properties", None)
+    if segments is None:
+        raise TypeError(
+            f"beam must be a uniform beam (length [m], bending_stiffness [N*m^2], "
+            f"linear_density [kg/m]) or a stepped beam (segment_properties) for {method}; got "
+            f"{type(beam).__name__} (finite-element modal data or a chain carry no stiffness "
+            "along their length to discretise: fit a chain with "
+            "appendages.equivalence.fit_chain)")
+    if not segments:
+        raise ValueError(f"{method}: the stepped beam has no segment")
+    return tuple(segments)
+
+
+def _overlaps(segments, a: float, b: float):
+    """(segment index, start, end) of each segment's part within [a, b] [m]."""
+    x = 0.0
+    out = []
+    for j, seg in enumerate(segments):
+        lo, hi = max(a, x), min(b, x + seg.length)
+        if hi > lo:
+            out.append((j, lo, hi))
+        x += seg.length
+    return out
+
+
+def _frozen_stepped_pieces(segments, edges: np.ndarray):
+    """Frozen pieces of a stepped beam between consecutive ``edges`` [m].
+
+    Each piece holds parts of one or more uniform segments (thin rods): its mass
+    ``sum m_j``, its centre ``c = sum m_j c_j / sum m_j`` and its inertia about z through
+    that centre ``sum m_j (l_j**2/12 + (c_j - c)**2)`` (parallel-axis theorem), and its
+    torsional inertia ``sum rho I_p,j l_j`` (None where a segment has none).
+
+    Returns
+    -------
+    masses [kg], com_offsets from each piece's start [m], inertias [kg*m^2], torsional
+    inertias [kg*m^2] or None : ndarray
+    """
+    n = edges.size - 1
+    masses, offsets, inertias = np.empty(n), np.empty(n), np.empty(n)
+    torsional = None if segments[0].torsional_inertia is None else np.empty(n)
+    for i in range(n):
+        parts = _overlaps(segments, edges[i], edges[i + 1])
+        l = np.array([hi - lo for _, lo, hi in parts])
+        m = np.array([segments[j].linear_density for j, _, _ in parts]) * l
+        centres = np.array([0.5 * (lo + hi) for _, lo, hi in parts])
+        M = float(np.sum(m))
+        c = float(m @ centres) / M
+        masses[i], offsets[i] = M, c - edges[i]
+        inertias[i] = float(np.sum(m * (l**2 / 12.0 + (centres - c) ** 2)))
+        if torsional is not None:
+            torsional[i] = float(sum(segments[j].torsional_inertia * (hi - lo)
+                                     for j, lo, hi in parts))
+    return masses, offsets, inertias, torsional
+
+
+def _arc_stiffnesses(segments, arcs, attribute: str) -> np.ndarray:
+    """The spring of each arc ``(a, b)`` of a stepped beam: the series flexibility of its
+    parts, ``1/c = sum l_j / S_j`` with S_j the segments' ``attribute`` (EJ, EJ_y, GJ, EA):
+    ``S/(b - a)`` on a uniform arc."""
+    return np.array([1.0 / sum((hi - lo) / getattr(segments[j], attribute)
+                               for j, lo, hi in _overlaps(segments, a, b)) for a, b in arcs])
 
 
 def _with_tip(beam, lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarray,
-              three_axis: dict):
+              three_axis: dict, offsets: np.ndarray | None = None):
     """The beam's tip body added to the chain's last body: (masses, inertias, com_offsets).
 
     The body of mass m_t and inertia J_t (about its centre, at ``l_n + offset_x`` from the last
@@ -711,10 +902,10 @@ def _with_tip(beam, lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarra
     ``J_b + m_b (a_b - a)**2 + J_t + m_t (p - a)**2`` about it (parallel-axis theorem), in each
     plane; the torsional inertia gains ``J_t,xx``. A chain's bodies lie on its axis with their
     principal axes along the chain's, so a tip body off the axis or with products of inertia
-    in the appendage's axes is refused by name. Without a tip body: the inputs and mid-length
-    centres.
+    in the appendage's axes is refused by name. Without a tip body: the inputs and the
+    centres ``offsets`` (default mid-length).
     """
-    offsets = 0.5 * lengths
+    offsets = 0.5 * lengths if offsets is None else offsets
     tip = getattr(beam, "tip", None)
     if tip is None or tip.is_null:
         return masses, inertias, offsets
@@ -728,7 +919,7 @@ def _with_tip(beam, lengths: np.ndarray, masses: np.ndarray, inertias: np.ndarra
         raise ValueError("a chain's bodies have their principal axes along the chain's: the tip "
                          "body's inertia must be diagonal in the appendage's axes to be carried "
                          f"by HingedChain.rfem [kg*m^2]; got {J_tip.tolist()!r}")
-    masses, inertias = masses.copy(), inertias.copy()
+    masses, inertias, offsets = masses.copy(), inertias.copy(), offsets.copy()
     m_b, a_b, m_t = masses[-1], offsets[-1], tip.mass
     p = lengths[-1] + tip.offset[0]
     M = m_b + m_t
@@ -761,7 +952,10 @@ def _three_axis_rfem(beam, lengths: np.ndarray, H: float) -> dict:
             out[f"{name}_stiffnesses"] = springs
             zeta = rod.damping_ratio
             if zeta > 0.0:
-                out[f"{name}_dampings"] = 2.0 * zeta * springs / _first_damped_frequency(rod)
+                # with a tip body the rod's first cantilever mode is the loaded one's
+                w1 = (_first_damped_frequency(rod) if beam.tip is None or beam.tip.is_null
+                      else float(beam.rod_cantilever_frequencies(name, 1)[0]))
+                out[f"{name}_dampings"] = 2.0 * zeta * springs / w1
     return out
 
 

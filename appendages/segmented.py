@@ -444,6 +444,46 @@ class SegmentedBeam:
         merged = np.sort(np.concatenate(lists))
         return merged[merged <= complete]
 
+    def rod_cantilever_frequencies(self, motion: str, n: int) -> np.ndarray:
+        """First n frequencies of the beam's torsion or axial motion alone with the root
+        clamped [rad/s]: the exact stepped rod with the tip body's moment about the axis
+        (about its centre plus ``m (r_y**2 + r_z**2)``) or its mass at the free end.
+
+        Parameters
+        ----------
+        motion : {"torsion", "axial"}
+        n : int
+            At least 1.
+
+        Returns
+        -------
+        ndarray, shape (n,), rad/s
+            Empty when the beam is rigid in that motion (no ``torsional_stiffness`` or
+            ``axial_stiffness``).
+        """
+        if motion not in ("torsion", "axial"):
+            raise ValueError(f"motion must be 'torsion' or 'axial'; got {describe(motion)}")
+        n = _check_count("n", n)
+        self._require_three_axis(f"rod_cantilever_frequencies({motion!r})")
+        stiffness = "torsional_stiffness" if motion == "torsion" else "axial_stiffness"
+        if getattr(self.segment_properties[0], stiffness) is None:
+            return np.zeros(0)
+        key = ("rod", motion)
+        assembly = self._cache.get(key)
+        if assembly is None:
+            tip = self.tip
+            if tip is None:
+                body = 0.0
+            elif motion == "axial":
+                body = tip.mass
+            else:
+                r = tip.offset
+                body = float(tip.inertia_tensor[0, 0]) + tip.mass * float(r[1]**2 + r[2]**2)
+            assembly = self._cache[key] = BeamAssembly(
+                self.segment_properties, None if body == 0.0 else np.array([[body]]), 1,
+                rod_motion=motion)
+        return assembly.frequencies("clamped", n).copy()
+
     def zeros(self, r: int, n: int = 2) -> np.ndarray:
         """First n zero frequencies of the exact W_r [rad/s] (r = 1, 2, 3, 4; module
         docstring)."""
