@@ -639,3 +639,21 @@ def test_basilisks_wheel_is_reported_in_the_words_of_flexsats(tmp_path):
     write_report(result, tmp_path)
     assert "Basilisk's reaction wheel: the wheels SATURATED" in (tmp_path / "report.md").read_text()
     assert (tmp_path / "plots" / "wheels.png").stat().st_size > 10_000
+
+
+@pytest.mark.slow
+@needs_bsk
+def test_every_controller_flies_the_scenes_wheel():
+    """With PD and LQR and a reaction wheel, the second controller was handed the first's wheel
+    summary in place of the wheel (a TypeError from inside the run)."""
+    from spacecraft import run
+
+    data = hinged_wing(reaction_wheel={"spin_inertia": 0.1})
+    data["controller"]["types"] = ["pd", "lqr"]
+    data["controller"]["lqr"] = {"attitude_weight": 1.0, "rate_weight": 10.0,
+                                 "torque_weight": 1.0}
+    result = run(data)
+    for kind in ("pd", "lqr"):
+        entry = result.data["basilisk"][kind]
+        assert entry["wheel"]["words"].startswith("no wheel reached a limit"), kind
+        assert entry["differences"]["basilisk_vs_chain"]["theta"]["relative"] < 1e-4, kind

@@ -16,6 +16,12 @@ distributed beams, truncated to the modes the scene's tolerance needs). The diff
 Basilisk's results are JSON-ready in ``data["basilisk"]`` (results.json), its responses beside
 flexsat's in the report, the slew plot and the time series.
 
+A three-axis scene runs the same way, branching only where the physics does: each 3-D chain
+joint as two bending hinges and a torsion hinge (:mod:`spacecraft.basilisk.layout`), the
+controller as three-axis flight software, the eigen-axis slew about ``manoeuvre.slew_axis``,
+the signals per axis (``theta_x/_y/_z``...) and per tip motion (``<name>_tip_deflection_y``,
+``_z``, ``<name>_tip_twist``), a reaction wheel as one such wheel on each hub axis.
+
 Before Basilisk runs, the scene's flight-software rate and RK4 step are checked against what
 the comparison needs and Basilisk integrates accurately, and refused by scene key
 (``simulator.sample_rate``, ``simulator.dt``, ``limits.basilisk_seconds``): a rate below the
@@ -82,7 +88,7 @@ def _checked_steps(scene, plant, controller, kind: str, spacecraft) -> float:
     (module docstring); SceneError naming the key."""
     from controllers.pd import check_sample_time
 
-    from ..basilisk import default_sample_time, dynamics_step
+    from ..basilisk import chain_spacecraft, default_sample_time, dynamics_step
 
     m, sim = scene.manoeuvre, scene.simulator
     digital = controller.dt not in (None, 0, True)
@@ -107,7 +113,8 @@ def _checked_steps(scene, plant, controller, kind: str, spacecraft) -> float:
                            f"sample time of {T:.6g} s, {source}); a comparison needs at least "
                            f"{MIN_SAMPLES}: raise the rate or lengthen the manoeuvre")
     if sim.dt is not None:
-        modes = spacecraft.modes()[0]
+        # the modes Basilisk integrates (three axes: its chains, axial motion held)
+        modes = chain_spacecraft(spacecraft).modes()[0]
         w_max = float(np.max(modes)) if np.size(modes) else 0.0
         try:
             dynamics_step(w_max, T, sim.dt)
@@ -134,9 +141,10 @@ def default_rate_note() -> str:
 def _check_wheel_speed(scene, response) -> None:
     """Warn, by key, about a wheel spinning faster than any real one."""
     labels = list(response.output_labels)
-    if "wheel_speed" not in labels:
+    rows = [k for k, name in enumerate(labels) if name.startswith("wheel_speed")]
+    if not rows:
         return
-    peak = float(np.max(np.abs(np.asarray(response.outputs)[labels.index("wheel_speed")])))
+    peak = float(np.max(np.abs(np.asarray(response.outputs)[rows])))
     if peak > WHEEL_SPEED_WARNING:
         J = scene.simulator.reaction_wheel.spin_inertia
         warnings.warn(
@@ -145,6 +153,16 @@ def _check_wheel_speed(scene, response) -> None:
             f"real reaction wheel (6,000-10,000 rpm); a wheel storing the same momentum at "
             f"{WHEEL_SPEED_WARNING:g} rad/s has {J * peak / WHEEL_SPEED_WARNING:.3g} kg m^2: "
             "check the unit of spin_inertia [kg m^2]", UserWarning, stacklevel=2)
+
+
+def _wheel_signals(response) -> list:
+    """(wheel name, speed signal, torque signal) of each Basilisk wheel in ``response``: the
+    planar wheel ``"wheel"``, or three axes one wheel per hub axis, ``"wheel_x"``..."""
+    labels = list(response.output_labels)
+    if "wheel_speed" in labels:
+        return [("wheel", "wheel_speed", "torque")]
+    return [(f"wheel_{a}", f"wheel_speed_{a}", f"torque_{a}") for a in "xyz"
+            if f"wheel_speed_{a}" in labels]
 
 
 def basilisk_wheel_summary(response, wheel) -> dict | None:
@@ -156,52 +174,61 @@ def basilisk_wheel_summary(response, wheel) -> dict | None:
     where |request| > max_torque (the motor torque is clipped), the speed limit where |Omega| >=
     max_speed and the request would spin the wheel further (request x Omega < 0: the wheel's
     momentum changes at minus the hub torque); each sample's state lasts until the next.
-    Momentum J_s Omega [N m s], its limit J_s max_speed.
+    Momentum J_s Omega [N m s], its limit J_s max_speed. Three axes: the triad's wheels
+    ``wheel_x``, ``wheel_y``, ``wheel_z`` (``wheel_speed_x`` with ``torque_x``...), each with
+    the same limits.
 
     Parameters
     ----------
     response : control.TimeResponseData
-        Basilisk's run (outputs ``wheel_speed``, ``torque``).
+        Basilisk's run (outputs ``wheel_speed``, ``torque``; three axes per axis).
     wheel : spacecraft.scene.specs.ReactionWheelSpec
 
     Returns
     -------
     dict or None
-        The summary's fields for one wheel named ``"wheel"``, and ``words``; None without a
-        wheel speed in the response.
+        The summary's fields per wheel (``"wheel"``; three axes ``"wheel_x"``...), and
+        ``words``; None without a wheel speed in the response.
     """
     from .manoeuvre import wheel_words
     from .responses import trace
 
-    speed, request = trace(response, "wheel_speed"), trace(response, "torque")
-    if speed is None or request is None:
+    signals = _wheel_signals(response)
+    if not signals:
         return None
     t = np.asarray(response.t, dtype=float).reshape(-1)
     dt = np.diff(t)
     torque_limit = math.inf if wheel.max_torque is None else wheel.max_torque
     speed_limit = math.inf if wheel.max_speed is None else wheel.max_speed
-    at_torque = np.abs(request) > torque_limit
-    at_speed = (np.abs(speed) >= speed_limit * (1 - 1e-9)) & (request * speed < 0)
-    applied = np.where(at_speed, 0.0, np.clip(request, -torque_limit, torque_limit))
-    momentum = wheel.spin_inertia * np.abs(speed)
     limit = wheel.spin_inertia * speed_limit
-    any_flag = at_torque | at_speed
-    first = np.flatnonzero(any_flag)
-    peak = float(np.max(momentum))
 
     def held(flags):
         return float(np.sum(dt[flags[:-1]]))
-    summary = {
-        "saturated": bool(first.size),
-        "first_saturation": float(t[first[0]]) if first.size else None,
-        "time_saturated": held(any_flag),
-        "time_torque_saturated": {"wheel": held(at_torque)},
-        "time_momentum_saturated": {"wheel": held(at_speed)},
-        "peak_momentum": {"wheel": peak},
-        "momentum_margin": {"wheel": None if math.isinf(limit) else limit - peak},
-        "momentum_margin_fraction": {"wheel": None if math.isinf(limit)
-                                     else (limit - peak) / limit},
-        "peak_torque": {"wheel": float(np.max(np.abs(applied)))}}
+
+    fields = ("time_torque_saturated", "time_momentum_saturated", "peak_momentum",
+              "momentum_margin", "momentum_margin_fraction", "peak_torque")
+    summary = {name: {} for name in fields}
+    any_flag = np.zeros(t.size, dtype=bool)
+    for name, speed_signal, torque_signal in signals:
+        speed, request = trace(response, speed_signal), trace(response, torque_signal)
+        if speed is None or request is None:
+            return None
+        at_torque = np.abs(request) > torque_limit
+        at_speed = (np.abs(speed) >= speed_limit * (1 - 1e-9)) & (request * speed < 0)
+        applied = np.where(at_speed, 0.0, np.clip(request, -torque_limit, torque_limit))
+        peak = float(np.max(wheel.spin_inertia * np.abs(speed)))
+        any_flag |= at_torque | at_speed
+        summary["time_torque_saturated"][name] = held(at_torque)
+        summary["time_momentum_saturated"][name] = held(at_speed)
+        summary["peak_momentum"][name] = peak
+        summary["momentum_margin"][name] = None if math.isinf(limit) else limit - peak
+        summary["momentum_margin_fraction"][name] = (None if math.isinf(limit)
+                                                     else (limit - peak) / limit)
+        summary["peak_torque"][name] = float(np.max(np.abs(applied)))
+    first = np.flatnonzero(any_flag)
+    summary = {"saturated": bool(first.size),
+               "first_saturation": float(t[first[0]]) if first.size else None,
+               "time_saturated": held(any_flag), **summary}
     summary["words"] = wheel_words(summary, duration=float(t[-1]))
     return summary
 
@@ -211,9 +238,11 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
 
     Parameters
     ----------
-    runner : spacecraft.design.loop._Runner
+    runner : spacecraft.DesignLoop
+        The design loop (its ``scene`` and ``stats``).
     designs : dict
-        The runner's designs (variant -> ``spacecraft``, ``controllers``...).
+        The loop's designs (variant -> ``spacecraft``, ``plant``, ``controllers``...); planar
+        or three-axis, as the spacecraft is.
     truth_sim : control.StateSpace
         The truth plant (tip deflections when the scene asks for them).
 
@@ -224,19 +253,20 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
     data : dict
         JSON-ready, per controller kind: ``design`` (the variant simulated), ``bsk_version``,
         ``sample_time`` [s], ``dt`` [s], ``seconds`` (Basilisk's build and run wall time),
-        ``out_of_plane``, ``differences`` (``basilisk_vs_truth``, ``basilisk_vs_chain``,
-        ``chain_vs_truth``: per signal ``peak``, ``peak_difference``, ``relative``),
-        ``truth`` (what the truth model is, :func:`truth_label`) and ``summary``
-        (:func:`summary`).
+        ``out_of_plane`` (None in three axes, where the motion has no plane),
+        ``differences`` (``basilisk_vs_truth``, ``basilisk_vs_chain``, ``chain_vs_truth``: per
+        signal ``peak``, ``peak_difference``, ``relative``), ``truth`` (what the truth model
+        is, :func:`truth_label`), ``summary`` (:func:`summary`), with a reaction wheel
+        ``wheel`` (:func:`basilisk_wheel_summary`), and where Basilisk's chains differ from the
+        design chains ``chains_as_held`` (per appendage: the motions ``held`` rigid and the
+        ``axial_frequency`` left out [rad/s], the ``raised_inertias``; see
+        :mod:`spacecraft.basilisk.layout`).
 
     Raises
     ------
     SceneError
         A flight-software rate, RK4 step or run time the scene cannot have (module docstring),
         naming the key.
-
-    Raises
-    ------
     spacecraft.basilisk.BasiliskNotInstalled
         Without the ``bsk`` package (one line: how to install the extra).
     """
@@ -247,6 +277,8 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
     m, sim = scene.manoeuvre, scene.simulator
     variant = next(iter(designs))
     d = designs[variant]
+    three_axis = bool(d["spacecraft"].three_axis)
+    axis = tuple(m.slew_axis) if three_axis else None
     wheel = None
     if sim.reaction_wheel is not None:
         w = sim.reaction_wheel
@@ -262,7 +294,7 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
                 d["spacecraft"], K, m.slew_angle, m.slew_time, duration=m.duration,
                 sample_time=sample_time, dt=sim.dt, truth_plant=truth_sim,
                 disturbances=basilisk_disturbances(m), reaction_wheel=wheel,
-                max_seconds=scene.limits.basilisk_seconds)
+                max_seconds=scene.limits.basilisk_seconds, axis=axis)
         except BasiliskRunTooLong as exc:
             raise _scene_error(scene, "simulator.name", f"{exc.work}, over the limit "
                                f"{exc.limit:g} s (limits.basilisk_seconds, estimated wall time "
@@ -276,13 +308,23 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
         differences = _differences(comparison)
         truth = truth_label(scene)
         data[kind] = {"design": variant, "bsk_version": version, "sample_time": b.sample_time,
-                      "dt": b.dt, "seconds": dict(b.seconds), "out_of_plane": b.out_of_plane,
+                      "dt": b.dt, "seconds": dict(b.seconds),
+                      # a three-axis run moves in every direction: no out-of-plane figure
+                      "out_of_plane": None if three_axis else b.out_of_plane,
                       "differences": differences, "truth": truth,
                       "summary": summary(differences, truth)}
+        held = {a.name: {"held": list(a.held), "axial_frequency": a.axial_frequency,
+                         "raised_inertias": [list(r) for r in a.raised_inertias]}
+                for a in b.layout.appendages if a.held or a.raised_inertias}
+        if held:
+            # what Basilisk's chains (and the linear chain compared) hold differently from the
+            # design chains (spacecraft.basilisk.layout: axial motion, moments of a body)
+            data[kind]["chains_as_held"] = held
         if sim.reaction_wheel is not None:
-            wheel = data[kind]["wheel"] = basilisk_wheel_summary(b.response, sim.reaction_wheel)
-            if wheel is not None and wheel["saturated"]:
-                data[kind]["summary"] += (f"; Basilisk's wheel: {wheel['words']} (flexsat's "
+            # (a name of its own: ``wheel`` is the next controller's wheel too)
+            wheels = data[kind]["wheel"] = basilisk_wheel_summary(b.response, sim.reaction_wheel)
+            if wheels is not None and wheels["saturated"]:
+                data[kind]["summary"] += (f"; Basilisk's wheel: {wheels['words']} (flexsat's "
                                           "linear predictions have no wheel: the differences "
                                           "are mostly the wheel's limits, not the chain's "
                                           "nonlinearity)")
@@ -318,19 +360,24 @@ def _truth_bodies(spec) -> int:
     return chain.n_bodies if chain.from_beam is not None else len(chain.lengths)
 
 
+def _unit(name: str) -> str:
+    """The unit of a compared signal, for a sentence."""
+    if name.startswith("theta") or name.endswith("_tip_twist"):
+        return "rad"
+    return "m"
+
+
 def summary(differences: dict, truth_name: str = "the distributed beam (truth)") -> str:
     """One sentence: how far Basilisk's nonlinear chain is from flexsat's truth model (named by
-    ``truth_name``, :func:`truth_label`) and from flexsat's linear chain, in theta and the tip
-    deflections."""
+    ``truth_name``, :func:`truth_label`) and from flexsat's linear chain, in the attitude and the
+    tip motions (planar: ``theta`` and the tip deflections; three axes: ``theta_x/_y/_z``, the
+    tip deflections in both planes and the tip twists)."""
     truth = differences.get("basilisk_vs_truth", {})
     chain = differences.get("basilisk_vs_chain", {})
-    names = ["theta"] + sorted(n for n in chain if n.endswith("_tip_deflection"))
-    parts = []
-    for name in names:
-        if name not in chain:
-            continue
-        unit = "rad" if name == "theta" else "m"
-        parts.append(f"{name} [{unit}] differs from {truth_name} by "
-                     f"{_part(truth.get(name))} and from the linear chain by "
-                     f"{_part(chain.get(name))}")
+    attitude = [n for n in ("theta", "theta_x", "theta_y", "theta_z") if n in chain]
+    tips = sorted(n for n in chain if n.endswith(("_tip_deflection", "_tip_deflection_y",
+                                                  "_tip_deflection_z", "_tip_twist")))
+    parts = [f"{name} [{_unit(name)}] differs from {truth_name} by {_part(truth.get(name))} "
+             f"and from the linear chain by {_part(chain.get(name))}"
+             for name in attitude + tips]
     return "; ".join(parts) if parts else "no common signals"
