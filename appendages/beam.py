@@ -576,7 +576,14 @@ class Beam:
         """True for the bare uniform beam (no tip body), whose closed forms apply."""
         return self._segmented is None
 
-    def _require_three_axis(self, what: str) -> None:
+    def require_three_axis(self, what: str) -> None:
+        """ValueError unless the beam has the three-axis properties (a torsional inertia).
+
+        Parameters
+        ----------
+        what : str
+            What needs them, the message's subject (e.g. ``"W6"``).
+        """
         if self.torsional_inertia is None:
             raise ValueError(
                 f"{what} needs the beam's torsion: torsional_inertia [kg*m] (rho*I_p per unit "
@@ -819,7 +826,7 @@ class Beam:
 
         Raises ValueError naming the missing property for a planar beam.
         """
-        self._require_three_axis("torsion_rod()")
+        self.require_three_axis("torsion_rod()")
         if self.torsional_stiffness is None:
             return None
         if "torsion" not in self._cache:
@@ -899,7 +906,7 @@ class Beam:
         """Rigid mass matrix about the root in (u, v, w, theta_x, theta_y, theta_z)."""
         if self._segmented is not None:
             return self._segmented.rigid_mass_matrix6
-        self._require_three_axis("rigid_mass_matrix6")
+        self.require_three_axis("rigid_mass_matrix6")
         m, L = self.mass, self.length
         M = np.zeros((6, 6))
         M[0, 0] = M[1, 1] = M[2, 2] = m
@@ -929,7 +936,7 @@ class Beam:
         ``diag(rho*I_p L, m L**2/12, m L**2/12)``: no rotary inertia of the section in bending
         (Euler-Bernoulli, as :attr:`inertia`).
         """
-        self._require_three_axis("inertia_tensor")
+        self.require_three_axis("inertia_tensor")
         if self._segmented is not None:
             return self._segmented.inertia_tensor
         return np.diag([self.torsional_inertia * self.length, self.inertia, self.inertia])
@@ -1334,7 +1341,7 @@ class Beam:
             A planar beam (no ``torsional_inertia``), s = 0, or s at an undamped natural
             frequency.
         """
-        self._require_three_axis("W6")
+        self.require_three_axis("W6")
         if self._segmented is not None:
             return self._segmented.W6(s)
         s = as_frequency_array(s)
@@ -1361,7 +1368,7 @@ class Beam:
         -------
         ndarray of complex128, shape ``np.shape(s) + (6, 6)``
         """
-        self._require_three_axis("dynamic_stiffness6")
+        self.require_three_axis("dynamic_stiffness6")
         if self._segmented is not None:
             return self._segmented.dynamic_stiffness6(s)
         s = as_frequency_array(s)
@@ -1379,8 +1386,7 @@ class Beam:
         if rod is not None:
             if which == "W":
                 return rod.W(s)
-            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-                return rod._D(s)
+            return rod.dynamic_stiffness(s)
         with np.errstate(divide="ignore"):
             return 1.0 / (rigid_inertia * s**2) if which == "W" else rigid_inertia * s**2
 
@@ -1393,7 +1399,7 @@ class Beam:
         it takes the last as the bound of completeness). Each motion's list is extended
         beyond omega_max and the union cut at the smallest of their ends.
         """
-        self._require_three_axis("clamped_frequencies6")
+        self.require_three_axis("clamped_frequencies6")
         if self._segmented is not None:
             return self._segmented.clamped_frequencies6(omega_max)
         parts = []

@@ -21,7 +21,7 @@ Three reductions of the exact beam, all realised in attachment-end coordinates (
     mass-normalised form (``R V = R2 V Lambda``) they are two more modes with root values
     ``(R V)^T`` and frequencies ``sqrt(Lambda)`` (above w_{n+1}), damped by the beam's damping
     operator projected on them, ``2 zeta V^T (sum_{k>n} b b^T/w**3) V``. The sums over k > n
-    come from :meth:`Beam._free_free_tail` (Hurwitz zeta tails, no cancellation). Then
+    come from :meth:`Beam.free_free_tail` (Hurwitz zeta tails, no cancellation). Then
 
         W(s) = rigid/s**2 + sum_{k<=n} b b^T/(s**2 + 2 zeta w s + w**2) + R (s**2 R2 + R)^-1 R,
 
@@ -251,12 +251,12 @@ def _bending_residual_modes(beam, n: int):
     [1/s] and tip values (2,), all for mass-normalised residual modes ``xi = V nu`` with
     ``R V = R2 V diag(lam)``, ``V^T R2 V = I``.
     """
-    R, tip_R = beam._free_free_tail(n, 2)
-    R3, _ = beam._free_free_tail(n, 3)
-    R2, _ = beam._free_free_tail(n, 4)
+    R, tip_R = beam.free_free_tail(n, 2)
+    R3, _ = beam.free_free_tail(n, 3)
+    R2, _ = beam.free_free_tail(n, 4)
     lam, V = scipy.linalg.eigh(R, R2)
     C = V.T @ (2.0 * beam.damping_ratio * R3) @ V
-    return (R @ V).T, lam, 0.5 * (C + C.T), tip_R @ V
+    return (R @ V).T, lam, 0.5 * (C + C.T), tip_R[0] @ V
 
 
 def _bending_projected_damping(beam, n: int) -> np.ndarray:
@@ -291,8 +291,8 @@ class _Bending:
         names = ("delta", "phi") + tuple(f"eta[{k + 1}]" for k in range(n))
         if self.method in ("free-free", "residual"):
             if n:
-                w = beam.natural_frequencies(n)
-                b_modes, tip_modes = beam._free_free_root_values(n)
+                w, b_modes, tip_modes = beam.free_free_modes(n)
+                tip_modes = tip_modes[:, 0]
             else:
                 w, b_modes, tip_modes = np.zeros(0), np.zeros((0, 2)), np.zeros(0)
             stiffness_modes = w**2
@@ -313,7 +313,7 @@ class _Bending:
             return _free_root_model(b_rigid, tip_rigid, np.array([1.0, L]), b_modes,
                                     stiffness_modes, damping_modes, tip_modes, names, 2)
         M_rr, participation, w, damping = self.craig_bampton_data()
-        tip_modes = beam._cantilever_tip_values(n) if n else np.zeros(0)
+        tip_modes = beam.cantilever_modes(n)[2][:, 0] if n else np.zeros(0)
         return fixed_root_model(M_rr, participation, w, damping, tip_modes,
                                 np.array([1.0, L]), names, 2)
 
@@ -357,8 +357,7 @@ class _Bending:
         beam, n = self.beam, self.n
         m, L, J = beam.mass, beam.length, beam.inertia
         if n:
-            w = beam.natural_frequencies(n)
-            b_flex, _ = beam._free_free_root_values(n)
+            w, b_flex, _ = beam.free_free_modes(n)
         else:
             w, b_flex = np.zeros(0), np.zeros((0, 2))
         products = np.stack([b_flex[:, 0] ** 2, b_flex[:, 0] * b_flex[:, 1],
@@ -830,7 +829,7 @@ class ModalBeam(FiniteAppendage):
 
     def _general6(self) -> GeneralTruncation:
         """The three-axis truncation of a non-uniform beam (its coupled modes)."""
-        self.beam._require_three_axis("a three-axis truncation")
+        self.beam.require_three_axis("a three-axis truncation")
         cached = self.__dict__.get("_general6_model")
         if cached is None:
             cached = self.__dict__["_general6_model"] = GeneralTruncation(
@@ -842,7 +841,7 @@ class ModalBeam(FiniteAppendage):
         """Modes the three-axis model keeps per motion: ``{"xy": .., "xz": .., "torsion": ..,
         "axial": ..}`` (rigid motions: 0). Their sum is ``n_modes`` or more (ties). A uniform
         beam's only: with a tip body or segments the modes couple."""
-        self.beam._require_three_axis("a three-axis truncation")
+        self.beam.require_three_axis("a three-axis truncation")
         if not self._uniform:
             raise ValueError("modes_per_motion: the modes of a beam with a tip body or "
                              "segments are not split by motion")

@@ -135,7 +135,9 @@ class SegmentedBeam:
         """True when every segment has the three-axis properties (a torsional inertia)."""
         return all(seg.torsional_inertia is not None for seg in self.segment_properties)
 
-    def _require_three_axis(self, what: str) -> None:
+    def require_three_axis(self, what: str) -> None:
+        """ValueError unless every segment has the three-axis properties (a torsional
+        inertia), naming the first that has not and ``what`` needs them."""
         for k, seg in enumerate(self.segment_properties):
             if seg.torsional_inertia is None:
                 raise ValueError(
@@ -149,7 +151,7 @@ class SegmentedBeam:
         cached = self._cache.get(key)
         if cached is None:
             if n_root == 6:
-                self._require_three_axis("a three-axis model")
+                self.require_three_axis("a three-axis model")
             tip = None if self.tip is None else self.tip.mass_matrix(n_root)
             cached = self._cache[key] = BeamAssembly(self.segment_properties, tip, n_root)
         return cached
@@ -164,7 +166,7 @@ class SegmentedBeam:
         cached = self._cache.get("parts")
         if cached is not None:
             return cached or None
-        self._require_three_axis("a three-axis model")
+        self.require_three_axis("a three-axis model")
         tip = self.tip
         J = np.zeros((3, 3)) if tip is None else tip.inertia_tensor
         if tip is not None and (np.any(tip.offset[1:] != 0.0) or np.any(J != np.diag(np.diag(J)))):
@@ -305,7 +307,7 @@ class SegmentedBeam:
     @property
     def inertia_tensor(self) -> np.ndarray:
         """Inertia about the centre of mass in appendage axes [kg*m**2], three-axis models."""
-        self._require_three_axis("inertia_tensor")
+        self.require_three_axis("inertia_tensor")
         return self._inertia_about(True)
 
     @property
@@ -319,7 +321,7 @@ class SegmentedBeam:
     @property
     def rigid_mass_matrix6(self) -> np.ndarray:
         """The rigid mass matrix about the root in (u, v, w, theta_x, theta_y, theta_z)."""
-        self._require_three_axis("rigid_mass_matrix6")
+        self.require_three_axis("rigid_mass_matrix6")
         m, c = self.mass, self.center_of_mass_vector
         X = np.array([[0.0, -c[2], c[1]], [c[2], 0.0, -c[0]], [-c[1], c[0], 0.0]])
         M = np.zeros((6, 6))
@@ -380,12 +382,12 @@ class SegmentedBeam:
     def W6(self, s) -> np.ndarray:
         """Exact three-axis W6(s), shape ``np.shape(s) + (6, 6)`` (root motions
         ``(u, v, w, theta_x, theta_y, theta_z)`` per root loads, appendage axes)."""
-        self._require_three_axis("W6")
+        self.require_three_axis("W6")
         return self._compliance(s, 6, "W6")
 
     def dynamic_stiffness6(self, s) -> np.ndarray:
         """Exact three-axis root dynamic stiffness D6(s) = W6(s)^-1; s = 0 gives 0."""
-        self._require_three_axis("dynamic_stiffness6")
+        self.require_three_axis("dynamic_stiffness6")
         return self._stiffness(as_frequency_array(s), 6)
 
     # -- frequencies ----------------------------------------------------------------------------
@@ -408,7 +410,7 @@ class SegmentedBeam:
 
     def natural_frequencies6(self, n: int) -> np.ndarray:
         """First n free-free frequencies of the three-axis model, all motions [rad/s]."""
-        self._require_three_axis("natural_frequencies6")
+        self.require_three_axis("natural_frequencies6")
         parts = self._parts()
         if parts is not None:
             return self._part_modes(parts, "free", _check_count("n", n))[0]
@@ -417,7 +419,7 @@ class SegmentedBeam:
     def clamped_frequencies6(self, omega_max: float) -> np.ndarray:
         """Every frequency of the three-axis model with the root clamped up to omega_max, and
         the next one [rad/s] (the Wittrick-Williams count of a three-axis spacecraft)."""
-        self._require_three_axis("clamped_frequencies6")
+        self.require_three_axis("clamped_frequencies6")
         parts = self._parts()
         if parts is None:
             assembly = self.assembly(6)
@@ -464,7 +466,7 @@ class SegmentedBeam:
         if motion not in ("torsion", "axial"):
             raise ValueError(f"motion must be 'torsion' or 'axial'; got {describe(motion)}")
         n = _check_count("n", n)
-        self._require_three_axis(f"rod_cantilever_frequencies({motion!r})")
+        self.require_three_axis(f"rod_cantilever_frequencies({motion!r})")
         stiffness = "torsional_stiffness" if motion == "torsion" else "axial_stiffness"
         if getattr(self.segment_properties[0], stiffness) is None:
             return np.zeros(0)

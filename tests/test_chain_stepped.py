@@ -30,6 +30,7 @@ def assert_same_chain(a, b, rtol):
             np.testing.assert_allclose(y, x, rtol=rtol, atol=0, err_msg=name)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n_bodies", [2, 5, 8])
 def test_rfem_of_a_stepped_beam_of_equal_segments_is_the_uniform_beams(n_bodies):
     # One segment, or the same tube as two equal halves, with the same three-axis tip body:
@@ -54,6 +55,7 @@ def test_superelements_of_a_stepped_beam_of_equal_segments_are_the_uniform_beams
                       HingedChain.superelements(stepped, n), rtol=1e-12)
 
 
+@pytest.mark.slow
 def test_rfem_and_superelements_converge_to_a_stepped_beam_with_a_tip_body():
     # The chains' first three frequencies against the stepped beam's exact free-free ones
     # (Wittrick-Williams, ~1e-14). Superelements are uniform pieces (the step at 1 m on a
@@ -78,6 +80,7 @@ def test_rfem_and_superelements_converge_to_a_stepped_beam_with_a_tip_body():
         assert chain.inertia == pytest.approx(beam.inertia, rel=1e-13)
 
 
+@pytest.mark.slow
 def test_three_axis_rfem_of_a_stepped_beam_converges_to_its_W6():
     # Every motion (two bending planes, torsion, axial) of a stepped tube with a tip body:
     # the relative error of W6 at four points falls 4x per doubling (H^2; measured 4.0-4.5
@@ -93,6 +96,7 @@ def test_three_axis_rfem_of_a_stepped_beam_converges_to_its_W6():
     assert errors[1] < errors[0] / 3.5 and errors[2] < errors[1] / 3.5, errors
 
 
+@pytest.mark.slow
 def test_rod_dampings_of_a_tip_loaded_beam_are_set_at_its_loaded_first_mode():
     # The torsion springs' damping 2 zeta c / w_1 with w_1 the first cantilever torsion
     # frequency of the rod carrying the tip body's moment about the axis (here 4.0x below the

@@ -225,6 +225,7 @@ def test_the_op2_file_itself_gives_the_extracts_appendage():
     np.testing.assert_array_equal(from_op2.W(S), from_npz.W(S))
 
 
+@pytest.mark.slow
 def test_table_and_fit_take_a_scenes_modal_appendage():
     import subprocess
     import sys
