@@ -24,7 +24,8 @@ from .signals import (OMEGA, THETA, TORQUE, check_controller, check_pair, check_
                       fed_back_signals, is_digital, reference_inputs, signal_names)
 from .threads import limits_blas_threads, total_states
 
-__all__ = ["LoopTransfer", "close_loop", "loop_frequency_response"]
+__all__ = ["LoopTransfer", "close_loop", "loop_frequency_response", "controller_roots",
+           "resonance_points"]
 
 
 def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
@@ -222,7 +223,8 @@ class LoopTransfer:
     ``loop(omega)`` gives L, shape (f,) planar or (f, m, m); :meth:`matrix` always (f, m, m);
     :meth:`broken` and :meth:`broken_all` the loop-at-a-time functions; :meth:`grid` a
     frequency grid refined around the lightly damped poles and zeros of L; :meth:`zeros` the
-    zeros of one channel's loop.
+    zeros of one channel's loop; :meth:`loop_at_a_time_poles` the poles the loop-at-a-time
+    functions have and L has not.
     """
 
     def __init__(self, plant, controller, delay: float = 0.0):
@@ -349,13 +351,7 @@ class LoopTransfer:
 
     def _controller_roots(self) -> np.ndarray:
         """Poles of the controller and zeros of each of its measurement channels."""
-        c = self.controller
-        roots = [self.controller_ev.poles()]
-        for name in self.measured:
-            j = list(c.input_labels).index(name)
-            roots.append(siso_zeros(c.A, c.B[:, j], c.C[0], c.D[0, j]))
-        roots = np.concatenate(roots).astype(complex)
-        return roots[np.isfinite(roots) & (np.abs(roots) < 1e12)]
+        return controller_roots(self.controller, self.measured, self.ch.torques[:1])
 
     def zeros(self, channel: int = 0) -> np.ndarray:
         """Zeros of the loop of one torque channel alone, -K_ii P_ii (z-plane for a digital
@@ -378,7 +374,7 @@ class LoopTransfer:
         z = siso_zeros(A, B, C, D)
         return z[np.isfinite(z) & (np.abs(z) < 1e12)]
 
-    def _loop_at_a_time_poles(self) -> np.ndarray:
+    def loop_at_a_time_poles(self) -> np.ndarray:
         """Poles of each loop-at-a-time L_i that the open loop does not have: those of the loop
         with torque i not fed back (the other loops closed); none for a planar loop."""
         if not self.ch.mimo:
@@ -402,7 +398,7 @@ class LoopTransfer:
             roots = self._controller_roots()
         else:
             roots = np.concatenate([self.plant_ev.poles(), self.controller_ev.poles(),
-                                    self._loop_at_a_time_poles()]
+                                    self.loop_at_a_time_poles()]
                                    + [self.zeros(i) for i in range(self.ch.n_axes)]
                                    ).astype(complex)
         if self.digital:
@@ -416,36 +412,76 @@ class LoopTransfer:
         if self.digital:
             w_hi = min(w_hi, math.pi / self.dt * (1 - 1e-9))
             w_lo = min(w_lo, 1e-3 * math.pi / self.dt)
-        grid = [np.logspace(math.log10(w_lo), math.log10(w_hi), n_points)]
-        # points concentrated in the half-power band of each lightly damped root: a pole
-        # -zeta w + j w sqrt(1-zeta^2) has |response| falling to 1/sqrt(2) at about w(1 +/- zeta),
-        # so steps of a fraction of zeta w resolve its peak and its 180 deg phase swing (the
-        # same for the notch of a lightly damped zero, an antiresonance).
-        # an even count: no point falls on the peak itself, where an undamped pole (zeta = 0,
-        # a free beam mode) makes L infinite
-        theta = np.linspace(-1.45, 1.45, 40)
-        # a root within 1/50 of the half-power half-width zeta w of one already placed is
-        # resolved by that one's points (the innermost lie 0.037 zeta w from the centre): the
-        # plant's modes that the loop leaves where they are come back as poles of every
-        # loop-at-a-time function and as zeros, several copies of each
-        upper = roots[(roots.imag > 0) & (np.abs(roots) > 0)]
-        upper = upper[np.argsort(upper.imag, kind="stable")]
-        last, last_width = complex(np.inf), 0.0
-        for lam in upper:
-            w = abs(lam)
-            zeta = max(abs(lam.real) / w, 1e-7)
-            if zeta > 0.3:
-                continue
-            width = zeta * w
-            if abs(lam - last) <= 0.02 * min(width, last_width):
-                continue
-            last, last_width = lam, width
-            pts = lam.imag + width * np.tan(theta)
-            grid.append(pts[(pts > w_lo) & (pts < w_hi)])
+        grid = [np.logspace(math.log10(w_lo), math.log10(w_hi), n_points),
+                resonance_points(roots, w_lo, w_hi)]
         if self.frd:
-            inside = [g[(g >= self.omega[0]) & (g <= self.omega[-1])] for g in grid[1:]]
-            return np.unique(np.concatenate([self.omega] + inside))
+            inside = grid[1][(grid[1] >= self.omega[0]) & (grid[1] <= self.omega[-1])]
+            return np.unique(np.concatenate([self.omega, inside]))
         return np.unique(np.concatenate(grid))
+
+
+def controller_roots(controller: control.StateSpace, measured, torques) -> np.ndarray:
+    """Poles of a controller and the zeros of each of its channels from a measurement to a
+    torque (z-plane for a digital controller), finite and below 1e12: the roots whose lightly
+    damped ones a frequency grid of its loop must resolve (:func:`resonance_points`).
+
+    Parameters
+    ----------
+    controller : control.StateSpace
+    measured, torques : sequence of str
+        Its fed-back inputs and its torque outputs.
+    """
+    c = controller
+    inputs, outputs = list(c.input_labels), list(c.output_labels)
+    roots = [modal_evaluator(c, list(measured), list(torques)).poles()]
+    for torque in torques:
+        i = outputs.index(torque)
+        for name in measured:
+            j = inputs.index(name)
+            roots.append(siso_zeros(c.A, c.B[:, j], c.C[i], c.D[i, j]))
+    roots = np.concatenate(roots).astype(complex)
+    return roots[np.isfinite(roots) & (np.abs(roots) < 1e12)]
+
+
+def resonance_points(roots, w_lo: float, w_hi: float) -> np.ndarray:
+    """Frequencies [rad/s] across the half-power band of every lightly damped root, in
+    (w_lo, w_hi), increasing.
+
+    A root -zeta w + j w sqrt(1 - zeta^2) (a pole: a resonance; a zero: an antiresonance) with
+    zeta <= 0.3 gets 40 points ``Im(root) + zeta w tan(t)``, t evenly in [-1.45, 1.45]: the
+    response falls to 1/sqrt(2) of its peak at about w (1 +/- zeta), so steps of a fraction of
+    zeta w resolve the peak and its 180 deg phase swing. An even count puts no point on the
+    peak itself, where an undamped pole (zeta = 0, taken as 1e-7) makes the response
+    infinite. A root within 1/50 of the half-width zeta w of one already placed is resolved by
+    that one's points (the innermost lie 0.037 zeta w from the centre): a plant's mode that a
+    loop leaves where it is comes back as a pole of every loop-at-a-time function and as
+    zeros, several copies of one root.
+
+    Parameters
+    ----------
+    roots : array of complex, rad/s
+        s-plane roots (only those with Im > 0 are used).
+    w_lo, w_hi : float, rad/s
+        The band the points are kept in.
+    """
+    roots = np.asarray(roots, dtype=complex).reshape(-1)
+    theta = np.linspace(-1.45, 1.45, 40)
+    upper = roots[(roots.imag > 0) & (np.abs(roots) > 0)]
+    upper = upper[np.argsort(upper.imag, kind="stable")]
+    last, last_width = complex(np.inf), 0.0
+    points = []
+    for lam in upper:
+        w = abs(lam)
+        zeta = max(abs(lam.real) / w, 1e-7)
+        if zeta > 0.3:
+            continue
+        width = zeta * w
+        if abs(lam - last) <= 0.02 * min(width, last_width):
+            continue
+        last, last_width = lam, width
+        pts = lam.imag + width * np.tan(theta)
+        points.append(pts[(pts > w_lo) & (pts < w_hi)])
+    return np.unique(np.concatenate(points)) if points else np.zeros(0)
 
 
 @limits_blas_threads(total_states)

@@ -36,7 +36,7 @@ import cmath
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Sequence
 
 import control
 import numpy as np
@@ -45,13 +45,14 @@ import scipy.optimize
 from .delay import check_delay, total_delay
 from .loop import LoopTransfer, close_loop, loop_frequency_response
 from .arguments import describe, frequency_grid
-from .signals import check_controller, check_pair, check_plant, is_digital
+from .signals import AXES, check_controller, check_pair, check_plant, is_digital
 from .stability import continuous_poles
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "margins",
            "spillover", "nyquist_count", "disk_margin_gain", "disk_margin_phase",
-           "loop_margins", "MAX_DELAY_GRID", "zero_crossings"]
+           "loop_margins", "MAX_DELAY_GRID", "zero_crossings", "multiloop_margins",
+           "loop_nyquist_count", "loop_verdict", "unstable_poles"]
 
 #: Most frequencies a delayed loop's grid may hold (omega tau resolved to pi/4 up to the grid's
 #: top): beyond, margins() refuses the delay by name before evaluating anything.
@@ -368,21 +369,121 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
         omega = _delay_grid(lambda w: _gain(loop.matrix(w)), omega, tau)
     if not loop.ch.mimo:
         return dataclasses.replace(loop_margins(loop, omega), delay=tau)
-    m = loop.ch.n_axes
+    return _multiloop_margins(loop.matrix, loop.ch.axes, omega, None, tau)
+
+
+def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
+                      L: np.ndarray | None = None, *, delay: float = 0.0,
+                      axes: Sequence[str] | None = None) -> MultiLoopMargins:
+    """Loop-at-a-time and disk margins of a matrix loop function, found on the function itself.
+
+    The multivariable counterpart of :func:`loop_margins`, with the definitions of
+    :func:`margins` for a three-axis state-space loop (:class:`MultiLoopMargins`: the classical
+    margins of each L_i = 1/S_ii - 1, the balanced disk margin 1 / max sigma_max(S - I/2), the
+    smallest singular value of I + L, the delay margin): the same code computes both, so a
+    loop known only by its frequency response (the exact distributed spacecraft's, through
+    W6) gets the margins a state-space model of it would. The grid only brackets: crossings are
+    refined on ``loop`` to 1e-13 relative in frequency, the extrema of the singular values by
+    a bounded scalar search between grid neighbours.
+
+    Parameters
+    ----------
+    loop : callable
+        ``loop(omega)`` -> L(j omega), complex array of shape (f, m, m) for the f frequencies
+        of the 1-D ``omega`` [rad/s]: the loop broken at the m plant inputs, negative-feedback
+        convention (the loop is unstable where det(I + L) = 0).
+    omega : ndarray, rad/s
+        Increasing grid that resolves L (every crossing and extremum between two of its
+        points).
+    L : ndarray, optional
+        ``loop(omega)``, if already known.
+    delay : float, s
+        A loop delay not in ``loop`` (the same on every input): the margins are those of
+        loop(omega) e^(-j omega delay), the grid refined for it as :func:`margins` refines its
+        own.
+    axes : sequence of str, optional
+        Names of the m inputs, the keys of ``loop_at_a_time`` (default ``'x', 'y', 'z'`` for
+        m = 3, else ``'1'``...).
+
+    Returns
+    -------
+    MultiLoopMargins
+    """
+    if not callable(loop):
+        raise TypeError(f"loop must be a function of omega [rad/s] giving L(j omega), shape "
+                        f"(f, m, m); got {type(loop).__name__}")
+    omega = frequency_grid(omega, minimum=2)
+    if np.any(np.diff(omega) <= 0):
+        raise ValueError(f"omega must be increasing [rad/s]; got {describe(omega)}")
+    delay = check_delay(delay)
+    if L is None:
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            L = loop(omega)
+    L = _loop_matrix_values(L, omega.size)
+    m = L.shape[1]
+    if axes is None:
+        axes = AXES if m == 3 else tuple(str(i + 1) for i in range(m))
+    axes = tuple(axes)
+    if len(axes) != m or not all(isinstance(a, str) for a in axes):
+        raise ValueError(f"axes must name the loop's {m} inputs; got {describe(axes)}")
+    if delay > 0.0:
+        bare = loop
+
+        def loop(w):
+            w = np.asarray(w, dtype=float).reshape(-1)
+            return bare(w) * np.exp(-1j * w * delay)[:, None, None]
+
+        refined = _delay_grid(None, omega, delay, _gain(L))
+        new = ~np.isin(refined, omega)
+        values = np.empty((refined.size, m, m), dtype=complex)
+        values[~new] = L[np.searchsorted(omega, refined[~new])]
+        if new.any():
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                values[new] = bare(refined[new])
+        omega = refined
+        L = values * np.exp(-1j * omega * delay)[:, None, None]
+    return _multiloop_margins(loop, axes, omega, L, delay)
+
+
+def _loop_matrix_values(L, n: int) -> np.ndarray:
+    """Loop values (f, m, m) (planar (f,) as m = 1) of n frequencies, or ValueError."""
+    L = np.asarray(L)
+    if L.dtype.kind not in "fc" or L.shape[:1] != (n,) or not (
+            L.ndim == 1 or (L.ndim == 3 and L.shape[1] == L.shape[2] and L.shape[1] > 0)):
+        raise ValueError(f"L must be the loop's values at the {n} frequencies, shape ({n},) or "
+                         f"({n}, m, m); got {L.dtype} of shape {L.shape}")
+    L = L.astype(complex)
+    return L[:, None, None] if L.ndim == 1 else L
+
+
+def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, omega: np.ndarray,
+                       L_grid: np.ndarray | None, tau: float) -> MultiLoopMargins:
+    """:class:`MultiLoopMargins` of the loop ``matrix(w)`` -> (f, m, m) (the delay ``tau``
+    [s] already in it) on the increasing grid ``omega`` (``L_grid`` its values, if known)."""
+    m = len(axes)
+
+    def broken_all(w: np.ndarray) -> np.ndarray:
+        """Every loop-at-a-time L_i = 1/S_ii - 1 (LoopTransfer.broken_all), (f, m)."""
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            L = matrix(w)
+            S = np.linalg.solve(np.eye(m) + L, np.broadcast_to(np.eye(m), L.shape))
+            return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
+
     # L on the grid once: the loop-at-a-time functions and the singular values all follow from
     # S = (I + L)^-1 there; only the refinements evaluate L again
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        L_grid = loop.matrix(omega)
+        if L_grid is None:
+            L_grid = matrix(omega)
         R = np.eye(m) + L_grid
         S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
-        per_axis = dict(zip(loop.ch.axes, _loops_margins(
-            lambda w, owner: loop.broken_all(w)[np.arange(w.size), owner], omega,
+        per_axis = dict(zip(axes, _loops_margins(
+            lambda w, owner: broken_all(w)[np.arange(w.size), owner], omega,
             1.0 / np.diagonal(S, axis1=1, axis2=2).T - 1.0, delay=tau)))
 
     def singular_values(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(sigma_max(S - I/2), sigma_min(I + L)) at each frequency."""
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            R = np.eye(m) + loop.matrix(w)
+            R = np.eye(m) + matrix(w)
             S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
             return (np.linalg.svd(S - 0.5 * np.eye(m), compute_uv=False)[:, 0],
                     np.linalg.svd(R, compute_uv=False)[:, -1])
@@ -402,7 +503,7 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
     sigma, w_sigma = _refined_extremum(lambda w: singular_values(w)[1], omega[ok], smallest[ok],
                                        maximum=False)
     alpha = 1.0 / disk_peak if disk_peak > 0 else math.inf
-    crossings = _unit_crossings(loop.matrix, omega, L_grid)
+    crossings = _unit_crossings(matrix, omega, L_grid)
     return MultiLoopMargins(per_axis, alpha, disk_margin_gain(alpha), disk_margin_phase(alpha),
                             w_disk, sigma, w_sigma, tau, _first_event(crossings, 0.0))
 
@@ -987,19 +1088,189 @@ def nyquist_count(truth_plant: control.FrequencyResponseData, controller, *,
         omega, L = loop_frequency_response(truth_plant, controller)
     else:
         omega, L = _loop_response(response)
-    if abs(L[0]) < 10 or abs(L[-1]) > 0.1:
+    return _nyquist_count(omega, L[:, None, None], unstable_poles(controller), "truth_plant ")
+
+
+def unstable_poles(system) -> int:
+    """Poles of a system in the open right half-plane (a digital one's mapped from the z-plane,
+    :func:`~controllers.stability.continuous_poles`): Re(s) > 1e-10 max(1, |s|) [rad/s], the P
+    of the Nyquist criterion for a controller (a pole on the imaginary axis, an integrator,
+    counts as stable: the contour is indented to its right)."""
+    lam = continuous_poles(system)
+    return int(np.sum(lam.real > 1e-10 * np.maximum(1.0, np.abs(lam))))
+
+
+def loop_nyquist_count(omega: np.ndarray, L: np.ndarray, *, open_loop_unstable: int = 0) -> int:
+    """Closed-loop poles in the right half-plane of a loop known by its frequency response, by
+    the (multivariable) Nyquist criterion on det(I + L(j omega)).
+
+    With the Nyquist contour indented to the right around s = 0 (and around nothing else: the
+    loop has no other pole on the imaginary axis), the clockwise encirclements of the origin by
+    det(I + L) are N = Z - P, P the open loop's poles in the open right half-plane and Z the
+    closed loop's. Along the contour det(I + L) turns by 2 Delta on the imaginary axis (Delta
+    from 0+ to +inf, the other half its mirror image), by -n0 pi around the n0-fold pole of det
+    L at s = 0 and by nothing on the large arc (L strictly proper), so
+
+        Z = P - (2 Delta - n0 pi) / (2 pi).
+
+    Delta is the unwrapped phase change of det(I + L) over the grid, n0 the low-frequency
+    slope of log|det L| against log omega (2 per free-floating axis), which needs the grid to
+    start where every singular value of L exceeds 10 (det(I + L) turns there as det L, whose
+    phase has reached its asymptote) and to end where every one is below 0.1 (det(I + L) near
+    1). For a planar loop (m = 1) this is :func:`nyquist_count`'s count.
+
+    Parameters
+    ----------
+    omega : ndarray, rad/s
+        Increasing grid that resolves the phase of det(I + L) (every lightly damped mode of
+        plant and controller).
+    L : ndarray, complex
+        L(j omega): shape (f,) for a planar loop, (f, m, m) for m loops, negative-feedback
+        convention.
+    open_loop_unstable : int
+        P: the open loop's poles in the open right half-plane (a controller's,
+        :func:`unstable_poles`; a free-floating spacecraft has none).
+
+    Returns
+    -------
+    int
+        Z (0 for a stable loop). May be negative for a grid that does not resolve the loop
+        (then the count is not to be trusted, and a verdict says unstable).
+
+    Raises
+    ------
+    ValueError
+        A grid too narrow for the criterion (named with the singular values of L at its
+        ends), a bad grid or L of the wrong shape.
+
+    References
+    ----------
+    Skogestad & Postlethwaite, Multivariable Feedback Control, 2nd ed., sec. 4.9.3 (the
+    generalised Nyquist theorem, det(I + L)); C. A. Desoer, Y.-T. Wang, "On the generalized
+    Nyquist stability criterion", IEEE Trans. Automatic Control 25(2), 1980.
+    """
+    omega = frequency_grid(omega, minimum=2)
+    if np.any(np.diff(omega) <= 0):
+        raise ValueError(f"omega must be increasing [rad/s]; got {describe(omega)}")
+    L = _loop_matrix_values(L, omega.size)
+    if isinstance(open_loop_unstable, (bool, np.bool_)) or not isinstance(
+            open_loop_unstable, (int, np.integer)) or open_loop_unstable < 0:
+        raise ValueError(f"open_loop_unstable must be a non-negative integer (poles in the "
+                         f"open right half-plane); got {describe(open_loop_unstable)}")
+    return _nyquist_count(omega, L, int(open_loop_unstable), "")
+
+
+def _nyquist_count(omega: np.ndarray, L: np.ndarray, p_rhp: int, what: str) -> int:
+    """Z of :func:`loop_nyquist_count` for L (f, m, m) on an increasing grid; ``what`` starts
+    the message of a grid too narrow."""
+    m = L.shape[1]
+    with np.errstate(all="ignore"):
+        ends = np.linalg.svd(L[[0, -1]], compute_uv=False) if m > 1 else np.abs(L[[0, -1], 0])
+    low, high = float(np.min(ends[0])), float(np.max(ends[1]))
+    if not (low >= 10 and high <= 0.1):
+        name = "|L|" if m == 1 else "every singular value of L"
         raise ValueError(
-            "truth_plant frequency grid too narrow for the Nyquist criterion: need |L| > 10 at the "
-            f"lowest and < 0.1 at the highest frequency; got |L| = {abs(L[0]):.3g} at "
-            f"{omega[0]:.3g} rad/s and {abs(L[-1]):.3g} at {omega[-1]:.3g} rad/s")
-    slope = (math.log(abs(L[1])) - math.log(abs(L[0]))) / (math.log(omega[1]) - math.log(omega[0]))
+            f"{what}frequency grid too narrow for the Nyquist criterion: need {name} > 10 at the "
+            f"lowest and < 0.1 at the highest frequency; got {low:.3g} at {omega[0]:.3g} rad/s "
+            f"and {high:.3g} at {omega[-1]:.3g} rad/s")
+    with np.errstate(all="ignore"):
+        if m == 1:
+            det_L, det_R = L[:2, 0, 0], 1.0 + L[:, 0, 0]
+        else:
+            det_L, det_R = np.linalg.det(L[:2]), np.linalg.det(np.eye(m) + L)
+    slope = ((math.log(abs(det_L[1])) - math.log(abs(det_L[0])))
+             / (math.log(omega[1]) - math.log(omega[0])))
     n0 = int(round(-slope))
-    phase = np.unwrap(np.angle(1.0 + L))
+    phase = np.unwrap(np.angle(det_R))
     delta = phase[-1] - phase[0]
-    lam_c = continuous_poles(controller)
-    p_rhp = int(np.sum(lam_c.real > 1e-10 * np.maximum(1.0, np.abs(lam_c))))
     z = p_rhp - (2.0 * delta - n0 * math.pi) / (2.0 * math.pi)
     return int(round(z))
+
+
+def loop_verdict(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
+                 L: np.ndarray | None = None, *, open_loop_unstable: int = 0,
+                 delay: float = 0.0, axes: Sequence[str] | None = None) -> SpilloverVerdict:
+    """Stability and margins of a loop known as a function L(j omega), planar or m x m.
+
+    What :func:`spillover` gives a state-space truth plant, for a loop whose plant is known
+    only by its frequency response but exactly, wherever asked (the exact distributed
+    spacecraft through W or W6):
+
+    - stability by the Nyquist criterion on det(I + L) over ``omega``
+      (:func:`loop_nyquist_count`, the open loop's ``open_loop_unstable`` poles counted);
+    - margins found on ``loop`` itself: :func:`loop_margins` (planar) or
+      :func:`multiloop_margins` (loop-at-a-time, disk margin, smallest singular value of
+      I + L), the definitions of :func:`margins`;
+    - with a delay tau (the same on every input): the roots in the closed right half-plane
+      are those without delay plus two per imaginary-axis crossing the delay causes below tau
+      (module docstring: the unit-circle crossings of the eigenvalues of L, found on ``loop``
+      and refined to 1e-13), as :func:`spillover` counts them; the margins include the delay
+      and their ``delay_margin`` is the extra delay tolerated, or for a loop the delay
+      destabilised minus how far tau lies beyond the smallest destabilising delay.
+
+    Parameters
+    ----------
+    loop : callable
+        ``loop(omega)`` -> L(j omega) at the 1-D frequencies omega [rad/s]: shape (f,) for a
+        planar loop, (f, m, m) for m loops (the loop broken at the plant's inputs,
+        negative-feedback convention), without the delay.
+    omega : ndarray, rad/s
+        Increasing grid that resolves det(I + L) (every lightly damped mode of plant and
+        controller) from where every singular value of L exceeds 10 to where each is below
+        0.1; it brackets the margins, which are then found on ``loop``.
+    L : ndarray, optional
+        ``loop(omega)``, if already known.
+    open_loop_unstable : int
+        The open loop's poles in the open right half-plane (:func:`unstable_poles` of the
+        controller when the plant has none).
+    delay : float, s
+        Loop delay.
+    axes : sequence of str, optional
+        Names of the m inputs (:func:`multiloop_margins`).
+
+    Returns
+    -------
+    SpilloverVerdict
+        ``method`` ``'nyquist'`` (``'nyquist+delay'`` with a delay); no poles or mode list (a
+        frequency response has none); ``margins`` :class:`Margins` or
+        :class:`MultiLoopMargins`.
+
+    Raises
+    ------
+    ValueError
+        A grid too narrow for the Nyquist criterion, or a bad argument.
+    """
+    if not callable(loop):
+        raise TypeError(f"loop must be a function of omega [rad/s] giving L(j omega); got "
+                        f"{type(loop).__name__}")
+    omega = frequency_grid(omega, minimum=2)
+    if np.any(np.diff(omega) <= 0):
+        raise ValueError(f"omega must be increasing [rad/s]; got {describe(omega)}")
+    delay = check_delay(delay)
+    if L is None:
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            L = loop(omega)
+    values = _loop_matrix_values(L, omega.size)
+    planar = np.ndim(L) == 1
+    n = loop_nyquist_count(omega, values, open_loop_unstable=open_loop_unstable)
+
+    def matrix(w: np.ndarray) -> np.ndarray:
+        out = np.asarray(loop(np.asarray(w, dtype=float).reshape(-1)))
+        return out[:, None, None] if planar else out
+
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        margins_ = (loop_margins(loop, omega, np.asarray(L).astype(complex), delay=delay)
+                    if planar else multiloop_margins(loop, omega, values, delay=delay,
+                                                     axes=axes))
+    if delay == 0.0:
+        return SpilloverVerdict(stable=n == 0, n_unstable_poles=max(n, 0),
+                                least_damping_ratio=None, least_damped_frequency=None,
+                                margins=margins_, method="nyquist")
+    n_delayed, margin = _roots_at_delay(max(n, 0), _unit_crossings(matrix, omega, values), delay)
+    return SpilloverVerdict(stable=n_delayed == 0 and n >= 0, n_unstable_poles=n_delayed,
+                            least_damping_ratio=None, least_damped_frequency=None,
+                            margins=dataclasses.replace(margins_, delay_margin=margin),
+                            method="nyquist+delay")
 
 
 def _loop_response(response) -> tuple[np.ndarray, np.ndarray]:
