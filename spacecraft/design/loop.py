@@ -459,9 +459,7 @@ class DesignLoop(ModelBuilder):
             with np.errstate(all="ignore"), warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 try:
-                    exact = exact_loop_verdict(self.exact_spacecraft(), K, frd.omega,
-                                               theta=np.asarray(frd.frdata)[0, 0],
-                                               delay=scene.controller.total_delay)
+                    exact = self.exact_verdict(K, frd)
                     row["exact_verdict"] = {**verdict_dict(exact), **delay_facts(exact.margins)}
                 except ValueError as exc:
                     row["exact_verdict"] = {"error": str(exc)}

@@ -36,12 +36,13 @@ from .fidelity import (MAX_MODES, FidelityChoice, choose_n_modes, clamped_freque
 from ..dynamics.hub import Hub, Mount
 from ..scene.limits import estimate_cost
 from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
+from .exact_grid import (POINTS_PER_DECADE, POINTS_PER_MODE, exact_grid, locating_spacecraft,
+                         locator_model)
 from .manoeuvre import loop_delay
-from .verdicts import closed_loop_poles
+from .verdicts import closed_loop_poles, exact_loop_verdict
 
 __all__ = ["ModelBuilder", "GivenModels", "TruthLoop", "RunStats", "raised_by_flexsat",
-           "LQR_FREQUENCY_RANGE", "ProgressCallback", "POINTS_PER_DECADE", "POINTS_PER_MODE",
-           "EXTRA_LOCATOR_MODES"]
+           "LQR_FREQUENCY_RANGE", "ProgressCallback"]
 
 #: Range of the rigid-body LQR natural frequency (q / (r J^2))^(1/4) [rad/s]: that of a PD's
 #: natural frequency in a scene (spacecraft.scene.read.RANGES["pd.frequency"]).
@@ -55,12 +56,6 @@ _OUR_FOLDERS = tuple(Path(p.__file__).resolve().parent for p in (appendages, con
 
 ProgressCallback = Callable[[str], None]
 
-#: The exact reference's frequency grid (:meth:`ModelBuilder.exact_grid`): points per decade,
-#: points across each coupled mode's half-power band, and clamped modes beyond the top of the
-#: grid in the truncation that locates the modes.
-POINTS_PER_DECADE = 100
-POINTS_PER_MODE = 60
-EXTRA_LOCATOR_MODES = 2
 
 
 @dataclasses.dataclass
@@ -478,11 +473,6 @@ class ModelBuilder:
             return self.exact_spacecraft().natural_frequencies(k, exact=True)
         return self.cached(("exact_frequencies", k), build)
 
-    def exact_response(self, omega: np.ndarray) -> np.ndarray:
-        self.stats.exact_reference_evaluations += 1
-        frd = self.exact_spacecraft().frequency_response(omega, output="theta")
-        return np.asarray(frd.frdata).reshape(-1)
-
     # -- the run -------------------------------------------------------------------------------
     def design_bandwidth(self, inertia: float) -> float:
         """Rigid-body closed-loop natural frequency of the fastest controller [rad/s]."""
@@ -598,60 +588,54 @@ class ModelBuilder:
 
     def exact_grid(self, *, points_per_decade: int = POINTS_PER_DECADE,
                    points_per_mode: int = POINTS_PER_MODE) -> np.ndarray:
-        """Frequencies [rad/s] of the exact reference, every coupled mode resolved.
-
-        Logarithmic from 1e-3 to 1e3 times the design bandwidth wb (``points_per_decade``),
-        plus ``points_per_mode`` points ``w_k (1 + zeta tan(t))``, t evenly in [-1.5, 1.5] (an
-        even count: no point exactly on an undamped mode), across every coupled mode w_k below
-        1e3 wb, zeta the largest modal damping ratio of the appendages (at least 1e-4): the
-        Nyquist count of a loop needs the phase of 1 + L through each resonance, and the
-        margins' crossings bracketed (they are then found on the exact loop function itself,
-        :func:`spacecraft.design.verdicts.exact_loop_verdict`). The modes are located on the
-        exact spacecraft with every distributed beam replaced by its undamped Craig-Bampton
-        truncation with :data:`EXTRA_LOCATOR_MODES` modes more than its clamped modes below
-        1e3 wb: within 3e-7 of the exact coupled frequencies on the default sweep scene, a
-        small fraction of the half-power band 2 zeta, and a fraction of the cost of the exact
-        Wittrick-Williams roots.
-        """
+        """Frequencies [rad/s] of the exact reference, every coupled mode resolved: the
+        module's :func:`exact_grid` of the exact spacecraft about the design bandwidth, its
+        locating truncations built once for the run."""
         def build():
             wb = self.design_bandwidth(self.rigid_inertia())
-            w_lo, w_hi = wb * 1e-3, wb * 1e3
-            exact = self.exact_spacecraft()
-            models = [self._locator(m.appendage, w_hi) for m in exact.mounts]
-            located = Spacecraft(exact.hub, [m.with_appendage(model) for m, model
-                                             in zip(exact.mounts, models)])
-            modes = located.modes()[0][located.n_rigid:]
-            modes = modes[modes < w_hi]
-            # a beam's damping ratio, or modal data's largest
-            zeta = max([getattr(m.appendage, "damping_ratio", 0.0) for m in exact.mounts]
-                       + [float(np.max(m.appendage.damping_ratios)) for m in exact.mounts
-                          if hasattr(m.appendage, "damping_ratios")] + [1e-4])
-            n_log = int(round(points_per_decade * math.log10(w_hi / w_lo)))
-            spread = np.tan(np.linspace(-1.5, 1.5, points_per_mode))
-            omega = np.unique(np.concatenate([np.geomspace(w_lo, w_hi, n_log), modes]
-                                             + [w * (1.0 + zeta * spread) for w in modes]))
-            return omega[(omega > 0) & (omega <= w_hi)]
+            return exact_grid(self.exact_spacecraft(), wb, points_per_decade=points_per_decade,
+                              points_per_mode=points_per_mode, locating=self.locating_spacecraft())
         return self.cached(("exact grid", points_per_decade, points_per_mode), build)
 
-    def _locator(self, appendage, w_hi: float):
-        """An appendage's model that locates its coupled modes below w_hi: a distributed
-        beam's undamped Craig-Bampton truncation (its clamped modes below w_hi and
-        EXTRA_LOCATOR_MODES more), any other model as it is."""
-        if not hasattr(appendage, "cantilever_frequencies") or \
-                not hasattr(appendage, "truncated"):
-            return appendage
-        beam = appendage.undamped() if hasattr(appendage, "undamped") else appendage
-        n = clamped_frequencies(beam, w_hi, three_axis=self.three_axis).size
-        n += EXTRA_LOCATOR_MODES - 1        # the list ends with the first mode above w_hi
-        return self.cached(("locator", id(appendage), n),
-                           lambda: beam.truncated(n, method="craig-bampton"))
+    def locating_spacecraft(self) -> Spacecraft:
+        """The finite spacecraft that located the modes of :meth:`exact_grid`
+        (:func:`locating_spacecraft` up to its top): it locates the resonances of the exact
+        loops too (:func:`spacecraft.design.verdicts.exact_loop_verdict`)."""
+        def build():
+            w_hi = 1e3 * self.design_bandwidth(self.rigid_inertia())
+            return locating_spacecraft(self.exact_spacecraft(), w_hi, locator=self._locator)
+        return self.cached(("locating spacecraft",), build)
+
+    def _locator(self, appendage, w_hi: float, three_axis: bool):
+        """:func:`locator_model`, built once per appendage for the run (identical wings share
+        it)."""
+        return self.cached(("locator", id(appendage), w_hi, three_axis),
+                           lambda: locator_model(appendage, w_hi, three_axis))
 
     def exact_reference_frd(self, **grid):
-        """Exact theta and omega per torque of the spacecraft with its distributed
-        appendages, as an FRD on :meth:`exact_grid` (``grid``: its options)."""
+        """Exact attitudes and rates per torque of the spacecraft with its distributed
+        appendages, as an FRD on :meth:`exact_grid` (``grid``: its options): planar outputs
+        ``theta``, ``omega`` per ``torque``; three axes ``theta_x/_y/_z``, ``omega_x/_y/_z``
+        per ``torque_x/_y/_z`` (through each appendage's W6)."""
         def build():
             omega = self.exact_grid(**grid)
-            theta = self.exact_response(omega)
-            data = np.stack([theta, 1j * omega * theta]).reshape(2, 1, -1)
-            return control.frd(data, omega, inputs=["torque"], outputs=["theta", "omega"])
+            self.stats.exact_reference_evaluations += 1
+            return self.exact_spacecraft().frequency_response(omega, output="both")
         return self.cached(("exact frd", tuple(sorted(grid.items()))), build)
+
+    def exact_verdict(self, controller, exact_frd=None):
+        """The verdict of a continuous controller on the exact distributed spacecraft, with the
+        scene's loop delay: :func:`spacecraft.design.verdicts.exact_loop_verdict` on the exact
+        reference (``exact_frd``, default :meth:`exact_reference_frd`), planar or three-axis
+        (MIMO Nyquist on det(I + L), loop-at-a-time and disk margins through W6), the
+        resonances of a three-axis loop located on :meth:`locating_spacecraft`.
+
+        Raises ValueError for a digital controller or a grid too narrow for the Nyquist
+        criterion."""
+        frd = exact_frd if exact_frd is not None else self.exact_reference_frd()
+        m = 3 if self.three_axis else 1
+        P = np.moveaxis(np.asarray(frd.frdata)[:m, :m], -1, 0)
+        self.stats.exact_reference_evaluations += 1
+        return exact_loop_verdict(self.exact_spacecraft(), controller, frd.omega, theta=P,
+                                  delay=self.scene.controller.total_delay,
+                                  locating=self.locating_spacecraft() if m > 1 else None)

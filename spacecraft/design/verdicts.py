@@ -230,121 +230,164 @@ def withheld_metrics(metrics: dict, status: dict) -> tuple[dict, dict]:
     return values, flags
 
 
-def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: float = 0.0):
-    """The verdict and margins of a planar loop closed on the exact distributed spacecraft.
+def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: float = 0.0,
+                       locating=None):
+    """The verdict and margins of a loop closed on the exact distributed spacecraft, planar or
+    three-axis.
 
-    Stability by the Nyquist criterion on the exact frequency response over ``omega``
-    (:func:`controllers.nyquist_count` on it as a FrequencyResponseData; with a delay
-    :func:`controllers.spillover`, which counts the roots the delay adds); the margins on the exact
-    loop function itself, L(j w) = -(K_theta(j w) + j w K_omega(j w)) theta/torque(j w) with
-    theta/torque evaluated through W(s) wherever asked (:func:`controllers.loop_margins`): the
-    grid only brackets the crossings of |L| = 1 and of the negative real axis and the minimum
-    of |1 + L|, which are then found on L to 1e-13 in frequency, so the margins are as
-    accurate as the exact response (about 1e-13 relative), not as a grid interpolation.
+    The loop is broken at the torque inputs, L(j w) = -(K_theta(j w) + j w K_omega(j w))
+    P(j w) (negative-feedback convention), P = theta/torque the exact attitude response
+    through each appendage's W(s) (W6 in three axes, :mod:`spacecraft.dynamics.exact`): a
+    number planar, the 3 x 3 matrix in three axes, where K_theta and K_omega are the
+    controller's 3 x 3 transfers from the measured attitudes and rates to the torques.
+    :func:`controllers.margins.loop_verdict` then judges it on the exact function itself:
+
+    - stability by the Nyquist criterion on det(I + L) over ``omega`` with the controller's
+      lightly damped roots added (:func:`controllers.loop.resonance_points`; P exact there
+      too), the controller's own poles in the right half-plane counted
+      (:func:`controllers.margins.loop_nyquist_count`). Three axes: also the lightly damped
+      roots that the loop-at-a-time functions have and L has not (the poles of the loop with
+      one axis open, which are no open-loop modes) and the zeros of each axis' loop, taken
+      from the loop on the finite ``locating`` spacecraft, which has the exact one's modes to
+      ~1e-7 below the grid's top: the grid of :func:`controllers.margins` on a state-space
+      plant resolves the same roots;
+    - the margins found on L, evaluated through W (W6) wherever asked: the grid only brackets
+      the crossings of |L| = 1 and of the negative real axis (three axes: of each
+      loop-at-a-time L_i = 1/S_ii - 1) and the extrema of |1 + L| and of the singular values,
+      which are then found on L to 1e-13 in frequency, so the margins are as accurate as the
+      exact response (about 1e-13 relative), not as a grid interpolation. Three axes: the
+      definitions of :func:`controllers.margins` (loop-at-a-time, balanced disk margin,
+      smallest singular value of I + L), so they equal a state-space model's.
 
     Parameters
     ----------
     spacecraft : spacecraft.Spacecraft
-        Planar hub with its distributed appendages (its ``exact`` reference is evaluated).
+        Hub with its distributed appendages (its ``exact`` reference is evaluated).
     controller : control.StateSpace
         Continuous controller with output ``torque`` and inputs ``theta`` and/or ``omega``
-        (others, such as references, are not fed back).
+        (three axes: outputs ``torque_x/_y/_z``, inputs ``theta_x``... and/or ``omega_x``...;
+        others, such as references, are not fed back).
     omega : array of float, rad/s
         Grid that resolves every coupled mode the loop feels (the Nyquist count is taken on
-        it), e.g. the runner's exact reference grid; with the controller's lightly damped
-        roots it also brackets the margins.
+        it), e.g. :meth:`spacecraft.design.models.ModelBuilder.exact_grid`; with the
+        controller's lightly damped roots it also brackets the margins.
     theta : array of complex, optional
-        The exact theta/torque on ``omega`` [rad/(N m)], if already known.
+        The exact theta/torque on ``omega``, if already known: shape (f,) planar [rad/(N m)],
+        (f, 3, 3) in three axes (row: attitude axis, column: torque axis).
     delay : float, s
-        A loop delay (computation plus transport), in the count and the margins as
-        :func:`controllers.spillover` takes it.
+        A loop delay (computation plus transport), the same on every torque, in the count and
+        the margins as :func:`controllers.spillover` takes it.
+    locating : spacecraft.Spacecraft, optional
+        Three axes: the finite spacecraft whose loop locates the exact loop's resonances
+        (:func:`spacecraft.design.models.locating_spacecraft` up to the grid's top, built here
+        if not given). Unused for a planar loop, whose L has only the plant's and the
+        controller's poles and zeros.
 
     Returns
     -------
     controllers.SpilloverVerdict
-        ``method`` ``'nyquist'``; ``margins`` refined on the exact loop function.
+        ``method`` ``'nyquist'`` (``'nyquist+delay'``); ``margins`` refined on the exact loop
+        function: :class:`controllers.Margins` planar, :class:`controllers.MultiLoopMargins`
+        in three axes.
+
+    Raises
+    ------
+    ValueError
+        A digital controller, or a grid too narrow for the Nyquist criterion.
     """
-    import dataclasses
+    from controllers.loop import LoopTransfer, controller_roots, resonance_points
+    from controllers.margins import loop_verdict, unstable_poles
+    from controllers.signals import channels
 
-    import control
-    import controllers
-
+    ch = channels(controller, "controller")
+    if ch.mimo != bool(spacecraft.three_axis):
+        raise ValueError(f"controller: a {'three-axis' if ch.mimo else 'planar'} controller "
+                         f"(outputs {list(controller.output_labels)}) on a "
+                         f"{'three-axis' if spacecraft.three_axis else 'planar'} spacecraft")
+    m = ch.n_axes
     omega = np.asarray(omega, dtype=float).reshape(-1)
     order = np.argsort(omega)
     omega = omega[order]
     if theta is None:
-        theta = _exact_theta(spacecraft, omega)
+        P = _exact_compliance(spacecraft, omega)
     else:
-        theta = np.asarray(theta, dtype=complex).reshape(-1)[order]
-    frd = control.frd(np.stack([theta, 1j * omega * theta]).reshape(2, 1, -1), omega,
-                      inputs=["torque"], outputs=["theta", "omega"])
-    gains = _measurement_gains(controller)
-    # the loop on the exact grid and the controller's lightly damped roots inside it (theta
-    # evaluated at the points added: a controller's root may sit on a lightly damped mode,
-    # between whose grid points an interpolated plant is no bracket); it counts the
-    # encirclements and brackets the margins, which are then found on the exact loop function
-    grid, _ = controllers.loop_frequency_response(frd, controller)
+        P = np.asarray(theta, dtype=complex).reshape((-1, m, m))[order]
+    gains = _measurement_gains(controller, ch)
+    # the exact grid and the controller's lightly damped roots inside it (P evaluated at the
+    # points added: a controller's root may sit on a lightly damped mode, between whose grid
+    # points an interpolated plant is no bracket); it counts the encirclements and brackets the
+    # margins, which are then found on the exact loop function
+    inputs = list(controller.input_labels)
+    measured = [n for n in ch.measurements if n in inputs]
+    roots = [controller_roots(controller, measured, ch.torques)]
+    if ch.mimo:
+        if locating is None:
+            from .exact_grid import locating_spacecraft
+
+            locating = locating_spacecraft(spacecraft, float(omega[-1]))
+        located = LoopTransfer(locating.plant(prune=True), controller)
+        roots += [located.loop_at_a_time_poles()] + [located.zeros(i) for i in range(m)]
+    extra = resonance_points(np.concatenate(roots), omega[0], omega[-1])
+    grid = np.unique(np.concatenate([omega, extra]))
     added = ~np.isin(grid, omega)
-    theta_grid = np.empty(grid.shape, dtype=complex)
-    theta_grid[~added] = theta[np.searchsorted(omega, grid[~added])]
+    P_grid = np.empty((grid.size, m, m), dtype=complex)
+    P_grid[~added] = P[np.searchsorted(omega, grid[~added])]
     if added.any():
-        theta_grid[added] = _exact_theta(spacecraft, grid[added])
-    K_theta, K_omega = gains(grid)
-    L = -(K_theta + 1j * grid * K_omega) * theta_grid
-    if delay > 0.0:
-        verdict = controllers.spillover(frd, controller, delay=delay)
-    else:
-        n = controllers.nyquist_count(frd, controller, response=(grid, L))
-        verdict = controllers.SpilloverVerdict(
-            stable=n == 0, n_unstable_poles=max(n, 0), least_damping_ratio=None,
-            least_damped_frequency=None, margins=None, method="nyquist")
+        P_grid[added] = _exact_compliance(spacecraft, grid[added])
+
+    def loop_of(w: np.ndarray, P: np.ndarray) -> np.ndarray:
+        K = gains(w)
+        L = -(K[:, :, :m] + 1j * w[:, None, None] * K[:, :, m:]) @ P
+        return L[:, 0, 0] if m == 1 else L
 
     def loop(w: np.ndarray) -> np.ndarray:
         w = np.asarray(w, dtype=float).reshape(-1)
-        K_theta, K_omega = gains(w)
-        return -(K_theta + 1j * w * K_omega) * _exact_theta(spacecraft, w)
+        return loop_of(w, _exact_compliance(spacecraft, w))
 
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        margins = controllers.loop_margins(loop, grid, L, delay=delay)
-    return dataclasses.replace(verdict, margins=margins)
+        L = loop_of(grid, P_grid)
+    return loop_verdict(loop, grid, L, open_loop_unstable=unstable_poles(controller),
+                        delay=delay, axes=ch.axes if ch.mimo else None)
 
 
-def _exact_theta(spacecraft, omega: np.ndarray) -> np.ndarray:
-    """Exact theta/torque at j omega [rad/(N m)]; inf where an undamped spacecraft has a
-    natural frequency (a refinement step may land there; the margin search steps aside)."""
+def _exact_compliance(spacecraft, omega: np.ndarray) -> np.ndarray:
+    """Exact theta/torque at j omega, shape (f, m, m) [rad/(N m)]; inf where an undamped
+    spacecraft has a natural frequency (a refinement step may land there; the margin search
+    steps aside)."""
     try:
-        return spacecraft.exact.attitude_compliance(omega)[:, 0, 0]
+        return spacecraft.exact.attitude_compliance(omega)
     except ValueError:
-        out = np.full(omega.shape, np.inf, dtype=complex)
-        for k, w in enumerate(omega):
+        m = 3 if spacecraft.three_axis else 1
+        out = np.full(omega.shape + (m, m), np.inf, dtype=complex)
+        for k in range(omega.size):
             try:
-                out[k] = spacecraft.exact.attitude_compliance(omega[k:k + 1])[0, 0, 0]
+                out[k] = spacecraft.exact.attitude_compliance(omega[k:k + 1])[0]
             except ValueError:
                 pass
         return out
 
 
-def _measurement_gains(controller):
-    """``gains(omega)`` -> (K_theta, K_omega) at j omega: the controller's transfer functions
-    from the measured theta and omega to its torque (zero for a signal it does not take),
-    C (j omega I - A)^-1 B + D: in modal form where A's eigenvectors are well conditioned
-    (condition number below 1e6: the modal sum then loses at most 1e-10 relative), else by
-    one linear solve per frequency (controllers have a few states)."""
+def _measurement_gains(controller, ch):
+    """``gains(omega)`` -> K(j omega), shape (f, m, 2m): the controller's transfers from the
+    measured attitudes, then rates (the channels ``ch``), to its m torques (zero for a signal
+    it does not take), C (j omega I - A)^-1 B + D: in modal form where A's eigenvectors are
+    well conditioned (condition number below 1e6: the modal sum then loses at most 1e-10
+    relative), else by one linear solve per frequency (controllers have a few states)."""
     if controller.isdtime(strict=True):
         raise ValueError("the exact-beam verdict needs a continuous controller; got "
                          f"dt={controller.dt}")
     inputs, outputs = list(controller.input_labels), list(controller.output_labels)
-    row = outputs.index("torque")
+    rows = [outputs.index(name) for name in ch.torques]
     A = np.asarray(controller.A, dtype=float)
-    C = np.asarray(controller.C, dtype=float)[row]
+    C = np.asarray(controller.C, dtype=float)[rows]
     columns = []
-    for name in ("theta", "omega"):
+    for name in ch.thetas + ch.omegas:
         j = inputs.index(name) if name in inputs else None
-        columns.append((np.zeros(A.shape[0]), 0.0) if j is None else
+        columns.append((np.zeros(A.shape[0]), np.zeros(len(rows))) if j is None else
                        (np.asarray(controller.B, dtype=float)[:, j],
-                        float(np.asarray(controller.D, dtype=float)[row, j])))
+                        np.asarray(controller.D, dtype=float)[rows, j]))
     B = np.stack([b for b, _ in columns], axis=1)
-    D = np.array([d for _, d in columns])
+    D = np.stack([d for _, d in columns], axis=1)
     modal = None
     if A.shape[0]:
         # modal form when the eigenvectors are well conditioned: (C V) diag(1/(s - lambda))
@@ -354,17 +397,15 @@ def _measurement_gains(controller):
         if np.linalg.cond(V) < 1e6:
             modal = lam, C @ V, np.linalg.solve(V, B.astype(complex))
 
-    def gains(omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def gains(omega: np.ndarray) -> np.ndarray:
         if A.shape[0] == 0:
-            K = np.broadcast_to(D.astype(complex), (omega.size, 2))
-        elif modal is not None:
+            return np.broadcast_to(D.astype(complex), (omega.size,) + D.shape)
+        if modal is not None:
             lam, CV, VB = modal
-            K = ((CV / (1j * omega[:, None] - lam)) @ VB) + D
-        else:
-            M = 1j * omega[:, None, None] * np.eye(A.shape[0]) - A
-            X = np.linalg.solve(M, np.broadcast_to(B, (omega.size,) + B.shape))
-            K = np.einsum("n,fnk->fk", C, X) + D
-        return K[:, 0], K[:, 1]
+            return np.einsum("in,fn,nk->fik", CV, 1.0 / (1j * omega[:, None] - lam), VB) + D
+        M = 1j * omega[:, None, None] * np.eye(A.shape[0]) - A
+        X = np.linalg.solve(M, np.broadcast_to(B, (omega.size,) + B.shape))
+        return np.einsum("in,fnk->fik", C, X) + D
     return gains
 
 

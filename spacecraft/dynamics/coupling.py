@@ -628,33 +628,39 @@ class Spacecraft:
     def frequency_response(self, omega, *, output: str = "theta"):
         """Exact frequency response from the hub torque(s) through every appendage's W (W6).
 
+        The attitude response is the rotation block of the inverse of the hub's dynamic
+        stiffness Z(s), every appendage eliminated through its W (W6): derived, with its rigid
+        limit, in :meth:`spacecraft.dynamics.exact.ExactReference.attitude_compliance`.
+        Vectorised over frequency.
+
         Parameters
         ----------
         omega : array_like, rad/s
             Positive frequencies.
-        output : {"theta", "omega"}
-            Attitude per torque [rad/(N*m)] or rate per torque [rad/(s*N*m)].
+        output : {"theta", "omega", "both"}
+            Attitude per torque [rad/(N*m)], rate per torque [rad/(s*N*m)], or both (the
+            attitudes first).
 
         Returns
         -------
         control.FrequencyResponseData
-            Planar: input ``torque``, the requested output (``theta`` or ``omega``). Three
-            axes: the exact 3x3 matrix, inputs ``torque_x/_y/_z``, outputs ``theta_x/_y/_z``
-            (or ``omega_x/_y/_z``), hub axes.
+            Planar: input ``torque``, the requested output(s) (``theta`` and/or ``omega``).
+            Three axes: the exact 3x3 matrix (6x3 for ``"both"``), inputs ``torque_x/_y/_z``,
+            outputs ``theta_x/_y/_z`` and/or ``omega_x/_y/_z``, hub axes.
         """
         import control
 
         omega = frequency_vector(omega)
-        if output not in ("theta", "omega"):
-            raise ValueError(f"output must be 'theta' or 'omega'; got {describe(output)}")
-        response = self.exact.attitude_compliance(omega)
-        if output == "omega":
-            response = response * (1j * omega)[:, None, None]
-        data = np.moveaxis(response, 0, -1)
-        if not self.three_axis:
-            return control.frd(data, omega, inputs=["torque"], outputs=[output])
-        return control.frd(data, omega, inputs=[f"torque_{a}" for a in _AXES],
-                           outputs=[f"{output}_{a}" for a in _AXES])
+        if output not in ("theta", "omega", "both"):
+            raise ValueError(f"output must be 'theta', 'omega' or 'both'; got {describe(output)}")
+        theta = self.exact.attitude_compliance(omega)
+        parts = {"theta": [("theta", theta)],
+                 "omega": [("omega", theta * (1j * omega)[:, None, None])]}
+        parts["both"] = parts["theta"] + parts["omega"]
+        data = np.moveaxis(np.concatenate([r for _, r in parts[output]], axis=1), 0, -1)
+        suffixes = [""] if not self.three_axis else [f"_{a}" for a in _AXES]
+        return control.frd(data, omega, inputs=[f"torque{x}" for x in suffixes],
+                           outputs=[f"{name}{x}" for name, _ in parts[output] for x in suffixes])
 
 
 def _closure(active: np.ndarray, coupled: np.ndarray) -> np.ndarray:

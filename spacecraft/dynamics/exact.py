@@ -179,7 +179,37 @@ class ExactReference:
         return Z
 
     def attitude_compliance(self, omega: np.ndarray) -> np.ndarray:
-        """theta/torque at s = i omega: shape ``omega.shape + (1, 1)`` planar, ``(3, 3)``.
+        r"""theta/torque at s = i omega: shape ``omega.shape + (1, 1)`` planar, ``(3, 3)``.
+
+        Derivation (three axes; the planar case is the same with h = (X, Y, theta), the
+        appendages' root motions (delta, phi) and their rigid axial motion). The hub's small
+        motion h = (u_G, theta) (centre of mass, rotation vector, hub axes) moves appendage i's
+        root by ``q_i = G_i h`` in the appendage's axes (``G_i = Mount.transformation()``,
+        :mod:`spacecraft.dynamics.kinematics`). The root loads F_i that the hub applies to the
+        appendage give ``q_i = W6_i(s) F_i``, so ``F_i = D6_i(s) G_i h`` with ``D6_i = W6_i^-1``,
+        and by virtual work (the power ``F_i . q_i' = (G_i^T F_i) . h'``) the appendage pushes
+        back on the hub with ``-G_i^T F_i``. The hub's equations under the generalised load Q
+        (forces at its centre of mass, torques) are then, in Laplace form from rest,
+
+            M_hub s**2 h = Q - sum_i G_i^T D6_i(s) G_i h,   i.e.   Z(s) h = Q,
+
+        with Z of the module docstring. The actuator torques tau act on the rotations,
+        ``Q = E tau`` with ``E = [0; I3]``, and the attitude is ``theta = E^T h``: the attitude
+        response is ``theta/tau = E^T Z(s)^-1 E``, the rotation block of Z^-1 (one linear
+        solve per frequency, all frequencies at once), and the rate response is ``s`` times it.
+
+        The rigid limit. A free appendage has no static stiffness at its root: its D6(s) =
+        ``s**2 M_rr + O(s**4)`` (M_rr its rigid mass matrix about the root), and each
+        appendage evaluates it without cancellation at small |s| (the beam's power series, the
+        modal sums of finite models). So every entry of Z carries the factor s**2,
+        ``Z(s) = s**2 (M_rigid + O(s**2))``, with M_rigid the whole spacecraft's rigid mass
+        matrix about the hub's centre of mass, positive definite: Z is s**2 times a matrix as
+        well conditioned as M_rigid, whatever |s|. The solve (LU with partial pivoting) is
+        invariant under that scalar, so the 1/s**2 of the rigid body comes out of it exactly,
+        ``theta/tau -> -J_c^-1 / omega**2`` (J_c the inertia about the spacecraft's centre of
+        mass, the Schur complement of the translations in M_rigid), with the flexible part
+        as a relative correction O(omega**2 / w_1**2) in full precision: no near-singular
+        matrix is inverted, as in the planar case, which takes the same path.
 
         Raises ValueError where the undamped spacecraft has a natural frequency.
         """
