@@ -72,6 +72,7 @@ def assert_same_margins(a, b, tol=1e-9):
     assert abs(a.delay_margin - b.delay_margin) <= tol * max(1.0, abs(a.delay_margin))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("delay", [0.0, 0.4])
 def test_multiloop_margins_of_the_loop_function_are_the_state_space_margins(delay):
     # the same definitions, one code: on the state-space loop's own grid the two are equal to
@@ -127,6 +128,7 @@ def test_loop_verdict_is_spillovers_verdict():
         assert_same_margins(expected.margins, found.margins)
 
 
+@pytest.mark.slow
 def test_a_destabilising_delay_is_found_as_spillover_finds_it():
     # the delay margin of the loop without delay: a delay a little below it keeps the loop
     # stable, a little above it destabilises it (two roots cross), in both verdicts

@@ -84,6 +84,7 @@ def test_craig_bampton_plants_converge_to_the_exact_response():
     assert errors[2] < 1e-6
 
 
+@pytest.mark.slow
 def test_a_modal_appendage_through_W6_is_its_state_space_plant():
     """A finite appendage two ways: its W6 in the exact response, its realisation in the
     plant; equal to the plant's rounding (1e-10 of the largest entry)."""
@@ -188,6 +189,7 @@ def controllers_of(plant):
             "unstable controller, unstable loop": with_unstable_pole(pd, 0.02, 0.2)}
 
 
+@pytest.mark.slow
 def test_the_exact_verdict_of_a_truncated_spacecraft_is_its_state_space_verdict(truncated):
     """Same stability, same number of unstable poles, every margin (loop-at-a-time gain,
     phase and modulus margins, disk margin and its gain and phase, smallest singular value,
@@ -302,9 +304,8 @@ def yaw_and_roll_pitch(planar_K, kp, kd):
                       outputs=[f"torque_{a}" for a in "xyz"])
 
 
-@pytest.mark.parametrize("case", ["pd",
-                                  pytest.param("roll-off, delayed", marks=pytest.mark.slow),
-                                  pytest.param("unstable yaw", marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("case", ["pd", "roll-off, delayed", "unstable yaw"])
 def test_a_spacecraft_whose_axes_decouple_gives_the_planar_exact_verdict(case):
     """The planar spacecraft's exact verdict is the limit of the three-axis one: with yaw
     decoupled, the yaw loop at a time is the planar loop, so its margins (gain, phase, modulus,
