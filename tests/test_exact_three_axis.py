@@ -365,3 +365,13 @@ def test_the_design_loop_gives_a_three_axis_loop_its_exact_verdict(truncated):
                 "disk_margin", "disk_phase_margin", "min_singular_value", "delay_margin"):
         assert exact[key] == pytest.approx(truth[key], rel=1e-9), key
     assert exact["delay"] == 0.05
+    # an unstable loop: no margin of its exact verdict counts (each flagged 'unstable')
+    K = with_unstable_pole(c.controller, 0.02, 0.2)
+    c = loop.closed_loops("design", "pd", models=("truth",), controller=K)
+    exact = c.row["exact_verdict"]
+    assert not exact["stable"] and not c.row["verdict"]["stable"]
+    assert exact["n_unstable_poles"] == c.row["verdict"]["n_unstable_poles"] > 0
+    margins = [k for k in exact if k.startswith(("gain_margin", "phase_margin", "modulus_margin",
+                                                  "disk_", "min_singular_value"))
+               and "frequency" not in k]
+    assert margins and all(exact["margin_flags"][k] == "unstable" for k in margins)
