@@ -371,17 +371,18 @@ DENSE_GRID = {"points_per_decade": 400, "points_per_mode": 96}
 def verify(context, values: dict, raw: dict, source: str) -> dict:
     """Check a worst case on the exact beams two ways.
 
-    ``exact_reference``: the sweep's own loop (the same controller) judged on the exact beams
-    through a grid four times as dense as a sample's (:data:`DENSE_GRID`, the design loop's
-    :meth:`~spacecraft.design.models.ModelBuilder.exact_grid`): the sweep's verdict does not
-    hang on its grid. ``runner``: the scene ``raw`` (``worst.toml``, the same controller
+    ``exact_reference``: the sweep's own loop (the same controller, the scene's loop delay)
+    judged on the exact beams through a grid four times as dense as a sample's
+    (:data:`DENSE_GRID`, the design loop's
+    :meth:`~spacecraft.design.models.ModelBuilder.exact_grid` and
+    :meth:`~spacecraft.design.models.ModelBuilder.exact_verdict`): the sweep's verdict does
+    not hang on its grid. ``runner``: the scene ``raw`` (``worst.toml``, the same controller
     given) run by :func:`spacecraft.design.loop.run`: what a user re-running it gets, its
     margins signed as the sweep's. Failures are recorded as ``error`` texts.
     """
     import warnings
 
     from ..design.loop import DesignLoop, run
-    from ..design.verdicts import exact_loop_verdict
     from ..scene.given import given_state_space
     from ..scene.read import load_scene
 
@@ -393,8 +394,7 @@ def verify(context, values: dict, raw: dict, source: str) -> dict:
         frd = loop.exact_reference_frd(**DENSE_GRID)
         with warnings.catch_warnings(), np.errstate(all="ignore"):
             warnings.simplefilter("ignore", RuntimeWarning)
-            out["exact_reference"] = _verdict(exact_loop_verdict(
-                loop.exact_spacecraft(), K, frd.omega, theta=np.asarray(frd.frdata)[0, 0]))
+            out["exact_reference"] = _verdict(loop.exact_verdict(K, frd))
     except (SceneError, ValueError, ArithmeticError) as exc:
         out["exact_reference"] = {"error": f"{type(exc).__name__}: {exc}"}
     try:
