@@ -40,9 +40,9 @@ from typing import Callable, Sequence
 
 import control
 import numpy as np
-import scipy.optimize
 
 from .delay import check_delay, total_delay
+from .refine import refine
 from .loop import LoopTransfer, close_loop, loop_frequency_response
 from .arguments import describe, frequency_grid
 from .signals import AXES, check_controller, check_pair, check_plant, is_digital
@@ -206,18 +206,13 @@ def zero_crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, val
     ``f`` maps an array of frequencies [rad/s] to real values; ``values = f(omega)`` on the
     increasing grid ``omega``. Returns the zeros found [rad/s], increasing.
 
-    Every sign-change bracket of the grid is refined at once by the Illinois variant of regula
-    falsi, one vectorised evaluation of f per iteration (with a bisection step when a bracket
-    fails to halve in three iterations), to |b - a| <= 1e-13 b. A sign change may also be a
-    pass through an undamped pole (f -> +-inf): the bracket then closes in on the pole, where f
-    is huge or not finite; such a point is no root and is dropped (|f| must fall below 1e-6
-    of its size at the bracket's ends); its refinement stops once |f| at both ends exceeds
-    1e3 times that size.
-
-    References
-    ----------
-    M. Dowell, P. Jarratt, "A modified regula falsi method for computing the root of an
-    equation", BIT 11, 1971 (the Illinois algorithm).
+    Every sign-change bracket of the grid is refined at once, one vectorised evaluation of f
+    at three points per bracket per iteration (safeguarded Newton steps with difference
+    quotients, :func:`controllers.refine.refine`), to |b - a| <= 1e-13 b. A sign change may
+    also be a pass through an undamped pole (f -> +-inf): the bracket then closes in on the
+    pole, where f is huge or not finite; such a point is no root and is dropped (|f| must fall
+    below 1e-6 of its size at the bracket's ends); its refinement stops once |f| at both ends
+    exceeds 1e3 times that size.
     """
     return _crossings_of_many(lambda x, owner: f(x), [(omega, values)])[0]
 
@@ -231,76 +226,26 @@ def _crossings_of_many(f: Callable[[np.ndarray, np.ndarray], np.ndarray],
     (the three loop-at-a-time functions of a three-axis loop come from one evaluation of
     L). Returns the zeros of each function, in the order of ``grids``.
     """
+    exact, brackets = _sign_changes(grids)
+    (root, found), _ = refine(f, roots=brackets)
+    owner = brackets[0]
+    return [np.concatenate([exact[j], root[found & (owner == j)]]) for j in range(len(grids))]
+
+
+def _sign_changes(grids: list[tuple[np.ndarray, np.ndarray]]) -> tuple[list, tuple]:
+    """Grid points where each function is 0, and the brackets of its sign changes (owner,
+    a, b, f(a), f(b)) for :func:`controllers.refine.refine`."""
     exact = [omega[values == 0] for omega, values in grids]
     brackets = []
     for j, (omega, values) in enumerate(grids):
         sign = np.sign(values)
         i = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
         brackets.append((np.full(i.size, j), omega[i], omega[i + 1], values[i], values[i + 1]))
+    if not brackets:
+        return exact, tuple(np.zeros(0) for _ in range(5))
     owner, a, b, fa, fb = (np.concatenate(parts) for parts in zip(*brackets))
-    if owner.size == 0:
-        return exact
-    a, b, fa, fb = a.astype(float), b.astype(float), fa.astype(float), fb.astype(float)
-    owner = owner.astype(int)
-    n = owner.size
-    ga, gb = fa.copy(), fb.copy()  # Illinois-scaled values used for the secant
-    scale = np.maximum(np.abs(fa), np.abs(fb))
-    last = np.zeros(n, dtype=int)  # -1: a moved last time, +1: b moved
-    width_before = np.full(n, np.inf)
-    suspect = np.zeros(n, dtype=bool)
-    active = np.ones(n, dtype=bool)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        for iteration in range(200):
-            active &= (b - a) > 1e-13 * b
-            k = np.nonzero(active)[0]
-            if k.size == 0:
-                break
-            mid = 0.5 * (a[k] + b[k])
-            x = (a[k] * gb[k] - b[k] * ga[k]) / (gb[k] - ga[k])
-            bisect = ~((x > a[k]) & (x < b[k]))
-            if iteration % 3 == 2:
-                bisect |= (b[k] - a[k]) > 0.5 * width_before[k]
-                width_before[k] = b[k] - a[k]
-            elif iteration == 0:
-                width_before[k] = b[k] - a[k]
-            bisect |= suspect[k]
-            x = np.where(bisect, mid, x)
-            fx = np.asarray(f(x, owner[k]), dtype=float)
-            bad = ~np.isfinite(fx)
-            if bad.any():  # on an undamped pole: step to the midpoint instead
-                x[bad] = mid[bad]
-                bisect = bisect | bad
-                fx[bad] = np.asarray(f(x[bad], owner[k][bad]), dtype=float)
-                lost = ~np.isfinite(fx)
-                active[k[lost]] = False
-                k, x, fx, bisect = k[~lost], x[~lost], fx[~lost], bisect[~lost]
-            zero = fx == 0
-            right = (np.sign(fx) == np.sign(fb[k])) & ~zero
-            left = ~right & ~zero
-            kr, kl, kz = k[right], k[left], k[zero]
-            # Illinois: the end kept twice in a row has its value halved (not after bisection)
-            ga[kr] = np.where((last[kr] == 1) & ~bisect[right], 0.5 * ga[kr], ga[kr])
-            b[kr], fb[kr], gb[kr], last[kr] = x[right], fx[right], fx[right], 1
-            gb[kl] = np.where((last[kl] == -1) & ~bisect[left], 0.5 * gb[kl], gb[kl])
-            a[kl], fa[kl], ga[kl], last[kl] = x[left], fx[left], fx[left], -1
-            # a bisection step restarts regula falsi from the true end values
-            kb = k[bisect]
-            ga[kb], gb[kb], last[kb] = fa[kb], fb[kb], 0
-            a[kz] = b[kz] = x[zero]
-            fa[kz] = fb[kz] = 0.0
-            active[kz] = False
-            # |f| inside above both starting ends: an undamped pole is likely in the bracket,
-            # where regula falsi creeps; bisect it from now on. Both ends 1e3 times larger than
-            # at the start: closing in on a pole, not a root.
-            suspect[kr] |= np.abs(fx[right]) > scale[kr]
-            suspect[kl] |= np.abs(fx[left]) > scale[kl]
-            active[k] &= np.minimum(np.abs(fa[k]), np.abs(fb[k])) <= 1e3 * scale[k]
-        root = np.where(np.abs(fa) <= np.abs(fb), a, b)
-        at_root = np.minimum(np.abs(fa), np.abs(fb))
-        keep = np.isfinite(at_root) & (at_root <= 1e-6 * scale)
-    return [np.concatenate([exact[j], root[keep & (owner == j)]]) for j in range(len(grids))]
-
-
+    return exact, (owner.astype(int), a.astype(float), b.astype(float), fa.astype(float),
+                   fb.astype(float))
 
 
 @limits_blas_threads(total_states)
@@ -549,9 +494,10 @@ def _largest_singular_values(A: np.ndarray) -> np.ndarray:
 
 def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
                       ) -> tuple[float, float]:
-    """Grid extremum of f refined between the grid neighbours (bounded scalar search in
-    log omega). ``values`` (to 1e-6 relative) only locate it: f itself gives the values at
-    the grid points within 1e-6 of the extremum, and the best of them is refined."""
+    """Grid extremum of f refined between the grid neighbours
+    (:func:`controllers.refine.refine`). ``values`` (to 1e-6 relative) only locate it: f itself
+    gives the values at the grid points within 1e-6 of the extremum, and the best of them is
+    refined."""
     sign = -1.0 if maximum else 1.0
     i = int(np.argmin(sign * values))
     near = np.flatnonzero(sign * values <= sign * values[i] + 1e-6 * abs(values[i]))
@@ -559,12 +505,12 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
     i = int(near[np.argmin(sign * exact)])
     best, w_best = float(exact[near == i][0]), float(omega[i])
     if 0 < i < omega.size - 1:
-        res = scipy.optimize.minimize_scalar(
-            lambda lw: sign * float(f(np.array([math.exp(lw)]))[0]),
-            bounds=(math.log(omega[i - 1]), math.log(omega[i + 1])), method="bounded",
-            options={"xatol": 1e-12})
-        if res.fun < sign * best:  # both in the minimised sign
-            best, w_best = float(sign * res.fun), float(math.exp(res.x))
+        _, (x, fx) = refine(lambda w, task: sign * np.asarray(f(w), dtype=float),
+                            minima=([0], [omega[i - 1]], [omega[i]], [omega[i + 1]],
+                                    [sign * values[i - 1]], [sign * best],
+                                    [sign * values[i + 1]]))
+        if sign * fx[0] != best or x[0] != w_best:
+            best, w_best = float(sign * fx[0]), float(x[0])
     return best, w_best
 
 
@@ -573,11 +519,11 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
     """Gain, phase and modulus margins of a scalar loop function, found on the function itself.
 
     The grid only brackets them: every crossing of |L| = 1 and of the negative real axis is
-    refined on ``loop`` to 1e-13 relative in frequency (regula falsi, :func:`zero_crossings`), the
-    minimum of |1 + L| by a bounded scalar search between the grid neighbours of its grid
-    minimum; the margins are the values of ``loop`` there. A loop known exactly (the exact
-    distributed beam's response through W(s)) gives its margins to the accuracy of its
-    evaluation, not of a grid.
+    refined on ``loop`` to 1e-13 relative in frequency (:func:`zero_crossings`), the
+    minimum of |1 + L| between the grid neighbours of its grid minimum, all together
+    (:func:`controllers.refine.refine`); the margins are the values of ``loop`` there. A loop
+    known exactly (the exact distributed beam's response through W(s)) gives its margins to
+    the accuracy of its evaluation, not of a grid.
 
     Parameters
     ----------
@@ -654,23 +600,41 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         return [values[owner == j] for j in range(len(roots))]
 
     def crossing(w: np.ndarray, owner: np.ndarray) -> np.ndarray:
-        """Im L_j for owner j < m, log|L_j| for owner m + j: one evaluation of the loop per
-        step refines the phase and the gain crossovers together."""
+        """Im L_j for owner j < m, log|L_j| for owner m + j, |1 + L_j| for owner 2 m + j: one
+        evaluation of the loop per step refines the phase and the gain crossovers and the
+        minima of |1 + L| together."""
         values = evaluate(w, owner % m)
-        with np.errstate(divide="ignore"):
-            return np.where(owner < m, values.imag, np.log(np.abs(values)))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(owner < m, values.imag,
+                            np.where(owner < 2 * m, np.log(np.abs(values)),
+                                     np.abs(1.0 + values)))
 
     # phase crossovers: L real and negative (Im L changes sign where Re L < 0). Crossings where
     # |L| < 1e-9 (a gain margin above 180 dB) are round-off in Im L, not a margin.
     # gain crossovers: |L| = 1
     with np.errstate(divide="ignore"):
-        roots = _crossings_of_many(crossing, [(w, row.imag) for w, row in grids]
-                                   + [(w, np.log(np.abs(row))) for w, row in grids])
+        exact, brackets = _sign_changes([(w, row.imag) for w, row in grids]
+                                        + [(w, np.log(np.abs(row))) for w, row in grids])
+    # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
+    grid_minima, minima = [], []
+    for j, (w_grid, row) in enumerate(grids):
+        dist = np.abs(1.0 + row)
+        i = int(np.argmin(dist))
+        grid_minima.append((float(dist[i]), float(w_grid[i])))
+        if 0 < i < w_grid.size - 1:
+            minima.append((2 * m + j, w_grid[i - 1], w_grid[i], w_grid[i + 1], dist[i - 1],
+                           dist[i], dist[i + 1]))
+    (root, found), (w_min, dist_min) = refine(
+        crossing, roots=brackets,
+        minima=tuple(np.array(v) for v in zip(*minima)) if minima else None)
+    owner = brackets[0]
+    roots = [np.concatenate([exact[j], root[found & (owner == j)]]) for j in range(2 * m)]
+    refined = dict(zip((task - 2 * m for task, *_ in minima), zip(dist_min, w_min)))
     phase_roots, gain_roots = roots[:m], roots[m:]
     values = values_at(roots)
     L_phase, L_gain = values[:m], values[m:]
     out = []
-    for j, (w_grid, row) in enumerate(grids):
+    for j in range(m):
         gain_margin, w_pc = math.inf, math.inf
         for w, Lw in zip(phase_roots[j], L_phase[j]):
             if Lw.real < 0 and abs(Lw) > 1e-9:
@@ -686,18 +650,9 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
             pm = pm - 360.0 if pm > 180.0 else pm
             if abs(pm) < abs(phase_margin):
                 phase_margin, w_gc = pm, float(w)
-        # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
-        dist = np.abs(1.0 + row)
-        i = int(np.argmin(dist))
-        mm, w_mm = float(dist[i]), float(w_grid[i])
-        if 0 < i < w_grid.size - 1:
-            owner = np.array([j])
-            res = scipy.optimize.minimize_scalar(
-                lambda lw: abs(1.0 + complex(evaluate(np.array([math.exp(lw)]), owner)[0])),
-                bounds=(math.log(w_grid[i - 1]), math.log(w_grid[i + 1])), method="bounded",
-                options={"xatol": 1e-12})
-            if res.fun < mm:
-                mm, w_mm = float(res.fun), float(math.exp(res.x))
+        mm, w_mm = grid_minima[j]
+        if j in refined and refined[j][0] < mm:
+            mm, w_mm = float(refined[j][0]), float(refined[j][1])
         out.append(Margins(float(gain_margin), float(phase_margin), mm, float(w_gc), float(w_pc),
                            w_mm, float(delay), float(delay_margin)))
     return out

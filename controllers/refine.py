@@ -1,0 +1,298 @@
+"""Roots and minima of many real functions refined together, few evaluations each.
+
+The margins of a loop are found on the loop function itself (:mod:`controllers.margins`): the
+crossings of |L| = 1 and of the negative real axis are roots, the modulus margin and the
+extrema of singular values are minima, each bracketed on a frequency grid. Evaluating the loop
+costs much more per call than per point (the exact distributed beam's W(s): a fixed cost of
+about a hundred points per call), so :func:`refine` refines every bracket of every function at
+once, each iteration one vectorised call at three points per bracket, and converges in a few
+iterations:
+
+- a root: while many brackets are left (more than 16: a three-axis loop's hundreds, whose
+  points cost more than the calls), each gets one probe, the Illinois step of regula falsi
+  (M. Dowell, P. Jarratt, BIT 11, 1971); once few are left, the bracket [a, b]
+  (f(a) f(b) < 0) is probed at c - h, c, c + h inside it; it shrinks
+  to the sign change nearest c among the five points; the next centre c is the Newton step from
+  the middle point with the slope of the outer two (a regula falsi step, or bisection, where
+  Newton leaves the bracket, stalls, or nears a pole), the next h half that step, so that the
+  three points straddle the root once Newton converges (quadratically): the bracket then
+  collapses to about the step's size. It ends at |b - a| <= ROOT_TOLERANCE b. A sign change
+  may also be a pass through an undamped pole (f -> +-inf): the bracket then closes in on the
+  pole, where f is huge or not finite; such a point is no root and is dropped (|f| must fall
+  below 1e-6 of its size at the bracket's ends); its refinement stops once |f| at both ends
+  exceeds 1e3 times that size.
+- a minimum: the bracket [lo, hi] around the best point x is probed at c - h, c, c + h; the
+  best point and the nearest probed points around it become the new bracket; the next centre
+  is the vertex of the parabola through the three probes (successive parabolic interpolation,
+  Newton's step on f' with f' and f'' from the same points; a ternary step where the parabola
+  does not open upwards or leaves the bracket), h at least 1e-4 of the initial half-width
+  (below it f'' drowns in round-off). It ends when the best point is the probed centre and the
+  next vertex lies within 1e-2 of that floor of it, so that f there is within about
+  f'' (1e-6 width)^2 of the minimum, or when hi - lo <= MINIMUM_TOLERANCE x.
+
+References
+----------
+J. F. Traub, Iterative Methods for the Solution of Equations, Prentice-Hall 1964 (Newton's
+method with difference quotients); R. P. Brent, Algorithms for Minimization without
+Derivatives, Prentice-Hall 1973, ch. 5 (successive parabolic interpolation, safeguarded by a
+bracket).
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+__all__ = ["ROOT_TOLERANCE", "MINIMUM_TOLERANCE", "refine"]
+
+#: Relative width |b - a| / b to which a root's bracket is refined.
+ROOT_TOLERANCE = 1e-13
+#: Relative width (hi - lo) / x at which a minimum's bracket is taken as converged.
+MINIMUM_TOLERANCE = 1e-12
+# iterations at most (every iteration at least halves a root's bracket)
+_MAX_ITERATIONS = 100
+# probes are kept this fraction of the bracket's width inside it
+_INSIDE = 1e-3
+# the floor of a minimum's probe spacing, relative to its initial half-width
+_MINIMUM_SPACING = 1e-4
+# the probes' offsets from their centre, in units of their spacing
+_OFFSETS = np.array([-1.0, 0.0, 1.0])
+# root brackets are probed three at a time once at most this many are left: until then one
+# probe each (the Illinois step), when the points rather than the calls cost
+_FEW = 16
+
+
+def _illinois_points(k, a, b, ga, gb, checked, suspect, iteration):
+    """The Illinois probe of each root bracket ``k`` (regula falsi on the scaled end values,
+    bisection where it leaves the bracket, a bracket fails to halve in three iterations, or a
+    pole is suspected): (points (n, 1), bisected)."""
+    mid = 0.5 * (a[k] + b[k])
+    x = (a[k] * gb[k] - b[k] * ga[k]) / (gb[k] - ga[k])
+    bisect = ~((x > a[k]) & (x < b[k]))
+    if iteration % 3 == 2:
+        bisect |= (b[k] - a[k]) > 0.5 * checked[k]
+        checked[k] = b[k] - a[k]
+    bisect |= suspect[k]
+    return np.where(bisect, mid, x)[:, None], bisect
+
+
+def _illinois_step(k, x, fx, bisect, a, b, fa, fb, ga, gb, last, scale, suspect, active):
+    """One Illinois iteration of the root brackets ``k`` probed at ``x`` (values ``fx``), in
+    place (M. Dowell, P. Jarratt, "A modified regula falsi method for computing the root of an
+    equation", BIT 11, 1971)."""
+    bad = ~np.isfinite(fx)
+    suspect[k[bad]] = True   # on an undamped pole: bisect from now on
+    keep = ~bad
+    k, x, fx, bisect = k[keep], x[keep], fx[keep], bisect[keep]
+    zero = fx == 0
+    right = (np.sign(fx) == np.sign(fb[k])) & ~zero
+    left = ~right & ~zero
+    kr, kl, kz = k[right], k[left], k[zero]
+    # the end kept twice in a row has its value halved (not after bisection)
+    ga[kr] = np.where((last[kr] == 1) & ~bisect[right], 0.5 * ga[kr], ga[kr])
+    b[kr], fb[kr], gb[kr], last[kr] = x[right], fx[right], fx[right], 1
+    gb[kl] = np.where((last[kl] == -1) & ~bisect[left], 0.5 * gb[kl], gb[kl])
+    a[kl], fa[kl], ga[kl], last[kl] = x[left], fx[left], fx[left], -1
+    # a bisection step restarts regula falsi from the true end values
+    kb = k[bisect]
+    ga[kb], gb[kb], last[kb] = fa[kb], fb[kb], 0
+    a[kz] = b[kz] = x[zero]
+    fa[kz] = fb[kz] = 0.0
+    active[kz] = False
+    # |f| inside above both starting ends: an undamped pole is likely in the bracket
+    suspect[kr] |= np.abs(fx[right]) > scale[kr]
+    suspect[kl] |= np.abs(fx[left]) > scale[kl]
+    active[k] &= ((b[k] - a[k]) > ROOT_TOLERANCE * b[k]) & (
+        np.minimum(np.abs(fa[k]), np.abs(fb[k])) <= 1e3 * scale[k])
+
+
+def _forward_fill(x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rows of points (n, k) with a non-finite value replaced by their left neighbour (point
+    and value): column 0 must be finite."""
+    x, f = x.copy(), f.copy()
+    for j in range(1, x.shape[1]):
+        bad = ~np.isfinite(f[:, j])
+        x[bad, j] = x[bad, j - 1]
+        f[bad, j] = f[bad, j - 1]
+    return x, f
+
+
+def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
+           roots: tuple | None = None, minima: tuple | None = None
+           ) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """Refine root brackets and minimum brackets of many functions together.
+
+    Parameters
+    ----------
+    evaluate : callable
+        ``evaluate(x, task)`` -> real values: function ``task[k]`` at ``x[k]`` (1-D arrays of
+        the same size); one call per iteration serves every bracket. Non-finite values are
+        allowed (a point on a pole): they carry no information.
+    roots : (task, a, b, fa, fb), optional
+        Root brackets: arrays of the function index, the ends a < b and the values there,
+        fa fb < 0 (finite).
+    minima : (task, lo, x, hi, flo, fx, fhi), optional
+        Minimum brackets: arrays of the function index, the ends lo < x < hi and the values
+        there, fx the least (the function is taken as unimodal in [lo, hi]; flo and fhi only
+        place the first probes, they may be approximate).
+
+    Returns
+    -------
+    (root, found), (x, fx)
+        Per root bracket: the root (the end of the final bracket with the smaller |f|) and
+        whether it is one (False: the bracket closed in on a pole); per minimum bracket: the
+        best point and its value (never worse than the given one).
+    """
+    empty = np.zeros(0)
+    rt, a, b, fa, fb = ((np.asarray(v) for v in roots) if roots is not None
+                        else (np.zeros(0, dtype=int), empty, empty, empty, empty))
+    mt, lo, xm, hi, flo, fm, fhi = ((np.asarray(v) for v in minima) if minima is not None
+                                    else (np.zeros(0, dtype=int),) + (empty,) * 6)
+    a, b, fa, fb = (np.array(v, dtype=float) for v in (a, b, fa, fb))
+    lo, xm, hi, flo, fm, fhi = (np.array(v, dtype=float) for v in (lo, xm, hi, flo, fm, fhi))
+    rt, mt = np.asarray(rt, dtype=int), np.asarray(mt, dtype=int)
+    nr = a.size
+
+    with np.errstate(all="ignore"):
+        scale = np.maximum(np.abs(fa), np.abs(fb))
+        r_active = (b - a) > ROOT_TOLERANCE * b
+        # roots, many brackets: the Illinois state (scaled end values, the end moved last,
+        # the width at the last halving check, a pole suspected)
+        ga, gb = fa.copy(), fb.copy()
+        last = np.zeros(nr, dtype=int)
+        checked = b - a
+        suspect = np.zeros(nr, dtype=bool)
+        # roots, few brackets: the centre and spacing of the three probes
+        c, h = np.zeros(nr), np.zeros(nr)
+        newton = False
+        # minima: the first centre at the vertex of the parabola through the bracket (at x if
+        # it has none inside), the spacing's floor from the bracket
+        d0, d1 = (fm - flo) / (xm - lo), (fhi - fm) / (hi - xm)
+        curvature = (d1 - d0) / (hi - lo)
+        vertex = 0.5 * (lo + xm) - 0.5 * d0 / curvature
+        inside = np.isfinite(vertex) & (curvature > 0) & (vertex > lo) & (vertex < hi)
+        cm = np.where(inside, vertex, xm)
+        hm = np.where(inside, np.abs(vertex - xm), 0.25 * np.minimum(xm - lo, hi - xm))
+        hm = np.minimum(hm, 0.5 * np.minimum(cm - lo, hi - cm))
+        floor = np.maximum(_MINIMUM_SPACING * 0.5 * (hi - lo), 0.5 * MINIMUM_TOLERANCE * xm)
+        m_active = (hi - lo) > MINIMUM_TOLERANCE * xm
+
+        for iteration in range(_MAX_ITERATIONS):
+            kr, km = np.nonzero(r_active)[0], np.nonzero(m_active)[0]
+            if kr.size == 0 and km.size == 0:
+                break
+            if not newton and kr.size <= _FEW:
+                # from now on three probes per bracket, starting from regula falsi
+                newton = True
+                c = (a * fb - b * fa) / (fb - fa)
+                c = np.where((c > a) & (c < b), c, 0.5 * (a + b))
+                h = 0.25 * (b - a)
+                checked = b - a
+            wm = hi[km] - lo[km]
+            pm = np.clip(cm[km, None] + hm[km, None] * _OFFSETS,
+                         (lo[km] + _INSIDE * wm)[:, None], (hi[km] - _INSIDE * wm)[:, None])
+            if newton:
+                # three probes per bracket, kept inside it (clipping keeps them in order)
+                wr = b[kr] - a[kr]
+                pr = np.clip(c[kr, None] + h[kr, None] * _OFFSETS,
+                             (a[kr] + _INSIDE * wr)[:, None], (b[kr] - _INSIDE * wr)[:, None])
+            else:
+                pr, bisect = _illinois_points(kr, a, b, ga, gb, checked, suspect, iteration)
+            per = pr.shape[1]
+            values = np.asarray(evaluate(np.concatenate([pr.ravel(), pm.ravel()]),
+                                         np.concatenate([np.repeat(rt[kr], per),
+                                                         np.repeat(mt[km], 3)])), dtype=float)
+            fr = values[:per * kr.size].reshape(-1, per)
+            fmp = values[per * kr.size:].reshape(-1, 3)
+            if kr.size and newton:
+                _root_step(kr, pr, fr, a, b, fa, fb, c, h, scale, checked, r_active,
+                           iteration)
+            elif kr.size:
+                _illinois_step(kr, pr[:, 0], fr[:, 0], bisect, a, b, fa, fb, ga, gb, last,
+                               scale, suspect, r_active)
+            if km.size:
+                _minimum_step(km, pm, fmp, lo, xm, hi, fm, cm, hm, floor, m_active)
+
+        found = np.where(np.abs(fa) <= np.abs(fb), a, b)
+        at_root = np.minimum(np.abs(fa), np.abs(fb))
+        ok = np.isfinite(at_root) & (at_root <= 1e-6 * scale)
+    return (found, ok), (xm, fm)
+
+
+def _root_step(k, p, fp, a, b, fa, fb, c, h, scale, checked, active, iteration) -> None:
+    """One iteration of the root brackets ``k`` probed at ``p`` (values ``fp``), in place."""
+    exact = np.isfinite(fp) & (fp == 0.0)
+    hit = exact.any(axis=1)
+    # the bracket: the sign change among a, p0, p1, p2, b nearest the centre
+    xs, fs = _forward_fill(np.column_stack([a[k], p, b[k]]),
+                           np.column_stack([fa[k], fp, fb[k]]))
+    change = np.sign(fs[:, :-1]) * np.sign(fs[:, 1:]) < 0
+    middle = 0.5 * (xs[:, :-1] + xs[:, 1:])
+    j = np.argmin(np.where(change, np.abs(middle - c[k, None]), np.inf), axis=1)
+    rows = np.arange(k.size)
+    na, nb = xs[rows, j], xs[rows, j + 1]
+    nfa, nfb = fs[rows, j], fs[rows, j + 1]
+    # a probe exactly on the root ends its bracket there
+    if hit.any():
+        at = p[rows, np.argmax(exact, axis=1)]
+        na, nb = np.where(hit, at, na), np.where(hit, at, nb)
+        nfa, nfb = np.where(hit, 0.0, nfa), np.where(hit, 0.0, nfb)
+    a[k], b[k], fa[k], fb[k] = na, nb, nfa, nfb
+    width = nb - na
+    # Newton from the middle probe, the slope from the outer two
+    slope = (fp[:, 2] - fp[:, 0]) / (p[:, 2] - p[:, 0])
+    step = -fp[:, 1] / slope
+    newton = p[:, 1] + step
+    good = (np.isfinite(newton) & (newton > na) & (newton < nb)
+            & (np.abs(fp[:, 1]) <= scale[k]))
+    secant = (na * nfb - nb * nfa) / (nfb - nfa)
+    secant = np.where((secant > na) & (secant < nb), secant, 0.5 * (na + nb))
+    # a bracket that fails to halve in two iterations is bisected (a pole, a flat stretch)
+    stalled = np.zeros(k.size, dtype=bool)
+    if iteration % 2 == 1:
+        stalled = width > 0.5 * checked[k]
+        checked[k] = width
+    centre = np.where(good, newton, secant)
+    centre = np.where(stalled, 0.5 * (na + nb), centre)
+    spacing = np.where(good & ~stalled, np.maximum(0.5 * np.abs(step), 0.3 * ROOT_TOLERANCE * nb),
+                       0.25 * width)
+    c[k], h[k] = centre, np.minimum(spacing, 0.5 * width)
+    active[k] = (~hit & (width > ROOT_TOLERANCE * nb)
+                 & (np.minimum(np.abs(nfa), np.abs(nfb)) <= 1e3 * scale[k]))
+
+
+def _minimum_step(k, p, fp, lo, x, hi, fx, c, h, floor, active) -> None:
+    """One iteration of the minimum brackets ``k`` probed at ``p`` (values ``fp``), in place."""
+    rows = np.arange(k.size)
+    values = np.where(np.isfinite(fp), fp, np.inf)
+    points = np.column_stack([x[k], p])
+    candidates = np.column_stack([fx[k], values])
+    i = np.argmin(candidates, axis=1)          # ties keep the known best
+    best, fbest = points[rows, i], candidates[rows, i]
+    # the new bracket: the nearest points on either side of the best
+    everything = np.column_stack([lo[k], hi[k], points])
+    below = np.where(everything < best[:, None], everything, -np.inf).max(axis=1)
+    above = np.where(everything > best[:, None], everything, np.inf).min(axis=1)
+    nlo = np.where(np.isfinite(below), below, lo[k])
+    nhi = np.where(np.isfinite(above), above, hi[k])
+    # the vertex of the parabola through the probes (Newton on f' with f', f'' from them)
+    p0, p1, p2 = p[:, 0], p[:, 1], p[:, 2]
+    f0, f1, f2 = fp[:, 0], fp[:, 1], fp[:, 2]
+    d01, d12 = (f1 - f0) / (p1 - p0), (f2 - f1) / (p2 - p1)
+    curvature = (d12 - d01) / (p2 - p0)
+    vertex = 0.5 * (p0 + p1) - 0.5 * d01 / curvature
+    good = (np.isfinite(vertex) & np.isfinite(curvature) & (curvature > 0)
+            & (vertex > nlo) & (vertex < nhi))
+    step = np.abs(vertex - p1)
+    # converged: the parabola through probes a local spacing apart predicts no value below
+    # the best beyond round-off (the value is what is wanted), or the vertex is the best probe
+    predicted = f0 + d01 * (vertex - p0) + curvature * (vertex - p0) * (vertex - p1)
+    local = h[k] <= 10.0 * floor[k]
+    converged = good & ((local & (fbest - predicted <= 4e-16 * np.abs(fbest)))
+                        | ((i == 2) & (step <= 1e-2 * floor[k])))
+    centre = np.where(good, vertex, best)
+    spacing = np.where(good, np.maximum(step, floor[k]), 0.25 * (nhi - nlo))
+    lo[k], hi[k], x[k], fx[k] = nlo, nhi, best, fbest
+    c[k] = centre
+    h[k] = np.minimum(spacing, 0.5 * (nhi - nlo))
+    active[k] = ~converged & ((nhi - nlo) > MINIMUM_TOLERANCE * best)
