@@ -1,6 +1,6 @@
 """The exact three-axis frequency response through W6 and the exact-beam verdict of a
 three-axis loop (spacecraft.dynamics.exact, spacecraft.design.verdicts.exact_loop_verdict,
-spacecraft.design.models.exact_grid).
+spacecraft.design.exact_grid).
 
 References: the state-space plant of the same spacecraft with every appendage truncated to
 Craig-Bampton modes (an independent route: assembled mass and stiffness matrices, their modes,

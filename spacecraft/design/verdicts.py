@@ -248,9 +248,9 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: floa
       (:func:`controllers.margins.loop_nyquist_count`). Three axes: also the lightly damped
       roots that the loop-at-a-time functions have and L has not (the poles of the loop with
       one axis open, which are no open-loop modes) and the zeros of each axis' loop, taken
-      from the loop on the finite ``locating`` spacecraft, which has the exact one's modes to
-      ~1e-7 below the grid's top: the grid of :func:`controllers.margins` on a state-space
-      plant resolves the same roots;
+      from the loop on the finite ``locating`` spacecraft, which has the exact one's modes
+      below the grid's top to a small fraction of their half-power bands: the grid of
+      :func:`controllers.margins` on a state-space plant resolves the same roots;
     - the margins found on L, evaluated through W (W6) wherever asked: the grid only brackets
       the crossings of |L| = 1 and of the negative real axis (three axes: of each
       loop-at-a-time L_i = 1/S_ii - 1) and the extrema of |1 + L| and of the singular values,
@@ -279,7 +279,7 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: floa
         the margins as :func:`controllers.spillover` takes it.
     locating : spacecraft.Spacecraft, optional
         Three axes: the finite spacecraft whose loop locates the exact loop's resonances
-        (:func:`spacecraft.design.models.locating_spacecraft` up to the grid's top, built here
+        (:func:`spacecraft.design.exact_grid.locating_spacecraft` up to the grid's top, built here
         if not given). Unused for a planar loop, whose L has only the plant's and the
         controller's poles and zeros.
 
