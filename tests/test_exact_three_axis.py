@@ -235,6 +235,8 @@ def test_the_given_response_is_used_and_a_digital_or_planar_controller_refused(t
     a = exact_loop_verdict(sc, K, grid)
     b = exact_loop_verdict(sc, K, grid[::-1], theta=theta[::-1])
     assert a.margins.as_dict() == b.margins.as_dict()
+    with pytest.raises(ValueError, match=r"theta must be .*\(\d+, 3, 3\); got .*shape"):
+        exact_loop_verdict(sc, K, grid, theta=theta[:, 0, 0])
     digital = controllers.pd(plant, natural_frequency=0.5, damping=0.7, sample_time=0.1)
     with pytest.raises(ValueError, match="continuous controller"):
         exact_loop_verdict(sc, digital, grid)

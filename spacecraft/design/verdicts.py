@@ -311,7 +311,14 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: floa
     if theta is None:
         P = _exact_compliance(spacecraft, omega)
     else:
-        P = np.asarray(theta, dtype=complex).reshape((-1, m, m))[order]
+        P = np.asarray(theta)
+        shapes = [(omega.size, m, m)] + ([(omega.size,)] if m == 1 else [])
+        if P.shape not in shapes or P.dtype.kind not in "fc":
+            raise ValueError(f"theta must be the exact attitude response on the {omega.size} "
+                             f"frequencies of omega [rad/(N m)], shape "
+                             f"{' or '.join(str(x) for x in shapes)}; got {P.dtype} of shape "
+                             f"{P.shape}")
+        P = P.astype(complex).reshape((-1, m, m))[order]
     gains = _measurement_gains(controller, ch)
     # the exact grid and the controller's lightly damped roots inside it (P evaluated at the
     # points added: a controller's root may sit on a lightly damped mode, between whose grid
