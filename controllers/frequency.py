@@ -11,6 +11,7 @@ below CHUNK_BYTES whatever the number of frequencies and modes.
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Sequence
 
 import control
@@ -260,12 +261,39 @@ def modal_evaluator(system, inputs: Sequence[str], outputs: Sequence[str]) -> Mo
     -------
     ModalEvaluator
         ``ev(s)`` has shape ``(len(s), len(outputs), len(inputs))``.
+
+    Notes
+    -----
+    The evaluator of a system is kept while the system lives and given again for the same
+    block of the same matrices (compared entry by entry, so a system changed in place gets a
+    new one): a controller judged on many plants (a sweep's nominal controller, one per
+    sample) is decomposed once.
     """
+    inputs, outputs = tuple(inputs), tuple(outputs)
     i_in = [list(system.input_labels).index(n) for n in inputs]
     i_out = [list(system.output_labels).index(n) for n in outputs]
-    return ModalEvaluator(system.A, system.B[:, i_in], system.C[i_out, :],
-                          system.D[np.ix_(i_out, i_in)],
-                          center=1.0 if system.isdtime(strict=True) else 0.0)
+    matrices = (np.asarray(system.A, dtype=float), np.asarray(system.B, dtype=float)[:, i_in],
+                np.asarray(system.C, dtype=float)[i_out, :],
+                np.asarray(system.D, dtype=float)[np.ix_(i_out, i_in)])
+    center = 1.0 if system.isdtime(strict=True) else 0.0
+    try:
+        kept = _EVALUATORS.setdefault(system, {})
+    except TypeError:  # a system that cannot be weakly referenced: no reuse
+        kept = {}
+    key = (inputs, outputs, center)
+    if key in kept:
+        known, ev = kept[key]
+        if all(np.array_equal(a, b) for a, b in zip(known, matrices)):
+            return ev
+    ev = ModalEvaluator(*matrices, center=center)
+    if len(kept) < _KEPT_BLOCKS:
+        kept[key] = (tuple(m.copy() for m in matrices), ev)
+    return ev
+
+
+# a system's evaluators by block, while the system lives (modal_evaluator)
+_EVALUATORS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_KEPT_BLOCKS = 8
 
 
 def siso_zeros(A, b, c, d) -> np.ndarray:

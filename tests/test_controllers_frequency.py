@@ -194,3 +194,22 @@ def test_real_schur_riccati_equals_complex_and_eigenvalue_parser():
     got = np.sort_complex(_quasi_triangular_eigenvalues(T))
     np.testing.assert_allclose(got, np.sort_complex(np.linalg.eigvals(T)), rtol=0,
                                atol=1e-12 * np.abs(got).max())
+
+
+def test_a_systems_evaluator_is_reused_until_the_system_changes():
+    """modal_evaluator gives the evaluator it built for the same block of the same system again
+    (a sweep's nominal controller is decomposed once, not once per sample), a new one for
+    another block or after the system's matrices changed in place, and the same response
+    either way (bit for bit: the same computation)."""
+    plant = _many_modes(5)
+    s = 1j * np.geomspace(0.1, 100.0, 50)
+    first = modal_evaluator(plant, ["torque"], ["theta"])
+    assert modal_evaluator(plant, ["torque"], ["theta"]) is first
+    assert modal_evaluator(plant, ["torque"], ["omega"]) is not first
+    before = first(s)
+    plant.A[3, 2] *= 2.25   # the first mode 1.5 times as fast, in place
+    changed = modal_evaluator(plant, ["torque"], ["theta"])
+    assert changed is not first
+    np.testing.assert_array_equal(changed(s), ModalEvaluator(plant.A, plant.B[:, [0]],
+                                                             plant.C[[0]], plant.D[[0]][:, [0]])(s))
+    assert not np.allclose(changed(s), before, rtol=1e-2)
