@@ -106,6 +106,14 @@ def _illinois_step(k, x, fx, bisect, a, b, fa, fb, ga, gb, last, scale, suspect,
         np.minimum(np.abs(fa[k]), np.abs(fb[k])) <= 1e3 * scale[k])
 
 
+def _probes(centre, spacing, lo, hi) -> np.ndarray:
+    """Three probes (n, 3) at centre - spacing, centre, centre + spacing, each kept a fraction
+    _INSIDE of the width inside [lo, hi] (which keeps them in order)."""
+    inside = _INSIDE * (hi - lo)
+    return np.minimum(np.maximum(centre[:, None] + spacing[:, None] * _OFFSETS,
+                                 (lo + inside)[:, None]), (hi - inside)[:, None])
+
+
 def _forward_fill(x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Rows of points (n, k) with a non-finite value replaced by their left neighbour (point
     and value): column 0 must be finite."""
@@ -188,14 +196,9 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
                 c = np.where((c > a) & (c < b), c, 0.5 * (a + b))
                 h = 0.25 * (b - a)
                 checked = b - a
-            wm = hi[km] - lo[km]
-            pm = np.clip(cm[km, None] + hm[km, None] * _OFFSETS,
-                         (lo[km] + _INSIDE * wm)[:, None], (hi[km] - _INSIDE * wm)[:, None])
+            pm = _probes(cm[km], hm[km], lo[km], hi[km])
             if newton:
-                # three probes per bracket, kept inside it (clipping keeps them in order)
-                wr = b[kr] - a[kr]
-                pr = np.clip(c[kr, None] + h[kr, None] * _OFFSETS,
-                             (a[kr] + _INSIDE * wr)[:, None], (b[kr] - _INSIDE * wr)[:, None])
+                pr = _probes(c[kr], h[kr], a[kr], b[kr])
             else:
                 pr, bisect = _illinois_points(kr, a, b, ga, gb, checked, suspect, iteration)
             per = pr.shape[1]
@@ -219,20 +222,30 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
     return (found, ok), (xm, fm)
 
 
+# the pairs (a, p0), (p0, p1), (p1, p2), (p2, b) in the order a bracket prefers them: those
+# beside the centre probe p1 first
+_PAIR_PRIORITY = np.array([1, 0, 0, 1])
+
+
 def _root_step(k, p, fp, a, b, fa, fb, c, h, scale, checked, active, iteration) -> None:
     """One iteration of the root brackets ``k`` probed at ``p`` (values ``fp``), in place."""
-    exact = np.isfinite(fp) & (fp == 0.0)
-    hit = exact.any(axis=1)
-    # the bracket: the sign change among a, p0, p1, p2, b nearest the centre
-    xs, fs = _forward_fill(np.column_stack([a[k], p, b[k]]),
-                           np.column_stack([fa[k], fp, fb[k]]))
-    change = np.sign(fs[:, :-1]) * np.sign(fs[:, 1:]) < 0
-    middle = 0.5 * (xs[:, :-1] + xs[:, 1:])
-    j = np.argmin(np.where(change, np.abs(middle - c[k, None]), np.inf), axis=1)
-    rows = np.arange(k.size)
+    n = k.size
+    rows = np.arange(n)
+    xs, fs = np.empty((n, 5)), np.empty((n, 5))
+    xs[:, 0], xs[:, 1:4], xs[:, 4] = a[k], p, b[k]
+    fs[:, 0], fs[:, 1:4], fs[:, 4] = fa[k], fp, fb[k]
+    finite = np.isfinite(fp)
+    if not finite.all():
+        xs, fs = _forward_fill(xs, fs)
+    # the bracket: a sign change among a, p0, p1, p2, b, one beside the centre first
+    sign = np.sign(fs)
+    change = sign[:, :-1] * sign[:, 1:] < 0
+    j = np.argmin(np.where(change, _PAIR_PRIORITY, 9), axis=1)
     na, nb = xs[rows, j], xs[rows, j + 1]
     nfa, nfb = fs[rows, j], fs[rows, j + 1]
     # a probe exactly on the root ends its bracket there
+    exact = finite & (fp == 0.0)
+    hit = exact.any(axis=1)
     if hit.any():
         at = p[rows, np.argmax(exact, axis=1)]
         na, nb = np.where(hit, at, na), np.where(hit, at, nb)
@@ -240,22 +253,22 @@ def _root_step(k, p, fp, a, b, fa, fb, c, h, scale, checked, active, iteration) 
     a[k], b[k], fa[k], fb[k] = na, nb, nfa, nfb
     width = nb - na
     # Newton from the middle probe, the slope from the outer two
-    slope = (fp[:, 2] - fp[:, 0]) / (p[:, 2] - p[:, 0])
-    step = -fp[:, 1] / slope
+    step = -fp[:, 1] * (p[:, 2] - p[:, 0]) / (fp[:, 2] - fp[:, 0])
     newton = p[:, 1] + step
-    good = (np.isfinite(newton) & (newton > na) & (newton < nb)
-            & (np.abs(fp[:, 1]) <= scale[k]))
-    secant = (na * nfb - nb * nfa) / (nfb - nfa)
-    secant = np.where((secant > na) & (secant < nb), secant, 0.5 * (na + nb))
-    # a bracket that fails to halve in two iterations is bisected (a pole, a flat stretch)
-    stalled = np.zeros(k.size, dtype=bool)
+    good = (newton > na) & (newton < nb) & (np.abs(fp[:, 1]) <= scale[k])  # NaN: False
     if iteration % 2 == 1:
-        stalled = width > 0.5 * checked[k]
+        # a bracket that fails to halve in two iterations is bisected (a pole, a flat stretch)
+        good &= ~(width > 0.5 * checked[k])
         checked[k] = width
-    centre = np.where(good, newton, secant)
-    centre = np.where(stalled, 0.5 * (na + nb), centre)
-    spacing = np.where(good & ~stalled, np.maximum(0.5 * np.abs(step), 0.3 * ROOT_TOLERANCE * nb),
-                       0.25 * width)
+    if good.all():
+        centre = newton
+        spacing = np.maximum(0.5 * np.abs(step), 0.3 * ROOT_TOLERANCE * nb)
+    else:
+        secant = (na * nfb - nb * nfa) / (nfb - nfa)
+        secant = np.where((secant > na) & (secant < nb), secant, 0.5 * (na + nb))
+        centre = np.where(good, newton, secant)
+        spacing = np.where(good, np.maximum(0.5 * np.abs(step), 0.3 * ROOT_TOLERANCE * nb),
+                           0.25 * width)
     c[k], h[k] = centre, np.minimum(spacing, 0.5 * width)
     active[k] = (~hit & (width > ROOT_TOLERANCE * nb)
                  & (np.minimum(np.abs(nfa), np.abs(nfb)) <= 1e3 * scale[k]))
