@@ -39,7 +39,6 @@ import time
 import warnings
 
 import numpy as np
-import scipy.linalg
 
 from _common import RESULTS, ROOT, fmt, machine_info, markdown_table, median_time, write_json
 
@@ -66,11 +65,21 @@ def _wing_segments(spec, n_elements: int) -> list:
 
 
 def _fe_W(K: np.ndarray, M: np.ndarray, s: complex) -> np.ndarray:
-    """W(s) of a free FE boom at its root (dofs 0, 1): the inverse of the dynamic stiffness
-    condensed to the root."""
-    D = K + s * s * M
+    """W(s) of a free FE boom at its root (dofs 0, 1): the inverse of its dynamic stiffness
+    condensed to the root, without cancellation at low |s|.
+
+    ``D_rr - D_ri D_ii^-1 D_ir`` of ``D = K + s^2 M`` cancels K's entries down to the
+    ``s^2`` rigid mass (eps |K|/(|s|^2 m) relative: 1e-6 at 16 elements per segment and
+    s = 0.05j w1). In the coordinates (root motion, interior motion relative to the rigid
+    motion ``T = [I; -K_ii^-1 K_ir]``, for which K T = 0) the same condensation reads
+    ``s^2 T^T M T - s^4 B^T (K_ii + s^2 M_ii)^-1 B`` with ``B = (M T)_i``: no cancellation.
+    """
     r, i = slice(0, 2), slice(2, None)
-    condensed = D[r, r] - D[r, i] @ np.linalg.solve(D[i, i], D[i, r])
+    T = np.vstack([np.eye(2), -np.linalg.solve(K[i, i], K[i, r])])
+    MT = M @ T
+    B = MT[i]
+    s2 = s * s
+    condensed = s2 * (T.T @ MT) - s2 * s2 * (B.T @ np.linalg.solve(K[i, i] + s2 * M[i, i], B))
     return np.linalg.inv(condensed)
 
 
@@ -329,8 +338,8 @@ def markdown(data: dict) -> str:
               + ", ".join(f"{v:.6g}" for v in c["exact"]) + " rad/s. Relative difference of "
               "the planar FE model of the whole spacecraft (tests/test_real_appendages.py: "
               "Hermite wings with their tip bodies, the boom as its modes' Craig-Bampton "
-              "model). The first modes level off near 3e-7: the exact frequencies of assembled "
-              "(stepped, tip-body) beams are located to about 1e-7 (appendages.segmented).", ""]
+              "model; fe3d's subspace iteration, the rigid modes removed exactly). Every mode "
+              "converges like h^4 (16x per halving) to flexsat's exact ones.", ""]
     lines += [markdown_table(["elements per segment"] + [f"mode {k + 1}" for k in
                                                         range(len(c["exact"]))],
                              [[r["elements"]] + [fmt(e) for e in r["errors"]] for r in c["fe"]]),
