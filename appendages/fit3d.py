@@ -203,7 +203,8 @@ def fit_chain_3d(beam, n_bodies: int = 3, *, match: str = "poles-and-zeros",
     Raises
     ------
     ValueError
-        A planar beam (no torsional_inertia), or what fit_chain raises.
+        A planar beam (no torsional_inertia), a tip body off the axis or with products of
+        inertia in the appendage's axes (a chain cannot carry it), or what fit_chain raises.
     ConvergenceError
         If the rod criterion gives non-finite springs.
     """
@@ -265,6 +266,7 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
                             f"{type(appendage).__name__} without '{attribute}'")
     if not getattr(appendage, "three_axis", False):
         raise ValueError(f"fit_chain_3d needs three-axis data; {describe(appendage)} is planar")
+    _check_tip_on_axis(getattr(appendage, "tip", None))
     xy, xz = appendage.planar_view("xy"), appendage.planar_view("xz")
     planar = fit_chain(xy, n_bodies, match=match, **fit_options)
     n = planar.n_bodies
@@ -316,6 +318,28 @@ def _fit_any_3d(appendage, n_bodies: int, match: str, fit_options: dict) -> Hing
                        torsional_inertias=torsional_inertias,
                        torsion_stiffnesses=springs["torsion"],
                        axial_stiffnesses=springs["axial"], **dampings)
+
+
+def _check_tip_on_axis(tip) -> None:
+    """ValueError for a tip body that no chain can carry: a chain's bodies lie on its axis
+    with their principal axes along it, so a body whose centre lies off the axis (a first
+    moment across it) or whose inertia has products in the appendage's axes would be lost."""
+    if tip is None or tip.is_null:
+        return
+    offset = [float(v) for v in tip.offset]
+    if offset[1] != 0.0 or offset[2] != 0.0:
+        raise ValueError(
+            f"fit_chain_3d: the tip body's centre lies off the appendage's axis (offset "
+            f"{offset} m): a chain's bodies lie on its axis, so no chain keeps the first moment "
+            "across it; give the body's offset along x alone (or design on the appendage's "
+            "truncation instead of a chain)")
+    if not isinstance(tip.inertia, float):
+        J = np.asarray(tip.inertia, dtype=float)
+        if np.any(J != np.diag(np.diag(J))):
+            raise ValueError(
+                "fit_chain_3d: the tip body's inertia has products in the appendage's axes "
+                f"({J.tolist()} kg*m^2): a chain's bodies have their principal axes along the "
+                "chain's; give it diagonal in the appendage's axes")
 
 
 class MotionRod:

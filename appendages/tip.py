@@ -202,7 +202,7 @@ class TipBody:
         if self.offset[1] != 0.0:
             raise ValueError(
                 "a tip body offset across the axis in the plane (offset y = "
-                f"{self.offset[1]!r} m) couples the tip rotation with axial motion, which the "
+                f"{float(self.offset[1])!r} m) couples the tip rotation with axial motion, which the "
                 "planar interface (F_y, M) cannot carry; use the three-axis model (W6) or an "
                 "offset along x")
 

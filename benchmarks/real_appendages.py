@@ -137,9 +137,9 @@ def coupled_3d(quick: bool) -> dict:
     import copy
 
     import fe_scene
-    from test_real_appendages_3d import EMBEDDED, SCENE, spacecraft_of
+    from test_real_appendages_3d import EMBEDDED, OFF_AXIS_SCENE, spacecraft_of
 
-    scene = load_scene(copy.deepcopy(SCENE), base=EMBEDDED)
+    scene = load_scene(copy.deepcopy(OFF_AXIS_SCENE), base=EMBEDDED)
     craft, models = spacecraft_of(scene)
     load = _load()
     t0 = time.process_time()

@@ -27,9 +27,9 @@ WING = {"stepped_beam": {"damping_ratio": 0.005, "segments": [
     {"section": "rectangular", "length": 6.0, "width": 1.5, "thickness": 0.025,
      "density": 160.0, "youngs_modulus": 7.2e9, "poisson_ratio": 0.3}]},
     "tip": {"mass": 5.0, "inertia": [[0.15, 0.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.2]],
-            "offset": [0.1, 0.0, 0.05]}}
+            "offset": [0.1, 0.0, 0.0]}}
 
-#: The spacecraft of the three-axis real-appendages scene (its hub, appendages and mounts).
+#: The three-axis real-appendages scene (its tip bodies on the wings' axes: chains carry them).
 SCENE = {
     "hub": {"mass": 1200.0,
             "inertia": [[900.0, 15.0, -10.0], [15.0, 800.0, 20.0], [-10.0, 20.0, 1000.0]]},
@@ -47,6 +47,12 @@ SCENE = {
 }
 
 
+#: The same spacecraft with the tip bodies 0.05 m off the wings' mid-planes (along their z).
+OFF_AXIS_SCENE = copy.deepcopy(SCENE)
+for _wing in OFF_AXIS_SCENE["appendages"][:2]:
+    _wing["tip"]["offset"] = [0.1, 0.0, 0.05]
+
+
 def spacecraft_of(scene):
     """The scene's exact spacecraft, built from its specs with the library alone."""
     with library_limits(scene.limits):
@@ -59,7 +65,7 @@ def spacecraft_of(scene):
 
 @pytest.fixture(scope="module")
 def case():
-    scene = load_scene(copy.deepcopy(SCENE), base=EMBEDDED)
+    scene = load_scene(copy.deepcopy(OFF_AXIS_SCENE), base=EMBEDDED)
     craft, models = spacecraft_of(scene)
     return scene, craft, models
 
@@ -95,3 +101,19 @@ def test_the_spacecrafts_rigid_properties_place_the_tip_bodies_off_the_wings_axe
     z = (2.0 * 5.0 * 0.05 + boom.mass * boom_centre[2]) / m_total
     assert craft.center_of_mass[2] == pytest.approx(z, rel=1e-12)
     assert craft.center_of_mass[1] == pytest.approx(0.0, abs=1e-15)
+
+
+def test_a_chain_cannot_carry_a_tip_body_off_the_axis_and_says_so(case):
+    # a chain's bodies lie on its axis with their principal axes along it: a tip body off the
+    # axis (or with products of inertia) is refused by name, on the axis it is fitted
+    from appendages import SteppedBeam, TipBody
+    from appendages.fit3d import fit_chain_3d
+
+    _, _, models = case
+    wing = models[0]
+    with pytest.raises(ValueError, match=r"fit_chain_3d: the tip body's centre lies off the "
+                                         r"appendage's axis \(offset \[0\.1, 0\.0, 0\.05\] m\)"):
+        fit_chain_3d(wing, 3)
+    products = TipBody(5.0, [[0.15, 0.01, 0.0], [0.01, 0.2, 0.0], [0.0, 0.0, 0.2]], 0.1)
+    with pytest.raises(ValueError, match="inertia has products"):
+        fit_chain_3d(SteppedBeam(wing.segments, tip=products), 3)
