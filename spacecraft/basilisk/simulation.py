@@ -9,11 +9,12 @@ instants. flexsat's prediction of the same sampled-data loop and the differences
 
 Tasks and time
     One Basilisk process with two tasks: ``dynamics`` (priority 100, step dt) holds the spacecraft;
-    ``flight_software`` (priority 50, step T = sample time, dt divides T) holds, in this order, the
-    disturbance schedule, the controller, the actuator that reads its command (``extForceTorque``
-    or a reaction wheel, :mod:`.actuators`), and the recorders. At a common instant the higher-priority dynamics task runs first, so the
-    flight software sees the state at t_k and its torque drives [t_k, t_(k+1)): the zero-order
-    hold of :func:`controllers.close_loop` with a digital controller.
+    ``flight_software`` (priority 50, step T = sample time, dt divides T) holds, in this order,
+    the disturbance schedule, the controller, the actuator that reads its command
+    (``extForceTorque`` or a reaction wheel, :mod:`.actuators`), and the recorders. At a common
+    instant the higher-priority dynamics task runs first, so the flight software sees the state
+    at t_k and its torque drives [t_k, t_(k+1)): the zero-order hold of
+    :func:`controllers.close_loop` with a digital controller.
 
 Integrator and step
     Basilisk's fixed-step RK4 (its default). On an undamped mode of frequency w, RK4 is stable for
