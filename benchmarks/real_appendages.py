@@ -17,7 +17,9 @@ bodies on a 1200 kg hub, and pyNastran's SOL 103 rod as a boom):
    spacecraft of tests/test_real_appendages_3d.py) against tests/fe_scene.py's 3-D model.
 3. Chains' poles and zeros against each appendage of the scene (and a tapered boom and a rod
    with a tip body): flexsat's fit with 3 to 6 bodies, the largest relative error of the
-   chain's n - 1 poles and of its first n - 1 zeros of W1, W2, W4, and the fit's CPU time.
+   chain's n - 1 poles and of its first n - 1 zeros of W1, W2, W4, and the fit's CPU time;
+   in three axes, ``fit_chain_3d`` on the wing and the boom, per bending plane and for the
+   torsion and axial motions.
 4. The cost of one W evaluation of each new kind (a tip body; stepped beams of 2, 5 and 20
    segments; modal data) against the uniform beam's closed form (one s, and per point of a
    1000-point sweep), undamped and damped, and of one W6 evaluation against the uniform
@@ -192,6 +194,55 @@ def chains(scene, quick: bool) -> dict:
                          "zeros_W4": float(relative[3].max()), "cpu": cpu, "load": load})
         out[name] = {"mass": float(appendage.mass), "length": float(appendage.length),
                      "rows": rows}
+    return out
+
+
+def chains_3d(quick: bool) -> dict:
+    """fit_chain_3d on the three-axis scene's wing (tip body on its axis) and boom (six root
+    motions): each bending plane's poles and zeros, and the torsion and axial first pole and
+    zero, against the appendage's own."""
+    import copy
+
+    from appendages.fit3d import fit_chain_3d, motion_frequencies, rod_chain_frequencies
+    from test_real_appendages_3d import EMBEDDED, SCENE
+
+    scene = load_scene(copy.deepcopy(SCENE), base=EMBEDDED)
+    out = {}
+    for index, name in ((0, "wing (stepped, tip body)"), (2, "boom (NASTRAN, 6 root motions)")):
+        appendage = scene.appendages[index].structure.build()
+        rows = []
+        for n in (3,) if quick else (3, 4):
+            load = _load()
+            t0 = time.process_time()
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                chain = fit_chain_3d(appendage, n)
+            cpu = time.process_time() - t0
+            row = {"bodies": n, "cpu": cpu, "load": load}
+            for plane in ("xy", "xz"):
+                exact = fit_targets(appendage.planar_view(plane), n)["targets"]
+                got = fit_targets(chain.planar_view(plane), n)["targets"]
+                relative = np.abs(got / exact - 1.0)
+                row[plane] = {"poles": float(relative[0].max()),
+                              "zeros": float(relative[1:].max())}
+            scale = float(fit_targets(appendage.planar_view("xy"), 2)["targets"][0][0])
+            center = np.asarray(appendage.center_of_mass_vector, dtype=float)
+            about_axis = float(appendage.inertia_tensor[0, 0]) + appendage.mass * float(
+                center[1] ** 2 + center[2] ** 2)
+            for motion, k, rigid, inertias, springs in (
+                    ("torsion", 3, about_axis, chain.torsional_inertias,
+                     chain.torsion_stiffnesses),
+                    ("axial", 0, appendage.mass, chain.masses, chain.axial_stiffnesses)):
+                rod = motion_frequencies(appendage, k, scale, rigid)
+                if rod is None or springs is None:
+                    row[motion] = None
+                    continue
+                free, clamped = rod_chain_frequencies(inertias, springs)
+                row[motion] = {"pole": abs(free / rod.free - 1.0),
+                               "zero": abs(clamped / rod.clamped - 1.0),
+                               "exact": [rod.free, rod.clamped]}
+            rows.append(row)
+        out[name] = rows
     return out
 
 
@@ -375,6 +426,22 @@ def markdown(data: dict) -> str:
                              f"{r['load']:.1f}"])
         lines += [markdown_table(["bodies", "poles", "zeros W1", "zeros W2", "zeros W4",
                                   "CPU [s]", "load"], rows), ""]
+    lines += ["Three axes (`fit_chain_3d`, the three-axis scene's wing with its tip body on the "
+              "axis and its boom): largest relative error of each bending plane's n - 1 poles "
+              "and first n - 1 zeros of W1, W2, W4 (the plane's view, the root's other motions "
+              "held), and of the first pole and zero of torsion and axial motion (the chain's "
+              "spring chain against the appendage's own, the other root motions held).", ""]
+    rows = []
+    for name, entries in data["chains_3d"].items():
+        for r in entries:
+            def pair(entry):
+                return "rigid" if entry is None else f"{fmt(entry['pole'])} / {fmt(entry['zero'])}"
+            rows.append([name, r["bodies"], fmt(r["xy"]["poles"]), fmt(r["xy"]["zeros"]),
+                         fmt(r["xz"]["poles"]), fmt(r["xz"]["zeros"]), pair(r["torsion"]),
+                         pair(r["axial"]), f"{r['cpu']:.2f}", f"{r['load']:.1f}"])
+    lines += [markdown_table(["appendage", "bodies", "x-y poles", "x-y zeros", "x-z poles",
+                              "x-z zeros", "torsion pole / zero", "axial pole / zero",
+                              "CPU [s]", "load"], rows), ""]
     k = data["cost"]
     lines += ["## 4. Cost of one W evaluation", "",
               "Median wall time; one s at 0.7 times the first frequency, and per point of a "
@@ -418,6 +485,7 @@ def main() -> None:
     data["coupled_3d"] = coupled_3d(args.quick)
     print("chains...", flush=True)
     data["chains"] = chains(scene, args.quick)
+    data["chains_3d"] = chains_3d(args.quick)
     print("cost...", flush=True)
     data["cost"] = costs(scene, args.quick)
     data["collected"] = collected()

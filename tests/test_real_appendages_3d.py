@@ -117,3 +117,32 @@ def test_a_chain_cannot_carry_a_tip_body_off_the_axis_and_says_so(case):
     products = TipBody(5.0, [[0.15, 0.01, 0.0], [0.01, 0.2, 0.0], [0.0, 0.0, 0.2]], 0.1)
     with pytest.raises(ValueError, match="inertia has products"):
         fit_chain_3d(SteppedBeam(wing.segments, tip=products), 3)
+
+
+@pytest.mark.slow
+def test_the_three_axis_fit_matches_each_rod_motions_own_pole_and_zero():
+    # fit_chain_3d on the stepped wing (tip body on its axis): its torsion and axial spring
+    # chains have the wing's own first pole and zero (ratio 2.06 and 1.82, not the uniform
+    # rod's 2), to the root search's 1e-12. The boom's torsion (a heavy tip mass on a short rod:
+    # ratio 31) is beyond what three bodies reach with the bounded tilt: its pole is matched and
+    # a FitWarning says how far its zero is.
+    from appendages import FitWarning
+    from appendages.fit3d import fit_chain_3d, motion_frequencies, rod_chain_frequencies
+    from appendages.equivalence import fit_targets
+
+    scene = load_scene(copy.deepcopy(SCENE), base=EMBEDDED)
+    wing, boom = (scene.appendages[k].structure.build() for k in (0, 2))
+    chain = fit_chain_3d(wing, 3)
+    scale = float(fit_targets(wing.planar_view("xy"), 2)["targets"][0][0])
+    for motion, index, rigid, inertias, springs in (
+            ("torsion", 3, float(wing.inertia_tensor[0, 0]), chain.torsional_inertias,
+             chain.torsion_stiffnesses),
+            ("axial", 0, wing.mass, chain.masses, chain.axial_stiffnesses)):
+        rod = motion_frequencies(wing, index, scale, rigid)
+        free, clamped = rod_chain_frequencies(inertias, springs)
+        np.testing.assert_allclose([free, clamped], [rod.free, rod.clamped], rtol=1e-10,
+                                   err_msg=motion)
+        assert abs(rod.free / rod.clamped - 2.0) > 0.05  # not the uniform rod's ratio
+    with pytest.warns(FitWarning, match=r"torsion chain of 3 bodies cannot reach the "
+                                        r"appendage's first pole/zero ratio 31\.3"):
+        fit_chain_3d(boom, 3)
