@@ -228,26 +228,64 @@ def _crossings_of_many(f: Callable[[np.ndarray, np.ndarray], np.ndarray],
     (the three loop-at-a-time functions of a three-axis loop come from one evaluation of
     L). Returns the zeros of each function, in the order of ``grids``.
     """
-    exact, brackets = _sign_changes(grids)
-    (root, found), _ = refine(f, roots=brackets)
+    exact, brackets, guesses = _sign_changes(grids)
+    (root, found), _ = refine(f, roots=brackets, guesses=guesses)
     owner = brackets[0]
     return [np.concatenate([exact[j], root[found & (owner == j)]]) for j in range(len(grids))]
 
 
-def _sign_changes(grids: list[tuple[np.ndarray, np.ndarray]]) -> tuple[list, tuple]:
-    """Grid points where each function is 0, and the brackets of its sign changes (owner,
-    a, b, f(a), f(b)) for :func:`controllers.refine.refine`."""
+def _sign_changes(grids: list[tuple[np.ndarray, np.ndarray]]) -> tuple[list, tuple, tuple]:
+    """Grid points where each function is 0, the brackets of its sign changes (owner, a, b,
+    f(a), f(b)) for :func:`controllers.refine.refine`, and a first guess of each root with its
+    error (NaN: none): the inverse cubic through the bracket and its grid neighbours where f
+    is monotonic on them, its distance to regula falsi's point as the error."""
     exact = [omega[values == 0] for omega, values in grids]
-    brackets = []
+    brackets, guesses = [], []
     for j, (omega, values) in enumerate(grids):
         sign = np.sign(values)
         i = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
         brackets.append((np.full(i.size, j), omega[i], omega[i + 1], values[i], values[i + 1]))
+        guesses.append(_inverse_cubic_guess(omega, values, i))
     if not brackets:
-        return exact, tuple(np.zeros(0) for _ in range(5))
+        empty = np.zeros(0)
+        return exact, (empty.astype(int),) + (empty,) * 4, (empty, empty)
     owner, a, b, fa, fb = (np.concatenate(parts) for parts in zip(*brackets))
+    centre, spacing = (np.concatenate(parts) for parts in zip(*guesses))
     return exact, (owner.astype(int), a.astype(float), b.astype(float), fa.astype(float),
-                   fb.astype(float))
+                   fb.astype(float)), (centre, spacing)
+
+
+def _inverse_cubic_guess(omega: np.ndarray, values: np.ndarray, i: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """(root estimate, its error) of the sign changes between omega[i] and omega[i + 1]: the
+    inverse interpolation cubic x(f) through the four grid points i - 1 .. i + 2 at f = 0
+    (Lagrange form) where f is strictly monotonic on them, and its distance to the regula
+    falsi point of the bracket; NaN where there are no four points or f is not monotonic."""
+    centre = np.full(i.size, np.nan)
+    spacing = np.full(i.size, np.nan)
+    ok = (i >= 1) & (i + 2 < omega.size)
+    k = i[ok]
+    if k.size == 0:
+        return centre, spacing
+    x = np.stack([omega[k - 1], omega[k], omega[k + 1], omega[k + 2]], axis=1).astype(float)
+    f = np.stack([values[k - 1], values[k], values[k + 1], values[k + 2]], axis=1).real
+    f = f.astype(float)
+    d = np.diff(f, axis=1)
+    monotonic = np.all(d > 0, axis=1) | np.all(d < 0, axis=1)
+    with np.errstate(all="ignore"):
+        estimate = np.zeros(k.size)
+        for m in range(4):
+            term = x[:, m].copy()
+            for q in range(4):
+                if q != m:
+                    term *= (0.0 - f[:, q]) / (f[:, m] - f[:, q])
+            estimate += term
+        a, b, fa, fb = x[:, 1], x[:, 2], f[:, 1], f[:, 2]
+        falsi = (a * fb - b * fa) / (fb - fa)
+    good = monotonic & np.isfinite(estimate) & (estimate > a) & (estimate < b)
+    centre[np.flatnonzero(ok)[good]] = estimate[good]
+    spacing[np.flatnonzero(ok)[good]] = np.abs(estimate - falsi)[good]
+    return centre, spacing
 
 
 @limits_blas_threads(total_states)
@@ -615,8 +653,8 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
     # |L| < 1e-9 (a gain margin above 180 dB) are round-off in Im L, not a margin.
     # gain crossovers: |L| = 1
     with np.errstate(divide="ignore"):
-        exact, brackets = _sign_changes([(w, row.imag) for w, row in grids]
-                                        + [(w, np.log(np.abs(row))) for w, row in grids])
+        exact, brackets, guesses = _sign_changes([(w, row.imag) for w, row in grids]
+                                                 + [(w, np.log(np.abs(row))) for w, row in grids])
     # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
     grid_minima, minima = [], []
     for j, (w_grid, row) in enumerate(grids):
@@ -627,7 +665,7 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
             minima.append((2 * m + j, w_grid[i - 1], w_grid[i], w_grid[i + 1], dist[i - 1],
                            dist[i], dist[i + 1]))
     (root, found), (w_min, dist_min) = refine(
-        crossing, roots=brackets,
+        crossing, roots=brackets, guesses=guesses,
         minima=tuple(np.array(v) for v in zip(*minima)) if minima else None)
     owner = brackets[0]
     roots = [np.concatenate([exact[j], root[found & (owner == j)]]) for j in range(2 * m)]

@@ -26,9 +26,10 @@ iterations:
   is the vertex of the parabola through the three probes (successive parabolic interpolation,
   Newton's step on f' with f' and f'' from the same points; a ternary step where the parabola
   does not open upwards or leaves the bracket), h at least 1e-4 of the initial half-width
-  (below it f'' drowns in round-off). It ends when the best point is the probed centre and the
-  next vertex lies within 1e-2 of that floor of it, so that f there is within about
-  f'' (1e-6 width)^2 of the minimum, or when hi - lo <= MINIMUM_TOLERANCE x.
+  (below it f'' drowns in round-off). It ends when the parabola through probes near that
+  floor predicts no value below the best by more than MINIMUM_VALUE_TOLERANCE (relative), when
+  the best point is the probed centre and the next vertex lies within 1e-2 of that floor of it,
+  or when hi - lo <= MINIMUM_TOLERANCE x.
 
 References
 ----------
@@ -43,15 +44,18 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["ROOT_TOLERANCE", "MINIMUM_TOLERANCE", "refine"]
+__all__ = ["ROOT_TOLERANCE", "MINIMUM_TOLERANCE", "MINIMUM_VALUE_TOLERANCE", "refine"]
 
 #: Relative width |b - a| / b to which a root's bracket is refined.
 ROOT_TOLERANCE = 1e-13
 #: Relative width (hi - lo) / x at which a minimum's bracket is taken as converged.
 MINIMUM_TOLERANCE = 1e-12
+#: A minimum is also converged when the parabola through probes a local spacing apart predicts
+#: no value below the best by more than this, relative (the value is what is wanted).
+MINIMUM_VALUE_TOLERANCE = 1e-13
 # iterations at most (every iteration at least halves a root's bracket)
 _MAX_ITERATIONS = 100
-# probes are kept this fraction of the bracket's width inside it
+# probes are kept this fraction of their spacing inside the bracket
 _INSIDE = 1e-3
 # the floor of a minimum's probe spacing, relative to its initial half-width
 _MINIMUM_SPACING = 1e-4
@@ -108,8 +112,9 @@ def _illinois_step(k, x, fx, bisect, a, b, fa, fb, ga, gb, last, scale, suspect,
 
 def _probes(centre, spacing, lo, hi) -> np.ndarray:
     """Three probes (n, 3) at centre - spacing, centre, centre + spacing, each kept a fraction
-    _INSIDE of the width inside [lo, hi] (which keeps them in order)."""
-    inside = _INSIDE * (hi - lo)
+    _INSIDE of the spacing (or of the width, if smaller) inside [lo, hi] (which keeps them in
+    order): a root next to an end of its bracket is probed there."""
+    inside = _INSIDE * np.minimum(spacing, hi - lo)
     return np.minimum(np.maximum(centre[:, None] + spacing[:, None] * _OFFSETS,
                                  (lo + inside)[:, None]), (hi - inside)[:, None])
 
@@ -126,7 +131,8 @@ def _forward_fill(x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 
 
 def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
-           roots: tuple | None = None, minima: tuple | None = None
+           roots: tuple | None = None, minima: tuple | None = None, *,
+           guesses: tuple | None = None
            ) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
     """Refine root brackets and minimum brackets of many functions together.
 
@@ -143,6 +149,10 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
         Minimum brackets: arrays of the function index, the ends lo < x < hi and the values
         there, fx the least (the function is taken as unimodal in [lo, hi]; flo and fhi only
         place the first probes, they may be approximate).
+    guesses : (centre, spacing), optional
+        Per root bracket, a first estimate of the root and of its error (NaN: none), e.g.
+        from an interpolation of the grid that bracketed it: the first three probes are
+        placed there instead of about regula falsi's point a quarter of the bracket apart.
 
     Returns
     -------
@@ -172,6 +182,7 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
         suspect = np.zeros(nr, dtype=bool)
         # roots, few brackets: the centre and spacing of the three probes
         c, h = np.zeros(nr), np.zeros(nr)
+        stalls = np.zeros(nr, dtype=int)
         newton = False
         # minima: the first centre at the vertex of the parabola through the bracket (at x if
         # it has none inside), the spacing's floor from the bracket
@@ -196,6 +207,11 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
                 c = np.where((c > a) & (c < b), c, 0.5 * (a + b))
                 h = 0.25 * (b - a)
                 checked = b - a
+                if guesses is not None and iteration == 0:
+                    c0, h0 = (np.asarray(v, dtype=float) for v in guesses)
+                    use = (c0 > a) & (c0 < b) & (h0 >= 0) & (h0 < 0.25 * (b - a))
+                    c = np.where(use, c0, c)
+                    h = np.where(use, np.maximum(h0, ROOT_TOLERANCE * b), h)
             pm = _probes(cm[km], hm[km], lo[km], hi[km])
             if newton:
                 pr = _probes(c[kr], h[kr], a[kr], b[kr])
@@ -208,7 +224,7 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
             fr = values[:per * kr.size].reshape(-1, per)
             fmp = values[per * kr.size:].reshape(-1, 3)
             if kr.size and newton:
-                _root_step(kr, pr, fr, a, b, fa, fb, c, h, scale, checked, r_active,
+                _root_step(kr, pr, fr, a, b, fa, fb, c, h, scale, checked, stalls, r_active,
                            iteration)
             elif kr.size:
                 _illinois_step(kr, pr[:, 0], fr[:, 0], bisect, a, b, fa, fb, ga, gb, last,
@@ -227,7 +243,8 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
 _PAIR_PRIORITY = np.array([1, 0, 0, 1])
 
 
-def _root_step(k, p, fp, a, b, fa, fb, c, h, scale, checked, active, iteration) -> None:
+def _root_step(k, p, fp, a, b, fa, fb, c, h, scale, checked, stalls, active,
+               iteration) -> None:
     """One iteration of the root brackets ``k`` probed at ``p`` (values ``fp``), in place."""
     n = k.size
     rows = np.arange(n)
@@ -255,20 +272,31 @@ def _root_step(k, p, fp, a, b, fa, fb, c, h, scale, checked, active, iteration) 
     # Newton from the middle probe, the slope from the outer two
     step = -fp[:, 1] * (p[:, 2] - p[:, 0]) / (fp[:, 2] - fp[:, 0])
     newton = p[:, 1] + step
-    good = (newton > na) & (newton < nb) & (np.abs(fp[:, 1]) <= scale[k])  # NaN: False
+    # a Newton point just beyond an end (the root at the end, to round-off) is taken at the end:
+    # the probes about it then close the bracket from the other side
+    good = ((newton > na - 0.5 * np.abs(step)) & (newton < nb + 0.5 * np.abs(step))
+            & (np.abs(fp[:, 1]) <= scale[k]))  # NaN: False
+    newton = np.minimum(np.maximum(newton, na), nb)
     if iteration % 2 == 1:
-        # a bracket that fails to halve in two iterations is bisected (a pole, a flat stretch)
-        good &= ~(width > 0.5 * checked[k])
+        # a bracket that fails to halve in two iterations twice in a row is bisected (a pole,
+        # a flat stretch); once, it may be Newton closing in from one side
+        slow = width > 0.5 * checked[k]
+        stalls[k] = np.where(slow, stalls[k] + 1, 0)
+        good &= stalls[k] < 2
+        stalls[k] = np.where(stalls[k] >= 2, 0, stalls[k])
         checked[k] = width
+    # probes that straddled the root (the bracket between two of them): the next ones half the
+    # Newton step apart; else a whole step, the estimate having been further off
+    straddled = (j == 1) | (j == 2)
+    newton_spacing = np.maximum(np.where(straddled, 0.5, 1.0) * np.abs(step),
+                                0.3 * ROOT_TOLERANCE * nb)
     if good.all():
-        centre = newton
-        spacing = np.maximum(0.5 * np.abs(step), 0.3 * ROOT_TOLERANCE * nb)
+        centre, spacing = newton, newton_spacing
     else:
         secant = (na * nfb - nb * nfa) / (nfb - nfa)
         secant = np.where((secant > na) & (secant < nb), secant, 0.5 * (na + nb))
         centre = np.where(good, newton, secant)
-        spacing = np.where(good, np.maximum(0.5 * np.abs(step), 0.3 * ROOT_TOLERANCE * nb),
-                           0.25 * width)
+        spacing = np.where(good, newton_spacing, 0.25 * width)
     c[k], h[k] = centre, np.minimum(spacing, 0.5 * width)
     active[k] = (~hit & (width > ROOT_TOLERANCE * nb)
                  & (np.minimum(np.abs(nfa), np.abs(nfb)) <= 1e3 * scale[k]))
@@ -300,8 +328,8 @@ def _minimum_step(k, p, fp, lo, x, hi, fx, c, h, floor, active) -> None:
     # converged: the parabola through probes a local spacing apart predicts no value below
     # the best beyond round-off (the value is what is wanted), or the vertex is the best probe
     predicted = f0 + d01 * (vertex - p0) + curvature * (vertex - p0) * (vertex - p1)
-    local = h[k] <= 10.0 * floor[k]
-    converged = good & ((local & (fbest - predicted <= 4e-16 * np.abs(fbest)))
+    local = h[k] <= 100.0 * floor[k]
+    converged = good & ((local & (fbest - predicted <= MINIMUM_VALUE_TOLERANCE * np.abs(fbest)))
                         | ((i == 2) & (step <= 1e-2 * floor[k])))
     centre = np.where(good, vertex, best)
     spacing = np.where(good, np.maximum(step, floor[k]), 0.25 * (nhi - nlo))
