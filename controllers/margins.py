@@ -234,25 +234,31 @@ def _crossings_of_many(f: Callable[[np.ndarray, np.ndarray], np.ndarray],
     return [np.concatenate([exact[j], root[found & (owner == j)]]) for j in range(len(grids))]
 
 
-def _sign_changes(grids: list[tuple[np.ndarray, np.ndarray]]) -> tuple[list, tuple, tuple]:
+def _sign_changes(grids: list[tuple[np.ndarray, np.ndarray]]) -> tuple[list, tuple, Callable]:
     """Grid points where each function is 0, the brackets of its sign changes (owner, a, b,
-    f(a), f(b)) for :func:`controllers.refine.refine`, and a first guess of each root with its
-    error (NaN: none): the inverse cubic through the bracket and its grid neighbours where f
-    is monotonic on them, its distance to regula falsi's point as the error."""
+    f(a), f(b)) for :func:`controllers.refine.refine`, and a function giving a first guess of
+    each root with its error (NaN: none): the inverse cubic through the bracket and its grid
+    neighbours where f is monotonic on them, its distance to regula falsi's point as the
+    error."""
     exact = [omega[values == 0] for omega, values in grids]
-    brackets, guesses = [], []
+    brackets, starts = [], []
     for j, (omega, values) in enumerate(grids):
         sign = np.sign(values)
         i = np.nonzero(sign[:-1] * sign[1:] < 0)[0]
         brackets.append((np.full(i.size, j), omega[i], omega[i + 1], values[i], values[i + 1]))
-        guesses.append(_inverse_cubic_guess(omega, values, i))
+        starts.append(i)
+
+    def guesses() -> tuple[np.ndarray, np.ndarray]:
+        parts = [_inverse_cubic_guess(omega, values, i)
+                 for (omega, values), i in zip(grids, starts)]
+        return tuple(np.concatenate(p) for p in zip(*parts))
+
     if not brackets:
         empty = np.zeros(0)
-        return exact, (empty.astype(int),) + (empty,) * 4, (empty, empty)
+        return exact, (empty.astype(int),) + (empty,) * 4, lambda: (empty, empty)
     owner, a, b, fa, fb = (np.concatenate(parts) for parts in zip(*brackets))
-    centre, spacing = (np.concatenate(parts) for parts in zip(*guesses))
     return exact, (owner.astype(int), a.astype(float), b.astype(float), fa.astype(float),
-                   fb.astype(float)), (centre, spacing)
+                   fb.astype(float)), guesses
 
 
 def _inverse_cubic_guess(omega: np.ndarray, values: np.ndarray, i: np.ndarray

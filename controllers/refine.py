@@ -85,9 +85,10 @@ def _illinois_step(k, x, fx, bisect, a, b, fa, fb, ga, gb, last, scale, suspect,
     place (M. Dowell, P. Jarratt, "A modified regula falsi method for computing the root of an
     equation", BIT 11, 1971)."""
     bad = ~np.isfinite(fx)
-    suspect[k[bad]] = True   # on an undamped pole: bisect from now on
-    keep = ~bad
-    k, x, fx, bisect = k[keep], x[keep], fx[keep], bisect[keep]
+    if bad.any():
+        suspect[k[bad]] = True   # on an undamped pole: bisect from now on
+        keep = ~bad
+        k, x, fx, bisect = k[keep], x[keep], fx[keep], bisect[keep]
     zero = fx == 0
     right = (np.sign(fx) == np.sign(fb[k])) & ~zero
     left = ~right & ~zero
@@ -98,11 +99,13 @@ def _illinois_step(k, x, fx, bisect, a, b, fa, fb, ga, gb, last, scale, suspect,
     gb[kl] = np.where((last[kl] == -1) & ~bisect[left], 0.5 * gb[kl], gb[kl])
     a[kl], fa[kl], ga[kl], last[kl] = x[left], fx[left], fx[left], -1
     # a bisection step restarts regula falsi from the true end values
-    kb = k[bisect]
-    ga[kb], gb[kb], last[kb] = fa[kb], fb[kb], 0
-    a[kz] = b[kz] = x[zero]
-    fa[kz] = fb[kz] = 0.0
-    active[kz] = False
+    if bisect.any():
+        kb = k[bisect]
+        ga[kb], gb[kb], last[kb] = fa[kb], fb[kb], 0
+    if kz.size:
+        a[kz] = b[kz] = x[zero]
+        fa[kz] = fb[kz] = 0.0
+        active[kz] = False
     # |f| inside above both starting ends: an undamped pole is likely in the bracket
     suspect[kr] |= np.abs(fx[right]) > scale[kr]
     suspect[kl] |= np.abs(fx[left]) > scale[kl]
@@ -149,10 +152,12 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
         Minimum brackets: arrays of the function index, the ends lo < x < hi and the values
         there, fx the least (the function is taken as unimodal in [lo, hi]; flo and fhi only
         place the first probes, they may be approximate).
-    guesses : (centre, spacing), optional
-        Per root bracket, a first estimate of the root and of its error (NaN: none), e.g.
-        from an interpolation of the grid that bracketed it: the first three probes are
-        placed there instead of about regula falsi's point a quarter of the bracket apart.
+    guesses : callable, optional
+        ``guesses()`` -> (centre, spacing): per root bracket, a first estimate of the root and
+        of its error (NaN: none), e.g. from an interpolation of the grid that bracketed it:
+        the first three probes are placed there instead of about regula falsi's point a
+        quarter of the bracket apart (called only when the brackets are few enough to be
+        probed so from the start).
 
     Returns
     -------
@@ -208,7 +213,7 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
                 h = 0.25 * (b - a)
                 checked = b - a
                 if guesses is not None and iteration == 0:
-                    c0, h0 = (np.asarray(v, dtype=float) for v in guesses)
+                    c0, h0 = (np.asarray(v, dtype=float) for v in guesses())
                     use = (c0 > a) & (c0 < b) & (h0 >= 0) & (h0 < 0.25 * (b - a))
                     c = np.where(use, c0, c)
                     h = np.where(use, np.maximum(h0, ROOT_TOLERANCE * b), h)
