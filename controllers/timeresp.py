@@ -458,7 +458,8 @@ def metrics(response: control.TimeResponseData, *, settling_band: float = 0.02
         ``settling_time`` on ||theta - r_f|| <= settling_band |r_f| (for a planar response
         these are the planar definitions); then per hub axis ``peak_torque_x``,
         ``peak_attitude_error_x``, ``final_attitude_error_x``, ... and per tip output
-        ``peak_<name>`` [m].
+        ``peak_<name>`` ([m] for a deflection, [rad] for a twist); ``peak_tip_deflection``
+        [m] the largest of the deflections (the twists are no deflections).
 
     References
     ----------
@@ -519,12 +520,14 @@ def _three_axis_metrics(response, t: np.ndarray, settling_band: float) -> dict:
     refs = [signal_trace(response, n, "input") for n in ch.refs]
     ref = np.array([np.zeros(t.size) if r is None else r for r in refs])
     tips = tip_outputs(response.output_labels)
+    # the deflections [m]: a twist [rad] is no deflection
+    deflections = [n for n in tips if TIP_SUFFIX in n]
     r_f = ref[:, -1]
     phi = float(np.linalg.norm(r_f))
     per_axis = [f"{name}_{a}" for a in ch.axes for name in
                 ("peak_torque", "peak_attitude_error", "final_attitude_error")]
     names = ["peak_torque", "peak_attitude_error", "final_attitude_error"]
-    names += ["peak_tip_deflection"] if tips else []
+    names += ["peak_tip_deflection"] if deflections else []
     names += ["overshoot", "settling_time"] if phi != 0.0 else []
     names += per_axis + [f"peak_{n}" for n in tips]
     diverged_at = _divergence(response, t, list(theta) + list(torque) + list(ref)
@@ -538,8 +541,8 @@ def _three_axis_metrics(response, t: np.ndarray, settling_band: float) -> dict:
         "peak_attitude_error": float(np.max(norm)),
         "final_attitude_error": float(norm[-1])}
     peaks = {n: float(np.max(np.abs(signal_trace(response, n)))) for n in tips}
-    if tips:
-        out["peak_tip_deflection"] = max(peaks.values())
+    if deflections:
+        out["peak_tip_deflection"] = max(peaks[n] for n in deflections)
     if phi != 0.0:
         along = (r_f @ theta) / (phi * phi)  # progress along the slew axis, 1 at the target
         out["overshoot"] = float(100.0 * max(0.0, np.max(along) - 1.0))

@@ -38,7 +38,8 @@ def test_a_recorded_controller_given_back_runs_the_same_loop(tmp_path):
     K = tuned.designs["poles-and-zeros"]["controllers"]["pd"]
     record = controller_record(K, "pd")
     assert record["kind"] == "pd" and len(record["A"]) == K.nstates == 2
-    again = run(load_scene(with_given(raw, record)))
+    again = run(load_scene(with_given(raw, record),
+                           overrides={"export.fmu": False, "report.plots": False}))
     K2 = again.designs["poles-and-zeros"]["controllers"]["pd"]
     for name in ("A", "B", "C", "D"):
         assert np.array_equal(getattr(K2, name), getattr(K, name)), name
@@ -52,7 +53,7 @@ def test_a_recorded_controller_given_back_runs_the_same_loop(tmp_path):
     for name in ("overshoot", "settling_time", "peak_torque"):
         assert m2[name] == pytest.approx(m1[name], rel=1e-12, abs=1e-15), name
     # the report says the controller was given, not tuned
-    write_report(again, tmp_path, fmus=False, plots=False)
+    write_report(again, tmp_path)
     assert "given in the scene (controller.given): 2 states" in (tmp_path / "report.md").read_text()
 
 

@@ -72,9 +72,10 @@ def fe_coupled_frequencies(scene, boom_root_model, boom_mass: float, n_elements:
 @pytest.fixture(scope="module")
 def result(tmp_path_factory):
     folder = tmp_path_factory.mktemp("real") / "out"
-    result = run("real_appendages")
+    result = run(load_scene("real_appendages",
+                            overrides={"export.fmu": False, "report.plots": False}))
     with output_folder(folder) as out:
-        write_report(result, out, fmus=False, plots=False)
+        write_report(result, out)
     return result, folder
 
 

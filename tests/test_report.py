@@ -33,8 +33,8 @@ def _written(scene, folder):
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(Figure, "savefig", keep)
-        result = run(scene)
-        data = write_report(result, folder, fmus=False, plots=True)
+        result = run(load_scene(scene, overrides={"export.fmu": False}))
+        data = write_report(result, folder)
     return result, data, figures
 
 
@@ -369,8 +369,9 @@ def test_modes_left_out_of_the_design_are_listed_with_the_reason(tmp_path):
     del scene["controller"]["pd"]["roll_off"]
     for a in scene["appendages"]:
         a["beam"]["damping_ratio"] = 0.0
+    scene["export"] = {"fmu": False}
     result = run(scene)
-    write_report(result, tmp_path, fmus=False, plots=False)
+    write_report(result, tmp_path)
     md = (tmp_path / "report.md").read_text()
     pd = result.data["controllers"]["poles-and-zeros"]["pd"]["removed_modes"]
     lqr = result.data["controllers"]["poles-and-zeros"]["lqr"]["removed_modes"]

@@ -259,6 +259,8 @@ def test_a_run_takes_the_structures_as_truth_and_fits_chains_to_them(tmp_path):
     data = scene_data()
     data["fidelity"] = {"n_modes": 4}
     data["outputs"] = {"exact_reference": True}
+    data["export"] = {"fmu": False}
+    data["report"] = {"plots": False}
     result = run(load_scene(data, source="real.toml"))   # no manoeuvre: no simulation
     hub = Hub(1200.0, 800.0)
     mounts = [Mount(m, p, d) for m, p, d in zip(
@@ -282,7 +284,7 @@ def test_a_run_takes_the_structures_as_truth_and_fits_chains_to_them(tmp_path):
     w = tables["boom"]["quantities"].index("w1")
     assert abs(tables["boom"]["columns"][0]["relative_error"][w]) < 1e-3
     with output_folder(tmp_path / "out") as folder:
-        write_report(result, folder, fmus=False, plots=False)
+        write_report(result, folder)
     report = (tmp_path / "out" / "report.md").read_text()
     assert "stepped beam of 2 segments from the root" in report
     assert "tip body 5 kg, 0.5 kg m^2, centre 0.1 m beyond the free end" in report

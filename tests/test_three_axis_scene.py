@@ -124,30 +124,53 @@ def report(tmp_path_factory):
 
 
 @pytest.mark.slow
-def test_run_writes_the_per_axis_report_plots_and_fmus(report):
+def test_run_writes_the_per_axis_report_plots_fmus_and_ssp(report):
+    """The shipped scene through the design loop every scene runs: the planar report's
+    sections, per axis where the physics has axes; every plot; FMUs and SSPs of both FMI
+    versions; the time series."""
     out, data = report
     assert data["three_axis"] and [r["controller"] for r in data["closed_loops"]] == ["pd", "lqr"]
     text = (out / "report.md").read_text()
+    for section in ("## Summary", "## The question", "## Models", "## Controllers",
+                    "## Equivalence criterion: wing_left (x-y bending plane)", "## Closed loops",
+                    "## Plots", "## FMUs", "## Time series"):
+        assert section in text, section
     for row in data["closed_loops"]:
-        assert row["design_stable"] and row["truth_stable"]
-        metrics = row["truth_metrics"]
+        assert row["verdict"]["stable"]
+        assert row["status"]["design"]["status"] == row["status"]["truth"]["status"] == "settles"
+        metrics = row["metrics"]["truth"]
         for a in AXES:
-            assert f"peak_attitude_error_{a}" in metrics and f"gain_margin_{a}" in \
-                row["truth_margins"]
+            assert f"peak_attitude_error_{a}" in metrics and f"gain_margin_{a}" in row["verdict"]
         for name in ("wing_left", "wing_right", "boom"):
+            peaks = row["appendages"]["truth"][name]
             for motion in ("tip_deflection_y", "tip_deflection_z", "tip_twist"):
-                assert f"peak_{name}_{motion}" in metrics
-                assert f"peak_{name}_{motion}" in text
+                assert peaks[f"peak_{motion}"] == metrics[f"peak_{name}_{motion}"]
+        # the tip deflection is a deflection's [m], not a twist's [rad]
+        assert metrics["peak_tip_deflection"] == max(
+            metrics[f"peak_{n}_tip_deflection_{p}"] for n in ("wing_left", "wing_right", "boom")
+            for p in "yz")
         # the slew ends at the target: 10 deg about the axis, to 1e-2 of the angle after 120 s
         assert metrics["final_attitude_error"] < 1e-2 * math.radians(10.0)
-        assert row["truth_margins"]["disk_margin"] > 0.5
-    assert sorted(data["files"]["plots"]) == ["plots/slew_lqr.png", "plots/slew_pd.png"]
+        assert row["verdict"]["disk_margin"] > 0.5
+        # the disturbance (0.05 N m about z for 5 s) moves the attitude about z most
+        shock = row["disturbance_metrics"]["truth"]
+        assert shock["peak_attitude_error_z"] > max(shock["peak_attitude_error_x"],
+                                                    shock["peak_attitude_error_y"])
+    for label in ("peak tip deflection y [m]", "peak tip twist [rad]", "disk margin alpha [-]",
+                  "peak attitude error about z [rad]", "the disturbance alone"):
+        # (Markdown escapes the brackets)
+        assert label.replace("[", "\\[").replace("]", "\\]") in text, label
+    # the PD's notch at the design model's first flexible mode, on every axis
+    pd = data["controllers"]["poles-and-zeros"]["pd"]
+    assert pd["notch_spec"] == "first_mode" and pd["n_states"] == 6   # a 2nd-order notch per axis
+    assert sorted(data["files"]["plots"]) == ["plots/W.png", "plots/loop.png", "plots/poles.png",
+                                              "plots/slew_lqr.png", "plots/slew_pd.png"]
     for p in data["files"]["plots"]:
         assert (out / p).stat().st_size > 10_000
     fmus = {f["path"] for f in data["files"]["fmu"]}
-    assert {"fmu/plant_fmi2.fmu", "fmu/plant_fmi3.fmu", "fmu/controller_lqr_fmi3.fmu",
-            "fmu/closed_loop_pd_fmi2.fmu"} <= fmus
-    variables = {v.name: v for v in read_model_description(str(out / "fmu/plant_fmi2.fmu"))
+    assert {"fmu/plant.fmu", "fmu/plant_fmi3.fmu", "fmu/lqr_fmi3.fmu",
+            "fmu/closed_loop_pd.fmu"} <= fmus
+    variables = {v.name: v for v in read_model_description(str(out / "fmu/plant.fmu"))
                  .modelVariables}
     for a in AXES:
         assert variables[f"torque_{a}"].causality == "input"
@@ -155,12 +178,29 @@ def test_run_writes_the_per_axis_report_plots_and_fmus(report):
         assert variables[f"theta_{a}"].unit == "rad"
     assert variables["boom_tip_twist"].unit == "rad"
     assert variables["wing_left_tip_deflection_z"].unit == "m"
+    # an SSP per controller and version connects the plant's three torques and attitudes
+    from fmpy.ssp.ssd import read_ssd
+
+    ssps = sorted(f["path"] for f in data["files"]["ssp"])
+    assert ssps == ["fmu/loop_lqr.ssp", "fmu/loop_lqr_fmi3.ssp", "fmu/loop_pd.ssp",
+                    "fmu/loop_pd_fmi3.ssp"]
+    structure = read_ssd(str(out / "fmu/loop_pd.ssp"), validate=True)
+    connected = {(c.startElement, c.startConnector) for c in structure.system.connections}
+    for a in AXES:
+        assert any(name == f"torque_{a}" for _, name in connected)
+        assert any(name == f"theta_{a}" for _, name in connected)
+    columns = {f["path"]: f for f in data["files"]["timeseries"]}
+    series = columns["timeseries/pd_poles-and-zeros_truth.csv"]
+    assert series["units"][series["columns"].index("theta_x")] == "rad"
+    assert series["units"][series["columns"].index("wing_left_tip_twist")] == "rad"
 
 
 def test_run_frequencies_equal_the_spacecraft_built_in_python(report):
     """The scene's exact coupled frequencies against the example built directly (the boom's
     orientation from its axis; an axisymmetric tube, so its roll does not matter): agreement
     to the precision of the scene's printed angles (1e-7 relative)."""
+    from spacecraft import DesignLoop
+
     _, data = report
     wing = Beam.rectangular(6.0, 2.0, 0.04, 40.0, 7e8, damping_ratio=0.005)
     boom = Beam.tube(4.0, 0.05, 0.001, 1600.0, 1.2e11, damping_ratio=0.005)
@@ -172,10 +212,17 @@ def test_run_frequencies_equal_the_spacecraft_built_in_python(report):
         Mount(wing, (0.0, -1.1, 0.0), orientation=euler_orientation("ZYX", (-math.pi / 2, 0.0,
                                                                             math.radians(20.0)))),
         Mount(boom, (0.6, 0.3, -0.9), orientation=orientation_from_axis((1.0, -0.5, -1.2)))])
-    exact = np.array(data["exact_frequencies_rad_s"])
+    loop = DesignLoop("three_axis")
+    exact = loop.exact_frequencies(12)
     np.testing.assert_allclose(craft.natural_frequencies(exact.size), exact, rtol=1e-7)
-    # the truth model (10 Craig-Bampton modes per beam) converges to them (1e-5 observed 2e-6)
-    np.testing.assert_allclose(data["truth_frequencies_rad_s"], exact, rtol=1e-5)
+    # the run's tolerance was met against these (its reference: the first exact frequency)
+    choice = data["fidelity"]["choice"]
+    np.testing.assert_allclose(choice["reference_frequencies"],
+                               exact[:len(choice["reference_frequencies"])], rtol=1e-12)
+    assert choice["trials"][-1]["frequency_error"] <= choice["tolerance"]
+    # 10 Craig-Bampton modes per beam converge to them (1e-5; observed 2e-6)
+    truth = loop.truth_spacecraft(10)
+    np.testing.assert_allclose(truth.natural_frequencies(12), exact, rtol=1e-5)
 
 
 def test_digital_controllers_in_a_three_axis_scene():
@@ -184,7 +231,9 @@ def test_digital_controllers_in_a_three_axis_scene():
     from spacecraft.design.loop import run
 
     data = run(scene_with(lambda d: (d["controller"].update(sample_rate=10.0),
-                                     d["export"].update(fmu=False)))).data
+                                     d["export"].update(fmu=False),
+                                     d["report"].update(plots=False)))).data
     for row in data["closed_loops"]:
-        assert row["digital"] and row["truth_stable"] and row["design_stable"]
-        assert row["truth_metrics"]["final_attitude_error"] < 1e-2 * math.radians(10.0)
+        assert row["digital"]["sample_time"] == pytest.approx(0.1)
+        assert row["verdict"]["stable"] and row["status"]["design"]["status"] == "settles"
+        assert row["metrics"]["truth"]["final_attitude_error"] < 1e-2 * math.radians(10.0)

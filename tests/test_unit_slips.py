@@ -156,7 +156,7 @@ def test_a_run_reports_the_unit_slips_with_its_warnings(tmp_path):
             "45 deg")
     assert result.data["warnings"][0] == line
     with output_folder(tmp_path / "out") as folder:
-        write_report(result, folder, fmus=False, plots=False)
+        write_report(result, folder)
     report = (tmp_path / "out" / "report.md").read_text()
     section = report[report.index("## Warnings"):]
     assert "direction: did you give radians? 0.7854 rad = 45 deg" in section

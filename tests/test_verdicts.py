@@ -21,7 +21,7 @@ from spacecraft.design.naming import CAUTION_COLOUR
 from spacecraft.report.pages import Tone
 from spacecraft.report.write import summary_lines, write_report
 from spacecraft.design.loop import run
-from spacecraft.scene.read import scene_path
+from spacecraft.scene.read import load_scene, scene_path
 from spacecraft.design.verdicts import (DAMPING_DROP, MARGINAL, MIN_DAMPING, MIN_DISK_MARGIN,
                                  MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN, MIN_PHASE_MARGIN, growing,
                                  loop_warnings, margin_flags)
@@ -147,8 +147,8 @@ def _written(scene, folder):
 
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(Figure, "savefig", keep)
-        result = run(scene)
-        data = write_report(result, folder, fmus=False, plots=True)
+        result = run(load_scene(scene, overrides={"export.fmu": False}))
+        data = write_report(result, folder)
     return result, data, figures
 
 
@@ -228,25 +228,27 @@ def test_a_lightly_damped_loop_is_not_stable_in_black(tmp_path):
 # ---------------------------------------------------------------------------------------------
 # three axes
 # ---------------------------------------------------------------------------------------------
-def _three_axis(position, tmp_path):
+def _three_axis(position, attitude_weight, tmp_path):
     raw = tomllib.loads(scene_path("three_axis").read_text())
     raw = copy.deepcopy(raw)
     raw["appendages"][0]["position"] = position
     raw["controller"] = {"types": ["lqr"], "lqr": {
-        "attitude_weight": 1e12, "torque_weight": 1e-12, "rate_weight": 0.0,
+        "attitude_weight": attitude_weight, "torque_weight": 1.0, "rate_weight": 0.0,
         "estimator_speed": 100.0}}
-    raw["fidelity"]["n_modes"] = 2
+    raw["fidelity"] = {"n_modes": 2}
     raw["export"]["fmu"] = False
+    raw["report"]["plots"] = False
     raw["manoeuvre"]["duration"] = 20.0
+    del raw["manoeuvre"]["disturbance"]
     result = run(raw)
-    data = write_report(result, tmp_path, fmus=False, plots=False)
+    data = write_report(result, tmp_path)
     return data, (tmp_path / "report.md").read_text(), (tmp_path / "report.html").read_text()
 
 
 def test_the_unstable_three_axis_loop_shows_no_margin_as_a_guarantee(tmp_path):
-    # the issue's reproducer: "UNSTABLE, disk margin 0.587 (gain 5.25 dB, phase 32.7 deg)",
-    # called margins it guarantees, with an empty warnings list
-    data, md, html = _three_axis([1000.0, 1000.0, 970.0], tmp_path)
+    # the issue's reproducer (a fast LQR, a wing 1.7 km out): "UNSTABLE, disk margin 0.587
+    # (gain 5.25 dB, phase 32.7 deg)", called margins it guarantees, with an empty warnings list
+    data, md, html = _three_axis([1000.0, 1000.0, 970.0], 1e8, tmp_path)
     row = data["closed_loops"][0]
     assert growing(row["verdict"])
     line = summary_lines(data)[1]
@@ -258,13 +260,15 @@ def test_the_unstable_three_axis_loop_shows_no_margin_as_a_guarantee(tmp_path):
     flags = saved["closed_loops"][0]["verdict"]["margin_flags"]
     assert flags["disk_margin"] == flags["disk_gain_margin"] == "unstable"
     assert "guarantees in all loops at once" not in md
-    assert "no margins and guarantee nothing" in md
+    # as a planar loop's: the summary says no margins, every margin cell says so in red
+    assert "no margins: it diverges unperturbed" in md
+    assert "(unstable: no margin)" in md
     assert '<td class="bad">' + f"{row['verdict']['disk_margin']:.4g}" in html
 
 
 def test_low_three_axis_margins_are_warned_and_marked(tmp_path):
-    # the wing 100 m out: stable, disk margin 0.10 (< 2/3)
-    data, md, html = _three_axis([0.0, 100.0, 0.0], tmp_path)
+    # the wing 100 m out: stable, disk margin 0.15 (< 2/3)
+    data, md, html = _three_axis([0.0, 100.0, 0.0], 1e7, tmp_path)
     row = data["closed_loops"][0]
     assert not growing(row["verdict"]) and row["verdict"]["disk_margin"] < MIN_DISK_MARGIN
     codes = [w["code"] for w in data["design_warnings"]]

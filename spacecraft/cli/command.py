@@ -284,35 +284,42 @@ def _add_export_options(parser) -> None:
                              "FMUs")
 
 
-def _with_options(scene, args):
-    """The scene with the command line's export and simulator options applied."""
-    import dataclasses
+def _overrides(args, *, export_only: bool = False) -> tuple[dict, dict]:
+    """The scene keys the command line's options set (key path -> value, for the scene
+    reader, which checks them with the rest) and the option that set each key."""
+    changes, given = {}, {}
 
-    changes = {}
+    def put(key, value, option):
+        changes[key] = value
+        if option is not None:
+            given[key] = option
+
     version = getattr(args, "fmi_version", None)
     if version is not None:
-        changes["fmi_versions"] = ("2.0", "3.0") if version == "both" else (version,)
+        put("export.fmi_version", ["2.0", "3.0"] if version == "both" else [version],
+            f"--fmi-version {version}")
     if getattr(args, "sources_only", False):
-        changes["sources_only"] = True
+        put("export.sources_only", True, "--sources-only")
     if getattr(args, "ssp", False):
-        if scene.three_axis:
-            raise _UserError(f"{scene.source}: --ssp is planar for now (the SSP connects "
-                             "torque, theta and omega)")
-        missing = [s for s in ("plant", "controller") if s not in scene.export.systems]
-        if missing:
-            raise _UserError(f"--ssp: needs 'plant' and 'controller' FMUs; the scene's "
-                             f"export.systems lacks {', '.join(map(repr, missing))}")
-        changes["ssp"] = True
+        put("export.ssp", True, "--ssp")
     if changes:
         if getattr(args, "no_fmu", False):
             raise _UserError("--no-fmu contradicts --fmi-version, --sources-only and --ssp")
-        scene = scene.replace(export=dataclasses.replace(scene.export, fmu=True, **changes))
+        put("export.fmu", True, None)
+    if export_only:
+        put("export.fmu", True, None)
+    if getattr(args, "no_fmu", False):
+        put("export.fmu", False, "--no-fmu")
+    if getattr(args, "no_plots", False):
+        put("report.plots", False, "--no-plots")
     simulator = getattr(args, "simulator", None)
     if simulator is not None:
-        from ..scene.read import with_simulator
-
-        scene = with_simulator(scene, simulator)
-    return scene
+        # flexsat alone: the whole table (Basilisk's rate, step and wheel go with Basilisk)
+        if simulator == "flexsat":
+            put("simulator", {"name": "flexsat"}, f"--simulator {simulator}")
+        else:
+            put("simulator.name", simulator, f"--simulator {simulator}")
+    return changes, given
 
 
 def _add_limit(parser) -> None:
@@ -328,25 +335,35 @@ def _limits(args) -> dict:
     return dict(getattr(args, "limit", []) or [])
 
 
-def _scene(argument, limits=None):
-    from ..scene.read import example_scenes, load_scene, scene_path
+def _scene(argument, limits=None, overrides=None, options=None):
+    """The scene of the command line: a file or an embedded scene's name, with the options'
+    ``overrides`` read by the scene reader, which checks them with the rest; a refusal of a
+    key an option set names the option (``options``: key path -> option)."""
+    from ..scene.read import SceneError, example_scenes, load_scene, scene_path
 
-    if argument is None:
-        return load_scene(None, limits=limits)
-    path = Path(argument)
-    if not path.exists():
-        names = example_scenes()
-        if argument in names:
-            return load_scene(scene_path(argument), source=f"{argument} (embedded scene)",
-                              limits=limits)
-        if path.suffix == "" and path.parent == Path("."):
-            import difflib
+    try:
+        if argument is None:
+            return load_scene(None, limits=limits, overrides=overrides)
+        path = Path(argument)
+        if not path.exists():
+            names = example_scenes()
+            if argument in names:
+                return load_scene(scene_path(argument), source=f"{argument} (embedded scene)",
+                                  limits=limits, overrides=overrides)
+            if path.suffix == "" and path.parent == Path("."):
+                import difflib
 
-            close = difflib.get_close_matches(argument, names, n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise _UserError(f"{_one_line(argument)[:100]}: no such scene file or embedded "
-                             f"scene (embedded: {', '.join(names)}){hint}")
-    return load_scene(path, limits=limits)
+                close = difflib.get_close_matches(argument, names, n=1)
+                hint = f"; did you mean {close[0]!r}?" if close else ""
+                raise _UserError(f"{_one_line(argument)[:100]}: no such scene file or embedded "
+                                 f"scene (embedded: {', '.join(names)}){hint}")
+        return load_scene(path, limits=limits, overrides=overrides)
+    except SceneError as exc:
+        message = str(exc)
+        named = [option for key, option in (options or {}).items() if f": {key}" in message]
+        if not named:
+            raise
+        raise SceneError(f"{message} (set by {', '.join(dict.fromkeys(named))})") from None
 
 
 def _beam_from(args):
@@ -354,7 +371,7 @@ def _beam_from(args):
     the beam of the beam options; with its source for the printout and the reader's unit-slip
     warnings (printed as ``flexsat: warning:`` lines)."""
     from ..scene.limits import library_limits
-    from ..scene.read import SceneError, _Reader, _read_beam, _read_tip
+    from ..scene.read import SceneError, read_beam_table
 
     given = {option[2:].replace("-", "_"): getattr(args, option[2:].replace("-", "_"))
              for option, _, _ in _BEAM_OPTIONS}
@@ -392,10 +409,8 @@ def _beam_from(args):
     else:
         spec = {"length": PAPER_ROD["length"]} | given
     spec["section"] = section
-    reader = _Reader("command line")
-    tip_spec = _read_tip(reader, tip, "tip") if tip else None
-    beam = _read_beam(reader, spec, "beam", tip=tip_spec)
-    for line in reader.warnings:
+    beam, warned = read_beam_table(spec, tip=tip or None)
+    for line in warned:
         print(f"flexsat: warning: {_one_line(line)}", file=sys.stderr)
     return beam.build(), "command line"
 
@@ -417,32 +432,27 @@ def _matches(model, asked: str | None = None) -> tuple:
 
 
 def _cmd_run(args, *, export_only: bool = False) -> int:
+    from ..design.loop import run
+    from ..report.exports import write_exports
     from ..report.output import OutputFolder
     from ..report.write import summary_lines, to_json, write_report
-    from ..design.loop import run
 
     progress = Progress(args.quiet)
-    scene = _with_options(_scene(args.scene, _limits(args)), args)
+    changes, options = _overrides(args, export_only=export_only)
+    scene = _scene(args.scene, _limits(args), changes, options)
     if scene.simulator.name == "basilisk" and not export_only:
         from ..basilisk import require_basilisk
 
         require_basilisk()   # before any work: one line saying how to install the extra
-    if export_only and not scene.export.fmu:
-        import dataclasses
-
-        scene = scene.replace(export=dataclasses.replace(scene.export, fmu=True))
-        if scene.manoeuvre is None and scene.export.step is None:
-            raise _UserError(f"{scene.source}: export.step [s] is needed without a manoeuvre")
     # the output folder is checked and claimed before anything is computed
     target = OutputFolder(args.out)
     with target as folder:
         result = run(scene, progress=progress, time_responses=not export_only)
         if export_only:
-            data = write_report(result, folder, fmus=True, plots=False, pages=False,
-                                progress=progress)
+            files, _ = write_exports(result, folder, progress=progress)
+            data = {**result.data, "files": files}
         else:
-            data = write_report(result, folder, fmus=not args.no_fmu,
-                                plots=not args.no_plots, progress=progress)
+            data = write_report(result, folder, progress=progress)
     out = target.path
     progress(f"done in {time.perf_counter() - progress.t0:.1f} s")
     for line in data.get("warnings", []):
@@ -452,7 +462,7 @@ def _cmd_run(args, *, export_only: bool = False) -> int:
         return 0
     fmus = data["files"].get("fmu", [])
     if export_only:
-        for f in fmus:
+        for f in fmus + data["files"].get("ssp", []):
             print(f"{out / f['path']}: {f['description']}")
         return 0
     for line in summary_lines(data):

@@ -8,7 +8,8 @@ Choosing n_modes
        it (the mode the loop rolls off against, where spillover starts), agrees with the exact
        coupled frequency within tol (exact: Wittrick-Williams on the exact W(s),
        :meth:`Spacecraft.natural_frequencies` with ``exact=True``); and
-    2. the gain |theta/torque| agrees with the exact one within tol (relative) on
+    2. the gain |theta/torque| (three axes: each singular value of the 3x3 attitude response)
+       agrees with the exact one within tol (relative) on
        the closed-loop-relevant low band ``[wb/10, min(bandwidth_factor*wb, w_1/2, z_1/2)]``,
        w_1 the first exact coupled frequency and z_1 the first anti-resonance of theta/torque
        (the lowest clamped-root frequency of the appendages): below the first resonance and
@@ -65,7 +66,7 @@ import numpy as np
 from appendages import limits
 from appendages.interface import describe
 
-__all__ = ["FidelityChoice", "choose_n_modes", "low_band", "transfer_theta_torque",
+__all__ = ["FidelityChoice", "choose_n_modes", "low_band", "transfer_theta_torque", "gain_error",
            "closed_loop_change", "refine_for_closed_loop", "DAMPING_SCALE",
            "clamped_frequencies"]
 
@@ -155,17 +156,34 @@ def low_band(bandwidth: float, factor: float, first_frequency: float,
 
 
 def transfer_theta_torque(plant: control.StateSpace, omega: np.ndarray) -> np.ndarray:
-    """theta/torque [rad/(N m)] of a state-space plant at j*omega (complex, shape omega.shape)."""
-    i_in = list(plant.input_labels).index("torque")
-    i_out = list(plant.output_labels).index("theta")
+    """theta/torque [rad/(N m)] of a state-space plant at j*omega: complex, shape
+    ``omega.shape + (m, m)``, m = 1 for a planar plant (torque to theta), 3 for a three-axis
+    one (torque_x.._z to theta_x.._z, hub axes)."""
+    inputs, outputs = list(plant.input_labels), list(plant.output_labels)
+    if "torque" in inputs:
+        i_in, i_out = [inputs.index("torque")], [outputs.index("theta")]
+    else:
+        i_in = [inputs.index(f"torque_{a}") for a in "xyz"]
+        i_out = [outputs.index(f"theta_{a}") for a in "xyz"]
     A = np.asarray(plant.A, dtype=float)
-    b = np.asarray(plant.B, dtype=float)[:, i_in]
-    c = np.asarray(plant.C, dtype=float)[i_out]
-    d = float(np.asarray(plant.D)[i_out, i_in])
+    B = np.asarray(plant.B, dtype=float)[:, i_in]
+    C = np.asarray(plant.C, dtype=float)[i_out]
+    D = np.asarray(plant.D, dtype=float)[np.ix_(i_out, i_in)]
     n = A.shape[0]
-    s = 1j * np.asarray(omega, dtype=float)
+    s = 1j * np.asarray(omega, dtype=float).reshape(-1)
     M = s[:, None, None] * np.eye(n) - A
-    return np.linalg.solve(M, np.broadcast_to(b, (s.size, n))[..., None])[..., 0] @ c + d
+    return C @ np.linalg.solve(M, np.broadcast_to(B, (s.size,) + B.shape)) + D
+
+
+def gain_error(response: np.ndarray, exact: np.ndarray) -> float:
+    """Largest relative error of the gains of an attitude response against the exact one:
+    max over frequency of |sigma_i(P) / sigma_i(P_exact) - 1| over the singular values (a
+    planar plant's |P| / |P_exact| - 1). The singular values are the gains in the principal
+    directions; damping changes them, like the magnitude, only at second order below the
+    first resonance, where a phase would change at first order."""
+    sigma = np.linalg.svd(response, compute_uv=False)
+    sigma_exact = np.linalg.svd(exact, compute_uv=False)
+    return float(np.max(np.abs(sigma / sigma_exact - 1.0)))
 
 
 def choose_n_modes(truncated_plant: Callable[[int], tuple], exact_frequencies: Callable[[int], np.ndarray],
@@ -179,11 +197,12 @@ def choose_n_modes(truncated_plant: Callable[[int], tuple], exact_frequencies: C
     ----------
     truncated_plant : callable n -> (coupled frequencies [rad/s], plant StateSpace)
         Hub with every beam truncated to n modes: its first coupled elastic frequencies (as many
-        as it has) and its torque-to-theta plant.
+        as it has) and its torque-to-theta plant (three axes: torques to attitudes).
     exact_frequencies : callable k -> ndarray
         First k exact coupled elastic frequencies [rad/s].
     exact_response : callable omega -> ndarray
-        Exact theta/torque at j*omega [rad/(N m)].
+        Exact theta/torque at j*omega [rad/(N m)], shape ``omega.shape + (m, m)`` as
+        :func:`transfer_theta_torque` (three axes: the 3x3 attitude compliance).
     bandwidth : float, rad/s
         Controller bandwidth (rigid-body closed-loop natural frequency).
     tolerance : float
@@ -248,9 +267,9 @@ def choose_n_modes(truncated_plant: Callable[[int], tuple], exact_frequencies: C
             trials.append({"n_modes": n, "frequency_error": math.inf, "gain_error": math.inf})
             continue
         f_err = float(np.max(np.abs(frequencies[:n_ref] / reference - 1.0)))
-        # gain (magnitude) error: below the first resonance damping changes the phase at
-        # first order in zeta but the gain only at second order, so the gain is compared
-        g_err = float(np.max(np.abs(np.abs(transfer_theta_torque(plant, omega) / exact) - 1.0)))
+        # gain error: below the first resonance damping changes the phase at first order in
+        # zeta but the gains (singular values) only at second order, so the gains are compared
+        g_err = gain_error(transfer_theta_torque(plant, omega), exact)
         trials.append({"n_modes": n, "frequency_error": f_err, "gain_error": g_err})
         if f_err <= tolerance and g_err <= tolerance:
             return FidelityChoice(n, method, float(tolerance), band, reference, trials)

@@ -49,9 +49,9 @@ from .models import ModelBuilder, ProgressCallback, RunStats
 from .responses import appendage_peaks, diverged_at, simulate_manoeuvre, trace
 from .tables import describe_model, equivalence_table
 from .tuning import digital_facts, rigid_crossover
-from .verdicts import (closed_loop_poles, design_warnings, exact_loop_verdict, growing,
-                       loop_status, margin_flags, margins_dict, resolved_frequency,
-                       verdict_dict, withheld_metrics)
+from .verdicts import (closed_loop_poles, crossover_frequencies, design_warnings,
+                       exact_loop_verdict, growing, loop_status, margin_flags, margins_dict,
+                       resolved_frequency, verdict_dict, withheld_metrics)
 
 __all__ = ["DesignLoop", "ClosedLoops", "RunResult", "RunStats", "run", "warning_lines",
            "input_warning_lines", "check_options"]
@@ -110,7 +110,6 @@ class RunResult:
     disturbance_responses: dict = dataclasses.field(default_factory=dict)
     poles: dict = dataclasses.field(default_factory=dict)
     basilisk: dict = dataclasses.field(default_factory=dict)
-    three_axis: dict = dataclasses.field(default_factory=dict)
 
 
 @dataclasses.dataclass
@@ -560,7 +559,8 @@ class DesignLoop(ModelBuilder):
         scene = self.scene
         if not rows:
             return None, {}
-        crossovers = [w for r in rows for w in _crossovers(r.get("design_margins", {}))]
+        crossovers = [w for r in rows
+                      for w in crossover_frequencies(r.get("design_margins", {}))]
         with self.scene_values("controller"):
             wn = self.design_bandwidth(self.rigid_inertia())
         band = scene.fidelity.bandwidth_factor * max([wn] + crossovers)
@@ -569,7 +569,8 @@ class DesignLoop(ModelBuilder):
             method = scene.fidelity.method
             for a in scene.appendages:
                 if a.truth == "beam":
-                    w = resolved_frequency(self.beam(a), n_modes, method)
+                    w = resolved_frequency(self.beam(a), n_modes, method,
+                                           three_axis=self.three_axis)
                     resolved[a.name] = (w, f"{n_modes} {method} mode"
                                            f"{'s' if n_modes != 1 else ''}")
         return band, resolved
@@ -586,17 +587,17 @@ class DesignLoop(ModelBuilder):
                 continue
             done.add(key)
             fits = {m: models[a.name]["fits"][m] for m in a.fit.match}
-            table = equivalence_table(self.beam(a), fits, stats=self.stats)
+            beam = self.beam(a)
+            if self.three_axis:
+                # the paper's table is planar: the x-y bending plane of beam and chains
+                beam = beam.planar_view("xy")
+                fits = {m: chain.planar_view("xy") for m, chain in fits.items()}
+            table = equivalence_table(beam, fits, stats=self.stats)
             table["appendage"] = a.name
+            if self.three_axis:
+                table["plane"] = "x-y"
             tables.append(table)
         return tables
-
-
-def _crossovers(margins: dict) -> list[float]:
-    """The finite gain crossover frequencies [rad/s] of a loop's margins (a three-axis loop's
-    per axis)."""
-    values = [v for k, v in margins.items() if k.startswith("gain_crossover_frequency")]
-    return [w for w in values if w is not None and math.isfinite(w)]
 
 
 def _described(sc) -> dict:
@@ -672,9 +673,6 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     if stats is not None and not isinstance(stats, RunStats):
         raise TypeError(f"stats must be a RunStats or None; got {type(stats).__name__}")
     scene = load_scene(scene)
-    stats = RunStats() if stats is None else stats
-    if scene.three_axis:
-        return _run_three_axis(scene, progress, stats, time_responses)
     # the whole run sized like its largest loop (controllers/threads.py): the models' and
     # tables' own small products and factorisations single-threaded too, not only the
     # controllers' entry points
@@ -687,23 +685,6 @@ def run(scene=None, *, progress: ProgressCallback | None = None,
     return result
 
 
-def _run_three_axis(scene, progress, stats, time_responses) -> RunResult:
-    """A three-axis scene (:mod:`spacecraft.design.three_axis`) in a RunResult."""
-    from .three_axis import run_three_axis
-
-    with warnings.catch_warnings(record=True) as caught, library_limits(scene.limits):
-        warnings.simplefilter("default")
-        out = run_three_axis(scene, progress=progress, time_responses=time_responses)
-    out["data"]["warnings"] = (input_warning_lines(scene) + out["data"]["warnings"]
-                               + warning_lines(caught))
-    return RunResult(scene=scene, data=out["data"], stats=stats,
-                     truth={"plant": out["plants"]["truth"]},
-                     designs={"design": {"plant": out["plants"]["design"],
-                                         "controllers": out["controllers"]}},
-                     responses=out["responses"], loops=out["loops"], models={},
-                     three_axis=out)
-
-
 def input_warning_lines(scene) -> list[str]:
     """The scene's values that look like unit slips (:attr:`Scene.input_warnings`), as warning
     lines (``UnitWarning: <file>: <key>: ...``)."""
@@ -711,17 +692,17 @@ def input_warning_lines(scene) -> list[str]:
 
 
 def check_options(**options) -> None:
-    """TypeError naming an option of :func:`run` or :func:`spacecraft.write_report` that is
-    not what it must be: ``progress`` None or a function of one message, the others a bool
-    (``fmus`` and ``plots`` also None: the scene's choice)."""
+    """TypeError naming an option of :func:`run`, :class:`DesignLoop` or
+    :func:`spacecraft.write_report` that is not what it must be: ``progress`` None or a
+    function of one message, the others True or False."""
     for name, value in options.items():
         if name == "progress":
             if value is not None and not callable(value):
                 raise TypeError(f"progress must be None or a function of one message; got "
                                 f"{type(value).__name__}")
-        elif not isinstance(value, bool) and not (value is None and name in ("fmus", "plots")):
-            allowed = "True, False or None" if name in ("fmus", "plots") else "True or False"
-            raise TypeError(f"{name} must be {allowed}; got {type(value).__name__} {value!r:.60}")
+        elif not isinstance(value, bool):
+            raise TypeError(f"{name} must be True or False; got {type(value).__name__} "
+                            f"{value!r:.60}")
 
 
 def warning_lines(caught) -> list[str]:

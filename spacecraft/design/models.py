@@ -39,7 +39,7 @@ from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
 from .exact_grid import (POINTS_PER_DECADE, POINTS_PER_MODE, exact_grid, locating_spacecraft,
                          locator_model)
 from .manoeuvre import loop_delay
-from .verdicts import closed_loop_poles, exact_loop_verdict
+from .verdicts import closed_loop_poles, crossover_frequencies, exact_loop_verdict
 
 __all__ = ["ModelBuilder", "GivenModels", "TruthLoop", "RunStats", "raised_by_flexsat",
            "LQR_FREQUENCY_RANGE", "ProgressCallback"]
@@ -192,7 +192,8 @@ class ModelBuilder:
             self.hub = given.truth.hub
         else:
             with self.scene_values("hub"):
-                self.hub = Hub(scene.hub.mass, scene.hub.inertia)
+                self.hub = Hub(scene.hub.mass, np.asarray(scene.hub.inertia, dtype=float)
+                               if scene.three_axis else scene.hub.inertia)
         self._cache: dict = {}
         self._modal_spacecraft: set = set()
 
@@ -298,18 +299,24 @@ class ModelBuilder:
     def fit(self, spec: AppendageSpec, match: str):
         """Chain fitted to the appendage's structure, damped as it is
         (:func:`appendages.fit_chain`: stiffness-proportional hinge damping with the
-        appendage's damping ratio at its first cantilever frequency)."""
+        appendage's damping ratio at its first cantilever frequency; in a three-axis scene
+        :func:`appendages.fit_chain_3d`: the bending fit in both planes, torsion and axial
+        motion, each damped as the appendage)."""
         def build():
             from appendages.equivalence import fit_chain
+            from appendages.fit3d import fit_chain_3d
 
             beam = self.beam(spec)
             self.stats.chain_fits += 1
             with warnings.catch_warnings(), self.scene_values(
                     self.key(spec, "fit"), f"cannot fit a chain (match = {match!r}): "):
                 warnings.simplefilter("ignore", RuntimeWarning)
+                if self.three_axis:
+                    return fit_chain_3d(beam, spec.fit.n_bodies, match=match)
                 return fit_chain(beam, spec.fit.n_bodies, match=match)
         # identical beams (two symmetric wings) share one fit
-        return self.cached(("fit", spec.structure, spec.fit.n_bodies, match), build)
+        return self.cached(("fit", spec.structure, spec.fit.n_bodies, match, self.three_axis),
+                           build)
 
     def undamped_beam(self, spec: AppendageSpec):
         """The appendage's beam without damping (for the choice of the number of modes)."""
@@ -342,7 +349,9 @@ class ModelBuilder:
             for a, model in zip(self.scene.appendages, models):
                 with self.scene_values(f"appendages[{self._index[a.name]}]",
                                        "cannot mount it: "):
-                    mounts.append(Mount(model, a.position, a.direction, name=a.name))
+                    mounts.append(Mount(model, a.position, orientation=np.array(a.orientation),
+                                        name=a.name) if self.three_axis else
+                                  Mount(model, a.position, a.direction, name=a.name))
             return Spacecraft(self.hub, mounts)
         return self.cached(("spacecraft", key), build)
 
@@ -450,10 +459,10 @@ class ModelBuilder:
                             prune=prune)
             n_total = sc.modes()[0].size
             kept = full.nstates // 2
-            if tip:
-                self.stats.tip_deflection_outputs += len(sc.mounts)
-            if root_loads:
-                self.stats.root_load_outputs += 2 * len(sc.mounts)
+            if tip:   # planar: the deflection; three axes: both planes and the twist
+                self.stats.tip_deflection_outputs += (3 if sc.three_axis else 1) * len(sc.mounts)
+            if root_loads:   # planar: force and moment; three axes: three of each
+                self.stats.root_load_outputs += (6 if sc.three_axis else 2) * len(sc.mounts)
             return full, {"modes_total": int(n_total), "modes_kept": int(kept),
                           "modes_dropped": int(n_total - kept)}
         return self.cached(("plant", key, tip, root_loads, disturbances, prune), build)
@@ -474,8 +483,9 @@ class ModelBuilder:
         return self.cached(("exact_frequencies", k), build)
 
     # -- the run -------------------------------------------------------------------------------
-    def design_bandwidth(self, inertia: float) -> float:
-        """Rigid-body closed-loop natural frequency of the fastest controller [rad/s]."""
+    def design_bandwidth(self, inertia) -> float:
+        """Rigid-body closed-loop natural frequency of the fastest controller [rad/s] (three
+        axes: about the fastest axis)."""
         from controllers import natural_frequency_from_bandwidth
 
         c = self.scene.controller
@@ -487,20 +497,28 @@ class ModelBuilder:
             values.append(self.lqr_frequency(inertia))
         return max(values)
 
-    def lqr_frequency(self, inertia: float) -> float:
-        """Rigid-body LQR natural frequency [rad/s], refused outside LQR_FREQUENCY_RANGE."""
+    def lqr_frequency(self, inertia) -> float:
+        """Rigid-body LQR natural frequency [rad/s] (three axes: about the axis of least
+        inertia, the fastest), refused outside LQR_FREQUENCY_RANGE about any axis."""
         lqr = self.scene.controller.lqr
-        # rigid-body LQR poles: w = (q / (r J^2))^(1/4) (Anderson & Moore, sec. 5.2), formed
-        # as (q/r)^(1/4) / sqrt(J): no overflow of J^2
-        w = (lqr.attitude_weight / lqr.torque_weight) ** 0.25 / math.sqrt(inertia)
+        # three axes: the same weights on every principal axis, each with its moment
+        moments = (np.linalg.eigvalsh(np.asarray(inertia, dtype=float)) if self.three_axis
+                   else [float(inertia)])
         lo, hi = LQR_FREQUENCY_RANGE
-        if not lo <= w <= hi:
-            raise SceneError(
-                f"{self.scene.source}: controller.lqr: the weights give a rigid-body "
-                f"closed-loop frequency (attitude_weight / (torque_weight J^2))^(1/4) = {w:.3g} "
-                f"rad/s with J = {inertia:.4g} kg m^2, outside [{lo:g}, {hi:g}] rad/s; change "
-                "attitude_weight or torque_weight")
-        return w
+        values = []
+        for J in moments:
+            # rigid-body LQR poles: w = (q / (r J^2))^(1/4) (Anderson & Moore, sec. 5.2),
+            # formed as (q/r)^(1/4) / sqrt(J): no overflow of J^2
+            w = (lqr.attitude_weight / lqr.torque_weight) ** 0.25 / math.sqrt(J)
+            if not lo <= w <= hi:
+                axis = " (a principal moment)" if self.three_axis else ""
+                raise SceneError(
+                    f"{self.scene.source}: controller.lqr: the weights give a rigid-body "
+                    f"closed-loop frequency (attitude_weight / (torque_weight J^2))^(1/4) = "
+                    f"{w:.3g} rad/s with J = {J:.4g} kg m^2{axis}, outside [{lo:g}, {hi:g}] "
+                    "rad/s; change attitude_weight or torque_weight")
+            values.append(w)
+        return max(values)
 
     def choose_fidelity(self) -> tuple[int | None, FidelityChoice | None]:
         scene = self.scene
@@ -522,7 +540,7 @@ class ModelBuilder:
                           for a in scene.appendages]
                 sc = self.spacecraft(("undamped truth", n), models)
                 plant, _ = self.plant(sc, ("undamped truth", n), prune=scene.fidelity.prune)
-                frequencies = sc.modes()[0][3:]
+                frequencies = sc.modes()[0][sc.n_rigid:]
                 return frequencies, plant
 
             def exact_response(omega):
@@ -530,7 +548,7 @@ class ModelBuilder:
                 models = [self.undamped_beam(a) if a.truth == "beam" else
                           self.truth_model(a, None) for a in scene.appendages]
                 frd = self.spacecraft("undamped exact", models).frequency_response(omega)
-                return np.asarray(frd.frdata).reshape(-1)
+                return np.moveaxis(np.asarray(frd.frdata), -1, 0)   # (omega, m, m)
 
             with self.scene_values("fidelity.tolerance"):
                 choice = choose_n_modes(truncated, self.exact_frequencies, exact_response,
@@ -552,9 +570,9 @@ class ModelBuilder:
         scene = self.scene
         if not scene.controller.types:
             return choice
-        crossovers = [self.design_margins(variant, kind, choice.n_modes).gain_crossover_frequency
-                      for variant in self.variants for kind in scene.controller.types]
-        crossovers = [w for w in crossovers if math.isfinite(w)]
+        crossovers = [w for variant in self.variants for kind in scene.controller.types
+                      for w in crossover_frequencies(self.design_margins(variant, kind,
+                                                                         choice.n_modes))]
         band = max(scene.fidelity.bandwidth_factor * max([bandwidth] + crossovers),
                    float(choice.reference_frequencies[-1]))
         n, record = refine_for_closed_loop(self.truth_loops, choice.n_modes,
@@ -580,7 +598,11 @@ class ModelBuilder:
         values = []
         for a in self.scene.appendages:
             if a.truth == "beam":
-                values.append(float(self.beam(a).cantilever_frequencies(1)[0]))
+                if self.three_axis:
+                    values.append(float(clamped_frequencies(self.beam(a), 0.0,
+                                                            three_axis=True)[0]))
+                else:
+                    values.append(float(self.beam(a).cantilever_frequencies(1)[0]))
             elif a.truth == "modal":
                 values.append(float(self.beam(a).frequencies[0]))
         return min(values, default=math.inf)

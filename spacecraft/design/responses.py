@@ -11,7 +11,8 @@ could be computed (attributes ``diverged`` and ``diverged_at`` [s], :func:`diver
 
 Per appendage (:func:`appendage_peaks`): the peak tip deflection and, when the plant has them,
 the peak root force and root moment, from the outputs ``<name>_tip_deflection`` [m],
-``<name>_root_force`` [N] and ``<name>_root_moment`` [N m] of :meth:`Spacecraft.plant`.
+``<name>_root_force`` [N] and ``<name>_root_moment`` [N m] of :meth:`Spacecraft.plant`; three
+axes: the tip deflections in both planes [m] and the twist [rad], the root loads per axis.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ import controllers
 
 __all__ = ["simulate_manoeuvre", "diverged_at", "time_grid", "trace", "appendage_peaks",
            "outputs_until_overflow", "slew_and_disturbance_inputs", "disturbance_inputs",
-           "discrete_outputs", "response_data"]
+           "discrete_outputs", "response_data", "disturbance_weights", "APPENDAGE_SIGNALS"]
 
 
 def time_grid(manoeuvre) -> np.ndarray:
@@ -37,11 +38,16 @@ def time_grid(manoeuvre) -> np.ndarray:
 
 def slew_and_disturbance_inputs(loop, manoeuvre, T: np.ndarray):
     """Input arrays (ninputs, n) of the slew alone and of the disturbance alone (None without
-    a disturbance)."""
+    a disturbance). A three-axis loop slews about the manoeuvre's eigen-axis e:
+    ``theta_ref_i = e_i profile`` (small angles), as :func:`controllers.slew` does."""
     labels = list(loop.input_labels)
     U = np.zeros((loop.ninputs, T.size))
-    U[labels.index("theta_ref")] = controllers.slew_profile(T, manoeuvre.slew_angle,
-                                                            manoeuvre.slew_time)
+    profile = controllers.slew_profile(T, manoeuvre.slew_angle, manoeuvre.slew_time)
+    if "theta_ref" in labels:
+        U[labels.index("theta_ref")] = profile
+    else:
+        for axis, e in zip("xyz", manoeuvre.slew_axis):
+            U[labels.index(f"theta_ref_{axis}")] = e * profile
     return U, disturbance_inputs(labels, manoeuvre, T)
 
 
@@ -54,8 +60,20 @@ def disturbance_inputs(labels, manoeuvre, T: np.ndarray) -> np.ndarray | None:
     d = manoeuvre.disturbance
     end = math.inf if d.length is None else d.start + d.length
     D = np.zeros((len(labels), T.size))
-    D[labels.index(d.input)] = np.where((T >= d.start) & (T < end), d.amplitude, 0.0)
+    pulse = np.where((T >= d.start) & (T < end), d.amplitude, 0.0)
+    for name, weight in disturbance_weights(d).items():
+        D[labels.index(name)] = weight * pulse
     return D
+
+
+def disturbance_weights(disturbance) -> dict[str, float]:
+    """The plant inputs a scene's disturbance acts on and its share of the amplitude in each:
+    the one input it names, or (three axes, ``disturbance_torque`` or ``force`` with an
+    ``axis``) the three inputs ``<input>_x``, ``_y``, ``_z`` with the axis' components."""
+    d = disturbance
+    if getattr(d, "axis", None) is None:
+        return {d.input: 1.0}
+    return {f"{d.input}_{a}": float(e) for a, e in zip("xyz", d.axis) if e != 0.0}
 
 
 def simulate_manoeuvre(loop, manoeuvre, *, simulator=None, together: bool = False) -> dict:
@@ -184,10 +202,17 @@ def trace(response, name: str, kind: str = "output") -> np.ndarray | None:
     return data.reshape(len(labels), -1)[labels.index(name)]
 
 
-#: Per-appendage outputs and the peak each gives: (suffix, metric name, unit).
+#: Per-appendage outputs and the peak each gives: (suffix, metric name, unit). Planar: the tip
+#: deflection, the root force and moment; three axes: the tip deflections in the appendage's
+#: x-y and x-z planes and its twist, the root loads along and about each appendage axis.
 APPENDAGE_SIGNALS = (("_tip_deflection", "peak_tip_deflection", "m"),
                      ("_root_force", "peak_root_force", "N"),
-                     ("_root_moment", "peak_root_moment", "N m"))
+                     ("_root_moment", "peak_root_moment", "N m"),
+                     ("_tip_deflection_y", "peak_tip_deflection_y", "m"),
+                     ("_tip_deflection_z", "peak_tip_deflection_z", "m"),
+                     ("_tip_twist", "peak_tip_twist", "rad"),
+                     *((f"_root_force_{a}", f"peak_root_force_{a}", "N") for a in "xyz"),
+                     *((f"_root_moment_{a}", f"peak_root_moment_{a}", "N m") for a in "xyz"))
 
 
 def appendage_peaks(response, names) -> dict:

@@ -22,7 +22,7 @@ import controllers
 
 from .verdicts import s_plane_poles
 
-__all__ = ["Tuned", "tune", "digital_facts", "rigid_crossover"]
+__all__ = ["Tuned", "tune", "controller_arguments", "digital_facts", "rigid_crossover"]
 
 
 @dataclasses.dataclass
@@ -121,11 +121,32 @@ def _given(given, sample_time: float | None) -> Tuned:
     return Tuned(K, description, [])
 
 
+def controller_arguments(kind: str, spec, plant, feedforward: bool = False) -> dict:
+    """The keyword arguments of :func:`controllers.pd` or :func:`controllers.lqr_design` for
+    a scene's controller table (:class:`~spacecraft.scene.specs.ControllerSpec`) on a design
+    plant: the one mapping from the scene's settings to the controllers' arguments.
+
+    A three-axis plant's LQR weighs the tip deflections in both planes by
+    ``deflection_weight`` [1/m^2] (its twists [rad] are not deflections)."""
+    if kind == "pd":
+        p = spec.pd
+        return dict(natural_frequency=p.natural_frequency, bandwidth=p.bandwidth,
+                    damping=p.damping, roll_off=p.roll_off, notch=p.notch,
+                    sample_time=spec.sample_time, feedforward=feedforward)
+    q = spec.lqr
+    weight = q.deflection_weight
+    if weight is not None and "torque" not in plant.input_labels:
+        weight = {name: weight for name in plant.output_labels
+                  if name.endswith(("_tip_deflection_y", "_tip_deflection_z"))}
+    return dict(attitude_weight=q.attitude_weight, rate_weight=q.rate_weight,
+                torque_weight=q.torque_weight, deflection_weight=weight,
+                estimator_speed=q.estimator_speed, sample_time=spec.sample_time,
+                feedforward=feedforward)
+
+
 def _pd(plant, spec, feedforward: bool = False) -> Tuned:
     p = spec.pd
-    K = controllers.pd(plant, natural_frequency=p.natural_frequency, bandwidth=p.bandwidth,
-                       damping=p.damping, roll_off=p.roll_off, notch=p.notch,
-                       sample_time=spec.sample_time, feedforward=feedforward)
+    K = controllers.pd(plant, **controller_arguments("pd", spec, plant, feedforward))
     J = controllers.rigid_body_inertia(plant)
     wn = (p.natural_frequency if p.natural_frequency is not None
           else controllers.natural_frequency_from_bandwidth(p.bandwidth, p.damping))
@@ -145,17 +166,22 @@ def _pd(plant, spec, feedforward: bool = False) -> Tuned:
         "notch_spec": p.notch if isinstance(p.notch, str) else None,
         "feedforward": feedforward,
     }
+    if np.ndim(J) == 2:
+        # three axes: the gains about each principal axis of the design inertia
+        description["principal_moments"] = controllers.principal_axes(J)[0]
     return Tuned(K, description, [])
 
 
 def _lqr(plant, spec, feedforward: bool = False) -> Tuned:
     q = spec.lqr
-    design = controllers.lqr_design(plant, attitude_weight=q.attitude_weight,
-                                     rate_weight=q.rate_weight, torque_weight=q.torque_weight,
-                                     deflection_weight=q.deflection_weight,
-                                     estimator_speed=q.estimator_speed,
-                                     sample_time=spec.sample_time, feedforward=feedforward)
+    design = controllers.lqr_design(plant, **controller_arguments("lqr", spec, plant,
+                                                                   feedforward))
     n = design.controller.nstates
+    J = controllers.rigid_body_inertia(plant)
+    # rigid-body regulator frequency (q / (r J^2))^(1/4) about each principal axis
+    moments = controllers.principal_axes(J)[0] if np.ndim(J) == 2 else np.array([J])
+    frequencies = (q.attitude_weight / q.torque_weight) ** 0.25 / np.sqrt(moments)
+    K = np.asarray(design.K, dtype=float)
     description = {
         "kind": "lqr",
         "structure": (("torque = -K (x_hat - x_ref theta_ref - x_rate omega_ref) + torque_ff"
@@ -166,9 +192,9 @@ def _lqr(plant, spec, feedforward: bool = False) -> Tuned:
         "attitude_weight": q.attitude_weight, "rate_weight": q.rate_weight,
         "torque_weight": q.torque_weight, "deflection_weight": q.deflection_weight,
         "estimator_speed": q.estimator_speed,
-        "rigid_body_frequency": (q.attitude_weight / q.torque_weight) ** 0.25
-        / math.sqrt(controllers.rigid_body_inertia(plant)),
-        "K": np.asarray(design.K, dtype=float).reshape(-1).tolist(),
+        "rigid_body_frequency": float(frequencies.max()),
+        # K: one row of gains per torque (planar: the row itself)
+        "K": K.reshape(-1).tolist() if K.shape[0] == 1 else K.tolist(),
         "L": np.asarray(design.L, dtype=float).tolist(),
         "states": list(design.design_plant.state_labels) if design.design_plant is not None
         else [f"x{i}" for i in range(n)],
@@ -176,6 +202,9 @@ def _lqr(plant, spec, feedforward: bool = False) -> Tuned:
         "regulator_poles": _poles(design.regulator_poles, spec.sample_time),
         "estimator_poles": _poles(design.estimator_poles, spec.sample_time),
     }
+    if np.ndim(J) == 2:
+        description["principal_moments"] = moments
+        description["rigid_body_frequencies"] = frequencies
     # the reason says "<=": words read the same in the Markdown, HTML and the terminal
     removed = [f"{m}: left out ({m.reason.replace('<=', 'at most')})"
                for m in design.removed_modes]
@@ -184,8 +213,8 @@ def _lqr(plant, spec, feedforward: bool = False) -> Tuned:
 
 def rigid_crossover(plant, controller) -> float | None:
     """The loop's rigid-body gain crossover [rad/s]: the lowest frequency where |L(j omega)|
-    falls through 1 (interpolated linearly in log |L| against log omega between grid points),
-    None if |L| never does.
+    (three axes: its largest singular value) falls through 1 (interpolated linearly in log |L|
+    against log omega between grid points), None if |L| never does.
 
     Where a lightly damped mode lifts |L| above 1 again, :func:`controllers.margins` may report
     that resonance crossing (the worst phase margin); the bandwidth a sample rate must support
@@ -194,7 +223,10 @@ def rigid_crossover(plant, controller) -> float | None:
     """
     with np.errstate(all="ignore"):
         omega, L = controllers.loop_frequency_response(plant, controller)
-        g = np.log(np.abs(np.asarray(L).reshape(omega.size, -1)[:, 0]))
+        L = np.asarray(L).reshape(omega.size, -1)
+        # three axes: the largest gain sigma_max(L), the fastest direction's crossover
+        g = np.log(np.abs(L[:, 0]) if L.shape[1] == 1 else
+                   np.linalg.svd(L.reshape(omega.size, 3, 3), compute_uv=False)[:, 0])
     finite = np.isfinite(g)
     omega, g = omega[finite], g[finite]
     down = np.nonzero((g[:-1] > 0.0) & (g[1:] <= 0.0))[0]

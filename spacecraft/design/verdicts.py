@@ -77,7 +77,8 @@ import numpy as np
 __all__ = ["MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "MIN_MODULUS_MARGIN", "MIN_DISK_MARGIN",
            "MIN_DAMPING", "DAMPING_DROP", "CAUTIONS", "MODE_ERROR", "MARGINAL", "STATUS_TEXT",
            "closed_loop_poles", "loop_status", "withheld_metrics", "design_warnings",
-           "loop_warnings", "margin_flags", "verdict_dict", "margins_dict", "growing",
+           "loop_warnings", "margin_flags", "verdict_dict", "margins_dict",
+           "crossover_frequencies", "growing",
            "resolved_frequency", "TIME_METRICS", "exact_loop_verdict", "s_plane_poles"]
 
 #: Smallest acceptable |gain margin| on the truth model [dB] (a factor of 2).
@@ -485,6 +486,16 @@ def margins_dict(margins) -> dict:
     return out
 
 
+def crossover_frequencies(margins) -> list[float]:
+    """The positive finite gain crossovers [rad/s] of a loop's margins: a
+    :func:`controllers.margins` result or its :func:`margins_dict` (a three-axis loop's, one
+    per axis' loop at a time)."""
+    if not isinstance(margins, dict):
+        margins = margins_dict(margins)
+    return [float(w) for k, w in margins.items() if k.startswith("gain_crossover_frequency")
+            and w is not None and math.isfinite(w) and w > 0]
+
+
 def verdict_dict(verdict) -> dict:
     """A :class:`controllers.SpilloverVerdict` as the JSON-ready ``verdict`` of a loop: stable,
     unstable poles, least-damped pole, method, the margins (planar: gain, phase, modulus and
@@ -502,14 +513,24 @@ def verdict_dict(verdict) -> dict:
     return out
 
 
-def resolved_frequency(beam, n_modes: int, method: str) -> float:
+def resolved_frequency(beam, n_modes: int, method: str, *, three_axis: bool = False) -> float:
     """Highest frequency [rad/s] up to which a truncation of ``beam`` to ``n_modes`` modes
     represents it: its n-th clamped (cantilever) frequency for Craig-Bampton (fixed-interface
     modes [2]_), its n-th free-free bending frequency for the free-free and residual
-    truncations."""
+    truncations; ``three_axis``: the n-th of all motions together (both bending planes,
+    torsion, axial), as a three-axis truncation keeps the n lowest of them."""
+    if not three_axis:
+        if method == "craig-bampton":
+            return float(beam.cantilever_frequencies(n_modes)[-1])
+        return float(beam.natural_frequencies(n_modes)[-1])
     if method == "craig-bampton":
-        return float(beam.cantilever_frequencies(n_modes)[-1])
-    return float(beam.natural_frequencies(n_modes)[-1])
+        # the x-y plane alone has n clamped frequencies up to its n-th: all motions at least n
+        top = float(beam.cantilever_frequencies(n_modes)[-1])
+        return float(beam.clamped_frequencies6(top)[n_modes - 1])
+    parts = [beam.planar_view(plane).natural_frequencies(n_modes) for plane in ("xy", "xz")]
+    parts += [rod.natural_frequencies(n_modes) for rod in (beam.torsion_rod(), beam.axial_rod())
+              if rod is not None]
+    return float(np.sort(np.concatenate(parts))[n_modes - 1])
 
 
 def _who(row) -> str:

@@ -17,11 +17,14 @@ File names: ``plant.fmu``, ``<controller>.fmu``, ``closed_loop_<controller>.fmu`
 
 from __future__ import annotations
 
+import concurrent.futures
+import os
+from collections.abc import Callable
 from pathlib import Path
 
-from ..design.naming import controller_label, design_label
+from ..design.naming import controller_label, design_label, plural
 
-__all__ = ["fmu_jobs", "start_exports", "finish_exports", "write_ssps"]
+__all__ = ["fmu_jobs", "start_exports", "finish_exports", "write_ssps", "write_exports"]
 
 
 def _suffix(version: str, versions) -> str:
@@ -132,3 +135,54 @@ def write_ssps(result, folder: Path, fmus: list) -> list:
                         "description": f"{controller_label(kind)} controller FMU and plant FMU "
                                        f"connected by signal name (SSP, FMI {version})"})
     return out
+
+
+def write_exports(result, folder: str | os.PathLike, *, progress=None,
+                  meanwhile: Callable[[], object] | None = None) -> tuple[dict, object]:
+    """Build the FMUs and SSP files a run's scene asks for (``export.fmu``) into
+    ``folder/fmu``.
+
+    The C compiler runs in subprocesses, two builds at a time (both cores): ``meanwhile()``
+    runs while they build (the report's plots).
+
+    Parameters
+    ----------
+    result : spacecraft.design.loop.RunResult
+    folder : path
+        An existing folder.
+    progress : callable, optional
+        Called with a short message per step.
+    meanwhile : callable, optional
+        Work to do while the FMUs build; its value is returned.
+
+    Returns
+    -------
+    files : dict
+        ``fmu`` and ``ssp``: the entries of results.json (empty without ``export.fmu``).
+    value
+        What ``meanwhile()`` returned (None without it).
+    """
+    scene = result.scene
+    progress = progress or (lambda message: None)
+    folder = Path(folder)
+    files: dict = {"fmu": [], "ssp": []}
+    pool = (concurrent.futures.ThreadPoolExecutor(max_workers=2) if scene.export.fmu
+            else None)
+    try:
+        started = []
+        if pool is not None:
+            (folder / "fmu").mkdir(exist_ok=True)
+            started = start_exports(result, folder / "fmu", pool)
+            progress(f"exporting {plural(len(started), 'FMU')}")
+        value = meanwhile() if meanwhile is not None else None
+        if started:
+            progress("waiting for the FMU builds")
+        files["fmu"] = finish_exports(started, result.stats)
+        if pool is not None and scene.export.ssp:
+            files["ssp"] = write_ssps(result, folder / "fmu", files["fmu"])
+    finally:
+        # on an error or a signal the builds not yet started are dropped; running ones (a few
+        # tenths of a second of gcc) finish before the folder is removed
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+    return files, value

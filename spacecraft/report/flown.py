@@ -267,8 +267,13 @@ def flown_blocks(data: dict) -> list:
     profiles = facts.get("profiles") or {}
     kinds = {f["kind"] for f in profiles.values()}
     m = scene.get("manoeuvre") or {}
-    parts.append("the reference: " + ", ".join(sorted(kinds)) + " profile"
-                 + (", fed forward (rate reference and torque)" if m.get("feedforward") else ""))
+    if kinds:
+        parts.append("the reference: " + ", ".join(sorted(kinds)) + " profile"
+                     + (", fed forward (rate reference and torque)" if m.get("feedforward")
+                        else ""))
+    else:   # not flown: the cycloidal slew of slew_time, no feedforward
+        parts.append("the reference: the cycloidal slew of "
+                     f"{number(m.get('slew_time'), 4)} s, not fed forward")
     if delay.get("total"):
         parts.append(f"a loop delay of {number(delay['total'], 4)} s"
                      + (" (one sample of computation included)"
@@ -289,7 +294,7 @@ def flown_blocks(data: dict) -> list:
                    "the loop is unstable, in red."))
     header, table = _delay_rows(rows)
     b.append(("table", header, table))
-    end = next(iter(profiles.values()))["end_time"] if profiles else None
+    end = next(iter(profiles.values()))["end_time"] if profiles else m.get("slew_time")
     b += _metric_blocks(rows, end)
     b += _wheel_blocks(data)
     b += _pointing_blocks(data)

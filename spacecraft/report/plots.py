@@ -1,7 +1,7 @@
 """The report's figures: what an attitude-control engineer looks at first.
 
-One figure per question, every controller side by side in it (so a scene's plots are at most
-four PNG files, drawn on matplotlib's Agg canvas without pyplot):
+One figure per question, every controller side by side in it (so a planar scene's plots are at
+most four PNG files, drawn on matplotlib's Agg canvas without pyplot):
 
 - ``slew.png``: per controller, theta with theta_ref [deg], the attitude error |theta -
   theta_ref| on a log scale [deg] (an overshoot of a few percent is visible there, with the
@@ -25,6 +25,13 @@ four PNG files, drawn on matplotlib's Agg canvas without pyplot):
 - ``wheels.png``: per controller, each wheel's torque (applied, and the controller's command)
   and momentum against their limits, the time a limit acts shaded; Basilisk's wheel dotted.
 
+A three-axis scene gets the same figures per axis where the physics has axes: the slew of each
+controller in ``slew_<controller>.png`` with a column per hub axis (attitude with its reference,
+torque) and per appendage the tip deflections in its two bending planes and its twist;
+``loop.png`` with each axis' loop at a time (L_i = 1/S_ii - 1: magnitude, phase, Nyquist) and
+the smallest singular value of the return difference I + L; ``poles.png`` as it is;
+``W.png`` with the diagonal of W6 (both bending planes, torsion, axial).
+
 Names and colours are those of :mod:`spacecraft.design.naming`: one colour per design model, the loop
 on the truth model solid, on the design model dashed, the exact beam black, Basilisk dotted,
 anything unstable red. A figure has one legend (above the panels).
@@ -41,9 +48,11 @@ from ..design.naming import (BASILISK_COLOUR, BASILISK_STYLE, CAUTION_COLOUR, DE
                      REFERENCE_COLOUR, TRUTH_STYLE, UNSTABLE_COLOUR, controller_label, design_label, plural,
                      variant_colour)
 from ..design.responses import trace
+from ..design.verdicts import crossover_frequencies
 
-__all__ = ["plot_slew", "plot_loop", "plot_poles", "plot_W", "plot_profile", "plot_wheels",
-           "draw", "PLOT_FILES", "envelope", "identical"]
+__all__ = ["plot_slew", "plot_slew_axes", "plot_loop", "plot_loop_axes", "plot_poles", "plot_W",
+           "plot_profile", "plot_wheels", "draw", "PLOT_FILES", "AXIS_COLOURS", "envelope",
+           "identical"]
 
 #: File of each plot of ``report.plots``.
 PLOT_FILES = {"slew": "slew.png", "loop": "loop.png", "poles": "poles.png", "W": "W.png",
@@ -55,6 +64,9 @@ _PLOT_POINTS = 4000
 _DPI = 90
 #: Largest number of appendages with a tip-deflection panel of their own.
 _MAX_TIP_PANELS = 6
+_AXES = ("x", "y", "z")
+#: Colours of the hub axes in three-axis plots (of the loop at a time).
+AXIS_COLOURS = {"x": "#1f77b4", "y": "#ff7f0e", "z": "#2ca02c"}
 
 
 def _figure(rows: int, cols: int, size, *, top: float = 0.9, left: float = 0.08,
@@ -282,18 +294,130 @@ def plot_slew(result, path: Path) -> str:
                       "colour per design model; red: unstable.")
 
 
+def plot_slew_axes(result, path: Path, kind: str) -> str:
+    """Draw a three-axis loop's slew, ``slew_<kind>.png``: one column per hub axis; returns its
+    caption."""
+    scene = result.scene
+    m = scene.manoeuvre
+    first = result.responses[next(k for k in result.responses if k[1] == kind)]
+    names = [n for n in _appendage_names(result)
+             if f"{n}_tip_deflection_y" in first.output_labels][:_MAX_TIP_PANELS]
+    # (signal, panel title, unit)
+    grid = [[(f"theta_{a}", f"attitude about {a}", "deg") for a in _AXES],
+            [(f"torque_{a}", f"torque about {a}", "N m") for a in _AXES],
+            [("error", "attitude error |theta - theta_ref| (norm)", "deg"),
+             ("disturbance", "attitude |theta| (norm), disturbance alone", "deg")
+             if result.disturbance_responses else None, None]]
+    for n in names:
+        grid.append([(f"{n}_tip_deflection_y", f"{n}: tip deflection in its x-y plane", "m"),
+                     (f"{n}_tip_deflection_z", f"{n}: tip deflection in its x-z plane", "m"),
+                     (f"{n}_tip_twist", f"{n}: tip twist", "deg")])
+    height = 2.1 * len(grid) + 1.5
+    top = 1.0 - 1.0 / height
+    fig, axes = _figure(len(grid), 3, (17.0, height), top=top, left=0.05, hspace=0.6)
+    handles = []
+    rows = {r["design"]: r for r in _rows(result, kind)}
+    bad = [v for v, r in rows.items() if _unstable(r)]
+    cautions = _cautions(result, kind)
+    verdict = (f"{controller_label(kind)}: " + (
+        "UNSTABLE on the truth model when tuned on " + ", ".join(map(design_label, bad))
+        if bad else "stable on the truth model" + (f"; {cautions}" if cautions else "")))
+    # the verdict beside the legend's first entries, in the loop's colour
+    fig.text(0.01, 0.995, verdict, ha="left", va="top", fontsize="medium",
+             color=UNSTABLE_COLOUR if bad else CAUTION_COLOUR if cautions else "black")
+    angle = math.degrees(m.slew_angle)
+    import controllers
+
+    t_ref = np.asarray(first.t, float).reshape(-1)
+    reference = controllers.slew_profile(t_ref, m.slew_angle, m.slew_time)
+    for i, panels in enumerate(grid):
+        for j, panel in enumerate(panels):
+            ax = axes[i, j]
+            if panel is None:
+                ax.set_visible(False)
+                continue
+            signal, title, unit = panel
+            curves = []
+            for (variant, k, which), resp in result.responses.items():
+                if k != kind:
+                    continue
+                if signal == "disturbance":
+                    resp = result.disturbance_responses.get((variant, k, which))
+                    if resp is None:
+                        continue
+                y = _slew_signal(resp, signal)
+                if y is None:
+                    continue
+                row = rows.get(variant)
+                curves.append((variant, which, np.asarray(resp.t, float).reshape(-1), y,
+                               row is not None and _unstable(row, which)))
+            _draw_curves(ax, curves, handles, log=signal == "error", note=(i, j) == (0, 0))
+            if signal.startswith("theta_"):
+                e = m.slew_axis["xyz".index(signal[-1])]
+                handles += ax.plot(t_ref, np.degrees(e * reference), ":",
+                                   color=REFERENCE_COLOUR, lw=1.2,
+                                   label="theta_ref (reference, per axis)")
+            if signal == "error":
+                handles.append(ax.axhline(0.02 * abs(angle), color=REFERENCE_COLOUR, lw=0.8,
+                                          ls="-.", label="2 % settling band"))
+            if signal != "disturbance" and m.slew_time <= m.duration:
+                handles.append(ax.axvline(m.slew_time, color=REFERENCE_COLOUR, lw=0.6, ls="--",
+                                          label="end of the slew"))
+            ax.set_title(title, fontsize="small")
+            ax.set_ylabel(f"[{unit}]", fontsize="small")
+            ax.grid(True, alpha=0.4)
+            ax.tick_params(labelsize="small")
+            if i == len(grid) - 1 or grid[i + 1][j] is None:
+                ax.set_xlabel("time [s]")
+    _legend(fig, handles, top)
+    _save(fig, path)
+    caption = (f"{controller_label(kind)}: eigen-axis slew of {angle:g} deg about "
+               f"({', '.join(f'{e:.3g}' for e in m.slew_axis)}) (hub axes) in "
+               f"{m.slew_time:g} s, simulated {m.duration:g} s; per hub axis (columns) the "
+               "attitude with its reference and the torque; the attitude error's norm on a log "
+               "scale with the 2 % settling band")
+    if result.disturbance_responses:
+        caption += "; the attitude's norm under the disturbance alone"
+    if names:
+        caption += ("; per appendage its tip deflections in its own x-y and x-z planes [m] "
+                    "and its twist [deg]")
+    return caption + (". Solid: loop on the truth model, dashed: on the design model; one "
+                      "colour per design model; red: unstable.")
+
+
+def _appendage_names(result) -> list[str]:
+    """The appendages' names in mount order (a scene's, or a user's own truth model's)."""
+    sc = result.truth.get("spacecraft")
+    if sc is not None:
+        return list(sc.names)
+    return [a.name for a in result.scene.appendages]
+
+
 def _slew_signal(resp, signal: str) -> np.ndarray | None:
+    """A panel's curve: an output as it is (degrees for angles), the attitude error (three
+    axes: its norm) [deg], or the attitude alone (three axes: its norm) [deg]."""
     with np.errstate(over="ignore", invalid="ignore"):
+        three_axis = "theta" not in resp.output_labels
         if signal == "error":
-            theta, ref = trace(resp, "theta"), trace(resp, "theta_ref", "input")
-            if theta is None or ref is None:
+            pairs = ([(f"theta_{a}", f"theta_ref_{a}") for a in _AXES] if three_axis
+                     else [("theta", "theta_ref")])
+            parts = [(trace(resp, y), trace(resp, r, "input")) for y, r in pairs]
+            if any(y is None or r is None for y, r in parts):
                 return None
-            return np.degrees(np.abs(theta - ref))
+            return np.degrees(np.sqrt(sum((y - r) ** 2 for y, r in parts)))
         if signal in ("theta", "disturbance"):
+            if three_axis:
+                parts = [trace(resp, f"theta_{a}") for a in _AXES]
+                if any(y is None for y in parts):
+                    return None
+                return np.degrees(np.sqrt(sum(y ** 2 for y in parts)))
             y = trace(resp, "theta")
             return None if y is None else np.degrees(y)
         y = trace(resp, signal)
-        return None if y is None else np.asarray(y, float)
+        if y is None:
+            return None
+        angle = signal.startswith("theta_") or signal.endswith("_tip_twist")
+        return np.degrees(y) if angle else np.asarray(y, float)
 
 
 def _draw_curves(ax, curves: list, handles: list, *, log: bool = False,
@@ -363,12 +487,9 @@ def loop_band(result) -> tuple[float, float]:
     """Frequency range [rad/s] of the loop plots, from the models: from 1/30 of the slowest
     crossover (or natural frequency) to 30 x the fastest, extended to 1.5 x the design
     plants' highest mode (at most 1e3 x the crossover)."""
-    crossings = []
-    for r in result.data.get("closed_loops", []):
-        for source in (r["design_margins"], r["verdict"]):
-            w = source.get("gain_crossover_frequency")
-            if w is not None and math.isfinite(w) and w > 0:
-                crossings.append(w)
+    crossings = [w for r in result.data.get("closed_loops", [])
+                 for source in (r["design_margins"], r["verdict"])
+                 for w in crossover_frequencies(source)]
     spec = result.scene.controller
     if spec.pd is not None and spec.pd.natural_frequency is not None:
         crossings.append(spec.pd.natural_frequency)
@@ -484,6 +605,109 @@ def plot_loop(result, path: Path) -> str:
             "rad/s, from the crossovers and the design plant's modes.")
 
 
+def plot_loop_axes(result, path: Path) -> str:
+    """Draw a three-axis ``loop.png``: per controller, the loop at a time about each hub axis
+    (L_i = 1/S_ii - 1, the other two loops closed) as |L_i|, arg L_i and its Nyquist plot near
+    -1, and the smallest singular value of the return difference I + L at the plant input;
+    returns its caption."""
+    import controllers
+
+    from ..design.verdicts import MIN_MODULUS_MARGIN
+
+    kinds = list(dict.fromkeys(r["controller"] for r in result.data["closed_loops"]))
+    w_lo, w_hi = loop_band(result)
+    n = len(kinds)
+    height = 3.6 * n + 1.0
+    top = 1.0 - 0.8 / height
+    fig, axes = _figure(n, 4, (21.0, height), top=top, wspace=0.3, left=0.05)
+    handles = []
+    circle = np.exp(1j * np.linspace(0, 2 * np.pi, 200))
+    for i, kind in enumerate(kinds):
+        mag, ph, nyq, sv = axes[i]
+        notes = []
+        lowest = math.inf
+        for row in _rows(result, kind):
+            variant = row["design"]
+            d = result.designs[variant]
+            K = d["controllers"][kind]
+            for which, plant, style in (("design", d["plant"], DESIGN_STYLE),
+                                        ("truth", result.truth["verdict"], TRUTH_STYLE)):
+                with np.errstate(all="ignore"):
+                    omega, L = controllers.loop_frequency_response(plant, K)
+                    keep = (omega >= w_lo) & (omega <= w_hi)
+                    omega, L = omega[keep], np.asarray(L)[keep]
+                    R = np.eye(3) + L
+                    S = np.linalg.solve(R, np.broadcast_to(np.eye(3), R.shape))
+                    loops = 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
+                    sigma = np.linalg.svd(R, compute_uv=False)[:, -1]
+                if omega.size < 2:
+                    continue
+                where = f"{design_label(variant)}, on the {which} model"
+                for a, L_a in zip(_AXES, loops.T):
+                    c = AXIS_COLOURS[a]
+                    handles += mag.semilogx(omega, 20 * np.log10(np.abs(L_a)), style, color=c,
+                                            lw=1.1,
+                                            label=f"about {a}, loop at a time ({which} model)")
+                    ph.semilogx(omega, _wrapped_phase(L_a), style, color=c, lw=1.1)
+                    inside = np.abs(L_a + 1.0) < 6.0
+                    nyq.plot(np.where(inside, L_a.real, np.nan),
+                             np.where(inside, L_a.imag, np.nan), style, color=c, lw=1.1)
+                # the axes' colours are the loops' here: the return difference in grey
+                colour = (UNSTABLE_COLOUR if which == "truth" and _unstable(row)
+                          else "#444444")
+                handles += sv.loglog(omega, sigma, style, color=colour, lw=1.2,
+                                     label=f"{where}: smallest singular value of I + L")
+                lowest = min(lowest, float(np.nanmin(sigma)))
+            v = row["verdict"]
+            notes.append(f"{design_label(variant)}, on the truth model:\n  disk margin "
+                         f"{_num(v.get('disk_margin'), '')} (gain "
+                         f"{_num(v.get('disk_gain_margin'), 'dB')}, phase "
+                         f"{_num(v.get('disk_phase_margin'), 'deg')}),\n  min sigma(I + L) "
+                         f"{_num(v.get('min_singular_value'), '')}")
+        mag.axhline(0.0, color=REFERENCE_COLOUR, lw=0.7)
+        ph.axhline(-180.0, color=REFERENCE_COLOUR, lw=0.7)
+        ph.set_ylim(-270, 90)
+        ph.set_yticks([-270, -180, -90, 0, 90])
+        nyq.plot(circle.real, circle.imag, color=REFERENCE_COLOUR, lw=0.7, ls=":")
+        nyq.plot([-1], [0], "x", color=UNSTABLE_COLOUR, ms=9, mew=2)
+        nyq.set_xlim(-3.0, 1.0)
+        nyq.set_ylim(-2.0, 2.0)
+        nyq.set_aspect("equal", adjustable="box")
+        handles.append(sv.axhline(MIN_MODULUS_MARGIN, color=CAUTION_COLOUR, lw=0.8, ls="--",
+                                  label=f"{MIN_MODULUS_MARGIN:g}: below it the loop is warned "
+                                        "about"))
+        if math.isfinite(lowest):
+            sv.set_ylim(bottom=min(0.5 * MIN_MODULUS_MARGIN, 0.5 * lowest))
+        label = controller_label(kind)
+        mag.set_title(f"{label}: |L_i(j omega)|, each axis' loop at a time", fontsize="medium")
+        ph.set_title(f"{label}: arg L_i(j omega)", fontsize="medium")
+        nyq.set_title(f"{label}: Nyquist of L_i near -1", fontsize="medium")
+        sv.set_title(f"{label}: return difference", fontsize="medium")
+        mag.set_ylabel("|L_i| [dB]")
+        ph.set_ylabel("arg L_i [deg]")
+        nyq.set_ylabel("Im L_i")
+        nyq.set_xlabel("Re L_i")
+        sv.set_ylabel("min singular value of I + L [-]")
+        for ax in (mag, ph, sv):
+            ax.set_xlim(w_lo, w_hi)
+            ax.set_xlabel("frequency [rad/s]")
+            ax.grid(True, alpha=0.4)
+            ax.minorticks_off()
+        nyq.grid(True, alpha=0.4)
+        sv.text(0.98, 0.97, "\n".join(notes), transform=sv.transAxes, fontsize="x-small",
+                va="top", ha="right",
+                bbox=dict(facecolor="white", edgecolor="0.8", alpha=0.6, lw=0.5))
+    _legend(fig, handles, top)
+    _save(fig, path)
+    return ("Each three-axis loop broken at one torque input at a time, the other two closed "
+            "(L_i = 1/S_ii - 1, unstable at -1; x blue, y orange, z green): magnitude, phase "
+            "and Nyquist near -1, on the design model (dashed) and the truth model (solid); "
+            "right, the smallest singular value of the return difference I + L(j omega) at "
+            "the plant input (its minimum is the multivariable modulus margin; a perturbation "
+            "of every torque at once smaller than it keeps the loop stable). Frequencies "
+            f"{w_lo:.3g} to {w_hi:.3g} rad/s.")
+
+
 def _num(value, unit: str) -> str:
     if value is None:
         return "n/a"
@@ -511,12 +735,8 @@ def plot_poles(result, path: Path) -> str:
     for col, kind in enumerate(kinds):
         near, spread = axes[0, col], axes[1, col]
         rows = {r["design"]: r for r in _rows(result, kind)}
-        scale = 0.0
-        for r in rows.values():
-            for source in (r["design_margins"], r["verdict"]):
-                w = source.get("gain_crossover_frequency")
-                if w is not None and math.isfinite(w):
-                    scale = max(scale, w)
+        scale = max([w for r in rows.values() for source in (r["design_margins"], r["verdict"])
+                     for w in crossover_frequencies(source)], default=0.0)
         if scale == 0.0:
             spec = result.scene.controller
             scale = (spec.pd.natural_frequency if spec.pd is not None
@@ -618,9 +838,11 @@ def plot_W(result, path: Path, stats, exact: bool) -> str:
         else:
             groups.append(([a.name], key, a))
     groups = groups[:_MAX_TIP_PANELS]
+    panels = _W_PANELS["three_axis" if scene.three_axis else "planar"]
     height = 3.1 * len(groups) + 1.2
     top = 1.0 - 0.9 / height
-    fig, axes = _figure(len(groups), 3, (16.0, height), top=top, wspace=0.25, left=0.06)
+    fig, axes = _figure(len(groups), len(panels), (5.3 * len(panels) + 0.1, height), top=top,
+                        wspace=0.25, left=0.06)
     handles = []
     notes = []
     loop_band_top = result.data.get("truth", {}).get("loop_band")
@@ -659,13 +881,12 @@ def plot_W(result, path: Path, stats, exact: bool) -> str:
         s = 1j * omega
         for label, model, style, colour, lw in curves:
             with np.errstate(all="ignore"):
-                W = np.asarray(model.W(s))
-            for c, (i, j) in enumerate(((0, 0), (0, 1), (1, 1))):
+                W = np.asarray(model.W6(s) if scene.three_axis else model.W(s))
+            for c, ((i, j), _) in enumerate(panels):
                 ax = axes[g, c]
                 handles += ax.loglog(omega, np.abs(W[:, i, j]), style, color=colour, lw=lw,
                                      label=label)
-        for c, title in enumerate(("W1 = delta / F_y [m/N]", "W2 = W3 = delta / M [1/N]",
-                                   "W4 = phi / M [1/(N m)]")):
+        for c, (_, title) in enumerate(panels):
             ax = axes[g, c]
             ax.set_title(f"{', '.join(names)}: {title}", fontsize="small")
             ax.grid(True, alpha=0.4)
@@ -684,11 +905,24 @@ def plot_W(result, path: Path, stats, exact: bool) -> str:
                              label="top of the loops' band (bandwidth_factor x crossover)"))
     _legend(fig, handles, top)
     _save(fig, path)
-    return ("W(s) of each appendage at its attachment end (free appendage, rigid-body term "
-            "included): magnitudes of W1, W2 = W3 and W4 of the exact distributed beam, the "
+    what = ("the diagonal of W6: bending in the appendage's x-y and x-z planes, torsion and "
+            "axial motion" if scene.three_axis else "W1, W2 = W3 and W4")
+    return (f"W(s) of each appendage at its attachment end (free appendage, rigid-body term "
+            f"included): magnitudes of {what} of the exact distributed beam (when asked), the "
             "truth model and the design chains; the phase of these lightly damped models is 0 "
             "or 180 deg between resonances and anti-resonances (the loop's phase is in the loop "
             "plot). " + " ".join(n for n in notes if n))
+
+
+#: The panels of W.png: (entry of W or W6, title), planar and three-axis.
+_W_PANELS = {
+    "planar": (((0, 0), "W1 = delta / F_y [m/N]"), ((0, 1), "W2 = W3 = delta / M [1/N]"),
+               ((1, 1), "W4 = phi / M [1/(N m)]")),
+    "three_axis": (((1, 1), "v / F_y: bending in x-y [m/N]"),
+                   ((2, 2), "w / F_z: bending in x-z [m/N]"),
+                   ((3, 3), "theta_x / M_x: torsion [1/(N m)]"),
+                   ((0, 0), "u / F_x: axial [m/N]")),
+}
 
 
 def _model_name(model) -> str:
@@ -725,16 +959,22 @@ def _truncation_note(names, a, models, res, band) -> str:
 def draw(result, folder: Path, wanted, stats, *, exact: bool) -> list:
     """Draw the plots asked for into ``folder``; returns ``[(path, caption)]``."""
     out = []
+    three_axis = result.scene.three_axis
     if "slew" in wanted and result.responses:
-        path = folder / PLOT_FILES["slew"]
-        out.append((path, plot_slew(result, path)))
+        if three_axis:   # one figure per controller: a column per hub axis
+            for kind in dict.fromkeys(k[1] for k in result.responses):
+                path = folder / f"slew_{kind}.png"
+                out.append((path, plot_slew_axes(result, path, kind)))
+        else:
+            path = folder / PLOT_FILES["slew"]
+            out.append((path, plot_slew(result, path)))
     if "loop" in wanted and result.data.get("closed_loops"):
         path = folder / PLOT_FILES["loop"]
-        out.append((path, plot_loop(result, path)))
+        out.append((path, (plot_loop_axes if three_axis else plot_loop)(result, path)))
     if "poles" in wanted and result.poles:
         path = folder / PLOT_FILES["poles"]
         out.append((path, plot_poles(result, path)))
-    if "W" in wanted:
+    if "W" in wanted and result.models:
         path = folder / PLOT_FILES["W"]
         out.append((path, plot_W(result, path, stats, exact)))
     if "profile" in wanted and result.scene.manoeuvre is not None and result.designs:

@@ -23,22 +23,28 @@ import numpy as np
 
 __all__ = ["clean", "to_json", "write_timeseries", "SIGNAL_UNITS", "signal_unit"]
 
-#: Units of the signals of flexsat's loops (by name or suffix).
+#: Units of the signals of flexsat's loops (by name or suffix; a three-axis signal's axis
+#: ``_x``, ``_y``, ``_z`` aside).
 SIGNAL_UNITS = {"time": "s", "theta": "rad", "theta_ref": "rad", "omega": "rad/s",
-                "torque": "N*m", "disturbance_torque": "N*m", "force_x": "N", "force_y": "N",
-                "_tip_deflection": "m", "_tip_force": "N", "_root_force": "N",
-                "_root_moment": "N*m", "wheel_speed": "rad/s", "omega_ref": "rad/s",
-                "torque_ff": "N*m", "torque_command": "N*m", "_torque_command": "N*m",
-                "_torque": "N*m", "_momentum": "N*m*s", "_speed": "rad/s", "_saturated": "-"}
+                "torque": "N*m", "disturbance_torque": "N*m", "force": "N", "force_x": "N",
+                "force_y": "N", "_tip_deflection": "m", "_tip_twist": "rad", "_tip_force": "N",
+                "_root_force": "N", "_root_moment": "N*m", "wheel_speed": "rad/s",
+                "omega_ref": "rad/s", "torque_ff": "N*m", "torque_command": "N*m",
+                "_torque_command": "N*m", "_torque": "N*m", "_momentum": "N*m*s",
+                "_speed": "rad/s", "_saturated": "-"}
 
 
 def signal_unit(name: str) -> str:
-    """The SI unit of a loop signal (``"-"`` if unknown)."""
-    if name in SIGNAL_UNITS:
-        return SIGNAL_UNITS[name]
-    for suffix, unit in SIGNAL_UNITS.items():
-        if suffix.startswith("_") and name.endswith(suffix):
-            return unit
+    """The SI unit of a loop signal (``"-"`` if unknown): planar names, and three-axis ones
+    with an axis suffix (``theta_x``, ``wing_tip_deflection_z``, ``boom_root_moment_y``)."""
+    names = [name] + ([name[:-2]] if name[-2:] in ("_x", "_y", "_z") else [])
+    for n in names:
+        if n in SIGNAL_UNITS:
+            return SIGNAL_UNITS[n]
+    for n in names:
+        for suffix, unit in SIGNAL_UNITS.items():
+            if suffix.startswith("_") and n.endswith(suffix):
+                return unit
     return "-"
 
 

@@ -28,11 +28,12 @@ The report, in the order an attitude engineer reads it:
 
 from __future__ import annotations
 
-import concurrent.futures
 import datetime
 import math
 import os
 from pathlib import Path
+
+import numpy as np
 
 from ..design.naming import controller_label, design_label, plural
 from .flown import basilisk_wheel_blocks, flown_blocks, flown_summary_lines
@@ -90,11 +91,41 @@ METRIC_LABELS = {
     "peak_torque": "peak torque [N m]", "peak_tip_deflection": "peak tip deflection [m]",
     "peak_attitude_error": "peak attitude error [rad]",
     "final_attitude_error": "attitude error at the end [rad]",
+    # three axes: the attitude error's norm above, then each hub axis
+    **{f"{name}_{axis}": f"{text} about {axis} [{unit}]" for axis in "xyz"
+       for name, text, unit in (("peak_torque", "peak torque", "N m"),
+                                ("peak_attitude_error", "peak attitude error", "rad"),
+                                ("final_attitude_error", "attitude error at the end", "rad"))},
 }
 MARGIN_LABELS = {"gain_margin": "gain margin [dB]", "phase_margin": "phase margin [deg]",
                  "modulus_margin": "modulus margin [-]",
                  "gain_crossover_frequency": "gain crossover [rad/s]",
-                 "phase_crossover_frequency": "phase crossover [rad/s]"}
+                 "phase_crossover_frequency": "phase crossover [rad/s]",
+                 # three axes: the multivariable margins, then each loop at a time
+                 "disk_margin": "disk margin alpha [-]",
+                 "disk_gain_margin": "disk gain margin, every channel at once [dB]",
+                 "disk_phase_margin": "disk phase margin, every channel at once [deg]",
+                 "min_singular_value": "smallest singular value of I + L [-]",
+                 **{f"{name}_{axis}": f"{text} about {axis}, loop at a time [{unit}]"
+                    for axis in "xyz" for name, text, unit in (
+                        ("gain_margin", "gain margin", "dB"),
+                        ("phase_margin", "phase margin", "deg"),
+                        ("modulus_margin", "modulus margin", "-"),
+                        ("gain_crossover_frequency", "gain crossover", "rad/s"))}}
+#: The margins of a loop's verdict in the summary and the verdicts' table: (name, label, unit).
+HEADLINE_MARGINS = {
+    "planar": (("gain_margin", "gain margin", "dB"), ("phase_margin", "phase margin", "deg"),
+               ("modulus_margin", "modulus margin", "")),
+    "three_axis": (("disk_margin", "disk margin", ""),
+                   ("disk_gain_margin", "disk gain margin", "dB"),
+                   ("disk_phase_margin", "disk phase margin", "deg"),
+                   ("min_singular_value", "min singular value of I + L", "")),
+}
+
+
+def _headline(verdict: dict) -> tuple:
+    """The headline margins of a verdict: planar, or the three-axis (multivariable) ones."""
+    return HEADLINE_MARGINS["three_axis" if "disk_margin" in verdict else "planar"]
 _FLAG_TEXT = {"diverges": "diverges", "slew unfinished": "slew unfinished",
               "not settled": "not settled"}
 
@@ -141,6 +172,8 @@ def metric_rows(rows: list, controller: str, table: str = "metrics") -> tuple[li
     if table != "metrics":
         return header, out
     for name, label in MARGIN_LABELS.items():
+        if not any(name in r["design_margins"] or name in r["verdict"] for r in mine):
+            continue
         row = [label]
         for r in mine:
             d, t = r["design_margins"].get(name), r["verdict"].get(name)
@@ -222,8 +255,9 @@ def _verdict_rows(rows: list, warnings: list = ()) -> tuple[list, list]:
     from ..design.verdicts import growing
 
     exact = any("exact_verdict" in r for r in rows)
+    headline = _headline(rows[0]["verdict"]) if rows else HEADLINE_MARGINS["planar"]
     header = ["design model", "controller", "on truth model", "least damping [-]",
-              "at [rad/s]", "gain margin [dB]", "phase margin [deg]", "modulus margin [-]"]
+              "at [rad/s]"] + [f"{label} [{unit or '-'}]" for _, label, unit in headline]
     if exact:
         header += ["on exact beam (Nyquist)"]
     out = []
@@ -240,10 +274,8 @@ def _verdict_rows(rows: list, warnings: list = ()) -> tuple[list, list]:
                 state = warn(f"{state}; " + ", ".join(cautions))
         flags = v.get("margin_flags")
         row = [_label(r["design"]), controller_label(r["controller"]), state,
-               _damping_cell(v), _fmt(v["least_damped_frequency"], 4),
-               _margin_cell("gain_margin", v["gain_margin"], flags),
-               _margin_cell("phase_margin", v["phase_margin"], flags),
-               _margin_cell("modulus_margin", v["modulus_margin"], flags)]
+               _damping_cell(v), _fmt(v["least_damped_frequency"], 4)]
+        row += [_margin_cell(name, v.get(name), flags) for name, _, _ in headline]
         if exact:
             e = r.get("exact_verdict", {})
             row.append("n/a" if "stable" not in e else
@@ -262,7 +294,7 @@ def _fidelity_line(data: dict) -> str:
     if fid.get("n_modes"):
         how = ("chosen for tolerance " + _fmt(fid["choice"]["tolerance"]) if fid.get("choice")
                else "given")
-        return (f"truth model: {plural(fid['n_modes'], 'bending mode')} per beam "
+        return (f"truth model: {_modes(data, fid['n_modes'])} per beam "
                 f"({fid['method']}, {how}); plant {plural(truth['n_states'], 'state')}, "
                 f"{plural(truth['modes_dropped'], 'mode')} pruned")
     what = "as given (your Spacecraft)" if fid.get("given") else "the chains as given"
@@ -275,14 +307,14 @@ def _loop_line(r: dict, warnings: list = ()) -> str | Tone:
     who = f"{controller_label(r['controller'])} tuned on {_label(r['design'])}"
     v = r["verdict"]
     status = (r.get("status") or {}).get("truth")
-    margins = (f"gain margin {_fmt(v['gain_margin'], 3)} dB, phase margin "
-               f"{_fmt(v['phase_margin'], 3)} deg, modulus margin "
-               f"{_fmt(v['modulus_margin'], 3)}")
+    margins = ", ".join(f"{label} {_fmt(v.get(name), 3)}{' ' + unit if unit else ''}"
+                        for name, label, unit in _headline(v))
     if growing(v, status):
         # the classical numbers of a diverging loop are no margins: said so, never as margins
-        figures = (f"no margins: it diverges unperturbed (the margin figures, gain "
-                   f"{_fmt(v['gain_margin'], 3)} dB, phase {_fmt(v['phase_margin'], 3)} deg, "
-                   f"modulus {_fmt(v['modulus_margin'], 3)}, guarantee nothing)")
+        bare = ", ".join(f"{label.replace(' margin', '')} {_fmt(v.get(name), 3)}"
+                         f"{' ' + unit if unit else ''}" for name, label, unit in _headline(v))
+        figures = (f"no margins: it diverges unperturbed (the margin figures, {bare}, "
+                   "guarantee nothing)")
         what = (status["text"] if status is not None else
                 f"UNSTABLE ({plural(v['n_unstable_poles'], 'pole')})")
         return bad(f"{who}: {what} on the truth model; {figures}")
@@ -302,8 +334,7 @@ def _loop_line(r: dict, warnings: list = ()) -> str | Tone:
             elif status["status"] == "not settled":
                 text += ", does not settle within the simulated time"
         peaks = r.get("appendages", {}).get("truth", {})
-        tips = [(n, p["peak_tip_deflection"]) for n, p in peaks.items()
-                if p.get("peak_tip_deflection") is not None]
+        tips = [(n, _tip_peak(p)) for n, p in peaks.items() if _tip_peak(p) is not None]
         if tips:
             text += "; peak tip deflection " + ", ".join(
                 f"{_fmt(value, 3)} m ({name})" for name, value in tips)
@@ -311,13 +342,26 @@ def _loop_line(r: dict, warnings: list = ()) -> str | Tone:
     return warn(text) if caution else text
 
 
+def _modes(data: dict, n: int) -> str:
+    """What a truncated beam keeps: n bending modes (planar), the n lowest modes of every
+    motion (three axes: both bending planes, torsion and axial motion together)."""
+    if data.get("three_axis"):
+        return f"{plural(n, 'mode')} (the lowest of all motions)"
+    return plural(n, "bending mode")
+
+
+def _tip_peak(peaks: dict) -> float | None:
+    """An appendage's peak tip deflection [m]: planar, or the larger of a three-axis
+    appendage's two bending planes."""
+    values = [peaks.get(k) for k in ("peak_tip_deflection", "peak_tip_deflection_y",
+                                     "peak_tip_deflection_z")]
+    values = [v for v in values if v is not None]
+    return max(values) if values else None
+
+
 def summary_lines(data: dict) -> list:
     """Short summary of a run (the CLI prints it): the truth model, one line per loop, one per
     design warning (``warning: ...``)."""
-    if data.get("three_axis"):
-        from ..design.three_axis import three_axis_summary
-
-        return three_axis_summary(data)
     lines: list = [_fidelity_line(data)]
     lines += [_loop_line(r, data.get("design_warnings", []))
               for r in data.get("closed_loops", [])]
@@ -338,18 +382,30 @@ def _question(data: dict) -> list:
     s = data.get("scene_resolved")
     if not s:
         return []
-    items = [f"hub: mass {_fmt(s['hub']['mass'])} kg, inertia {_fmt(s['hub']['inertia'])} "
-             "kg m^2 about its centre of mass"]
+    J = s["hub"]["inertia"]
+    three_axis = isinstance(J, list)
+    inertia = ("[" + "; ".join(", ".join(_fmt(v) for v in row) for row in J) + "] (hub axes)"
+               if three_axis else _fmt(J))
+    items = [f"hub: mass {_fmt(s['hub']['mass'])} kg, inertia {inertia} kg m^2 about its "
+             "centre of mass"]
     for a in s["appendages"]:
         truth = truth_text(a)
         design = {"fit": "chains fitted to it (" + " and ".join(
             _label(m) for m in (a["fit"] or {}).get("match", [])) + ")",
                   "chain": "the given chain", "truth": "the truth model itself"}[a["design"]]
         what = structure_text(a)
-        items.append(f"appendage {a['name']}{what} at ({_fmt(a['position'][0])}, "
-                     f"{_fmt(a['position'][1])}) m, direction "
-                     f"{_fmt(math.degrees(a['direction']), 4)} deg: truth model {truth}, "
-                     f"design model {design}")
+        position = ", ".join(_fmt(x) for x in a["position"])
+        if a.get("orientation") is not None:
+            # the appendage's axis: the first column of its orientation (hub axes)
+            # (the Euler angles' round-off, 1e-16, shown as 0)
+            along = ", ".join(_fmt(row[0] if abs(row[0]) > 1e-12 else 0.0, 4)
+                              for row in a["orientation"])
+            mount = f"at ({position}) m, along ({along}) in hub axes"
+        else:
+            mount = (f"at ({position}) m, direction {_fmt(math.degrees(a['direction']), 4)} "
+                     "deg")
+        items.append(f"appendage {a['name']}{what} {mount}: truth model {truth}, design model "
+                     f"{design}")
     c = s["controller"]
     rate = c.get("sample_time")
     items.append("controllers: " + ", ".join(controller_label(k) for k in c["types"]) + "; "
@@ -357,17 +413,21 @@ def _question(data: dict) -> list:
                     "hold)" if rate else "continuous-time"))
     m = s.get("manoeuvre")
     if m:
-        items.append(f"manoeuvre: slew of {_fmt(math.degrees(m['slew_angle']), 5)} deg in "
-                     f"{_fmt(m['slew_time'])} s (cycloidal), simulated for {_fmt(m['duration'])} "
-                     f"s at a step of {_fmt(m['step'])} s")
+        about = ("" if m.get("slew_axis") is None else " about (" + ", ".join(
+            _fmt(e, 4) for e in m["slew_axis"]) + ") in hub axes (an eigen-axis slew)")
+        items.append(f"manoeuvre: slew of {_fmt(math.degrees(m['slew_angle']), 5)} deg{about} "
+                     f"in {_fmt(m['slew_time'])} s (cycloidal), simulated for "
+                     f"{_fmt(m['duration'])} s at a step of {_fmt(m['step'])} s")
         d = m.get("disturbance")
         if d:
-            unit = "N m" if d["input"] == "disturbance_torque" else "N"
+            unit = "N m" if d["input"].startswith("disturbance_torque") else "N"
             length = (f"for {_fmt(d['length'])} s" if d.get("length") is not None
                       else "to the end")
-            items.append(f"disturbance: {_fmt(d['amplitude'])} {unit} on {d['input']} from "
-                         f"t = {_fmt(d['start'])} s {length} (its response is reported apart "
-                         "from the slew's)")
+            along = ("" if d.get("axis") is None else " along (" + ", ".join(
+                _fmt(e, 4) for e in d["axis"]) + ") in hub axes")
+            items.append(f"disturbance: {_fmt(d['amplitude'])} {unit} on {d['input']}{along} "
+                         f"from t = {_fmt(d['start'])} s {length} (its response is reported "
+                         "apart from the slew's)")
     o = s["outputs"]
     asked = [k.replace("_", " ") for k in ("tip_deflection", "root_loads", "exact_reference")
              if o.get(k)]
@@ -384,7 +444,7 @@ def _models(data: dict) -> list:
     truth = data["truth"]
     if fid.get("n_modes"):
         b.append(("p", f"Truth model: every distributed beam truncated to "
-                       f"{plural(fid['n_modes'], 'bending mode')} ({fid['method']}); the coupled "
+                       f"{_modes(data, fid['n_modes'])} ({fid['method']}); the coupled "
                        f"plant keeps {truth['modes_kept']} of {plural(truth['modes_total'], 'mode')}"
                        f" ({truth['modes_dropped']} pruned: not excited by the inputs or not "
                        f"seen by the outputs) and has {plural(truth['n_states'], 'state')}."))
@@ -454,26 +514,36 @@ def _controllers(data: dict) -> list:
             items = [f"control law: {c['structure']}"]
             if c.get("given"):
                 items.append("the controller's matrices are in results.json (controllers)")
+            elif c["kind"] == "pd" and "principal_moments" in c:
+                # three axes: J, Kp and Kd are matrices, diagonal in the principal axes
+                J = np.asarray(c["principal_moments"], dtype=float)
+                wn, zeta = c["natural_frequency"], c["damping"]
+                items += [f"design inertia J: principal moments {_vector(J)} kg m^2 (rigid-body "
+                          "limit of the design plant; the gains act along its principal axes)",
+                          f"natural frequency wn = {_fmt(wn)} rad/s, damping ratio "
+                          f"{_fmt(zeta)} about every axis",
+                          f"Kp = J wn^2 = {_vector(J * wn**2)} N m/rad, Kd = 2 zeta wn J = "
+                          f"{_vector(2.0 * zeta * wn * J)} N m s/rad about the principal axes"]
+                items += _filters(c)
             elif c["kind"] == "pd":
                 items += [f"design inertia J = {_fmt(c['inertia'])} kg m^2 (rigid-body limit of "
                           "the design plant)",
                           f"natural frequency wn = {_fmt(c['natural_frequency'])} rad/s, damping "
                           f"ratio {_fmt(c['damping'])}",
                           f"Kp = J wn^2 = {_fmt(c['Kp'])} N m/rad, Kd = 2 zeta wn J = "
-                          f"{_fmt(c['Kd'])} N m s/rad",
-                          "roll-off: " + (f"second-order Butterworth at {_fmt(c['roll_off'])} rad/s"
-                                          if c["roll_off"] else "none"),
-                          "notch: " + (f"at {_fmt(c['notch'])} rad/s"
-                                       + (" (the first flexible mode)" if c.get("notch_spec")
-                                          else "") if c["notch"] else "none")]
+                          f"{_fmt(c['Kd'])} N m s/rad"] + _filters(c)
             else:
                 items += [f"weights: attitude {_fmt(c['attitude_weight'])} 1/rad^2, rate "
                           f"{_fmt(c['rate_weight'])} s^2/rad^2, torque {_fmt(c['torque_weight'])}"
                           " 1/(N m)^2" + (f", tip deflection {_fmt(c['deflection_weight'])} 1/m^2"
                                           if c.get("deflection_weight") else ""),
-                          f"rigid-body regulator frequency (q / (r J^2))^(1/4) = "
-                          f"{_fmt(c['rigid_body_frequency'], 4)} rad/s; estimator "
-                          f"{_fmt(c['estimator_speed'])} x faster",
+                          (f"rigid-body regulator frequency (q / (r J^2))^(1/4) = "
+                           f"{_fmt(c['rigid_body_frequency'], 4)} rad/s" if
+                           "rigid_body_frequencies" not in c else
+                           "rigid-body regulator frequencies (q / (r J^2))^(1/4) about the "
+                           f"principal axes (J = {_vector(c['principal_moments'])} kg m^2): "
+                           f"{_vector(c['rigid_body_frequencies'], 4)} rad/s")
+                          + f"; estimator {_fmt(c['estimator_speed'])} x faster",
                           f"controller states: {c['n_states']} (the estimate of the design "
                           "model's states)",
                           "regulator poles [1/s]: " + _poles_text(c["regulator_poles"])
@@ -494,10 +564,7 @@ def _controllers(data: dict) -> list:
                 items.append("continuous-time")
             b.append(("ul", items))
             if c["kind"] == "lqr" and not c.get("given"):
-                rows = [[state, _fmt(k, 4), _fmt(l_[0], 4), _fmt(l_[1], 4)]
-                        for state, k, l_ in zip(c["states"], c["K"], c["L"])]
-                b.append(("table", ["design-model state", "K (torque per state)",
-                                    "L (theta innovation)", "L (omega innovation)"], rows))
+                b.append(("table", *_lqr_gains(c)))
             for line in c.get("removed_modes", []):
                 removed.append(f"{who}: {line}")
     b.append(("h3", "Modes left out of the design and why"))
@@ -511,6 +578,37 @@ def _controllers(data: dict) -> list:
     else:
         b.append(("p", "None: every mode of the design plants is within the loops' reach."))
     return b
+
+
+def _vector(values, digits: int = 5) -> str:
+    """``(a, b, c)`` of numbers, each as :func:`_fmt` gives it."""
+    return "(" + ", ".join(_fmt(float(v), digits) for v in np.ravel(values)) + ")"
+
+
+def _filters(c: dict) -> list:
+    """A PD's roll-off and notch, as the controllers' section lists them."""
+    return ["roll-off: " + (f"second-order Butterworth at {_fmt(c['roll_off'])} rad/s"
+                            if c["roll_off"] else "none"),
+            "notch: " + (f"at {_fmt(c['notch'])} rad/s"
+                         + (" (the first flexible mode)" if c.get("notch_spec") else "")
+                         if c["notch"] else "none")]
+
+
+def _lqr_gains(c: dict) -> tuple[list, list]:
+    """Header and rows of an LQR's gains per design-model state: K (torque per state; three
+    axes one column per torque) and L (per innovation: theta and omega, per axis)."""
+    K = np.asarray(c["K"], dtype=float)
+    K = K.reshape(1, -1) if K.ndim == 1 else K
+    L = np.asarray(c["L"], dtype=float)
+    if K.shape[0] == 1:
+        header = ["design-model state", "K (torque per state)", "L (theta innovation)",
+                  "L (omega innovation)"]
+    else:
+        header = (["design-model state"] + [f"K (torque_{a})" for a in "xyz"]
+                  + [f"L ({q}_{a} innovation)" for q in ("theta", "omega") for a in "xyz"])
+    rows = [[state, *(_fmt(k, 4) for k in K[:, i]), *(_fmt(v, 4) for v in L[i])]
+            for i, state in enumerate(c["states"])]
+    return header, rows
 
 
 def _closed_loop_fidelity(choice: dict) -> list:
@@ -638,7 +736,8 @@ def report_blocks(data: dict, images: list) -> list:
     b += _models(data)
     b += _controllers(data)
     for table in data.get("equivalence", []):
-        b.append(("h2", f"Equivalence criterion: {table['appendage']}"))
+        plane = f" ({table['plane']} bending plane)" if table.get("plane") else ""
+        b.append(("h2", f"Equivalence criterion: {table['appendage']}{plane}"))
         b.append(("p", "The paper's quantities (m, J, L, gains k_r, zeros n_r1, n_r2, natural "
                        "frequencies w1, w2) of each model, with relative errors against "
                        f"the {table.get('reference', 'beam (exact)')}, and the largest "
@@ -694,19 +793,16 @@ def _work(stats: dict) -> str:
 # ---------------------------------------------------------------------------------------------
 # the writer
 # ---------------------------------------------------------------------------------------------
-def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
-                 plots: bool | None = None, pages: bool = True, progress=None) -> dict:
-    """Write the report of a run into ``folder`` (which must exist).
+def write_report(result, folder: str | os.PathLike, *, progress=None) -> dict:
+    """Write the report of a run into ``folder`` (which must exist), as its scene asks: the
+    pages, results.json, the time series (``report.timeseries``), the plots
+    (``report.plots``) and the FMUs and SSP files (``export``).
 
     Parameters
     ----------
     result : spacecraft.design.loop.RunResult
     folder : path
         Destination (use :func:`output_folder` for an all-or-nothing folder).
-    fmus, plots : bool, optional
-        Override the scene's ``export.fmu`` / ``report.plots`` (False: skip).
-    pages : bool
-        Write report.md, report.html, results.json and the time series (False: FMUs only).
     progress : callable, optional
         Called with a short message per step.
 
@@ -715,65 +811,45 @@ def write_report(result, folder: str | os.PathLike, *, fmus: bool | None = None,
     dict
         The results (``result.data`` plus ``files``, ``version``, ``created``), as written to
         results.json.
+
+    See Also
+    --------
+    spacecraft.report.exports.write_exports : the FMUs alone (``flexsat export``).
     """
-    from .exports import finish_exports, start_exports, write_ssps
     from ..design.loop import RunResult, check_options
+    from .exports import write_exports
 
     if not isinstance(result, RunResult):
         raise TypeError(f"result must be a RunResult (spacecraft.run); got {type(result).__name__}")
     if not isinstance(folder, (str, os.PathLike)) or not os.path.isdir(folder):
         raise ValueError(f"folder must be an existing folder (str or os.PathLike; see "
                          f"spacecraft.output_folder); got {folder!r:.200}")
-    check_options(fmus=fmus, plots=plots, pages=pages, progress=progress)
-    if result.data.get("three_axis"):
-        from ..design.three_axis import write_three_axis_report
-
-        return write_three_axis_report(result.scene, result.three_axis, folder,
-                                       fmus=fmus, plots=plots, pages=pages, progress=progress)
+    check_options(progress=progress)
     folder = Path(folder)
     progress = progress or (lambda message: None)
     scene = result.scene
-    stats = result.stats
-    do_fmus = scene.export.fmu if fmus is None else (fmus and scene.export.fmu)
-    wanted_plots = scene.report.plots if plots is None or plots else ()
     data = dict(result.data)
     data["version"] = version()
     data["created"] = datetime.datetime.now().isoformat(timespec="seconds")
-    files: dict = {"fmu": [], "plots": []}
-    # The C compiler runs in subprocesses: the FMU builds (two at a time, both cores) proceed
-    # while the plots are drawn.
-    pool = concurrent.futures.ThreadPoolExecutor(max_workers=2) if do_fmus else None
-    try:
-        started = []
-        if do_fmus:
-            (folder / "fmu").mkdir(exist_ok=True)
-            started = start_exports(result, folder / "fmu", pool)
-            progress(f"exporting {plural(len(started), 'FMU')}")
-        images = _plots(result, folder, wanted_plots if pages else (), progress)
-        if started:
-            progress("waiting for the FMU builds")
-        files["fmu"] = finish_exports(started, stats)
-        if do_fmus and scene.export.ssp:
-            files["ssp"] = write_ssps(result, folder / "fmu", files["fmu"])
-    finally:
-        # on an error or a signal the builds not yet started are dropped; running ones (a few
-        # tenths of a second of gcc) finish before the folder is removed
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)
+    # the plots are drawn while the C compiler builds the FMUs
+    files, images = write_exports(result, folder, progress=progress,
+                                  meanwhile=lambda: _plots(result, folder, scene.report.plots,
+                                                           progress))
+    files = {"fmu": files["fmu"], "plots": [], **({"ssp": files["ssp"]} if files["ssp"]
+                                                  else {})}
     images = [(f"plots/{Path(p).name}", caption) for p, caption in images]
     files["plots"] = [p for p, _ in images]
-    if pages and scene.report.timeseries and (result.responses or result.basilisk):
+    if scene.report.timeseries and (result.responses or result.basilisk):
         files["timeseries"] = write_timeseries(result, folder / "timeseries")
     data["files"] = files
-    data["stats"] = stats.as_dict()
-    if pages:
-        progress("writing report")
-        blocks = report_blocks(data, images)
-        (folder / "report.md").write_text(markdown(blocks), encoding="utf-8")
-        (folder / "report.html").write_text(render_html(blocks, data.get("title") or "flexsat"),
-                                            encoding="utf-8")
-        data["files"]["pages"] = ["report.md", "report.html", "results.json"]
-        (folder / "results.json").write_text(to_json(data), encoding="utf-8")
+    data["stats"] = result.stats.as_dict()
+    progress("writing report")
+    blocks = report_blocks(data, images)
+    (folder / "report.md").write_text(markdown(blocks), encoding="utf-8")
+    (folder / "report.html").write_text(render_html(blocks, data.get("title") or "flexsat"),
+                                        encoding="utf-8")
+    data["files"]["pages"] = ["report.md", "report.html", "results.json"]
+    (folder / "results.json").write_text(to_json(data), encoding="utf-8")
     return data
 
 

@@ -300,7 +300,11 @@ key                                    unit       meaning
                                                   scipy sequence (upper case intrinsic)
 ``appendages[i].beam.poisson_ratio``   -          sections: G = E / (2 (1 + nu)) for torsion;
                                                   default 0.3 (a section is needed: torsion
-                                                  and axial motion; no ``"uniform"``)
+                                                  and axial motion; no ``"uniform"``); planar
+                                                  scenes refuse it
+``appendages[i].chain``                -          ``from_beam = "rfem"`` only (the 3-D rigid
+                                                  finite elements of the beam, rigid root): an
+                                                  explicit chain's arrays are planar
 ``wheels.spin_axes``                   -          ``[[x, y, z], ...]``: each wheel's spin axis
                                                   (hub axes; they must span x, y, z), or
 ``wheels.pyramid.cant_angle``          deg        four wheels about +z, each at this angle from
@@ -308,6 +312,16 @@ key                                    unit       meaning
 ``wheels.pyramid.azimuth``             deg        the first wheel's azimuth from +x; default 0
 ``manoeuvre.slew_axis`` *              -          ``"x"``, ``"y"``, ``"z"`` or ``[x, y, z]`` (hub
                                                   axes): the eigen-axis slew of slew_angle
+``manoeuvre.disturbance.input``        -          ``"disturbance_torque"`` [N m] or
+                                                  ``"force"`` [N] along ``axis``; or one axis'
+                                                  ``"disturbance_torque_x"``.. ``"force_z"``,
+                                                  ``"<name>_tip_force_y"``, ``_z`` [N] (the
+                                                  appendage's axes)
+``manoeuvre.disturbance.axis``         -          ``"x"``, ``"y"``, ``"z"`` or ``[x, y, z]``
+                                                  (hub axes): the direction of
+                                                  ``disturbance_torque`` or ``force``
+(every other key as in a planar scene; ``outputs.exact_reference`` and ``simulator.name =
+"basilisk"`` are planar for now, refused by key with the reason)
 =====================================  =========  ==============================================
 
 Ranges (SI units, the file's deg and Hz where it uses them; ``|x|``: either sign)
@@ -323,7 +337,7 @@ keys                                                  accepted             unit
 ``hub.inertia`` (a 3x3 tensor, entries)               |x| <= 1e10          kg m^2
 ``appendages[i].orientation``                         |x| <= 360           deg
 ``beam.poisson_ratio``                                0 .. 0.5 (excluded)  -
-``manoeuvre.slew_axis``                               |x| <= 1e6           -
+``manoeuvre.slew_axis``, ``disturbance.axis``         |x| <= 1e6           -
 ``beam.length``                                       1e-2 .. 1e3          m
 ``beam.diameter``, ``outer_diameter``, ``width``,     1e-5 .. 10, and at   m
 ``thickness``                                         most the length
@@ -452,8 +466,8 @@ from appendages.units import LENGTH_UNITS, MASS_UNITS
 
 from .limits import (DIGITAL_SAMPLE_COST, LIMIT_UNITS, REAL_LIMITS, Limits, estimate_cost,
                      library_limits)
-from .reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, _BETA1_L,
-                           _NAME, _Reader, _kind, _quoted, _shown, shorten, suggestion)
+from .reader import (BEAM_FREQUENCY_RANGE, NAME_LENGTH, RANGES, SceneError, BETA1_L,
+                           NAME_PATTERN, SceneReader, value_kind, quoted_choices, shown_value, shorten, suggestion)
 from .given import read_given
 from .specs import SensorsSpec, ShaperSpec, WheelsSpec  # noqa: F401  (public through this module)
 from .flown import (MANOEUVRE_KEYS, check_flown_scene, flown_plots, read_delay, read_profile,
@@ -495,7 +509,8 @@ __all__ = [
     "scene_dict",
     "models_scene",
     "read_limits",
-    "with_simulator",
+    "read_beam_table",
+    "with_overrides",
     "RANGES",
     "BEAM_FREQUENCY_RANGE",
     "NAME_LENGTH",
@@ -537,7 +552,7 @@ def _section_properties(section: str, d: dict, density, youngs) -> tuple[float, 
     return youngs * second_moment, density * area
 
 
-def _read_beam(r: _Reader, data, path: str, *, segment: bool = False,
+def _read_beam(r: SceneReader, data, path: str, *, segment: bool = False,
                tip: TipSpec | None = None, damping: float | None = None) -> BeamSpec:
     """A beam table (``segment``: one segment of a stepped beam, whose damping ratio is the
     stepped beam's ``damping``, without its own frequency check)."""
@@ -564,6 +579,10 @@ def _read_beam(r: _Reader, data, path: str, *, segment: bool = False,
                                                                  else {"damping_ratio"})
     if section != "uniform":
         allowed |= {"density", "youngs_modulus", "poisson_ratio"}
+    if "poisson_ratio" in t and not getattr(r, "three_axis", False):
+        raise r.error(f"{path}.poisson_ratio", "applies to three-axis scenes (the shear modulus "
+                      "G = E / (2 (1 + nu)) of the beam's torsion); a planar scene's beams "
+                      "bend in the hub's plane only")
     poisson = (r.number(t, "poisson_ratio", path, "beam.poisson_ratio", default=0.3)
                if section != "uniform" else 0.3)
     for key in list(t):
@@ -577,12 +596,12 @@ def _read_beam(r: _Reader, data, path: str, *, segment: bool = False,
     _check_section_shape(r, path, section, length, dims)
     if not segment:
         bending_stiffness, linear_density = _section_properties(section, dims, density, youngs)
-        omega_1 = _BETA1_L**2 * math.sqrt(bending_stiffness / linear_density) / length**2
+        omega_1 = BETA1_L**2 * math.sqrt(bending_stiffness / linear_density) / length**2
         _check_first_frequency(r, path, omega_1, "from length, section and material")
     return BeamSpec(section, length, tuple(dims.items()), density, youngs, damping, poisson, tip)
 
 
-def _read_damping_ratio(r: _Reader, t: dict, path: str) -> float:
+def _read_damping_ratio(r: SceneReader, t: dict, path: str) -> float:
     """``damping_ratio`` [-] of a beam (default 0), with its unit-slip hint and warning."""
     damping = _with_unit_hint(lambda: r.number(t, "damping_ratio", path, "beam.damping_ratio",
                                                default=0.0),
@@ -591,7 +610,7 @@ def _read_damping_ratio(r: _Reader, t: dict, path: str) -> float:
     return damping
 
 
-def _check_section_shape(r: _Reader, path: str, section: str, length: float, dims: dict):
+def _check_section_shape(r: SceneReader, path: str, section: str, length: float, dims: dict):
     """A tube's wall at most half its diameter; a beam no deeper than it is long."""
     if section == "tube" and dims["wall_thickness"] > dims["outer_diameter"] / 2:
         raise r.error(f"{path}.wall_thickness", "must be at most outer_diameter/2 = "
@@ -602,7 +621,7 @@ def _check_section_shape(r: _Reader, path: str, section: str, length: float, dim
                           f"(a beam is slender); got {dims[key]:g}")
 
 
-def _check_first_frequency(r: _Reader, path: str, omega_1: float, origin: str) -> None:
+def _check_first_frequency(r: SceneReader, path: str, omega_1: float, origin: str) -> None:
     """Refuse a beam whose first free-free bending frequency [rad/s] lies outside
     BEAM_FREQUENCY_RANGE."""
     lo, hi = BEAM_FREQUENCY_RANGE
@@ -612,7 +631,7 @@ def _check_first_frequency(r: _Reader, path: str, omega_1: float, origin: str) -
                       "for; check the units of length, section and material")
 
 
-def _read_tip(r: _Reader, data, path: str) -> TipSpec:
+def _read_tip(r: SceneReader, data, path: str) -> TipSpec:
     """``appendages[i].tip``: a rigid body at the beam's free end."""
     t = r.table(data, path)
     three_axis = getattr(r, "three_axis", False)
@@ -622,7 +641,7 @@ def _read_tip(r: _Reader, data, path: str) -> TipSpec:
         if not isinstance(value, (list, tuple)):
             raise r.error(full, "must be a 3x3 array [kg m^2] in a three-axis scene: the body's "
                           "inertia tensor about its own centre of mass, appendage axes; got "
-                          f"{_kind(value)}")
+                          f"{value_kind(value)}")
         inertia = _read_inertia_tensor(r, value, full, kind="tip.inertia tensor",
                                        about="about the body's own centre of mass, appendage "
                                              "axes")
@@ -664,23 +683,23 @@ _MODAL_ORIGINS = {"file": "a modal data file", "nastran": "a NASTRAN solution",
                   "inline": "numbers in the scene"}
 
 
-def _data_path(r: _Reader, value, full: str, suffixes: tuple) -> str:
+def _data_path(r: SceneReader, value, full: str, suffixes: tuple) -> str:
     """A data file named in the scene: a string, relative to the scene's folder (or absolute),
     an existing file with one of ``suffixes``; returned absolute."""
     if not isinstance(value, str) or not value:
         raise r.error(full, f"must be a file path (a string, relative to the scene's folder); "
-                      f"got {_kind(value)}")
+                      f"got {value_kind(value)}")
     base = getattr(r, "base", None) or Path.cwd()
     path = (Path(base) / value).resolve()
     if not path.is_file():
         raise r.error(full, f"no such file: {shorten(str(path))} (a path relative to the "
                       f"scene's folder {shorten(str(base))})")
     if not path.name.lower().endswith(suffixes):
-        raise r.error(full, f"must be a {' or '.join(suffixes)} file; got {_shown(value)}")
+        raise r.error(full, f"must be a {' or '.join(suffixes)} file; got {shown_value(value)}")
     return str(path)
 
 
-def _matrix(r: _Reader, t: dict, key: str, path: str, kind: str, *, rows: int | None = None,
+def _matrix(r: SceneReader, t: dict, key: str, path: str, kind: str, *, rows: int | None = None,
             columns: tuple = ()) -> tuple | None:
     """An array of rows of numbers of the range ``RANGES[kind]`` (``columns``: the accepted
     row lengths), or None when absent."""
@@ -690,7 +709,7 @@ def _matrix(r: _Reader, t: dict, key: str, path: str, kind: str, *, rows: int | 
     unit = RANGES[kind].unit
     if not isinstance(value, (list, tuple)) or not value or not all(
             isinstance(row, (list, tuple)) for row in value):
-        raise r.error(full, f"must be an array of rows of numbers [{unit}]; got {_kind(value)}")
+        raise r.error(full, f"must be an array of rows of numbers [{unit}]; got {value_kind(value)}")
     r.check_limit(full, len(value), "modes", f"an array of {len(value)} rows")
     if rows is not None and len(value) != rows:
         raise r.error(full, f"must have {rows} rows [{unit}]; got {len(value)}")
@@ -702,7 +721,7 @@ def _matrix(r: _Reader, t: dict, key: str, path: str, kind: str, *, rows: int | 
                  for i, row in enumerate(value))
 
 
-def _read_modal(r: _Reader, data, path: str) -> ModalSpec:
+def _read_modal(r: SceneReader, data, path: str) -> ModalSpec:
     """``appendages[i].modal``: the cantilever modes of a finite-element model, from a modal
     data file, a NASTRAN solution or the numbers given here."""
     t = r.table(data, path)
@@ -730,11 +749,11 @@ def _read_modal(r: _Reader, data, path: str) -> ModalSpec:
                 or not all(isinstance(u, str) for u in units)):
             raise r.error(full, "must be [length unit, mass unit] of the finite-element model "
                           "(NASTRAN has none), e.g. [\"m\", \"kg\"], [\"mm\", \"t\"], "
-                          f"[\"in\", \"slinch\"]; got {_kind(units)}")
+                          f"[\"in\", \"slinch\"]; got {value_kind(units)}")
         for unit, table, what in zip(units, (LENGTH_UNITS, MASS_UNITS), ("length", "mass")):
             if unit not in table:
-                raise r.error(full, f"the {what} unit must be one of {_quoted(table)}; got "
-                              f"{_shown(unit)}" + suggestion(unit, table))
+                raise r.error(full, f"the {what} unit must be one of {quoted_choices(table)}; got "
+                              f"{shown_value(unit)}" + suggestion(unit, table))
         fields["units"] = tuple(units)
         if "mass_matrix" in t:
             fields["mass_matrix"] = _data_path(r, t.pop("mass_matrix"), f"{path}.mass_matrix",
@@ -846,7 +865,7 @@ def _structure_name(spec) -> str:
     return "a tapered beam"
 
 
-def _read_stepped(r: _Reader, data, path: str, tip: TipSpec | None) -> SteppedBeamSpec:
+def _read_stepped(r: SceneReader, data, path: str, tip: TipSpec | None) -> SteppedBeamSpec:
     """``appendages[i].stepped_beam``: ``segments`` (beam tables from the root outward) and
     one ``damping_ratio``."""
     t = r.table(data, path)
@@ -855,7 +874,7 @@ def _read_stepped(r: _Reader, data, path: str, tip: TipSpec | None) -> SteppedBe
     if not isinstance(items, (list, tuple)) or not items:
         raise r.error(full, "must be a non-empty array of tables, one per segment from the root "
                       f"outward ([[{path.split('[')[0]}.stepped_beam.segments]]); got "
-                      f"{_kind(items)}")
+                      f"{value_kind(items)}")
     r.check_limit(full, len(items), "bodies", f"{len(items)} segments")
     segments = tuple(_read_beam(r, item, f"{full}[{k}]", segment=True, damping=damping)
                      for k, item in enumerate(items))
@@ -865,7 +884,7 @@ def _read_stepped(r: _Reader, data, path: str, tip: TipSpec | None) -> SteppedBe
     return spec
 
 
-def _read_tapered(r: _Reader, data, path: str, tip: TipSpec | None) -> TaperedBeamSpec:
+def _read_tapered(r: SceneReader, data, path: str, tip: TipSpec | None) -> TaperedBeamSpec:
     """``appendages[i].tapered_beam``: a section whose dimensions vary linearly from
     ``root_dimensions`` to ``tip_dimensions``, as ``n_segments`` uniform segments."""
     t = r.table(data, path)
@@ -896,7 +915,7 @@ def _read_tapered(r: _Reader, data, path: str, tip: TipSpec | None) -> TaperedBe
     return spec
 
 
-def _check_built_frequency(r: _Reader, path: str, spec) -> None:
+def _check_built_frequency(r: SceneReader, path: str, spec) -> None:
     """Build a stepped or tapered beam (refusals of the library by key) and check its first
     free-free bending frequency."""
     try:
@@ -940,7 +959,7 @@ _CHAIN_ARRAYS = {"lengths": "chain.lengths", "masses": "chain.masses",
                  "hinge_dampings": "chain.hinge_dampings", "com_offsets": "chain.com_offsets"}
 
 
-def _read_chain(r: _Reader, data, path: str, has_beam: bool) -> ChainSpec:
+def _read_chain(r: SceneReader, data, path: str, has_beam: bool) -> ChainSpec:
     t = r.table(data, path)
     root = r.choice(t, "root", path, ("rigid", "hinged"), default="rigid")
     if "from_beam" in t:
@@ -985,13 +1004,13 @@ def _read_chain(r: _Reader, data, path: str, has_beam: bool) -> ChainSpec:
     return ChainSpec(root=root, **values)
 
 
-def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
+def _read_appendage(r: SceneReader, data, path: str, index: int) -> AppendageSpec:
     t = r.table(data, path)
     name, full = r.take(t, "name", path, f"appendage{index + 1}")
-    if not isinstance(name, str) or not _NAME.fullmatch(name) or len(name) > NAME_LENGTH:
+    if not isinstance(name, str) or not NAME_PATTERN.fullmatch(name) or len(name) > NAME_LENGTH:
         raise r.error(full, f"must be an ASCII identifier of at most {NAME_LENGTH} characters "
                       "(a letter or '_', then letters, digits or '_': it names FMU variables); "
-                      f"got {_kind(name)}")
+                      f"got {value_kind(name)}")
     three_axis = getattr(r, "three_axis", False)
     orientation = None
     if three_axis:
@@ -1095,23 +1114,19 @@ def _read_appendage(r: _Reader, data, path: str, index: int) -> AppendageSpec:
                          orientation, modal)
 
 
-def _check_three_axis_scene(r: _Reader, simulator, outputs, export, plots) -> None:
-    """What a three-axis scene cannot ask for (yet): by key."""
+def _check_three_axis_scene(r: SceneReader, simulator, outputs) -> None:
+    """What a three-axis scene cannot ask for yet, by key, with the reason."""
     if simulator.name != "flexsat":
         raise r.error("simulator.name", f"{simulator.name!r} is planar; a three-axis scene is "
                       "simulated by flexsat")
     if outputs.exact_reference:
-        raise r.error("outputs.exact_reference", "the exact frequency-response reference is "
-                      "planar; a three-axis report gives the exact coupled frequencies")
-    if export.ssp:
-        raise r.error("export.ssp", "is planar for now (the SSP connects torque, theta, omega)")
-    unsupported = [p for p in plots if p not in ("slew", "poles")]
-    if unsupported:
-        raise r.error("report.plots", f"a three-axis report plots 'slew' (per axis, tip motions "
-                      f"in both planes) and 'poles'; got {_shown(unsupported)}")
+        raise r.error("outputs.exact_reference", "the exact-beam verdict of a three-axis loop "
+                      "(a multivariable Nyquist count through W6) is not built yet; a "
+                      "three-axis run checks its truth model against the exact coupled "
+                      "frequencies when fidelity.tolerance chooses the modes")
 
 
-def _read_inertia_tensor(r: _Reader, value, full: str, *, kind: str = "hub.inertia tensor",
+def _read_inertia_tensor(r: SceneReader, value, full: str, *, kind: str = "hub.inertia tensor",
                          about: str = "about the hub's centre of mass, hub axes") -> tuple:
     """A 3x3 inertia tensor of a body [kg m^2], rows as tuples: the hub's symmetric positive
     definite (the checks of :class:`~spacecraft.dynamics.hub.Hub`), a tip body's positive
@@ -1143,7 +1158,7 @@ def _read_inertia_tensor(r: _Reader, value, full: str, *, kind: str = "hub.inert
     return rows
 
 
-def _read_orientation(r: _Reader, t: dict, path: str) -> tuple:
+def _read_orientation(r: SceneReader, t: dict, path: str) -> tuple:
     """``orientation``: Euler angles [deg] of the appendage's axes (local x along it) in the
     ``orientation_sequence`` (default ``"ZYX"``: yaw about the hub's z, then pitch about the
     new y, then roll about the new x, the appendage's own axis)."""
@@ -1160,7 +1175,7 @@ def _read_orientation(r: _Reader, t: dict, path: str) -> tuple:
     return tuple(tuple(float(v) for v in row) for row in R)
 
 
-def _check_three_axis_appendage(r: _Reader, t: dict, path: str, beam) -> None:
+def _check_three_axis_appendage(r: SceneReader, t: dict, path: str, beam) -> None:
     """A three-axis scene needs beams that twist and stretch (sections give GJ, rho I_p, EA) and
     fitted design chains (3-D chains in every motion)."""
     sections = []
@@ -1176,20 +1191,23 @@ def _check_three_axis_appendage(r: _Reader, t: dict, path: str, beam) -> None:
                           "[kg m], EA [N]): 'rod', 'tube' or 'rectangular'; got 'uniform' "
                           "(bending only)")
     for key in ("chain", "truth_chain"):
-        if key in t:
-            raise r.error(f"{path}.{key}", "explicit chains are planar; a three-axis scene "
-                          "fits 3-D chains to the beams (design = 'fit')")
+        chain = t.get(key)
+        if not isinstance(chain, Mapping):
+            continue
+        if "from_beam" not in chain:
+            raise r.error(f"{path}.{key}", "an explicit chain's arrays are planar (no second "
+                          "bending plane, torsion or axial springs); in a three-axis scene give "
+                          "chain.from_beam = 'rfem' (the 3-D rigid finite elements of the "
+                          "beam) or fit 3-D chains (design = 'fit')")
+        if chain.get("root", "rigid") == "hinged":
+            raise r.error(f"{path}.{key}.root", "a hinged root (a drive hinge about one axis) "
+                          "is planar; a three-axis chain has a rigid root")
     if beam is None:
         raise r.error(path, "a three-axis appendage needs a structure (a beam, stepped_beam, "
                       "tapered_beam or modal table)")
-    truth = "modal" if isinstance(beam, ModalSpec) else "beam"
-    for key, allowed in (("truth", truth), ("design", "fit")):
-        if key in t and t[key] != allowed:
-            raise r.error(f"{path}.{key}", f"must be {allowed!r} in a three-axis scene; got "
-                          f"{_shown(t[key])}")
 
 
-def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
+def _read_controller(r: SceneReader, data, path: str) -> ControllerSpec:
     t = r.table(data, path)
     # unknown keys first: a misspelt table ([controller.pid]) is named as such, not taken for
     # a missing [controller.pd]
@@ -1244,7 +1262,7 @@ def _read_controller(r: _Reader, data, path: str) -> ControllerSpec:
                           delay, computation_delay)
 
 
-def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time,
+def _read_manoeuvre(r: SceneReader, data, path: str, names, sample_time,
                     delay: float = 0.0) -> ManoeuvreSpec:
     t = r.table(data, path)
     degrees = r.number(t, "slew_angle", path, "manoeuvre.slew_angle")
@@ -1277,13 +1295,29 @@ def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time,
     if "disturbance" in t:
         p = f"{path}.disturbance"
         dt_ = r.table(t.pop("disturbance"), p)
-        inputs = ("disturbance_torque", "force_x", "force_y", *(f"{n}_tip_force" for n in names))
+        three_axis = getattr(r, "three_axis", False)
+        if three_axis:
+            inputs = ("disturbance_torque", "force",
+                      *(f"{q}_{a}" for q in ("disturbance_torque", "force") for a in "xyz"),
+                      *(f"{n}_tip_force_{a}" for n in names for a in "yz"))
+        else:
+            inputs = ("disturbance_torque", "force_x", "force_y",
+                      *(f"{n}_tip_force" for n in names))
         disturbance = DisturbanceSpec(
             input=r.choice(dt_, "input", p, inputs),
             amplitude=r.number(dt_, "amplitude", p, "disturbance.amplitude"),
             start=r.number(dt_, "start", p, "disturbance.start", default=0.0),
             length=r.number(dt_, "length", p, "disturbance.length", default=None))
-        r.done(dt_, p, {"input", "amplitude", "start", "length"})
+        axis = None
+        if three_axis and disturbance.input in ("disturbance_torque", "force"):
+            axis = _read_axis(r, dt_, p, "axis", "disturbance.axis")
+        elif "axis" in dt_:
+            raise r.error(f"{p}.axis", "applies to a three-axis scene's 'disturbance_torque' "
+                          "or 'force' (their direction in hub axes); "
+                          + ("this input names its own direction" if three_axis else
+                             "a planar disturbance acts in the hub's plane"))
+        disturbance = dataclasses.replace(disturbance, axis=axis)
+        r.done(dt_, p, {"input", "amplitude", "start", "length", "axis"})
         if disturbance.start >= duration:
             raise r.error(f"{p}.start", f"must fall inside the simulated time, before "
                           f"manoeuvre.duration = {duration:g} [s]; got {disturbance.start:g}")
@@ -1293,24 +1327,28 @@ def _read_manoeuvre(r: _Reader, data, path: str, names, sample_time,
     elif "slew_axis" in t:
         raise r.error(f"{path}.slew_axis", "applies to three-axis scenes only (hub.inertia a "
                       "3x3 tensor [kg m^2]); a planar slew turns about the hub's z axis")
-    if disturbance is not None and getattr(r, "three_axis", False):
-        raise r.error(f"{path}.disturbance", "is not supported in three-axis scenes yet")
     flown = read_profile(r, t, path)
     r.done(t, path, {"slew_angle", "slew_time", "duration", "step", "disturbance", "slew_axis",
                      *MANOEUVRE_KEYS})
     return ManoeuvreSpec(angle, slew_time, duration, step, disturbance, slew_axis, **flown)
 
 
-def _read_slew_axis(r: _Reader, t: dict, path: str) -> tuple:
+def _read_slew_axis(r: SceneReader, t: dict, path: str) -> tuple:
     """``slew_axis``: ``"x"``, ``"y"``, ``"z"`` or a non-zero 3-vector in hub axes
     (normalised here), the axis of the eigen-axis slew."""
-    value, full = r.take(t, "slew_axis", path)
+    return _read_axis(r, t, path, "slew_axis", "manoeuvre.slew_axis")
+
+
+def _read_axis(r: SceneReader, t: dict, path: str, key: str, kind: str) -> tuple:
+    """A direction in hub axes: ``"x"``, ``"y"``, ``"z"`` or a non-zero 3-vector (range
+    ``kind``), normalised."""
+    value, full = r.take(t, key, path)
     if isinstance(value, str):
         if value not in ("x", "y", "z"):
             raise r.error(full, f"must be 'x', 'y', 'z' or an array of 3 numbers (hub axes); "
-                          f"got {_shown(value)}")
+                          f"got {shown_value(value)}")
         return tuple(float(a == value) for a in "xyz")
-    axis = r.vector({"slew_axis": value}, "slew_axis", path, "manoeuvre.slew_axis", size=3)
+    axis = r.vector({key: value}, key, path, kind, size=3)
     largest = max(abs(a) for a in axis)
     if largest == 0.0:
         raise r.error(full, "must be a non-zero vector (hub axes); got [0, 0, 0]")
@@ -1321,7 +1359,7 @@ def _read_slew_axis(r: _Reader, t: dict, path: str) -> tuple:
     return tuple(a / norm for a in scaled)
 
 
-def _read_simulator(r: _Reader, data, path: str) -> SimulatorSpec:
+def _read_simulator(r: SceneReader, data, path: str) -> SimulatorSpec:
     t = r.table(data, path)
     name = r.choice(t, "name", path, SIMULATORS, default="flexsat")
     rate = r.number(t, "sample_rate", path, "simulator.sample_rate", default=None)
@@ -1354,21 +1392,21 @@ def _read_simulator(r: _Reader, data, path: str) -> SimulatorSpec:
     return SimulatorSpec(name, sample_time, dt, wheel)
 
 
-def _limit_value(r: _Reader, value, full: str, name: str):
+def _limit_value(r: SceneReader, value, full: str, name: str):
     """A limit: a positive integer (``memory``, ``basilisk_seconds``: a positive number)."""
     unit = LIMIT_UNITS[name][0]
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise r.error(full, f"must be a positive number [{unit}]; got {_kind(value)}")
+        raise r.error(full, f"must be a positive number [{unit}]; got {value_kind(value)}")
     try:
         number = float(value)
     except (OverflowError, ValueError):
-        raise r.error(full, f"must be finite [{unit}]; got {_shown(value)}") from None
+        raise r.error(full, f"must be finite [{unit}]; got {shown_value(value)}") from None
     if not (math.isfinite(number) and number >= 1):
-        raise r.error(full, f"must be a finite number >= 1 [{unit}]; got {_shown(value)}")
+        raise r.error(full, f"must be a finite number >= 1 [{unit}]; got {shown_value(value)}")
     if name in REAL_LIMITS:
         return number
     if number != math.floor(number):
-        raise r.error(full, f"must be a whole number [{unit}]; got {_shown(value)}")
+        raise r.error(full, f"must be a whole number [{unit}]; got {shown_value(value)}")
     return int(number)
 
 
@@ -1385,7 +1423,7 @@ def read_limits(data: Mapping, source: str = "") -> dict:
     SceneError
         An unknown limit or a value that is not a positive whole number.
     """
-    r = _Reader(source)
+    r = SceneReader(source)
     t = r.table(data, "limits")
     values = {name: _limit_value(r, t.pop(name), f"limits.{name}", name)
               for name in Limits.names() if name in t}
@@ -1393,7 +1431,7 @@ def read_limits(data: Mapping, source: str = "") -> dict:
     return values
 
 
-def _check_cost(r: _Reader, scene: Scene) -> None:
+def _check_cost(r: SceneReader, scene: Scene) -> None:
     """Refuse a scene whose estimated work exceeds the limits, naming the key to change."""
     cost = estimate_cost(scene)
     limits = r.limits
@@ -1426,14 +1464,17 @@ def _check_cost(r: _Reader, scene: Scene) -> None:
                       f"/ step {step:g} s)")
 
 
-def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None,
+def _read_scene(data: Mapping, source: str, limit_overrides: Mapping | None = None,
                 base: Path | None = None) -> Scene:
-    r = _Reader(source)
+    r = SceneReader(source)
     r.base = base  # the folder of data files named relative to the scene
     t = r.table(data, "")
     # the limits first: they bound what the rest may ask for
+    if isinstance(t.get("limits"), Mapping) and "file_size" in t["limits"]:
+        raise r.error("limits.file_size", "bounds the scene file before it is read: give it "
+                      "on the command line (--limit file_size=N [bytes])")
     limits = dict(read_limits(t.pop("limits", {}), source)) if "limits" in t else {}
-    limits.update(overrides or {})
+    limits.update(limit_overrides or {})
     r.limits = Limits(**limits)
     title = r.text(t, "title", "", "")
     ht = r.table(r.take(t, "hub", "")[0], "hub")
@@ -1497,7 +1538,7 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None,
     r.done(et, "export", {"fmu", "systems", "reference_files", "step", "fmi_version",
                           "sources_only", "ssp"})
     if not export.fmi_versions:
-        raise r.error("export.fmi_version", f"must name at least one of {_quoted(FMI_VERSIONS)}")
+        raise r.error("export.fmi_version", f"must name at least one of {quoted_choices(FMI_VERSIONS)}")
     if export.ssp and not {"plant", "controller"} <= set(export.systems):
         raise r.error("export.ssp", "needs both 'plant' and 'controller' in export.systems (an "
                       "SSP connects the two FMUs)")
@@ -1548,7 +1589,7 @@ def _read_scene(data: Mapping, source: str, overrides: Mapping | None = None,
     plots = flown_plots(r, plots, plots_value is True, manoeuvre=manoeuvre, wheels=wheels,
                         simulator=simulator)
     if hub.three_axis:
-        _check_three_axis_scene(r, simulator, outputs, export, plots)
+        _check_three_axis_scene(r, simulator, outputs)
     scene = Scene(title=title, source=source or "<dict>", hub=hub, appendages=appendages,
                   fidelity=fidelity, controller=controller, manoeuvre=manoeuvre,
                   outputs=outputs, export=export,
@@ -1591,36 +1632,40 @@ def _checked_simulator(simulator: SimulatorSpec, appendages, manoeuvre, controll
     return simulator
 
 
-def with_simulator(scene: Scene, name: str) -> Scene:
-    """The scene with ``simulator.name`` replaced (the command line's ``--simulator``),
-    checked as the scene file's key is.
+def read_beam_table(beam: Mapping[str, Any], *, tip: Mapping[str, Any] | None = None,
+                    source: str = "command line") -> tuple[BeamSpec, list[str]]:
+    """Read and check one beam table as a scene's ``appendages[i].beam`` (units of the file),
+    with an optional ``tip`` table (``appendages[i].tip``): the command line's beam options.
+
+    Parameters
+    ----------
+    beam : mapping
+        ``section``, ``length`` [m] and the section's keys (see the scene reference).
+    tip : mapping, optional
+        ``mass`` [kg], ``inertia`` [kg m^2], ``offset`` [m] of a body at the free end.
+    source : str
+        Name in messages (``"command line"``).
+
+    Returns
+    -------
+    BeamSpec, list of str
+        The beam and the reader's unit-slip warnings, one line each.
 
     Raises
     ------
     SceneError
-        If the scene cannot be run by that simulator.
+        Naming the key and the problem.
     """
-    if name not in SIMULATORS:
-        raise SceneError(f"simulator must be one of {', '.join(map(repr, SIMULATORS))}; got "
-                         f"{shorten(repr(name))}")
-    if name == scene.simulator.name:
-        return scene
-    simulator = (SimulatorSpec() if name == "flexsat"
-                 else dataclasses.replace(scene.simulator, name=name))
-
-    def error(key, message):
-        return SceneError(f"{scene.source}: {key}: {message} (--simulator {name})")
-    if scene.three_axis and name != "flexsat":
-        raise error("simulator.name", f"{name!r} is planar; a three-axis scene is simulated by "
-                    "flexsat")
-    simulator = _checked_simulator(simulator, scene.appendages, scene.manoeuvre,
-                                   scene.controller, error)
-    return scene.replace(simulator=simulator)
+    reader = SceneReader(source)
+    tip_spec = _read_tip(reader, tip, "tip") if tip else None
+    spec = _read_beam(reader, beam, "beam", tip=tip_spec)
+    return spec, list(reader.warnings)
 
 
 def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = None, *,
                source: str | None = None, limits: Mapping[str, Any] | None = None,
-               base: "str | os.PathLike | None" = None) -> Scene:
+               base: "str | os.PathLike | None" = None,
+               overrides: Mapping[str, Any] | None = None) -> Scene:
     """Read and validate a scene.
 
     Parameters
@@ -1639,6 +1684,11 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         The folder that data files named in a dict scene (``modal.file``, ``modal.nastran``,
         ``modal.mass_matrix``) are relative to; default the current folder. A scene file's
         are relative to the file's own folder.
+    overrides : mapping, optional
+        Key path -> value (units of the file) set in the scene before it is read, so that the
+        reader checks them with everything else (the command line's ``--ssp``,
+        ``--no-plots``, ``--simulator``...): ``{"export.fmu": True, "report.plots": False}``;
+        a value None removes the key. Not for a validated Scene.
 
     Returns
     -------
@@ -1650,15 +1700,25 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         Naming the file, the key path and the problem (also for a missing, unreadable, too
         large or deeply nested file, or bad TOML), or the work limit a scene exceeds.
     """
-    overrides = read_limits(limits, "--limit") if limits is not None else {}
+    if source is not None and not isinstance(source, str):
+        raise TypeError(f"source must be a string (the scene's name in messages) or None; got "
+                        f"{type(source).__name__}")
+    limit_overrides = read_limits(limits, "--limit") if limits is not None else {}
+    changes = _checked_overrides(overrides)
     if isinstance(scene, Scene):
+        if changes:
+            raise TypeError("overrides apply to a scene file, an embedded scene's name or a "
+                            "dict (its keys are changed before they are checked); got a "
+                            "validated Scene")
         return scene
     if scene is None:
-        return default_scene(limits=overrides)
+        return load_scene(scene_path("default"), source=source or "default scene",
+                          limits=limits, overrides=overrides)
     if isinstance(scene, Mapping):
         name = source or "<dict>"
         folder = Path.cwd() if base is None else Path(base)
-        return _guarded(lambda: _read_scene(scene, name, overrides, folder), name)
+        return _guarded(lambda: _read_scene(with_overrides(scene, changes, name), name,
+                                            limit_overrides, folder), name)
     if not isinstance(scene, (str, os.PathLike)):
         raise SceneError(f"scene must be a TOML file path, a dict or a Scene; got "
                          f"{shorten(type(scene).__name__)}")
@@ -1669,15 +1729,15 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
         names = example_scenes()
         if scene in names:
             return load_scene(scene_path(scene), source=source or f"{scene} (embedded scene)",
-                              limits=limits)
+                              limits=limits, overrides=overrides)
         import difflib
 
         close = difflib.get_close_matches(scene, names, n=1)
         raise SceneError(f"{shorten(scene)}: no such scene file or embedded scene (embedded: "
                          f"{', '.join(names)})" + (f"; did you mean {close[0]!r}?" if close
                                                    else ""))
-    shown = shorten(str(path)) if str(path).isprintable() else _shown(str(path))
-    file_size = overrides.get("file_size", Limits().file_size)
+    shown = shorten(str(path)) if str(path).isprintable() else shown_value(str(path))
+    file_size = limit_overrides.get("file_size", Limits().file_size)
     try:
         with open(path, "rb") as stream:
             text = stream.read(file_size + 1)
@@ -1702,8 +1762,51 @@ def load_scene(scene: "str | os.PathLike | Mapping[str, Any] | Scene | None" = N
             data = tomllib.loads(decoded)
         except tomllib.TOMLDecodeError as exc:
             raise SceneError(f"{name}: invalid TOML ({shorten(str(exc), 200)})") from None
-        return _read_scene(data, name, overrides, path.resolve().parent)
+        return _read_scene(with_overrides(data, changes, name), name, limit_overrides,
+                           path.resolve().parent)
     return _guarded(parse, name)
+
+
+def _checked_overrides(overrides) -> dict:
+    """``overrides`` as a dict of key paths (names joined by dots) to values."""
+    if overrides is None:
+        return {}
+    if not isinstance(overrides, Mapping):
+        raise TypeError(f"overrides must be a mapping of key paths to values (e.g. "
+                        f"{{'export.fmu': True}}); got {type(overrides).__name__}")
+    for path in overrides:
+        if not (isinstance(path, str) and all(NAME_PATTERN.fullmatch(p) for p in path.split("."))):
+            raise TypeError(f"overrides: a key path is names joined by dots "
+                            f"('report.plots'); got {shown_value(path)}")
+    return dict(overrides)
+
+
+def with_overrides(data: Mapping, overrides: Mapping[str, Any], source: str = "") -> dict:
+    """A copy of a scene mapping with ``overrides`` (key path -> value, None: remove) set,
+    tables made where missing.
+
+    Raises
+    ------
+    SceneError
+        A key path through a value that is not a table, named.
+    """
+    import copy
+
+    out = copy.deepcopy(dict(data))
+    for path, value in overrides.items():
+        parts = path.split(".")
+        table = out
+        for k, part in enumerate(parts[:-1]):
+            table = table.setdefault(part, {})
+            if not isinstance(table, dict):
+                where = ".".join(parts[:k + 1])
+                raise SceneError(f"{source}: {where}: must be a table to set {path}; got "
+                                 f"{value_kind(table)}")
+        if value is None:
+            table.pop(parts[-1], None)
+        else:
+            table[parts[-1]] = value
+    return out
 
 
 def _guarded(read, name: str) -> Scene:
@@ -1719,11 +1822,11 @@ def scene_path(name: str) -> Path:
     """Path of an embedded scene (``"default"``, ``"single_boom"``, ``"two_wings"``...)."""
     if not isinstance(name, str):
         raise TypeError(f"name must be the name of an embedded scene (a string); got "
-                        f"{type(name).__name__} {_shown(name)}")
+                        f"{type(name).__name__} {shown_value(name)}")
     resource = importlib.resources.files("spacecraft.scene").joinpath("embedded", f"{name}.toml")
     path = Path(str(resource))
     if not path.is_file():
-        raise SceneError(f"name: no embedded scene {_shown(name)}; available: "
+        raise SceneError(f"name: no embedded scene {shown_value(name)}; available: "
                          + ", ".join(example_scenes()))
     return path
 
@@ -1736,8 +1839,7 @@ def example_scenes() -> list[str]:
 
 def default_scene(*, limits: Mapping[str, Any] | None = None) -> Scene:
     """The embedded default scene: the paper's steel rod on a 100 kg, 50 kg m^2 hub."""
-    path = scene_path("default")
-    return load_scene(path, source="default scene", limits=limits)
+    return load_scene(None, limits=limits)
 
 
 def models_scene(hub, names, *, controller, manoeuvre=None, outputs=None, exact: bool = False,
@@ -1779,7 +1881,7 @@ def models_scene(hub, names, *, controller, manoeuvre=None, outputs=None, exact:
     three_axis = bool(getattr(hub, "three_axis", False))
     inertia = (tuple(tuple(float(v) for v in row) for row in np.asarray(hub.inertia))
                if three_axis else float(hub.inertia))
-    r = _Reader(source)
+    r = SceneReader(source)
     r.three_axis = three_axis
     if not isinstance(controller, ControllerSpec):
         controller = _read_controller(r, controller, "controller")

@@ -1,6 +1,6 @@
 """Reading a scene's values: one check per value at the boundary, one line per problem.
 
-:class:`_Reader` pops keys off the tables of a scene file, checks their types and ranges
+:class:`SceneReader` pops keys off the tables of a scene file, checks their types and ranges
 (:data:`RANGES`) and the work limits, and raises :class:`SceneError` naming the file, the key
 path (``appendages[1].beam.diameter``), the unit, the value (shortened to about 100 characters)
 and what to do. An unknown key, or a missing required key beside an unknown one that looks like
@@ -24,8 +24,9 @@ from appendages.interface import FlexsatError
 
 from .limits import LIMIT_UNITS, Limits
 
-__all__ = ["SceneError", "RANGES", "BEAM_FREQUENCY_RANGE", "NAME_LENGTH", "SHOWN", "suggestion",
-           "closest", "shorten"]
+__all__ = ["SceneError", "SceneReader", "RANGES", "BEAM_FREQUENCY_RANGE", "BETA1_L",
+           "NAME_LENGTH", "NAME_PATTERN", "SHOWN", "suggestion", "closest", "shorten",
+           "shown_value", "value_kind", "quoted_choices"]
 
 
 class SceneError(FlexsatError, ValueError):
@@ -77,6 +78,7 @@ RANGES = {
     "orientation": _Range("deg", 0.0, 360.0, "signed"),
     "beam.poisson_ratio": _Range("-", 0.0, 0.5, "non-negative", below=True),
     "manoeuvre.slew_axis": _Range("-", 0.0, 1e6, "signed"),
+    "disturbance.axis": _Range("-", 0.0, 1e6, "signed"),
     "position": _Range("m", 0.0, 1e3, "signed"),
     "direction": _Range("deg", 0.0, 360.0, "signed"),
     "direction vector": _Range("-", 0.0, 1e6, "signed"),
@@ -158,13 +160,14 @@ RANGES = {
 #: First free-free bending frequency of a beam [rad/s]: a beam outside is refused (its
 #: frequencies would be far from any attitude-control band and the coupled plant ill-scaled).
 BEAM_FREQUENCY_RANGE = (1e-4, 1e5)
-# beta_1 L of the first free-free bending mode (Blevins, Formulas for Natural Frequency and
-# Mode Shape, table 8-1): omega_1 = (beta_1 L)^2 sqrt(EJ / (rho A L^4))
-_BETA1_L = 4.730040745
+#: beta_1 L of the first free-free bending mode (Blevins, Formulas for Natural Frequency and
+#: Mode Shape, table 8-1): omega_1 = (beta_1 L)^2 sqrt(EJ / (rho A L^4)).
+BETA1_L = 4.730040745
 
 #: Longest appendage name [characters]: names become FMI variable names and C identifiers.
 NAME_LENGTH = 64
-_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: A name in a scene (appendage names, key path parts): a C identifier.
+NAME_PATTERN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 #: Longest value shown in a message [characters].
 SHOWN = 100
@@ -184,7 +187,7 @@ def shorten(text: str, limit: int = SHOWN, *, one_line: bool = False) -> str:
     return text if len(text) <= limit else f"{text[:limit]}... ({len(text)} characters)"
 
 
-def _shown(value) -> str:
+def shown_value(value) -> str:
     """A value for a message: repr (control characters escaped), at most about 100 characters."""
     try:
         text = repr(value)
@@ -197,10 +200,10 @@ def _key(key) -> str:
     """A key of the user's file for a key path: as is if plain, else quoted and shortened."""
     if isinstance(key, str) and re.fullmatch(r"[A-Za-z0-9_-]{1,100}", key):
         return key
-    return _shown(key)
+    return shown_value(key)
 
 
-class _Reader:
+class SceneReader:
     """Pops keys off a table, checking types and ranges, and reports problems with file and key
     path; ``limits`` bound the sizes (modes, bodies, appendages, strings)."""
 
@@ -222,7 +225,7 @@ class _Reader:
 
     def table(self, data, path: str) -> dict:
         if not isinstance(data, Mapping):
-            raise self.error(path, f"must be a table; got {_kind(data)}")
+            raise self.error(path, f"must be a table; got {value_kind(data)}")
         return dict(data)
 
     def done(self, table: dict, path: str, allowed) -> None:
@@ -237,7 +240,7 @@ class _Reader:
         if key not in table:
             if default is _MISSING:
                 typo = closest(key, [k for k in table if k != key])
-                hint = (f" (is {_shown(typo)} a misspelling of {key!r}?)"
+                hint = (f" (is {shown_value(typo)} a misspelling of {key!r}?)"
                         if typo is not None else "")
                 raise self.error(full, f"missing required value{hint}")
             return default, full
@@ -254,11 +257,11 @@ class _Reader:
         rng = RANGES[kind]
         unit = rng.unit
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-            raise self.error(full, f"must be a number [{unit}]; got {_kind(value)}")
+            raise self.error(full, f"must be a number [{unit}]; got {value_kind(value)}")
         try:
             value = float(value)
         except (OverflowError, ValueError):  # an integer beyond the float range
-            raise self.error(full, f"must be finite [{unit}]; got {_shown(value)}") from None
+            raise self.error(full, f"must be finite [{unit}]; got {shown_value(value)}") from None
         if not math.isfinite(value):
             raise self.error(full, f"must be finite [{unit}]; got {value!r}")
         size = abs(value)
@@ -292,7 +295,7 @@ class _Reader:
                 self.check_limit(full, value, limit)   # a lowered limit applies to defaults
             return value
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral):
-            raise self.error(full, f"must be an integer; got {_kind(value)}")
+            raise self.error(full, f"must be an integer; got {value_kind(value)}")
         value = int(value)
         if value < minimum:
             raise self.error(full, f"must be at least {minimum}; got {value}")
@@ -304,7 +307,7 @@ class _Reader:
         """Refuse ``value`` above the work limit ``limit``, saying how to raise it."""
         bound = getattr(self.limits, limit)
         if value > bound:
-            raise self.error(full, f"{what or _shown(value)}: over the limit {bound:g} "
+            raise self.error(full, f"{what or shown_value(value)}: over the limit {bound:g} "
                              f"(limits.{limit}, {LIMIT_UNITS[limit][1]}); ask for less, or if "
                              f"you really want more raise it: [limits] {limit} = N in the "
                              f"scene, or --limit {limit}=N")
@@ -312,19 +315,19 @@ class _Reader:
     def boolean(self, table: dict, key: str, path: str, default: bool) -> bool:
         value, full = self.take(table, key, path, default)
         if not isinstance(value, bool):
-            raise self.error(full, f"must be true or false; got {_kind(value)}")
+            raise self.error(full, f"must be true or false; got {value_kind(value)}")
         return value
 
     def text(self, table: dict, key: str, path: str, default: str) -> str:
         """A free-text string: at most limits.string_length characters, one line."""
         value, full = self.take(table, key, path, default)
         if not isinstance(value, str):
-            raise self.error(full, f"must be a string; got {_kind(value)}")
+            raise self.error(full, f"must be a string; got {value_kind(value)}")
         self.check_limit(full, len(value), "string_length", f"a text of {len(value)} characters")
         bad = [c for c in value if unicodedata.category(c) in ("Cc", "Cs", "Zl", "Zp")]
         if bad:
             raise self.error(full, f"must be one line of text without control characters; got "
-                             f"{_shown(bad[0])} in {_shown(value)}")
+                             f"{shown_value(bad[0])} in {shown_value(value)}")
         return value
 
     def choice(self, table: dict, key: str, path: str, choices, default=_MISSING):
@@ -332,9 +335,9 @@ class _Reader:
         if value is None and default is None:
             return None
         if not isinstance(value, str):
-            raise self.error(full, f"must be a string, one of {_quoted(choices)}; got {_kind(value)}")
+            raise self.error(full, f"must be a string, one of {quoted_choices(choices)}; got {value_kind(value)}")
         if value not in choices:
-            raise self.error(full, f"must be one of {_quoted(choices)}; got {_shown(value)}")
+            raise self.error(full, f"must be one of {quoted_choices(choices)}; got {shown_value(value)}")
         return value
 
     def choices(self, table: dict, key: str, path: str, choices, default) -> tuple:
@@ -344,15 +347,15 @@ class _Reader:
             value = [value]
         if not isinstance(value, (list, tuple)):
             raise self.error(full, f"must be a string or a list of strings from "
-                                   f"{_quoted(choices)}; got {_kind(value)}")
+                                   f"{quoted_choices(choices)}; got {value_kind(value)}")
         if len(value) > len(choices):
-            raise self.error(full, f"must list each of {_quoted(choices)} at most once; got "
+            raise self.error(full, f"must list each of {quoted_choices(choices)} at most once; got "
                              f"{len(value)} entries")
         out = []
         for k, item in enumerate(value):
             if not isinstance(item, str) or item not in choices:
-                raise self.error(f"{full}[{k}]", f"must be one of {_quoted(choices)}; got "
-                                 f"{_shown(item)}")
+                raise self.error(f"{full}[{k}]", f"must be one of {quoted_choices(choices)}; got "
+                                 f"{shown_value(item)}")
             if item in out:
                 raise self.error(f"{full}[{k}]", f"{item!r} is listed twice")
             out.append(item)
@@ -366,7 +369,7 @@ class _Reader:
             return value
         unit = RANGES[kind].unit
         if not isinstance(value, (list, tuple)):
-            raise self.error(full, f"must be an array of numbers [{unit}]; got {_kind(value)}")
+            raise self.error(full, f"must be an array of numbers [{unit}]; got {value_kind(value)}")
         if size is not None and len(value) != size:
             raise self.error(full, f"must have {size} entries [{unit}]; got {len(value)}")
         if not value:
@@ -376,15 +379,17 @@ class _Reader:
         return tuple(self.check_number(v, f"{full}[{k}]", kind) for k, v in enumerate(value))
 
 
-def _kind(value) -> str:
+def value_kind(value) -> str:
+    """What a value of the user's file is, for a message: ``"number 1.5"``, ``"a table"``,
+    ``"string 'x'"``, ``"an array of 3"``..."""
     if isinstance(value, (bool, np.bool_)):
         return f"boolean {str(bool(value)).lower()}"
     if isinstance(value, numbers.Real):
-        return f"number {_shown(value)}"
+        return f"number {shown_value(value)}"
     if isinstance(value, numbers.Number):
-        return f"{shorten(type(value).__name__)} {_shown(value)}"
+        return f"{shorten(type(value).__name__)} {shown_value(value)}"
     if isinstance(value, str):
-        return f"string {_shown(value)}"
+        return f"string {shown_value(value)}"
     if isinstance(value, Mapping):
         return "a table"
     if isinstance(value, (list, tuple)):
@@ -392,6 +397,7 @@ def _kind(value) -> str:
     return shorten(type(value).__name__)
 
 
-def _quoted(choices) -> str:
+def quoted_choices(choices) -> str:
+    """The allowed values of a choice for a message: ``'a', 'b', 'c'``."""
     return ", ".join(repr(c) for c in choices)
 

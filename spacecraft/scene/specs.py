@@ -457,12 +457,15 @@ class ControllerSpec:
 
 @dataclasses.dataclass(frozen=True)
 class DisturbanceSpec:
-    """A rectangular pulse on a plant disturbance input (N or N m), from start [s] for length [s]."""
+    """A rectangular pulse on a plant disturbance input (N or N m), from start [s] for length [s];
+    three axes: ``"disturbance_torque"`` or ``"force"`` along ``axis`` (unit vector, hub
+    axes)."""
 
     input: str
     amplitude: float
     start: float = 0.0
     length: float | None = None
+    axis: tuple | None = None
 
 
 @dataclasses.dataclass(frozen=True)
