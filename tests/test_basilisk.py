@@ -19,6 +19,7 @@ What the Basilisk comparisons can expect (their tolerances)
 from __future__ import annotations
 
 import math
+import re
 import subprocess
 import sys
 import warnings
@@ -579,8 +580,13 @@ def test_a_basilisk_run_over_its_time_limit_names_the_limit():
     with pytest.raises(SceneError, match=r"simulator\.name: the Basilisk run would take about "
                                          r".* s \(3 spinning bodies.*over the limit 1 s "
                                          r"\(limits\.basilisk_seconds.*--limit "
-                                         r"basilisk_seconds=N"):
+                                         r"basilisk_seconds=N") as refused:
         run(data)
+    # without simulator.dt, the longest step RK4 keeps stable is offered: 2 sqrt(2) / w_max
+    w_max = float(re.search(r"highest mode ([\d.e+]+) rad/s", str(refused.value)).group(1))
+    longest = float(re.search(r"simulator\.dt up to ([\d.e+-]+) s", str(refused.value)).group(1))
+    # (printed to 3 and 4 significant digits: 5e-3 and 5e-4 at worst)
+    assert longest == pytest.approx(2.0 * math.sqrt(2.0) / w_max, rel=6e-3)
 
 
 def test_the_summary_names_the_truth_model_it_compares_with():

@@ -51,11 +51,15 @@ class BasiliskRunTooLong(BasiliskModelError):
         What the run would cost (seconds, bodies, RK4 steps), for a message of the caller's.
     estimate, limit : float, s
         The estimated wall time and the limit it exceeds.
+    highest_frequency : float, rad/s
+        The highest mode the RK4 step was sized from (0: none given).
     """
 
-    def __init__(self, message: str, *, work: str, estimate: float, limit: float):
+    def __init__(self, message: str, *, work: str, estimate: float, limit: float,
+                 highest_frequency: float = 0.0):
         super().__init__(message)
         self.work, self.estimate, self.limit = work, estimate, limit
+        self.highest_frequency = highest_frequency
 
 
 class BasiliskIntegrationError(FlexsatError, ArithmeticError):

@@ -446,7 +446,7 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
         raise BasiliskRunTooLong(
             f"{work}, above max_seconds = {max_seconds:g} s: use a chain with fewer or softer "
             "bodies, a shorter duration, or raise max_seconds", work=work, estimate=estimate,
-            limit=max_seconds)
+            limit=max_seconds, highest_frequency=w_max)
     initial_rate = _initial_rate(initial_rate, lay.three_axis)
     angles = _initial_angles(lay, initial_angles)
     times = np.arange(n_samples) * (nanoseconds(T, "sample_time") * _NANO)

@@ -271,6 +271,7 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
         Without the ``bsk`` package (one line: how to install the extra).
     """
     from ..basilisk import BasiliskRunTooLong, ReactionWheel, require_basilisk, slew_comparison
+    from ..basilisk.simulation import RK4_STABILITY_LIMIT
 
     version = require_basilisk()
     scene = runner.scene
@@ -296,12 +297,16 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
                 disturbances=basilisk_disturbances(m), reaction_wheel=wheel,
                 max_seconds=scene.limits.basilisk_seconds, axis=axis)
         except BasiliskRunTooLong as exc:
+            longest = RK4_STABILITY_LIMIT / exc.highest_frequency if exc.highest_frequency else 0
+            step = (f", a longer RK4 step (simulator.dt up to {longest:.3g} s, RK4's stability "
+                    "limit on the highest mode, which a slow manoeuvre barely excites; the "
+                    "default resolves it)" if sim.dt is None and longest else "")
             raise _scene_error(scene, "simulator.name", f"{exc.work}, over the limit "
                                f"{exc.limit:g} s (limits.basilisk_seconds, estimated wall time "
                                "of a Basilisk run); use design chains with fewer or softer "
-                               "bodies or a shorter manoeuvre.duration, or if you really want "
-                               "it raise the limit: [limits] basilisk_seconds = N in the scene, "
-                               "or --limit basilisk_seconds=N") from None
+                               f"bodies{step} or a shorter manoeuvre.duration, or if you really "
+                               "want it raise the limit: [limits] basilisk_seconds = N in the "
+                               "scene, or --limit basilisk_seconds=N") from None
         comparisons[kind] = comparison
         b = comparison.basilisk
         _check_wheel_speed(scene, b.response)
