@@ -498,10 +498,3 @@ def test_basilisk_table_keeps_small_relative_differences_visible():
     table = [b for b in blocks if b[0] == "table"][0]
     # before: "1.9e-08 (0.00 %)"
     assert table[2][0][3] == "1.9e-08 (1.1e-05 %)"
-
-
-def test_planar_only_options_refuse_a_three_axis_scene(tmp_path, capsys):
-    assert flexsat("run", "three_axis", "--simulator", "basilisk", "--out", tmp_path / "a") == 2
-    assert ("three_axis (embedded scene): simulator.name: 'basilisk' is planar; a three-axis "
-            "scene is simulated by flexsat (set by --simulator basilisk)"
-            in capsys.readouterr().err)

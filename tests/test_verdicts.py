@@ -238,6 +238,7 @@ def _three_axis(position, attitude_weight, tmp_path):
     raw["fidelity"] = {"n_modes": 2}
     raw["export"]["fmu"] = False
     raw["report"]["plots"] = False
+    raw["outputs"]["exact_reference"] = False
     raw["manoeuvre"]["duration"] = 20.0
     del raw["manoeuvre"]["disturbance"]
     result = run(raw)

@@ -19,20 +19,18 @@ modes             500          ``fidelity.n_modes`` (bending modes per truncated
                                search from ``fidelity.tolerance`` tries at most 40 (fewer if
                                this limit is lower; ``spacecraft.design.fidelity.MAX_MODES`` says why)
 bodies            500          bodies of an explicit or ``from_beam`` chain (a 500-body
-                               truth chain: 998 states, 7 s, 1.4 GB)
+                               truth chain has 998 states)
 fit_bodies        14           ``fit.n_bodies``: appendages' own limit (``appendages.limits``),
-                               the range the "poles-and-zeros" fit is benchmarked and tested on.
-                               Cold fits 0.04 s CPU at 3 bodies, 0.95 s at 10, 2.5 s at 14
-                               (load 1.6-2.7; benchmarks/results/fit.md); raising it raises
+                               the range the "poles-and-zeros" fit is benchmarked and tested on
+                               (its cost per body: benchmarks/results/fit.md); raising it raises
                                appendages' too
 appendages        64           mounted appendages
 states            1200         states of the largest closed loop (upper bound: truth plant
-                               plus controller). A 1202-state loop (600 modes, PD) took 20 s
-                               and 2.0 GB; an LQR on a 502-state design model 27 s, 0.9 GB
+                               plus controller): tens of seconds and about 2 GB at the limit
 samples           10,000,000   samples of one simulation (duration / step + 1); a sample
                                of a digital loop counts 20 (scipy's dlsim steps in
-                               Python: 21 us a sample against 0.7 us for the continuous
-                               simulator, measured at load 10), so 500,000 there
+                               Python, some 30 times the continuous simulator's cost per
+                               sample), so 500,000 there
 memory            2 GiB        bytes held by the time responses (upper bound: every response
                                kept, plus one simulation's work arrays)
 string_length     4096         characters of a free-text value (``title``)

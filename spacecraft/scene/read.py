@@ -320,8 +320,8 @@ key                                    unit       meaning
 ``manoeuvre.disturbance.axis``         -          ``"x"``, ``"y"``, ``"z"`` or ``[x, y, z]``
                                                   (hub axes): the direction of
                                                   ``disturbance_torque`` or ``force``
-(every other key as in a planar scene; ``outputs.exact_reference`` and ``simulator.name =
-"basilisk"`` are planar for now, refused by key with the reason)
+(every other key as in a planar scene; a three-axis scene refuses by key, with the reason, what
+its run does not do yet: a given controller, explicit chain arrays, the manoeuvre as flown)
 =====================================  =========  ==============================================
 
 Ranges (SI units, the file's deg and Hz where it uses them; ``|x|``: either sign)
@@ -1114,18 +1114,6 @@ def _read_appendage(r: SceneReader, data, path: str, index: int) -> AppendageSpe
                          orientation, modal)
 
 
-def _check_three_axis_scene(r: SceneReader, simulator, outputs) -> None:
-    """What a three-axis scene cannot ask for yet, by key, with the reason."""
-    if simulator.name != "flexsat":
-        raise r.error("simulator.name", f"{simulator.name!r} is planar; a three-axis scene is "
-                      "simulated by flexsat")
-    if outputs.exact_reference:
-        raise r.error("outputs.exact_reference", "the exact-beam verdict of a three-axis loop "
-                      "(a multivariable Nyquist count through W6) is not built yet; a "
-                      "three-axis run checks its truth model against the exact coupled "
-                      "frequencies when fidelity.tolerance chooses the modes")
-
-
 def _read_inertia_tensor(r: SceneReader, value, full: str, *, kind: str = "hub.inertia tensor",
                          about: str = "about the hub's centre of mass, hub axes") -> tuple:
     """A 3x3 inertia tensor of a body [kg m^2], rows as tuples: the hub's symmetric positive
@@ -1588,8 +1576,6 @@ def _read_scene(data: Mapping, source: str, limit_overrides: Mapping | None = No
                       three_axis=hub.three_axis)
     plots = flown_plots(r, plots, plots_value is True, manoeuvre=manoeuvre, wheels=wheels,
                         simulator=simulator)
-    if hub.three_axis:
-        _check_three_axis_scene(r, simulator, outputs)
     scene = Scene(title=title, source=source or "<dict>", hub=hub, appendages=appendages,
                   fidelity=fidelity, controller=controller, manoeuvre=manoeuvre,
                   outputs=outputs, export=export,

@@ -1,4 +1,4 @@
-"""Sweeps, Monte Carlo and worst cases of the design loop, on Dask (issue 13).
+"""Sweeps, Monte Carlo and worst cases of the design loop, on Dask.
 
 A ``[sweep]`` table in a scene names scene numbers (key paths) and their distributions; every
 sample is a full design-loop evaluation (design on the chain, truth on the beam, the exact beam's

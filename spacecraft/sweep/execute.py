@@ -15,12 +15,12 @@ Where the samples run
 Batches
     Each Dask task evaluates a batch of samples (:func:`.evaluate.evaluate_batch`). The batch
     size is chosen from the time of one evaluation of the nominal scene, measured before the
-    sweep, so that a task takes about :data:`TASK_SECONDS` (Dask's per-task cost, 9 ms of CPU
-    time and 27 ms of a worker's wall time measured on this 2-core machine at load 8, stays
-    below 1.5 % of the work; ``benchmarks/bench_sweep.py`` measures it; each task is also one
+    sweep, so that a task takes about :data:`TASK_SECONDS` (Dask's per-task cost, some tens of
+    milliseconds of a worker's time, stays a small fraction of the work;
+    ``benchmarks/bench_sweep.py`` measures it; each task is also one
     Parquet part, so 2 s keeps a 10,000-sample sweep to about a hundred files), and at most a
     quarter of the samples per worker (the load stays balanced). Besides, an idle LocalCluster
-    of 2 workers takes about 7 % of one core (scheduler, client, heartbeats:
+    takes a few per cent of a core (scheduler, client, heartbeats:
     :data:`_LOCAL_CLUSTER_CONFIG`). At most
     ``2 x workers + 1`` tasks are in flight; a finished batch is written before another is sent.
     A worker lost mid-task (killed, out of memory) costs its batch's time: each task carries
@@ -77,8 +77,8 @@ SCHEDULER_TIMEOUT = 10.0
 TASK_RETRIES = 2
 #: Dask settings of the LocalCluster a sweep starts (not of a cluster given to it): no
 #: statistical profiler in the workers (it samples the running task's stack every 10 ms) and a
-#: system monitor every 5 s instead of 0.5 s. An idle worker then uses 1.6 % of a core
-#: instead of 2.9 % (measured on this 2-core machine, load 6): time taken from the samples.
+#: system monitor every 5 s instead of 0.5 s: an idle worker then takes about half the CPU
+#: time it would (``benchmarks/bench_sweep.py``), time taken from the samples.
 _LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
                          "distributed.admin.system-monitor.interval": "5s"}
 _PARTS = "samples"

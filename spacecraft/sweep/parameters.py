@@ -92,7 +92,7 @@ __all__ = [
 ]
 
 #: Largest number of samples a sweep runs unless ``max_samples`` (``--max-samples``) raises it:
-#: 1e6 samples of a 30 ms design loop are 8 hours on two cores.
+#: a million samples of a design loop of some tens of milliseconds are hours on two cores.
 MAX_SAMPLES = 1_000_000
 METHODS = ("monte-carlo", "latin-hypercube", "grid")
 DESIGNS = ("per-sample", "nominal")
