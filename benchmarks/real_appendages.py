@@ -430,7 +430,12 @@ def markdown(data: dict) -> str:
               "axis and its boom): largest relative error of each bending plane's n - 1 poles "
               "and first n - 1 zeros of W1, W2, W4 (the plane's view, the root's other motions "
               "held), and of the first pole and zero of torsion and axial motion (the chain's "
-              "spring chain against the appendage's own, the other root motions held).", ""]
+              "spring chain against the appendage's own, the other root motions held). One "
+              "body layout serves both planes: the wing's x-z plane, whose flexibility lies "
+              "in its narrow yoke (in x-y: in its thin panel), does not fit on the x-y "
+              "plane's bodies (its first x-z mode lies two decades above the x-y plane's). "
+              "A motion whose pole/zero ratio the bounded tilt cannot reach (the boom's "
+              "torsion: a heavy tip on a short rod) keeps its pole and is warned.", ""]
     rows = []
     for name, entries in data["chains_3d"].items():
         for r in entries:
