@@ -1217,8 +1217,8 @@ class Beam:
         ----------
         s : complex or array_like of complex, rad/s
             Laplace variable of magnitude 1e-80 to 1e80 rad/s
-            (:data:`appendages.interface.S_RANGE`; tests/test_extremes.py sweeps it, against
-            60-digit closed forms from 1e-8 to 1e8 in tests/test_stress.py). s = 0 is the
+            (:data:`appendages.interface.S_RANGE`; tests/project/test_extremes.py sweeps it, against
+            60-digit closed forms from 1e-8 to 1e8 in tests/project/test_stress.py). s = 0 is the
             rigid-body pole and is rejected.
 
         Returns

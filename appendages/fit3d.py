@@ -17,7 +17,7 @@ Bending: one fit serves both planes
     fit's criterion (log-frequency errors of poles and zeros, rigid properties m, J, L and the
     centre of mass held) is therefore invariant: the x-y fit with its hinges scaled by lambda
     *is* the fit of the x-z plane, with the same relative errors, and the shared body layout
-    costs nothing. (tests/test_three_axis_chain.py runs fit_chain on both planar views and
+    costs nothing. (tests/appendages/test_three_axis_chain.py runs fit_chain on both planar views and
     finds the same layout and hinges in the ratio lambda.) The bodies' inertias about y and z
     are then equal, as the Euler-Bernoulli beam's are.
 

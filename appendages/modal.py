@@ -34,7 +34,7 @@ Three reductions of the exact beam, all realised in attachment-end coordinates (
     hub, 7.68 rad/s on a 1 kg hub where the exact modes are 6.02 and 11.65 rad/s). As a
     Rayleigh-Ritz model of the coupled system the residual form cannot have one: every
     coupled frequency is an upper bound of the exact one of the same rank, and the first
-    n + 1 converge (tests/test_spacecraft.py).
+    n + 1 converge (tests/spacecraft/dynamics/test_spacecraft.py).
 
 ``"craig-bampton"``
     Attachment-end motion q_r = (delta, phi) carries the beam rigidly (constraint modes

@@ -9,7 +9,7 @@ Writes benchmarks/results/modal_appendage.json and modal_appendage.md:
    max |ln(W_r^chain/W_r^appendage)| on s = omega (0.02 + i) over its default band); the fit's
    CPU time (cold: memo cleared) and whether it stopped at its budget (FitWarning). Cases:
    the paper's rod as 60 cantilever modes (against the rod's own fit and the exact rod), the
-   stepped boom with a tip body of tests/fe_planar.py (30 modes), and NASTRAN's beam_modes
+   stepped boom with a tip body of tests/support/fe_planar.py (30 modes), and NASTRAN's beam_modes
    (tests/data/nastran: a round rod with a tip mass, its x-y plane: 4 modes).
 2. The cost of one W(s) evaluation: ModalAppendage with 10 to 1000 modes (the paper's rod's
    cantilever modes; undamped, and damped 0.5 %) against the exact uniform beam's closed form,
@@ -35,7 +35,7 @@ import numpy as np
 
 from _common import ROOT, fmt, machine_info, markdown_table, median_time, paper_rod, write_json
 
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "tests" / "support"))
 import fe_planar  # noqa: E402  (the independent FE reference, shipped with the tests)
 
 from appendages import Beam, ModalAppendage, fit_chain, fitting, nastran  # noqa: E402

@@ -18,7 +18,7 @@ principal axis). Measured here:
   eigen-axis slew about a non-principal axis simulated 100 s at 100 Hz, the multivariable and
   loop-at-a-time margins on the truth plant; CPU and wall medians, and a profile;
 - accuracy: the exact coupled frequencies against the independent 3-D finite-element model of
-  tests/fe3d.py at 10, 20 and 40 elements per appendage, and the wing's W6 against fe3d's;
+  tests/support/fe3d.py at 10, 20 and 40 elements per appendage, and the wing's W6 against fe3d's;
 - issue 10: the planar Craig-Bampton W at 400 modes on 1000 and 10000 frequencies (time, peak
   memory of the call) and the damped Craig-Bampton build at 1000 modes.
 
@@ -50,7 +50,7 @@ from appendages.fit3d import fit_chain_3d
 from spacecraft import Hub, Mount, Spacecraft
 from spacecraft.dynamics.kinematics import euler_orientation, orientation_from_axis
 
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "tests" / "support"))
 import fe3d  # noqa: E402  (the independent reference, shipped with the tests)
 
 HUB_MASS = 820.0                                                       # kg
@@ -254,7 +254,7 @@ def main() -> None:
         rows = [[f"{k + 1}", f"{exact[k]:.10g}"]
                 + [f"{a['relative_difference'][k]:.1e}" for a in accuracy] for k in range(20)]
         lines += ["## Exact coupled frequencies against the finite-element model", "",
-                  "Relative difference |FE / exact - 1| (tests/fe3d.py, Hermite bending in two "
+                  "Relative difference |FE / exact - 1| (tests/support/fe3d.py, Hermite bending in two "
                   "planes, torsion and axial elements, free-floating 6-DOF hub).", "",
                   markdown_table(["mode", "exact [rad/s]"]
                                  + [f"FE {a['n_elements']} el." for a in accuracy], rows), "",

@@ -2,14 +2,14 @@
 
 Writes benchmarks/results/tip_stepped.json and tip_stepped.md (issue 21, items 1, 2 and 4):
 
-1. W against the independent finite-element models of the tests (tests/fe3d.py: degree-5 bending
+1. W against the independent finite-element models of the tests (tests/support/fe3d.py: degree-5 bending
    elements, degree-5 rods, the tip body's mass matrix at the last node, its own derivation):
    the largest error of W6 relative to the largest entry at each s, for 1 to 16 elements per
    segment, on a stepped tube with an off-axis tip body (three segments, 3.5 m) and the uniform
    tube with a tip body.
 2. Coupled frequencies: a 60 kg three-axis hub with two such booms (flexsat's exact
    Wittrick-Williams count on W6 against fe3d's spacecraft) and a 40 kg planar hub with two
-   stepped booms (the planar FE model of tests/test_stepped_beam.py), largest relative
+   stepped booms (the planar FE model of tests/appendages/test_stepped_beam.py), largest relative
    difference of the first 8 (6) frequencies per element count.
 3. The cost of one W (and W6) evaluation: the uniform beam's closed form against the tip beam
    and stepped beams of 2, 5 and 20 segments (tubes), undamped and damped 0.5 % (cantilever
@@ -38,7 +38,7 @@ import numpy as np
 
 from _common import ROOT, fmt, machine_info, markdown_table, median_time, write_json
 
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "tests" / "support"))
 import fe3d  # noqa: E402  (the independent 3-D FE reference, shipped with the tests)
 
 from appendages import Beam, SteppedBeam, TipBody  # noqa: E402
@@ -217,7 +217,7 @@ def markdown(data: dict) -> str:
              f"{data['machine']['date_utc']} UTC, {data['machine']['cpu']}, "
              f"{data['machine']['nproc']} cores, BLAS threads {data['machine']['blas_threads']}.", ""]
     fe = data["w_against_fe"]
-    lines += ["## W6 against the 3-D finite-element model (tests/fe3d.py)", "",
+    lines += ["## W6 against the 3-D finite-element model (tests/support/fe3d.py)", "",
               f"Largest |W6_FE - W6| / max|W6| at each s (load {fe['load']:.1f}).", ""]
     s = fe["s"]
     for name, rows in fe["cases"].items():

@@ -6,18 +6,28 @@ modules in sys.modules at the time of the draw (``_get_local_constants`` in
 site-packages, test files excluded), and it offers no setting to turn that off. With our
 packages imported on demand, the pool, and so the examples of a ``derandomize=True`` test,
 depended on which test files had run before it: the issue-9 review found ``test_lqr_fuzz``
-failing after ``tests/test_extremes.py`` and passing alone. With every module of appendages,
+failing after ``tests/project/test_extremes.py`` and passing alone. With every module of appendages,
 controllers, fmu and spacecraft imported here, the pool is the same for any order or subset of
 the tests (for a given version of the code), and the constants of our own modules (1e-13,
 1e10, the documented limits...) stay in it: they are good fuzz inputs.
 """
 import importlib
 import importlib.util
+import pathlib
 import pkgutil
+import sys
 
 import pytest
 
 PACKAGES = ("appendages", "controllers", "fmu", "spacecraft")
+
+# The tests' shared helpers (tests/support: the independent FE models, plants, FMU cases) and
+# the folders of test modules whose fixtures other tests import (``from test_scene import
+# scene_with``) import by name: test module names are unique across the folders.
+TESTS = pathlib.Path(__file__).resolve().parent
+for _folder in sorted({TESTS / "support", *(p.parent for p in TESTS.rglob("test_*.py"))}):
+    if str(_folder) not in sys.path:
+        sys.path.append(str(_folder))
 
 
 def _import_everything():

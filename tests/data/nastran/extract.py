@@ -1,7 +1,7 @@
 """Regenerate the .npz extracts of the OP2 files here (needs pyNastran; run from this folder).
 
 The tests read the extracts, so that they run without pyNastran; where pyNastran is installed,
-tests/test_nastran.py also checks that the extracts equal a fresh read of the OP2 files.
+tests/appendages/test_nastran.py also checks that the extracts equal a fresh read of the OP2 files.
 
     python extract.py
 """
