@@ -7,14 +7,15 @@ completed here on the embedded scene ``real_appendages`` (two stepped 7 m wings 
 bodies on a 1200 kg hub, and pyNastran's SOL 103 rod as a boom):
 
 1. W against an independent finite-element model: the scene's wing (stepped, tip body), its
-   exact W against the planar Hermite model of tests/support/fe_planar.py condensed to the root, 1 to
-   16 elements per segment; the round trip, the FE model's own cantilever modes as a
+   exact W against the planar Hermite model of tests/support/fe_planar.py condensed to the
+   root, 1 to 16 elements per segment; the round trip, the FE model's own cantilever modes as a
    ModalAppendage against its condensed W.
 2. Coupled frequencies: the scene's exact ones (through each appendage's W) against the planar
    FE model of the whole spacecraft (the wings as Hermite booms, the boom as its modes'
    Craig-Bampton model), per element count; and the same spacecraft in three axes (the wings
    with off-axis tip bodies, the boom's six root motions, a full hub inertia tensor: the
-   spacecraft of tests/spacecraft/design/test_real_appendages_3d.py) against tests/support/fe_scene.py's 3-D model.
+   spacecraft of tests/spacecraft/design/test_real_appendages_3d.py) against
+   tests/support/fe_scene.py's 3-D model.
 3. Chains' poles and zeros against each appendage of the scene (and a tapered boom and a rod
    with a tip body): flexsat's fit with 3 to 6 bodies, the largest relative error of the
    chain's n - 1 poles and of its first n - 1 zeros of W1, W2, W4, and the fit's CPU time;
@@ -44,7 +45,9 @@ import numpy as np
 
 from _common import RESULTS, ROOT, fmt, machine_info, markdown_table, median_time, write_json
 
+# the independent FE references (tests/support) and the real-appendage tests' spacecraft
 sys.path.insert(0, str(ROOT / "tests" / "support"))
+sys.path.insert(0, str(ROOT / "tests" / "spacecraft" / "design"))
 import fe_planar  # noqa: E402  (the independent planar FE reference, shipped with the tests)
 
 from appendages import Beam, ModalAppendage, SteppedBeam, TipBody  # noqa: E402
@@ -119,7 +122,6 @@ def w_against_fe(scene, quick: bool) -> dict:
 
 # -- 2. coupled frequencies ---------------------------------------------------------------------
 def coupled_against_fe(scene, quick: bool) -> dict:
-    sys.path.insert(0, str(ROOT / "tests" / "support"))
     from test_real_appendages import fe_coupled_frequencies
 
     loop = DesignLoop(scene)
@@ -369,8 +371,8 @@ def markdown(data: dict) -> str:
     lines += ["## 1. W against an independent finite-element model", "",
               "The scene's wing, undamped: largest |W_FE - W| / max|W| at each s (s in units of "
               f"its first free-free frequency {w['first_frequency']:.5g} rad/s); W_FE the "
-              "planar Hermite model of tests/support/fe_planar.py (consistent mass, the tip body's mass "
-              "and inertia at the last node), condensed to the root.", ""]
+              "planar Hermite model of tests/support/fe_planar.py (consistent mass, the tip "
+              "body's mass and inertia at the last node), condensed to the root.", ""]
     header = ["elements per segment"] + [f"s = {p[0] / w['first_frequency']:.2g}"
                                          f"{p[1] / w['first_frequency']:+.2g}j w1"
                                          for p in w["points"]]
@@ -387,10 +389,11 @@ def markdown(data: dict) -> str:
               f"Exact (Wittrick-Williams on each appendage's W; the boom's W its own: FE-exact; "
               f"{c['cpu_exact']:.2f} s CPU, load {c['load']:.1f}): "
               + ", ".join(f"{v:.6g}" for v in c["exact"]) + " rad/s. Relative difference of "
-              "the planar FE model of the whole spacecraft (tests/spacecraft/design/test_real_appendages.py: "
-              "Hermite wings with their tip bodies, the boom as its modes' Craig-Bampton "
-              "model; fe3d's subspace iteration, the rigid modes removed exactly). Every mode "
-              "converges like h^4 (16x per halving) to flexsat's exact ones.", ""]
+              "the planar FE model of the whole spacecraft "
+              "(tests/spacecraft/design/test_real_appendages.py: Hermite wings with their tip "
+              "bodies, the boom as its modes' Craig-Bampton model; fe3d's subspace iteration, "
+              "the rigid modes removed exactly). Every mode converges like h^4 (16x per "
+              "halving) to flexsat's exact ones.", ""]
     lines += [markdown_table(["elements per segment"] + [f"mode {k + 1}" for k in
                                                         range(len(c["exact"]))],
                              [[r["elements"]] + [fmt(e) for e in r["errors"]] for r in c["fe"]]),
@@ -398,12 +401,13 @@ def markdown(data: dict) -> str:
     c3 = data["coupled_3d"]
     lines += ["Three axes: the same spacecraft with a hub inertia tensor, the wings along +-y "
               "with their 5 kg tip bodies 0.05 m off their mid-planes (3x3 inertias), the boom "
-              "along -z with its six root motions (tests/spacecraft/design/test_real_appendages_3d.py). Exact "
-              f"(through each appendage's W6; {c3['cpu_exact']:.2f} s CPU for 12, load "
-              f"{c3['load']:.1f}): " + ", ".join(f"{v:.6g}" for v in c3["exact"])
-              + " rad/s. Relative difference of the 3-D FE model (tests/support/fe_scene.py: fe3d's "
-              "quintic beam elements per segment with the tip bodies' 6x6 mass matrices, the "
-              "boom's Craig-Bampton data, rigid mounts).", ""]
+              "along -z with its six root motions "
+              "(tests/spacecraft/design/test_real_appendages_3d.py). Exact (through each "
+              f"appendage's W6; {c3['cpu_exact']:.2f} s CPU for 12, load {c3['load']:.1f}): "
+              + ", ".join(f"{v:.6g}" for v in c3["exact"])
+              + " rad/s. Relative difference of the 3-D FE model (tests/support/fe_scene.py: "
+              "fe3d's quintic beam elements per segment with the tip bodies' 6x6 mass matrices, "
+              "the boom's Craig-Bampton data, rigid mounts).", ""]
     lines += [markdown_table(["elements per segment"] + [f"mode {k + 1}" for k in
                                                         range(len(c3["exact"]))],
                              [[r["elements"]] + [fmt(e) for e in r["errors"]]

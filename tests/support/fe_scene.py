@@ -1,10 +1,10 @@
 """Independent finite-element models of a scene's three-axis spacecraft.
 
 The reference of the real-appendage scenes in three axes: the hub rigid (six degrees of
-freedom), each stepped beam with its tip body a finite-element beam of tests/support/fe3d.py (high-order
-elements per segment, the body's 6x6 mass matrix at the last node), each modal appendage its
-own Craig-Bampton realisation (``root_model(6)``: the finite-element data themselves, six root
-motions and the cantilever modes), all joined at their roots by the mounts' rigid kinematics
+freedom), each stepped beam with its tip body a finite-element beam of tests/support/fe3d.py
+(high-order elements per segment, the body's 6x6 mass matrix at the last node), each modal
+appendage its own Craig-Bampton realisation (``root_model(6)``: the finite-element data
+themselves, six root motions and the cantilever modes), all joined at their roots by the mounts' rigid kinematics
 (:func:`fe3d.mount_transformation`). Nothing of flexsat's W6 or exact coupling is used.
 """
 
