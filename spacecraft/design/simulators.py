@@ -35,6 +35,7 @@ about by key (``simulator.reaction_wheel.spin_inertia``): no real wheel does.
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 
@@ -58,16 +59,21 @@ WHEEL_SPEED_WARNING = 1e4
 
 
 def basilisk_disturbances(manoeuvre) -> dict | None:
-    """The scene's disturbance pulse as Basilisk inputs: name -> f(t) (None without one)."""
+    """The scene's disturbance pulse as Basilisk inputs: name -> f(t) (None without one); three
+    axes, a torque or force along ``axis`` as its components on the hub axes
+    (:func:`spacecraft.design.responses.disturbance_weights`)."""
+    from .responses import disturbance_weights
+
     d = manoeuvre.disturbance
     if d is None:
         return None
     end = np.inf if d.length is None else d.start + d.length
 
-    def pulse(t, start=d.start, end=end, amplitude=d.amplitude):
+    def pulse(t, start=d.start, end=end, amplitude=d.amplitude, weight=1.0):
         t = np.asarray(t, dtype=float)
-        return np.where((t >= start) & (t < end), amplitude, 0.0)
-    return {d.input: pulse}
+        return np.where((t >= start) & (t < end), weight * amplitude, 0.0)
+    return {name: functools.partial(pulse, weight=weight)
+            for name, weight in disturbance_weights(d).items()}
 
 
 def _differences(comparison) -> dict:

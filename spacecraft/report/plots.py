@@ -241,20 +241,8 @@ def plot_slew(result, path: Path) -> str:
                 curves.append((variant, which, np.asarray(resp.t, float).reshape(-1), y,
                                row is not None and _unstable(row, which)))
             _draw_curves(ax, curves, handles, log=signal == "error", note=row_index == 0)
-            comparison = result.basilisk.get(kind)
-            if comparison is not None and signal != "disturbance":
-                resp = comparison.basilisk.response
-                y = _slew_signal(resp, signal)
-                if signal == "torque" and kind in wheels:
-                    y = wheels[kind][1]     # what Basilisk's wheel applies, not the request
-                if y is not None:
-                    variant = result.data["basilisk"][kind]["design"]
-                    t = np.asarray(resp.t, float).reshape(-1)
-                    if signal == "error":
-                        y = np.maximum(y, 1e-9)
-                    handles += (ax.semilogy if signal == "error" else ax.plot)(
-                        *envelope(t, y), BASILISK_STYLE, color=BASILISK_COLOUR, lw=1.6,
-                        label=f"Basilisk: {design_label(variant)}, nonlinear", zorder=3)
+            _draw_basilisk(ax, result, kind, signal, handles,
+                           wheels[kind][1] if signal == "torque" and kind in wheels else None)
             if signal == "theta":
                 t = np.asarray(first.t, float).reshape(-1)
                 # the reference the loops read (the scene's profile)
@@ -292,6 +280,25 @@ def plot_slew(result, path: Path) -> str:
                        else "") + ")")
     return caption + (". Solid: loop on the truth model, dashed: on the design model; one "
                       "colour per design model; red: unstable.")
+
+
+def _draw_basilisk(ax, result, kind: str, signal: str, handles: list, y=None) -> None:
+    """Basilisk's run of a controller in a slew panel (dotted black), when there is one: its
+    ``signal`` as :func:`_slew_signal` forms it, or ``y`` (e.g. the torque its wheel applies)."""
+    comparison = result.basilisk.get(kind)
+    if comparison is None or signal == "disturbance":
+        return
+    resp = comparison.basilisk.response
+    y = _slew_signal(resp, signal) if y is None else y
+    if y is None:
+        return
+    variant = result.data["basilisk"][kind]["design"]
+    t = np.asarray(resp.t, float).reshape(-1)
+    if signal == "error":
+        y = np.maximum(y, 1e-9)
+    handles += (ax.semilogy if signal == "error" else ax.plot)(
+        *envelope(t, y), BASILISK_STYLE, color=BASILISK_COLOUR, lw=1.6,
+        label=f"Basilisk: {design_label(variant)}, nonlinear", zorder=3)
 
 
 def plot_slew_axes(result, path: Path, kind: str) -> str:
@@ -352,6 +359,7 @@ def plot_slew_axes(result, path: Path, kind: str) -> str:
                 curves.append((variant, which, np.asarray(resp.t, float).reshape(-1), y,
                                row is not None and _unstable(row, which)))
             _draw_curves(ax, curves, handles, log=signal == "error", note=(i, j) == (0, 0))
+            _draw_basilisk(ax, result, kind, signal, handles)
             if signal.startswith("theta_"):
                 e = m.slew_axis["xyz".index(signal[-1])]
                 handles += ax.plot(t_ref, np.degrees(e * reference), ":",
@@ -381,6 +389,10 @@ def plot_slew_axes(result, path: Path, kind: str) -> str:
     if names:
         caption += ("; per appendage its tip deflections in its own x-y and x-z planes [m] "
                     "and its twist [deg]")
+    if kind in result.basilisk:
+        caption += ("; dotted black: Basilisk's nonlinear run of the design chains (the whole "
+                    "manoeuvre, three-axis flight software at its sample time; the torques it "
+                    "commands)")
     return caption + (". Solid: loop on the truth model, dashed: on the design model; one "
                       "colour per design model; red: unstable.")
 

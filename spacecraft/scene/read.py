@@ -257,6 +257,7 @@ key                                    unit       meaning
 ``simulator.dt``                       s          Basilisk's RK4 step (divides the sample
                                                   time); default from the highest mode
 ``simulator.reaction_wheel.spin_inertia``  kg m^2  torque through a reaction wheel about z
+                                                  (three-axis: one on each hub axis)
 ``simulator.reaction_wheel.max_torque``  N m      its motor torque limit; default none
 ``simulator.reaction_wheel.max_speed``  rad/s     its speed limit; default none
 ``wheels.torque_limit`` *              N m        reaction wheels fly the torque (planar: one
@@ -1605,8 +1606,10 @@ def _checked_simulator(simulator: SimulatorSpec, appendages, manoeuvre, controll
     if (manoeuvre.disturbance is not None
             and manoeuvre.disturbance.input.endswith("_tip_force")):
         raise error("manoeuvre.disturbance.input", "a tip force is not applied by the "
-                    "Basilisk model (it applies disturbance_torque, force_x, force_y); "
-                    "choose one of those or drop simulator.name = 'basilisk'")
+                    "Basilisk model (it applies the hub's disturbance torque and forces: "
+                    "disturbance_torque, force_x, force_y; three axes disturbance_torque_x, "
+                    "_y, _z, force_x, _y, _z); choose one of those or drop simulator.name = "
+                    "'basilisk'")
     if (simulator.sample_time is not None and controller.sample_time is not None
             and not math.isclose(simulator.sample_time, controller.sample_time, rel_tol=1e-9)):
         raise error("simulator.sample_rate", f"must equal controller.sample_rate = "
