@@ -121,8 +121,7 @@ class ModalEvaluator:
         # A = Tb Ab Tb^-1 with Tb[perm[j], j] = scale[j]
         Cb = self.C[:, perm] * scale[None, :]
         Bb = self.B[perm] / scale[:, None]
-        n_parts, part_of = scipy.sparse.csgraph.connected_components(
-            scipy.sparse.csr_matrix(Ab != 0.0), directed=True, connection="weak")
+        n_parts, part_of = _parts(Ab != 0.0)
         sizes = np.bincount(part_of, minlength=n_parts)
         order = np.argsort(part_of, kind="stable")
         starts = np.concatenate([[0], np.cumsum(sizes)])
@@ -155,7 +154,13 @@ class ModalEvaluator:
                                          sort=lambda x: abs(x) <= self.rigid_tol)
             T11, T12, T22 = T[:k, :k], T[:k, k:], T[k:, k:]
             if 0 < k < idx.size:
-                X = scipy.linalg.solve_sylvester(T11, -T22, -T12)
+                # T11 and T22 are triangular already: LAPACK's triangular Sylvester solver
+                # (solve_sylvester would bring both to Schur form again)
+                X, scale, info = scipy.linalg.lapack.ztrsyl(T11, T22, -T12, isgn=-1)
+                if info == 0 and scale > 0:
+                    X = X / scale
+                else:  # close eigenvalues of T11 and T22 (perturbed): the general solver
+                    X = scipy.linalg.solve_sylvester(T11, -T22, -T12)
             else:
                 X = np.zeros((k, idx.size - k), dtype=complex)
             CZ = Cb[:, idx] @ Z
@@ -227,6 +232,38 @@ class ModalEvaluator:
             return np.zeros(0)
         w = np.abs(self.poles())
         return w[w > self.rigid_tol]
+
+
+def _parts(pattern: np.ndarray) -> tuple[int, np.ndarray]:
+    """Weakly connected components of the directed graph with adjacency ``pattern`` (n, n)
+    (bool): (number of parts, part of each node). Small graphs by the transitive closure of
+    the symmetrised pattern (repeated boolean squaring, a few small products), large ones by
+    scipy's sparse graph search; the labels number the parts in the order of their first
+    node either way."""
+    n = pattern.shape[0]
+    if n > _DENSE_PARTS:
+        n_parts, labels = scipy.sparse.csgraph.connected_components(
+            scipy.sparse.csr_matrix(pattern), directed=True, connection="weak")
+    else:
+        reach = (pattern | pattern.T | np.eye(n, dtype=bool)).astype(np.float64)
+        for _ in range(max(1, int(math.ceil(math.log2(max(n, 2)))))):
+            grown = (reach @ reach) > 0
+            if np.array_equal(grown, reach > 0):
+                break
+            reach = grown.astype(np.float64)
+        first = np.argmax(reach > 0, axis=1)          # each node's lowest reachable node
+        _, labels = np.unique(first, return_inverse=True)
+        n_parts = int(labels.max()) + 1 if n else 0
+        return n_parts, labels
+    # renumber by first node, as above
+    _, order = np.unique(labels, return_index=True)
+    rank = np.empty(n_parts, dtype=int)
+    rank[np.argsort(order)] = np.arange(n_parts)
+    return n_parts, rank[labels]
+
+
+# graphs up to this many nodes are split into parts densely (_parts)
+_DENSE_PARTS = 256
 
 
 def _dense_response(A, B, C, s) -> np.ndarray:
