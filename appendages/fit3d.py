@@ -180,17 +180,22 @@ def _fit_rod_chain(masses: np.ndarray, total_inertia: float | None, centres: np.
 
     tilt, exact = (_ratio_root(log_ratio) if spacing.size >= 2 or total_inertia is not None
                    else (0.0, False))
+    if not exact and isinstance(rod, MotionRod):
+        # Any other appendage's ratio out of reach: the closest tilt lies on the bound, where
+        # the inertias or springs spread over e**8 and the chain's highest mode of this motion
+        # rises with them (a design model stiff for nothing: an LQR design on it failed). The
+        # untilted layout, the lumped rule, keeps the pole; the zero's error is said.
+        tilt = 0.0
     inertias, springs = layout(tilt)
     pole, zero = rod_chain_frequencies(inertias, springs)
     if not exact and isinstance(rod, MotionRod):
-        # a uniform rod's unreachable ratio (two bodies, axial) is the documented case that
-        # rod_chain_errors reports; any other appendage's is said here
         warnings.warn(
             f"fit_chain_3d: the {'axial' if total_inertia is None else 'torsion'} chain of "
             f"{masses.size} bodies cannot reach the appendage's first pole/zero ratio "
-            f"{rod.free / rod.clamped:.4g} (closest {pole / zero:.4g}): its first pole is "
-            f"matched, its first zero is off by {abs(rod.free / rod.clamped * zero / pole - 1):.3g}"
-            " relative", FitWarning, stacklevel=4)
+            f"{rod.free / rod.clamped:.4g} within its bounded tilt: the untilted chain (ratio "
+            f"{pole / zero:.4g}) matches its first pole, its first zero is off by "
+            f"{abs(rod.free / rod.clamped * zero / pole - 1):.3g} relative", FitWarning,
+            stacklevel=4)
     return inertias, springs * (float(rod.natural_frequencies(1)[0]) / pole) ** 2
 
 
