@@ -146,3 +146,42 @@ def test_the_three_axis_fit_matches_each_rod_motions_own_pole_and_zero():
     with pytest.warns(FitWarning, match=r"torsion chain of 3 bodies cannot reach the "
                                         r"appendage's first pole/zero ratio 31\.3"):
         fit_chain_3d(boom, 3)
+
+
+@pytest.mark.slow
+def test_the_embedded_scene_is_this_spacecraft():
+    # the embedded scene real_appendages_3d holds SCENE's hub and appendages
+    embedded = load_scene("real_appendages_3d")
+    ours = load_scene(copy.deepcopy(SCENE), base=EMBEDDED)
+    assert embedded.three_axis and embedded.hub == ours.hub
+    assert embedded.appendages == ours.appendages
+
+
+@pytest.mark.slow
+def test_the_scene_runs_fits_chains_to_all_three_and_its_exact_frequencies_agree_with_fe():
+    # flexsat run real_appendages_3d: chains fitted to the two stepped wings and the NASTRAN
+    # boom (three-axis chains keeping each appendage's mass), both controllers tuned on them
+    # and stable on the truth model, settling; the run's exact coupled frequencies (its
+    # outputs.exact_reference) against the independent FE model at 8 quintic elements per
+    # segment (5e-9 measured on the off-axis variant above): rtol 1e-7.
+    from spacecraft import run
+
+    result = run(load_scene("real_appendages_3d",
+                            overrides={"export.fmu": False, "report.plots": False}))
+    scene = result.scene
+    assert [a.truth for a in scene.appendages] == ["beam", "beam", "modal"]
+    for a in scene.appendages:
+        chain = result.models[a.name]["fits"]["poles-and-zeros"]
+        assert chain.three_axis
+        assert chain.mass == pytest.approx(result.models[a.name]["truth"].mass, rel=1e-12)
+    assert {row["controller"] for row in result.data["closed_loops"]} == {"pd", "lqr"}
+    for row in result.data["closed_loops"]:
+        assert row["verdict"]["stable"]
+        assert row["status"]["truth"]["status"] == "settles"
+    # the run's exact reference is the library's, and the FE model agrees with it
+    craft, models = spacecraft_of(scene)
+    exact = np.array(result.data["exact"]["coupled_frequencies"])
+    np.testing.assert_allclose(exact, craft.natural_frequencies(exact.size), rtol=1e-12)
+    np.testing.assert_allclose(fe_scene.coupled_frequencies(scene, models, 8, exact.size), exact,
+                               rtol=1e-7)
+    np.testing.assert_allclose(result.data["exact"]["inertia"], craft.inertia, rtol=1e-12)
