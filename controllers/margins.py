@@ -57,8 +57,10 @@ __all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "
 #: Most frequencies a delayed loop's grid may hold (omega tau resolved to pi/4 up to the grid's
 #: top): beyond, margins() refuses the delay by name before evaluating anything.
 MAX_DELAY_GRID = 2_000_000
-# a unit-circle crossing's bracket is cut into this many sections per step (_unit_crossings)
-_SECTIONS = 8
+# a unit-circle crossing's bracket is cut into this many sections per step (_unit_crossings):
+# 2, bisection; more sections take fewer evaluations of L but count at more points, each an
+# eigenvalue problem near the crossing (8 was no faster on benchmarks/three_axis.py's loop)
+_SECTIONS = 2
 # below this |L| a crossing of the negative real axis is no margin (as in _loops_margins)
 _NEGLIGIBLE_GAIN = 1e-9
 
