@@ -34,6 +34,10 @@ Modes::
                                                 # CPU share (a shared machine: ~3 min)
     python benchmarks/bench_sweep.py --quick    # a smoke run of everything (~1 min)
     python benchmarks/bench_sweep.py --only-per-sample
+    python benchmarks/bench_sweep.py --ten-thousand-before PATH [--big N]
+                                                # 4. only, with the checkout at PATH (before
+                                                # a change) and this one, one after the other
+                                                # (sweep_end_to_end.*)
 
 Writes ``benchmarks/results/sweep.json`` and ``sweep.md`` (``--shared``: ``sweep_shared.*``;
 ``--quick``: ``sweep_quick.*``; ``--only-per-sample``: ``sweep_per_sample.json``). CPU times
@@ -245,6 +249,51 @@ def ten_thousand(n: int) -> dict:
             "batch": s.get("batch"), "instability": s["instability"]}
 
 
+def before_and_after(before: Path, n: int) -> int:
+    """``ten_thousand(n)`` with the checkout at ``before`` and with this one, each in a fresh
+    process (the checkout first on the path, its workers too), one after the other; the ratio
+    of their wall times (sweep_end_to_end.json and .md)."""
+    import json
+    import subprocess
+
+    here = Path(__file__).resolve().parent.parent
+    runs = {}
+    for which, tree in (("before", before), ("after", here)):
+        print(f"{n} samples, {which} ({tree})...", file=sys.stderr)
+        code = ("import json, sys; sys.path[:0] = [sys.argv[1], sys.argv[1] + '/benchmarks']; "
+                "import bench_sweep; r = bench_sweep.ten_thousand(int(sys.argv[2])); "
+                "r.pop('instability', None); print(json.dumps(r, default=str))")
+        out = subprocess.run([sys.executable, "-c", code, str(tree), str(n)], cwd=str(tree),
+                             env=dict(os.environ, PYTHONPATH=str(tree)), capture_output=True,
+                             text=True)
+        if out.returncode != 0:
+            raise RuntimeError(out.stderr[-3000:])
+        runs[which] = json.loads(out.stdout.strip().splitlines()[-1])
+    result = {"machine": machine_info(), "samples": n, "before_checkout": str(before),
+              "runs": runs, "wall_ratio": runs["after"]["wall_s"] / runs["before"]["wall_s"],
+              "workers_cpu_ratio": runs["after"]["workers_cpu_s"] / runs["before"]["workers_cpu_s"]}
+    write_json("sweep_end_to_end.json", result)
+    rows = [[which, f"{r['wall_s']:.1f} s (cluster start {r['cluster_start_s']:.1f} s)",
+             f"{r['workers_cpu_per_sample_s'] * 1e3:.1f} ms", f"{r['client_cpu_s']:.1f} s",
+             f"{r['failed']}", f"{r['load_before']} -> {r['load_after']}"]
+            for which, r in runs.items()]
+    rows.append(["after / before", f"{result['wall_ratio']:.2f}",
+                 f"{result['workers_cpu_ratio']:.2f}", "", "", ""])
+    machine = result["machine"]
+    text = "\n".join([
+        f"# {n} samples of the shipped sweep scene end to end, before and after", "",
+        f"`python benchmarks/bench_sweep.py --ten-thousand-before PATH` on "
+        f"{machine['date_utc']} UTC ({machine['cpu']}, {machine['nproc']} cores): run_sweep on "
+        "a fresh LocalCluster of 2 workers (its start, the workers' imports, every sample to "
+        "Parquet, the report without plots), the checkout before the change first, then this "
+        "one.", "",
+        markdown_table(["checkout", "wall", "workers' CPU a sample", "client + scheduler CPU",
+                        "failed samples", "load average (1, 5, 15 min)"], rows), ""])
+    (RESULTS / "sweep_end_to_end.md").write_text(text + "\n")
+    print(text)
+    return 0
+
+
 def shipped() -> dict:
     from spacecraft.sweep import run_sweep
 
@@ -307,6 +356,10 @@ def main(argv=None) -> int:
                            "overhead, Dask's CPU share (sweep_shared.json)")
     mode.add_argument("--only-per-sample", action="store_true",
                       help="measure one sample only (sweep_per_sample.json)")
+    mode.add_argument("--ten-thousand-before", type=Path, metavar="PATH",
+                      help="only the --big samples end to end, first with the flexsat checkout "
+                           "at PATH (before a change), then with this one, in one run "
+                           "(sweep_end_to_end.json)")
     parser.add_argument("--samples-per-sample", type=int, default=40)
     parser.add_argument("--speed-up-samples", type=int, default=2000)
     parser.add_argument("--repeats", type=int, default=3)
@@ -314,6 +367,8 @@ def main(argv=None) -> int:
     parser.add_argument("--big", type=int, default=10_000)
     parser.add_argument("--skip-shipped", action="store_true")
     args = parser.parse_args(argv)
+    if args.ten_thousand_before is not None:
+        return before_and_after(args.ten_thousand_before.resolve(), args.big)
     if args.only_per_sample:
         result = {"machine": machine_info(), "per_sample": per_sample(args.samples_per_sample)}
         write_json("sweep_per_sample.json", result)
