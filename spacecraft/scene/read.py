@@ -136,8 +136,9 @@ key                                    unit       meaning
 ``appendages[i].chain.com_offsets``    m          centre of mass from each body's start
 ``appendages[i].chain.root``           -          ``"rigid"`` (default) or ``"hinged"``
 ``appendages[i].chain.from_beam``      -          instead of the arrays: ``"rfem"`` (rigid
-                                                  finite elements of the ``beam`` table's
-                                                  uniform beam, its tip body included) with
+                                                  finite elements of the appendage's beam,
+                                                  stepped or tapered beam, its tip body
+                                                  included; not of modal data) with
 ``appendages[i].chain.n_bodies``       -          its number of bodies (>= 2)
 ``appendages[i].chain.root_stiffness``  N m/rad   ``root = "hinged"`` with ``from_beam``: the
                                                   drive hinge between mount and first body
@@ -966,9 +967,9 @@ def _read_chain(r: SceneReader, data, path: str, has_beam: bool) -> ChainSpec:
     if "from_beam" in t:
         from_beam = r.choice(t, "from_beam", path, ("rfem",))
         if not has_beam:
-            raise r.error(f"{path}.from_beam", "'rfem' (rigid finite elements of a uniform "
-                          "beam) needs a beam table in the same appendage (a stepped or "
-                          "tapered beam or modal data get a fitted chain: design = 'fit')")
+            raise r.error(f"{path}.from_beam", "'rfem' (rigid finite elements of a beam) "
+                          "needs a beam, stepped_beam or tapered_beam table in the same "
+                          "appendage (modal data get a fitted chain: design = 'fit')")
         n_bodies = r.integer(t, "n_bodies", path, minimum=2, limit="bodies")
         root_stiffness = None
         root_damping = 0.0
@@ -1059,10 +1060,10 @@ def _read_appendage(r: SceneReader, data, path: str, index: int) -> AppendageSpe
     structure = beam if beam is not None else modal
     if three_axis:
         _check_three_axis_appendage(r, t, path, structure)
-    uniform_beam = isinstance(beam, BeamSpec)
-    chain = (_read_chain(r, t.pop("chain"), f"{path}.chain", uniform_beam)
+    distributed = beam is not None  # rfem divides any beam: uniform, tip-loaded, stepped
+    chain = (_read_chain(r, t.pop("chain"), f"{path}.chain", distributed)
              if "chain" in t else None)
-    truth_chain = (_read_chain(r, t.pop("truth_chain"), f"{path}.truth_chain", uniform_beam)
+    truth_chain = (_read_chain(r, t.pop("truth_chain"), f"{path}.truth_chain", distributed)
                    if "truth_chain" in t else None)
     if structure is None and chain is None:
         raise r.error(path, "needs a structure (a beam, stepped_beam, tapered_beam or modal "

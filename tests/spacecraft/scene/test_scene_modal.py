@@ -152,7 +152,7 @@ def test_bad_modal_values_are_refused_by_key(edit, match):
     ({"beam": {"section": "rod", "length": 1.0, "diameter": 0.01, "density": 7800.0,
                "youngs_modulus": 2e11}}, r"an appendage is one structure.*got beam and modal"),
     ({"chain": {"from_beam": "rfem", "n_bodies": 3}, "design": "chain"},
-     r"chain\.from_beam: 'rfem' .*needs a beam table"),
+     r"chain\.from_beam: 'rfem' .*needs a beam, stepped_beam or tapered_beam table"),
 ])
 def test_what_modal_data_cannot_have(appendage, match):
     with pytest.raises(SceneError, match=match):
