@@ -92,6 +92,9 @@ __all__ = ["Beam", "characteristic_roots", "rectangle_torsion_constant"]
 _SERIES_RADIUS = 2.0  # |x| below which the power series in y = x**4 are used
 _MAX_CORRECTION_MODES = 20000  # free-free modes summed explicitly in a damping correction
 _TAIL_TERMS = 12      # terms of the series in s/w_k of the damping correction's tail
+#: Most cantilever modes of the modal sum of the damped root dynamic stiffness (beyond, the
+#: closed form with damping corrections of :mod:`appendages.damping`).
+_MODAL_MAX_MODES = 1024
 _N_SERIES = 18        # terms: 4**k |y|**k/(4k)! < 1e-30 at |x| = 2 for k = 18
 
 
@@ -1286,7 +1289,11 @@ class Beam:
         if self._segmented is not None:
             return self._segmented.dynamic_stiffness(s)
         if self.damping_ratio > 0.0 and self.damping_convention == "cantilever":
-            return self._cantilever_damping()(s.ravel()).reshape(s.shape + (2, 2))
+            flat = s.ravel()
+            D = self._cantilever_modal_stiffness(flat)
+            if D is None:       # |s| too high for the modal sum: the general evaluation
+                D = self._cantilever_damping()(flat)
+            return D.reshape(s.shape + (2, 2))
         D = np.zeros(s.shape + (2, 2), dtype=np.complex128)
         if self.damping_ratio > 0.0:
             nonzero = s != 0
@@ -1430,6 +1437,74 @@ class Beam:
                 self.rigid_mass_matrix, tail=self._cantilever_tail)
             self._cache["cantilever_damping"] = cached
         return cached
+
+    def _cantilever_modal_stiffness(self, s: np.ndarray) -> np.ndarray | None:
+        r"""The damped root dynamic stiffness of the cantilever convention by its modal sum,
+        at flat complex s: shape (npts, 2, 2), or None where it would need more than
+        :data:`_MODAL_MAX_MODES` modes.
+
+        With the completeness of the cantilever modes, ``M_rr = sum_k l_k l_k^T``
+        (:mod:`appendages.damping`), the modal form
+        ``D = s**2 M_rr - s**4 sum_k l_k l_k^T/(s**2 + 2 zeta w_k s + w_k**2)`` is
+
+            D(s) = s**2 sum_{k<=N} l_k l_k^T (w_k**2 + 2 zeta w_k s)/(s**2 + 2 zeta w_k s + w_k**2)
+                   + s**2 R_N - s**4 sum_{k>N} l_k l_k^T/w_k**2 h(s/w_k),
+
+        ``R_N = sum_{k>N} l_k l_k^T`` (:meth:`cantilever_participation_tail`, Hurwitz sums, no
+        cancellation) and ``h(u) = 1/(1 + 2 zeta u + u**2) = sum_m U_m(-zeta) u**m``
+        (Chebyshev), summed like :meth:`_cantilever_tail` over the asymptotic modes k > N:
+        ``sum_m U_m(-zeta) v**(4+m) c0**2 (4 rho*A/L) [L**2 Z(6+2m), L**3 Z(7+2m),
+        L**4 Z(8+2m)]`` (v = s/c0, Z of :meth:`_cantilever_tail`). N (a power of two, at
+        least 16) puts every mode up to 10 max|s| in the explicit sum, so that |u| <= 1/10 in
+        the tail and its 12 terms leave below 1e-12 of it. No term cancels another: a mode
+        far below |s| contributes about ``-l l^T w_k**2`` (the rod's stiffness it carries),
+        one far above ``s**2 l l^T``, and the denominators are written as
+        ``(s - i w_k)(s + i w_k) + 2 zeta w_k s`` (no difference of squares near a
+        resonance). It equals the closed form with the damping corrections of
+        :class:`~appendages.damping.CantileverDamping` to rounding, at a fraction of the cost
+        (no repair about the undamped poles, one pass over the points); s = 0 gives 0.
+        """
+        c0 = self.frequency_scale
+        top = float(np.max(np.abs(s), initial=0.0))
+        N = 16
+        while ((N + 0.5) * math.pi) ** 2 * c0 < 10.0 * top:
+            N *= 2
+            if N > _MODAL_MAX_MODES:
+                return None
+        key = ("cantilever_modal", N)
+        data = self._cache.get(key)
+        if data is None:
+            w = self.cantilever_frequencies(N)
+            l = self.modal_participation(N)
+            products = np.stack([l[:, 0] ** 2, l[:, 0] * l[:, 1], l[:, 1] ** 2], axis=1)
+            R = self.cantilever_participation_tail(N)
+            zeta, L = self.damping_ratio, self.length
+            cheb = np.empty(_TAIL_TERMS)
+            cheb[0], cheb[1] = 1.0, -2.0 * zeta
+            for m in range(2, _TAIL_TERMS):
+                cheb[m] = -2.0 * zeta * cheb[m - 1] - cheb[m - 2]
+            m = np.arange(_TAIL_TERMS)
+            orders = 2 * m[None, :] + np.array([[6], [7], [8]])
+            Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, N + 0.5)
+            scale = 4.0 * self.linear_density / L * c0**2 * np.array([L**2, L**3, L**4])[:, None]
+            data = (w, products, np.array([R[0, 0], R[0, 1], R[1, 1]]),
+                    scale * cheb[None, :] * Z)
+            self._cache[key] = data
+        w, products, rest, coefficients = data
+        two_zeta_w = 2.0 * self.damping_ratio * w
+        ss = s[:, None]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            factor = (w**2 + two_zeta_w * ss) / ((ss - 1j * w) * (ss + 1j * w) + two_zeta_w * ss)
+        s2 = s**2
+        v = s / c0
+        tail = np.zeros((3, s.size), dtype=np.complex128)
+        for t in range(_TAIL_TERMS - 1, -1, -1):
+            tail = tail * v + coefficients[:, t:t + 1]
+        entries = s2[:, None] * (factor @ products + rest) - (v**4)[:, None] * tail.T
+        D = np.empty((s.size, 2, 2), dtype=np.complex128)
+        D[:, 0, 0], D[:, 0, 1], D[:, 1, 1] = entries.T
+        D[:, 1, 0] = D[:, 0, 1]
+        return D
 
     def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:
         r"""The damping of the cantilever modes k > n (:mod:`appendages.damping`), exactly.
