@@ -114,7 +114,9 @@ def _given(given, sample_time: float | None) -> Tuned:
     K = given_state_space(given, sample_time)
     description = {"kind": given.kind, "given": True,
                    "structure": (f"given in the scene (controller.given): {K.nstates} states, "
-                                 "torque from theta_ref, theta and omega; not tuned"),
+                                 + ("torques about x, y, z from theta_ref, theta and omega "
+                                    "about x, y, z" if given.three_axis else
+                                    "torque from theta_ref, theta and omega") + "; not tuned"),
                    "A": [list(r) for r in given.A], "B": [list(r) for r in given.B],
                    "C": [list(r) for r in given.C], "D": [list(r) for r in given.D],
                    "n_states": int(K.nstates), "sample_time": sample_time}

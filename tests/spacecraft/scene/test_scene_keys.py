@@ -107,7 +107,9 @@ def _cases(kind: str) -> dict:
     three = kind == "three_axis"
     numbers = copy.deepcopy(_modal_numbers(three))
     modal = {f"{A}.beam": None, f"{A}.modal": numbers}
-    given = {"kind": "pd", "D": [[1.0, -1.0, -1.0]]}
+    given = ({"kind": "pd", "D": [[1.0 * (j % 3 == i) * (-1.0 if j > 2 else 1.0)
+                                   for j in range(9)] for i in range(3)]}
+             if three else {"kind": "pd", "D": [[1.0, -1.0, -1.0]]})
     second = copy.deepcopy(BASES[kind]["appendages"][0])
     second["name"] = "rod2"
     if three:
