@@ -18,25 +18,27 @@ need it raise :class:`BasiliskNotInstalled` (one line: how to install the extra)
 
 from .actuators import ReactionWheel
 from .comparison import SlewComparison, compare, linear_slew, slew_comparison
-from .flight_software import (SAMPLES_PER_CROSSOVER, SIGNALS_3, TORQUES_3, FlightSoftwareLaw,
-                              default_sample_time, flight_software_law, rotation_vector)
+from .flight_software import (LOOP_GAIN_FLOOR, SAMPLES_PER_CROSSOVER, SIGNALS_3, TORQUES_3,
+                              FlightSoftwareLaw, default_sample_time, flight_software_law,
+                              rotation_vector)
 from .install import (INSTALL_HINT, TESTED_VERSIONS, BasiliskIntegrationError,
                       BasiliskModelError, BasiliskModelWarning, BasiliskNotInstalled,
                       BasiliskRunTooLong, BasiliskVersionWarning, require_basilisk)
 from .layout import (AppendageLayout, BodyLayout, HubLayout, SpacecraftLayout, basilisk_chain,
-                     chain_spacecraft, inextensible, layout)
+                     chain_spacecraft, inextensible, layout, torsion_frequency, torsion_held)
 from .simulation import (DISTURBANCES_3, MAX_SECONDS, BasiliskResult, LinearisedModel,
-                         dynamics_step, estimated_seconds, linearised, simulate, simulate_slew,
-                         slew_reference)
+                         dynamics_step, estimated_seconds, largest_stable_step, linearised,
+                         simulate, simulate_slew, slew_reference)
 
 __all__ = [
     "AppendageLayout", "BasiliskIntegrationError", "BasiliskModelError", "BasiliskModelWarning",
     "BasiliskNotInstalled", "BasiliskResult", "BasiliskRunTooLong", "BasiliskVersionWarning",
     "BodyLayout", "DISTURBANCES_3", "FlightSoftwareLaw", "HubLayout", "INSTALL_HINT",
-    "LinearisedModel", "MAX_SECONDS", "ReactionWheel", "SAMPLES_PER_CROSSOVER", "SIGNALS_3",
-    "SlewComparison", "SpacecraftLayout", "TESTED_VERSIONS", "TORQUES_3", "basilisk_chain",
+    "LOOP_GAIN_FLOOR", "LinearisedModel", "MAX_SECONDS", "ReactionWheel",
+    "SAMPLES_PER_CROSSOVER", "SIGNALS_3", "SlewComparison", "SpacecraftLayout", "TESTED_VERSIONS",
+    "TORQUES_3", "basilisk_chain",
     "chain_spacecraft", "compare", "default_sample_time", "dynamics_step", "estimated_seconds",
-    "flight_software_law", "inextensible", "layout", "linear_slew", "linearised",
-    "require_basilisk", "rotation_vector", "simulate", "simulate_slew", "slew_comparison",
-    "slew_reference",
+    "flight_software_law", "inextensible", "largest_stable_step", "layout", "linear_slew",
+    "linearised", "require_basilisk", "rotation_vector", "simulate", "simulate_slew",
+    "slew_comparison", "slew_reference", "torsion_frequency", "torsion_held",
 ]

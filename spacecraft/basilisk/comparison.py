@@ -12,7 +12,10 @@ user asks (:func:`slew_comparison`):
   the default step);
 - linear chain - truth: flexsat's own chain-vs-beam figure for the same sampled loop.
 
-Each as the peak absolute difference per signal and relative to the reference's peak.
+Each as the peak absolute difference per signal and relative to the reference's peak. When
+Basilisk holds a stiff torsion rigid (``rigid_above``, :mod:`.layout`), the linear chain
+compared holds it too, and a fourth difference measures what that costs: the linear chain held
+against the linear chain free (``held_vs_chain``), both exact at the samples.
 """
 
 from __future__ import annotations
@@ -166,13 +169,18 @@ class SlewComparison:
         flexsat's truth plant (e.g. hub + beam), same digital law, same instants.
     differences : dict
         ``"basilisk_vs_chain"``, and with a truth ``"basilisk_vs_truth"`` and
-        ``"chain_vs_truth"``: each :func:`compare`'s dict over the common signals.
+        ``"chain_vs_truth"``: each :func:`compare`'s dict over the common signals; with a
+        torsion held rigid (``rigid_above``) ``"held_vs_chain"``, the linear chain held against
+        the linear chain free (what holding costs).
+    free_chain : control.TimeResponseData or None
+        With a torsion held rigid: flexsat's linear hub + chains with every torsion free.
     """
 
     basilisk: BasiliskResult
     chain: control.TimeResponseData
     truth: control.TimeResponseData | None
     differences: dict
+    free_chain: control.TimeResponseData | None = None
 
 
 def slew_comparison(spacecraft: Spacecraft, controller: control.StateSpace, angle: float,
@@ -181,15 +189,18 @@ def slew_comparison(spacecraft: Spacecraft, controller: control.StateSpace, angl
                     dt: float | None = None, chains: Mapping | None = None,
                     disturbances: Mapping | None = None,
                     reaction_wheel: ReactionWheel | None = None,
-                    max_seconds: float = MAX_SECONDS, axis=None) -> SlewComparison:
+                    max_seconds: float = MAX_SECONDS, axis=None,
+                    rigid_above: float | None = None,
+                    accurate_up_to: float | None = None) -> SlewComparison:
     """Run a slew in Basilisk and compare it with flexsat's chain and truth predictions.
 
     Parameters
     ----------
     spacecraft, controller, angle, slew_time, duration, sample_time, dt, chains, disturbances,
-    reaction_wheel, max_seconds, axis
+    reaction_wheel, max_seconds, axis, rigid_above, accurate_up_to
         As for :func:`.simulate_slew` (``spacecraft`` with its design chains; ``axis`` the
-        eigen-axis of a three-axis slew).
+        eigen-axis of a three-axis slew; a torsion held rigid above ``rigid_above`` is held
+        in the linear chain compared too, and what that costs measured, ``held_vs_chain``).
     truth_plant : control.StateSpace, optional
         flexsat's truth plant (e.g. ``Spacecraft(hub, [Mount(beam.truncated(...), ...)]).plant(
         tip_deflection=True)``, the runner's truth); its outputs are compared by name.
@@ -204,14 +215,20 @@ def slew_comparison(spacecraft: Spacecraft, controller: control.StateSpace, angl
     basilisk = simulate_slew(spacecraft, controller, angle, slew_time, duration=duration,
                              sample_time=sample_time, dt=dt, chains=chains,
                              disturbances=disturbances, reaction_wheel=reaction_wheel,
-                             max_seconds=max_seconds, axis=axis)
+                             max_seconds=max_seconds, axis=axis, rigid_above=rigid_above,
+                             accurate_up_to=accurate_up_to)
     kwargs = dict(duration=duration, sample_time=basilisk.sample_time, disturbances=disturbances,
                   axis=axis)
     chain = linear_slew(basilisk.layout.spacecraft, controller, angle, slew_time, **kwargs)
     differences = {"basilisk_vs_chain": compare(basilisk.response, chain)}
+    free = None
+    if any("torsion" in a.held for a in basilisk.layout.appendages):
+        free = linear_slew(chain_spacecraft(spacecraft, chains), controller, angle, slew_time,
+                           **kwargs)
+        differences["held_vs_chain"] = compare(chain, free)
     truth = None
     if truth_plant is not None:
         truth = linear_slew(spacecraft, controller, angle, slew_time, plant=truth_plant, **kwargs)
         differences["basilisk_vs_truth"] = compare(basilisk.response, truth)
         differences["chain_vs_truth"] = compare(chain, truth)
-    return SlewComparison(basilisk, chain, truth, differences)
+    return SlewComparison(basilisk, chain, truth, differences, free)

@@ -60,7 +60,7 @@ from appendages.interface import check_positive
 from .install import BasiliskModelError
 
 __all__ = ["FlightSoftwareLaw", "flight_software_law", "default_sample_time",
-           "SIGNALS", "SIGNALS_3", "TORQUES_3", "SAMPLES_PER_CROSSOVER",
+           "SIGNALS", "SIGNALS_3", "TORQUES_3", "SAMPLES_PER_CROSSOVER", "LOOP_GAIN_FLOOR",
            "flight_software_class", "rotation_vector"]
 
 #: The signals the flight software forms, in flexsat's names.
@@ -74,6 +74,11 @@ TORQUES_3 = ("torque_x", "torque_y", "torque_z")
 #: the highest gain crossover or controller pole (the top of Franklin, Powell & Workman's 10-30
 #: range [2]_), so the sampled loop stays close to the continuous loop the user designed.
 SAMPLES_PER_CROSSOVER = 30.0
+#: Loop gain (largest singular value of L(j omega)) below which a controller pole does not set
+#: the default rate (-40 dB): where |L| < 0.01, even a sampled law 100 % off the continuous one
+#: moves the return difference I + L by less than 1 %, so the closed loop barely notices (an
+#: estimator's copies of stiff chain modes, thousands of rad/s, far above the loop's band).
+LOOP_GAIN_FLOOR = 0.01
 
 
 @dataclasses.dataclass(frozen=True)
@@ -187,7 +192,12 @@ def default_sample_time(plant: control.StateSpace, controller: control.StateSpac
     |L(j omega)| < 1 for good; three axes: the largest singular value of the 3x3 L, every
     loop's gain in every direction) and (b) the controller's own fastest pole (an estimator's copy of
     the chain modes, a roll-off filter): the sampled law then stays close to the continuous one
-    the user designed. A digital controller's own dt is returned as it is.
+    the user designed wherever the loop acts. Poles above the band where the loop has gain
+    (above the highest frequency with |L| >= :data:`LOOP_GAIN_FLOOR`) do not count: they are
+    an estimator's copies of modes the loop does not act on (the stiff ones would ask for a
+    rate no flight computer has), and a sampled law off the continuous one there changes the
+    closed loop by less than the floor (flexsat's predictions are of the sampled law as
+    flown, whatever the rate). A digital controller's own dt is returned as it is.
 
     Parameters
     ----------
@@ -211,12 +221,21 @@ def default_sample_time(plant: control.StateSpace, controller: control.StateSpac
     above = np.nonzero(gain >= 1.0)[0]
     fastest = float(omega[above[-1]]) if above.size else 0.0
     if controller.nstates:
-        fastest = max(fastest, float(np.max(np.abs(np.linalg.eigvals(
-            np.asarray(controller.A, dtype=float))))))
+        poles = np.abs(np.linalg.eigvals(np.asarray(controller.A, dtype=float)))
+        acting = np.nonzero(gain >= LOOP_GAIN_FLOOR)[0]
+        if acting.size and acting[-1] < omega.size - 1:
+            # poles above the band where the loop has gain do not count (docstring)
+            poles = poles[poles <= omega[acting[-1]]]
+        if poles.size:
+            fastest = max(fastest, float(np.max(poles)))
     if fastest == 0.0:
         raise ValueError("the loop has no gain crossover and the controller no dynamics: cannot "
                          "choose a sample time; give sample_time [s]")
-    limit = 2.0 * math.pi / (SAMPLES_PER_CROSSOVER * fastest)
+    return _one_two_five(2.0 * math.pi / (SAMPLES_PER_CROSSOVER * fastest))
+
+
+def _one_two_five(limit: float) -> float:
+    """The largest of 1, 2, 5 x 10**k at most ``limit`` [s]."""
     decade = 10.0 ** math.floor(math.log10(limit))
     return max(m * decade for m in (1.0, 2.0, 5.0) if m * decade <= limit * (1.0 + 1e-12))
 

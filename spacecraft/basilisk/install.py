@@ -53,13 +53,15 @@ class BasiliskRunTooLong(BasiliskModelError):
         The estimated wall time and the limit it exceeds.
     highest_frequency : float, rad/s
         The highest mode the RK4 step was sized from (0: none given).
+    step : float, s
+        The RK4 step of the run (0: none given).
     """
 
     def __init__(self, message: str, *, work: str, estimate: float, limit: float,
-                 highest_frequency: float = 0.0):
+                 highest_frequency: float = 0.0, step: float = 0.0):
         super().__init__(message)
         self.work, self.estimate, self.limit = work, estimate, limit
-        self.highest_frequency = highest_frequency
+        self.highest_frequency, self.step = highest_frequency, step
 
 
 class BasiliskIntegrationError(FlexsatError, ArithmeticError):

@@ -91,6 +91,17 @@ Three axes
     names the motion held and :attr:`AppendageLayout.axial_frequency` gives the chain's first
     axial frequency with its root held, the mode left out.
 
+    Stiff torsion: a chain's torsion whose first frequency (root held) lies far above what the
+    flight software can act on (``rigid_above``, e.g. its sampling frequency) can be held
+    rigid, in Basilisk and in the linear chain compared alike (``torsion_stiffnesses=None``,
+    which :class:`appendages.HingedChain` models exactly): a thin boom's torsion, thousands
+    of rad/s, would otherwise set RK4's step for the whole run (:mod:`.simulation`) though
+    no torque of the loop excites it. :attr:`AppendageLayout.held` names it and
+    :attr:`AppendageLayout.torsion_frequency` gives the mode left out; what holding it costs
+    is measured on flexsat's linear chains (:func:`.slew_comparison`). The bending planes
+    are never held: a chain has no rigid bending joint, so the comparison could not hold it
+    alike.
+
     Bodies: Basilisk accepts only the inertia tensor of a body, whose largest principal moment
     is at most the sum of the other two. A chain fitted to an Euler-Bernoulli beam need not
     give one: the beam has the section's torsional inertia (``torsional_inertia``, rho I_p)
@@ -132,6 +143,7 @@ import scipy.linalg
 from scipy.spatial.transform import Rotation
 
 from appendages.chain import HingedChain, spring_chain_matrices
+from appendages.interface import check_positive
 
 from ..dynamics.coupling import Spacecraft
 from ..dynamics.hub import Mount
@@ -139,7 +151,8 @@ from ..dynamics.kinematics import TRIANGLE_TOLERANCE
 from .install import BasiliskModelError, BasiliskModelWarning
 
 __all__ = ["BodyLayout", "AppendageLayout", "HubLayout", "SpacecraftLayout", "layout",
-           "chain_spacecraft", "basilisk_chain", "inextensible", "SPIN_AXES"]
+           "chain_spacecraft", "basilisk_chain", "inextensible", "torsion_held",
+           "torsion_frequency", "SPIN_AXES"]
 
 _CHAIN_ATTRIBUTES = ("lengths", "masses", "inertias", "hinge_stiffnesses", "com_offsets", "root")
 
@@ -206,15 +219,19 @@ class AppendageLayout:
     n_folded : int
         Bodies folded into the hub (1 for ``root="rigid"``, else 0).
     held : tuple of str
-        Motions of the given chain that Basilisk's spinning bodies cannot represent and that
-        are held rigid, in Basilisk and in flexsat's comparison model alike: ``("axial",)``
-        for a three-axis chain with axial springs, else empty.
+        Motions of the given chain held rigid, in Basilisk and in flexsat's comparison model
+        alike: ``"axial"`` for a three-axis chain with axial springs (Basilisk's spinning
+        bodies cannot represent them), ``"torsion"`` for a torsion stiffer than
+        :func:`layout`'s ``rigid_above`` (module docstring, "Stiff torsion"), else empty.
     axial_frequency : float or None, rad/s
-        With ``held``: the first axial frequency of the given chain with its root held (the
-        mode left out).
+        With ``"axial"`` held: the first axial frequency of the given chain with its root
+        held (the mode left out).
     raised_inertias : tuple of (int, str, float)
         Bodies whose moments were made a body's (module docstring, "Bodies"): the body's
         number (1 at the root), the axis whose moment was raised and by how much [kg*m**2].
+    torsion_frequency : float or None, rad/s
+        With ``"torsion"`` held: the chain's first torsion frequency with its root held (the
+        mode left out).
     """
 
     name: str
@@ -225,6 +242,7 @@ class AppendageLayout:
     held: tuple = ()
     axial_frequency: float | None = None
     raised_inertias: tuple = ()
+    torsion_frequency: float | None = None
 
     @property
     def three_axis(self) -> bool:
@@ -380,6 +398,31 @@ def inextensible(chain: HingedChain) -> HingedChain:
                        torsion_dampings=chain.torsion_dampings)
 
 
+def torsion_held(chain: HingedChain) -> HingedChain:
+    """The three-axis chain with its torsion joints held rigid (``torsion_stiffnesses=None``;
+    everything else as it is). A chain without torsion springs is returned as it is."""
+    _check_chain(chain)
+    if getattr(chain, "torsion_stiffnesses", None) is None:
+        return chain
+    return HingedChain(chain.lengths, chain.masses, chain.inertias, chain.hinge_stiffnesses,
+                       hinge_dampings=chain.hinge_dampings, com_offsets=chain.com_offsets,
+                       root=chain.root, inertias_y=chain.inertias_y,
+                       hinge_stiffnesses_y=chain.hinge_stiffnesses_y,
+                       hinge_dampings_y=chain.hinge_dampings_y,
+                       torsional_inertias=chain.torsional_inertias,
+                       axial_stiffnesses=chain.axial_stiffnesses,
+                       axial_dampings=chain.axial_dampings)
+
+
+def torsion_frequency(chain: HingedChain) -> float | None:
+    """First torsion frequency [rad/s] of a three-axis chain with its root held (its torsion
+    spring chain); None without torsion springs."""
+    _check_chain(chain)
+    if getattr(chain, "torsion_stiffnesses", None) is None:
+        return None
+    return _spring_frequency(chain.torsional_inertias, chain.torsion_stiffnesses, chain.root)
+
+
 def _body_inertias(chain) -> tuple[np.ndarray, list]:
     """Principal moments (n, 3) ``(J_x, J_y, J_z)`` of a three-axis chain's bodies as Basilisk
     takes them, and the raises [(body number, axis, added)] that made them a body's (module
@@ -435,15 +478,21 @@ def basilisk_chain(chain: HingedChain) -> HingedChain:
                        torsion_dampings=chain.torsion_dampings)
 
 
-def _axial_frequency(chain) -> float:
-    """First axial frequency [rad/s] of a chain's spring chain with its root held."""
-    M, _, K, _ = spring_chain_matrices(np.asarray(chain.masses, dtype=float),
-                                       np.asarray(chain.axial_stiffnesses, dtype=float), None,
-                                       chain.root == "hinged")
+def _spring_frequency(inertias, springs, root: str) -> float:
+    """First frequency [rad/s] of a spring chain (masses or moments ``inertias`` joined by
+    ``springs``) with its root held."""
+    M, _, K, _ = spring_chain_matrices(np.asarray(inertias, dtype=float),
+                                       np.asarray(springs, dtype=float), None, root == "hinged")
     return float(math.sqrt(max(scipy.linalg.eigvalsh(K[1:, 1:], M[1:, 1:])[0], 0.0)))
 
 
-def chain_spacecraft(spacecraft: Spacecraft, chains: Mapping | None = None) -> Spacecraft:
+def _axial_frequency(chain) -> float:
+    """First axial frequency [rad/s] of a chain's spring chain with its root held."""
+    return _spring_frequency(chain.masses, chain.axial_stiffnesses, chain.root)
+
+
+def chain_spacecraft(spacecraft: Spacecraft, chains: Mapping | None = None, *,
+                     rigid_above: float | None = None) -> Spacecraft:
     """The spacecraft Basilisk models: appendages replaced by chains, by mount name.
 
     Parameters
@@ -453,13 +502,17 @@ def chain_spacecraft(spacecraft: Spacecraft, chains: Mapping | None = None) -> S
     chains : mapping name -> HingedChain, optional
         Replacements (e.g. the chain a scene fits to a beam). Appendages not named must already
         be chains.
+    rigid_above : float, rad/s, optional
+        Three axes: hold rigid the torsion of every chain whose first torsion frequency (root
+        held, :func:`torsion_frequency`) is above it (module docstring, "Stiff torsion");
+        None holds no torsion.
 
     Returns
     -------
     Spacecraft
         ``spacecraft`` itself when nothing is replaced (its computed modes are reused). Three
         axes: each chain as Basilisk holds it (:func:`basilisk_chain`: inextensible, every
-        body's inertia a body's).
+        body's inertia a body's; :func:`torsion_held` above ``rigid_above``).
 
     Raises
     ------
@@ -471,6 +524,8 @@ def chain_spacecraft(spacecraft: Spacecraft, chains: Mapping | None = None) -> S
     if chains is not None and not isinstance(chains, Mapping):
         raise TypeError(f"chains must be a mapping mount name -> HingedChain or None; got "
                         f"{type(chains).__name__} {chains!r:.100}")
+    if rigid_above is not None:
+        rigid_above = check_positive("rigid_above", rigid_above, "rad/s")
     chains = {} if chains is None else dict(chains)
     unknown = sorted(set(chains) - set(spacecraft.names))
     if unknown:
@@ -492,6 +547,8 @@ def chain_spacecraft(spacecraft: Spacecraft, chains: Mapping | None = None) -> S
                 f"({fit}) and pass chains={{{name!r}: chain}}")
         if spacecraft.three_axis:
             held = basilisk_chain(appendage)
+            if rigid_above is not None and (torsion_frequency(held) or 0.0) > rigid_above:
+                held = torsion_held(held)
             replaced = replaced or held is not appendage
             mounts.append(mount.with_appendage(held))
         else:
@@ -603,12 +660,15 @@ def _appendage_3d(name: str, mount: Mount, given) -> tuple[AppendageLayout, list
                 k=float(springs[h]), c=float(dampers[h]),
                 length=float(lengths[i]) if carrier else 0.0, spin_axis=axis))
     held = ()
-    axial = None
+    axial = torsion = None
     if getattr(given, "axial_stiffnesses", None) is not None:
         held, axial = ("axial",), _axial_frequency(given)
+    if chain.torsion_stiffnesses is None and getattr(given, "torsion_stiffnesses",
+                                                     None) is not None:
+        held, torsion = held + ("torsion",), torsion_frequency(given)
     raised = tuple(_body_inertias(given)[1]) if getattr(given, "three_axis", False) else ()
     return (AppendageLayout(name, mount, chain, tuple(bodies), len(folded), held, axial,
-                            raised), folded)
+                            raised, torsion), folded)
 
 
 def _raised_message(entry: AppendageLayout) -> str:
@@ -622,7 +682,8 @@ def _raised_message(entry: AppendageLayout) -> str:
             "motion of each body, whose modes it moves least")
 
 
-def layout(spacecraft: Spacecraft, *, chains: Mapping | None = None) -> SpacecraftLayout:
+def layout(spacecraft: Spacecraft, *, chains: Mapping | None = None,
+           rigid_above: float | None = None) -> SpacecraftLayout:
     """Basilisk parameters of a flexsat spacecraft whose appendages are chains.
 
     Parameters
@@ -632,6 +693,9 @@ def layout(spacecraft: Spacecraft, *, chains: Mapping | None = None) -> Spacecra
         appendages.
     chains : mapping name -> HingedChain, optional
         Chains replacing appendages that are not chains (see :func:`chain_spacecraft`).
+    rigid_above : float, rad/s, optional
+        Three axes: hold rigid every chain's torsion whose first frequency (root held) is
+        above it (module docstring, "Stiff torsion"); None holds none.
 
     Returns
     -------
@@ -651,7 +715,7 @@ def layout(spacecraft: Spacecraft, *, chains: Mapping | None = None) -> Spacecra
     """
     if not isinstance(spacecraft, Spacecraft):
         raise TypeError(f"spacecraft must be a flexsat Spacecraft; got {type(spacecraft).__name__}")
-    sc = chain_spacecraft(spacecraft, chains)
+    sc = chain_spacecraft(spacecraft, chains, rigid_above=rigid_above)
     hub = sc.hub
     appendages, folded = [], []
     if sc.three_axis:

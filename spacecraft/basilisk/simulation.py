@@ -28,7 +28,19 @@ Integrator and step
     less, 1e-7). A chain whose w_max dt exceeds 2 sqrt(2) diverges: ``peer_basilisk.py``'s
     equal-panel chains of the paper's rod at its dt = 0.01 s give NaN from 20 panels (w_max dt =
     3.5) but run at 10 (0.86) and 16 (2.24) (``benchmarks/basilisk_vs_flexsat.py``); the
-    adapter refuses such a dt before the run.
+    adapter refuses such a dt before the run, naming the largest stable step.
+
+    Stiff chains (``accurate_up_to``): a three-axis chain's stiffest motions (a wide wing's
+    in-plane bending, a thin boom's torsion) have modes of thousands of rad/s that the
+    flight software, sampling at 2 pi / T, neither sees nor drives except through the small
+    steps of its held torque. Resolving them takes w_max / 0.5 steps per second for motions
+    that answer quasi-statically. Given ``accurate_up_to`` (the design loop passes the flight
+    software's Nyquist frequency pi / T), the default step is accurate (w dt <= 1/2) on the
+    modes up to it and stable with a margin on the highest, w_max dt <= :data:`STABLE_STEP_FACTOR`
+    = 2 (70 % of the limit: RK4's amplification there is |R(2i)| = 0.75 a step, so a mode
+    above the accurate range is damped numerically and its ringing after each torque step
+    lost, while its quasi-static response, which follows the slow loads, is kept). What that
+    costs is measured against the accurate step (``benchmarks/basilisk_three_axis.py``).
 
 Three axes
     A three-axis spacecraft runs the same way: the hub's full inertia tensor, three spinning
@@ -74,7 +86,8 @@ from .install import (BasiliskIntegrationError, BasiliskModelError, BasiliskRunT
 from .layout import SpacecraftLayout, layout
 
 __all__ = ["BasiliskResult", "simulate", "simulate_slew", "dynamics_step", "estimated_seconds",
-           "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR", "DISTURBANCES", "DISTURBANCES_3",
+           "largest_stable_step", "RK4_STABILITY_LIMIT", "DEFAULT_STEP_FACTOR",
+           "STABLE_STEP_FACTOR", "DISTURBANCES", "DISTURBANCES_3",
            "MAX_SECONDS", "MAX_SAMPLES", "nanoseconds", "disturbance_values", "sample_count",
            "default_duration", "linearised", "LinearisedModel", "slew_reference"]
 
@@ -82,6 +95,9 @@ __all__ = ["BasiliskResult", "simulate", "simulate_slew", "dynamics_step", "esti
 RK4_STABILITY_LIMIT = 2.0 * math.sqrt(2.0)
 #: Default w_max * dt of the dynamics step (see the module docstring).
 DEFAULT_STEP_FACTOR = 0.5
+#: w_max * dt of the default step when only the modes up to ``accurate_up_to`` are resolved
+#: (module docstring, "Stiff chains"): 70 % of :data:`RK4_STABILITY_LIMIT`.
+STABLE_STEP_FACTOR = 2.0
 #: Disturbance inputs the Basilisk model applies (hub torque; force at the hub's centre of mass).
 DISTURBANCES = ("disturbance_torque", "force_x", "force_y")
 #: The same in three axes (hub axes).
@@ -161,8 +177,28 @@ def nanoseconds(seconds: float, name: str) -> int:
     return nanos
 
 
-def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None = None
-                  ) -> float:
+def _divided(period: int, k: int) -> float | None:
+    """The step T/k' [s] for the least k' in [k, 4k] dividing ``period`` [ns]; None if none."""
+    for candidate in range(k, 4 * k + 1):
+        if period % candidate == 0:
+            return period // candidate * _NANO
+    return None
+
+
+def largest_stable_step(highest_frequency: float, sample_time: float) -> float | None:
+    """The largest RK4 step [s] dividing the sample time into whole nanoseconds that is
+    stable on the highest mode (w_max dt <= 2 sqrt(2) [1]_); None if no such step is found."""
+    w = check_positive("highest_frequency", highest_frequency, "rad/s", allow_zero=True)
+    T = check_positive("sample_time", sample_time, "s")
+    period = nanoseconds(T, "sample_time")
+    ratio = w * T / RK4_STABILITY_LIMIT
+    if not ratio <= MAX_STEPS_PER_SAMPLE:
+        return None
+    return _divided(period, max(1, math.ceil(ratio - 1e-12)))
+
+
+def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None = None, *,
+                  accurate_up_to: float | None = None) -> float:
     """RK4 step [s] for the dynamics: T/k, k integer, sized from the highest mode.
 
     Parameters
@@ -174,11 +210,16 @@ def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None
     dt : float, s, optional
         Asked step, checked: T/dt an integer, w_max dt <= 2 sqrt(2). Default: the largest T/k
         with w_max dt <= :data:`DEFAULT_STEP_FACTOR` and k dividing T in whole nanoseconds.
+    accurate_up_to : float, rad/s, optional
+        For the default step: resolve accurately (w dt <= :data:`DEFAULT_STEP_FACTOR`) only the
+        modes up to this frequency, and keep the highest stable with a margin (w_max dt <=
+        :data:`STABLE_STEP_FACTOR`; module docstring, "Stiff chains"). None: every mode.
 
     Raises
     ------
     ValueError
-        A step that does not divide T, or one beyond RK4's stability limit for w_max.
+        A step that does not divide T, or one beyond RK4's stability limit for w_max (the
+        message names the largest stable step).
     """
     w = check_positive("highest_frequency", highest_frequency, "rad/s", allow_zero=True)
     T = check_positive("sample_time", sample_time, "s")
@@ -200,16 +241,26 @@ def dynamics_step(highest_frequency: float, sample_time: float, dt: float | None
                              f"number of whole-nanosecond steps [s]; got {dt!r} (T / dt = "
                              f"{T / dt:.6g}){_dividing_steps(period, dt)}")
         if highest_frequency * dt > RK4_STABILITY_LIMIT:
+            stable = largest_stable_step(highest_frequency, T)
+            largest = ("" if stable is None else
+                       f"; the largest stable step dividing the sample time {T:.6g} s is "
+                       f"{stable:.9g} s (w*dt = {highest_frequency * stable:.3g})")
             raise ValueError(
                 f"dt = {dt!r} s is beyond RK4's stability limit for the chain's highest mode "
                 f"{highest_frequency:.6g} rad/s (w*dt = {highest_frequency * dt:.3g} > 2*sqrt(2) "
-                f"= 2.83); use dt <= {DEFAULT_STEP_FACTOR / highest_frequency:.3g} s (w*dt = "
-                f"{DEFAULT_STEP_FACTOR:g}, the default)")
+                f"= 2.83: the run would blow up){largest}; the accurate step has w*dt <= "
+                f"{DEFAULT_STEP_FACTOR:g}, dt <= {DEFAULT_STEP_FACTOR / highest_frequency:.3g} s")
         return period // k * _NANO
-    k = max(1, math.ceil(highest_frequency * T / DEFAULT_STEP_FACTOR - 1e-12))
-    for candidate in range(k, 4 * k + 1):
-        if period % candidate == 0:
-            return period // candidate * _NANO
+    factor = DEFAULT_STEP_FACTOR
+    if accurate_up_to is not None:
+        resolved = check_positive("accurate_up_to", accurate_up_to, "rad/s")
+        if highest_frequency > resolved:
+            # accurate up to ``resolved``, stable with a margin above (module docstring)
+            factor = min(STABLE_STEP_FACTOR, DEFAULT_STEP_FACTOR * highest_frequency / resolved)
+    k = max(1, math.ceil(highest_frequency * T / factor - 1e-12))
+    step = _divided(period, k)
+    if step is not None:
+        return step
     raise ValueError(f"no dynamics step divides the sample time {T!r} s into between {k} and "
                      f"{4 * k} whole-nanosecond steps; choose a rounder sample time [s]")
 
@@ -351,7 +402,8 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
              chains: Mapping | None = None, disturbances: Mapping | None = None,
              initial_rate=0.0, initial_angles: Mapping | None = None,
              conservation: bool = False, reaction_wheel: ReactionWheel | None = None,
-             max_seconds: float = MAX_SECONDS) -> BasiliskResult:
+             max_seconds: float = MAX_SECONDS, rigid_above: float | None = None,
+             accurate_up_to: float | None = None) -> BasiliskResult:
     """Simulate a flexsat spacecraft (chains) and controller in Basilisk.
 
     Parameters
@@ -392,6 +444,12 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
         relative to the hub (``initial_speed`` 0, see :mod:`.actuators`).
     max_seconds : float, s
         Refuse a run whose estimated wall time (:func:`estimated_seconds`) exceeds this.
+    rigid_above : float, rad/s, optional
+        Three axes: hold rigid the torsion of every chain whose first torsion frequency (root
+        held) is above it (:func:`.layout`; its ``held`` and ``torsion_frequency`` say which).
+    accurate_up_to : float, rad/s, optional
+        The default step resolves the modes up to this frequency and is only stable above
+        (:func:`dynamics_step`); ignored with ``dt``.
 
     Returns
     -------
@@ -410,7 +468,7 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
     """
     version = require_basilisk()
     t_build = time.perf_counter()
-    lay = layout(spacecraft, chains=chains)
+    lay = layout(spacecraft, chains=chains, rigid_above=rigid_above)
     law = None if controller is None else flight_software_law(controller, sample_time)
     if law is not None and law.three_axis != lay.three_axis:
         which = "three-axis" if lay.three_axis else "planar"
@@ -436,7 +494,7 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
                          "(a slew's duration is 3 x slew_time by default)")
     frequencies = lay.spacecraft.modes()[0] if lay.n_bodies else np.zeros(1)
     w_max = float(np.max(frequencies))
-    step = dynamics_step(w_max, T, dt)
+    step = dynamics_step(w_max, T, dt, accurate_up_to=None if dt is not None else accurate_up_to)
     max_seconds = check_positive("max_seconds", max_seconds, "s")
     estimate = estimated_seconds(lay.n_bodies, duration, step, T)
     if estimate > max_seconds:
@@ -446,7 +504,7 @@ def simulate(spacecraft: Spacecraft, controller: control.StateSpace | None = Non
         raise BasiliskRunTooLong(
             f"{work}, above max_seconds = {max_seconds:g} s: use a chain with fewer or softer "
             "bodies, a shorter duration, or raise max_seconds", work=work, estimate=estimate,
-            limit=max_seconds, highest_frequency=w_max)
+            limit=max_seconds, highest_frequency=w_max, step=step)
     initial_rate = _initial_rate(initial_rate, lay.three_axis)
     angles = _initial_angles(lay, initial_angles)
     times = np.arange(n_samples) * (nanoseconds(T, "sample_time") * _NANO)
@@ -870,12 +928,14 @@ def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle:
                   sample_time: float | None = None, dt: float | None = None,
                   chains: Mapping | None = None, disturbances: Mapping | None = None,
                   reaction_wheel: ReactionWheel | None = None,
-                  max_seconds: float = MAX_SECONDS, axis=None) -> BasiliskResult:
+                  max_seconds: float = MAX_SECONDS, axis=None, rigid_above: float | None = None,
+                  accurate_up_to: float | None = None) -> BasiliskResult:
     """A cycloidal slew (:func:`controllers.slew_profile`) of the spacecraft in Basilisk.
 
     Parameters
     ----------
-    spacecraft, controller, sample_time, dt, chains, disturbances, reaction_wheel, max_seconds
+    spacecraft, controller, sample_time, dt, chains, disturbances, reaction_wheel, max_seconds,
+    rigid_above, accurate_up_to
         As for :func:`simulate`.
     angle : float, rad
         Slew angle (non-zero, finite).
@@ -902,7 +962,8 @@ def simulate_slew(spacecraft: Spacecraft, controller: control.StateSpace, angle:
     _check_axis(spacecraft, axis)
     return simulate(spacecraft, controller, duration=duration, sample_time=sample_time, dt=dt,
                     chains=chains, disturbances=disturbances, reaction_wheel=reaction_wheel,
-                    max_seconds=max_seconds,
+                    max_seconds=max_seconds, rigid_above=rigid_above,
+                    accurate_up_to=accurate_up_to,
                     reference=slew_reference(angle, slew_time, axis))
 
 

@@ -22,6 +22,14 @@ controller as three-axis flight software, the eigen-axis slew about ``manoeuvre.
 the signals per axis (``theta_x/_y/_z``...) and per tip motion (``<name>_tip_deflection_y``,
 ``_z``, ``<name>_tip_twist``), a reaction wheel as one such wheel on each hub axis.
 
+Stiff chains: without ``simulator.dt`` the run is sized to what the flight software can act on.
+A chain's torsion whose first frequency (root held) is above the flight software's sampling
+frequency 2 pi / T is held rigid, in Basilisk and in the linear chain compared alike, and what
+that costs is measured on flexsat's linear chains (``held_vs_chain``); the RK4 step resolves
+the modes up to the Nyquist frequency pi / T and keeps the others stable with a margin
+(:func:`spacecraft.basilisk.dynamics_step`, ``accurate_up_to``). The report says both
+(``notes``). A scene that gives ``simulator.dt`` runs every torsion free at that step.
+
 Before Basilisk runs, the scene's flight-software rate and RK4 step are checked against what
 the comparison needs and Basilisk integrates accurately, and refused by scene key
 (``simulator.sample_rate``, ``simulator.dt``, ``limits.basilisk_seconds``): a rate below the
@@ -42,6 +50,7 @@ import warnings
 import numpy as np
 
 __all__ = ["basilisk_runs", "basilisk_disturbances", "summary", "basilisk_wheel_summary",
+           "step_notes",
            "SIGNALS", "MIN_SAMPLES", "ACCURATE_STEP", "WHEEL_SPEED_WARNING"]
 
 #: Signals compared, in the report's order (those both responses have).
@@ -277,7 +286,7 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
         Without the ``bsk`` package (one line: how to install the extra).
     """
     from ..basilisk import BasiliskRunTooLong, ReactionWheel, require_basilisk, slew_comparison
-    from ..basilisk.simulation import RK4_STABILITY_LIMIT
+    from ..basilisk.simulation import largest_stable_step
 
     version = require_basilisk()
     scene = runner.scene
@@ -296,17 +305,25 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
         # the scene's rate, else the controller's own (digital), else 30 samples per period
         # of the loop's fastest crossover or the controller's fastest pole
         sample_time = _checked_steps(scene, d["plant"], K, kind, d["spacecraft"])
+        # without a step from the scene: what the flight software can act on (module docstring)
+        sized = {} if sim.dt is not None else {"rigid_above": 2.0 * math.pi / sample_time,
+                                               "accurate_up_to": math.pi / sample_time}
         try:
             comparison = slew_comparison(
                 d["spacecraft"], K, m.slew_angle, m.slew_time, duration=m.duration,
                 sample_time=sample_time, dt=sim.dt, truth_plant=truth_sim,
                 disturbances=basilisk_disturbances(m), reaction_wheel=wheel,
-                max_seconds=scene.limits.basilisk_seconds, axis=axis)
+                max_seconds=scene.limits.basilisk_seconds, axis=axis, **sized)
         except BasiliskRunTooLong as exc:
-            longest = RK4_STABILITY_LIMIT / exc.highest_frequency if exc.highest_frequency else 0
-            step = (f", a longer RK4 step (simulator.dt up to {longest:.3g} s, RK4's stability "
-                    "limit on the highest mode, which a slow manoeuvre barely excites; the "
-                    "default resolves it)" if sim.dt is None and longest else "")
+            # the longest step RK4 keeps stable on the highest mode (which a slow manoeuvre
+            # barely excites), when it is longer than the run's
+            longest = (largest_stable_step(exc.highest_frequency, sample_time)
+                       if exc.highest_frequency else None)
+            step = (f", a longer RK4 step (simulator.dt up to {longest:.9g} s, the largest "
+                    "stable one on the highest mode"
+                    + ("; the default holds stiff torsion rigid and resolves only the modes the "
+                       "flight software acts on" if sim.dt is not None else "") + ")"
+                    if longest and longest > exc.step * (1 + 1e-9) else "")
             raise _scene_error(scene, "simulator.name", f"{exc.work}, over the limit "
                                f"{exc.limit:g} s (limits.basilisk_seconds, estimated wall time "
                                "of a Basilisk run); use design chains with fewer or softer "
@@ -325,8 +342,11 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
                       "differences": differences, "truth": truth,
                       "summary": summary(differences, truth)}
         held = {a.name: {"held": list(a.held), "axial_frequency": a.axial_frequency,
+                         "torsion_frequency": a.torsion_frequency,
                          "raised_inertias": [list(r) for r in a.raised_inertias]}
                 for a in b.layout.appendages if a.held or a.raised_inertias}
+        data[kind]["highest_frequency"] = b.highest_frequency
+        data[kind]["notes"] = step_notes(b, sim.dt is not None, differences)
         if held:
             # what Basilisk's chains (and the linear chain compared) hold differently from the
             # design chains (spacecraft.basilisk.layout: axial motion, moments of a body)
@@ -340,6 +360,49 @@ def basilisk_runs(runner, designs: dict, truth_sim) -> tuple[dict, dict]:
                                           "are mostly the wheel's limits, not the chain's "
                                           "nonlinearity)")
     return comparisons, data
+
+
+def step_notes(result, given: bool, differences: dict) -> list:
+    """Sentences for the report: the RK4 step of a Basilisk run against the chain's modes
+    (``result``, a :class:`spacecraft.basilisk.BasiliskResult`; ``given``: the scene's
+    ``simulator.dt``), and every torsion held rigid with what holding it costs
+    (``differences["held_vs_chain"]``)."""
+    from ..basilisk.simulation import DEFAULT_STEP_FACTOR, RK4_STABILITY_LIMIT
+
+    w, dt, T = result.highest_frequency, result.dt, result.sample_time
+    y = w * dt
+    where = "simulator.dt" if given else "the default"
+    notes = [f"RK4 step {dt:.4g} s ({where}): w dt = {y:.3g} on the chain's highest mode "
+             f"{w:.4g} rad/s, inside RK4's stability limit 2 sqrt(2) = "
+             f"{RK4_STABILITY_LIMIT:.3g} (Hairer & Wanner, Solving ODEs II, sec. IV.2)"]
+    if y > DEFAULT_STEP_FACTOR:
+        notes[0] += (f"; modes up to {DEFAULT_STEP_FACTOR / dt:.4g} rad/s are resolved "
+                     f"accurately (w dt <= {DEFAULT_STEP_FACTOR:g}), those above, beyond the "
+                     f"flight software's Nyquist frequency {math.pi / T:.4g} rad/s, are "
+                     "integrated stably but damped numerically (their quasi-static response "
+                     "is kept, their ringing after each torque step is not); give "
+                     f"simulator.dt <= {DEFAULT_STEP_FACTOR / w:.3g} s to resolve every mode")
+    else:
+        notes[0] += f": every mode resolved accurately (w dt <= {DEFAULT_STEP_FACTOR:g})"
+    held = [a for a in result.layout.appendages if "torsion" in a.held]
+    if held:
+        which = ", ".join(f"{a.name} (first torsion mode {a.torsion_frequency:.4g} rad/s)"
+                          for a in held)
+        cost = differences.get("held_vs_chain", {})
+        twists = {f"{a.name}_tip_twist" for a in held}
+        rest = {n: e for n, e in cost.items() if n not in twists and e["relative"] is not None}
+        worst = max(rest, key=lambda n: rest[n]["relative"]) if rest else None
+        sentence = (f"Torsion held rigid in Basilisk and in the linear chain compared: {which}, "
+                    f"above the flight software's sampling frequency {2 * math.pi / T:.4g} "
+                    "rad/s")
+        if worst is not None:
+            sentence += (f"; holding it changes flexsat's linear chain by at most "
+                         f"{100 * rest[worst]['relative']:.2g} % of a signal's peak ({worst})")
+        for name in sorted(twists & set(cost)):
+            sentence += (f"; {name} is not simulated (its peak on the free linear chain "
+                         f"{cost[name]['peak']:.3g} rad)")
+        notes.append(sentence + "; give simulator.dt to run every torsion free")
+    return notes
 
 
 def _part(entry) -> str:

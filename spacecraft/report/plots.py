@@ -277,9 +277,25 @@ def plot_slew(result, path: Path) -> str:
         caption += ("; dotted black: Basilisk's nonlinear run of the design chains (the whole "
                     "manoeuvre, flight software at its sample time"
                     + ("; the torque its reaction wheel applies, within its limits" if wheels
-                       else "") + ")")
+                       else "") + ")" + _basilisk_caption_note(result))
     return caption + (". Solid: loop on the truth model, dashed: on the design model; one "
                       "colour per design model; red: unstable.")
+
+
+def _basilisk_caption_note(result) -> str:
+    """What a slew plot's Basilisk curves hold that flexsat's beside them do not: the
+    disturbance pulse (shaded), and motions Basilisk holds rigid (their tip motion is 0)."""
+    note = ""
+    if result.scene.manoeuvre.disturbance is not None:
+        note += ("; Basilisk flies the slew and the disturbance pulse together (shaded), "
+                 "flexsat's curves here the slew alone, so they part there")
+    held = sorted({name for entry in (result.data.get("basilisk") or {}).values()
+                   for name, h in (entry.get("chains_as_held") or {}).items()
+                   if "torsion" in h["held"]})
+    if held:
+        note += (f"; Basilisk holds the torsion of {', '.join(held)} rigid (its twist is 0 "
+                 "there; the report's Basilisk section says why and what it costs)")
+    return note
 
 
 def _draw_basilisk(ax, result, kind: str, signal: str, handles: list, y=None) -> None:
@@ -296,6 +312,12 @@ def _draw_basilisk(ax, result, kind: str, signal: str, handles: list, y=None) ->
     t = np.asarray(resp.t, float).reshape(-1)
     if signal == "error":
         y = np.maximum(y, 1e-9)
+    pulse = result.scene.manoeuvre.disturbance
+    if pulse is not None and pulse.start < t[-1]:
+        # Basilisk flies the slew and the pulse together, flexsat's slew curves the slew alone
+        end = t[-1] if pulse.length is None else min(pulse.start + pulse.length, t[-1])
+        handles.append(ax.axvspan(pulse.start, end, color=BASILISK_COLOUR, alpha=0.08, lw=0,
+                                  label="disturbance pulse (in Basilisk's run only)"))
     handles += (ax.semilogy if signal == "error" else ax.plot)(
         *envelope(t, y), BASILISK_STYLE, color=BASILISK_COLOUR, lw=1.6,
         label=f"Basilisk: {design_label(variant)}, nonlinear", zorder=3)
@@ -392,7 +414,7 @@ def plot_slew_axes(result, path: Path, kind: str) -> str:
     if kind in result.basilisk:
         caption += ("; dotted black: Basilisk's nonlinear run of the design chains (the whole "
                     "manoeuvre, three-axis flight software at its sample time; the torques it "
-                    "commands)")
+                    "commands)" + _basilisk_caption_note(result))
     return caption + (". Solid: loop on the truth model, dashed: on the design model; one "
                       "colour per design model; red: unstable.")
 

@@ -718,6 +718,7 @@ def _basilisk(data: dict) -> list:
                            if v["relative"] is not None else _fmt(v["peak_difference"], 3))
             out.append(row)
         b.append(("p", f"{controller_label(kind)}: {e['summary']}"))
+        b += [("p", f"{controller_label(kind)}: {note}.") for note in e.get("notes", [])]
         b += basilisk_wheel_blocks(kind, e)
     b.append(("table", header, out))
     return b

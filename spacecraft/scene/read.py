@@ -254,9 +254,16 @@ key                                    unit       meaning
                                                   the manoeuvre also in Basilisk, on the design
                                                   chains (needs ``flexsat[basilisk]``)
 ``simulator.sample_rate``              Hz         Basilisk's flight-software rate; default the
-                                                  controller's, else 30 per crossover period
+                                                  controller's, else 30 per period of the
+                                                  crossover or of the controller's fastest
+                                                  pole where the loop has gain
 ``simulator.dt``                       s          Basilisk's RK4 step (divides the sample
-                                                  time); default from the highest mode
+                                                  time; refused beyond RK4's stability limit,
+                                                  naming the largest stable step); default
+                                                  accurate up to the flight software's Nyquist
+                                                  frequency and stable above, a chain's
+                                                  torsion above its sampling frequency held
+                                                  rigid (the report says what it costs)
 ``simulator.reaction_wheel.spin_inertia``  kg m^2  torque through a reaction wheel about z
                                                   (three-axis: one on each hub axis)
 ``simulator.reaction_wheel.max_torque``  N m      its motor torque limit; default none
