@@ -42,8 +42,6 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from controllers.signals import THREE_AXIS
-
 __all__ = ["GivenController", "INPUTS", "OUTPUTS", "INPUTS_3D", "OUTPUTS_3D", "channel_names",
            "controller_record", "read_given", "given_state_space"]
 
@@ -51,10 +49,12 @@ __all__ = ["GivenController", "INPUTS", "OUTPUTS", "INPUTS_3D", "OUTPUTS_3D", "c
 INPUTS = ("theta_ref", "theta", "omega")
 #: Its output (the row of C and D).
 OUTPUTS = ("torque",)
-#: Inputs of a three-axis given controller, in the order of the columns of B and D.
-INPUTS_3D = THREE_AXIS.refs + THREE_AXIS.thetas + THREE_AXIS.omegas
+#: Inputs of a three-axis given controller, in the order of the columns of B and D: the
+#: three-axis controller signals of :mod:`controllers.signals` (written out here so that
+#: reading a scene does not import the control library).
+INPUTS_3D = tuple(f"{name}_{axis}" for name in INPUTS for axis in "xyz")
 #: Its outputs (the rows of C and D).
-OUTPUTS_3D = THREE_AXIS.torques
+OUTPUTS_3D = tuple(f"torque_{axis}" for axis in "xyz")
 _KEYS = ("kind", "A", "B", "C", "D")
 
 

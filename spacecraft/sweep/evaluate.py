@@ -27,6 +27,16 @@ loop's rule, and held: every sample's truth model has as many modes. Where the e
 is on, the report gives the largest difference between the truth model's and the exact beam's
 modulus margins over the samples, and the number of verdicts they disagree on.
 
+A three-axis scene (a 3 x 3 hub inertia) is swept through the same loop: its verdict is the
+multiloop one (:class:`controllers.margins.MultiLoopMargins`): the gain, phase and modulus
+margins of each axis' loop at a time (``truth_gain_margin_x``...), the disk margin and its
+gain and phase (``truth_disk_margin``...), the smallest singular value of the return
+difference I + L, and, as the summary the report, the worst-case search and every ranking
+use, ``truth_gain_margin``, ``truth_phase_margin`` (the least over the three loops at a time)
+and ``truth_modulus_margin`` (the least of the loops at a time and of the smallest singular
+value of I + L: never above any of them); the slew's torque and attitude errors per axis
+(``peak_torque_x``...). The exact beam's verdict is the same through W6 (``exact_*``).
+
 What a sample records, so that every verdict can be read and checked:
 
 * margins signed by the verdict (:func:`signed_margin`): ``|m|`` for a stable loop, ``-|m|`` for
@@ -67,9 +77,9 @@ from ..scene.read import SceneError, load_scene
 from ..scene.reader import shorten
 from .parameters import SweepError, SweepSpec, apply_values
 
-__all__ = ["Context", "METRICS", "STATUSES", "SAMPLE_GRID", "prepare", "evaluate",
-           "evaluate_batch", "evaluate_scene", "controller_description", "columns",
-           "signed_margin"]
+__all__ = ["Context", "METRICS", "THREE_AXIS_METRICS", "STATUSES", "SAMPLE_GRID", "prepare",
+           "evaluate", "evaluate_batch", "evaluate_scene", "controller_description", "columns",
+           "signed_margin", "summary_margins"]
 
 #: Columns of a sample's result: name -> (kind, unit, meaning). Kinds: "float", "int", "bool",
 #: "str". "truth_*": hub + truncated beams (eigenvalue verdict); "exact_*": hub + exact beams
@@ -111,10 +121,43 @@ METRICS: dict[str, tuple[str, str, str]] = {
     "warning": ("str", "-", "first warning raised while evaluating it (empty: none)"),
     "seconds": ("float", "s", "evaluation time"),
 }
+
+def _three_axis_metrics() -> dict[str, tuple[str, str, str]]:
+    out: dict[str, tuple[str, str, str]] = {}
+    for prefix, model in (("truth", "the truth model"), ("exact", "the exact beam")):
+        for axis in "xyz":
+            loop = f"the loop at a time about {axis} on {model}, signed"
+            out[f"{prefix}_gain_margin_{axis}"] = ("float", "dB", f"gain margin of {loop}")
+            out[f"{prefix}_phase_margin_{axis}"] = ("float", "deg", f"phase margin of {loop}")
+            out[f"{prefix}_modulus_margin_{axis}"] = ("float", "-",
+                                                      f"modulus margin of {loop}")
+        out[f"{prefix}_disk_margin"] = ("float", "-", f"disk margin alpha (all loops at once) "
+                                                      f"on {model}, signed")
+        out[f"{prefix}_disk_gain_margin"] = ("float", "dB", f"gain margin of the disk margin on "
+                                                            f"{model}, signed")
+        out[f"{prefix}_disk_phase_margin"] = ("float", "deg", f"phase margin of the disk margin "
+                                                              f"on {model}, signed")
+        out[f"{prefix}_min_singular_value"] = ("float", "-", "smallest singular value of the "
+                                                             f"return difference I + L on "
+                                                             f"{model}, signed")
+    for axis in "xyz":
+        out[f"peak_torque_{axis}"] = ("float", "N*m", f"peak torque about {axis} during the slew")
+        out[f"peak_attitude_error_{axis}"] = ("float", "rad", f"peak attitude error about "
+                                                              f"{axis} during the slew")
+        out[f"final_attitude_error_{axis}"] = ("float", "rad", f"attitude error about {axis} "
+                                                               "at the end of the slew")
+    return out
+
+
+#: Columns a three-axis sweep records besides :data:`METRICS` (whose summary margins are then
+#: the worst over the axes: module docstring).
+THREE_AXIS_METRICS = _three_axis_metrics()
+METRICS.update(THREE_AXIS_METRICS)
 #: Values of the ``status`` column.
 STATUSES = ("settles", "not settled", "slew unfinished", "unstable", "diverges", "stable",
             "failed")
-_TIME_METRICS = TIME_METRICS
+_TIME_METRICS = TIME_METRICS + tuple(k for k in THREE_AXIS_METRICS
+                                      if not k.startswith(("truth_", "exact_")))
 _PER_SAMPLE = ("controller",)
 _PD = ("pd_kp", "pd_kd")
 _EXACT = tuple(k for k in METRICS if k.startswith("exact_"))
@@ -155,6 +198,8 @@ class Context:
         Close the loop on the exact beams too.
     time_responses : bool
         The scene has a manoeuvre (slew metrics).
+    three_axis : bool
+        A three-axis scene (the multiloop verdict's columns, :data:`THREE_AXIS_METRICS`).
     """
 
     base: dict
@@ -168,21 +213,25 @@ class Context:
     exact: bool = False
     time_responses: bool = False
     nominal_record: dict | None = None
+    three_axis: bool = False
 
     def columns(self) -> list[str]:
         """The metric columns this sweep records."""
         return columns(self.exact, self.time_responses, per_sample=self.design == "per-sample",
-                       controller=self.controller)
+                       controller=self.controller, three_axis=self.three_axis)
 
 
 def columns(exact: bool, time_responses: bool, *, per_sample: bool = False,
-            controller: str = "lqr") -> list[str]:
+            controller: str = "lqr", three_axis: bool = False) -> list[str]:
     """Metric columns of a sweep with/without the exact reference and the slew; the
-    controller's columns with ``design = "per-sample"`` (the PD's gains for a PD)."""
+    controller's columns with ``design = "per-sample"`` (a planar PD's gains for a PD); the
+    multiloop verdict's and the per-axis columns of a three-axis sweep."""
+    pd_gains = controller == "pd" and not three_axis
     return [k for k in METRICS if (exact or k not in _EXACT)
             and (time_responses or k not in _TIME_METRICS)
             and (per_sample or k not in _PER_SAMPLE + _PD)
-            and (controller == "pd" or k not in _PD)]
+            and (pd_gains or k not in _PD)
+            and (three_axis or k not in THREE_AXIS_METRICS)]
 
 
 def signed_margin(value, stable) -> float:
@@ -194,22 +243,60 @@ def signed_margin(value, stable) -> float:
 
 
 def controller_description(tuned, kind: str) -> dict:
-    """The record of a tuned controller: its numbers, and a PD's gains ``Kp``, ``Kd``."""
+    """The record of a tuned controller: its numbers, and a PD's gains ``Kp`` [N m/rad], ``Kd``
+    [N m s/rad] (floats; a three-axis PD's 3 x 3 gain matrices as lists of rows)."""
     record = controller_record(tuned.controller, kind)
     if kind == "pd" and "Kp" in tuned.description:
-        record["Kp"] = float(tuned.description["Kp"])
-        record["Kd"] = float(tuned.description["Kd"])
+        for name in ("Kp", "Kd"):
+            gain = np.asarray(tuned.description[name], dtype=float)
+            record[name] = float(gain) if gain.ndim == 0 else gain.tolist()
     return record
 
 
+def summary_margins(margins) -> dict:
+    """A loop's gain [dB], phase [deg] and modulus margins, unsigned: a planar loop's own; a
+    three-axis loop's the least over its loops at a time, the modulus margin also over the
+    smallest singular value of the return difference I + L (module docstring), and its
+    per-axis and disk margins as they are.
+
+    Parameters
+    ----------
+    margins : controllers.margins result or mapping
+        :func:`controllers.margins` (planar or :class:`controllers.margins.MultiLoopMargins`)
+        or its dict (:func:`spacecraft.design.verdicts.margins_dict`).
+
+    Returns
+    -------
+    dict
+        ``gain_margin``, ``phase_margin``, ``modulus_margin`` and, for a three-axis loop, the
+        names of :data:`THREE_AXIS_METRICS` without their prefix (None where not given).
+    """
+    m = dict(margins) if isinstance(margins, dict) else dict(margins.as_dict())
+    if "gain_margin_x" not in m:
+        return {k: m.get(k) for k in ("gain_margin", "phase_margin", "modulus_margin")}
+
+    def least(names):
+        values = [float(m[k]) for k in names if m.get(k) is not None]
+        values = [v for v in values if not math.isnan(abs(v))]
+        return min((abs(v) for v in values), default=None)
+
+    out = {"gain_margin": least([f"gain_margin_{a}" for a in "xyz"]),
+           "phase_margin": least([f"phase_margin_{a}" for a in "xyz"]),
+           "modulus_margin": least([f"modulus_margin_{a}" for a in "xyz"]
+                                   + ["min_singular_value"])}
+    for key in THREE_AXIS_METRICS:
+        name = key.split("_", 1)[1]
+        if key.startswith("truth_"):
+            out[name] = m.get(name)
+    return out
+
+
 def _margins(prefix: str, verdict) -> dict:
-    m = verdict.margins
     stable = bool(verdict.stable)
     out = {f"{prefix}_stable": stable,
-           f"{prefix}_n_unstable_poles": int(verdict.n_unstable_poles),
-           f"{prefix}_gain_margin": signed_margin(m.gain_margin, stable),
-           f"{prefix}_phase_margin": signed_margin(m.phase_margin, stable),
-           f"{prefix}_modulus_margin": signed_margin(m.modulus_margin, stable)}
+           f"{prefix}_n_unstable_poles": int(verdict.n_unstable_poles)}
+    out.update({f"{prefix}_{k}": signed_margin(v, stable)
+                for k, v in summary_margins(verdict.margins).items()})
     if verdict.least_damping_ratio is not None:
         out[f"{prefix}_least_damping_ratio"] = float(verdict.least_damping_ratio)
     return out
@@ -236,7 +323,7 @@ def evaluate_scene(context: Context, scene) -> dict:
         record = controller_description(tuned, context.controller)
         out["controller"] = json.dumps({k: v for k, v in record.items()
                                         if k not in ("Kp", "Kd")})
-        if "Kp" in record:
+        if "Kp" in record and not context.three_axis:
             out["pd_kp"], out["pd_kd"] = record["Kp"], record["Kd"]
     exact_frd = loop.exact_reference_frd(**SAMPLE_GRID) if context.exact else None
     c = loop.closed_loops(context.variant, context.controller, controller=K,
@@ -257,7 +344,9 @@ def evaluate_scene(context: Context, scene) -> dict:
             # exact beam's, and a slew's numbers are not those of an unstable loop
             status = {**status, "status": "unstable"}
             values, _ = withheld_metrics(values, status)
-        out.update({k: None if values[k] is None else float(values[k])
+        gone = status["status"] in ("unstable", "diverges")
+        # an unstable loop's time metrics are withheld, the per-axis ones with the rest
+        out.update({k: None if values[k] is None or gone else float(values[k])
                     for k in _TIME_METRICS if k in values})
         out["status"] = status["status"]
     else:
@@ -393,11 +482,6 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
     # a swept key the scene leaves out is nominally the centre of its distribution
     raw = apply_values(raw, spec.parameters, spec.nominal)
     scene = load_scene(raw, source=source)
-    if scene.three_axis:
-        raise SweepError(f"{source}: hub.inertia is a 3 x 3 tensor: a three-axis scene cannot "
-                         "be swept yet (a sample is the planar design loop: one torque, theta "
-                         "and omega about z); sweep a planar scene, or run this one with "
-                         "flexsat run")
     flown = flown_keys(scene)
     if flown:
         raise SweepError(f"{source}: {flown[0]}: a sweep's sample is the ideal slew (the step "
@@ -418,7 +502,8 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
                       variant=variant, controller=kind, n_modes=n_modes,
                       exact=(trimmed.outputs.exact_reference and trimmed.has_beam_truth
                              and trimmed.controller.sample_time is None),
-                      time_responses=trimmed.manoeuvre is not None)
+                      time_responses=trimmed.manoeuvre is not None,
+                      three_axis=trimmed.three_axis)
     if spec.design == "nominal":
         tuned = DesignLoop(trimmed).tuned(variant, kind, n_modes)
         context.nominal_controller = tuned.controller

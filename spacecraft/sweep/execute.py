@@ -97,7 +97,10 @@ def schema(context: Context):
     kinds = {"float": pa.float64(), "int": pa.int64(), "bool": pa.bool_(), "str": pa.string()}
     fields = [pa.field("sample", pa.int64(), nullable=False)]
     fields += [pa.field(p.key, pa.float64(), nullable=False) for p in context.parameters]
-    fields += [pa.field(name, kinds[METRICS[name][0]]) for name in context.columns()]
+    # each metric's unit and meaning in words travel with its column (the field's metadata)
+    fields += [pa.field(name, kinds[METRICS[name][0]],
+                        metadata={"unit": METRICS[name][1], "meaning": METRICS[name][2]})
+               for name in context.columns()]
     return pa.schema(fields)
 
 

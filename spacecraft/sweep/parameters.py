@@ -44,6 +44,17 @@ leaves at its default (``appendages.rod.beam.damping_ratio``) may be swept too. 
 the scene with these numbers replaced, validated by :func:`spacecraft.scene.read.load_scene` like any
 scene (so every bound a scene has applies to every sample).
 
+Three-axis scenes are swept the same way, by the indices of their arrays: an entry of the hub's
+inertia tensor (``hub.inertia[0][0]``; an off-diagonal entry ``hub.inertia[0][1]`` is the
+product of inertia and moves ``hub.inertia[1][0]`` with it, the tensor stays symmetric), a
+mount's position (``appendages.<name>.position[2]``) or Euler angle [deg]
+(``appendages.<name>.orientation[2]``, the cant of a wing about its own axis with the ``"ZYX"``
+sequence), any section property of a beam (``appendages.<name>.beam.thickness``,
+``...youngs_modulus``, ``...wall_thickness``). A sample whose inertia tensor is no rigid body's
+(not positive definite, or its principal moments break the triangle inequality) is refused by
+the scene reader, so it is a failed sample with that reason, counted apart; a box whose end
+alone reaches one refuses the sweep (:func:`check_box`).
+
 Distributions (the worst-case box in brackets)
 
 * ``{distribution = "uniform", low, high}`` [low, high];
@@ -87,7 +98,7 @@ from ..scene.read import SceneError, load_scene
 
 __all__ = [
     "SweepError", "Parameter", "SweepSpec", "read_sweep", "resolve_key", "numeric_keys",
-    "apply_values", "check_box", "MAX_SAMPLES", "METHODS", "DESIGNS", "DISTRIBUTIONS", "WORST_METRICS",
+    "apply_values", "mirror_path", "check_box", "MAX_SAMPLES", "METHODS", "DESIGNS", "DISTRIBUTIONS", "WORST_METRICS",
     "BOX_SIGMAS",
 ]
 
@@ -270,17 +281,46 @@ def _get(raw, path):
     return node
 
 
+def mirror_path(path: tuple, raw: Mapping) -> tuple | None:
+    """The symmetric partner of an off-diagonal entry of an inertia tensor, or None.
+
+    An inertia tensor (the hub's ``inertia`` or a tip body's, a 3 x 3 array) is symmetric: its
+    entry ``[i][j]``, i != j, is the product of inertia of both ``[i][j]`` and ``[j][i]``, and a
+    sweep moves both (:func:`apply_values`).
+
+    Parameters
+    ----------
+    path : tuple
+        A parameter's place in the scene mapping (:func:`resolve_key`).
+    raw : mapping
+        The scene mapping.
+    """
+    if len(path) < 3 or path[-3] != "inertia" or not all(
+            isinstance(k, int) and not isinstance(k, bool) for k in path[-2:]):
+        return None
+    i, j = path[-2:]
+    tensor = _get(raw, path[:-2])
+    if i == j or not isinstance(tensor, list) or len(tensor) != 3 or not all(
+            isinstance(row, list) and len(row) == 3 for row in tensor):
+        return None
+    return (*path[:-2], j, i)
+
+
 def apply_values(raw: Mapping, parameters: Sequence["Parameter"], values) -> dict:
-    """A deep copy of the scene mapping with each parameter set to its value (file units)."""
+    """A deep copy of the scene mapping with each parameter set to its value (file units); an
+    off-diagonal entry of an inertia tensor sets its symmetric partner too
+    (:func:`mirror_path`)."""
     out = copy.deepcopy(dict(raw))
     for p, value in zip(parameters, values):
-        node = out
-        for step in p.path[:-1]:
-            node = node[step]
         value = float(value)
         if p.integer and value.is_integer():
             value = int(value)
-        node[p.path[-1]] = value
+        mirror = mirror_path(p.path, out)
+        for path in (p.path,) if mirror is None else (p.path, mirror):
+            node = out
+            for step in path[:-1]:
+                node = node[step]
+            node[path[-1]] = value
     return out
 
 
@@ -658,6 +698,13 @@ def read_sweep(table, raw: Mapping, source: str = "<dict>", *,
         raise SweepError(f"{where}.parameters: missing: give at least one key path with its "
                          "distribution")
     params = tuple(_read_parameter(k, v, raw, source) for k, v in parameters.items())
+    paths = {p.path: p.key for p in params}
+    for p in params:
+        mirror = mirror_path(p.path, raw)
+        if mirror is not None and mirror in paths:
+            raise SweepError(f"{source}: sweep.parameters.{p.key!r} and {paths[mirror]!r}: the "
+                             "inertia tensor is symmetric, one product of inertia moves both "
+                             "entries; sweep one of them")
     # blame each key for what it alone breaks, before any combination is tried
     try:
         load_scene(raw, source=source)

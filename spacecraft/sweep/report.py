@@ -44,13 +44,16 @@ from ..report.results import to_json
 from .evaluate import METRICS
 
 __all__ = ["clopper_pearson", "summarise", "write_report", "spearman", "CONFIDENCE",
-           "format_number", "instability", "instability_text"]
+           "format_number", "instability", "instability_text", "metric_label"]
 
 #: Confidence level of the interval on the probability of instability.
 CONFIDENCE = 0.95
 _HISTOGRAMS = ("exact_modulus_margin", "exact_phase_margin", "exact_gain_margin",
                "truth_modulus_margin", "truth_phase_margin", "truth_gain_margin", "overshoot",
                "settling_time", "peak_tip_deflection", "peak_torque")
+#: Histograms a three-axis sweep adds: the multiloop verdict (all loops at once).
+_HISTOGRAMS_3D = ("exact_disk_margin", "exact_disk_phase_margin", "exact_min_singular_value",
+                  "truth_disk_margin", "truth_disk_phase_margin", "truth_min_singular_value")
 
 
 def clopper_pearson(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
@@ -204,7 +207,8 @@ def summarise(table, context, spec, *, nominal: dict, worst: list, timings: dict
         "loop": {"controller": context.controller, "design_model": context.variant,
                  "design": context.design, "n_modes": context.n_modes,
                  "exact_reference": context.exact,
-                 "nominal_controller": context.nominal_record},
+                 "nominal_controller": context.nominal_record,
+                 "three_axis": context.three_axis},
         "executor": executor,
         "samples": {"total": n, "evaluated": n_ok, "failed": int(errors.sum()),
                     "status": statuses, "evaluated_now": info["evaluated"],
@@ -260,13 +264,41 @@ def _log_axis(axis) -> None:
     axis.set_minor_formatter(NullFormatter())
 
 
-def _label(name: str) -> str:
+_MODELS = {"truth": "truth model", "exact": "exact beam"}
+_WORDS = {"min_singular_value": "smallest singular value of I + L",
+          "n_unstable_poles": "unstable poles", "least_damping_ratio": "least damping ratio"}
+
+
+def metric_label(name: str, three_axis: bool = False) -> str:
+    """A metric column in words, with its unit: ``exact_modulus_margin_x`` -> "modulus margin
+    about x, exact beam (signed)"; a three-axis summary margin says it is the least over the
+    axes ("modulus margin, least of the axes and I + L, exact beam (signed)")."""
     unit = METRICS[name][1] if name in METRICS else ""
-    signed = " (signed)" if name.endswith("_margin") else ""
-    return f"{name}{signed} [{unit}]" if unit and unit != "-" else f"{name}{signed}"
+    model = ""
+    rest = name
+    for prefix, words in _MODELS.items():
+        if name.startswith(prefix + "_"):
+            model, rest = words, name[len(prefix) + 1:]
+    axis = ""
+    if rest[-2:] in ("_x", "_y", "_z"):
+        axis, rest = f" about {rest[-1]}", rest[:-2]
+    text = _WORDS.get(rest, rest.replace("_", " ")) + axis
+    if three_axis and model and not axis and rest in ("gain_margin", "phase_margin"):
+        text += ", least of the axes"
+    elif three_axis and model and not axis and rest == "modulus_margin":
+        text += ", least of the axes and I + L"
+    if model:
+        text += f", {model}"
+    signed = " (signed)" if rest.endswith(("_margin", "singular_value")) else ""
+    return f"{text}{signed} [{unit}]" if unit and unit != "-" else f"{text}{signed}"
 
 
 def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
+    three_axis = context.three_axis
+
+    def _label(name):
+        return metric_label(name, three_axis)
+
     cols = table.to_pydict()
     ok = np.array([not e for e in cols["error"]], dtype=bool)
     if not ok.any():
@@ -274,7 +306,7 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
     folder.mkdir(parents=True, exist_ok=True)
     files = []
     stable = np.array([bool(s) for s, good in zip(cols["stable"], ok) if good])
-    names = [n for n in _HISTOGRAMS if n in cols]
+    names = [n for n in _HISTOGRAMS + (_HISTOGRAMS_3D if three_axis else ()) if n in cols]
     # histograms
     k = len(names)
     ncol = 3
@@ -428,6 +460,8 @@ def _blocks(summary: dict, images: list) -> list:
     if loop.get("nominal_controller"):
         c = loop["nominal_controller"]
         gains = (f": Kp = {_f(c['Kp'], 6)} N m/rad, Kd = {_f(c['Kd'], 6)} N m s/rad"
+                 if "Kp" in c and not isinstance(c["Kp"], list) else
+                 ": 3 x 3 gain matrices Kp [N m/rad], Kd [N m s/rad] in summary.json"
                  if "Kp" in c else "")
         b.append(("h2", "Controller"))
         b.append(("p", f"The nominal {c['kind']} controller held for every sample, "
@@ -437,7 +471,8 @@ def _blocks(summary: dict, images: list) -> list:
         b.append(("h2", "Controller"))
         b.append(("p", "Each sample's controller is in its row of the Parquet table (column "
                        "controller: kind and state-space matrices"
-                       + ("; pd_kp, pd_kd: the PD's gains" if loop["controller"] == "pd" else "")
+                       + ("; pd_kp, pd_kd: the PD's gains" if loop["controller"] == "pd"
+                          and "pd_kp" in s["metrics"] else "")
                        + ")."))
     if s["worst_case"]:
         b.append(("h2", "Worst case"))
@@ -476,9 +511,17 @@ def _blocks(summary: dict, images: list) -> list:
     b.append(("p", "Over the samples evaluated. Margins are signed (negative: unstable); "
                    "withheld: time metrics of slews that do not settle (settling time) or of "
                    "unstable loops (all), as the run's report withholds them."))
-    b.append(("table", ["metric", "unit", "min", "5 %", "median", "95 %", "max", "infinite",
-                        "withheld"],
-              [[k, v["unit"], bad(_f(v.get("min"))) if k.endswith("_margin") and
+    if loop.get("three_axis"):
+        b.append(("p", "Three axes: each loop at a time about x, y and z, and all loops at "
+                       "once (the disk margin; the smallest singular value of the return "
+                       "difference I + L). The gain and phase margins without an axis are the "
+                       "least of the three loops at a time; the modulus margin without an axis "
+                       "the least of those and of the smallest singular value of I + L (the "
+                       "one the sensitivity ranking and the worst case use)."))
+    b.append(("table", ["metric", "meaning", "unit", "min", "5 %", "median", "95 %", "max",
+                        "infinite", "withheld"],
+              [[k, metric_label(k, bool(loop.get("three_axis"))).split(" [")[0], v["unit"],
+                bad(_f(v.get("min"))) if k.endswith("_margin") and
                 v.get("min") is not None and v["min"] < 0 else _f(v.get("min")),
                 _f(v.get("p5")), _f(v.get("median")), _f(v.get("p95")), _f(v.get("max")),
                 str(v["infinite"]), str(v["withheld"])]

@@ -51,7 +51,7 @@ import re
 import numpy as np
 
 from ..scene.read import SceneError
-from .evaluate import signed_margin
+from .evaluate import signed_margin, summary_margins
 from .parameters import SweepSpec, apply_values
 
 __all__ = ["CAP", "DENSE_GRID", "WorstCase", "objective", "search", "worst_scene", "to_toml",
@@ -356,11 +356,10 @@ def to_toml(mapping: dict, header: str = "") -> str:
 
 
 def _verdict(v) -> dict:
-    m = v.margins
     stable = bool(v.stable)
     return {"stable": stable, "n_unstable_poles": int(v.n_unstable_poles),
-            **{k: signed_margin(getattr(m, k), stable)
-               for k in ("gain_margin", "phase_margin", "modulus_margin")}}
+            **{k: signed_margin(value, stable)
+               for k, value in summary_margins(v.margins).items()}}
 
 
 #: The grid of the dense check of a worst case (:func:`verify`): points per decade and across
@@ -414,5 +413,5 @@ def verify(context, values: dict, raw: dict, source: str) -> dict:
 
 def _signed(verdict: dict) -> dict:
     stable = verdict.get("stable")
-    return {"stable": stable, **{k: signed_margin(verdict.get(k), stable)
-                                 for k in ("gain_margin", "phase_margin", "modulus_margin")}}
+    return {"stable": stable, **{k: signed_margin(value, stable)
+                                 for k, value in summary_margins(verdict).items()}}

@@ -146,6 +146,15 @@ def test_a_three_axis_controller_given_back_runs_the_same_loop():
         assert m2[name] == pytest.approx(m1[name], rel=1e-12, abs=1e-15), name
 
 
+def test_the_three_axis_signals_are_the_controllers_convention():
+    from controllers.signals import THREE_AXIS
+
+    from spacecraft.scene.given import INPUTS_3D, OUTPUTS_3D
+
+    assert INPUTS_3D == THREE_AXIS.refs + THREE_AXIS.thetas + THREE_AXIS.omegas
+    assert OUTPUTS_3D == THREE_AXIS.torques
+
+
 def test_a_three_axis_record_keeps_the_signal_order():
     """A controller whose inputs and outputs come in another order is recorded in the order of
     channel_names, and read back to the same transfer (D permuted, not copied)."""
