@@ -24,6 +24,14 @@ on a 100 kg hub, LQR + Kalman tuned on the fitted 3-body chain and held (design 
    Parquet, the report without plots), no worst-case search; then the shipped scene as shipped
    (1000 samples and the worst-case searches, their worst cases).
 
+With ``--scene NAME`` (an embedded sweep scene, e.g. ``three_axis``: the three-axis spacecraft,
+its PD + notch held, every sample judged on the exact beams through W6) the same measures of
+that scene: 1. one sample (CPU with and without the exact-beam verdict), 4. ``--big`` samples
+end to end on a fresh LocalCluster of 2 workers, and the command as a user runs it
+(``flexsat sweep NAME --workers 2 --samples --cli-samples`` with its worst-case search, in a
+fresh process); the 10,000-sample figure is scaled from the end-to-end run (module function
+:func:`scaled`), written to ``sweep_NAME.json`` and ``sweep_NAME.md``.
+
 Every figure carries the load average (``os.getloadavg``) before and after it: the machine has
 2 cores and is shared, so a speed-up measured under load measures the load.
 
@@ -34,6 +42,8 @@ Modes::
                                                 # CPU share (a shared machine: ~3 min)
     python benchmarks/bench_sweep.py --quick    # a smoke run of everything (~1 min)
     python benchmarks/bench_sweep.py --only-per-sample
+    python benchmarks/bench_sweep.py --scene three_axis --big 400 --cli-samples 200
+                                                # a three-axis sweep scene (sweep_three_axis.*)
     python benchmarks/bench_sweep.py --ten-thousand-before PATH [--big N]
                                                 # 4. only, with the checkout at PATH (before
                                                 # a change) and this one, one after the other
@@ -68,13 +78,13 @@ def load() -> list[float]:
     return [round(x, 2) for x in os.getloadavg()]
 
 
-def per_sample(n: int) -> dict:
+def per_sample(n: int, scene: str | None = None) -> dict:
     import spacecraft.sweep as S
     from spacecraft.design.loop import run
     from spacecraft.scene.read import load_scene
     from spacecraft.sweep.evaluate import apply_values, evaluate, prepare
 
-    raw, spec, source = S.load_sweep(None, samples=n)
+    raw, spec, source = S.load_sweep(scene, samples=n)
     context = prepare(raw, spec, source)
     values = spec.values()
     evaluate(context, values[0])
@@ -102,12 +112,12 @@ def per_sample(n: int) -> dict:
     profiler.disable()
     stream = io.StringIO()
     pstats.Stats(profiler, stream=stream).strip_dirs().sort_stats("cumulative").print_stats(25)
-    scene = load_scene(apply_values(context.base, context.parameters, spec.nominal))
-    run(scene)
+    nominal = load_scene(apply_values(context.base, context.parameters, spec.nominal))
+    run(nominal)
     runner_times = []
     for _ in range(3):
         t = time.perf_counter()
-        run(scene)
+        run(nominal)
         runner_times.append(time.perf_counter() - t)
     return {"median_s": statistics.median(times), "min_s": min(times), "max_s": max(times),
             "cpu_median_s": statistics.median(cpu),
@@ -221,7 +231,7 @@ def speed_up(n: int, repeats: int) -> dict:
     return out
 
 
-def ten_thousand(n: int) -> dict:
+def ten_thousand(n: int, scene: str | None = None) -> dict:
     """``run_sweep`` of n samples end to end on a fresh LocalCluster of 2 workers (module
     docstring, 4): the cluster's start, the workers' imports, every sample to Parquet, the
     report without plots."""
@@ -234,7 +244,7 @@ def ten_thousand(n: int) -> dict:
         start = time.perf_counter() - t
         try:
             run = _accounted(client, lambda: run_sweep(
-                None, samples=n, worst_case=False, out=Path(tmp) / "sweep", plots=False,
+                scene, samples=n, worst_case=False, out=Path(tmp) / "sweep", plots=False,
                 progress=False, client=client))
         finally:
             client.close()
@@ -290,6 +300,125 @@ def before_and_after(before: Path, n: int) -> int:
         markdown_table(["checkout", "wall", "workers' CPU a sample", "client + scheduler CPU",
                         "failed samples", "load average (1, 5, 15 min)"], rows), ""])
     (RESULTS / "sweep_end_to_end.md").write_text(text + "\n")
+    print(text)
+    return 0
+
+
+def scaled(end_to_end: dict, n: int = 10_000, workers: int = 2) -> dict:
+    """The end-to-end time of n samples scaled from a shorter run: its fixed part (cluster
+    start and what the sweep does before and after its samples: prepare, the nominal
+    evaluation, the report) plus n times the workers' CPU a sample over the workers (each
+    worker busy all the time, as in the measured run when its busy fraction is near 1)."""
+    fixed = end_to_end["cluster_start_s"] + sum(
+        v for k, v in end_to_end["timings"].items()
+        if k not in ("samples", "per_sample_median", "per_sample_mean") and v is not None)
+    per_sample = end_to_end["workers_cpu_per_sample_s"]
+    busy = end_to_end["workers_cpu_s"] / (workers * end_to_end["timings"]["samples"])
+    return {"samples": n, "fixed_s": fixed, "workers_cpu_per_sample_s": per_sample,
+            "workers": workers, "measured_busy_fraction": busy,
+            "estimate_s": fixed + n * per_sample / workers}
+
+
+def command_line(scene: str, n: int) -> dict:
+    """``flexsat sweep SCENE --samples n --workers 2`` in a fresh process, as a user runs it
+    (its own LocalCluster, the worst-case search and its checks, the report with plots)."""
+    import json
+    import subprocess
+
+    here = Path(__file__).resolve().parent.parent
+    with tempfile.TemporaryDirectory() as tmp:
+        before = load()
+        t = time.perf_counter()
+        out = subprocess.run([sys.executable, "-m", "spacecraft.cli", "sweep", scene,
+                              "--samples", str(n), "--workers", "2", "--quiet", "--json",
+                              "--out", str(Path(tmp) / "sweep")], cwd=str(here),
+                             capture_output=True, text=True,
+                             env=dict(os.environ, PYTHONPATH=str(here)))
+        wall = time.perf_counter() - t
+        after = load()
+    if out.returncode != 0:
+        raise RuntimeError(out.stderr[-3000:])
+    s = json.loads(out.stdout)
+    return {"samples": n, "wall_s": wall, "exit_code": out.returncode, "load_before": before,
+            "load_after": after, "executor": s["executor"], "timings": s["timings"],
+            "counts": {k: s["samples"][k] for k in ("total", "evaluated", "failed", "status")},
+            "instability": s["instability"], "sensitivity": s["sensitivity"]["ranking"],
+            "worst_case": [{k: w[k] for k in ("metric", "values", "objective", "evaluations",
+                                               "failed", "verification")}
+                           for w in s["worst_case"]],
+            "fidelity_check": s["fidelity_check"]}
+
+
+def scene_benchmark(scene: str, args) -> int:
+    """``--scene NAME`` (module docstring): one sample, ``--big`` samples end to end on 2
+    workers, the command line with its worst case; sweep_NAME.json and .md."""
+    result = {"machine": machine_info(), "scene": scene}
+    print("per sample...", file=sys.stderr)
+    result["per_sample"] = per_sample(args.samples_per_sample, scene)
+    print(f"{args.big} samples end to end...", file=sys.stderr)
+    big = ten_thousand(args.big, scene)
+    big.pop("instability", None)
+    result["end_to_end"] = big
+    result["ten_thousand_scaled"] = scaled(big)
+    if args.cli_samples:
+        print(f"flexsat sweep {scene} --samples {args.cli_samples}...", file=sys.stderr)
+        result["command_line"] = command_line(scene, args.cli_samples)
+    write_json(f"sweep_{scene}.json", result)
+    p, e, x = result["per_sample"], result["end_to_end"], result["ten_thousand_scaled"]
+    rows = [["one sample (median)", f"{p['median_s'] * 1e3:.0f} ms wall, "
+             f"{p['cpu_median_s'] * 1e3:.0f} ms CPU", f"{p['load_before']}"],
+            ["one sample without the exact-beam verdict (CPU)",
+             f"{p['without_exact_cpu_median_s'] * 1e3:.0f} ms", f"{p['load_after']}"],
+            ["spacecraft.run of the sample's one-loop scene (median of 3)",
+             f"{p['runner_run_median_s'] * 1e3:.0f} ms", f"{p['load_after']}"],
+            [f"{e['samples']} samples end to end ({e['executor']}, cluster start "
+             f"{e['cluster_start_s']:.1f} s included)",
+             f"{e['wall_s']:.1f} s; workers' CPU {e['workers_cpu_per_sample_s'] * 1e3:.0f} ms "
+             f"a sample, busy {100 * x['measured_busy_fraction']:.0f} %; client + scheduler "
+             f"CPU {e['client_cpu_s']:.1f} s", f"{e['load_before']} -> {e['load_after']}"],
+            [f"10,000 samples, scaled (fixed {x['fixed_s']:.1f} s + 10,000 x "
+             f"{x['workers_cpu_per_sample_s'] * 1e3:.0f} ms / 2 workers)",
+             f"{x['estimate_s']:.0f} s ({x['estimate_s'] / 60:.1f} min)", ""]]
+    if "command_line" in result:
+        c = result["command_line"]
+        rows.append([f"flexsat sweep {scene} --samples {c['samples']} --workers 2 (worst "
+                     "case, plots)", f"{c['wall_s']:.1f} s, exit {c['exit_code']}",
+                     f"{c['load_before']} -> {c['load_after']}"])
+    machine = result["machine"]
+    lines = [f"# Sweep benchmark: the {scene} sweep scene", "",
+             f"`python benchmarks/bench_sweep.py --scene {scene} --big {args.big} "
+             f"--cli-samples {args.cli_samples}` on {machine['date_utc']} UTC "
+             f"({machine['cpu']}, {machine['nproc']} cores, shared: the load beside every "
+             "figure; the workers' CPU a sample is the measure of the work).", "",
+             markdown_table(["what", "time", "load average (1, 5, 15 min)"], rows), "",
+             "The 10,000-sample figure is scaled, not run: the end-to-end run's fixed part "
+             "(cluster start, prepare, the nominal evaluation, the report) plus 10,000 times "
+             "the workers' CPU a sample shared by 2 workers kept busy (benchmarks/"
+             "bench_sweep.py, scaled()): the two cores free, where the measured run's workers "
+             "got the busy fraction of a core each (the load).", ""]
+    if "command_line" in result:
+        c = result["command_line"]
+        inst = c["instability"]
+        lines += [f"Command line: {c['counts']['total']} samples, {c['counts']['failed']} "
+                  f"failed, statuses {c['counts']['status']}; probability of instability "
+                  f"{inst['probability']} (95 % {inst['interval'][0]:.3g} to "
+                  f"{inst['interval'][1]:.3g}); most influential "
+                  + ", ".join(f"{r['parameter']} ({r['spearman']:.2f})"
+                              for r in c["sensitivity"][:3]) + "."]
+        for w in c["worst_case"]:
+            ver = w["verification"] or {}
+            dense = (ver.get("exact_reference") or {}).get(w["metric"])
+            runner = ((ver.get("runner") or {}).get("exact") or {}).get(w["metric"])
+            lines.append(f"- worst {w['metric']}: signed {w['objective']:.6g} "
+                         f"({w['evaluations']} evaluations) at "
+                         + ", ".join(f"{k} = {v:.6g}" for k, v in w["values"].items())
+                         + f"; on a grid four times as dense {dense}; flexsat run worst.toml "
+                         f"(the same controller given): {runner}")
+        lines.append("")
+    lines += ["## Profile of one sample (cumulative)", "", "```", p["profile"].strip(), "```",
+              ""]
+    text = "\n".join(lines)
+    (RESULTS / f"sweep_{scene}.md").write_text(text + "\n")
     print(text)
     return 0
 
@@ -366,7 +495,13 @@ def main(argv=None) -> int:
     parser.add_argument("--tasks", type=int, default=400)
     parser.add_argument("--big", type=int, default=10_000)
     parser.add_argument("--skip-shipped", action="store_true")
+    parser.add_argument("--scene", metavar="NAME",
+                        help="measure this embedded sweep scene instead (sweep_NAME.json)")
+    parser.add_argument("--cli-samples", type=int, default=200,
+                        help="with --scene: samples of the command-line run (0: skip it)")
     args = parser.parse_args(argv)
+    if args.scene is not None:
+        return scene_benchmark(args.scene, args)
     if args.ten_thousand_before is not None:
         return before_and_after(args.ten_thousand_before.resolve(), args.big)
     if args.only_per_sample:

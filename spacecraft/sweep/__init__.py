@@ -12,6 +12,12 @@ on the probability of instability; margins are signed (negative: unstable) every
 design's controller is recorded, and ``worst.toml`` runs that very controller again
 (``[controller.given]``).
 
+Planar and three-axis scenes are swept alike: a three-axis sample is the same design loop with
+its multiloop verdict (each axis' loop at a time, the disk margin, the return difference I + L;
+on the exact beams through W6), its parameters the inertia tensor's entries (kept symmetric),
+mount positions and angles, section properties (:mod:`.parameters`); the embedded sweep scene
+``three_axis`` is one.
+
 Modules: :mod:`.parameters` (key paths, distributions, sampling), :mod:`.evaluate` (one
 sample), :mod:`.execute` (Dask, batches, Parquet, resume, progress), :mod:`.worst` (worst-case
 search, ``worst.toml``), :mod:`.report` (statistics, plots, files), :mod:`.runner` (the whole
