@@ -9,7 +9,14 @@ an ideal, instantaneous loop: a profile other than ``"step"`` or feedforward
   :func:`controllers.reference_profile` for each design model, ending at ``slew_time``; a
   ``"shaped"`` profile's shaper on the design model's lowest flexible modes
   (:func:`controllers.flexible_modes`, :func:`controllers.mode_shaper`); the feedforward torque
-  J alpha_ref with J the design model's rigid-body inertia. The loop reads theta_ref (and, when
+  J alpha_ref with J the design model's rigid-body inertia. Three axes: the eigen-axis slew
+  about ``manoeuvre.slew_axis`` (theta_ref = e s, omega_ref = e s'), the modes those of the
+  3 x 3 channel torque -> theta, J the inertia tensor and the torque limit on each hub-axis
+  component of J e s''. A flight computer feeds J alpha_ref + omega_ref x J omega_ref (Euler's
+  equation); flexsat's plants are linearised about rest and have no gyroscopic torque, so the
+  loop is fed the part its plant has, J alpha_ref: the linear plant with it and the spacecraft
+  with the whole feedforward see the same (no) rigid-body error; the gyroscopic term's peak
+  |e x J e| max s'^2 is reported (``gyroscopic_peak_torque``). The loop reads theta_ref (and, when
   its controller was tuned with feedforward, omega_ref and torque_ff) at the samples, linearly
   interpolated between them as :class:`controllers.Simulator` reads every input: the difference
   from the exact profile is at most :meth:`controllers.Profile.hold_error` per signal (reported).
@@ -59,8 +66,8 @@ import controllers
 from controllers.signals import tip_outputs
 
 from ..scene.reader import SceneError
-from .responses import (discrete_outputs, disturbance_inputs, outputs_until_overflow,
-                        response_data, time_grid)
+from .responses import (discrete_outputs, disturbance_inputs, disturbance_weights,
+                        outputs_until_overflow, response_data, time_grid)
 
 __all__ = ["flies", "flown_keys", "loop_delay", "build_profile", "close_flown_loop", "FlownManoeuvre", "Flight",
            "check_slew_limits", "wheel_words", "withheld_manoeuvre_metrics", "delay_facts",
@@ -152,14 +159,33 @@ def _base_kind(m) -> str:
     return m.shaper.base if m.profile == "shaped" else m.profile
 
 
-def check_slew_limits(scene, inertia: float, shaper_duration: float = 0.0) -> dict:
+def _inertia_words(inertia, axis) -> str:
+    """The spacecraft's inertia about the slew axis, in words."""
+    if axis is None:
+        return f"the spacecraft's inertia {inertia:.6g} kg m^2"
+    e = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    return (f"the spacecraft's inertia {float(e @ np.asarray(inertia) @ e):.6g} kg m^2 about "
+            "the slew axis")
+
+
+def slew_axis(scene):
+    """The unit eigen-axis of a three-axis scene's slew (hub axes), None for a planar one."""
+    axis = scene.manoeuvre.slew_axis
+    if axis is None:
+        return None
+    e = np.asarray(axis, dtype=float)
+    return e / np.linalg.norm(e)
+
+
+def check_slew_limits(scene, inertia, shaper_duration: float = 0.0) -> dict:
     """Refuse, by key, limits that cannot complete the slew in ``slew_time``.
 
     Parameters
     ----------
     scene : Scene
-    inertia : float, kg m^2
-        The spacecraft's rigid-body inertia about the slew axis.
+    inertia : float or ndarray (3, 3), kg m^2
+        The spacecraft's rigid-body inertia: about the planar axis, or the tensor in hub axes
+        (three axes: the slew is the eigen-axis one about ``manoeuvre.slew_axis``).
     shaper_duration : float, s
         What a shaper adds to the base profile (0 before the shaper is known).
 
@@ -175,12 +201,15 @@ def check_slew_limits(scene, inertia: float, shaper_duration: float = 0.0) -> di
         ``manoeuvre.slew_time`` shorter than either, the shortest time given.
     """
     m = scene.manoeuvre
+    axis = slew_axis(scene)
+    words = _inertia_words(inertia, axis)
     out = {"profile_shortest_time": None, "wheels_shortest_time": None}
     if m.profile != "step":
         base = _base_kind(m)
         shortest = controllers.minimum_time(
             base, m.slew_angle, inertia=inertia, torque_limit=m.torque_limit,
-            rate_limit=m.rate_limit, jerk_limit=m.jerk_limit if base == "smooth" else None)
+            rate_limit=m.rate_limit, jerk_limit=m.jerk_limit if base == "smooth" else None,
+            axis=axis)
         shortest += shaper_duration
         out["profile_shortest_time"] = shortest
         if m.slew_time < shortest * (1.0 - 1e-12):
@@ -188,21 +217,29 @@ def check_slew_limits(scene, inertia: float, shaper_duration: float = 0.0) -> di
                       if shaper_duration > 0 else "")
             raise _error(scene, "manoeuvre.slew_time", f"{m.slew_time:g} s is too short for a "
                          f"{base} slew of {math.degrees(m.slew_angle):g} deg under "
-                         f"{_limits_words(m)} (the spacecraft's inertia {inertia:.6g} kg m^2):"
+                         f"{_limits_words(m)} ({words}):"
                          f" the shortest time they allow is {shortest:.6g} s{shaper}; lengthen "
                          "the slew or raise the limits")
     if scene.wheels is not None:
         wheels = scene.wheels.build()
-        shortest = controllers.shortest_slew_time(wheels, m.slew_angle, inertia)
+        shortest = controllers.shortest_slew_time(wheels, m.slew_angle, inertia, axis=axis)
         out["wheels_shortest_time"] = shortest
         if m.slew_time < shortest * (1.0 - 1e-12):
             raise _error(scene, "manoeuvre.slew_time", f"{m.slew_time:g} s is too short for the "
-                         f"wheels: their torque limit {scene.wheels.torque_limit:.4g} N m and "
-                         f"momentum limit {scene.wheels.momentum_limit:.4g} N m s allow the "
-                         f"{math.degrees(m.slew_angle):g} deg slew (the spacecraft's inertia "
-                         f"{inertia:.6g} kg m^2) in no less than {shortest:.6g} s; lengthen the "
+                         f"wheels: their torque limit {_per_wheel_words(scene.wheels.torque_limit)}"
+                         f" N m and momentum limit "
+                         f"{_per_wheel_words(scene.wheels.momentum_limit)} N m s allow the "
+                         f"{math.degrees(m.slew_angle):g} deg slew ({words}) in no less than "
+                         f"{shortest:.6g} s; lengthen the "
                          "slew or raise wheels.torque_limit / wheels.momentum_limit")
     return out
+
+
+def _per_wheel_words(value) -> str:
+    """A wheel limit as given: one number, or one per wheel."""
+    if isinstance(value, (tuple, list)):
+        return "[" + ", ".join(f"{v:.4g}" for v in value) + "]"
+    return f"{value:.4g}"
 
 
 def build_profile(scene, design_plant, variant: str = "design"):
@@ -213,7 +250,9 @@ def build_profile(scene, design_plant, variant: str = "design"):
     scene : Scene
     design_plant : control.StateSpace
         The design model's plant: its rigid-body inertia scales the feedforward torque and the
-        torque limit, its lowest flexible modes are the ones a ``"shaped"`` profile cancels.
+        torque limit, its lowest flexible modes are the ones a ``"shaped"`` profile cancels
+        (three axes: the modes of the 3 x 3 channel torque -> theta, the slew the eigen-axis
+        one about ``manoeuvre.slew_axis``).
     variant : str
         The design model's label (for messages).
 
@@ -221,9 +260,11 @@ def build_profile(scene, design_plant, variant: str = "design"):
     -------
     profile : controllers.Profile
     facts : dict
-        JSON-ready: ``kind``, ``feedforward``, ``inertia`` [kg m^2], ``end_time`` [s],
+        JSON-ready: ``kind``, ``feedforward``, ``inertia`` [kg m^2] (three axes: the 3 x 3
+        tensor, hub axes), ``axis`` (three axes: the unit slew axis), ``end_time`` [s],
         ``peak_rate`` [rad/s], ``peak_acceleration`` [rad/s^2], ``peak_torque`` [N m] (of the
-        feedforward; None for the step), ``reading`` (how the loop reads the profile:
+        feedforward, three axes the largest hub-axis component of J alpha_ref; None for the
+        step), three axes ``gyroscopic_peak_torque`` [N m] (module docstring), ``reading`` (how the loop reads the profile:
         ``"samples"``, a digital controller; ``"linear"``, a continuous loop interpolating its
         samples; ``"held"``, a continuous controller's delayed loop), ``hold_error`` (per
         reference signal, the largest difference between the profile and its samples linearly
@@ -240,11 +281,15 @@ def build_profile(scene, design_plant, variant: str = "design"):
     """
     m = scene.manoeuvre
     J = controllers.rigid_body_inertia(design_plant)
-    facts: dict = {"kind": m.profile, "feedforward": m.feedforward, "inertia": J,
+    axis = slew_axis(scene)
+    facts: dict = {"kind": m.profile, "feedforward": m.feedforward,
+                   "inertia": J if axis is None else np.asarray(J).tolist(),
                    "end_time": m.slew_time}
+    if axis is not None:
+        facts["axis"] = axis.tolist()
     shaper = None
     if m.profile == "step":
-        profile = controllers.step_reference(m.slew_angle, m.slew_time)
+        profile = controllers.step_reference(m.slew_angle, m.slew_time, axis=axis)
     else:
         if m.profile == "shaped":
             modes = controllers.flexible_modes(design_plant)
@@ -259,16 +304,22 @@ def build_profile(scene, design_plant, variant: str = "design"):
         profile = controllers.reference_profile(
             m.profile, m.slew_angle, m.slew_time, inertia=J, torque_limit=m.torque_limit,
             rate_limit=m.rate_limit, jerk_limit=m.jerk_limit if base == "smooth" else None,
-            shaper=shaper, base=base)
+            shaper=shaper, base=base, axis=axis)
     c = scene.controller
     facts["reading"] = ("samples" if c.sample_time is not None else
                         "held" if c.total_delay > 0 else "linear")
     facts.update(
         end_time=profile.end_time, peak_rate=profile.peak_rate,
         peak_acceleration=profile.peak_acceleration,
-        peak_torque=profile.peak_torque(J) if m.profile != "step" else None,
+        peak_torque=(None if m.profile == "step" else profile.peak_torque(J) if axis is None
+                     else profile.peak_torque(J, gyroscopic=False)),
         hold_error=profile.hold_error(m.step, inertia=J if m.feedforward else None)
         if m.step <= profile.end_time else None)
+    if axis is not None and m.profile != "step":
+        # |e x J e| s'^2 at the peak rate: what a flight computer adds to the feedforward, and
+        # what the plants linearised about rest do not have
+        facts["gyroscopic_peak_torque"] = float(np.max(np.abs(np.cross(axis, J @ axis)))
+                                                * profile.peak_rate ** 2)
     if shaper is not None:
         facts["shaper"] = {
             "kind": m.shaper.kind, "base": m.shaper.base, "duration": shaper.duration,
@@ -411,14 +462,26 @@ class FlownManoeuvre:
         step, as its mean over each step [t, t + h) (exact impulses at its edges)."""
         U = np.zeros((len(labels), T.size))
         if not only_disturbance:
-            wants_ff = controllers.signals.TORQUE_FF in labels
-            references = profile.references(T, J if wants_ff else None)
-            if held is not None and profile.axis is None:
+            wants_ff = any(name == controllers.signals.TORQUE_FF
+                           or name.startswith(controllers.signals.TORQUE_FF + "_")
+                           for name in labels)
+            references = profile.references(T, J if wants_ff else None, gyroscopic=False)
+            if held is not None:
                 a, b = T - 0.5 * held, T + 0.5 * held
-                references["omega_ref"] = (profile.path(b) - profile.path(a)) / held
-                if wants_ff:
-                    references["torque_ff"] = J * (profile.path(b, 1)
-                                                   - profile.path(a, 1)) / held
+                rate = (profile.path(b) - profile.path(a)) / held
+                if profile.axis is None:
+                    references["omega_ref"] = rate
+                    if wants_ff:
+                        references["torque_ff"] = J * (profile.path(b, 1)
+                                                       - profile.path(a, 1)) / held
+                else:
+                    e = profile.axis
+                    Je = np.asarray(J, dtype=float) @ e
+                    acceleration = (profile.path(b, 1) - profile.path(a, 1)) / held
+                    for i, name in enumerate("xyz"):
+                        references[f"omega_ref_{name}"] = e[i] * rate
+                        if wants_ff:
+                            references[f"torque_ff_{name}"] = Je[i] * acceleration
             for name, values in references.items():
                 if name in labels:
                     U[labels.index(name)] = values
@@ -556,7 +619,8 @@ def _held_pulse(labels, manoeuvre, T: np.ndarray, h: float) -> np.ndarray | None
     end = math.inf if d.length is None else d.start + d.length
     covered = np.clip(np.minimum(T + h, end) - np.maximum(T, d.start), 0.0, h) / h
     D = np.zeros((len(labels), T.size))
-    D[labels.index(d.input)] = d.amplitude * covered
+    for name, weight in disturbance_weights(d).items():
+        D[labels.index(name)] = weight * d.amplitude * covered
     return D
 
 

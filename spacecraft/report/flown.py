@@ -41,6 +41,26 @@ def _deg(value, digits: int = 4) -> str:
     return "n/a" if value is None else number(math.degrees(value), digits)
 
 
+def _about(facts: dict) -> str:
+    """Three axes: the eigen-axis the profile turns about."""
+    axis = facts.get("axis")
+    if axis is None:
+        return ""
+    return (" about the eigen-axis (" + ", ".join(number(e, 4) for e in axis)
+            + ") in hub axes")
+
+
+def _feedforward_words(inertia) -> str:
+    """The feedforward torque in words: J alpha_ref (planar), J alpha_ref + omega_ref x J
+    omega_ref (three axes, J the tensor in hub axes)."""
+    if isinstance(inertia, (list, tuple)):
+        J = "[" + "; ".join(", ".join(number(v, 4) for v in row) for row in inertia) + "]"
+        return ("J alpha_ref + omega_ref x J omega_ref with J = " + J + " kg m^2 (the design "
+                "model's rigid-body inertia tensor, hub axes) and the rate reference")
+    return ("J alpha_ref with J = " + number(inertia) + " kg m^2 (the design model's "
+            "rigid-body inertia) and the rate reference")
+
+
 def _profile_items(facts: dict, scene: dict) -> list:
     m = scene.get("manoeuvre") or {}
     kind = facts["kind"]
@@ -54,10 +74,10 @@ def _profile_items(facts: dict, scene: dict) -> list:
         base = shaper["base"] if shaper else kind
         items.append(f"{kind}" + (f" ({shaper['kind'].upper()} shaper convolved with a {base} "
                                   "profile)" if shaper else "")
+                     + _about(facts)
                      + f", ending at t = {number(facts['end_time'])} s; feedforward "
-                     + ("J alpha_ref with J = " + number(facts["inertia"]) + " kg m^2 (the "
-                        "design model's rigid-body inertia) and the rate reference"
-                        if facts["feedforward"] else "off: the controller reads theta_ref"))
+                     + (_feedforward_words(facts["inertia"]) if facts["feedforward"]
+                        else "off: the controller reads theta_ref"))
         limits = [f"{label} {value}" for label, value in (
             ("torque", None if m.get("torque_limit") is None
              else number(m["torque_limit"], 4) + " N m"),
@@ -192,7 +212,7 @@ def _wheel_blocks(data: dict) -> list:
     table = []
     for r in rows:
         for which, s in r["wheels"].items():
-            for wheel in s["peak_torque"]:
+            for k, wheel in enumerate(s["peak_torque"]):
                 margin = s["momentum_margin"][wheel]
                 fraction = s["momentum_margin_fraction"][wheel]
                 words = s["words"]
@@ -206,7 +226,7 @@ def _wheel_blocks(data: dict) -> list:
                     number(s["time_momentum_saturated"][wheel], 4),
                     f"{number(margin, 4)}" + ("" if fraction is None else
                                               f" ({100 * fraction:.3g} %)"),
-                    warn(words) if s["saturated"] else words])
+                    "" if k else warn(words) if s["saturated"] else words])
     b.append(("table", header, table))
     return b
 

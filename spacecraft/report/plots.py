@@ -67,6 +67,9 @@ _MAX_TIP_PANELS = 6
 _AXES = ("x", "y", "z")
 #: Colours of the hub axes in three-axis plots (of the loop at a time).
 AXIS_COLOURS = {"x": "#1f77b4", "y": "#ff7f0e", "z": "#2ca02c"}
+#: The wheels of a set of several, one colour each (wheels.png).
+WHEEL_COLOURS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+                 "#bcbd22")
 
 
 def _figure(rows: int, cols: int, size, *, top: float = 0.9, left: float = 0.08,
@@ -383,8 +386,11 @@ def plot_slew_axes(result, path: Path, kind: str) -> str:
             _draw_curves(ax, curves, handles, log=signal == "error", note=(i, j) == (0, 0))
             _draw_basilisk(ax, result, kind, signal, handles)
             if signal.startswith("theta_"):
+                # the reference the loops read (the scene's profile), else the cycloid
+                read = trace(first, f"theta_ref_{signal[-1]}", "input")
                 e = m.slew_axis["xyz".index(signal[-1])]
-                handles += ax.plot(t_ref, np.degrees(e * reference), ":",
+                handles += ax.plot(t_ref, np.degrees(e * reference if read is None else read),
+                                   ":",
                                    color=REFERENCE_COLOUR, lw=1.2,
                                    label="theta_ref (reference, per axis)")
             if signal == "error":
@@ -1039,10 +1045,24 @@ def plot_profile(result, path: Path) -> str:
         colour = variant_colour(variant)
         end = profile.end_time
         label = design_label(variant)
-        handles += axes[0, 0].plot(t, np.degrees(profile.theta_ref(t)), color=colour,
+        # three axes: the angle and rate along the eigen-axis, the torque per hub axis (the axes'
+        # colours; the path in the design model's colour unless it is one of them)
+        if profile.axis is not None and len(result.designs) == 1:
+            colour = "black"
+        handles += axes[0, 0].plot(t, np.degrees(profile.path(t)), color=colour,
                                    lw=1.3, label=f"profile for {label}")
-        axes[1, 0].plot(t, np.degrees(profile.omega_ref(t)), color=colour, lw=1.3)
-        axes[2, 0].plot(t, profile.torque_ff(t, facts["inertia"]), color=colour, lw=1.3)
+        axes[1, 0].plot(t, np.degrees(profile.path(t, 1)), color=colour, lw=1.3)
+        torque = profile.torque_ff(t, facts["inertia"], **(
+            {} if profile.axis is None else {"gyroscopic": False}))
+        if profile.axis is None:
+            axes[2, 0].plot(t, torque, color=colour, lw=1.3)
+        else:
+            style = "-" if variant == next(iter(result.designs)) else "--"
+            for i, (axis, axis_colour) in enumerate(AXIS_COLOURS.items()):
+                line = axes[2, 0].plot(t, torque[i], style, color=axis_colour, lw=1.3,
+                                       label=f"about hub {axis}")
+                if style == "-":
+                    handles += line
         if profile.shaper is not None:
             for time in profile.shaper.times:
                 axes[2, 0].axvline(time, color=colour, lw=0.6, ls=":")
@@ -1060,8 +1080,11 @@ def plot_profile(result, path: Path) -> str:
                                       label="end of the profile"))
         ax.grid(True, alpha=0.4)
         ax.tick_params(labelsize="small")
-    axes[0, 0].set_ylabel("theta_ref [deg]", fontsize="small")
-    axes[1, 0].set_ylabel("omega_ref [deg/s]", fontsize="small")
+    three = m.slew_axis is not None
+    axes[0, 0].set_ylabel("angle about the slew axis [deg]" if three else "theta_ref [deg]",
+                          fontsize="small")
+    axes[1, 0].set_ylabel("rate about the slew axis [deg/s]" if three
+                          else "omega_ref [deg/s]", fontsize="small")
     axes[2, 0].set_ylabel("J alpha_ref [N m]", fontsize="small")
     axes[2, 0].set_xlabel("time [s]")
     kinds = {"step": "the step reference (the cycloid of theta_ref alone)",
@@ -1075,6 +1098,13 @@ def plot_profile(result, path: Path) -> str:
     caption = (f"The reference profile ({kinds[m.profile]}) for the controllers tuned on each "
                "design model: theta_ref, omega_ref and the feedforward torque J alpha_ref (J "
                "the design model's rigid-body inertia)")
+    if three:
+        caption = (f"The reference profile ({kinds[m.profile]}, an eigen-axis slew about ("
+                   + ", ".join(f"{e:.3g}" for e in m.slew_axis) + ") in hub axes) for the "
+                   "controllers tuned on each design model: the angle s and the rate s' about "
+                   "the slew axis (theta_ref = e s, omega_ref = e s') and the feedforward "
+                   "torque J e s'' about each hub axis (J the design model's inertia tensor; "
+                   "the gyroscopic term, absent from the linear plants, is not fed)")
     if m.shaper is not None:
         caption += "; dotted: the shaper's impulses"
     caption += ("; dashed orange: the profile's limits" if any(v is not None for _, v, _ in
@@ -1139,8 +1169,14 @@ def plot_wheels(result, path: Path) -> str:
             style = TRUTH_STYLE if which == "truth" else DESIGN_STYLE
             colour = variant_colour(variant)
             for w, name in enumerate(names):
-                suffix = f", {name}" if len(names) > 1 else ""
-                label = f"{design_label(variant)}: loop on the {which} model{suffix}"
+                if len(names) > 1:
+                    # a set of wheels: a colour per wheel (the design models by line style)
+                    # (the legend names the wheels; the caption the line styles)
+                    colour = WHEEL_COLOURS[w % len(WHEEL_COLOURS)]
+                    label = ("_design" if which != "truth" else f"{name}" + (
+                        f" ({design_label(variant)})" if len(result.designs) > 1 else ""))
+                else:
+                    label = f"{design_label(variant)}: loop on the {which} model"
                 handles += ax_t.plot(*envelope(t, trace(resp, f"{name}_torque")), style,
                                      color=colour, lw=1.2, label=label)
                 ax_h.plot(*envelope(t, trace(resp, f"{name}_momentum")), style, color=colour,

@@ -413,10 +413,3 @@ def check_flown_scene(r, *, controller, manoeuvre, wheels, sensors, simulator, e
                       f"(controller.delay = {controller.delay:g} s): export 'plant' and "
                       "'controller' (a co-simulation applies the delay between them), or set "
                       "controller.delay = 0")
-    if three_axis:
-        asked = [key for key, on in (("controller.delay", controller.total_delay > 0),
-                                     ("manoeuvre.profile", flown), ("wheels", wheels is not None),
-                                     ("sensors", sensors is not None)) if on]
-        if asked:
-            raise r.error(asked[0], "is read and checked, but the three-axis run does not fly "
-                          "it yet (planar scenes do): remove it from this three-axis scene")

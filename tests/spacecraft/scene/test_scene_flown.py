@@ -4,6 +4,7 @@ refused by its key (or warned about where it looks like a unit slip)."""
 import copy
 import math
 
+import numpy as np
 import pytest
 
 from spacecraft.scene.flown import shaper_band
@@ -100,13 +101,20 @@ def test_a_three_axis_scene_reads_per_wheel_limits_pyramid_and_per_axis_noise():
     data["wheels"] = {"torque_limit": [0.1, 0.1, 0.2, 0.2], "momentum_limit": 4.0,
                       "pyramid": {"cant_angle": 54.7356}}
     data["sensors"] = {"attitude_density": [1e-5, 1e-5, 3e-5], "rpe_window": 10.0}
-    with pytest.raises(SceneError, match=r"wheels: is read and checked, but the three-axis "
-                                         r"run does not fly it yet"):
-        load_scene(data)
+    scene = load_scene(data)
+    w = scene.wheels
+    assert (w.torque_limit, w.momentum_limit, w.n_wheels) == ((0.1, 0.1, 0.2, 0.2), 4.0, 4)
+    wheels = w.build()
+    assert wheels.torque_limits.tolist() == [0.1, 0.1, 0.2, 0.2]
+    # the pyramid's spin axes: unit vectors at the cant angle from +z
+    assert np.linalg.norm(wheels.spin_axes, axis=1) == pytest.approx(np.ones(4), rel=1e-12)
+    assert wheels.spin_axes[:, 2] == pytest.approx(
+        np.full(4, math.cos(math.radians(54.7356))), rel=1e-12)
+    assert scene.sensors.attitude_density == (1e-5, 1e-5, 3e-5)
     data["wheels"] = {"torque_limit": 0.1, "momentum_limit": 4.0,
                       "spin_axes": [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]]}
-    with pytest.raises(SceneError, match=r"wheels: is read"):
-        load_scene(data)
+    wheels = load_scene(data).wheels.build()
+    assert wheels.spin_axes[3] == pytest.approx(np.full(3, 3 ** -0.5), rel=1e-15)
 
 
 @pytest.mark.parametrize("changes, match", [
