@@ -330,8 +330,9 @@ key                                    unit       meaning
                                                   (hub axes): the direction of
                                                   ``disturbance_torque`` or ``force``
 (every other key as in a planar scene; a three-axis scene refuses by key, with the reason, what
-its run does not do yet: explicit chain arrays, the manoeuvre as flown; a given controller
-takes the three axes' signals, :mod:`spacecraft.scene.given`)
+its run does not do yet: explicit chain arrays; a given controller takes the three axes'
+signals, :mod:`spacecraft.scene.given`; the manoeuvre as flown is the eigen-axis slew about
+``slew_axis``, the wheels' ``spin_axes`` or ``[wheels.pyramid]``, noise per axis)
 =====================================  =========  ==============================================
 
 Ranges (SI units, the file's deg and Hz where it uses them; ``|x|``: either sign)
