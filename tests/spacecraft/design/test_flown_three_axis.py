@@ -213,14 +213,24 @@ def test_a_delay_takes_omega_c_tau_off_each_axis_phase_margin(delayed_pair, verd
 
 @pytest.mark.slow
 def test_a_delay_beyond_the_margin_is_a_result():
-    probe = spacecraft.run(scene(**{"controller.delay": 0.05}), time_responses=False)
-    margin = probe.data["closed_loops"][0]["verdict"]["delay_margin"] + 0.05
-    delay = 1.2 * margin
-    result = spacecraft.run(scene(**{"controller.delay": delay,
-                                     "manoeuvre.step": min(0.1, 2.0 * delay),
-                                     "sensors": SENSORS}))
+    # the 10 m rod of the scene-key walk, damped, on the three-axis hub, a PD of 1 rad/s: a
+    # delay margin of a tenth of a second (the margins resolve the delay's phase up to the
+    # loop's highest frequency, 2e6 rad/s here, on at most 2e6 frequencies)
+    from test_scene_keys import THREE_AXIS
+
+    rod = copy.deepcopy(THREE_AXIS)
+    rod["appendages"][0]["beam"]["damping_ratio"] = 0.005
+    rod["manoeuvre"].update(slew_axis=[1.0, 1.0, 0.5], step=0.02)
+    rod["controller"]["pd"]["natural_frequency"] = 1.0
+    rod["controller"]["delay"] = 0.01
+    probe = spacecraft.run(rod, time_responses=False)
+    margin = probe.data["closed_loops"][0]["verdict"]["delay_margin"] + 0.01
+    rod["controller"]["delay"] = 1.2 * margin
+    rod["sensors"] = SENSORS
+    result = spacecraft.run(rod)
     row = result.data["closed_loops"][0]
     assert not row["verdict"]["stable"] and row["undelayed_stable"]
+    assert row["verdict"]["delay_margin"] <= 0.0
     assert row["status"]["truth"]["status"] in ("unstable", "diverges")
     assert row["manoeuvre_metrics"]["truth"]["residual_attitude_error"] is None
     assert "error" in row["pointing"]["truth"]
@@ -240,9 +250,8 @@ def test_pointing_per_axis_is_the_librarys():
     assert set(figures["ape"]) == {f"theta_{x}" for x in AXES}
     for name in ("ape", "mpe", "rpe", "jitter", "jitter_rpe"):
         assert figures[name] == pytest.approx(getattr(budget, name), rel=1e-12)
-    # the noisier y sensor gives the larger pointing error about y... as the loop couples
-    # the axes only through the inertia's small products, by about its density ratio
-    assert figures["ape"]["theta_y"] > 1.5 * figures["ape"]["theta_x"]
+    # the noisier attitude sensor about y gives the larger pointing error there
+    assert figures["ape"]["theta_y"] > figures["ape"]["theta_x"]
 
 
 @pytest.mark.parametrize("changes, match", [
