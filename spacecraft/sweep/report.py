@@ -33,6 +33,7 @@ References
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -296,8 +297,8 @@ def metric_label(name: str, three_axis: bool = False) -> str:
 def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
     three_axis = context.three_axis
 
-    def _label(name):
-        return metric_label(name, three_axis)
+    def _label(name, width=44):
+        return textwrap.fill(metric_label(name, three_axis), width)
 
     cols = table.to_pydict()
     ok = np.array([not e for e in cols["error"]], dtype=bool)
@@ -317,9 +318,13 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
         finite = v[np.isfinite(v)]
         if finite.size:
             ax.hist(finite, bins=min(40, max(5, int(math.sqrt(finite.size)))), color="tab:blue")
+        else:
+            ax.text(0.5, 0.5, "no finite value" + (" (all infinite)" if v.size else ""),
+                    ha="center", va="center", transform=ax.transAxes)
         extra = [f"{int(np.sum(np.isinf(v)))} infinite"] if np.isinf(v).any() else []
         extra += [f"{withheld} withheld"] if withheld else []
-        ax.set_xlabel(_label(name) + (f" ({', '.join(extra)})" if extra else ""))
+        ax.set_xlabel(textwrap.fill(metric_label(name, three_axis)
+                                    + (f" ({', '.join(extra)})" if extra else ""), 44))
         ax.set_ylabel("samples")
     for ax in list(axes.flat)[k:]:
         ax.set_visible(False)
@@ -348,7 +353,8 @@ def _plots(table, context, spec, summary, folder: Path) -> list[dict]:
                 ax.set_xscale("log")
                 _log_axis(ax.xaxis)
             ax.set_xlabel(p.key)
-            ax.set_ylabel(_label(m))
+            if j == 0:   # one label a row: the margin is the row's
+                ax.set_ylabel(_label(m, 30))
     axes[0, 0].legend(fontsize=7)
     _save(fig, folder / "margins.png")
     files.append({"path": "plots/margins.png",
