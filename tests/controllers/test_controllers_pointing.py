@@ -353,6 +353,45 @@ def test_sampled_loop_statistics_match_a_long_simulation():
             assert abs(m_est - mpe) <= 5 * m_err, (name, placement, m_est / mpe)
 
 
+@pytest.mark.slow
+def test_three_axis_loop_statistics_match_a_long_simulation():
+    # a full inertia tensor and a flexible mode in all three axes couple the axes; a noise
+    # level per axis (no bias: the noise model is the loop's white inputs alone)
+    inertia = [[300.0, 12.0, -8.0], [12.0, 200.0, 15.0], [-8.0, 15.0, 150.0]]
+    b = 0.04 * np.array([1.0, 0.6, -0.3])
+    plant = three_axis_plant(inertia, [(2.0, 0.02, b, b)], tips=[("wing_tip_deflection", [0.5])])
+    noise = controllers.SensorNoise(attitude_density=[5e-6, 2e-6, 1e-6],
+                                    angle_random_walk=[1e-6, 2e-6, 1e-6])
+    K = controllers.pd(plant, natural_frequency=0.1, damping=0.7)
+    loop = controllers.close_loop_with_sensors(plant, K)
+    labels = list(loop.input_labels)
+    columns = [labels.index(f"{kind}_noise_{a}") for kind in ("theta", "omega") for a in "xyz"]
+    W = np.concatenate([np.square(noise.attitude_density),
+                        np.square(noise.angle_random_walk)])
+    A = np.asarray(loop.A, dtype=float)
+    Bw = np.asarray(loop.B, dtype=float)[:, columns]
+    window, per_window = 10.0, 50
+    h = window / per_window
+    F, Qd = exact_discrete(A, Bw, W, h)
+    outputs = list(loop.output_labels)
+    names = ["theta_x", "theta_y", "theta_z", "wing_tip_deflection"]
+    C = np.asarray(loop.C, dtype=float)[[outputs.index(n) for n in names]]
+    n_samples = 400_000                   # 8e4 s: some 5000 of the loop's time constants
+    Y, P = simulate_noise(F, Qd, C, n_samples, seed=20261127)
+    budget = controllers.pointing(plant, K, noise, window=window)
+    for row, name in enumerate(names):
+        sigma2 = (budget.ape | budget.jitter)[name] ** 2
+        error = sample_variance_error(F, P, C[row], n_samples)
+        assert abs(np.mean(Y[row] ** 2) - sigma2) <= 5 * error, (name, error / sigma2)
+        assert error <= 0.05 * sigma2                      # the check has teeth
+        rpe = (budget.rpe | budget.jitter_rpe)[name] ** 2
+        mpe = (budget.mpe | budget.jitter_mpe)[name] ** 2
+        (r_est, r_err), (m_est, m_err) = batch_windows(Y[row], per_window, "random",
+                                                       continuous=True)
+        assert abs(r_est - rpe) <= 5 * r_err, (name, r_est / rpe)
+        assert abs(m_est - mpe) <= 5 * m_err, (name, m_est / mpe)
+
+
 # -- bad input ---------------------------------------------------------------------------------
 def test_bad_pointing_arguments_are_refused():
     K = controllers.pd(FLEXIBLE, natural_frequency=0.1, damping=0.7)
