@@ -331,8 +331,8 @@ key                                    unit       meaning
                                                   ``disturbance_torque`` or ``force``
 (every other key as in a planar scene; a three-axis scene refuses by key, with the reason, what
 its run does not do yet: explicit chain arrays; a given controller takes the three axes'
-signals, :mod:`spacecraft.scene.given`; the manoeuvre as flown is the eigen-axis slew about
-``slew_axis``, the wheels' ``spin_axes`` or ``[wheels.pyramid]``, noise per axis)
+signals, :mod:`spacecraft.scene.given`; the manoeuvre as flown is the eigen-axis slew about the
+slew axis, with the wheels' spin axes or a pyramid and noise per axis)
 =====================================  =========  ==============================================
 
 Ranges (SI units, the file's deg and Hz where it uses them; ``|x|``: either sign)

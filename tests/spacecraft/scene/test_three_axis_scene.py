@@ -96,8 +96,8 @@ def test_poisson_ratio_reaches_the_beam():
      r"manoeuvre\.slew_axis: must be a non-zero vector"),
     (lambda d: d["manoeuvre"].update(slew_axis="w"),
      r"manoeuvre\.slew_axis: must be 'x', 'y', 'z' or an array of 3 numbers"),
-    (lambda d: d["controller"].update(delay=0.1) or d["export"].update(fmu=False),
-     r"controller\.delay: is read and checked, but the three-axis run does not fly it yet"),
+    (lambda d: d.update(wheels={"torque_limit": 0.1, "momentum_limit": 4.0}),
+     r"wheels: a three-axis scene needs the wheels' spin axes"),
 ])
 def test_bad_three_axis_keys_are_named(change, match):
     with pytest.raises(SceneError, match=match):
