@@ -1270,7 +1270,10 @@ class Beam:
         the Laplace variable s. Undamped: the closed form of :func:`_dimensionless_D`, which
         stays accurate where W is singular or huge (at the clamped-free frequencies D has its
         poles, at the free-free ones W has them); the hub coupling uses it instead of
-        inverting W. Damped: the 2x2 inverse of the exact damped W by its adjugate.
+        inverting W. Damped, cantilever convention: the modal sum of
+        :meth:`_cantilever_modal_stiffness` (beyond its cap on modes, the closed form with
+        the damping corrections of :mod:`appendages.damping`); free-free convention: the
+        2x2 inverse of the exact damped W by its adjugate.
 
         Parameters
         ----------
