@@ -1,0 +1,236 @@
+"""A sweep sample and a sweep end to end, before and after a change, measured in one run.
+
+Two checkouts of flexsat (``--before PATH``, e.g. ``git worktree add /tmp/before <rev>``, and
+this one), each measured in fresh processes that put their checkout first on the path, the
+rounds alternating so that both see the same load:
+
+1. ``sweep_sample``: one sample of the shipped sweep scene
+   (``spacecraft/scene/embedded/sweeps/default.toml``: the paper's rod, LQR + Kalman held from
+   the nominal scene, 2 modes of truth, the slew, the exact-beam verdict) in process, as a
+   Dask worker runs it (one BLAS thread): :func:`spacecraft.sweep.evaluate.evaluate` on
+   ``--samples`` samples after a warm-up, CPU (``time.process_time``) min and median;
+2. ``planar_loop``: one planar design-loop evaluation of ``benchmarks/design_loop.py`` (the
+   paper's rod, 20 modes), the loop that must not get slower;
+3. ``end_to_end``: ``run_sweep`` of ``--end-to-end`` samples as ``flexsat sweep`` runs it: its
+   own LocalCluster of 2 worker processes (start, the workers' imports, prepare, every sample
+   streamed to Parquet, the report without plots and without the worst-case search). Wall
+   time; the CPU time of this process (client and scheduler) and of its children (the
+   workers and their nannies, ``resource.getrusage(RUSAGE_CHILDREN)`` once the cluster is
+   closed); the load average before and after.
+
+The 10,000-sample estimates scale the end-to-end run: its fixed part (everything but the
+samples' stage, ``timings.samples`` of the summary) plus 10,000 / n times its samples' stage;
+the CPU of both processes per sample times 10,000 over the two cores plus the fixed part; and,
+for a quiet machine, the least CPU of a sample (1.) times 10,000 over the two cores plus the
+fixed part (Dask's own CPU, a few per cent, left out).
+
+Run::
+
+    python benchmarks/sample_speed.py --before /tmp/before [--rounds 3] [--samples 60]
+                                      [--end-to-end 1000]
+
+Writes ``benchmarks/results/sample_speed.json`` and ``sample_speed.md``.
+"""
+
+from __future__ import annotations
+
+import _common  # noqa: F401  (BLAS threads, sys.path)
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+from _common import RESULTS, machine_info, markdown_table, write_json
+
+HERE = Path(__file__).resolve().parent.parent
+
+CHILD = textwrap.dedent("""
+    import json, os, resource, statistics, sys, tempfile, time, warnings
+    tree, workload, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+    sys.path[:0] = [tree, os.path.join(tree, "benchmarks")]
+    warnings.simplefilter("ignore")
+
+    def load():
+        return [round(x, 2) for x in os.getloadavg()]
+
+    def timed(call, items):
+        cpu, wall = [], []
+        for item in items:
+            c, w = time.process_time(), time.perf_counter()
+            call(item)
+            cpu.append(time.process_time() - c)
+            wall.append(time.perf_counter() - w)
+        return {"cpu_min_s": min(cpu), "cpu_median_s": statistics.median(cpu),
+                "wall_min_s": min(wall), "wall_median_s": statistics.median(wall),
+                "n": len(cpu), "cpu_s": cpu}
+
+    before = load()
+    if workload == "sweep_sample":
+        import spacecraft.sweep as S
+        from spacecraft.sweep.evaluate import evaluate, prepare
+        raw, spec, source = S.load_sweep(None, samples=n + 5)
+        context = prepare(raw, spec, source)
+        values = spec.values()
+        for v in values[:5]:
+            evaluate(context, v)
+        out = timed(lambda v: evaluate(context, v), values[5:])
+    elif workload == "planar_loop":
+        import design_loop
+        design_loop.evaluate()
+        out = timed(lambda _: design_loop.evaluate(), range(n))
+    else:
+        from spacecraft.sweep import run_sweep
+        with tempfile.TemporaryDirectory() as tmp:
+            t, c = time.perf_counter(), time.process_time()
+            result = run_sweep(None, samples=n, worst_case=False, out=os.path.join(tmp, "s"),
+                               plots=False, progress=False, workers=2)
+            wall, own = time.perf_counter() - t, time.process_time() - c
+        children = resource.getrusage(resource.RUSAGE_CHILDREN)
+        s = result.summary
+        out = {"samples": n, "wall_s": wall, "client_scheduler_cpu_s": own,
+               "workers_cpu_s": children.ru_utime + children.ru_stime,
+               "timings": s["timings"], "executor": s["executor"],
+               "failed": s["samples"]["failed"]}
+    out["load_before"], out["load_after"] = before, load()
+    print(json.dumps(out))
+""")
+
+WORKLOADS = {"sweep_sample": "one sample of the shipped sweep scene (CPU, one BLAS thread)",
+             "planar_loop": "one planar design-loop evaluation (paper's rod, 20 modes)"}
+
+
+def revision(tree: Path) -> str:
+    """The checkout's commit and whether it has changes of its own."""
+    try:
+        head = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
+                              capture_output=True, text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(tree), "status", "--porcelain",
+                                "--untracked-files=no"], capture_output=True, text=True,
+                               check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + (" + local changes" if dirty else "")
+
+
+def run_child(tree: Path, workload: str, n: int) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    if workload == "sweep_sample":     # as a Dask worker runs it
+        env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+    out = subprocess.run([sys.executable, "-c", CHILD, str(tree), workload, str(n)],
+                         capture_output=True, text=True, env=env, cwd=str(tree))
+    if out.returncode != 0:
+        raise RuntimeError(f"{workload} in {tree} failed:\n{out.stderr[-2000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def estimate(run: dict, n_target: int = 10_000, cores: int = 2) -> dict:
+    """The end-to-end run scaled to n_target samples (module docstring)."""
+    n = run["samples"]
+    samples_s = run["timings"]["samples"]
+    fixed = run["wall_s"] - samples_s
+    cpu_per_sample = (run["workers_cpu_s"] + run["client_scheduler_cpu_s"]) / n
+    return {"fixed_s": fixed, "scaled_wall_s": fixed + samples_s * n_target / n,
+            "cpu_per_sample_s": cpu_per_sample,
+            "quiet_wall_s": fixed + cpu_per_sample * n_target / cores}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--before", type=Path, required=True,
+                        help="a checkout of flexsat before the change")
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--samples", type=int, default=60, help="sweep samples per round")
+    parser.add_argument("--loops", type=int, default=15, help="planar loops per round")
+    parser.add_argument("--end-to-end", type=int, default=1000,
+                        help="samples of the end-to-end sweep (0: skip it)")
+    args = parser.parse_args()
+    trees = {"before": args.before.resolve(), "after": HERE}
+    result = {"machine": machine_info(), "revisions": {k: revision(v) for k, v in trees.items()},
+              "rounds": args.rounds, "workloads": {}}
+    for workload in WORKLOADS:
+        n = args.samples if workload == "sweep_sample" else args.loops
+        runs = {"before": [], "after": []}
+        for _ in range(args.rounds):
+            for which, tree in trees.items():
+                print(f"{workload} {which}...", file=sys.stderr)
+                runs[which].append(run_child(tree, workload, n))
+        best = {k: min(v, key=lambda r: r["cpu_median_s"]) for k, v in runs.items()}
+        # each item (a sample, an evaluation) at its least CPU over the rounds: the same
+        # work in both checkouts, each seen at its quietest moment
+        least = {k: [min(r["cpu_s"][i] for r in v) for i in range(n)]
+                 for k, v in runs.items()}
+        mean = {k: sum(v) / n for k, v in least.items()}
+        result["workloads"][workload] = {
+            "runs": runs, "best": best, "least_mean_s": mean,
+            "least_ratio": mean["after"] / mean["before"],
+            "cpu_median_ratio": best["after"]["cpu_median_s"] / best["before"]["cpu_median_s"],
+            "cpu_min_ratio": best["after"]["cpu_min_s"] / best["before"]["cpu_min_s"]}
+    if args.end_to_end:
+        ends = {}
+        for which, tree in trees.items():
+            print(f"end to end {which}...", file=sys.stderr)
+            ends[which] = run_child(tree, "end_to_end", args.end_to_end)
+            ends[which]["estimate_10000"] = estimate(ends[which])
+            # a quiet machine: each sample at its least CPU, the two cores busy
+            least = result["workloads"]["sweep_sample"]["least_mean_s"][which]
+            ends[which]["estimate_10000"]["least_cpu_wall_s"] = (
+                ends[which]["estimate_10000"]["fixed_s"] + least * 10_000 / 2)
+        result["end_to_end"] = ends
+    write_json("sample_speed.json", result)
+    info = result["machine"]
+    rows = []
+    for workload, r in result["workloads"].items():
+        for which in ("before", "after"):
+            b = r["best"][which]
+            rows.append([WORKLOADS[workload], which,
+                         f"{r['least_mean_s'][which] * 1e3:.1f}",
+                         f"{b['cpu_median_s'] * 1e3:.1f} / {b['cpu_min_s'] * 1e3:.1f}",
+                         f"{b['wall_median_s'] * 1e3:.1f} / {b['wall_min_s'] * 1e3:.1f}",
+                         f"{b['load_before']} -> {b['load_after']}"])
+        rows.append([WORKLOADS[workload], "after / before", f"{r['least_ratio']:.2f}",
+                     f"{r['cpu_median_ratio']:.2f} / {r['cpu_min_ratio']:.2f}", "", ""])
+    lines = [
+        "# A sweep sample and a sweep end to end: before and after, one run", "",
+        f"`python benchmarks/sample_speed.py --before ...` on {info['date_utc']} UTC, "
+        f"{info['cpu']}, {info['nproc']} cores; before: {result['revisions']['before']}, "
+        f"after: {result['revisions']['after']}. Each checkout {args.rounds} rounds in fresh "
+        "processes, alternating. 'Least CPU': the mean over the items (samples, evaluations) "
+        "of each item's least CPU time over the rounds (the same work in both checkouts, each "
+        "item at its quietest moment: the closest measure on a shared machine); then the "
+        "best round (lowest median CPU) of each, the load average (1, 5, 15 min) before and "
+        "after it.", "",
+        markdown_table(["workload", "checkout", "least CPU [ms]", "CPU median / min [ms]",
+                        "wall median / min [ms]", "load"], rows), ""]
+    if args.end_to_end:
+        rows = []
+        for which, r in result["end_to_end"].items():
+            e = r["estimate_10000"]
+            rows.append([which, f"{r['wall_s']:.1f} s",
+                         f"{r['timings']['samples']:.1f} s",
+                         f"{r['workers_cpu_s'] / r['samples'] * 1e3:.1f} ms",
+                         f"{r['client_scheduler_cpu_s']:.1f} s",
+                         f"{e['scaled_wall_s']:.0f} s", f"{e['quiet_wall_s']:.0f} s",
+                         f"{e['least_cpu_wall_s']:.0f} s",
+                         f"{r['failed']}", f"{r['load_before']} -> {r['load_after']}"])
+        lines += [f"`run_sweep` of {args.end_to_end} samples end to end (its own LocalCluster "
+                  "of 2 workers, Parquet, the report without plots or worst-case search); "
+                  "10,000 samples estimated by scaling the samples' stage, from the CPU "
+                  "of both processes over the two cores, and (a quiet machine) from the least "
+                  "CPU of a sample above over the two cores plus the run's fixed part:", "",
+                  markdown_table(["checkout", "wall", "samples' stage",
+                                  "workers' CPU a sample", "client + scheduler CPU",
+                                  "10,000 scaled", "10,000 from CPU",
+                                  "10,000 from least CPU", "failed", "load"], rows),
+                  ""]
+    text = "\n".join(lines)
+    (RESULTS / "sample_speed.md").write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
