@@ -9,7 +9,8 @@ user asks (:func:`slew_comparison`):
 - Basilisk - truth: how far the Basilisk model (nonlinear chain) is from flexsat's distributed
   beam, i.e. what modelling the appendage as a chain costs;
 - Basilisk - linear chain: the nonlinearity of the manoeuvre (plus RK4's error, below 1e-7 at
-  the default step);
+  the accurate default step; a step that resolves only the modes up to ``accurate_up_to``
+  damps those above numerically, :mod:`.simulation`);
 - linear chain - truth: flexsat's own chain-vs-beam figure for the same sampled loop.
 
 Each as the peak absolute difference per signal and relative to the reference's peak. When
