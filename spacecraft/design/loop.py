@@ -391,9 +391,9 @@ class DesignLoop(ModelBuilder):
             with self.stage("running the manoeuvre in Basilisk"):
                 basilisk, data["basilisk"] = basilisk_runs(self, designs, truth_sim)
 
-        loop_band, resolved = self.truth_resolution(n_modes, rows)
-        data["truth"]["resolved"] = {k: {"frequency": w, "model": what}
-                                     for k, (w, what) in resolved.items()}
+        loop_band, resolved = self.truth_resolution(n_modes, rows, data["fidelity"])
+        data["truth"]["resolved"] = {k: {"frequency": w, "model": what, "covers_loops": covers}
+                                     for k, (w, what, covers) in resolved.items()}
         data["truth"]["loop_band"] = loop_band
         data["design_warnings"] = design_warnings(data, loop_band=loop_band, resolved=resolved)
         if self.flown is not None:
@@ -553,9 +553,15 @@ class DesignLoop(ModelBuilder):
         return simulate_manoeuvre(loop, m, simulator=simulator, together=whole)
 
     # -- what the run adds around the loops -----------------------------------------------------
-    def truth_resolution(self, n_modes, rows) -> tuple[float | None, dict]:
+    def truth_resolution(self, n_modes, rows, fidelity: dict) -> tuple[float | None, dict]:
         """The band the loops act in, bandwidth_factor x the fastest crossover [rad/s], and per
-        beam appendage the frequency up to which its truth model resolves it."""
+        beam appendage ``(frequency, model, covers_loops)``: the frequency up to which its truth
+        model resolves it by the rule of thumb of :func:`resolved_frequency`, and whether the
+        truth model is shown good enough for the loops' band: that frequency is above the band,
+        or the tolerance-driven fidelity closed every loop with one more mode per beam and its
+        poles up to at least the band, its damping and margins changed by less than the
+        tolerance (:func:`spacecraft.design.fidelity.refine_for_closed_loop`), a check of the
+        very question the rule of thumb estimates."""
         scene = self.scene
         if not rows:
             return None, {}
@@ -564,6 +570,10 @@ class DesignLoop(ModelBuilder):
         with self.scene_values("controller"):
             wn = self.design_bandwidth(self.rigid_inertia())
         band = scene.fidelity.bandwidth_factor * max([wn] + crossovers)
+        record = (fidelity.get("choice") or {}).get("closed_loop")
+        # the same crossovers set both bands; the slack only absorbs their rounding
+        converged = (record is not None and record["converged"]
+                     and record["band"] >= band * (1.0 - 1e-9))
         resolved = {}
         if n_modes is not None:
             method = scene.fidelity.method
@@ -572,7 +582,8 @@ class DesignLoop(ModelBuilder):
                     w = resolved_frequency(self.beam(a), n_modes, method,
                                            three_axis=self.three_axis)
                     resolved[a.name] = (w, f"{n_modes} {method} mode"
-                                           f"{'s' if n_modes != 1 else ''}")
+                                           f"{'s' if n_modes != 1 else ''}",
+                                        bool(w >= band or converged))
         return band, resolved
 
     def equivalence_tables(self, models) -> list:

@@ -665,7 +665,9 @@ def design_warnings(data: dict, *, loop_band: float | None, resolved: dict) -> l
         bandwidth_factor x the fastest loop's crossover (None: no check of the truth model).
     resolved : dict
         appendage name -> (frequency [rad/s] up to which its truth model is resolved,
-        description), for the appendages whose truth is a truncated beam.
+        description, covers_loops), for the appendages whose truth is a truncated beam;
+        ``covers_loops`` False (the frequency below the loops' band and no converged
+        closed-loop check over it) gives the warning ``truth_resolution``.
 
     Returns
     -------
@@ -696,8 +698,8 @@ def design_warnings(data: dict, *, loop_band: float | None, resolved: dict) -> l
                             + "; set manoeuvre.duration beyond manoeuvre.slew_time (3 x "
                             "slew_time is the default)"))
     if loop_band is not None:
-        for name, (w_resolved, what) in resolved.items():
-            if w_resolved < loop_band:
+        for name, (w_resolved, what, covers) in resolved.items():
+            if not covers:
                 out.append(_warning("truth_resolution", f"the truth model of {name!r} ({what}) "
                                     f"resolves the appendage up to about {w_resolved:.4g} rad/s, "
                                     f"but the loops act up to {loop_band:.4g} rad/s "

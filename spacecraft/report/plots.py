@@ -992,6 +992,8 @@ def _truncation_note(names, a, models, res, band) -> str:
     if band is not None:
         text += (f"; the loops act below {band:.3g} rad/s, "
                  + ("inside the resolved band." if band <= res["frequency"] else
+                    "beyond it, where one more mode changes the closed loops by less than "
+                    "the tolerance." if res.get("covers_loops") else
                     "BEYOND the resolved band: raise fidelity.n_modes."))
     return text
 
