@@ -25,7 +25,11 @@ from .signals import (OMEGA, THETA, TORQUE, check_controller, check_pair, check_
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["LoopTransfer", "close_loop", "loop_frequency_response", "controller_roots",
-           "resonance_points"]
+           "resonance_points", "UNDAMPED_LADDER"]
+
+#: Relative offsets from an undamped pole at which :func:`resonance_points` adds points (on both
+#: sides): between the innermost point of its half-power window (3.7e-9) and round-off.
+UNDAMPED_LADDER = 10.0 ** -np.arange(9.0, 13.01, 0.5)
 
 
 def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
@@ -391,8 +395,32 @@ class LoopTransfer:
             roots.append(np.linalg.eigvals(close_loop(self.plant, cut).A))
         return np.concatenate(roots).astype(complex)
 
+    def poles(self) -> np.ndarray:
+        """The poles of L and of its loop-at-a-time functions (s-plane, rad/s; a digital
+        loop's mapped from the z-plane by s = log(z) / T), computed once: for an FRD plant the
+        controller's only."""
+        if getattr(self, "_poles", None) is None:
+            if self.frd:
+                poles = self.controller_ev.poles()
+            else:
+                poles = np.concatenate([self.plant_ev.poles(), self.controller_ev.poles(),
+                                        self.loop_at_a_time_poles()]).astype(complex)
+            if self.digital:
+                # z = 0 is infinitely fast: dropped
+                poles = np.log(poles[np.abs(poles) > 1e-12]) / self.dt
+            self._poles = np.asarray(poles, dtype=complex)
+        return self._poles
+
+    def undamped_frequencies(self) -> np.ndarray:
+        """Frequencies [rad/s] of the undamped (or nearly: damping ratio below 1e-7) poles
+        among :meth:`poles`, increasing, each once (to 1e-13 relative)."""
+        poles = self.poles()
+        w = np.sort(poles.imag[(poles.imag > 0) & (np.abs(poles.real) < 1e-7 * np.abs(poles))])
+        return w[np.concatenate([[True], np.diff(w) > 1e-13 * w[1:]])] if w.size else w
+
     def grid(self, n_points: int = 600) -> np.ndarray:
         """Frequency grid [rad/s] refined around every lightly damped pole and zero of L."""
+        poles = self.poles()
         if self.frd:
             # the FRD's own grid (it must resolve the plant) plus the controller's resonances
             roots = self._controller_roots()
@@ -413,7 +441,7 @@ class LoopTransfer:
             w_hi = min(w_hi, math.pi / self.dt * (1 - 1e-9))
             w_lo = min(w_lo, 1e-3 * math.pi / self.dt)
         grid = [np.logspace(math.log10(w_lo), math.log10(w_hi), n_points),
-                resonance_points(roots, w_lo, w_hi)]
+                resonance_points(roots, w_lo, w_hi, poles=poles)]
         if self.frd:
             inside = grid[1][(grid[1] >= self.omega[0]) & (grid[1] <= self.omega[-1])]
             return np.unique(np.concatenate([self.omega, inside]))
@@ -443,7 +471,7 @@ def controller_roots(controller: control.StateSpace, measured, torques) -> np.nd
     return roots[np.isfinite(roots) & (np.abs(roots) < 1e12)]
 
 
-def resonance_points(roots, w_lo: float, w_hi: float) -> np.ndarray:
+def resonance_points(roots, w_lo: float, w_hi: float, *, poles=None) -> np.ndarray:
     """Frequencies [rad/s] across the half-power band of every lightly damped root, in
     (w_lo, w_hi), increasing.
 
@@ -457,12 +485,22 @@ def resonance_points(roots, w_lo: float, w_hi: float) -> np.ndarray:
     loop leaves where it is comes back as a pole of every loop-at-a-time function and as
     zeros, several copies of one root.
 
+    A pole of the loop that is undamped or nearly so (zeta below the floor 1e-7) also gets
+    points w (1 +- 10^-k), k = 9, 9.5, ..., 13 (UNDAMPED_LADDER), between the window's innermost
+    points and the pole: |L| grows without bound towards it, so |L| = 1 is crossed on both sides,
+    as close to it as the mode's residue is small (a mode the loop barely feels), and these
+    crossings, with their phase margins, are bracketed down to 1e-13 of the frequency (closer
+    than that a double cannot tell them from the pole).
+
     Parameters
     ----------
     roots : array of complex, rad/s
         s-plane roots (only those with Im > 0 are used).
     w_lo, w_hi : float, rad/s
         The band the points are kept in.
+    poles : array of complex, rad/s, optional
+        The poles among them (of the loop, or of its loop-at-a-time functions): the undamped
+        ones get the ladder of points above.
     """
     roots = np.asarray(roots, dtype=complex).reshape(-1)
     theta = np.linspace(-1.45, 1.45, 40)
@@ -481,6 +519,17 @@ def resonance_points(roots, w_lo: float, w_hi: float) -> np.ndarray:
         last, last_width = lam, width
         pts = lam.imag + width * np.tan(theta)
         points.append(pts[(pts > w_lo) & (pts < w_hi)])
+    if poles is not None:
+        poles = np.asarray(poles, dtype=complex).reshape(-1)
+        poles = poles[(poles.imag > 0) & (np.abs(poles.real) < 1e-7 * np.abs(poles))]
+        # one ladder per pole frequency (the loop's modes come back as poles of every
+        # loop-at-a-time function, to round-off)
+        w_poles = np.sort(poles.imag)
+        if w_poles.size:
+            w_poles = w_poles[np.concatenate([[True], np.diff(w_poles) > 1e-13 * w_poles[1:]])]
+            offsets = np.concatenate([-UNDAMPED_LADDER, UNDAMPED_LADDER])
+            pts = (w_poles[:, None] * (1.0 + offsets)).ravel()
+            points.append(pts[(pts > w_lo) & (pts < w_hi)])
     return np.unique(np.concatenate(points)) if points else np.zeros(0)
 
 

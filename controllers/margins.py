@@ -360,14 +360,16 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
         raise ValueError("omega must hold at least two distinct frequencies [rad/s]")
     if refine and tau > 0.0:
         omega = _delay_grid(lambda w: _gain(loop.matrix(w)), omega, tau)
+    undamped = loop.undamped_frequencies()
     if not loop.ch.mimo:
-        return dataclasses.replace(loop_margins(loop, omega), delay=tau)
-    return _multiloop_margins(loop.matrix, loop.ch.axes, omega, None, tau)
+        return dataclasses.replace(loop_margins(loop, omega, undamped=undamped), delay=tau)
+    return _multiloop_margins(loop.matrix, loop.ch.axes, omega, None, tau, undamped)
 
 
 def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
                       L: np.ndarray | None = None, *, delay: float = 0.0,
-                      axes: Sequence[str] | None = None) -> MultiLoopMargins:
+                      axes: Sequence[str] | None = None,
+                      undamped: np.ndarray | None = None) -> MultiLoopMargins:
     """Loop-at-a-time and disk margins of a matrix loop function, found on the function itself.
 
     The multivariable counterpart of :func:`loop_margins`, with the definitions of
@@ -397,6 +399,11 @@ def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     axes : sequence of str, optional
         Names of the m inputs, the keys of ``loop_at_a_time`` (default ``'x', 'y', 'z'`` for
         m = 3, else ``'1'``...).
+    undamped : array of float, rad/s, optional
+        Frequencies of the loop's undamped poles, if known (:meth:`LoopTransfer.
+        undamped_frequencies`): beside each, L runs along a whole straight line and |1 + L|
+        can dip far below its grid values in a band narrower than any grid; those dips are
+        searched on ``loop``.
 
     Returns
     -------
@@ -409,6 +416,7 @@ def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     if np.any(np.diff(omega) <= 0):
         raise ValueError(f"omega must be increasing [rad/s]; got {describe(omega)}")
     delay = check_delay(delay)
+    undamped = _check_undamped(undamped)
     if L is None:
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             L = loop(omega)
@@ -435,7 +443,23 @@ def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
                 values[new] = bare(refined[new])
         omega = refined
         L = values * np.exp(-1j * omega * delay)[:, None, None]
-    return _multiloop_margins(loop, axes, omega, L, delay)
+    return _multiloop_margins(loop, axes, omega, L, delay, undamped)
+
+
+def _check_undamped(undamped) -> np.ndarray | None:
+    """``undamped`` of :func:`loop_margins` checked: None or positive finite frequencies
+    [rad/s], as a 1-D float array."""
+    if undamped is None:
+        return None
+    try:
+        w = np.asarray(undamped, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise TypeError(f"undamped must be the frequencies of the loop's undamped poles [rad/s]; "
+                        f"got {describe(undamped)}") from None
+    if not np.all(np.isfinite(w) & (w > 0)):
+        raise ValueError(f"undamped must be positive finite frequencies [rad/s]; got "
+                         f"{describe(undamped)}")
+    return w
 
 
 def _loop_matrix_values(L, n: int) -> np.ndarray:
@@ -450,9 +474,11 @@ def _loop_matrix_values(L, n: int) -> np.ndarray:
 
 
 def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, omega: np.ndarray,
-                       L_grid: np.ndarray | None, tau: float) -> MultiLoopMargins:
+                       L_grid: np.ndarray | None, tau: float,
+                       undamped: np.ndarray | None = None) -> MultiLoopMargins:
     """:class:`MultiLoopMargins` of the loop ``matrix(w)`` -> (f, m, m) (the delay ``tau``
-    [s] already in it) on the increasing grid ``omega`` (``L_grid`` its values, if known)."""
+    [s] already in it) on the increasing grid ``omega`` (``L_grid`` its values, if known;
+    ``undamped`` the frequencies of its undamped poles, if known)."""
     m = len(axes)
 
     def broken_all(w: np.ndarray) -> np.ndarray:
@@ -471,7 +497,7 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
         S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
         per_axis = dict(zip(axes, _loops_margins(
             lambda w, owner: broken_all(w)[np.arange(w.size), owner], omega,
-            1.0 / np.diagonal(S, axis1=1, axis2=2).T - 1.0, delay=tau)))
+            1.0 / np.diagonal(S, axis1=1, axis2=2).T - 1.0, delay=tau, undamped=undamped)))
 
     def singular_values(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(sigma_max(S - I/2), sigma_min(I + L)) at each frequency."""
@@ -496,6 +522,21 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
     sigma, w_sigma = _refined_extremum(lambda w: singular_values(w)[1], omega[ok], smallest[ok],
                                        maximum=False)
     alpha = 1.0 / disk_peak if disk_peak > 0 else math.inf
+    # every loop at a time bounds both: S_ii = 1 / (1 + L_i) is an entry of S, so
+    # sigma_min(I + L) = 1 / sigma_max(S) <= |1 + L_i| and sigma_max(S - I/2) >= |S_ii - 1/2|,
+    # which is 1/(2 tan(PM/2)) at a gain crossover and at least 1/m - 1/2 where |1 + L_i| = m:
+    # a dip of one of them narrower than the grid shows in its loop-at-a-time margins
+    for mg in per_axis.values():
+        if mg.modulus_margin < sigma:
+            sigma, w_sigma = mg.modulus_margin, mg.modulus_margin_frequency
+        bounds = [(2.0 * mg.modulus_margin / (2.0 - mg.modulus_margin)
+                   if mg.modulus_margin < 2.0 else math.inf, mg.modulus_margin_frequency)]
+        if math.isfinite(mg.phase_margin):
+            bounds.append((2.0 * math.tan(math.radians(min(abs(mg.phase_margin), 179.0)) / 2.0),
+                           mg.gain_crossover_frequency))
+        for bound, w in bounds:
+            if bound < alpha:
+                alpha, w_disk = bound, w
     crossings = _unit_crossings(matrix, omega, L_grid)
     return MultiLoopMargins(per_axis, alpha, disk_margin_gain(alpha), disk_margin_phase(alpha),
                             w_disk, sigma, w_sigma, tau, _first_event(crossings, 0.0))
@@ -563,7 +604,8 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
 
 
 def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
-                 L: np.ndarray | None = None, *, delay: float = 0.0) -> Margins:
+                 L: np.ndarray | None = None, *, delay: float = 0.0,
+                 undamped: np.ndarray | None = None) -> Margins:
     """Gain, phase and modulus margins of a scalar loop function, found on the function itself.
 
     The grid only brackets them: every crossing of |L| = 1 and of the negative real axis is
@@ -586,6 +628,11 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
     delay : float, s
         A loop delay not in ``loop``: the margins are those of loop(omega) e^(-j omega delay),
         the grid refined for it as :func:`margins` refines its own.
+    undamped : array of float, rad/s, optional
+        Frequencies of the loop's undamped poles, if known (:meth:`LoopTransfer.
+        undamped_frequencies`): beside each, L runs along a whole straight line and |1 + L|
+        can dip far below its grid values in a band narrower than any grid; those dips are
+        searched on ``loop``.
 
     Returns
     -------
@@ -601,6 +648,7 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
         raise ValueError(f"L must be loop(omega), an array of {omega.size} numbers; got "
                          f"{type(L).__name__} of shape {np.shape(L)}")
     delay = check_delay(delay)
+    undamped = _check_undamped(undamped)
     if delay > 0.0:
         bare, given = loop, L
 
@@ -619,20 +667,24 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
                 L[new] = bare(refined[new])
         omega = refined
         L = L * np.exp(-1j * omega * delay)
-        out = _loops_margins(lambda w, owner: loop(w), omega, L[None, :], delay=delay)[0]
+        out = _loops_margins(lambda w, owner: loop(w), omega, L[None, :], delay=delay,
+                             undamped=undamped)[0]
         return out
     if L is None:
         with np.errstate(divide="ignore", invalid="ignore"):
             L = loop(omega)
-    return _loops_margins(lambda w, owner: loop(w), omega, L[None, :])[0]
+    return _loops_margins(lambda w, owner: loop(w), omega, L[None, :], undamped=undamped)[0]
 
 
 def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], omega: np.ndarray,
-                   L: np.ndarray, *, delay: float = 0.0) -> list[Margins]:
+                   L: np.ndarray, *, delay: float = 0.0,
+                   undamped: np.ndarray | None = None) -> list[Margins]:
     """Margins of m scalar loop functions L_j at once (the loop-at-a-time functions of a
     three-axis loop), each as :func:`loop_margins` finds them: ``L`` (m, f) on the grid,
     ``evaluate(w, owner)`` the value of L_owner[k] at w[k] (one evaluation of the loop serves
-    every function, so the crossings of all of them are refined together)."""
+    every function, so the crossings of all of them are refined together); ``undamped``: the
+    frequencies [rad/s] of the loop's undamped poles, whose dips of |1 + L| are searched
+    (:func:`_undamped_dips`)."""
     grids = []
     for row in L:
         finite = np.isfinite(row)  # a grid point exactly on an undamped pole: L is infinite
@@ -681,6 +733,38 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
     phase_roots, gain_roots = roots[:m], roots[m:]
     values = values_at(roots)
     L_phase, L_gain = values[:m], values[m:]
+    # |1 + L| dips where L passes close to -1, at a gain crossover with a small phase margin:
+    # beside a lightly damped pole such a dip can be far narrower than the grid's spacing, so
+    # the grid minimum may miss it. Each crossover whose |1 + L| is below the best found so far
+    # starts a minimum search between the grid points that bracketed it.
+    best = [min((grid_minima[j],) + ((refined[j],) if j in refined else ()))
+            for j in range(m)]
+    dips = []
+    for j in range(m):
+        w_grid, row = grids[j]
+        mine = np.flatnonzero(found & (owner == m + j))
+        if mine.size == 0:
+            continue
+        at = np.abs(1.0 + evaluate(root[mine], np.full(mine.size, j)))
+        for k, d in zip(mine, at):
+            if not d < best[j][0]:
+                continue
+            best[j] = (float(d), float(root[k]))
+            lo, hi = brackets[1][k], brackets[2][k]
+            if lo < root[k] < hi:
+                i_lo, i_hi = np.searchsorted(w_grid, [lo, hi])
+                dips.append((2 * m + j, lo, root[k], hi, abs(1.0 + row[i_lo]), d,
+                             abs(1.0 + row[i_hi])))
+    if undamped is not None and len(undamped):
+        more, floors = _undamped_dips(evaluate, m, np.asarray(undamped, dtype=float), best,
+                                      omega[0], omega[-1])
+        dips += [(2 * m + j, *rest) for j, *rest in more]
+        for j, d, w in floors:
+            best[j] = min(best[j], (d, w))
+    if dips:
+        _, (w_dip, dist_dip) = refine(crossing, minima=tuple(np.array(v) for v in zip(*dips)))
+        for (task, *_), d, w in zip(dips, dist_dip, w_dip):
+            best[task - 2 * m] = min(best[task - 2 * m], (float(d), float(w)))
     out = []
     for j in range(m):
         gain_margin, w_pc = math.inf, math.inf
@@ -698,12 +782,63 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
             pm = pm - 360.0 if pm > 180.0 else pm
             if abs(pm) < abs(phase_margin):
                 phase_margin, w_gc = pm, float(w)
-        mm, w_mm = grid_minima[j]
-        if j in refined and refined[j][0] < mm:
-            mm, w_mm = float(refined[j][0]), float(refined[j][1])
+        mm, w_mm = best[j]
+        # at a gain crossover |1 + L| = 2 sin(PM / 2) exactly; beside an undamped pole the
+        # crossover and its dip can lie closer to the pole than L is evaluated to the accuracy
+        # of that small value, but the phase there is well conditioned: it bounds the margin
+        at_crossover = 2.0 * math.sin(math.radians(min(abs(phase_margin), 180.0)) / 2.0)
+        if at_crossover < mm:
+            mm, w_mm = at_crossover, w_gc
         out.append(Margins(float(gain_margin), float(phase_margin), mm, float(w_gc), float(w_pc),
                            w_mm, float(delay), float(delay_margin)))
     return out
+
+
+def _undamped_dips(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], m: int,
+                   undamped: np.ndarray, best: list, w_lo: float, w_hi: float
+                   ) -> tuple[list, list]:
+    """The dips of |1 + L_j| beside undamped poles that may lie below ``best[j]`` (value,
+    frequency): (minimum brackets (j, lo, x, hi, f(lo), f(x), f(hi)) for
+    :func:`controllers.refine.refine`, [(j, value, frequency)] of dips too close to their pole
+    to be evaluated).
+
+    Near an undamped pole w0, L(w0 + x) = c + r / x + O(x): as x runs through 0, L runs along
+    the whole straight line c + t r (t = 1/x real), which passes -1 at the distance
+    |Im((1 + c) conj(r))| / |r|, at t* = -Re((1 + c) conj(r)) / |r|^2. That dip can be far
+    narrower than a grid's spacing, and away from any crossing of |L| = 1: c and r are taken
+    from L at w0 (1 +- 1e-9) (c the mean, r from the difference), and the dip, where it may
+    be lower than the best found, is searched on L about w0 + 1/t*, or, closer to the pole
+    than 1e-13 w0 (beyond what L can be evaluated to there), taken from the line itself."""
+    undamped = undamped[(undamped > w_lo) & (undamped < w_hi)]
+    brackets, floors = [], []
+    if undamped.size == 0:
+        return brackets, floors
+    x = 1e-9 * undamped
+    w = np.concatenate([undamped - x, undamped + x])
+    owner = np.repeat(np.arange(m), w.size)
+    with np.errstate(all="ignore"):
+        values = np.asarray(evaluate(np.tile(w, m), owner)).reshape(m, 2, -1)
+        below, above = values[:, 0], values[:, 1]
+        c = 0.5 * (below + above)
+        r = 0.5 * (above - below) * x
+        # a pole of this function: L changes across it by more than its smooth part could
+        # over 2e-9 of the frequency (the pole's own term |r| / x may still be small next to c:
+        # a mode the loop barely feels, its dip within 1e-9 of it)
+        pole = (np.isfinite(c) & np.isfinite(r)
+                & (np.abs(above - below) > 2e-6 * (1.0 + np.abs(c))))
+        t = -((1.0 + c) * r.conj()).real / np.abs(r) ** 2
+        depth = np.abs(((1.0 + c) * r.conj()).imag) / np.abs(r)
+        offset = 1.0 / t
+    for j in range(m):
+        for k in np.flatnonzero(pole[j] & (depth[j] < best[j][0]) & np.isfinite(offset[j])):
+            w0, dx = undamped[k], offset[j, k]
+            if abs(dx) < 1e-13 * w0:
+                floors.append((j, float(depth[j, k]), float(w0)))
+                continue
+            ends = sorted([w0 + 0.5 * dx, w0 + 2.0 * dx])
+            line = [abs(1.0 + c[j, k] + r[j, k] / (e - w0)) for e in (ends[0], w0 + dx, ends[1])]
+            brackets.append((j, ends[0], w0 + dx, ends[1], *line))
+    return brackets, floors
 
 
 def _gain(L: np.ndarray) -> np.ndarray:

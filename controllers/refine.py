@@ -19,8 +19,10 @@ iterations:
   collapses to about the step's size. It ends at |b - a| <= ROOT_TOLERANCE b. A sign change
   may also be a pass through an undamped pole (f -> +-inf): the bracket then closes in on the
   pole, where f is huge or not finite; such a point is no root and is dropped (|f| must fall
-  below 1e-6 of its size at the bracket's ends); its refinement stops once |f| at both ends
-  exceeds 1e3 times that size.
+  below 1e-6 of its size at the bracket's ends, or, where f is so steep that the converged
+  bracket's ends are not that small, beside a pole, |f| must grow outside the bracket, at
+  OUTSIDE_PROBE widths from it, beyond its values at the ends, as it does about a root and
+  not about a pole); its refinement stops once |f| at both ends exceeds 1e3 times that size.
 - a minimum: the bracket [lo, hi] around the best point x is probed at c - h, c, c + h; the
   best point and the nearest probed points around it become the new bracket; the next centre
   is the vertex of the parabola through the three probes (successive parabolic interpolation,
@@ -44,12 +46,16 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["ROOT_TOLERANCE", "MINIMUM_TOLERANCE", "MINIMUM_VALUE_TOLERANCE", "refine"]
+__all__ = ["ROOT_TOLERANCE", "OUTSIDE_PROBE", "MINIMUM_TOLERANCE", "MINIMUM_VALUE_TOLERANCE", "refine"]
 
 #: Relative width |b - a| / b to which a root's bracket is refined.
 ROOT_TOLERANCE = 1e-13
 #: Relative width (hi - lo) / x at which a minimum's bracket is taken as converged.
 MINIMUM_TOLERANCE = 1e-12
+#: A converged root bracket whose end values are not small (f steep there) is told from a pole
+#: by |f| at this many bracket widths outside it: larger than at the ends at a root, smaller
+#: at a pole.
+OUTSIDE_PROBE = 100.0
 #: A minimum is also converged when the parabola through probes a local spacing apart predicts
 #: no value below the best by more than this, relative (the value is what is wanted).
 MINIMUM_VALUE_TOLERANCE = 1e-13
@@ -240,6 +246,18 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
         found = np.where(np.abs(fa) <= np.abs(fb), a, b)
         at_root = np.minimum(np.abs(fa), np.abs(fb))
         ok = np.isfinite(at_root) & (at_root <= 1e-6 * scale)
+        # a converged bracket whose ends are not small next to the starting ends: a root where f
+        # is steep (beside a pole: the slope is about 1/distance) or a pole; outside the
+        # bracket, at D = OUTSIDE_PROBE times its width, |f| grows to about |f'| D at a root
+        # and falls to about r / D at a pole (r / width or more at the ends)
+        doubt = np.nonzero(~ok & np.isfinite(at_root) & (b - a <= 2.0 * ROOT_TOLERANCE * b))[0]
+        if doubt.size:
+            distance = np.maximum(OUTSIDE_PROBE * (b[doubt] - a[doubt]),
+                                  ROOT_TOLERANCE * found[doubt])
+            x = np.concatenate([found[doubt] - distance, found[doubt] + distance])
+            fx = np.abs(np.asarray(evaluate(x, np.tile(rt[doubt], 2)), dtype=float))
+            fx = np.where(np.isfinite(fx), fx, 0.0).reshape(2, -1).max(axis=0)
+            ok[doubt] = fx > np.maximum(np.abs(fa[doubt]), np.abs(fb[doubt]))
     return (found, ok), (xm, fm)
 
 
