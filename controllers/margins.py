@@ -215,8 +215,9 @@ def zero_crossings(f: Callable[[np.ndarray], np.ndarray], omega: np.ndarray, val
     quotients, :func:`controllers.refine.refine`), to |b - a| <= 1e-13 b. A sign change may
     also be a pass through an undamped pole (f -> +-inf): the bracket then closes in on the
     pole, where f is huge or not finite; such a point is no root and is dropped (|f| must fall
-    below 1e-6 of its size at the bracket's ends); its refinement stops once |f| at both ends
-    exceeds 1e3 times that size.
+    below 1e-6 of its size at the bracket's ends, or grow outside the converged bracket as
+    about a root, not fall as about a pole: :func:`controllers.refine.refine`); its refinement
+    stops once |f| at both ends exceeds 1e3 times that size.
     """
     return _crossings_of_many(lambda x, owner: f(x), [(omega, values)])[0]
 
@@ -409,18 +410,8 @@ def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     -------
     MultiLoopMargins
     """
-    if not callable(loop):
-        raise TypeError(f"loop must be a function of omega [rad/s] giving L(j omega), shape "
-                        f"(f, m, m); got {type(loop).__name__}")
-    omega = frequency_grid(omega, minimum=2)
-    if np.any(np.diff(omega) <= 0):
-        raise ValueError(f"omega must be increasing [rad/s]; got {describe(omega)}")
-    delay = check_delay(delay)
+    omega, delay, _, L = _loop_arguments(loop, omega, L, delay, ", shape (f, m, m)")
     undamped = _check_undamped(undamped)
-    if L is None:
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            L = loop(omega)
-    L = _loop_matrix_values(L, omega.size)
     m = L.shape[1]
     if axes is None:
         axes = AXES if m == 3 else tuple(str(i + 1) for i in range(m))
@@ -444,6 +435,25 @@ def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
         omega = refined
         L = values * np.exp(-1j * omega * delay)[:, None, None]
     return _multiloop_margins(loop, axes, omega, L, delay, undamped)
+
+
+def _loop_arguments(loop, omega, L, delay, shape: str
+                    ) -> tuple[np.ndarray, float, np.ndarray, np.ndarray]:
+    """The arguments of a loop known as a function (:func:`multiloop_margins`,
+    :func:`loop_verdict`) checked: ``loop`` callable (``shape`` ends its message), ``omega`` an
+    increasing grid [rad/s] of at least two points, ``delay`` [s]; returns (omega, delay, L as
+    given or ``loop(omega)``, its values (f, m, m))."""
+    if not callable(loop):
+        raise TypeError(f"loop must be a function of omega [rad/s] giving L(j omega){shape}; got "
+                        f"{type(loop).__name__}")
+    omega = frequency_grid(omega, minimum=2)
+    if np.any(np.diff(omega) <= 0):
+        raise ValueError(f"omega must be increasing [rad/s]; got {describe(omega)}")
+    delay = check_delay(delay)
+    if L is None:
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            L = loop(omega)
+    return omega, delay, L, _loop_matrix_values(L, omega.size)
 
 
 def _check_undamped(undamped) -> np.ndarray | None:
@@ -1387,17 +1397,7 @@ def loop_verdict(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
     ValueError
         A grid too narrow for the Nyquist criterion, or a bad argument.
     """
-    if not callable(loop):
-        raise TypeError(f"loop must be a function of omega [rad/s] giving L(j omega); got "
-                        f"{type(loop).__name__}")
-    omega = frequency_grid(omega, minimum=2)
-    if np.any(np.diff(omega) <= 0):
-        raise ValueError(f"omega must be increasing [rad/s]; got {describe(omega)}")
-    delay = check_delay(delay)
-    if L is None:
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            L = loop(omega)
-    values = _loop_matrix_values(L, omega.size)
+    omega, delay, L, values = _loop_arguments(loop, omega, L, delay, "")
     planar = np.ndim(L) == 1
     n = loop_nyquist_count(omega, values, open_loop_unstable=open_loop_unstable)
 

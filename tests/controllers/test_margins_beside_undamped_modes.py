@@ -20,6 +20,7 @@ from scipy.optimize import brentq
 
 import controllers
 from controllers.loop import LoopTransfer
+from controllers.margins import loop_margins
 from controllers.refine import ROOT_TOLERANCE, refine
 from plants import modal_plant, three_axis_plant
 
@@ -182,3 +183,12 @@ def test_three_axis_margins_never_above_a_dense_scan(seed):
         smallest = min(smallest, mm)
     assert m.min_singular_value <= smallest * (1 + 1e-5)
     assert m.disk_margin <= 2 * smallest / (2 - smallest) * (1 + 1e-5)
+
+
+@pytest.mark.parametrize("undamped, error", [([-1.0], ValueError), ([np.nan], ValueError),
+                                             ("fast", TypeError)])
+def test_undamped_frequencies_are_checked(undamped, error):
+    """loop_margins' undamped pole frequencies: positive and finite [rad/s], by name."""
+    omega = np.geomspace(0.01, 100.0, 50)
+    with pytest.raises(error, match="undamped"):
+        loop_margins(lambda w: 1.0 / (1j * w) ** 2, omega, undamped=undamped)
