@@ -280,7 +280,12 @@ def fe_accuracy(exact: np.ndarray) -> list[dict]:
     for n_elements in (10, 20, 40, 80):
         K, M = fe3d.spacecraft_matrices(HUB_MASS, HUB_INERTIA, mounts, n_elements)
         t0 = time.perf_counter()
-        fe = fe3d.natural_frequencies(K, M, 24)[:20]
+        try:
+            fe = fe3d.natural_frequencies(K, M, 24)[:20]
+        except fe3d.SingularMatrixError as error:
+            # the reference refuses a solve it cannot trust: recorded, not compared
+            print(f"FE model at {n_elements} elements: {error}", file=sys.stderr)
+            fe = np.full(20, np.nan)
         accuracy.append({"n_elements": n_elements, "fe_seconds": time.perf_counter() - t0,
                          "relative_difference": np.abs(fe / exact - 1)})
     return accuracy

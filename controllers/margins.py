@@ -818,7 +818,9 @@ def _undamped_dips(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], m: 
     narrower than a grid's spacing, and away from any crossing of |L| = 1: c and r are taken
     from L at w0 (1 +- 1e-9) (c the mean, r from the difference), and the dip, where it may
     be lower than the best found, is searched on L about w0 + 1/t*, or, closer to the pole
-    than 1e-13 w0 (beyond what L can be evaluated to there), taken from the line itself."""
+    than 1e-13 w0 (beyond what L can be evaluated to there), taken from the line itself (to
+    about 1 % of its value: the smooth part of L varies over 2e-9 w0, and L is evaluated
+    there to about eps / 1e-9 of the pole's term)."""
     undamped = undamped[(undamped > w_lo) & (undamped < w_hi)]
     brackets, floors = [], []
     if undamped.size == 0:
