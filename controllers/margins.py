@@ -52,7 +52,7 @@ from .threads import limits_blas_threads, total_states
 __all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "margins",
            "spillover", "nyquist_count", "disk_margin_gain", "disk_margin_phase",
            "loop_margins", "MAX_DELAY_GRID", "zero_crossings", "multiloop_margins",
-           "loop_nyquist_count", "loop_verdict", "unstable_poles"]
+           "loop_nyquist_count", "loop_verdict", "unstable_poles", "harmless_gain"]
 
 #: Most frequencies a delayed loop's grid may hold (omega tau resolved to pi/4 up to the grid's
 #: top): beyond, margins() refuses the delay by name before evaluating anything.
@@ -359,12 +359,23 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
     omega = np.unique(frequency_grid(omega, minimum=2))
     if omega.size < 2:
         raise ValueError("omega must hold at least two distinct frequencies [rad/s]")
-    if refine and tau > 0.0:
-        omega = _delay_grid(lambda w: _gain(loop.matrix(w)), omega, tau)
     undamped = loop.undamped_frequencies()
-    if not loop.ch.mimo:
-        return dataclasses.replace(loop_margins(loop, omega, undamped=undamped), delay=tau)
-    return _multiloop_margins(loop.matrix, loop.ch.axes, omega, None, tau, undamped)
+
+    def on(grid: np.ndarray) -> Margins | MultiLoopMargins:
+        if not loop.ch.mimo:
+            return dataclasses.replace(loop_margins(loop, grid, undamped=undamped), delay=tau)
+        return _multiloop_margins(loop.matrix, loop.ch.axes, grid, None, tau, undamped)
+
+    if not (refine and tau > 0.0):
+        return on(omega)
+    # the margins on the grid as it is bound the true ones from above; only where |L| can
+    # reach what would lower them is the delay's phase resolved (harmless_gain)
+    first = on(omega)
+    with np.errstate(all="ignore"):
+        gains = _gain(loop.matrix(omega))
+    refined = _delay_grid(None, omega, tau, gains,
+                          harmless_gain(first, len(loop.ch.axes) if loop.ch.mimo else 1))
+    return first if refined.size == omega.size else on(refined)
 
 
 def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
@@ -425,7 +436,12 @@ def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
             w = np.asarray(w, dtype=float).reshape(-1)
             return bare(w) * np.exp(-1j * w * delay)[:, None, None]
 
-        refined = _delay_grid(None, omega, delay, _gain(L))
+        first = _multiloop_margins(loop, axes, omega,
+                                   L * np.exp(-1j * omega * delay)[:, None, None], delay,
+                                   undamped)
+        refined = _delay_grid(None, omega, delay, _gain(L), harmless_gain(first, m))
+        if refined.size == omega.size:
+            return first
         new = ~np.isin(refined, omega)
         values = np.empty((refined.size, m, m), dtype=complex)
         values[~new] = L[np.searchsorted(omega, refined[~new])]
@@ -668,7 +684,12 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
 
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             values = bare(omega) if given is None else np.asarray(given).reshape(-1)
-        refined = _delay_grid(None, omega, delay, np.abs(values))
+        first = _loops_margins(lambda w, owner: loop(w), omega,
+                               (values * np.exp(-1j * omega * delay))[None, :], delay=delay,
+                               undamped=undamped)[0]
+        refined = _delay_grid(None, omega, delay, np.abs(values), harmless_gain(first, 1))
+        if refined.size == omega.size:
+            return first
         new = ~np.isin(refined, omega)
         L = np.empty(refined.size, dtype=complex)
         L[~new] = values[np.searchsorted(omega, refined[~new])]
@@ -861,27 +882,76 @@ def _gain(L: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(g), g, np.inf)
 
 
+def harmless_gain(bound: Margins | MultiLoopMargins, m: int = 1) -> float:
+    """The largest |L| entry at which a loop's delay cannot lower the margins ``bound``.
+
+    Margins found on a grid bound the true ones from above (a crossing or dip between grid
+    points can only lower them), and the delay e^(-j omega tau) leaves |L| as it is. Where every
+    entry of L (m x m) has modulus at most the returned g, no margin can fall below ``bound``:
+    with a = m g >= sigma_max(L) (Frobenius bound) and e = a / (1 - a) >= ||S - I||,
+    S = (I + L)^-1, a loop-at-a-time L_i = 1/S_ii - 1 has |L_i| <= e / (1 - e); a crossing of the
+    negative real axis there gives a gain margin of at least 1/|L_i| and |1 + L_i| >=
+    1 - |L_i|, sigma_max(S - I/2) <= 1/2 + e and sigma_min(I + L) >= 1 - a. For a single loop
+    (m = 1) L_i = L. A phase crossover matters only where |L| >= 1/GM and the modulus dips only
+    where |L| >= 1 - modulus margin; the gain crossovers (|L| = 1) do not depend on the delay.
+
+    Parameters
+    ----------
+    bound : Margins or MultiLoopMargins
+        Margins of the loop (delay included) on a grid.
+    m : int
+        The loop's size (1: a single loop).
+
+    Returns
+    -------
+    float
+        g >= 0 (0: everywhere matters).
+    """
+    if isinstance(bound, MultiLoopMargins):
+        loops = list(bound.loop_at_a_time.values())
+        # |L_i| <= t <=> e <= t / (1 + t) <=> a <= e / (1 + e)
+        limits = [1.0 / bound.disk_margin - 0.5 if bound.disk_margin > 0 else math.inf]
+    else:
+        loops, limits = [bound], []
+    for mg in loops:
+        t = min(10.0 ** (-abs(mg.gain_margin) / 20.0), 1.0 - mg.modulus_margin)
+        limits.append(t / (1.0 + t) if m > 1 and t > 0.0 else t)
+    e = min(limits)
+    if not e > 0.0:
+        return 0.0
+    if m == 1:
+        return e
+    a = min(e / (1.0 + e), 1.0 - bound.min_singular_value)
+    return max(a, 0.0) / m
+
+
 def _delay_grid(gain: Callable[[np.ndarray], np.ndarray] | None, omega: np.ndarray,
-                delay: float, values: np.ndarray | None = None) -> np.ndarray:
+                delay: float, values: np.ndarray | None = None,
+                harmless: float = 0.0) -> np.ndarray:
     """``omega`` with points added where omega delay changes by more than pi/4 between two grid
-    points at which |L| (``gain(omega)`` or ``values``) reaches 1e-9: the phase -omega delay is
-    then resolved wherever a crossing of the negative real axis can be a margin."""
+    points at which |L| (``gain(omega)`` or ``values``) reaches half of ``harmless`` (a
+    :func:`harmless_gain`; margin against the growth of |L| between grid points, which resolve
+    every lightly damped mode) or 1e-9: the phase -omega delay is then resolved wherever a
+    crossing of the negative real axis or a dip of |1 + L| can lower the margins."""
     if values is None:
         with np.errstate(all="ignore"):
             values = gain(omega)
     values = np.where(np.isfinite(values), values, np.inf)
     step = 0.25 * math.pi / delay
     width = np.diff(omega)
-    relevant = np.maximum(values[:-1], values[1:]) >= _NEGLIGIBLE_GAIN
+    threshold = max(0.5 * harmless, _NEGLIGIBLE_GAIN)
+    relevant = np.maximum(values[:-1], values[1:]) >= threshold
     with np.errstate(over="ignore", invalid="ignore"):
         needed = np.where(relevant, np.ceil(width / step) - 1.0, 0.0)
     total = float(np.sum(np.maximum(needed, 0.0))) + omega.size
     if not total <= MAX_DELAY_GRID:
+        top = float(omega[1:][relevant].max())
         raise ValueError(
-            f"delay {delay:.4g} s needs {total:.3g} frequencies to resolve its phase omega delay up "
-            f"to {omega[-1]:.4g} rad/s (pi/4 per step), more than MAX_DELAY_GRID = "
-            f"{MAX_DELAY_GRID:.3g}: the delay is too long for the loop's frequency range (check "
-            "its unit: seconds)")
+            f"controller.delay = {delay:.4g} s needs {total:.3g} frequencies to resolve its phase "
+            f"omega delay (pi/4 per step) where the loop gain can still lower the margins, up "
+            f"to {top:.4g} rad/s: more than MAX_DELAY_GRID = {MAX_DELAY_GRID:.3g}; a delay "
+            f"below about {MAX_DELAY_GRID * 0.25 * math.pi / top:.3g} s would do (check its unit: "
+            "seconds)")
     if total == omega.size:
         return omega
     counts = np.maximum(needed, 0.0).astype(np.int64)
