@@ -4,9 +4,13 @@ Loop delay
 ----------
 A delay tau [s] (computation plus transport, :mod:`controllers.delay`) multiplies the loop by
 e^(-j omega tau): it leaves every |L| and so the gain crossovers where they are and lowers the
-phase there by omega_c tau. The frequency grid is refined until omega tau changes by at most
-pi/4 between points wherever |L| >= 1e-9 (the crossings of the negative real axis it adds are
-then all bracketed).
+phase there by omega_c tau. The margins are first found on the grid as it is (they bound the
+true ones from above: a crossing or dip between grid points can only lower them); the grid is
+then refined until omega tau changes by at most pi/4 between points wherever |L| can still lower
+them (:func:`harmless_gain`: a crossing of the negative real axis at |L| = g gives a gain margin
+of 1/g, and |1 + L e^(-j omega tau)| >= 1 - |L|), so the crossings the delay adds there are all
+bracketed, and nowhere else: the stiff lightly damped modes far above the crossover, where
+|L| is small, need no phase resolution however long the delay.
 
 Delay margin: the smallest extra delay Delta that puts L e^(-j omega Delta) through -1, i.e.
 min over the gain crossovers omega_c of PM / omega_c with PM in [0, 360) deg (a negative margin
@@ -54,8 +58,9 @@ __all__ = ["Margins", "MultiLoopMargins", "ModeSpillover", "SpilloverVerdict", "
            "loop_margins", "MAX_DELAY_GRID", "zero_crossings", "multiloop_margins",
            "loop_nyquist_count", "loop_verdict", "unstable_poles", "harmless_gain"]
 
-#: Most frequencies a delayed loop's grid may hold (omega tau resolved to pi/4 up to the grid's
-#: top): beyond, margins() refuses the delay by name before evaluating anything.
+#: Most frequencies a delayed loop's grid may hold (omega tau resolved to pi/4 wherever |L| can
+#: lower the margins): beyond, margins() refuses the delay by name (controller.delay) before
+#: evaluating the refined grid.
 MAX_DELAY_GRID = 2_000_000
 # a unit-circle crossing's bracket is cut into this many sections per step (_unit_crossings):
 # 2, bisection; more sections take fewer evaluations of L but count at more points, each an
@@ -321,7 +326,8 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
         pole with damping ratio below 0.3 (lightly damped modes of plant and controller).
         Crossings and the minimum of |1 + L| are then refined on the exact L. With a delay the
         default grid is refined so that omega delay changes by at most pi/4 between points
-        where |L| >= 1e-9 (at most MAX_DELAY_GRID points); a given grid is used as it is.
+        where |L| can lower the margins (:func:`harmless_gain`; at most MAX_DELAY_GRID points);
+        a given grid is used as it is.
     delay : float, s
         Loop delay: L e^(-j omega delay) exactly (a digital controller on a state-space plant:
         the sampled plant with the delayed hold, the modified z-transform). The margins then
