@@ -201,6 +201,15 @@ def loop_status(poles: np.ndarray, response, manoeuvre, metrics: dict | None) ->
     return out
 
 
+def _time_metric(name: str, kinds) -> bool:
+    """``name`` is one of ``kinds``, or one of them per hub axis (``peak_torque_x``), or a
+    peak of an appendage's tip motion (``peak_boom_tip_twist``: three-axis runs name them so)."""
+    base = name[:-2] if name[-2:] in ("_x", "_y", "_z") else name
+    return name in kinds or base in kinds or (
+        "peak_tip_deflection" in kinds and name.startswith("peak_")
+        and ("_tip_deflection" in name or name.endswith("_tip_twist")))
+
+
 def withheld_metrics(metrics: dict, status: dict) -> tuple[dict, dict]:
     """The metrics to report under a status, and the flags of those withheld.
 
@@ -214,13 +223,13 @@ def withheld_metrics(metrics: dict, status: dict) -> tuple[dict, dict]:
     values, flags = dict(metrics), {}
     kind = status["status"]
     if kind in ("diverges", "unstable"):
-        for name in TIME_METRICS:
-            if name in values:
+        for name in values:
+            if _time_metric(name, TIME_METRICS):
                 values[name] = None
                 flags[name] = "diverges"
     elif kind == "slew unfinished":
-        for name in ("overshoot", "settling_time"):
-            if name in values:
+        for name in values:
+            if _time_metric(name, ("overshoot", "settling_time")):
                 values[name] = None
                 flags[name] = "slew unfinished"
     elif kind == "not settled" and "settling_time" in values:
