@@ -440,11 +440,17 @@ def _stationary_covariance(A, Bw, W, sampled: bool) -> np.ndarray:
                              f"pointing error; its rightmost eigenvalue has real part "
                              f"{worst:.6g} >= 0 [1/s]")
     Q = (Bw * W) @ Bw.T
-    if sampled:
-        P = scipy.linalg.solve_discrete_lyapunov(A, Q)
-    else:
-        P = scipy.linalg.solve_continuous_lyapunov(A, -Q)
-    return 0.5 * (P + P.T)
+    solve = ((lambda R: scipy.linalg.solve_discrete_lyapunov(A, R)) if sampled else
+             (lambda R: scipy.linalg.solve_continuous_lyapunov(A, -R)))
+    P = solve(Q)
+    P = 0.5 * (P + P.T)
+    # one step of iterative refinement: the error of P solves the same equation with the
+    # residual in place of Q. A lightly damped loop's solution loses digits to the equation's
+    # conditioning (an output of small variance beside large states: its C P C^T may come out
+    # of the wrong sign); the residual, formed in working precision, carries that error
+    R = (A @ P @ A.T + Q - P) if sampled else (A @ P + P @ A.T + Q)
+    dP = solve(0.5 * (R + R.T))
+    return P + 0.5 * (dP + dP.T)
 
 
 def _window_statistics(A, C, P, window, T, placement):
