@@ -63,6 +63,7 @@ import control
 import numpy as np
 
 import controllers
+from controllers.pointing import PointingNotComputed
 from controllers.signals import tip_outputs
 
 from ..scene.reader import SceneError
@@ -712,7 +713,8 @@ def pointing_figures(plant, K, scene) -> dict:
     ``ape``, ``mpe``, ``rpe`` per attitude output [rad], ``jitter``, ``jitter_mpe``,
     ``jitter_rpe`` per tip output [m] (1 sigma), the same at ``probability`` (``at``, with
     ``factor``), ``window`` [s], ``placement``, ``sampled``, ``definitions``; or ``error``
-    (e.g. an unstable loop has no stationary pointing error)."""
+    (e.g. an unstable loop has no stationary pointing error), with ``not_computed`` True for
+    a stable loop whose figures could not be computed to their accuracy (the error says why)."""
     s = scene.sensors
     tips = tip_outputs(list(plant.output_labels))
     try:
@@ -721,6 +723,9 @@ def pointing_figures(plant, K, scene) -> dict:
             budget = controllers.pointing(plant, K, s.noise(), window=s.rpe_window,
                                           placement=s.placement, outputs=tips,
                                           **loop_delay(scene.controller))
+    except PointingNotComputed as exc:    # a stable loop whose figures missed their accuracy
+        return {"error": " ".join(str(exc).split()), "not_computed": True,
+                "window": s.rpe_window, "placement": s.placement}
     except ValueError as exc:
         return {"error": " ".join(str(exc).split()), "window": s.rpe_window,
                 "placement": s.placement}

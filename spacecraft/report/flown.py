@@ -255,7 +255,9 @@ def _pointing_blocks(data: dict) -> list:
     for r in rows:
         for which, p in r["pointing"].items():
             if "error" in p:
-                table.append([_who(r), which, "-", bad(p["error"]), "", "", "", ""])
+                said = (warn(f"not computed: {p['error']}") if p.get("not_computed")
+                        else bad(p["error"]))
+                table.append([_who(r), which, "-", said, "", "", "", ""])
                 continue
             for kind, mean, rel in (("ape", "mpe", "rpe"), ("jitter", "jitter_mpe",
                                                              "jitter_rpe")):

@@ -11,6 +11,7 @@ autocovariance R(m), the sample variance has Var(s^2) = (2 / N) sum_m R(m)^2 (Ba
 exactly here from a discrete Lyapunov equation; windowed statistics use the spread of 20 batch
 means. Assertions at 5 standard errors (the seeds are fixed; 5 sigma leaves room on any machine).
 """
+import importlib
 import math
 import pathlib
 import warnings
@@ -569,3 +570,14 @@ def test_the_shipped_flown_scene_design_loop_has_pointing_figures():
     for name in ("ape", "mpe", "rpe"):
         for key, value in getattr(budget, name).items():
             assert getattr(pade, name)[key] == pytest.approx(value, rel=1e-7), (name, key)
+
+
+def test_figures_that_miss_their_accuracy_are_not_reported(monkeypatch):
+    # with too few quadrature panels for its 1e-4-damped mode the delayed loop's integrals do
+    # not reach 1e-9: the figures are refused with the reason, never returned
+    module = importlib.import_module("controllers.pointing")
+    monkeypatch.setattr(module, "_MAX_PANELS", 50)
+    K = controllers.pd(LIGHT, natural_frequency=0.1, damping=0.7)
+    with pytest.raises(module.PointingNotComputed,
+                       match=r"did not reach their relative accuracy 1e-09 within 50 "):
+        controllers.pointing(LIGHT, K, NOISE, window=10.0, delay=0.1)

@@ -92,3 +92,21 @@ def test_plots_true_draws_the_flown_plots_only_where_they_show_something():
         load_scene(scene_with(**{"report": {"plots": ["profile"]}, "manoeuvre": None}))
     # the step reference drawn when asked by name
     assert load_scene(dict(BASE, report={"plots": ["profile"]})).report.plots == ("profile",)
+
+
+def test_pointing_figures_not_computed_are_said_in_words():
+    from spacecraft.report.flown import flown_blocks
+    why = ("the spectral pointing integrals did not reach their relative accuracy 1e-09 "
+           "within 100000 quadrature panels")
+    row = {"controller": "pd", "design": "poles-and-zeros", "verdict": {"stable": True},
+           "pointing": {"design": {"error": why, "not_computed": True, "window": 10.0,
+                                   "placement": "random"},
+                        "truth": {"error": "the closed loop must be asymptotically stable",
+                                  "window": 10.0, "placement": "random"}}}
+    blocks = flown_blocks({"manoeuvre": {"flown": True, "delay": {"total": 0.1}},
+                           "closed_loops": [row],
+                           "scene_resolved": {"sensors": {"attitude_density": 1e-5}}})
+    table = [b for b in blocks if b[0] == "table" and "APE (1 sigma)" in b[1]][0][2]
+    said = {r[1]: r[3] for r in table}
+    assert str(said["design"]) == "not computed: " + why and said["design"].tone == "warn"
+    assert said["truth"].tone == "bad"
