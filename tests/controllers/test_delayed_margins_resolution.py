@@ -126,3 +126,13 @@ def test_harmless_gain_bounds():
     e = a / (1 - a)
     assert e / (1 - e) <= 0.1 * (1 + 1e-12) and 0.5 + e <= 1 / 0.5 and 1 - a >= 0.6
     assert g > 0
+
+
+def test_a_grid_too_large_names_the_delay_and_what_would_do():
+    # |L| = 0.5 up to 1e9 rad/s: the delay's phase matters everywhere, 1 s of it would need
+    # ~4e8 points
+    def flat(w):
+        return np.full(np.size(w), -0.5 + 0j)
+
+    with pytest.raises(ValueError, match=r"controller\.delay = 1 s .* below about [0-9.e+-]+ s"):
+        controllers.loop_margins(flat, np.array([1.0, 1e9]), delay=1.0)
