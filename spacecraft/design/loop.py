@@ -54,7 +54,7 @@ from .verdicts import (closed_loop_poles, crossover_frequencies, design_warnings
                        resolved_frequency, verdict_dict, withheld_metrics)
 
 __all__ = ["DesignLoop", "ClosedLoops", "RunResult", "RunStats", "run", "warning_lines",
-           "input_warning_lines", "check_options"]
+           "input_warning_lines", "check_options", "unmodelled_outputs"]
 
 #: Coupled modes of the open-loop truth model in the report's modal table (from the lowest).
 MODAL_TABLE_MODES = 12
@@ -396,6 +396,7 @@ class DesignLoop(ModelBuilder):
                                      for k, (w, what, covers) in resolved.items()}
         data["truth"]["loop_band"] = loop_band
         data["design_warnings"] = design_warnings(data, loop_band=loop_band, resolved=resolved)
+        data["design_warnings"] += unmodelled_outputs(truth_sim)
         if self.flown is not None:
             data["design_warnings"] += self.flown.warnings(data)
         data["stats"] = stats.as_dict()
@@ -609,6 +610,23 @@ class DesignLoop(ModelBuilder):
                 table["plane"] = "x-y"
             tables.append(table)
         return tables
+
+
+def unmodelled_outputs(plant: control.StateSpace) -> list[dict]:
+    """The warning ``truth_output_unmodelled`` for the truth model's tip outputs that no kept
+    mode moves: their C and D rows are zero by construction (a truncation keeps the lowest
+    modes of all motions together, so a stiff motion, a wing's in-plane bending or a boom's
+    torsion, may have none), so their figures read 0 in the truth model, which is not the
+    structure's value. Exact zeros, not small ones: a row is zero only when no mode enters it."""
+    C, D = np.asarray(plant.C), np.asarray(plant.D)
+    names = [name for i, name in enumerate(plant.output_labels)
+             if "_tip_" in name and not C[i].any() and not D[i].any()]
+    if not names:
+        return []
+    return [{"code": "truth_output_unmodelled", "message": (
+        "the truth model keeps no mode that moves " + ", ".join(names) + ": their figures "
+        "read 0 on the truth model (the design model's are its own); raise fidelity.n_modes "
+        "or tighten fidelity.tolerance until each appendage keeps a mode of that motion")}]
 
 
 def _described(sc) -> dict:

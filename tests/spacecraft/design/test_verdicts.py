@@ -255,7 +255,9 @@ def test_the_unstable_three_axis_loop_shows_no_margin_as_a_guarantee(tmp_path):
     line = summary_lines(data)[1]
     assert line.tone == "bad" and "UNSTABLE" in line and "no margins" in line
     assert "disk margin" not in line
-    assert [w["code"] for w in data["design_warnings"]] == ["unstable"]
+    # beside it only what the 2-mode truth model cannot move (its stiff motions' tips)
+    assert [w["code"] for w in data["design_warnings"]
+            if w["code"] != "truth_output_unmodelled"] == ["unstable"]
     assert "guarantee nothing" in data["design_warnings"][0]["message"]
     saved = json.loads((tmp_path / "results.json").read_text())
     flags = saved["closed_loops"][0]["verdict"]["margin_flags"]
