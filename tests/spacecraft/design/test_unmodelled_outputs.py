@@ -47,4 +47,4 @@ def test_the_shipped_flown_three_axis_scene_says_which_tips_its_truth_cannot_mov
         for key, value in motions.items():
             motion = key.replace("peak_", "")
             named = f"{name}_{motion}" in warning["message"]
-            assert (value == 0.0) is named, (name, key, value)
+            assert (value == 0.0) is named, f"{name} {key}: {value}"
