@@ -388,14 +388,7 @@ def inextensible(chain: HingedChain) -> HingedChain:
     _check_chain(chain)
     if getattr(chain, "axial_stiffnesses", None) is None:
         return chain
-    return HingedChain(chain.lengths, chain.masses, chain.inertias, chain.hinge_stiffnesses,
-                       hinge_dampings=chain.hinge_dampings, com_offsets=chain.com_offsets,
-                       root=chain.root, inertias_y=chain.inertias_y,
-                       hinge_stiffnesses_y=chain.hinge_stiffnesses_y,
-                       hinge_dampings_y=chain.hinge_dampings_y,
-                       torsional_inertias=chain.torsional_inertias,
-                       torsion_stiffnesses=chain.torsion_stiffnesses,
-                       torsion_dampings=chain.torsion_dampings)
+    return _held(chain, "axial")
 
 
 def torsion_held(chain: HingedChain) -> HingedChain:
@@ -404,14 +397,20 @@ def torsion_held(chain: HingedChain) -> HingedChain:
     _check_chain(chain)
     if getattr(chain, "torsion_stiffnesses", None) is None:
         return chain
+    return _held(chain, "torsion")
+
+
+def _held(chain: HingedChain, motion: str) -> HingedChain:
+    """``chain`` rebuilt without the springs and dampers of ``motion`` ("axial", "torsion")."""
+    joints = {f"{m}_{what}": getattr(chain, f"{m}_{what}")
+              for m in ("torsion", "axial") if m != motion
+              for what in ("stiffnesses", "dampings")}
     return HingedChain(chain.lengths, chain.masses, chain.inertias, chain.hinge_stiffnesses,
                        hinge_dampings=chain.hinge_dampings, com_offsets=chain.com_offsets,
                        root=chain.root, inertias_y=chain.inertias_y,
                        hinge_stiffnesses_y=chain.hinge_stiffnesses_y,
                        hinge_dampings_y=chain.hinge_dampings_y,
-                       torsional_inertias=chain.torsional_inertias,
-                       axial_stiffnesses=chain.axial_stiffnesses,
-                       axial_dampings=chain.axial_dampings)
+                       torsional_inertias=chain.torsional_inertias, **joints)
 
 
 def torsion_frequency(chain: HingedChain) -> float | None:
