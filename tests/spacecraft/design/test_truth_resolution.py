@@ -14,16 +14,12 @@ from spacecraft.design.loop import DesignLoop
 from spacecraft.design.verdicts import design_warnings
 from spacecraft.report.pages import markdown
 from spacecraft.report.write import report_blocks
+from test_design_loop import SCENE as ROD_SCENE
 
-SCENE = {
-    "hub": {"mass": 100.0, "inertia": 50.0},
-    "appendages": [{"name": "rod", "position": [0.5, 0.0], "beam": {
-        "section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
-        "youngs_modulus": 2.06e11, "damping_ratio": 0.005}, "fit": {"match": "poles-and-zeros"}}],
-    "fidelity": {"n_modes": 1},
-    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.3}},
-    "manoeuvre": {"slew_angle": 10.0, "slew_time": 60.0, "duration": 150.0, "step": 0.1},
-}
+# the design-loop tests' rod and slew, one truth mode and a faster PD (its band above 1 rad/s)
+SCENE = {**{key: copy.deepcopy(ROD_SCENE[key]) for key in ("hub", "appendages", "manoeuvre")},
+         "fidelity": {"n_modes": 1},
+         "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.3}}}
 
 
 @pytest.fixture(scope="module")
