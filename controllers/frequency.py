@@ -208,14 +208,16 @@ class ModalEvaluator:
         G = (1.0 / (s[:, None] - self.lam)) @ self.residues + self.D.reshape(1, p * m)
         G = G.reshape(s.size, p, m)
         if self.k:
-            # (sI - T11) X = B1 by back substitution (T11 upper triangular), all s at once
-            T11, k = self.T11, self.k
-            X = np.empty((s.size, k, m), dtype=complex)
+            # (sI - T11) X = B1 by back substitution (T11 upper triangular), all s at once; X
+            # held as (k, f m) so that each step is one matrix-vector product
+            T11, k, f = self.T11, self.k, s.size
+            X = np.empty((k, f, m), dtype=complex)
             for i in range(k - 1, -1, -1):
-                # (j,) @ (f, j, m) -> (f, m): matmul, several times faster than einsum here
-                rhs = self.B1[i] + T11[i, i + 1:] @ X[:, i + 1:]
-                X[:, i] = rhs / (s - T11[i, i])[:, None]
-            G += self.C1 @ X
+                X[i] = self.B1[i]
+                if i + 1 < k:
+                    X[i] += (T11[i, i + 1:] @ X[i + 1:].reshape(k - i - 1, f * m)).reshape(f, m)
+                X[i] /= (s - T11[i, i])[:, None]
+            G += (self.C1 @ X.reshape(k, f * m)).reshape(p, f, m).transpose(1, 0, 2)
         for Ad, Bd, Cd in self.dense:
             G += _dense_response(Ad, Bd, Cd, s)
         return G

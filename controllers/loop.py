@@ -383,6 +383,8 @@ class LoopTransfer:
         with torque i not fed back (the other loops closed); none for a planar loop."""
         if not self.ch.mimo:
             return np.zeros(0, dtype=complex)
+        if getattr(self, "_loop_at_a_time_poles", None) is not None:
+            return self._loop_at_a_time_poles.copy()
         roots = []
         for i in range(self.ch.n_axes):
             cut = control.ss(self.controller.A, self.controller.B,
@@ -393,7 +395,9 @@ class LoopTransfer:
                              inputs=list(self.controller.input_labels),
                              outputs=list(self.controller.output_labels))
             roots.append(np.linalg.eigvals(close_loop(self.plant, cut).A))
-        return np.concatenate(roots).astype(complex)
+        # computed once per loop (the grid and the poles both need them)
+        self._loop_at_a_time_poles = np.concatenate(roots).astype(complex)
+        return self._loop_at_a_time_poles.copy()
 
     def poles(self) -> np.ndarray:
         """The poles of L and of its loop-at-a-time functions (s-plane, rad/s; a digital
