@@ -30,7 +30,7 @@ import numpy as np
 import scipy.linalg
 
 from .arguments import describe, positive, real_array
-from .frequency import ModalEvaluator
+from .frequency import modal_evaluator
 from .modes import design_model, inertia_matrix, rigid_body_inertia, verify_loop
 from .pd import check_sampling, rigid_crossover
 from .riccati import modal_correction, solve_care, solve_dare
@@ -344,6 +344,20 @@ def _weights_text(q_theta, q_omega, r, W_tip) -> str:
     return out + (f", deflection_weight={describe(np.diag(W_tip))}" if W_tip.size else "")
 
 
+class _LazyText:
+    """A message fragment formatted when a message uses it (``f"{text}"``), not before: the
+    design's success path formats none (the weights' text cost a twentieth of a design)."""
+
+    def __init__(self, function, *args):
+        self._function, self._args = function, args
+
+    def __str__(self) -> str:
+        return self._function(*self._args)
+
+    def __format__(self, spec: str) -> str:
+        return format(str(self), spec)
+
+
 def _rigid_bandwidths(q_theta, r, Jd, speed, weights) -> tuple[np.ndarray, np.ndarray]:
     """Rigid-body bandwidths of regulator and estimator per axis, (q/(r J^2))^(1/4) and k times
     it [rad/s], computed in logarithms (the ratio q/r of extreme weights overflows)."""
@@ -383,16 +397,16 @@ def lqr_design(plant: control.StateSpace, *, attitude_weight, rate_weight, torqu
                          f"over the regulator's; beyond, no loop resolves both) [-]; got "
                          f"{speed:.6g}")
     tip_names, W_tip = _deflection_weights(plant, deflection_weight)
-    weights = _weights_text(q_theta, q_omega, r, W_tip)
+    weights = _LazyText(_weights_text, q_theta, q_omega, r, W_tip)  # for messages only
     T = None if sample_time is None else positive(sample_time, "sample_time", "s")
     J = rigid_body_inertia(plant)
     Jd = np.diag(inertia_matrix(J)).copy()  # the inertia each torque sees first
     w_r, w_e = _rigid_bandwidths(q_theta, r, Jd, speed, weights)
-    A = np.asarray(plant.A, dtype=float)
     with np.errstate(all="ignore"):
-        # O(n) for a modal plant (its decoupled parts), one Schur form otherwise
-        w_modes = np.abs(ModalEvaluator(A, np.zeros((A.shape[0], 0)),
-                                        np.zeros((0, A.shape[0])), np.zeros((0, 0))).poles())
+        # O(n) for a modal plant (its decoupled parts), one Schur form otherwise; the
+        # evaluator of theta/torque that rigid_body_inertia used (kept with the plant): its
+        # poles are A's, whatever the channel
+        w_modes = np.abs(modal_evaluator(plant, list(ch.torques), list(ch.thetas)).poles())
     w_plant = float(w_modes.max(initial=0.0))
     # the lowest flexible mode (the rigid-body eigenvalues are ~sqrt(eps ||A||) from 0)
     w_low = float(w_modes[w_modes > 1e-6 * math.sqrt(max(w_plant, 1.0))].min(initial=np.inf))

@@ -350,6 +350,9 @@ def design_model(plant: control.StateSpace, *, critical: float, J, what: str
     cluster_tol = _CLUSTER_RTOL * norm            # Jordan blocks and repeated frequencies
     n_parts, part_of = scipy.sparse.csgraph.connected_components(
         scipy.sparse.csr_matrix(A != 0.0), directed=True, connection="weak")
+    if _nothing_to_remove(Ab, d, part_of, n_parts, b, c_theta, c_omega, Jh, critical,
+                          rigid_tol, cluster_tol):
+        return plant, [], np.zeros(0, dtype=complex)
     keep_whole: list[np.ndarray] = []
     split: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
     removed: list[RemovedMode] = []
@@ -427,6 +430,82 @@ def design_model(plant: control.StateSpace, *, critical: float, J, what: str
                         inputs=list(plant.input_labels), outputs=list(plant.output_labels),
                         states=states, name=plant.name)
     return design, sorted(removed, key=lambda m: m.frequency), np.concatenate(removed_eigs)
+
+
+# A participation this many times INFLUENCE_TOL or more decides "kept" in the batched check
+# of _nothing_to_remove; nearer the threshold the per-part analysis decides (round-off of the
+# two computations differs by ~eps cond, far below this factor).
+_CLEARLY_KEPT = 1e3
+
+
+def _nothing_to_remove(Ab, d, part_of, n_parts, b, c_theta, c_omega, Jh, critical,
+                       rigid_tol, cluster_tol) -> bool:
+    """True when a modal realisation (every decoupled part 1 x 1 or 2 x 2) clearly has no
+    mode to remove: every rigid-body part carries its share of theta/torque and every
+    undamped mode's participation is far above INFLUENCE_TOL, with no two undamped
+    eigenvalues within ``cluster_tol`` (which the per-part analysis would join or test).
+
+    The same quantities as design_model's per-part analysis (the balanced matrix ``Ab`` with
+    scaling ``d``), computed for all parts at once: each part's eigenvectors V from one
+    batched eigen-decomposition and its left eigenvectors as the rows of V^-1 (a simple
+    eigenvalue's residue (C v)(w^H B) / (w^H v) is (C v)(V^-1 B)_i). False (the per-part
+    analysis decides) for any other realisation, a cluster, a defective non-rigid part or a
+    participation within a factor _CLEARLY_KEPT of the threshold.
+    """
+    sizes = np.bincount(part_of, minlength=n_parts)
+    if sizes.max(initial=0) > 2:
+        return False
+    order = np.argsort(part_of, kind="stable")
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    bs = b / d[:, None]
+    cts, cos = c_theta * d[None, :], c_omega * d[None, :]
+    critical_lam = []
+    for size in (1, 2):
+        parts = np.flatnonzero(sizes == size)
+        if not parts.size:
+            continue
+        idx = order[starts[parts][:, None] + np.arange(size)]                # (g, size)
+        M = Ab[idx[:, :, None], idx[:, None, :]]                            # (g, size, size)
+        lam, V = np.linalg.eig(M)
+        rigid = np.abs(lam) <= rigid_tol
+        whole = rigid.all(axis=1)
+        if whole.any():
+            # nilpotent parts: the share of theta/torque (C A B, C B), as design_model
+            Mr, ir = M[whole], idx[whole]
+            bp = bs[ir]                                                     # (g, size, m)
+            share_t = np.einsum("pgi,gij,gjm->gpm", cts[:, ir], Mr, bp)
+            share_o = np.einsum("pgi,gim->gpm", cos[:, ir], bp)
+            share = np.maximum(np.linalg.norm(Jh @ share_t @ Jh, 2, axis=(1, 2)),
+                               np.linalg.norm(Jh @ share_o @ Jh, 2, axis=(1, 2)))
+            if np.any(share <= _CLEARLY_KEPT * INFLUENCE_TOL):
+                return False
+        undamped = ~rigid & (lam.real >= -critical) & ~whole[:, None]
+        if not undamped.any():
+            continue
+        parts_u = np.flatnonzero(undamped.any(axis=1))
+        with np.errstate(all="ignore"):
+            cond = np.linalg.cond(V[parts_u]) if size > 1 else np.ones(parts_u.size)
+        if not np.all(np.isfinite(cond) & (cond < 1e8)):
+            return False
+        Vu, iu = V[parts_u], idx[parts_u]
+        WB = np.linalg.solve(Vu, bs[iu].astype(complex))                   # (g, size, m)
+        Cv_t = np.einsum("pgi,gik->gkp", cts[:, iu], Vu)                    # (g, size, p)
+        Cv_o = np.einsum("pgi,gik->gkp", cos[:, iu], Vu)
+        sel = undamped[parts_u]
+        wb = np.linalg.norm(WB[sel] @ Jh, axis=1)
+        p_t = 2.0 * np.abs(lam[parts_u][sel]) * np.linalg.norm(Cv_t[sel] @ Jh.T, axis=1) * wb
+        p_o = 2.0 * np.linalg.norm(Cv_o[sel] @ Jh.T, axis=1) * wb
+        if np.any(~np.isfinite(p_t)) or np.any(np.maximum(p_t, p_o)
+                                                <= _CLEARLY_KEPT * INFLUENCE_TOL):
+            return False
+        critical_lam.append(lam[parts_u][sel])
+    if critical_lam:
+        lam = np.concatenate(critical_lam)
+        gaps = np.abs(lam[:, None] - lam[None, :])
+        np.fill_diagonal(gaps, np.inf)
+        if gaps.min() <= cluster_tol:
+            return False
+    return True
 
 
 def _joint_parts(Ab, part_of, n_parts, critical, rigid_tol, cluster_tol):
