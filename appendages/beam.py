@@ -77,7 +77,7 @@ import scipy.special
 from . import limits
 from .assembly import Segment
 from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
-                      hurwitz_tail_coefficients)
+                      chebyshev_resonance_coefficients, hurwitz_tail_coefficients)
 from .checks import as_frequency_array, check_derived, check_range
 from .errors import describe
 from .interface import inverse_2x2, place_bending_planes
@@ -1482,10 +1482,7 @@ class Beam:
             products = np.stack([l[:, 0] ** 2, l[:, 0] * l[:, 1], l[:, 1] ** 2], axis=1)
             R = self.cantilever_participation_tail(N)
             zeta, L = self.damping_ratio, self.length
-            cheb = np.empty(_TAIL_TERMS)
-            cheb[0], cheb[1] = 1.0, -2.0 * zeta
-            for m in range(2, _TAIL_TERMS):
-                cheb[m] = -2.0 * zeta * cheb[m - 1] - cheb[m - 2]
+            cheb = chebyshev_resonance_coefficients(zeta, _TAIL_TERMS)
             m = np.arange(_TAIL_TERMS)
             orders = 2 * m[None, :] + np.array([[6], [7], [8]])
             Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, N + 0.5)

@@ -48,7 +48,7 @@ from .checks import check_positive
 from .errors import describe
 
 __all__ = ["CantileverDamping", "CONVENTIONS", "MAX_MODES", "check_damping_convention",
-           "check_damping_ratio",
+           "check_damping_ratio", "chebyshev_resonance_coefficients",
            "hurwitz_tail_coefficients", "mode_groups"]
 
 _REPAIR_POINTS = 32
@@ -251,18 +251,30 @@ def check_damping_convention(convention) -> str:
                      f"fixed-root modes) or 'free-free'; got {convention!r}")
 
 
+def chebyshev_resonance_coefficients(zeta: float, n_terms: int) -> np.ndarray:
+    """U_0..U_(J-1) at -zeta: ``h(u) = 1/(1 + 2 zeta u + u**2) = sum_m U_m(-zeta) u**m``.
+
+    The generating function of the Chebyshev polynomials of the second kind (DLMF 18.12.10),
+    by their recurrence ``U_m = -2 zeta U_(m-1) - U_(m-2)`` (|U_m| <= m + 1 for zeta < 1):
+    the series of one mode's resonance factor in u = s/w_k, |u| < 1.
+    """
+    cheb = np.empty(n_terms)
+    if n_terms > 0:
+        cheb[0] = 1.0
+    if n_terms > 1:
+        cheb[1] = -2.0 * zeta
+    for j in range(2, n_terms):
+        cheb[j] = -2.0 * zeta * cheb[j - 1] - cheb[j - 2]
+    return cheb
+
+
 def hurwitz_tail_coefficients(zeta: float, n_terms: int) -> np.ndarray:
     """c_1..c_J of ``g(u) = 2 zeta u/((1 + u**2)(1 + 2 zeta u + u**2)) = sum_j c_j u**j``.
 
     The product of ``sum (-1)**i u**(2i)`` and the Chebyshev series ``sum U_m(-zeta) u**m`` of
     ``1/(1 + 2 zeta u + u**2)`` (|U_m| <= m + 1), times 2 zeta u: ``|c_j| <= zeta j**2``.
     """
-    cheb = np.empty(n_terms)
-    cheb[0] = 1.0
-    if n_terms > 1:
-        cheb[1] = -2.0 * zeta
-    for j in range(2, n_terms):
-        cheb[j] = -2.0 * zeta * cheb[j - 1] - cheb[j - 2]
+    cheb = chebyshev_resonance_coefficients(zeta, n_terms)
     alternating = np.zeros(n_terms)
     alternating[::2] = (-1.0) ** np.arange((n_terms + 1) // 2)
     return 2.0 * zeta * np.convolve(alternating, cheb)[:n_terms]

@@ -57,12 +57,15 @@ import numpy as np
 import scipy.special
 
 from . import limits
-from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
+from .damping import (MAX_MODES, CantileverDamping, check_damping_convention,
+                      check_damping_ratio, chebyshev_resonance_coefficients,
                       hurwitz_tail_coefficients)
 from .checks import as_frequency_array, check_range
 from .errors import describe
 
 __all__ = ["Rod", "MOTIONS"]
+
+_TAIL_TERMS = 12    # terms of the series in s/w_k of the modal sum's tail
 
 #: The two rod motions and the quantities (keys of RANGES) of their stiffness and inertia.
 MOTIONS = {"axial": ("axial_stiffness", "linear_density"),
@@ -129,6 +132,7 @@ class Rod:
         self.damping_ratio = check_damping_ratio(damping_ratio)
         self.damping_convention = check_damping_convention(damping_convention)
         self._cantilever = None
+        self._modal = None
 
     def __repr__(self) -> str:
         return (f"Rod(length={self.length!r}, stiffness={self.stiffness!r}, "
@@ -218,7 +222,11 @@ class Rod:
 
     def _D(self, s: np.ndarray) -> np.ndarray:
         if self.damping_ratio > 0.0 and self.damping_convention == "cantilever":
-            return self._cantilever_damping()(s.ravel())[:, 0, 0].reshape(s.shape)
+            flat = s.ravel()
+            D = self._cantilever_modal_stiffness(flat)
+            if D is None:       # |s| too high for the modal sum: the general evaluation
+                D = self._cantilever_damping()(flat)[:, 0, 0]
+            return D.reshape(s.shape)
         if self.damping_ratio == 0.0:
             _, tanhz = zcoth_and_tanh_over_z(s * self.travel_time)
             return self.rigid_inertia * s**2 * tanhz
@@ -242,6 +250,63 @@ class Rod:
                 self.damping_ratio, lambda s: self._undamped_D(s)[:, None, None], modes,
                 np.array([[self.rigid_inertia]]), tail=self._cantilever_tail)
         return self._cantilever
+
+    def _cantilever_modal_stiffness(self, s: np.ndarray) -> np.ndarray | None:
+        r"""The damped D(s) of the cantilever convention by its modal sum, at flat complex s:
+        shape (npts,), or None where it would need more than
+        :data:`~appendages.damping.MAX_MODES` modes.
+
+        With ``l_k**2 = 2 m/(b_k pi)**2``, ``w_k = b_k Omega`` (``b_k = k - 1/2``) and their
+        completeness ``sum_k l_k**2 = m``, the modal form
+        ``D = m s**2 - s**4 sum_k l_k**2/(s**2 + 2 zeta w_k s + w_k**2)`` is
+
+            D(s) = s**2 sum_{k<=N} l_k**2 (w_k**2 + 2 zeta w_k s)/(s**2 + 2 zeta w_k s + w_k**2)
+                   + s**2 R_N - s**4 sum_{k>N} l_k**2/w_k**2 h(s/w_k),
+
+        ``R_N = (2 m/pi**2) zeta(2, N + 1/2)`` (Hurwitz) and ``h(u) = 1/(1 + 2 zeta u + u**2)
+        = sum_j U_j(-zeta) u**j`` (:func:`~appendages.damping.chebyshev_resonance_coefficients`),
+        so the last sum is ``Omega**2 (2 m/pi**2) sum_j U_j(-zeta) v**(4+j) zeta(4 + j,
+        N + 1/2)``, ``v = s/Omega``. N (a power of two, at least 16) puts every mode up to
+        10 max|s| in the explicit sum: |u| <= 1/10 in the tail, whose 12 terms leave below
+        1e-11 of it (|U_j| <= j + 1). No term cancels another (a mode far below |s| gives
+        about ``l**2 w_k**2``, one far above ``l**2 s**2``; the denominators are written
+        ``(s - i w_k)(s + i w_k) + 2 zeta w_k s``, no difference of squares near a resonance).
+        The same function as the closed form with damping corrections of
+        :class:`~appendages.damping.CantileverDamping`, to rounding, at a fraction of its
+        cost (no circle mean about the undamped poles); s = 0 gives 0.
+        """
+        Omega = math.pi / self.travel_time
+        top = float(np.max(np.abs(s), initial=0.0))
+        N = 16
+        while (N + 0.5) * Omega < 10.0 * top:
+            N *= 2
+            if N > MAX_MODES:
+                return None
+        if self._modal is None or self._modal[0] != N:
+            m, zeta = self.rigid_inertia, self.damping_ratio
+            b = np.arange(1, N + 1) - 0.5
+            j = np.arange(_TAIL_TERMS)
+            scale = 2.0 * m / math.pi**2
+            tail = (chebyshev_resonance_coefficients(zeta, _TAIL_TERMS) * Omega**2 * scale
+                    * scipy.special.zeta(4.0 + j, N + 0.5))
+            self._modal = (N, b * Omega, scale / b**2,
+                           scale * float(scipy.special.zeta(2.0, N + 0.5)), tail)
+        _, w, l2, rest, tail = self._modal
+        two_zeta_w = 2.0 * self.damping_ratio * w
+        D = np.empty(s.size, dtype=np.complex128)
+        chunk = max(1, 1_000_000 // N)
+        for start in range(0, s.size, chunk):
+            ss = s[start:start + chunk]
+            col = ss[:, None]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                factor = ((w**2 + two_zeta_w * col)
+                          / ((col - 1j * w) * (col + 1j * w) + two_zeta_w * col))
+            v = ss / Omega
+            series = np.zeros(ss.size, dtype=np.complex128)
+            for t in range(_TAIL_TERMS - 1, -1, -1):
+                series = series * v + tail[t]
+            D[start:start + chunk] = ss**2 * (factor @ l2 + rest) - v**4 * series
+        return D
 
     def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:
         """The damping of the cantilever modes k > n, exactly: ``l_k**2 = 2 m/(b_k pi)**2``,
