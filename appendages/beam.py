@@ -92,6 +92,7 @@ __all__ = ["Beam", "characteristic_roots", "rectangle_torsion_constant"]
 _SERIES_RADIUS = 2.0  # |x| below which the power series in y = x**4 are used
 _MAX_CORRECTION_MODES = 20000  # free-free modes summed explicitly in a damping correction
 _TAIL_TERMS = 12      # terms of the series in s/w_k of the damping correction's tail
+_TAIL_POWERS = np.arange(4, 4 + _TAIL_TERMS)    # the powers of s/c0 in the modal sum's tail
 #: Most cantilever modes of the modal sum of the damped root dynamic stiffness (beyond, the
 #: closed form with damping corrections of :mod:`appendages.damping`).
 _MODAL_MAX_MODES = 1024
@@ -1468,7 +1469,7 @@ class Beam:
         (no repair about the undamped poles, one pass over the points); s = 0 gives 0.
         """
         c0 = self.frequency_scale
-        top = float(np.max(np.abs(s), initial=0.0))
+        top = float(np.abs(s).max()) if s.size else 0.0
         N = 16
         while ((N + 0.5) * math.pi) ** 2 * c0 < 10.0 * top:
             N *= 2
@@ -1487,20 +1488,17 @@ class Beam:
             orders = 2 * m[None, :] + np.array([[6], [7], [8]])
             Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, N + 0.5)
             scale = 4.0 * self.linear_density / L * c0**2 * np.array([L**2, L**3, L**4])[:, None]
-            data = (w, products, np.array([R[0, 0], R[0, 1], R[1, 1]]),
-                    scale * cheb[None, :] * Z)
+            data = (w, w**2, 2.0 * zeta * w, products, np.array([R[0, 0], R[0, 1], R[1, 1]]),
+                    (scale * cheb[None, :] * Z).T)
             self._cache[key] = data
-        w, products, rest, coefficients = data
-        two_zeta_w = 2.0 * self.damping_ratio * w
+        w, w2, two_zeta_w, products, rest, coefficients = data
         ss = s[:, None]
+        damping = two_zeta_w * ss
         with np.errstate(divide="ignore", invalid="ignore"):
-            factor = (w**2 + two_zeta_w * ss) / ((ss - 1j * w) * (ss + 1j * w) + two_zeta_w * ss)
-        s2 = s**2
-        v = s / c0
-        tail = np.zeros((3, s.size), dtype=np.complex128)
-        for t in range(_TAIL_TERMS - 1, -1, -1):
-            tail = tail * v + coefficients[:, t:t + 1]
-        entries = s2[:, None] * (factor @ products + rest) - (v**4)[:, None] * tail.T
+            factor = (w2 + damping) / ((ss - 1j * w) * (ss + 1j * w) + damping)
+        # the tail's series sum_m c_m v**(4+m) (integer powers: a few ulp each)
+        tail = ((s / c0)[:, None] ** _TAIL_POWERS) @ coefficients
+        entries = (s**2)[:, None] * (factor @ products + rest) - tail
         D = np.empty((s.size, 2, 2), dtype=np.complex128)
         D[:, 0, 0], D[:, 0, 1], D[:, 1, 1] = entries.T
         D[:, 1, 0] = D[:, 0, 1]

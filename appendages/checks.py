@@ -168,9 +168,12 @@ def as_frequency_array(s) -> np.ndarray:
         raise TypeError(f"s must be a complex number or array of them [rad/s]; got dtype {arr.dtype}")
     limits.check("s (number of points)", arr.size, "points", "points at once")
     arr = arr.astype(np.complex128)
+    magnitude = np.abs(arr)
+    # one pass for the common case: NaN fails every comparison, inf the upper bound
+    if (((magnitude >= S_RANGE[0]) & (magnitude <= S_RANGE[1])) | (magnitude == 0)).all():
+        return arr
     if not np.all(np.isfinite(arr)):
         raise ValueError("s must be finite [rad/s]; got a NaN or infinite value")
-    magnitude = np.abs(arr)
     outside = (magnitude != 0) & ((magnitude < S_RANGE[0]) | (magnitude > S_RANGE[1]))
     if np.any(outside):
         raise ValueError(
