@@ -66,7 +66,7 @@ import numpy as np
 from appendages import limits
 from appendages.interface import describe
 
-__all__ = ["FidelityChoice", "choose_n_modes", "low_band", "transfer_theta_torque", "gain_error",
+__all__ = ["FidelityChoice", "choose_n_modes", "motion_counts", "low_band", "transfer_theta_torque", "gain_error",
            "closed_loop_change", "refine_for_closed_loop", "DAMPING_SCALE",
            "clamped_frequencies"]
 
@@ -143,6 +143,51 @@ def clamped_frequencies(beam, omega_max: float, *, three_axis: bool = False) -> 
             n *= 2
             w = beam.cantilever_frequencies(n)
     return w[:int(np.searchsorted(w, omega_max, side="right")) + 1]
+
+
+def motion_counts(beam, n_modes: int, method: str, seen: tuple = ()) -> dict:
+    """Modes per motion of a three-axis truncation that keeps, of a uniform beam, the lowest
+    mode of every motion in ``seen`` that the beam has and, beyond those, the ``n_modes``
+    lowest of all its motions (and any tying with the last: a round section's twin).
+
+    Parameters
+    ----------
+    beam : appendages.Beam
+        A uniform three-axis beam (its four motions separate).
+    n_modes : int
+        Modes beyond the floor (>= 1).
+    method : str
+        Truncation method: Craig-Bampton ranks cantilever modes, the others free-free ones.
+    seen : tuple of str
+        Motions (``"xy"``, ``"xz"``, ``"torsion"``, ``"axial"``) whose lowest mode is kept
+        whatever its frequency.
+
+    Returns
+    -------
+    dict
+        ``{"xy": .., "xz": .., "torsion": .., "axial": ..}`` for
+        ``beam.truncated(n, method=method, modes_per_motion=...)``. With ``seen``, beyond the
+        floor the n lowest distinct frequencies are kept (twins count once), so each added n
+        adds at least one mode and a search over n never compares a model with itself.
+        Without ``seen``: the n lowest of all motions, as
+        :attr:`appendages.ModalBeam.modes_per_motion`.
+    """
+    kind = "cantilever_frequencies" if method == "craig-bampton" else "natural_frequencies"
+    k = int(n_modes) + 1
+    frequencies = {"xy": getattr(beam.planar_view("xy"), kind)(k),
+                   "xz": getattr(beam.planar_view("xz"), kind)(k)}
+    for name, rod in (("torsion", beam.torsion_rod()), ("axial", beam.axial_rod())):
+        frequencies[name] = getattr(rod, kind)(k) if rod is not None else np.zeros(0)
+    floor = {name: int(name in seen and f.size > 0) for name, f in frequencies.items()}
+    rest = np.sort(np.concatenate([f[floor[name]:] for name, f in frequencies.items()]))
+    if not seen:
+        cutoff = rest[int(n_modes) - 1] * (1.0 + 1e-12)
+    else:
+        # distinct frequencies: a round section's twins count once, so that n + 1 always adds
+        levels = rest[np.concatenate([[True], np.diff(rest) > 1e-12 * rest[1:]])]
+        cutoff = levels[min(int(n_modes), levels.size) - 1] * (1.0 + 1e-12)
+    return {name: floor[name] + int(np.count_nonzero(f[floor[name]:] <= cutoff))
+            for name, f in frequencies.items()}
 
 
 def low_band(bandwidth: float, factor: float, first_frequency: float,

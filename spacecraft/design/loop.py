@@ -310,6 +310,10 @@ class DesignLoop(ModelBuilder):
             **({"choice": choice.as_dict()} if choice is not None else {}),
             **({"given": True} if self.given is not None else {}),
         }
+        per_motion = self.truth_modes_per_motion(n_modes)
+        if per_motion:
+            data["fidelity"]["modes_per_motion"] = per_motion
+            data["fidelity"]["motions_kept"] = list(self.seen_motions())
 
         with self.stage("building plants"):
             truth_sc = self.truth_spacecraft(n_modes)
@@ -617,7 +621,10 @@ def unmodelled_outputs(plant: control.StateSpace) -> list[dict]:
     mode moves: their C and D rows are zero by construction (a truncation keeps the lowest
     modes of all motions together, so a stiff motion, a wing's in-plane bending or a boom's
     torsion, may have none), so their figures read 0 in the truth model, which is not the
-    structure's value. Exact zeros, not small ones: a row is zero only when no mode enters it."""
+    structure's value. Exact zeros, not small ones: a row is zero only when no mode enters it.
+    A truncation chosen from the tolerance keeps a mode of every motion a tip output sees
+    (:meth:`spacecraft.design.models.ModelBuilder.truncation`): this is for a given
+    ``fidelity.n_modes`` and for beams whose motions couple."""
     C, D = np.asarray(plant.C), np.asarray(plant.D)
     names = [name for i, name in enumerate(plant.output_labels)
              if "_tip_" in name and not C[i].any() and not D[i].any()]
@@ -626,7 +633,9 @@ def unmodelled_outputs(plant: control.StateSpace) -> list[dict]:
     return [{"code": "truth_output_unmodelled", "message": (
         "the truth model keeps no mode that moves " + ", ".join(names) + ": their figures "
         "read 0 on the truth model (the design model's are its own); raise fidelity.n_modes "
-        "or tighten fidelity.tolerance until each appendage keeps a mode of that motion")}]
+        "until each appendage keeps a mode of that motion, or leave fidelity.n_modes out: the "
+        "number chosen from fidelity.tolerance keeps the lowest mode of every motion a tip "
+        "output sees")}]
 
 
 def _described(sc) -> dict:

@@ -32,7 +32,7 @@ from appendages.interface import FlexsatError
 
 from ..dynamics.coupling import Spacecraft
 from .fidelity import (MAX_MODES, FidelityChoice, choose_n_modes, clamped_frequencies,
-                       refine_for_closed_loop)
+                       motion_counts, refine_for_closed_loop)
 from ..dynamics.hub import Hub, Mount
 from ..scene.limits import estimate_cost
 from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
@@ -324,13 +324,52 @@ class ModelBuilder:
             return self.beam(spec).undamped()
         return self.cached(("undamped beam", spec.beam), build)
 
+    def seen_motions(self) -> tuple:
+        """The motions of a three-axis beam that the run's reported outputs see and that a
+        truncation chosen from the tolerance must keep a mode of: with ``outputs.tip_deflection``
+        bending in both planes (``<name>_tip_deflection_y``, ``_z``) and torsion
+        (``<name>_tip_twist``); no tip output sees the axial motion. Empty for a planar scene,
+        without tip outputs, or with ``fidelity.n_modes`` given (the user's count is kept as
+        it is, and a tip output it leaves without a mode is warned about:
+        :func:`spacecraft.design.loop.unmodelled_outputs`)."""
+        scene = self.scene
+        if (not self.three_axis or scene.fidelity.n_modes is not None
+                or not scene.outputs.tip_deflection):
+            return ()
+        return ("xy", "xz", "torsion")
+
+    def truncation(self, beam, n_modes: int):
+        """``beam`` truncated by the scene's method: its ``n_modes`` lowest (planar: bending)
+        modes; in a three-axis scene that reports tip outputs, with ``n_modes`` chosen from the
+        tolerance, the lowest mode of every motion they see (:meth:`seen_motions`) that the
+        beam has and the ``n_modes`` lowest of the rest
+        (:func:`spacecraft.design.fidelity.motion_counts`), so that no tip output of the truth
+        model reads 0 for want of a mode. A beam whose motions couple (a tip body, segments)
+        keeps its n lowest coupled modes."""
+        method = self.scene.fidelity.method
+        seen = self.seen_motions()
+        if not seen or not getattr(beam, "is_uniform", False):
+            return beam.truncated(n_modes, method=method)
+        return beam.truncated(n_modes, method=method,
+                              modes_per_motion=motion_counts(beam, n_modes, method, seen))
+
+    def truth_modes_per_motion(self, n_modes: int | None) -> dict:
+        """Modes per motion (``xy``, ``xz``, ``torsion``, ``axial``) of each three-axis
+        truncated truth beam whose motions are separate, by appendage name (empty for a planar
+        scene or without truncated beams)."""
+        if not self.three_axis or n_modes is None or self.given is not None:
+            return {}
+        return {a.name: self.truth_model(a, n_modes).modes_per_motion
+                for a in self.scene.appendages
+                if a.truth == "beam" and getattr(self.beam(a), "is_uniform", False)}
+
     def truth_model(self, spec: AppendageSpec, n_modes: int | None):
         if spec.truth == "modal":
             return self.beam(spec)  # all the modes of the data: FE-exact
         if spec.truth == "beam":
             def build():
                 with self.scene_values("fidelity"):
-                    return self.beam(spec).truncated(n_modes, method=self.scene.fidelity.method)
+                    return self.truncation(self.beam(spec), n_modes)
             return self.cached(("truncated", spec.name, n_modes, self.scene.fidelity.method),
                                build)
         return self.chain(spec, spec.truth_chain or spec.chain)
@@ -535,7 +574,7 @@ class ModelBuilder:
             # undamped beams skip the damping projection, and only the chosen one is built
             # with damping.
             def truncated(n):
-                models = [self.undamped_beam(a).truncated(n, method=scene.fidelity.method)
+                models = [self.truncation(self.undamped_beam(a), n)
                           if a.truth == "beam" else self.truth_model(a, n)
                           for a in scene.appendages]
                 sc = self.spacecraft(("undamped truth", n), models)

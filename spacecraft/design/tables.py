@@ -114,6 +114,10 @@ def describe_model(model) -> dict:
                    com_offsets=model.com_offsets.tolist())
     if hasattr(model, "n_modes"):
         out.update(n_modes=int(model.n_modes), method=getattr(model, "method", None))
+        try:
+            out["modes_per_motion"] = dict(model.modes_per_motion)
+        except (AttributeError, ValueError):
+            pass   # planar, or a beam whose motions couple
     if hasattr(model, "poles"):
         try:
             out["natural_frequencies"] = np.asarray(model.poles())[:6].tolist()

@@ -438,6 +438,11 @@ def _question(data: dict) -> list:
     return [("h2", "The question"), ("ul", items)]
 
 
+#: A three-axis beam's motions in words (spacecraft.design.models.ModelBuilder.seen_motions).
+_MOTION_WORDS = {"xy": "bending in x-y", "xz": "bending in x-z", "torsion": "torsion",
+                 "axial": "axial motion"}
+
+
 def _models(data: dict) -> list:
     b: list = [("h2", "Models")]
     fid = data["fidelity"]
@@ -448,6 +453,19 @@ def _models(data: dict) -> list:
                        f"plant keeps {truth['modes_kept']} of {plural(truth['modes_total'], 'mode')}"
                        f" ({truth['modes_dropped']} pruned: not excited by the inputs or not "
                        f"seen by the outputs) and has {plural(truth['n_states'], 'state')}."))
+        per_motion = fid.get("modes_per_motion")
+        if per_motion:
+            kept = fid.get("motions_kept") or []
+            text = ("Modes per motion of each truncated beam (bending in its x-y and x-z planes, "
+                    "torsion, axial): " + "; ".join(
+                        f"{name} " + ", ".join(f"{m} {c}" for m, c in counts.items())
+                        for name, counts in per_motion.items()) + ".")
+            if kept:
+                text += (" Besides the lowest of all motions, each keeps at least the lowest "
+                         "mode of every motion a tip output sees (" + ", ".join(
+                             _MOTION_WORDS.get(m, m) for m in kept) + "), so that no tip "
+                         "figure of the truth model reads 0 for want of a mode.")
+            b.append(("p", text))
         choice = fid.get("choice")
         if choice:
             b.append(("p", f"Why {fid['n_modes']}: n_modes is the smallest number meeting the "
