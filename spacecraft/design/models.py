@@ -282,9 +282,18 @@ class ModelBuilder:
 
         def built():
             if chain.from_beam is None:
+                # a three-axis chain's other motions: None (a planar scene's) is the default
                 return HingedChain(chain.lengths, chain.masses, chain.inertias,
                                    chain.hinge_stiffnesses, hinge_dampings=chain.hinge_dampings,
-                                   com_offsets=chain.com_offsets, root=chain.root)
+                                   com_offsets=chain.com_offsets, root=chain.root,
+                                   inertias_y=chain.inertias_y,
+                                   hinge_stiffnesses_y=chain.hinge_stiffnesses_y,
+                                   hinge_dampings_y=chain.hinge_dampings_y,
+                                   torsional_inertias=chain.torsional_inertias,
+                                   torsion_stiffnesses=chain.torsion_stiffnesses,
+                                   torsion_dampings=chain.torsion_dampings,
+                                   axial_stiffnesses=chain.axial_stiffnesses,
+                                   axial_dampings=chain.axial_dampings)
             base = HingedChain.rfem(self.beam(spec), chain.n_bodies)
             if chain.root == "rigid":
                 return base

@@ -311,9 +311,28 @@ key                                    unit       meaning
                                                   default 0.3 (a section is needed: torsion
                                                   and axial motion; no ``"uniform"``); planar
                                                   scenes refuse it
-``appendages[i].chain``                -          ``from_beam = "rfem"`` only (the 3-D rigid
-                                                  finite elements of the beam, rigid root): an
-                                                  explicit chain's arrays are planar
+``appendages[i].chain``                -          a rigid root; ``from_beam = "rfem"`` (the 3-D
+                                                  rigid finite elements of the beam) or the
+                                                  arrays: ``lengths``, ``masses``,
+                                                  ``com_offsets`` shared by every motion,
+                                                  ``inertias``, ``hinge_stiffnesses``,
+                                                  ``hinge_dampings`` of x-y bending (about the
+                                                  body's local z) and
+``appendages[i].chain.inertias_y``     kg m^2     x-z bending: inertias about each body's
+                                                  local y; default ``inertias``
+``appendages[i].chain.hinge_stiffnesses_y``  N m/rad  x-z bending, one per joint; default
+                                                  ``hinge_stiffnesses``
+``appendages[i].chain.hinge_dampings_y``  N m s/rad  x-z bending, one per joint; default
+                                                  ``hinge_dampings``
+``appendages[i].chain.torsional_inertias``  kg m^2  each body's moment about the chain's
+                                                  axis (required with the arrays)
+``appendages[i].chain.torsion_stiffnesses``  N m/rad  one per joint; default none
+                                                  (torsionally rigid joints)
+``appendages[i].chain.torsion_dampings``  N m s/rad  one per joint (needs
+                                                  ``torsion_stiffnesses``); default 0
+``appendages[i].chain.axial_stiffnesses``  N/m    one per joint; default none (inextensible)
+``appendages[i].chain.axial_dampings``  N s/m     one per joint (needs
+                                                  ``axial_stiffnesses``); default 0
 ``wheels.spin_axes``                   -          ``[[x, y, z], ...]``: each wheel's spin axis
                                                   (hub axes; they must span x, y, z), or
 ``wheels.pyramid.cant_angle``          deg        four wheels about +z, each at this angle from
@@ -329,8 +348,8 @@ key                                    unit       meaning
 ``manoeuvre.disturbance.axis``         -          ``"x"``, ``"y"``, ``"z"`` or ``[x, y, z]``
                                                   (hub axes): the direction of
                                                   ``disturbance_torque`` or ``force``
-(every other key as in a planar scene; a three-axis scene refuses by key, with the reason, what
-its run does not do yet: explicit chain arrays; a given controller takes the three axes'
+(every other key as in a planar scene; a planar scene refuses the three-axis chain keys by
+name; a given controller takes the three axes'
 signals, :mod:`spacecraft.scene.given`; the manoeuvre as flown is the eigen-axis slew about the
 slew axis, with the wheels' spin axes or a pyramid and noise per axis)
 =====================================  =========  ==============================================
@@ -379,6 +398,12 @@ stepped or tapered beam: its segments assembled)
 ``chain.hinge_stiffnesses``, ``root_stiffness``       1e-6 .. 1e12         N m/rad
 ``chain.hinge_dampings``, ``root_damping``            0 or 1e-12 .. 1e12   N m s/rad
 ``chain.com_offsets``                                 0 .. body length     m
+``chain.inertias_y``                                  0 or 1e-12 .. 1e10   kg m^2
+``chain.torsional_inertias``                          1e-12 .. 1e10        kg m^2
+``chain.hinge_stiffnesses_y``, ``torsion_stiffnesses``  1e-6 .. 1e12       N m/rad
+``chain.hinge_dampings_y``, ``torsion_dampings``      0 or 1e-12 .. 1e12   N m s/rad
+``chain.axial_stiffnesses``                           1e-6 .. 1e15         N/m
+``chain.axial_dampings``                              0 or 1e-12 .. 1e12   N s/m
 ``fidelity.tolerance``                                1e-12 .. 0.5         -
 ``fidelity.bandwidth_factor``                         1 .. 1e3             -
 ``controller.sample_rate``                            1e-3 .. 1e6          Hz
@@ -969,6 +994,17 @@ _CHAIN_ARRAYS = {"lengths": "chain.lengths", "masses": "chain.masses",
                  "inertias": "chain.inertias", "hinge_stiffnesses": "chain.hinge_stiffnesses",
                  "hinge_dampings": "chain.hinge_dampings", "com_offsets": "chain.com_offsets"}
 
+#: An explicit chain's three-axis arrays (key -> range kind), :class:`appendages.HingedChain`'s
+#: names: per body (inertias about local y, about the axis) or per joint.
+_CHAIN_ARRAYS_3 = {"inertias_y": "chain.inertias", "torsional_inertias": "chain.torsional_inertias",
+                   "hinge_stiffnesses_y": "chain.hinge_stiffnesses",
+                   "hinge_dampings_y": "chain.hinge_dampings",
+                   "torsion_stiffnesses": "chain.hinge_stiffnesses",
+                   "torsion_dampings": "chain.hinge_dampings",
+                   "axial_stiffnesses": "chain.axial_stiffnesses",
+                   "axial_dampings": "chain.axial_dampings"}
+_PER_BODY_3 = ("inertias_y", "torsional_inertias")
+
 
 def _read_chain(r: SceneReader, data, path: str, has_beam: bool) -> ChainSpec:
     t = r.table(data, path)
@@ -989,29 +1025,51 @@ def _read_chain(r: SceneReader, data, path: str, has_beam: bool) -> ChainSpec:
                | ({"root_stiffness", "root_damping"} if root == "hinged" else set()))
         return ChainSpec(root=root, from_beam=from_beam, n_bodies=n_bodies,
                          root_stiffness=root_stiffness, root_damping=root_damping)
+    three_axis = getattr(r, "three_axis", False)
+    if not three_axis:
+        for key in _CHAIN_ARRAYS_3:
+            if key in t:
+                raise r.error(f"{path}.{key}", "is a three-axis chain's key (x-z bending, "
+                              "torsion, axial motion); a planar scene's chain bends in the x-y "
+                              "plane only (inertias, hinge_stiffnesses, hinge_dampings)")
     values = {}
     for key in ("lengths", "masses", "inertias", "hinge_stiffnesses"):
         values[key] = r.vector(t, key, path, _CHAIN_ARRAYS[key], limit="bodies")
     for key in ("hinge_dampings", "com_offsets"):
         values[key] = r.vector(t, key, path, _CHAIN_ARRAYS[key], default=None, limit="bodies")
+    if three_axis:
+        values["torsional_inertias"] = r.vector(t, "torsional_inertias", path,
+                                                _CHAIN_ARRAYS_3["torsional_inertias"],
+                                                limit="bodies")
+        for key, kind in _CHAIN_ARRAYS_3.items():
+            if key != "torsional_inertias":
+                values[key] = r.vector(t, key, path, kind, default=None, limit="bodies")
+        for damping, spring in (("torsion_dampings", "torsion_stiffnesses"),
+                                ("axial_dampings", "axial_stiffnesses")):
+            if values[damping] is not None and values[spring] is None:
+                raise r.error(f"{path}.{damping}", f"needs the springs it damps: give "
+                              f"{path}.{spring} too")
     n = len(values["lengths"])
     n_hinges = n - 1 if root == "rigid" else n
     if n_hinges < 1:
         raise r.error(f"{path}.lengths", "must have at least 2 entries (bodies) for root = "
                       "'rigid', or 1 with root = 'hinged'")
-    for key, size in (("masses", n), ("inertias", n), ("hinge_stiffnesses", n_hinges),
-                      ("hinge_dampings", n_hinges), ("com_offsets", n)):
-        if values[key] is not None and len(values[key]) != size:
-            what = "body" if size == n and key not in ("hinge_stiffnesses", "hinge_dampings") \
-                else f"hinge (root = {root!r})"
+    per_body = ("masses", "inertias", "com_offsets", *_PER_BODY_3)
+    for key, value in values.items():
+        if key == "lengths" or value is None:
+            continue
+        size = n if key in per_body else n_hinges
+        if len(value) != size:
+            what = "body" if key in per_body else f"hinge (root = {root!r})"
             raise r.error(f"{path}.{key}", f"must have {size} entries, one per {what}; got "
-                          f"{len(values[key])}")
+                          f"{len(value)}")
     if values["com_offsets"] is not None:
         for k, (offset, length) in enumerate(zip(values["com_offsets"], values["lengths"])):
             if offset > length:
                 raise r.error(f"{path}.com_offsets[{k}]", f"must lie on the body, at most its "
                               f"length {length:g} [m]; got {offset:g}")
-    r.done(t, path, {"root", *_CHAIN_ARRAYS, "from_beam"})
+    r.done(t, path, {"root", *_CHAIN_ARRAYS, "from_beam"}
+           | (set(_CHAIN_ARRAYS_3) if three_axis else set()))
     return ChainSpec(root=root, **values)
 
 
@@ -1193,17 +1251,14 @@ def _check_three_axis_appendage(r: SceneReader, t: dict, path: str, beam) -> Non
         chain = t.get(key)
         if not isinstance(chain, Mapping):
             continue
-        if "from_beam" not in chain:
-            raise r.error(f"{path}.{key}", "an explicit chain's arrays are planar (no second "
-                          "bending plane, torsion or axial springs); in a three-axis scene give "
-                          "chain.from_beam = 'rfem' (the 3-D rigid finite elements of the "
-                          "beam) or fit 3-D chains (design = 'fit')")
         if chain.get("root", "rigid") == "hinged":
             raise r.error(f"{path}.{key}.root", "a hinged root (a drive hinge about one axis) "
                           "is planar; a three-axis chain has a rigid root")
-    if beam is None:
+    explicit = any(isinstance(t.get(key), Mapping) and "from_beam" not in t[key]
+                   for key in ("chain", "truth_chain"))
+    if beam is None and not explicit:
         raise r.error(path, "a three-axis appendage needs a structure (a beam, stepped_beam, "
-                      "tapered_beam or modal table)")
+                      "tapered_beam or modal table) or an explicit chain (its arrays)")
 
 
 def _read_controller(r: SceneReader, data, path: str) -> ControllerSpec:

@@ -354,7 +354,13 @@ def _length_or_none(model):
 
 @dataclasses.dataclass(frozen=True)
 class ChainSpec:
-    """A hinged chain: explicit arrays, or rigid finite elements of the appendage's beam."""
+    """A hinged chain: explicit arrays, or rigid finite elements of the appendage's beam.
+
+    The arrays are :class:`appendages.HingedChain`'s: ``inertias``, ``hinge_stiffnesses`` and
+    ``hinge_dampings`` of x-y bending; in a three-axis scene also those of x-z bending
+    (``..._y``; None: the x-y ones), the torsion (``torsional_inertias``, required there;
+    ``torsion_stiffnesses`` None: torsionally rigid joints) and the axial springs (None:
+    inextensible)."""
 
     root: str = "rigid"
     lengths: tuple | None = None
@@ -367,6 +373,15 @@ class ChainSpec:
     n_bodies: int | None = None
     root_stiffness: float | None = None
     root_damping: float = 0.0
+    # three axes (an explicit chain): x-z bending (None: as x-y), torsion, axial motion
+    inertias_y: tuple | None = None
+    hinge_stiffnesses_y: tuple | None = None
+    hinge_dampings_y: tuple | None = None
+    torsional_inertias: tuple | None = None
+    torsion_stiffnesses: tuple | None = None
+    torsion_dampings: tuple | None = None
+    axial_stiffnesses: tuple | None = None
+    axial_dampings: tuple | None = None
 
 
 @dataclasses.dataclass(frozen=True)

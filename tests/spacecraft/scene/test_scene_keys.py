@@ -54,6 +54,10 @@ CHAIN = {"lengths": [2.5, 5.0, 2.5], "masses": [1.53, 3.06, 1.53],
          "inertias": [0.797, 6.38, 0.797], "hinge_stiffnesses": [20.2, 20.2],
          "hinge_dampings": [0.1, 0.1], "com_offsets": [1.25, 2.5, 1.25], "root": "rigid"}
 RFEM = {"from_beam": "rfem", "n_bodies": 3}
+# the same bodies in three axes: torsion (GJ = 77.6 N m^2, rho I_p = 7.66e-6 kg m) and axial
+# springs (EA = 1.62e7 N) of the rod by the lumped rule, x-z bending as x-y (the round rod)
+CHAIN_3 = {**CHAIN, "torsional_inertias": [1.9e-5, 3.8e-5, 1.9e-5],
+           "torsion_stiffnesses": [20.7, 20.7], "axial_stiffnesses": [4.3e6, 4.3e6]}
 TUBE = {"section": "tube", "diameter": None, "outer_diameter": 0.02, "wall_thickness": 0.002}
 RECTANGLE = {"section": "rectangular", "diameter": None, "width": 0.05, "thickness": 0.01}
 UNIFORM = {"section": "uniform", "diameter": None, "density": None, "youngs_modulus": None,
@@ -123,6 +127,8 @@ def _cases(kind: str) -> dict:
         second["direction"] = 180.0
     vector = (lambda *v: list(v)) if three else (lambda *v: list(v[:2]))
     wheels = WHEELS_3 if three else WHEELS
+    # an explicit chain as the design model (three axes: with its torsion and axial springs)
+    explicit = {**CHAIN_DESIGN, f"{A}.chain": CHAIN_3 if three else CHAIN}
     return {
         "title": ({}, {"title": "another title"}),
         "hub.mass": ({}, {"hub.mass": 120.0}),
@@ -207,23 +213,35 @@ def _cases(kind: str) -> dict:
         f"{A}.fit.n_bodies": ({}, {f"{A}.fit.n_bodies": 4}),
         f"{A}.fit.match": ({}, {f"{A}.fit.match": ["poles-and-zeros", "frequencies"]}),
         f"{A}.chain": ({}, {**CHAIN_DESIGN, f"{A}.chain": RFEM}),
-        f"{A}.chain.lengths": ({**CHAIN_DESIGN, f"{A}.chain": CHAIN},
+        f"{A}.chain.lengths": (explicit,
                                {f"{A}.chain.lengths": [2.4, 5.2, 2.4]}),
-        f"{A}.chain.masses": ({**CHAIN_DESIGN, f"{A}.chain": CHAIN},
+        f"{A}.chain.masses": (explicit,
                               {f"{A}.chain.masses": [1.6, 3.0, 1.6]}),
-        f"{A}.chain.inertias": ({**CHAIN_DESIGN, f"{A}.chain": CHAIN},
+        f"{A}.chain.inertias": (explicit,
                                 {f"{A}.chain.inertias": [0.9, 6.0, 0.9]}),
-        f"{A}.chain.hinge_stiffnesses": ({**CHAIN_DESIGN, f"{A}.chain": CHAIN},
+        f"{A}.chain.hinge_stiffnesses": (explicit,
                                          {f"{A}.chain.hinge_stiffnesses": [25.0, 25.0]}),
-        f"{A}.chain.hinge_dampings": ({**CHAIN_DESIGN, f"{A}.chain": CHAIN},
+        f"{A}.chain.hinge_dampings": (explicit,
                                       {f"{A}.chain.hinge_dampings": [0.5, 0.5]}),
-        f"{A}.chain.com_offsets": ({**CHAIN_DESIGN, f"{A}.chain": CHAIN},
+        f"{A}.chain.com_offsets": (explicit,
                                    {f"{A}.chain.com_offsets": [1.0, 2.5, 1.0]}),
-        f"{A}.chain.root": ({**CHAIN_DESIGN, f"{A}.chain": CHAIN},
+        f"{A}.chain.root": (explicit,
                             {f"{A}.chain.root": "hinged",
                              f"{A}.chain.hinge_stiffnesses": [5.0, 20.2, 20.2],
                              f"{A}.chain.hinge_dampings": None}),
-        f"{A}.chain.from_beam": ({**CHAIN_DESIGN, f"{A}.chain": CHAIN},
+        f"{A}.chain.inertias_y": (explicit, {f"{A}.chain.inertias_y": [0.9, 6.0, 0.9]}),
+        f"{A}.chain.hinge_stiffnesses_y": (explicit,
+                                           {f"{A}.chain.hinge_stiffnesses_y": [25.0, 25.0]}),
+        f"{A}.chain.hinge_dampings_y": (explicit, {f"{A}.chain.hinge_dampings_y": [0.5, 0.5]}),
+        f"{A}.chain.torsional_inertias": (explicit, {f"{A}.chain.torsional_inertias": [
+            1.9e-5, 5.0e-5, 1.9e-5]}),
+        f"{A}.chain.torsion_stiffnesses": (explicit,
+                                           {f"{A}.chain.torsion_stiffnesses": [30.0, 30.0]}),
+        f"{A}.chain.torsion_dampings": (explicit, {f"{A}.chain.torsion_dampings": [1e-3, 1e-3]}),
+        f"{A}.chain.axial_stiffnesses": (explicit,
+                                         {f"{A}.chain.axial_stiffnesses": [5e6, 5e6]}),
+        f"{A}.chain.axial_dampings": (explicit, {f"{A}.chain.axial_dampings": [10.0, 10.0]}),
+        f"{A}.chain.from_beam": (explicit,
                                  {f"{A}.chain": RFEM}),
         f"{A}.chain.n_bodies": ({**CHAIN_DESIGN, f"{A}.chain": RFEM},
                                 {f"{A}.chain.n_bodies": 5}),
