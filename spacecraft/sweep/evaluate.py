@@ -51,7 +51,8 @@ What a sample records, so that every verdict can be read and checked:
   report withholds it (:func:`spacecraft.design.verdicts.withheld_metrics`);
 * the controller: with ``design = "per-sample"`` each sample's in the column ``controller``
   (JSON: kind and state-space matrices, :func:`spacecraft.scene.given.controller_record`;
-  a PD's gains also in ``pd_kp``, ``pd_kd``); with ``design = "nominal"`` the one controller in
+  a PD's gains also in ``pd_kp``, ``pd_kd``, a three-axis PD's per hub axis in ``pd_kp_x``..
+  ``pd_kd_z``, the diagonals of its gain matrices); with ``design = "nominal"`` the one controller in
   :attr:`Context.nominal_record` (the sweep's ``sweep.json`` and ``summary.json``).
 
 A sample that genuinely fails (a scene the scene reader refuses, a controller that cannot be
@@ -141,6 +142,13 @@ def _three_axis_metrics() -> dict[str, tuple[str, str, str]]:
                                                              f"return difference I + L on "
                                                              f"{model}, signed")
     for axis in "xyz":
+        out[f"pd_kp_{axis}"] = ("float", "N*m/rad", f"the sample's PD proportional gain about "
+                                                    f"{axis}: Kp[{axis}{axis}] of its 3 x 3 Kp "
+                                                    "(design = per-sample)")
+        out[f"pd_kd_{axis}"] = ("float", "N*m*s/rad", f"the sample's PD derivative gain about "
+                                                      f"{axis}: Kd[{axis}{axis}] of its 3 x 3 Kd "
+                                                      "(design = per-sample)")
+    for axis in "xyz":
         out[f"peak_torque_{axis}"] = ("float", "N*m", f"peak torque about {axis} during the slew")
         out[f"peak_attitude_error_{axis}"] = ("float", "rad", f"peak attitude error about "
                                                               f"{axis} during the slew")
@@ -156,10 +164,12 @@ METRICS.update(THREE_AXIS_METRICS)
 #: Values of the ``status`` column.
 STATUSES = ("settles", "not settled", "slew unfinished", "unstable", "diverges", "stable",
             "failed")
-_TIME_METRICS = TIME_METRICS + tuple(k for k in THREE_AXIS_METRICS
-                                      if not k.startswith(("truth_", "exact_")))
 _PER_SAMPLE = ("controller",)
 _PD = ("pd_kp", "pd_kd")
+#: A three-axis PD's gains per hub axis (the diagonals; the whole matrices: ``controller``).
+_PD_3 = tuple(f"pd_k{g}_{a}" for a in "xyz" for g in "pd")
+_TIME_METRICS = TIME_METRICS + tuple(k for k in THREE_AXIS_METRICS
+                                      if not k.startswith(("truth_", "exact_", "pd_")))
 _EXACT = tuple(k for k in METRICS if k.startswith("exact_"))
 
 #: The exact grid of a sample (:meth:`spacecraft.design.models.ModelBuilder.exact_grid`): a
@@ -224,13 +234,14 @@ class Context:
 def columns(exact: bool, time_responses: bool, *, per_sample: bool = False,
             controller: str = "lqr", three_axis: bool = False) -> list[str]:
     """Metric columns of a sweep with/without the exact reference and the slew; the
-    controller's columns with ``design = "per-sample"`` (a planar PD's gains for a PD); the
-    multiloop verdict's and the per-axis columns of a three-axis sweep."""
-    pd_gains = controller == "pd" and not three_axis
+    controller's columns with ``design = "per-sample"`` (a PD's gains for a PD: planar
+    ``pd_kp``, ``pd_kd``, three-axis per hub axis ``pd_kp_x``..``pd_kd_z``); the multiloop
+    verdict's and the per-axis columns of a three-axis sweep."""
+    gains = (_PD_3 if three_axis else _PD) if controller == "pd" and per_sample else ()
     return [k for k in METRICS if (exact or k not in _EXACT)
             and (time_responses or k not in _TIME_METRICS)
-            and (per_sample or k not in _PER_SAMPLE + _PD)
-            and (pd_gains or k not in _PD)
+            and (per_sample or k not in _PER_SAMPLE)
+            and (k in gains or k not in _PD + _PD_3)
             and (three_axis or k not in THREE_AXIS_METRICS)]
 
 
@@ -325,6 +336,9 @@ def evaluate_scene(context: Context, scene) -> dict:
                                         if k not in ("Kp", "Kd")})
         if "Kp" in record and not context.three_axis:
             out["pd_kp"], out["pd_kd"] = record["Kp"], record["Kd"]
+        elif "Kp" in record:   # per hub axis: the diagonals of the 3 x 3 gains
+            for i, a in enumerate("xyz"):
+                out[f"pd_kp_{a}"], out[f"pd_kd_{a}"] = record["Kp"][i][i], record["Kd"][i][i]
     exact_frd = loop.exact_reference_frd(**SAMPLE_GRID) if context.exact else None
     c = loop.closed_loops(context.variant, context.controller, controller=K,
                           models=("truth",), whole_manoeuvre=True, exact_frd=exact_frd)

@@ -266,7 +266,8 @@ def _log_axis(axis) -> None:
 
 
 _MODELS = {"truth": "truth model", "exact": "exact beam"}
-_WORDS = {"min_singular_value": "smallest singular value of I + L",
+_WORDS = {"pd_kp": "PD proportional gain", "pd_kd": "PD derivative gain",
+          "min_singular_value": "smallest singular value of I + L",
           "n_unstable_poles": "unstable poles", "least_damping_ratio": "least damping ratio"}
 
 
@@ -479,6 +480,9 @@ def _blocks(summary: dict, images: list) -> list:
                        "controller: kind and state-space matrices"
                        + ("; pd_kp, pd_kd: the PD's gains" if loop["controller"] == "pd"
                           and "pd_kp" in s["metrics"] else "")
+                       + ("; pd_kp_x.. pd_kd_z: the PD's gains about each hub axis (the "
+                          "diagonals of its 3 x 3 gain matrices)"
+                          if loop["controller"] == "pd" and "pd_kp_x" in s["metrics"] else "")
                        + ")."))
     if s["worst_case"]:
         b.append(("h2", "Worst case"))

@@ -110,6 +110,7 @@ def test_three_axis_columns_are_named_in_words():
     assert metric_label("truth_modulus_margin", three_axis=True) == \
         "modulus margin, least of the axes and I + L, truth model (signed)"
     assert metric_label("peak_torque_y") == "peak torque about y [N*m]"
+    assert metric_label("pd_kd_z") == "PD derivative gain about z [N*m*s/rad]"
     assert all(unit and meaning for _, unit, meaning in THREE_AXIS_METRICS.values())
 
 
@@ -295,3 +296,46 @@ def test_the_shipped_three_axis_sweep_scene_reads_and_its_box_is_physical():
         assert np.array_equal(J, J.T)
         assert np.all(np.linalg.eigvalsh(J) > 0)
     assert sweep_scene_path("three_axis").name == "three_axis.toml"
+
+
+def test_the_controller_columns_are_per_axis():
+    """A PD tuned per sample records its gains about each hub axis (the diagonals of its 3 x 3
+    matrices), as a planar sweep records its PD's two gains; a held (nominal) controller and an
+    LQR have none (their matrices are in the controller column or summary.json)."""
+    from spacecraft.sweep.evaluate import columns
+
+    gains = [f"pd_k{g}_{a}" for a in "xyz" for g in "pd"]
+    three = columns(False, True, per_sample=True, controller="pd", three_axis=True)
+    assert set(gains) <= set(three) and "pd_kp" not in three and "controller" in three
+    assert {"pd_kp", "pd_kd"} <= set(columns(False, True, per_sample=True, controller="pd"))
+    for kwargs in ({"per_sample": False, "controller": "pd"},
+                   {"per_sample": True, "controller": "lqr"}):
+        assert not set(gains + ["pd_kp", "pd_kd"]) & set(
+            columns(True, True, three_axis=True, **kwargs))
+
+
+@pytest.mark.slow
+def test_a_three_axis_pd_sweep_records_each_samples_gains_per_axis():
+    """Each sample's Kp = wn^2 J and Kd = 2 zeta wn J (J the sample's spacecraft inertia, wn
+    swept too): its columns about x, y, z equal the diagonals of the gains the design loop
+    tunes on that sample's scene (the same formula: 1e-12)."""
+    raw = scene()
+    raw["outputs"] = {"exact_reference": False}
+    parameters = {"hub.inertia[0][0]": PARAMETERS["hub.inertia[0][0]"],
+                  "controller.pd.natural_frequency": {"distribution": "uniform",
+                                                      "low": 0.08, "high": 0.12}}
+    result = run_sweep(raw, parameters=parameters, samples=2, seed=4, design="per-sample",
+                       worst_case=False, workers=1, progress=False)
+    t = result.table.to_pydict()
+    assert t["pd_kp_x"][0] != t["pd_kp_x"][1]
+    context = result.context
+    for i in range(2):
+        sample = apply_values(context.base, context.parameters,
+                              [t[k][i] for k in parameters])
+        c = run(load_scene(sample), time_responses=False).data["controllers"]
+        (pd,) = [kinds["pd"] for kinds in c.values()]
+        for j, a in enumerate("xyz"):
+            assert t[f"pd_kp_{a}"][i] == pytest.approx(pd["Kp"][j][j], rel=1e-12)
+            assert t[f"pd_kd_{a}"][i] == pytest.approx(pd["Kd"][j][j], rel=1e-12)
+        wn = t["controller.pd.natural_frequency"][i]
+        assert t["pd_kd_z"][i] / t["pd_kp_z"][i] == pytest.approx(2 * 0.7 / wn, rel=1e-12)
