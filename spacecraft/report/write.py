@@ -346,6 +346,9 @@ def _modes(data: dict, n: int) -> str:
     """What a truncated beam keeps: n bending modes (planar), the n lowest modes of every
     motion (three axes: both bending planes, torsion and axial motion together)."""
     if data.get("three_axis"):
+        if (data.get("fidelity") or {}).get("motions_kept"):
+            return (f"the lowest mode of every motion a tip output sees and "
+                    f"{plural(n, 'mode')} more (the lowest of the rest)")
         return f"{plural(n, 'mode')} (the lowest of all motions)"
     return plural(n, "bending mode")
 
@@ -461,10 +464,10 @@ def _models(data: dict) -> list:
                         f"{name} " + ", ".join(f"{m} {c}" for m, c in counts.items())
                         for name, counts in per_motion.items()) + ".")
             if kept:
-                text += (" Besides the lowest of all motions, each keeps at least the lowest "
-                         "mode of every motion a tip output sees (" + ", ".join(
-                             _MOTION_WORDS.get(m, m) for m in kept) + "), so that no tip "
-                         "figure of the truth model reads 0 for want of a mode.")
+                text += (" Each keeps the lowest mode of every motion a tip output sees (" +
+                         ", ".join(_MOTION_WORDS.get(m, m) for m in kept) + "), however stiff, "
+                         "so that no tip figure of the truth model reads 0 for want of a "
+                         "mode; n_modes counts the modes beyond those.")
             b.append(("p", text))
         choice = fid.get("choice")
         if choice:

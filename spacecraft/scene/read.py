@@ -333,6 +333,13 @@ key                                    unit       meaning
 ``appendages[i].chain.axial_stiffnesses``  N/m    one per joint; default none (inextensible)
 ``appendages[i].chain.axial_dampings``  N s/m     one per joint (needs
                                                   ``axial_stiffnesses``); default 0
+``fidelity.n_modes``                   -          modes per uniform beam, the lowest of all
+                                                  its motions together; when chosen from
+                                                  ``fidelity.tolerance`` with
+                                                  ``outputs.tip_deflection``: the modes beyond
+                                                  the lowest mode of every motion a tip output
+                                                  sees (both bending planes, torsion), which
+                                                  are kept however stiff
 ``wheels.spin_axes``                   -          ``[[x, y, z], ...]``: each wheel's spin axis
                                                   (hub axes; they must span x, y, z), or
 ``wheels.pyramid.cant_angle``          deg        four wheels about +z, each at this angle from

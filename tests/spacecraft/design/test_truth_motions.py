@@ -62,8 +62,18 @@ def _run(**overrides):
     return DesignLoop(scene).run().data
 
 
-def test_the_tolerance_driven_truth_moves_every_tip_output():
-    data = _run()
+def test_the_tolerance_driven_truth_moves_every_tip_output(tmp_path):
+    from spacecraft import write_report
+
+    scene = spacecraft.load_scene("three_axis", overrides={"export.fmu": False,
+                                                           "report.plots": False})
+    result = DesignLoop(scene).run()
+    data = result.data
+    write_report(result, tmp_path)
+    text = (tmp_path / "report.md").read_text()
+    assert "truncated to the lowest mode of every motion a tip output sees and " in text
+    counts = data["fidelity"]["modes_per_motion"]["boom"]
+    assert ("boom " + ", ".join(f"{m} {c}" for m, c in counts.items())) in text
     assert not [w for w in data["design_warnings"] if w["code"] == "truth_output_unmodelled"]
     per_motion = data["fidelity"]["modes_per_motion"]
     assert set(per_motion) == {"wing_left", "wing_right", "boom"}
