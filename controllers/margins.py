@@ -66,6 +66,8 @@ MAX_DELAY_GRID = 2_000_000
 # 2, bisection; more sections take fewer evaluations of L but count at more points, each an
 # eigenvalue problem near the crossing (8 was no faster on benchmarks/three_axis.py's loop)
 _SECTIONS = 2
+# ... or, with fewer brackets, into as many sections as give about this many points per step
+_BISECTION_POINTS = 64
 # below this |L| a crossing of the negative real axis is no margin (as in _loops_margins)
 _NEGLIGIBLE_GAIN = 1e-9
 
@@ -1017,11 +1019,16 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     to the right as the delay grows), -1 where it rises.
 
     Found from the number of eigenvalues outside the unit circle on the grid (no tracking of
-    eigenvalues needed), each change located to 1e-13 relative in frequency, the count taken
-    at _SECTIONS - 1 points of every bracket per step. ``matrix(w)``
-    gives L, shape (f, m, m) (``L``: its values on ``omega``, if known); a planar loop is the
-    m = 1 case (|L| = 1: the gain crossovers). The count needs no eigenvalues where
-    ||L||_F < 1 (every |lambda| < 1) or ||L^-1||_F < 1 (every |lambda| > 1): most of a grid.
+    eigenvalues needed), each change located to 1e-13 relative in frequency. Where the count
+    changes by one between two grid points (one eigenvalue crosses), the crossing is a sign
+    change of the product of (|lambda_k| - 1) over the eigenvalues, a function of omega as
+    continuous as they are (symmetric in them, so again no tracking), refined as a root
+    (:func:`controllers.refine.refine`, superlinear); other brackets, and any such root the
+    refinement does not confirm, are bisected on the count, at _SECTIONS - 1 points of every
+    bracket per step. ``matrix(w)`` gives L, shape (f, m, m) (``L``: its values on ``omega``,
+    if known); a planar loop is the m = 1 case (|L| = 1: the gain crossovers). The count needs
+    no eigenvalues where ||L||_F < 1 (every |lambda| < 1) or ||L^-1||_F < 1 (every
+    |lambda| > 1): most of a grid.
     """
     def count_at(w, L=None):
         with np.errstate(all="ignore"):
@@ -1033,11 +1040,16 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
             small = finite & (np.sqrt(np.sum(np.abs(L) ** 2, axis=(1, 2))) < 1.0)
             rest = finite & ~small
             if rest.any():
-                inverse = np.linalg.inv(L[rest]) if m > 1 else 1.0 / L[rest]
-                large = np.sqrt(np.sum(np.abs(inverse) ** 2, axis=(1, 2))) < 1.0
                 idx = np.nonzero(rest)[0]
-                count[idx[large]] = m
-                hard = idx[~large]
+                if m in (2, 3):
+                    decided = _outside_unit_circle(L[rest])
+                    count[idx] = decided
+                    hard = idx[decided < 0]
+                else:
+                    inverse = np.linalg.inv(L[rest]) if m > 1 else 1.0 / L[rest]
+                    large = np.sqrt(np.sum(np.abs(inverse) ** 2, axis=(1, 2))) < 1.0
+                    count[idx[large]] = m
+                    hard = idx[~large]
                 if hard.size:
                     lam[hard] = np.linalg.eigvals(L[hard])
                     count[hard] = np.sum(np.abs(lam[hard]) > 1.0, axis=1)
@@ -1052,20 +1064,61 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
             lam[finite] = np.linalg.eigvals(L[finite])
         return lam, finite
 
+    def product_at(w, task=None):
+        """prod_k (|lambda_k| - 1) at each frequency (NaN on a pole)."""
+        lam, ok = eigenvalues_at(w)
+        with np.errstate(all="ignore"):
+            return np.where(ok, np.prod(np.abs(lam) - 1.0, axis=1).real, np.nan)
+
     count, _, finite = count_at(omega, L)
     grid, count = omega[finite], count[finite]
     i = np.nonzero(count[:-1] != count[1:])[0]
     if i.size == 0:
         return []
     a, b, ca, cb = grid[i].astype(float), grid[i + 1].astype(float), count[i], count[i + 1]
-    # each step counts at _SECTIONS - 1 points inside every bracket at once (one evaluation of
-    # L for all): the bracket shrinks _SECTIONS-fold per call instead of two-fold
-    fractions = np.arange(1, _SECTIONS) / _SECTIONS
+    out = []
+    single = np.abs(cb - ca) == 1
+    if single.any():
+        ends = product_at(np.concatenate([a[single], b[single]])).reshape(2, -1)
+        # the product's sign is (-1)^(eigenvalues inside): it changes across the bracket
+        sign_change = np.isfinite(ends).all(axis=0) & (ends[0] * ends[1] < 0)
+        usable, ends = np.flatnonzero(single)[sign_change], ends[:, sign_change]
+        if usable.size:
+            (root, found), _ = refine(product_at, roots=(np.zeros(usable.size, dtype=int),
+                                                         a[usable], b[usable], ends[0], ends[1]))
+            lam, ok = eigenvalues_at(root)
+            done = found & ok
+            for k in np.flatnonzero(done):
+                j = int(np.argmin(np.abs(np.abs(lam[k]) - 1.0)))
+                change = int(cb[usable[k]]) - int(ca[usable[k]])
+                out.append((float(root[k]), complex(lam[k, j]), -1 if change > 0 else 1))
+            keep = np.ones(a.size, dtype=bool)
+            keep[usable[done]] = False
+            # a root not confirmed (the sign change is a pass through an undamped pole, where
+            # the count may change too): the count is bisected from the few 1e-13 about where
+            # the refinement closed in, if it changes there, else from the grid's bracket
+            left = np.flatnonzero(~done)
+            if left.size:
+                x = root[left]
+                lo, hi = x * (1.0 - 2e-13), x * (1.0 + 2e-13)
+                c_ends, _, ok_ends = count_at(np.concatenate([lo, hi]))
+                c_lo, c_hi = c_ends[:left.size], c_ends[left.size:]
+                near = (ok_ends[:left.size] & ok_ends[left.size:] & (c_lo != c_hi)
+                        & (lo > a[usable[left]]) & (hi < b[usable[left]]))
+                k = usable[left[near]]
+                a[k], b[k], ca[k], cb[k] = lo[near], hi[near], c_lo[near], c_hi[near]
+            a, b, ca, cb = a[keep], b[keep], ca[keep], cb[keep]
+    # each step counts at sections - 1 points inside every bracket at once (one evaluation of
+    # L for all): the bracket shrinks sections-fold per call instead of two-fold; the few
+    # brackets left once the others are refined as roots are cut into more sections, the
+    # evaluations' cost then being their calls, not their points
     for _ in range(100):
         active = (b - a) > 1e-13 * b
         if not active.any():
             break
         idx = np.nonzero(active)[0]
+        sections = max(_SECTIONS, _BISECTION_POINTS // idx.size)
+        fractions = np.arange(1, sections) / sections
         points = a[idx, None] + (b[idx] - a[idx])[:, None] * fractions      # (k, sections - 1)
         cm, _, ok = count_at(points.ravel())
         # a point on an undamped pole (non-finite L): counted as the bracket's start
@@ -1081,7 +1134,6 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
         cb[idx[inside]] = cm[rows[inside], first[inside]]
     w = 0.5 * (a + b)
     lam, ok = eigenvalues_at(w)
-    out = []
     for k in range(w.size):
         if not ok[k]:
             continue
@@ -1089,7 +1141,64 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
         closest = np.argsort(np.abs(np.abs(lam[k]) - 1.0))[:abs(change)]
         for j in closest:
             out.append((float(w[k]), complex(lam[k, j]), -1 if change > 0 else 1))
+    out.sort(key=lambda crossing: crossing[0])
     return out
+
+
+# a characteristic polynomial coefficient's rounding error, relative to the sum of the moduli
+# of the products it is made of (a few unit round-offs for a 3 x 3's minors and determinant)
+_COEFFICIENT_ERROR = 1e-12
+
+
+def _outside_unit_circle(L: np.ndarray) -> np.ndarray:
+    """Number of eigenvalues outside the unit circle of each matrix of a stack (f, m, m),
+    m = 2 or 3, where Rouche's theorem decides it from the characteristic polynomial; -1
+    elsewhere.
+
+    det(z I - L) = z^m + c_(m-1) z^(m-1) + ... + c_0, with c_(m-1) = -tr L, c_(m-2) the sum of
+    the principal 2 x 2 minors and c_0 = (-1)^m det L. Where one term dominates on the unit
+    circle, |c_k| > sum over j != k of |c_j| (c_m = 1), the polynomial has as many zeros
+    inside the circle as z^k, k, and none on it: m - k eigenvalues lie outside. Each |c_j| is
+    taken with a bound of its rounding error (_COEFFICIENT_ERROR times the sum of the moduli
+    of the products it is made of), so that the count is that of the matrix as given. Near a
+    loop's resonance one eigenvalue is large and the others small, where the Frobenius norms of
+    L and of L^-1 decide nothing: there the term z^(m-1) dominates.
+
+    References
+    ----------
+    L. V. Ahlfors, Complex Analysis, 3rd ed., McGraw-Hill 1979, ch. 4 (the argument principle,
+    Rouche's theorem).
+    """
+    m = L.shape[1]
+    A = np.abs(L)
+    d = [L[:, i, i] for i in range(m)]
+    if m == 2:
+        c = [L[:, 0, 0] * L[:, 1, 1] - L[:, 0, 1] * L[:, 1, 0], -(d[0] + d[1])]
+        e = [A[:, 0, 0] * A[:, 1, 1] + A[:, 0, 1] * A[:, 1, 0], A[:, 0, 0] + A[:, 1, 1]]
+    elif m == 3:
+        def minor(i, j, k, q):   # l_ik l_jq - l_iq l_jk and the sum of the moduli
+            return (L[:, i, k] * L[:, j, q] - L[:, i, q] * L[:, j, k],
+                    A[:, i, k] * A[:, j, q] + A[:, i, q] * A[:, j, k])
+        m12, a12 = minor(1, 2, 1, 2)
+        m02, a02 = minor(0, 2, 0, 2)
+        m01, a01 = minor(0, 1, 0, 1)
+        n12, b12 = minor(1, 2, 0, 2)
+        n11, b11 = minor(1, 2, 0, 1)
+        det = L[:, 0, 0] * m12 - L[:, 0, 1] * n12 + L[:, 0, 2] * n11
+        c = [-det, m01 + m02 + m12, -(d[0] + d[1] + d[2])]
+        e = [A[:, 0, 0] * a12 + A[:, 0, 1] * b12 + A[:, 0, 2] * b11, a01 + a02 + a12,
+             A[:, 0, 0] + A[:, 1, 1] + A[:, 2, 2]]
+    else:
+        raise ValueError(f"stack of 2 x 2 or 3 x 3 matrices expected; got {m} x {m}")
+    size = np.stack([np.abs(ck) for ck in c] + [np.ones(L.shape[0])])          # (m + 1, f)
+    error = _COEFFICIENT_ERROR * np.stack(e + [np.zeros(L.shape[0])])
+    total = np.sum(size + error, axis=0)
+    count = np.full(L.shape[0], -1)
+    for k in range(m + 1):
+        # |c_k| - its error > the others with theirs
+        dominant = (size[k] - error[k]) > total - (size[k] + error[k])
+        count[dominant] = m - k
+    return count
 
 
 def _event_delays(crossing: tuple[float, complex, int], delay: float) -> tuple[float, float]:
