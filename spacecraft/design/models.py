@@ -350,27 +350,56 @@ class ModelBuilder:
     def truncation(self, beam, n_modes: int):
         """``beam`` truncated by the scene's method: its ``n_modes`` lowest (planar: bending)
         modes; in a three-axis scene that reports tip outputs, with ``n_modes`` chosen from the
-        tolerance, the lowest mode of every motion they see (:meth:`seen_motions`) that the
-        beam has and the ``n_modes`` lowest of the rest
-        (:func:`spacecraft.design.fidelity.motion_counts`), so that no tip output of the truth
-        model reads 0 for want of a mode. A beam whose motions couple (a tip body, segments)
-        keeps its n lowest coupled modes."""
+        tolerance, also the lowest mode of every motion they see (:meth:`seen_motions`) that
+        the beam has, so that no tip output of the truth model reads 0 for want of a mode:
+        a uniform beam keeps those and the ``n_modes`` lowest of the rest
+        (:func:`spacecraft.design.fidelity.motion_counts`); a beam whose modes are ranked
+        together (a tip body, segments) keeps its ``k0 - 1 + n_modes`` lowest modes, k0 the
+        fewest lowest modes that move every seen tip motion (:meth:`coupled_floor`). Either
+        way each added n adds a mode."""
         method = self.scene.fidelity.method
         seen = self.seen_motions()
-        if not seen or not getattr(beam, "is_uniform", False):
+        if not seen:
             return beam.truncated(n_modes, method=method)
-        return beam.truncated(n_modes, method=method,
-                              modes_per_motion=motion_counts(beam, n_modes, method, seen))
+        if getattr(beam, "is_uniform", False):
+            return beam.truncated(n_modes, method=method,
+                                  modes_per_motion=motion_counts(beam, n_modes, method, seen))
+        return beam.truncated(self.coupled_floor(beam) - 1 + n_modes, method=method)
+
+    def coupled_floor(self, beam) -> int:
+        """The fewest lowest modes of a three-axis beam whose modes are ranked together (a tip
+        body, segments) that move every tip motion :meth:`seen_motions` names (a tip row of
+        its root model with a non-zero entry), searched up to the most modes the scene's
+        search may try (:meth:`max_modes`); 1 when none up to there moves them all (the
+        warning ``truth_output_unmodelled`` then names what stays unmoved)."""
+        rows = {"xy": 0, "xz": 1, "torsion": 2}
+
+        def build():
+            method = self.scene.fidelity.method
+            wanted = [rows[m] for m in self.seen_motions() if m in rows]
+            for k in range(1, self.max_modes() + 1):
+                with self.scene_values("fidelity"):
+                    tip = beam.truncated(k, method=method).root_model(6).tip_rows
+                if all(np.asarray(tip[i]).any() for i in wanted):
+                    return k
+            return 1
+        return self.cached(("coupled floor", id(beam)), build)
 
     def truth_modes_per_motion(self, n_modes: int | None) -> dict:
         """Modes per motion (``xy``, ``xz``, ``torsion``, ``axial``) of each three-axis
-        truncated truth beam whose motions are separate, by appendage name (empty for a planar
-        scene or without truncated beams)."""
+        truncated truth beam whose motions are separate (a beam whose modes are ranked
+        together: ``{"lowest coupled modes": k}``), by appendage name (empty for a planar scene
+        or without truncated beams)."""
         if not self.three_axis or n_modes is None or self.given is not None:
             return {}
-        return {a.name: self.truth_model(a, n_modes).modes_per_motion
-                for a in self.scene.appendages
-                if a.truth == "beam" and getattr(self.beam(a), "is_uniform", False)}
+        out = {}
+        for a in self.scene.appendages:
+            if a.truth != "beam":
+                continue
+            model = self.truth_model(a, n_modes)
+            out[a.name] = (model.modes_per_motion if getattr(self.beam(a), "is_uniform", False)
+                           else {"lowest coupled modes": int(model.n_modes)})
+        return out
 
     def truth_model(self, spec: AppendageSpec, n_modes: int | None):
         if spec.truth == "modal":

@@ -679,7 +679,8 @@ def _read_tip(r: SceneReader, data, path: str) -> TipSpec:
     t = r.table(data, path)
     three_axis = getattr(r, "three_axis", False)
     mass = r.number(t, "mass", path, "tip.mass")
-    value, full = r.take(t, "inertia", path, 0.0)
+    # default: a point mass (three axes: the zero tensor)
+    value, full = r.take(t, "inertia", path, ((0.0,) * 3,) * 3 if three_axis else 0.0)
     if three_axis:
         if not isinstance(value, (list, tuple)):
             raise r.error(full, "must be a 3x3 array [kg m^2] in a three-axis scene: the body's "

@@ -117,3 +117,45 @@ def test_the_floored_motions_tip_figures_are_converged():
             a = row_c["appendages"]["truth"][name][key]
             b = row_f["appendages"]["truth"][name][key]
             assert b > 0.0 and math.isclose(a, b, rel_tol=1e-4), (name, key, a, b)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("diameter", [0.05, 0.01])
+def test_a_beam_with_a_tip_body_keeps_the_fewest_lowest_modes_that_move_every_tip(diameter):
+    """A tip body's beam has its modes ranked together (no split by motion): the truth keeps
+    the fewest lowest modes k0 that move every tip motion, and k0 - 1 + n for n_modes = n;
+    one fewer leaves a tip row zero. A 50 mm steel rod's first torsion mode (about 500 rad/s)
+    lies among its lowest 40 modes; a 10 mm rod's lies above them (bending frequencies scale
+    with the diameter, torsion's do not), beyond the search: its twist stays unmodelled and
+    the warning names it."""
+    import numpy as np
+
+    rod = {"section": "rod", "length": 10.0, "diameter": diameter, "density": 7800.0,
+           "youngs_modulus": 2.06e11, "damping_ratio": 0.005}
+    raw = {"hub": {"mass": 100.0, "inertia": [[60.0, 2.0, 0.0], [2.0, 50.0, 1.0],
+                                              [0.0, 1.0, 40.0]]},
+           "appendages": [{"name": "rod", "position": [0.5, 0.0, 0.1],
+                           "orientation": [0.0, 0.0, 0.0], "beam": rod,
+                           "tip": {"mass": 1.0}, "design": "truth"}],
+           "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}},
+           "manoeuvre": {"slew_angle": 10.0, "slew_time": 30.0, "duration": 45.0,
+                         "step": 0.25, "slew_axis": [1.0, 1.0, 1.0]},
+           "outputs": {"tip_deflection": True}}
+    loop = DesignLoop(spacecraft.load_scene(raw, source="tip body"))
+    beam = loop.beam(loop.scene.appendages[0])
+    k0 = loop.coupled_floor(beam)
+    data = loop.run().data
+    unmodelled = [w for w in data["design_warnings"] if w["code"] == "truth_output_unmodelled"]
+    if diameter == 0.01:
+        assert k0 == 1 and "rod_tip_twist" in unmodelled[0]["message"]
+        return
+    assert k0 > 1
+    rows = [beam.truncated(k).root_model(6).tip_rows for k in (k0 - 1, k0)]
+    assert not all(np.asarray(row).any() for row in rows[0])
+    assert all(np.asarray(row).any() for row in rows[1])
+    for n in (1, 2):
+        assert loop.truncation(beam, n).n_modes == k0 - 1 + n
+    assert data["fidelity"]["modes_per_motion"]["rod"]["lowest coupled modes"] >= k0
+    assert not unmodelled
+    for row in data["closed_loops"]:
+        assert min(row["appendages"]["truth"]["rod"].values()) > 0.0
