@@ -27,6 +27,7 @@ ch. 2 (first-order eigenvalue shift); B. N. Parlett, C. Reinsch, Numer. Math. 13
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 
 import control
@@ -115,6 +116,25 @@ def rigid_body_inertia(plant: control.StateSpace) -> float | np.ndarray:
     """
     ch = check_plant(plant)
     ev = modal_evaluator(plant, list(ch.torques), list(ch.thetas))
+    known = _INERTIAS.get(ev)
+    if known is not None:
+        # the evaluator is the plant's own while its matrices are unchanged (modal_evaluator)
+        return known if np.ndim(known) == 0 else known.copy()
+    J = _inertia_of(ev, ch)
+    try:
+        _INERTIAS[ev] = J if np.ndim(J) == 0 else J.copy()
+    except TypeError:  # an evaluator that cannot be weakly referenced: not kept
+        pass
+    return J
+
+
+# the inertia of each evaluator's plant, while the evaluator lives (rigid_body_inertia: a
+# design loop asks for it in several places)
+_INERTIAS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _inertia_of(ev: ModalEvaluator, ch) -> float | np.ndarray:
+    """rigid_body_inertia from the evaluator of theta/torque (``ch`` the plant's channels)."""
     A1, A2 = _rigid_gain(ev)
     scale = float(np.linalg.norm(A2, 2)) if np.any(A2) else 1.0
     # a frequency scale to compare the 1/s and 1/s^2 coefficients: A1/A2 is in rad/s
