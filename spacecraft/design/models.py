@@ -660,11 +660,14 @@ class ModelBuilder:
 
     def max_modes(self) -> int:
         """Most modes per beam the search from a tolerance may try: fidelity.MAX_MODES, within
-        limits.modes and the loop size limits.states allows."""
+        limits.modes and the loop size limits.states allows (counting, in three axes, a mode
+        more per motion a tip output sees: :meth:`truncation`)."""
         scene = self.scene
         cap = min(MAX_MODES, scene.limits.modes)
+        floor = len(self.seen_motions())
         while cap > 1:
-            trial = scene.replace(fidelity=dataclasses.replace(scene.fidelity, n_modes=cap))
+            trial = scene.replace(fidelity=dataclasses.replace(scene.fidelity,
+                                                               n_modes=cap + floor))
             if estimate_cost(trial).loop_states <= scene.limits.states:
                 break
             cap -= 1
