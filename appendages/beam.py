@@ -77,7 +77,8 @@ import scipy.special
 from . import limits
 from .assembly import Segment
 from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
-                      chebyshev_resonance_coefficients, hurwitz_tail_coefficients)
+                      chebyshev_resonance_coefficients, hurwitz_tail_coefficients,
+                      modal_factor_sum)
 from .checks import as_frequency_array, check_derived, check_range
 from .errors import describe
 from .interface import inverse_2x2, place_bending_planes
@@ -1488,17 +1489,14 @@ class Beam:
             orders = 2 * m[None, :] + np.array([[6], [7], [8]])
             Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, N + 0.5)
             scale = 4.0 * self.linear_density / L * c0**2 * np.array([L**2, L**3, L**4])[:, None]
-            data = (w, w**2, 2.0 * zeta * w, products, np.array([R[0, 0], R[0, 1], R[1, 1]]),
+            data = (w, products, np.array([R[0, 0], R[0, 1], R[1, 1]]),
                     (scale * cheb[None, :] * Z).T)
             self._cache[key] = data
-        w, w2, two_zeta_w, products, rest, coefficients = data
-        ss = s[:, None]
-        damping = two_zeta_w * ss
-        with np.errstate(divide="ignore", invalid="ignore"):
-            factor = (w2 + damping) / ((ss - 1j * w) * (ss + 1j * w) + damping)
+        w, products, rest, coefficients = data
         # the tail's series sum_m c_m v**(4+m) (integer powers: a few ulp each)
         tail = ((s / c0)[:, None] ** _TAIL_POWERS) @ coefficients
-        entries = (s**2)[:, None] * (factor @ products + rest) - tail
+        entries = ((s**2)[:, None] * (modal_factor_sum(s, w, products, self.damping_ratio)
+                                      + rest) - tail)
         D = np.empty((s.size, 2, 2), dtype=np.complex128)
         D[:, 0, 0], D[:, 0, 1], D[:, 1, 1] = entries.T
         D[:, 1, 0] = D[:, 0, 1]

@@ -59,7 +59,7 @@ import scipy.special
 from . import limits
 from .damping import (MAX_MODES, CantileverDamping, check_damping_convention,
                       check_damping_ratio, chebyshev_resonance_coefficients,
-                      hurwitz_tail_coefficients)
+                      hurwitz_tail_coefficients, modal_factor_sum)
 from .checks import as_frequency_array, check_range
 from .errors import describe
 
@@ -290,21 +290,17 @@ class Rod:
             scale = 2.0 * m / math.pi**2
             tail = (chebyshev_resonance_coefficients(zeta, _TAIL_TERMS) * Omega**2 * scale
                     * scipy.special.zeta(4.0 + j, N + 0.5))
-            w = b * Omega
-            self._modal = (N, w, w**2, 2.0 * zeta * w, scale / b**2,
+            self._modal = (N, b * Omega, scale / b**2,
                            scale * float(scipy.special.zeta(2.0, N + 0.5)), tail)
-        _, w, w2, two_zeta_w, l2, rest, tail = self._modal
+        _, w, l2, rest, tail = self._modal
         D = np.empty(s.size, dtype=np.complex128)
         chunk = max(1, 1_000_000 // N)
         for start in range(0, s.size, chunk):
             ss = s[start:start + chunk]
-            col = ss[:, None]
-            damping = two_zeta_w * col
-            with np.errstate(divide="ignore", invalid="ignore"):
-                factor = (w2 + damping) / ((col - 1j * w) * (col + 1j * w) + damping)
             # the tail's series sum_j c_j v**(4+j) (integer powers: a few ulp each)
             series = ((ss / Omega)[:, None] ** _TAIL_POWERS) @ tail
-            D[start:start + chunk] = ss**2 * (factor @ l2 + rest) - series
+            D[start:start + chunk] = (ss**2 * (modal_factor_sum(ss, w, l2, self.damping_ratio)
+                                               + rest) - series)
         return D
 
     def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:

@@ -101,6 +101,10 @@ def test_modal_sum_of_the_damped_rod_equals_the_closed_form(zeta):
         closed = beam._cantilever_damping()(s)
         size = np.abs(closed).reshape(-1, 4).max(axis=1)[:, None, None]
         assert np.all(np.abs(modal - closed) <= 1e-11 * size)
+        axis = s.size // 2           # the imaginary axis alone: the real-arithmetic path
+        np.testing.assert_array_equal(s[:axis].real, 0.0)
+        modal_axis = beam._cantilever_modal_stiffness(s[:axis])
+        assert np.all(np.abs(modal_axis - closed[:axis]) <= 1e-11 * size[:axis])
         np.testing.assert_array_equal(beam.dynamic_stiffness(0.0), np.zeros((2, 2)))
         far = np.array([1j * 1e4 * wc[-1]])
         assert beam._cantilever_modal_stiffness(far) is None
@@ -173,6 +177,10 @@ def test_modal_sum_of_the_damped_rod_member_equals_the_closed_form(zeta):
         undamped = np.where(np.isfinite(undamped), undamped, 0.0)
         scale = np.abs(closed) + undamped + rod.rigid_inertia * np.abs(s) ** 2
         assert np.all(np.abs(modal - closed) <= 1e-12 * scale)
+        axis = s.size // 2           # the imaginary axis alone: the real-arithmetic path
+        np.testing.assert_array_equal(s[:axis].real, 0.0)
+        modal_axis = rod._cantilever_modal_stiffness(s[:axis])
+        assert np.all(np.abs(modal_axis - closed[:axis]) <= 1e-12 * scale[:axis])
         np.testing.assert_array_equal(rod.dynamic_stiffness(s), modal)
         assert rod.dynamic_stiffness(0.0) == 0
         far = np.array([1j * 1e5 * Omega])
@@ -191,6 +199,34 @@ def test_modal_sum_of_the_damped_rod_against_40_digits():
     for x in (1e-3, 0.7, 0.5 * (1 + 1e-5), 3.3, 27.4725, 98.4716, 305.4568, 60.0 * (1 + 1j)):
         s = 1j * x * Omega
         assert abs(rod.dynamic_stiffness(s) / D_rod_mpmath(rod, s) - 1) < 1e-12, x
+
+
+def test_modal_factor_sum_on_the_axis_equals_the_complex_form():
+    """appendages.damping.modal_factor_sum: on the imaginary axis (real arithmetic) against the
+    complex form, the same sum at points off the axis by 1e-300 of |s| (which take the complex
+    form): 1e-14 of the sum of |weight| x |factor| (each factor a few eps in either form),
+    at and next to the modes' frequencies too; frequencies whose squares leave double
+    precision take the complex form (finite, equal)."""
+    from appendages.damping import modal_factor_sum
+
+    rng = np.random.default_rng(5)
+    w = np.sort(rng.uniform(0.5, 3e3, 40))
+    weights = rng.normal(size=(40, 3))
+    omega = np.concatenate([np.logspace(-4, 4, 400), w, w * (1 + 1e-9), w * (1 - 1e-6)])
+    for zeta in (1e-4, 0.005, 0.3):
+        on = modal_factor_sum(1j * omega, w, weights, zeta)
+        off = modal_factor_sum(omega * (1e-300 + 1j), w, weights, zeta)
+        ss = (1j * omega)[:, None]
+        factor = (w**2 + 2 * zeta * w * ss) / ((ss - 1j * w) * (ss + 1j * w)
+                                               + 2 * zeta * w * ss)
+        size = np.abs(factor) @ np.abs(weights)
+        assert np.all(np.abs(on - off) <= 1e-14 * size)
+    huge = np.array([1e100, 2e100])          # w^4 overflows, w^2 does not
+    s = 1j * np.logspace(90, 99, 3000)
+    on = modal_factor_sum(s, huge, np.ones(2), 0.01)
+    assert np.all(np.isfinite(on))
+    np.testing.assert_allclose(on, modal_factor_sum(s * (1 + 1e-300j), huge, np.ones(2), 0.01),
+                               rtol=1e-14)
 
 
 def _coupled_pole(beam, hub_mass, hub_inertia, guess):
