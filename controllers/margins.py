@@ -1087,26 +1087,29 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
             (root, found), _ = refine(product_at, roots=(np.zeros(usable.size, dtype=int),
                                                          a[usable], b[usable], ends[0], ends[1]))
             lam, ok = eigenvalues_at(root)
-            done = found & ok
+            # the count across the root (a few 1e-13 about it, beyond the refined bracket)
+            # changes as across the grid's bracket: one eigenvalue crossing in that direction
+            # (else, several crossings between two grid points, the count is bisected)
+            lo, hi = root * (1.0 - 2e-13), root * (1.0 + 2e-13)
+            c_ends, _, ok_ends = count_at(np.concatenate([lo, hi]))
+            c_lo, c_hi = c_ends[:usable.size], c_ends[usable.size:]
+            done = (found & ok & ok_ends[:usable.size] & ok_ends[usable.size:]
+                    & (c_hi - c_lo == cb[usable] - ca[usable]))
             for k in np.flatnonzero(done):
                 j = int(np.argmin(np.abs(np.abs(lam[k]) - 1.0)))
                 change = int(cb[usable[k]]) - int(ca[usable[k]])
                 out.append((float(root[k]), complex(lam[k, j]), -1 if change > 0 else 1))
             keep = np.ones(a.size, dtype=bool)
             keep[usable[done]] = False
-            # a root not confirmed (the sign change is a pass through an undamped pole, where
-            # the count may change too): the count is bisected from the few 1e-13 about where
-            # the refinement closed in, if it changes there, else from the grid's bracket
+            # a root not confirmed (a pass through an undamped pole, where the count may change
+            # too, or several crossings): the count is bisected from the few 1e-13 about
+            # where the refinement closed in if it changes there, else from the grid's bracket
             left = np.flatnonzero(~done)
-            if left.size:
-                x = root[left]
-                lo, hi = x * (1.0 - 2e-13), x * (1.0 + 2e-13)
-                c_ends, _, ok_ends = count_at(np.concatenate([lo, hi]))
-                c_lo, c_hi = c_ends[:left.size], c_ends[left.size:]
-                near = (ok_ends[:left.size] & ok_ends[left.size:] & (c_lo != c_hi)
-                        & (lo > a[usable[left]]) & (hi < b[usable[left]]))
-                k = usable[left[near]]
-                a[k], b[k], ca[k], cb[k] = lo[near], hi[near], c_lo[near], c_hi[near]
+            near = (ok_ends[:usable.size] & ok_ends[usable.size:] & (c_lo != c_hi)
+                    & (lo > a[usable]) & (hi < b[usable]))[left]
+            k = usable[left[near]]
+            a[k], b[k] = lo[left[near]], hi[left[near]]
+            ca[k], cb[k] = c_lo[left[near]], c_hi[left[near]]
             a, b, ca, cb = a[keep], b[keep], ca[keep], cb[keep]
     # each step counts at sections - 1 points inside every bracket at once (one evaluation of
     # L for all): the bracket shrinks sections-fold per call instead of two-fold; the few
