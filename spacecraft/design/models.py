@@ -337,15 +337,17 @@ class ModelBuilder:
         """The motions of a three-axis beam that the run's reported outputs see and that a
         truncation chosen from the tolerance must keep a mode of: with ``outputs.tip_deflection``
         bending in both planes (``<name>_tip_deflection_y``, ``_z``) and torsion
-        (``<name>_tip_twist``); no tip output sees the axial motion. Empty for a planar scene,
-        without tip outputs, or with ``fidelity.n_modes`` given (the user's count is kept as
-        it is, and a tip output it leaves without a mode is warned about:
+        (``<name>_tip_twist``); with ``outputs.root_loads`` also the axial motion (the root
+        force along the appendage, ``<name>_root_force_x``). Empty for a planar scene, without
+        those outputs, or with ``fidelity.n_modes`` given (the user's count is kept as it is,
+        and a tip output it leaves without a mode is warned about:
         :func:`spacecraft.design.loop.unmodelled_outputs`)."""
         scene = self.scene
+        outputs = scene.outputs
         if (not self.three_axis or scene.fidelity.n_modes is not None
-                or not scene.outputs.tip_deflection):
+                or not (outputs.tip_deflection or outputs.root_loads)):
             return ()
-        return ("xy", "xz", "torsion")
+        return ("xy", "xz", "torsion") + (("axial",) if outputs.root_loads else ())
 
     def truncation(self, beam, n_modes: int):
         """``beam`` truncated by the scene's method: its ``n_modes`` lowest (planar: bending)
@@ -661,7 +663,7 @@ class ModelBuilder:
     def max_modes(self) -> int:
         """Most modes per beam the search from a tolerance may try: fidelity.MAX_MODES, within
         limits.modes and the loop size limits.states allows (counting, in three axes, a mode
-        more per motion a tip output sees: :meth:`truncation`)."""
+        more per motion a reported output sees: :meth:`truncation`)."""
         scene = self.scene
         cap = min(MAX_MODES, scene.limits.modes)
         floor = len(self.seen_motions())

@@ -347,7 +347,7 @@ def _modes(data: dict, n: int) -> str:
     motion (three axes: both bending planes, torsion and axial motion together)."""
     if data.get("three_axis"):
         if (data.get("fidelity") or {}).get("motions_kept"):
-            return (f"the lowest mode of every motion a tip output sees and "
+            return (f"the lowest mode of every motion a reported output sees and "
                     f"{plural(n, 'mode')} more (the lowest of the rest)")
         return f"{plural(n, 'mode')} (the lowest of all motions)"
     return plural(n, "bending mode")
@@ -464,9 +464,9 @@ def _models(data: dict) -> list:
                         f"{name} " + ", ".join(f"{m} {c}" for m, c in counts.items())
                         for name, counts in per_motion.items()) + ".")
             if kept:
-                text += (" Each keeps the lowest mode of every motion a tip output sees (" +
+                text += (" Each keeps the lowest mode of every motion a reported output sees (" +
                          ", ".join(_MOTION_WORDS.get(m, m) for m in kept) + "), however stiff, "
-                         "so that no tip figure of the truth model reads 0 for want of a "
+                         "so that no output of the truth model misses that motion for want of a "
                          "mode; n_modes counts the modes beyond those.")
             b.append(("p", text))
         choice = fid.get("choice")

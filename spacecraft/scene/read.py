@@ -338,7 +338,8 @@ key                                    unit       meaning
                                                   ``fidelity.tolerance`` with
                                                   ``outputs.tip_deflection``: the modes beyond
                                                   the lowest mode of every motion a tip output
-                                                  sees (both bending planes, torsion), which
+                                                  sees (both bending planes, torsion; with
+                                                  ``outputs.root_loads`` also axial), which
                                                   are kept however stiff
 ``wheels.spin_axes``                   -          ``[[x, y, z], ...]``: each wheel's spin axis
                                                   (hub axes; they must span x, y, z), or

@@ -71,7 +71,7 @@ def test_the_tolerance_driven_truth_moves_every_tip_output(tmp_path):
     data = result.data
     write_report(result, tmp_path)
     text = (tmp_path / "report.md").read_text()
-    assert "truncated to the lowest mode of every motion a tip output sees and " in text
+    assert "truncated to the lowest mode of every motion a reported output sees and " in text
     counts = data["fidelity"]["modes_per_motion"]["boom"]
     assert ("boom " + ", ".join(f"{m} {c}" for m, c in counts.items())) in text
     assert not [w for w in data["design_warnings"] if w["code"] == "truth_output_unmodelled"]
@@ -86,6 +86,17 @@ def test_the_tolerance_driven_truth_moves_every_tip_output(tmp_path):
         for name, peaks in row["appendages"]["truth"].items():
             for key, value in peaks.items():
                 assert value > 0.0, (row["controller"], name, key)
+
+
+def test_root_loads_keep_the_axial_motion_too():
+    """The root force along an appendage sees its axial motion: with outputs.root_loads each
+    uniform beam keeps its lowest axial mode too (and, without tip outputs, still the lowest of
+    both bending planes and torsion, which the root's other loads see)."""
+    data = _run(**{"outputs.root_loads": True, "outputs.tip_deflection": False,
+                   "outputs.exact_reference": False, "manoeuvre": None})
+    assert data["fidelity"]["motions_kept"] == [*SEEN, "axial"]
+    for counts in data["fidelity"]["modes_per_motion"].values():
+        assert all(counts[m] >= 1 for m in (*SEEN, "axial"))
 
 
 def test_a_given_n_modes_is_kept_and_its_unmodelled_tips_are_named():
