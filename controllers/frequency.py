@@ -197,8 +197,10 @@ class ModalEvaluator:
         """Return G(s), shape (len(s), n_outputs, n_inputs), complex128; inf at a pole."""
         s = np.asarray(s, dtype=complex).reshape(-1) - self.center
         p, m = self.C.shape[0], self.B.shape[1]
-        G = np.empty((s.size, p, m), dtype=complex)
         step = max(1, CHUNK_BYTES // (16 * max(self.lam.size, self.n, 1)))
+        if 0 < s.size <= step:
+            return self._chunk(s)
+        G = np.empty((s.size, p, m), dtype=complex)
         for start in range(0, s.size, step):
             G[start:start + step] = self._chunk(s[start:start + step])
         return G

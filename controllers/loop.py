@@ -331,7 +331,7 @@ class LoopTransfer:
             return L[:, :, 0]
         m = L.shape[1]
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            S = np.linalg.solve(np.eye(m) + L, np.broadcast_to(np.eye(m), L.shape))
+            S = np.linalg.inv(np.eye(m) + L)  # LU with the identity as right-hand side
             return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
 
     def _interpolated_plant(self, omega: np.ndarray) -> np.ndarray:

@@ -519,7 +519,7 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
         """Every loop-at-a-time L_i = 1/S_ii - 1 (LoopTransfer.broken_all), (f, m)."""
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             L = matrix(w)
-            S = np.linalg.solve(np.eye(m) + L, np.broadcast_to(np.eye(m), L.shape))
+            S = np.linalg.inv(np.eye(m) + L)  # LU with the identity as right-hand side
             return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
 
     # L on the grid once: the loop-at-a-time functions and the singular values all follow from
@@ -528,7 +528,7 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
         if L_grid is None:
             L_grid = matrix(omega)
         R = np.eye(m) + L_grid
-        S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
+        S = np.linalg.inv(R)  # LU with the identity as right-hand side
         per_axis = dict(zip(axes, _loops_margins(
             lambda w, owner: _at_distinct(broken_all, w)[np.arange(w.size), owner], omega,
             1.0 / np.diagonal(S, axis1=1, axis2=2).T - 1.0, delay=tau, undamped=undamped)))
@@ -537,7 +537,7 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
         """(sigma_max(S - I/2), sigma_min(I + L)) at each frequency."""
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             R = np.eye(m) + matrix(w)
-            S = np.linalg.solve(R, np.broadcast_to(np.eye(m), R.shape))
+            S = np.linalg.inv(R)  # LU with the identity as right-hand side
             return (np.linalg.svd(S - 0.5 * np.eye(m), compute_uv=False)[:, 0],
                     np.linalg.svd(R, compute_uv=False)[:, -1])
 
