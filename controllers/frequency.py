@@ -106,6 +106,16 @@ class ModalEvaluator:
         if n:
             self._decompose(A)
         self.modal = not self.dense
+        # a rigid-body block with exactly zero eigenvalues (T11 strictly upper triangular,
+        # nilpotent: T11^q = 0) is the finite sum C1 (sI - T11)^-1 B1 = sum_j C1 T11^j B1 /
+        # s^(j+1), j < q: its Markov parameters once, then a product per point
+        self.rigid_markov = None
+        if self.k and not np.any(np.diag(self.T11)):
+            power, markov = np.eye(self.k, dtype=complex), []
+            while np.any(power) and len(markov) < self.k:
+                markov.append((self.C1 @ power @ self.B1).reshape(-1))
+                power = power @ self.T11
+            self.rigid_markov = np.array(markov)                       # (q, p m)
         # residues R_i = Cm[:, i] Bm[i, :] of the partial fractions, one row per pole:
         # G(s) = D + C1 (sI - T11)^-1 B1 + sum_i R_i / (s - lam_i) is then one matrix product
         self.residues = (self.Cm.T[:, :, None] * self.Bm[:, None, :]).reshape(self.lam.size,
@@ -209,7 +219,10 @@ class ModalEvaluator:
         p, m = self.C.shape[0], self.B.shape[1]
         G = (1.0 / (s[:, None] - self.lam)) @ self.residues + self.D.reshape(1, p * m)
         G = G.reshape(s.size, p, m)
-        if self.k:
+        if self.rigid_markov is not None:
+            inverse = np.repeat((1.0 / s)[:, None], self.rigid_markov.shape[0], axis=1)
+            G += (np.cumprod(inverse, axis=1) @ self.rigid_markov).reshape(s.size, p, m)
+        elif self.k:
             # (sI - T11) X = B1 by back substitution (T11 upper triangular), all s at once; X
             # held as (k, f m) so that each step is one matrix-vector product
             T11, k, f = self.T11, self.k, s.size
