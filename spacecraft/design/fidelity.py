@@ -42,6 +42,18 @@ Converging the closed loops
     model, plant, controller and verdict is built once and reused by the run. The search stops
     at the largest n the scene's limits allow (reported as not converged).
 
+Three axes: every motion an output sees
+    A three-axis truncation ranks the modes of all a beam's motions together (bending in both
+    planes, torsion, axial motion), so the n lowest may hold none of a stiff motion (a wing's
+    in-plane bending, a boom's torsion) whose tip output would then read 0. When n is chosen
+    from the tolerance and the scene reports tip outputs (or root loads), each beam keeps the
+    lowest mode of every motion they see, however stiff, and n counts the modes beyond
+    (:func:`motion_counts`; a beam whose modes are not split by motion, with a tip body or
+    segments, keeps the fewest lowest modes that move every such tip motion and one more per
+    n: :meth:`spacecraft.design.models.ModelBuilder.truncation`). Each n adds a mode, so the
+    closed-loop rule below never compares a model with itself. A stiff motion's one mode with
+    the Craig-Bampton constraint modes gives its quasi-static response in the loops' band.
+
 Dropping what the signals cannot reach
     :meth:`Spacecraft.plant` with ``prune=True`` drops the modes that no input excites or no
     output sees (e.g. the symmetric bending of two symmetric wings under a pure torque); the
