@@ -112,6 +112,12 @@ def describe_model(model) -> dict:
                    hinge_dampings=(None if model.hinge_dampings is None
                                    else np.asarray(model.hinge_dampings).tolist()),
                    com_offsets=model.com_offsets.tolist())
+        if getattr(model, "three_axis", False):   # a three-axis chain's other motions
+            for name in ("inertias_y", "hinge_stiffnesses_y", "hinge_dampings_y",
+                         "torsional_inertias", "torsion_stiffnesses", "torsion_dampings",
+                         "axial_stiffnesses", "axial_dampings"):
+                value = getattr(model, name)
+                out[name] = None if value is None else np.asarray(value).tolist()
     if hasattr(model, "n_modes"):
         out.update(n_modes=int(model.n_modes), method=getattr(model, "method", None))
         try:

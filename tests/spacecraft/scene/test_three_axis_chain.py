@@ -140,7 +140,10 @@ def test_a_three_axis_appendage_may_be_an_explicit_chain_alone():
                 manoeuvre={"slew_angle": 10.0, "slew_time": 30.0, "duration": 45.0,
                            "step": 0.25, "slew_axis": [1.0, 1.0, 1.0]})
     result = run(load_scene(data, source="chain3"))
-    assert result.data["truth"]["models"]["rod"]["type"] == "HingedChain"
+    described = result.data["truth"]["models"]["rod"]
+    assert described["type"] == "HingedChain"
+    for key, value in {**CHAIN, **THREE_D}.items():   # results.json gives every array
+        assert described[key] == value, key
     (row,) = result.data["closed_loops"]
     assert row["verdict"]["stable"]
     peaks = row["appendages"]["truth"]["rod"]
