@@ -4,7 +4,8 @@ The stages of one design-loop evaluation that are not the margins, for the two l
 ``benchmarks/three_axis.py`` (two wings and a boom; truth 56 states, design 46, loop 102) and
 ``benchmarks/design_loop.py`` (the paper's rod, 20 modes; a 3-body chain as design model):
 ``build_truth``, ``build_design``, ``lqr``, ``close_loop`` and ``simulate`` (the slew, 100 s at
-100 Hz), each timed on its own (CPU, ``time.process_time``, one BLAS thread) in a fresh
+100 Hz), and the simulation of one sample of the shipped sweep scene (a short run of a small
+loop, where the simulator's choice of method decides), each timed on its own (CPU, ``time.process_time``, one BLAS thread) in a fresh
 process per round, the rounds alternating between two checkouts of flexsat (``--before PATH``,
 e.g. ``git worktree add /tmp/before <rev>``, and this one) so that both see the same load;
 ``uptime``'s load average beside every round. Medians over the repeats of a round, then the
@@ -119,6 +120,35 @@ CHILD = textwrap.dedent("""
         arrays[name + "_K"], arrays[name + "_L"] = design.K, design.L
         arrays[name + "_poles"] = np.sort_complex(np.linalg.eigvals(state["loop"].A))
         arrays[name + "_y"] = state["y"]
+
+    # a sweep sample's simulation (the shipped sweep scene: a short run of a small loop)
+    import spacecraft.sweep as S
+    from spacecraft.sweep.evaluate import evaluate, prepare
+    CS = sys.modules["controllers.simulate"]
+    raw, spec, source = S.load_sweep(None, samples=4)
+    context = prepare(raw, spec, source)
+    grabbed, propagate = [], CS.Simulator._propagate
+    def grab(self, U, X0, **kwargs):
+        grabbed.append((self.system, self.dt, self.hold, U.copy(), X0.copy()))
+        return propagate(self, U, X0, **kwargs)
+    CS.Simulator._propagate = grab
+    evaluate(context, spec.values()[0])
+    CS.Simulator._propagate = propagate
+    system, dt, hold, U, X0 = grabbed[-1]
+    T = np.arange(U.shape[1]) * dt
+    def sweep_simulate():
+        return CS.Simulator(system, dt, hold=hold).outputs(T, U, X0)
+    y = sweep_simulate()
+    cpu = []
+    for _ in range(n):
+        c = time.process_time()
+        sweep_simulate()
+        cpu.append(time.process_time() - c)
+    result["sweep_sample"] = {"simulate": statistics.median(cpu),
+                              "states": system.nstates, "samples": U.shape[1],
+                              "method": CS.Simulator(system, dt, hold=hold).method_for(
+                                  U.shape[1])}
+    arrays["sweep_sample_y"] = y
     np.savez(out, **arrays)
     result["load"] = [round(x, 2) for x in os.getloadavg()]
     print(json.dumps(result))
@@ -188,6 +218,11 @@ def main() -> int:
     results = {"machine": info, "revisions": {k: revision(t) for k, t in trees.items()},
                "rounds": args.rounds, "repeats": args.repeats, "blas_threads": 1,
                "cpu_median_s": medians, "runs": runs, "accuracy_relative": accuracy}
+    sweep = {which: float(np.median([r["sweep_sample"]["simulate"] for r in rounds]))
+             for which, rounds in runs.items()}
+    results["sweep_sample_simulate_cpu_median_s"] = sweep
+    results["sweep_sample_method"] = {which: rounds[-1]["sweep_sample"]["method"]
+                                      for which, rounds in runs.items()}
     write_json("lqr_simulate_speed.json", results)
     rows = []
     for loop in ("three_axis", "planar"):
@@ -206,6 +241,12 @@ def main() -> int:
              "CPU time (time.process_time), median over the rounds of each round's median [ms]:",
              "",
              markdown_table(["loop", "stage", "before", "after", "after / before"], rows), "",
+             f"A sweep sample's simulation (the shipped sweep scene's loop, "
+             f"{runs['after'][-1]['sweep_sample']['states']} states, "
+             f"{runs['after'][-1]['sweep_sample']['samples']} samples): "
+             f"{sweep['before'] * 1e3:.2f} ms ({results['sweep_sample_method']['before']}) -> "
+             f"{sweep['after'] * 1e3:.2f} ms ({results['sweep_sample_method']['after']}), "
+             f"{sweep['after'] / sweep['before']:.2f}.", "",
              "Results, after against before (max |after - before| / max |before|): "
              + ", ".join(f"{k} {v:.1e}" if isinstance(v, float) else f"{k} {v}"
                          for k, v in accuracy.items()), ""]

@@ -1,7 +1,7 @@
 """Chunked (block-processing) recursion of an exact discrete LTI system.
 
 The fallback of :mod:`.simulate` for systems whose modal form is ill-conditioned (and for
-short runs, where it avoids the compiled loop's one-time load): it works with the dense
+runs of fewer samples than states, where its set-up is the cheaper one): it works with the dense
 discrete matrices ``x[k+1] = Ad x[k] + Bd0 u[k] + Bd1 u[k+1]``, the ones
 :func:`control.forced_response` steps through, and needs no eigen- or Schur decomposition.
 

@@ -28,8 +28,12 @@ Two ways to run the recursion, chosen per system and run (see :class:`Simulator`
   long-double reference's own, ``benchmarks/simulate_error_budget.py``);
 - the chunked recursion (:mod:`.chunked`): block processing of the dense discrete system,
   when the modal transformation would be ill-conditioned (strongly non-normal systems),
-  when numba is not installed, and for short runs, where loading the compiled loop (once
-  per process, ~0.5 s) would cost more than it saves.
+  when numba is not installed, and for runs of fewer samples than the system has states,
+  where its set-up (one dense exponential) costs less than the modal one.  The compiled
+  loop is loaded once per process (a fraction of a second, a tenth of importing flexsat);
+  after that the modal recursion is the faster one from a few samples on
+  (``benchmarks/results/lqr_simulate_speed.md``), which matters where many short runs are
+  simulated (a sweep's samples).
 
 Every simulation runs with one BLAS thread (:func:`.threads.one_blas_thread`), whatever the
 caller's settings: its results never depend on them (a threaded matrix product rounds
@@ -77,11 +81,11 @@ _OVERFLOW = OVERFLOW
 # lightly damped modal systems give 1e1-1e3).
 _MAX_MODAL_CONDITION = 1e5
 
-# "auto" runs the modal recursion when n_states * n_samples reaches this.  Below, the chunked
-# recursion costs at most a few tens of ms (~0.1-0.3 us per state and sample when its
-# accuracy probe forces stepping), less than loading the compiled loop (~0.5 s, once per
-# process).  The choice depends on the problem only, never on what ran before.
-_MODAL_MIN_WORK = 200_000
+# "auto" runs the modal recursion for runs of at least this many samples per state: both
+# set-ups cost O(n^3) (a Schur form and its decoupling, or one dense exponential), measured
+# even at 50 states and 200 samples, and the modal recursion's O(n) per sample wins beyond.
+# The choice depends on the problem only, never on what ran before.
+_MODAL_MIN_SAMPLES_PER_STATE = 1
 
 # "auto" runs the modal recursion only while a cluster of close eigenvalues stays below this
 # size (its dense block costs O(k^2) per sample in the compiled loop).
@@ -110,10 +114,11 @@ class Simulator:
         a discrete-time system (its inputs are sequences).
     method : {"auto", "modal", "chunked"}
         How to run the recursion (see the module docstring).  ``"auto"``: the modal
-        recursion when numba is installed, the run is long enough (n_states * n_samples >=
-        2e5), the modal transformation's condition number is below 1e5 and no cluster of
-        close eigenvalues exceeds 64 states; otherwise the chunked one.  ``"modal"`` raises RuntimeError where it is not possible
-        (numba missing); an ill-conditioned modal form is used as it is.
+        recursion when numba is installed, the run has at least as many samples as the
+        system has states, the modal transformation's condition number is below 1e5 and
+        no cluster of close eigenvalues exceeds 64 states; otherwise the chunked one.
+        ``"modal"`` raises RuntimeError where it is not possible (numba missing); an
+        ill-conditioned modal form is used as it is.
 
     Attributes
     ----------
@@ -239,8 +244,9 @@ class Simulator:
         """The modal recursion for a run of n_samples, or None for the chunked one."""
         if self.method == "chunked" or self.n_states == 0 or self._modal is False:
             return None
-        if self.method == "auto" and not (self.n_states * n_samples >= _MODAL_MIN_WORK
-                                          and kernel_available()):
+        if self.method == "auto" and not (
+                n_samples >= _MODAL_MIN_SAMPLES_PER_STATE * self.n_states
+                and kernel_available()):
             return None
         if self._modal is None:
             form = block_diagonal_form(self._A)

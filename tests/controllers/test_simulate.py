@@ -639,16 +639,30 @@ def test_stiff_attitude_loop_against_extended_precision(method):
 
 @needs_numba
 def test_auto_method_choice():
-    """Long runs go modal, short ones chunked (loading the compiled loop would cost
-    more).  A system whose eigenvalues cannot be decoupled into small blocks (one Jordan
-    block of 70 states: the modal recursion would step a dense 70 x 70 block, O(n^2) per
-    sample) stays chunked, whatever the length."""
+    """Runs of at least as many samples as states go modal (a sweep's short runs too),
+    shorter ones chunked (its set-up is the cheaper one there).  A system whose eigenvalues
+    cannot be decoupled into small blocks (one Jordan block of 70 states: the modal
+    recursion would step a dense 70 x 70 block, O(n^2) per sample) stays chunked, whatever
+    the length."""
     rng = np.random.default_rng(3)
     sim = Simulator(modal_system(rng, 10, n_rigid=1), 0.01)
     assert sim.method_for(100_000) == "modal"
-    assert sim.method_for(100) == "chunked"
+    assert sim.method_for(sim.n_states) == "modal"
+    assert sim.method_for(sim.n_states - 1) == "chunked"
     jordan = control.ss(-np.eye(70) + np.eye(70, k=1), np.ones((70, 1)), np.ones((1, 70)), 0)
     assert Simulator(jordan, 0.01).method_for(10**6) == "chunked"
+
+
+@needs_numba
+def test_short_runs_go_modal_to_the_same_accuracy():
+    """A run as short as a sweep sample's (2000 samples; before, runs below 2e5 states x
+    samples went chunked): "auto" takes the modal recursion, as accurate as on long runs.
+    Issue 10's general system (20 states, two rigid bodies) against its extended-precision
+    solution: round-off only, ~N eps = 4e-13 amplified by V's condition (30) and the rigid
+    bodies' drift; required: 1e-10 of the output range, as for 3000 samples above."""
+    sys, T, U, error = general_system_run(np.random.default_rng(45), 2000)
+    assert Simulator(sys, 0.01).method_for(T.size) == "modal"
+    assert error(simulate(sys, T, U).y) < 1e-10
 
 
 def test_static_gain_and_inputless_system():
