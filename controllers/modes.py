@@ -515,16 +515,19 @@ def _nothing_to_remove(Ab, d, part_of, n_parts, b, c_theta, c_omega, Jh, critica
         wb = np.linalg.norm(WB[sel] @ Jh, axis=1)
         p_t = 2.0 * np.abs(lam[parts_u][sel]) * np.linalg.norm(Cv_t[sel] @ Jh.T, axis=1) * wb
         p_o = 2.0 * np.linalg.norm(Cv_o[sel] @ Jh.T, axis=1) * wb
-        if np.any(~np.isfinite(p_t)) or np.any(np.maximum(p_t, p_o)
-                                                <= _CLEARLY_KEPT * INFLUENCE_TOL):
+        p = np.maximum(p_t, p_o)
+        if not np.all(np.isfinite(p)) or np.any(p <= _CLEARLY_KEPT * INFLUENCE_TOL):
             return False
         critical_lam.append(lam[parts_u][sel])
     if critical_lam:
+        # two eigenvalues within cluster_tol have imaginary parts within it: sorted by them,
+        # each is compared with the few that follow within cluster_tol (O(n log n))
         lam = np.concatenate(critical_lam)
-        gaps = np.abs(lam[:, None] - lam[None, :])
-        np.fill_diagonal(gaps, np.inf)
-        if gaps.min() <= cluster_tol:
-            return False
+        lam = lam[np.argsort(lam.imag, kind="stable")]
+        last = np.searchsorted(lam.imag, lam.imag + cluster_tol, side="right")
+        for i in np.flatnonzero(last > np.arange(lam.size) + 1):
+            if np.min(np.abs(lam[i + 1:last[i]] - lam[i])) <= cluster_tol:
+                return False
     return True
 
 
