@@ -1027,8 +1027,11 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     refinement does not confirm, are bisected on the count, at _SECTIONS - 1 points of every
     bracket per step. ``matrix(w)`` gives L, shape (f, m, m) (``L``: its values on ``omega``,
     if known); a planar loop is the m = 1 case (|L| = 1: the gain crossovers). The count needs
-    no eigenvalues where ||L||_F < 1 (every |lambda| < 1) or ||L^-1||_F < 1 (every
-    |lambda| > 1): most of a grid.
+    no eigenvalues where ||L||_F < 1 (every |lambda| < 1), nor, for m = 2 or 3, where one
+    coefficient of the characteristic polynomial dominates on the unit circle
+    (:func:`_outside_unit_circle`, Rouche's theorem: beside resonances too), else where
+    ||L^-1||_F < 1 (every |lambda| > 1): the eigenvalues are computed at a few points of a
+    grid only.
     """
     def count_at(w, L=None):
         with np.errstate(all="ignore"):
