@@ -9,9 +9,12 @@ rounds alternating so that both see the same load:
    the nominal scene, 2 modes of truth, the slew, the exact-beam verdict) in process, as a
    Dask worker runs it (one BLAS thread): :func:`spacecraft.sweep.evaluate.evaluate` on
    ``--samples`` samples after a warm-up, CPU (``time.process_time``) min and median;
-2. ``planar_loop``: one planar design-loop evaluation of ``benchmarks/design_loop.py`` (the
+2. ``three_axis_sample``: the same for the three_axis sweep scene
+   (``spacecraft/scene/embedded/sweeps/three_axis.toml``: every sample judged on the exact
+   beams through W6), ``--three-axis-samples`` samples;
+3. ``planar_loop``: one planar design-loop evaluation of ``benchmarks/design_loop.py`` (the
    paper's rod, 20 modes), the loop that must not get slower;
-3. ``end_to_end``: ``run_sweep`` of ``--end-to-end`` samples as ``flexsat sweep`` runs it: its
+4. ``end_to_end``: ``run_sweep`` of ``--end-to-end`` samples as ``flexsat sweep`` runs it: its
    own LocalCluster of 2 worker processes (start, the workers' imports, prepare, every sample
    streamed to Parquet, the report without plots and without the worst-case search). Wall
    time; the CPU time of this process (client and scheduler) and of its children (the
@@ -27,7 +30,7 @@ fixed part (Dask's own CPU, a few per cent, left out).
 Run::
 
     python benchmarks/sample_speed.py --before /tmp/before [--rounds 3] [--samples 60]
-                                      [--end-to-end 1000]
+                                      [--three-axis-samples 10] [--end-to-end 1000]
 
 Writes ``benchmarks/results/sample_speed.json`` and ``sample_speed.md``.
 
@@ -76,10 +79,11 @@ CHILD = textwrap.dedent("""
                 "n": len(cpu), "cpu_s": cpu}
 
     before = load()
-    if workload == "sweep_sample":
+    if workload in ("sweep_sample", "three_axis_sample"):
         import spacecraft.sweep as S
         from spacecraft.sweep.evaluate import evaluate, prepare
-        raw, spec, source = S.load_sweep(None, samples=n + 5)
+        scene = None if workload == "sweep_sample" else "three_axis"
+        raw, spec, source = S.load_sweep(scene, samples=n + 5)
         context = prepare(raw, spec, source)
         values = spec.values()
         for v in values[:5]:
@@ -107,6 +111,8 @@ CHILD = textwrap.dedent("""
 """)
 
 WORKLOADS = {"sweep_sample": "one sample of the shipped sweep scene (CPU, one BLAS thread)",
+             "three_axis_sample": "one sample of the three_axis sweep scene (CPU, one BLAS "
+                                  "thread)",
              "planar_loop": "one planar design-loop evaluation (paper's rod, 20 modes)"}
 
 
@@ -125,7 +131,7 @@ def revision(tree: Path) -> str:
 
 def run_child(tree: Path, workload: str, n: int) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree))
-    if workload == "sweep_sample":     # as a Dask worker runs it
+    if workload.endswith("_sample"):     # as a Dask worker runs it
         env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     out = subprocess.run([sys.executable, "-c", CHILD, str(tree), workload, str(n)],
                          capture_output=True, text=True, env=env, cwd=str(tree))
@@ -235,6 +241,8 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--samples", type=int, default=60, help="sweep samples per round")
     parser.add_argument("--loops", type=int, default=15, help="planar loops per round")
+    parser.add_argument("--three-axis-samples", type=int, default=10,
+                        help="three_axis sweep samples per round")
     parser.add_argument("--end-to-end", type=int, default=1000,
                         help="samples of the end-to-end sweep (0: skip it)")
     args = parser.parse_args()
@@ -242,7 +250,8 @@ def main() -> int:
     result = {"machine": machine_info(), "revisions": {k: revision(v) for k, v in trees.items()},
               "rounds": args.rounds, "workloads": {}}
     for workload in WORKLOADS:
-        n = args.samples if workload == "sweep_sample" else args.loops
+        n = {"sweep_sample": args.samples, "three_axis_sample": args.three_axis_samples,
+             "planar_loop": args.loops}[workload]
         runs = {"before": [], "after": []}
         for _ in range(args.rounds):
             for which, tree in trees.items():
