@@ -45,6 +45,7 @@ import numpy as np
 import scipy.linalg
 
 from appendages import limits
+from controllers.threads import blas_threads_for, one_blas_thread
 from appendages.interface import ROOT_LOADS, TIP_MOTIONS, describe, equilibrate
 
 from .exact import ExactReference, frequency_vector
@@ -476,7 +477,26 @@ class Spacecraft:
             ``torque_z``, outputs ``theta_x/_y/_z`` [rad] (small-angle attitude, hub axes),
             ``omega_x/_y/_z`` [rad/s] (+ requested). States ``mode[k]``, ``mode_rate[k]``
             (modal coordinates).
+
+        Notes
+        -----
+        Built with one BLAS thread up to ``controllers.threads.SINGLE_THREAD_BELOW``
+        coordinates (the appendages' root models and their assembly always): for these small
+        matrices OpenBLAS's threads cost more than they compute, and they keep spinning
+        after the call, taking a core from what runs next (measured on the three-axis
+        example of ``benchmarks/three_axis.py`` with the default two threads:
+        ``benchmarks/results/lqr_simulate_speed.md``).
         """
+        with one_blas_thread():
+            size = self.second_order_model().mass.shape[0]
+        with blas_threads_for(size):
+            return self._plant(tip_deflection=tip_deflection, root_loads=root_loads,
+                               disturbances=disturbances, n_modes=n_modes, prune=prune,
+                               name=name)
+
+    def _plant(self, *, tip_deflection: bool, root_loads: bool, disturbances: bool,
+               n_modes: int | None, prune: bool, name: str):
+        """:meth:`plant`, within its BLAS-thread limit."""
         import control
 
         model = self.second_order_model()
