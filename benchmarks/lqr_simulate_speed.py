@@ -11,6 +11,9 @@ e.g. ``git worktree add /tmp/before <rev>``, and this one) so that both see the 
 ``uptime``'s load average beside every round. Medians over the repeats of a round, then the
 median over the rounds.
 
+Then the three-axis truth build with the default BLAS threads (no thread variables set),
+CPU and wall, the same alternation.
+
 Accuracy, in the same run: each checkout's gains K and L, closed-loop poles and simulated
 outputs of both loops, compared (max |after - before| relative to max |before|).
 
@@ -155,6 +158,27 @@ CHILD = textwrap.dedent("""
 """)
 
 
+# the child of the default-threads check: the three-axis truth build with the user's BLAS
+# threads (OpenBLAS: one per core), CPU and wall
+CHILD_THREADS = textwrap.dedent("""
+    import json, os, statistics, sys, time, warnings
+    tree, n = sys.argv[1], int(sys.argv[2])
+    sys.path[:0] = [tree, os.path.join(tree, "benchmarks")]
+    warnings.simplefilter("ignore")
+    import three_axis as T3
+    def build():
+        T3.example(lambda b: b.truncated(T3.N_MODES)).plant(tip_deflection=True, prune=True)
+    build()
+    cpu, wall = [], []
+    for _ in range(n):
+        c, w = time.process_time(), time.perf_counter()
+        build()
+        cpu.append(time.process_time() - c)
+        wall.append(time.perf_counter() - w)
+    print(json.dumps({"cpu": statistics.median(cpu), "wall": statistics.median(wall)}))
+""")
+
+
 def revision(tree: Path) -> str:
     """The checkout's commit and whether it has changes of its own."""
     try:
@@ -176,6 +200,20 @@ def run_child(tree: Path, repeats: int, out: Path) -> dict:
                           capture_output=True, text=True, env=env, cwd=str(tree))
     if done.returncode != 0:
         raise RuntimeError(f"the stages in {tree} failed:\n{done.stderr[-2000:]}")
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result["load_before"] = load
+    return result
+
+
+def run_threads_child(tree: Path, repeats: int) -> dict:
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    env["PYTHONPATH"] = str(tree)
+    load = [round(x, 2) for x in os.getloadavg()]
+    done = subprocess.run([sys.executable, "-c", CHILD_THREADS, str(tree), str(repeats)],
+                          capture_output=True, text=True, env=env, cwd=str(tree))
+    if done.returncode != 0:
+        raise RuntimeError(f"the build in {tree} failed:\n{done.stderr[-2000:]}")
     result = json.loads(done.stdout.strip().splitlines()[-1])
     result["load_before"] = load
     return result
@@ -211,6 +249,12 @@ def main() -> int:
                 runs[which].append(run_child(tree, args.repeats, files[which]))
                 print(which, json.dumps(runs[which][-1]), flush=True)
         accuracy = differences(files["before"], files["after"])
+    threads: dict = {"before": [], "after": []}
+    for _ in range(args.rounds):
+        for which, tree in trees.items():
+            threads[which].append(run_threads_child(tree, args.repeats))
+    default_threads = {which: {k: float(np.median([r[k] for r in rounds]))
+                               for k in ("cpu", "wall")} for which, rounds in threads.items()}
     medians = {which: {loop: {stage: float(np.median([r[loop][stage] for r in rounds]))
                               for stage in STAGES + ("total",)}
                        for loop in ("three_axis", "planar")}
@@ -223,6 +267,8 @@ def main() -> int:
     results["sweep_sample_simulate_cpu_median_s"] = sweep
     results["sweep_sample_method"] = {which: rounds[-1]["sweep_sample"]["method"]
                                       for which, rounds in runs.items()}
+    results["three_axis_build_truth_default_threads_s"] = default_threads
+    results["default_threads_runs"] = threads
     write_json("lqr_simulate_speed.json", results)
     rows = []
     for loop in ("three_axis", "planar"):
@@ -247,6 +293,12 @@ def main() -> int:
              f"{sweep['before'] * 1e3:.2f} ms ({results['sweep_sample_method']['before']}) -> "
              f"{sweep['after'] * 1e3:.2f} ms ({results['sweep_sample_method']['after']}), "
              f"{sweep['after'] / sweep['before']:.2f}.", "",
+             "The three-axis truth build with the default BLAS threads (OpenBLAS, one per "
+             "core; the same alternation, medians) [ms]: CPU "
+             f"{default_threads['before']['cpu'] * 1e3:.2f} -> "
+             f"{default_threads['after']['cpu'] * 1e3:.2f}, wall "
+             f"{default_threads['before']['wall'] * 1e3:.2f} -> "
+             f"{default_threads['after']['wall'] * 1e3:.2f}.", "",
              "Results, after against before (max |after - before| / max |before|): "
              + ", ".join(f"{k} {v:.1e}" if isinstance(v, float) else f"{k} {v}"
                          for k, v in accuracy.items()), ""]
