@@ -45,7 +45,7 @@ import numpy as np
 import scipy.linalg
 
 from appendages import limits
-from controllers.threads import blas_threads_for, one_blas_thread
+from controllers.threads import SINGLE_THREAD_BELOW, one_blas_thread
 from appendages.interface import ROOT_LOADS, TIP_MOTIONS, describe, equilibrate
 
 from .exact import ExactReference, frequency_vector
@@ -487,12 +487,12 @@ class Spacecraft:
         example of ``benchmarks/three_axis.py`` with the default two threads:
         ``benchmarks/results/lqr_simulate_speed.md``).
         """
+        arguments = dict(tip_deflection=tip_deflection, root_loads=root_loads,
+                         disturbances=disturbances, n_modes=n_modes, prune=prune, name=name)
         with one_blas_thread():
-            size = self.second_order_model().mass.shape[0]
-        with blas_threads_for(size):
-            return self._plant(tip_deflection=tip_deflection, root_loads=root_loads,
-                               disturbances=disturbances, n_modes=n_modes, prune=prune,
-                               name=name)
+            if self.second_order_model().mass.shape[0] < SINGLE_THREAD_BELOW:
+                return self._plant(**arguments)
+        return self._plant(**arguments)        # a large model: the caller's BLAS threads
 
     def _plant(self, *, tip_deflection: bool, root_loads: bool, disturbances: bool,
                n_modes: int | None, prune: bool, name: str):
