@@ -37,7 +37,10 @@ digamma function (``psi(1 + x) = -gamma + sum_k [1/k - 1/(k + x)]``)::
 
     W(s) = 1/(m s**2) + 2/(m Omega**2) [psi(1 - q) - psi(1 - p)]/(p - q),
 
-exact at any s (zeta = 0 gives back the coth form).
+exact at any s (zeta = 0 gives back the coth form). That is the free-free convention; by
+default the ratio damps the cantilever modes (:mod:`appendages.damping`), and D(s) is their
+modal sum (``Rod._cantilever_modal_stiffness``: the modes up to 10 |s| one by one, the rest by
+Hurwitz zeta sums), the closed form with damping corrections beyond its cap on modes.
 
 References
 ----------
@@ -214,8 +217,9 @@ class Rod:
     def dynamic_stiffness(self, s) -> np.ndarray:
         """Exact root dynamic stiffness ``D = 1/W`` [N/m or N*m/rad], shape ``np.shape(s)``.
 
-        Undamped: ``m s**2 tanh(z)/z``, infinite exactly at a clamped-free frequency; s = 0
-        gives 0 (a free rod offers no static stiffness).
+        Undamped: ``m s**2 tanh(z)/z``, infinite exactly at a clamped-free frequency; damped
+        (cantilever convention): the modal sum of the module docstring; s = 0 gives 0 (a free
+        rod offers no static stiffness).
         """
         s = as_frequency_array(s)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
