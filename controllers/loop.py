@@ -25,7 +25,7 @@ from .signals import (OMEGA, THETA, TORQUE, check_controller, check_pair, check_
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["LoopTransfer", "close_loop", "loop_frequency_response", "controller_roots",
-           "resonance_points", "UNDAMPED_LADDER"]
+           "resonance_points", "window_angle_steps", "UNDAMPED_LADDER"]
 
 #: Relative offsets from an undamped pole at which :func:`resonance_points` adds points (on both
 #: sides): between the innermost point of its half-power window (3.7e-9) and round-off.
@@ -475,26 +475,142 @@ def controller_roots(controller: control.StateSpace, measured, torques) -> np.nd
     return roots[np.isfinite(roots) & (np.abs(roots) < 1e12)]
 
 
+# a lightly damped root's window: _WINDOW_POINTS points Im(root) + zeta w tan(t), t evenly in
+# [-_THETA, _THETA]
+_THETA = 1.45
+_WINDOW_POINTS = 40
+_STEP = 2.0 * _THETA / (_WINDOW_POINTS - 1)
+# roots whose windows are merged: centres within this many of the narrowest half-width of the
+# group, half-widths within this ratio (beyond, a merged window needs about as many points)
+_MERGE_SPREAD = 1.0
+_MERGE_WIDTHS = 1.25
+# a merged window's ends may fall short of a root's own by round-off of the frequencies: this
+# fraction of a step
+_ENDS = 1e-6
+
+
+def window_angle_steps(points: np.ndarray, centre: float, width: float) -> np.ndarray:
+    """The angle t = arctan((x - centre) / width) that each gap between neighbouring increasing
+    ``points`` spans, for the gaps that meet the root's own window |t| < 1.45 (the phase that a
+    factor 1 / (j omega - root) of the root -width + j centre turns across the gap) [rad]: at
+    most 2.9 / 39 in the root's own window (:func:`resonance_points`)."""
+    t = np.arctan((np.asarray(points, dtype=float) - centre) / width)
+    # (a gap that only touches the window's end, to round-off, is not in it)
+    meets = (t[1:] > -_THETA + _ENDS * _STEP) & (t[:-1] < _THETA - _ENDS * _STEP)
+    return np.diff(t)[meets]
+
+
+def _groups(centres: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """Group number of each root (centres increasing): consecutive roots within _MERGE_SPREAD
+    of the group's narrowest half-width from its first, half-widths within _MERGE_WIDTHS."""
+    group = np.zeros(centres.size, dtype=int)
+    k, first, narrowest, widest = 0, 0, math.inf, 0.0
+    c, w = centres.tolist(), widths.tolist()
+    for i in range(len(c)):
+        narrowest_i, widest_i = min(narrowest, w[i]), max(widest, w[i])
+        if i > first and (c[i] - c[first] > _MERGE_SPREAD * narrowest_i
+                          or widest_i > _MERGE_WIDTHS * narrowest_i):
+            k, first, narrowest_i, widest_i = k + 1, i, w[i], w[i]
+        narrowest, widest = narrowest_i, widest_i
+        group[i] = k
+    return group
+
+
+def _ragged_windows(centre, width, theta, n) -> np.ndarray:
+    """The points of windows centre_k + width_k tan(t), t in n_k even steps over
+    [-theta_k, theta_k], concatenated."""
+    offsets = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+    t = np.repeat(-theta, n) + offsets * np.repeat(2.0 * theta / (n - 1), n)
+    return np.repeat(centre, n) + np.repeat(width, n) * np.tan(t)
+
+
+def _windows(centres: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """The window points of lightly damped roots (centres increasing, half-widths zeta |root|),
+    close ones merged (:func:`resonance_points`)."""
+    if centres.size == 0:
+        return np.zeros(0)
+    group = _groups(centres, widths)
+    starts = np.flatnonzero(np.concatenate([[True], group[1:] != group[:-1]]))
+    size = np.diff(np.concatenate([starts, [group.size]]))
+    # the merged window: centre c between the extreme centres, half-width w the narrowest,
+    # steps s0 / R, R = max_i kappa_i (1 + d_i + d_i^2), d_i = |c - c_i| / w_i,
+    # kappa_i = w_i / w; its ends reach tan(t_max) = max_i (w_i tan(1.45) + |c - c_i|) / w
+    centre = 0.5 * (np.minimum.reduceat(centres, starts) + np.maximum.reduceat(centres, starts))
+    width = np.minimum.reduceat(widths, starts)
+    apart = np.abs(centres - centre[group])
+    d = apart / widths
+    # (a relative 1e-12 beyond, for round-off)
+    ratio = np.maximum.reduceat(widths / width[group] * (1.0 + d + d * d), starts) * (1 + 1e-12)
+    theta = np.arctan(np.maximum.reduceat(widths * math.tan(_THETA) + apart, starts)
+                      * (1 + 1e-12) / width)
+    n = np.ceil(2.0 * theta * ratio / _STEP).astype(int) + 1
+    merge = (size > 1) & (n < _WINDOW_POINTS * size)
+    merged = np.flatnonzero(merge)
+    points = _ragged_windows(centre[merged], width[merged], theta[merged], n[merged])
+    if merged.size:
+        # checked on the points: every gap spans at most s0 of every member's angle, and the
+        # window covers every member's own (a group where round-off breaks it is not merged)
+        members = np.flatnonzero(merge[group])
+        k = np.searchsorted(merged, group[members])       # the member's merged window
+        ends = np.cumsum(n[merged])
+        first = ends - n[merged]
+        count = n[merged][k]
+        which = np.repeat(np.arange(members.size), count)
+        at = np.repeat(first[k], count) + (np.arange(int(count.sum()))
+                                           - np.repeat(np.cumsum(count) - count, count))
+        t = np.arctan((points[at] - centres[members][which]) / widths[members][which])
+        step = np.diff(t)
+        same = which[1:] == which[:-1]
+        meets = same & (t[1:] > -_THETA + _ENDS * _STEP) & (t[:-1] < _THETA - _ENDS * _STEP)
+        bad_step = np.zeros(members.size, dtype=bool)
+        np.logical_or.at(bad_step, which[1:][meets], step[meets] > _STEP)
+        # (to the round-off of the frequencies themselves, 1e-6 of a step at 1e-7 |root|)
+        covered = ((t[np.cumsum(count) - count] <= -_THETA + _ENDS * _STEP)
+                   & (t[np.cumsum(count) - 1] >= _THETA - _ENDS * _STEP))
+        broken = np.zeros(merged.size, dtype=bool)
+        np.logical_or.at(broken, k, bad_step | ~covered)
+        if broken.any():
+            merge[merged[broken]] = False
+            keep = np.repeat(~broken, n[merged])
+            points = points[keep]
+    single = ~merge[group]
+    theta40 = np.linspace(-_THETA, _THETA, _WINDOW_POINTS)
+    own = centres[single, None] + widths[single, None] * np.tan(theta40)
+    return np.concatenate([points, own.ravel()])
+
+
 def resonance_points(roots, w_lo: float, w_hi: float, *, poles=None) -> np.ndarray:
     """Frequencies [rad/s] across the half-power band of every lightly damped root, in
     (w_lo, w_hi), increasing.
 
     A root -zeta w + j w sqrt(1 - zeta^2) (a pole: a resonance; a zero: an antiresonance) with
-    zeta <= 0.3 gets 40 points ``Im(root) + zeta w tan(t)``, t evenly in [-1.45, 1.45]: the
-    response falls to 1/sqrt(2) of its peak at about w (1 +/- zeta), so steps of a fraction of
-    zeta w resolve the peak and its 180 deg phase swing. An even count puts no point on the
-    peak itself, where an undamped pole (zeta = 0, taken as 1e-7) makes the response
-    infinite. A root within 1/50 of the half-width zeta w of one already placed is resolved by
-    that one's points (the innermost lie 0.037 zeta w from the centre): a plant's mode that a
-    loop leaves where it is comes back as a pole of every loop-at-a-time function and as
-    zeros, several copies of one root.
+    zeta <= 0.3 gets 40 points ``Im(root) + zeta w tan(t)``, t evenly in [-1.45, 1.45] (steps
+    s0 = 2.9 / 39): the response falls to 1/sqrt(2) of its peak at about w (1 +/- zeta), so
+    steps of a fraction of zeta w resolve the peak and its 180 deg phase swing; t is the phase
+    the root's factor 1 / (j omega - root) turns. An even count puts no point on the peak
+    itself, where an undamped pole (zeta = 0, taken as 1e-7) makes the response infinite.
+
+    Roots whose centres c_i lie within one half-width w_i = zeta_i |root_i| of each other
+    (half-widths within a ratio 1.25) share one window wherever it needs fewer points than
+    their own windows together: a plant's mode that a loop leaves where it is comes back as a
+    pole of every loop-at-a-time function and as zeros, several copies of one root computed a
+    little apart. The shared window is c + w tan(t), c the middle of the centres, w the
+    narrowest half-width, t in steps s0 / R. Its local spacing, s0 / R (w + (x - c)^2 / w), is
+    at most s0 / R kappa_i (w_i + (x - c)^2 / w_i) (kappa_i = w_i / w >= 1), and
+    (w_i + (x - c)^2 / w_i) / (w_i + (x - c_i)^2 / w_i) <= 1 + d_i + d_i^2
+    (d_i = |c - c_i| / w_i), so with R = max_i kappa_i (1 + d_i + d_i^2) the angle
+    t_i = arctan((x - c_i) / w_i) of every root turns by at most s0 across any of its gaps, as
+    in the root's own window, nowhere a coarser spacing; its ends, tan(t_max) =
+    max_i (w_i tan(1.45) + |c - c_i|) / w, lie beyond every root's own window (both checked
+    on the points, :func:`window_angle_steps`; a group where round-off breaks them keeps its
+    roots' own windows).
 
     A pole of the loop that is undamped or nearly so (zeta below the floor 1e-7) also gets
-    points w (1 +- 10^-k), k = 9, 9.5, ..., 13 (UNDAMPED_LADDER), between the window's innermost
-    points and the pole: |L| grows without bound towards it, so |L| = 1 is crossed on both sides,
-    as close to it as the mode's residue is small (a mode the loop barely feels), and these
-    crossings, with their phase margins, are bracketed down to 1e-13 of the frequency (closer
-    than that a double cannot tell them from the pole).
+    points w (1 +- 10^-k), k = 9, 9.5, ..., 13 (UNDAMPED_LADDER), beside the pole: |L| grows
+    without bound towards it, so |L| = 1 is crossed on both sides, as close to it as the
+    mode's residue is small (a mode the loop barely feels), and these crossings, with their
+    phase margins, are bracketed down to 1e-13 of the frequency (closer than that a double
+    cannot tell them from the pole).
 
     Parameters
     ----------
@@ -507,22 +623,13 @@ def resonance_points(roots, w_lo: float, w_hi: float, *, poles=None) -> np.ndarr
         ones get the ladder of points above.
     """
     roots = np.asarray(roots, dtype=complex).reshape(-1)
-    theta = np.linspace(-1.45, 1.45, 40)
     upper = roots[(roots.imag > 0) & (np.abs(roots) > 0)]
     upper = upper[np.argsort(upper.imag, kind="stable")]
-    last, last_width = complex(np.inf), 0.0
-    points = []
-    for lam in upper:
-        w = abs(lam)
-        zeta = max(abs(lam.real) / w, 1e-7)
-        if zeta > 0.3:
-            continue
-        width = zeta * w
-        if abs(lam - last) <= 0.02 * min(width, last_width):
-            continue
-        last, last_width = lam, width
-        pts = lam.imag + width * np.tan(theta)
-        points.append(pts[(pts > w_lo) & (pts < w_hi)])
+    w_all = np.abs(upper)
+    zeta = np.maximum(np.abs(upper.real) / w_all, 1e-7)
+    light = zeta <= 0.3
+    pts = _windows(upper.imag[light], (zeta * w_all)[light])
+    points = [pts[(pts > w_lo) & (pts < w_hi)]]
     if poles is not None:
         poles = np.asarray(poles, dtype=complex).reshape(-1)
         poles = poles[(poles.imag > 0) & (np.abs(poles.real) < 1e-7 * np.abs(poles))]
@@ -534,7 +641,7 @@ def resonance_points(roots, w_lo: float, w_hi: float, *, poles=None) -> np.ndarr
             offsets = np.concatenate([-UNDAMPED_LADDER, UNDAMPED_LADDER])
             pts = (w_poles[:, None] * (1.0 + offsets)).ravel()
             points.append(pts[(pts > w_lo) & (pts < w_hi)])
-    return np.unique(np.concatenate(points)) if points else np.zeros(0)
+    return np.unique(np.concatenate(points))
 
 
 @limits_blas_threads(total_states)
