@@ -78,7 +78,7 @@ from . import limits
 from .assembly import Segment
 from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
                       chebyshev_resonance_coefficients, hurwitz_tail_coefficients,
-                      modal_factor_sum)
+                      modal_factor_sum, tail_series)
 from .checks import as_frequency_array, check_derived, check_range
 from .errors import describe
 from .interface import inverse_2x2, place_bending_planes
@@ -93,7 +93,6 @@ __all__ = ["Beam", "characteristic_roots", "rectangle_torsion_constant"]
 _SERIES_RADIUS = 2.0  # |x| below which the power series in y = x**4 are used
 _MAX_CORRECTION_MODES = 20000  # free-free modes summed explicitly in a damping correction
 _TAIL_TERMS = 12      # terms of the series in s/w_k of the damping correction's tail
-_TAIL_POWERS = np.arange(4, 4 + _TAIL_TERMS)    # the powers of s/c0 in the modal sum's tail
 #: Most cantilever modes of the modal sum of the damped root dynamic stiffness (beyond, the
 #: closed form with damping corrections of :mod:`appendages.damping`).
 _MODAL_MAX_MODES = 1024
@@ -1493,8 +1492,7 @@ class Beam:
                     (scale * cheb[None, :] * Z).T)
             self._cache[key] = data
         w, products, rest, coefficients = data
-        # the tail's series sum_m c_m v**(4+m) (integer powers: a few ulp each)
-        tail = ((s / c0)[:, None] ** _TAIL_POWERS) @ coefficients
+        tail = tail_series(s / c0, coefficients)
         entries = ((s**2)[:, None] * (modal_factor_sum(s, w, products, self.damping_ratio)
                                       + rest) - tail)
         D = np.empty((s.size, 2, 2), dtype=np.complex128)

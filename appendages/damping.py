@@ -49,7 +49,7 @@ from .errors import describe
 
 __all__ = ["CantileverDamping", "CONVENTIONS", "MAX_MODES", "check_damping_convention",
            "check_damping_ratio", "chebyshev_resonance_coefficients",
-           "hurwitz_tail_coefficients", "mode_groups", "modal_factor_sum"]
+           "hurwitz_tail_coefficients", "mode_groups", "modal_factor_sum", "tail_series"]
 
 _REPAIR_POINTS = 32
 #: Most cantilever modes summed explicitly at one point.
@@ -297,6 +297,33 @@ def modal_factor_sum(s: np.ndarray, w: np.ndarray, weights: np.ndarray,
     with np.errstate(divide="ignore", invalid="ignore"):
         factor = (w * w + damping) / ((col - 1j * w) * (col + 1j * w) + damping)
     return factor @ weights
+
+
+def tail_series(v: np.ndarray, coefficients: np.ndarray, first_power: int = 4) -> np.ndarray:
+    """``sum_j coefficients_j v**(first_power + j)`` at flat complex v: the Hurwitz tails of
+    the modal sums.
+
+    A few points: the integer powers at once (numpy's integer power, a few ulp each: one array
+    operation); many: Horner's scheme (numpy's complex integer power is slow on long arrays).
+
+    Parameters
+    ----------
+    v : ndarray of complex, shape (npts,)
+    coefficients : ndarray, shape (J,) or (J, k)
+    first_power : int
+
+    Returns
+    -------
+    ndarray of complex, shape (npts,) or (npts, k)
+    """
+    J = coefficients.shape[0]
+    if v.size <= 32:
+        return (v[:, None] ** np.arange(first_power, first_power + J)) @ coefficients
+    out = np.zeros((v.size,) + coefficients.shape[1:], dtype=np.complex128)
+    column = v if coefficients.ndim == 1 else v[:, None]
+    for j in range(J - 1, -1, -1):
+        out = out * column + coefficients[j]
+    return out * column**first_power
 
 
 def chebyshev_resonance_coefficients(zeta: float, n_terms: int) -> np.ndarray:

@@ -62,14 +62,13 @@ import scipy.special
 from . import limits
 from .damping import (MAX_MODES, CantileverDamping, check_damping_convention,
                       check_damping_ratio, chebyshev_resonance_coefficients,
-                      hurwitz_tail_coefficients, modal_factor_sum)
+                      hurwitz_tail_coefficients, modal_factor_sum, tail_series)
 from .checks import as_frequency_array, check_range
 from .errors import describe
 
 __all__ = ["Rod", "MOTIONS"]
 
 _TAIL_TERMS = 12    # terms of the series in s/w_k of the modal sum's tail
-_TAIL_POWERS = np.arange(4, 4 + _TAIL_TERMS)    # the powers of s/Omega in it
 
 #: The two rod motions and the quantities (keys of RANGES) of their stiffness and inertia.
 MOTIONS = {"axial": ("axial_stiffness", "linear_density"),
@@ -301,8 +300,7 @@ class Rod:
         chunk = max(1, 1_000_000 // N)
         for start in range(0, s.size, chunk):
             ss = s[start:start + chunk]
-            # the tail's series sum_j c_j v**(4+j) (integer powers: a few ulp each)
-            series = ((ss / Omega)[:, None] ** _TAIL_POWERS) @ tail
+            series = tail_series(ss / Omega, tail)
             D[start:start + chunk] = (ss**2 * (modal_factor_sum(ss, w, l2, self.damping_ratio)
                                                + rest) - series)
         return D

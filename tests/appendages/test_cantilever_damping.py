@@ -229,6 +229,28 @@ def test_modal_factor_sum_on_the_axis_equals_the_complex_form():
                                rtol=1e-14)
 
 
+def test_tail_series_few_and_many_points():
+    """appendages.damping.tail_series, sum_j c_j v^(4+j), by integer powers (a few points) and
+    by Horner's scheme (many) against the 40-digit sum: 1e-14 of sum_j |c_j| |v|^(4+j)."""
+    from appendages.damping import tail_series
+
+    rng = np.random.default_rng(7)
+    coefficients = rng.normal(size=(12, 3))
+    for n in (1, 5, 32, 33, 500):
+        v = rng.uniform(0.01, 1.5, n) * np.exp(1j * rng.uniform(0, np.pi, n))
+        got = tail_series(v, coefficients)
+        assert got.shape == (n, 3)
+        np.testing.assert_allclose(tail_series(v, coefficients[:, 0]), got[:, 0], rtol=1e-13,
+                                   atol=1e-14 * np.abs(got[:, 0]).max())
+        with mp.workdps(40):
+            for i in range(0, n, max(1, n // 7)):
+                for k in range(3):
+                    exact = mp.fsum(mp.mpf(coefficients[j, k]) * mp.mpc(v[i]) ** (4 + j)
+                                    for j in range(12))
+                    size = sum(abs(coefficients[j, k]) * abs(v[i]) ** (4 + j) for j in range(12))
+                    assert abs(got[i, k] - complex(exact)) <= 1e-14 * size
+
+
 def _coupled_pole(beam, hub_mass, hub_inertia, guess):
     """The coupled pole near ``guess`` of a hub carrying the beam at its centre, from the exact
     Z(s) = M_hub s^2 + G^T D(s) G: a root of ``(s - guess) det Z(s)`` (the factor removes the
