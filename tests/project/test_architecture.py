@@ -290,3 +290,17 @@ def test_no_private_name_imported_across_modules(package):
              if m.split(".")[0] == package]
     assert not found, ("private names used across modules (make them public and documented): "
                        + "; ".join(found))
+
+
+def test_test_modules_have_unique_names():
+    """pytest imports test modules by their base name (no packages under tests/): two files of
+    one name in different folders stop the collection of the whole suite."""
+    seen: dict[str, pathlib.Path] = {}
+    clashes = []
+    for path in sorted((ROOT / "tests").rglob("*.py")):
+        if path.name in ("__init__.py", "conftest.py"):
+            continue
+        if path.name in seen:
+            clashes.append(f"{seen[path.name].relative_to(ROOT)} and {path.relative_to(ROOT)}")
+        seen.setdefault(path.name, path)
+    assert not clashes, "test modules of the same name: " + "; ".join(clashes)
