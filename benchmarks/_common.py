@@ -31,6 +31,7 @@ import gc
 import json
 import math
 import platform
+import subprocess
 import statistics
 import time
 from pathlib import Path
@@ -49,7 +50,7 @@ __all__ = [
     "RESULTS", "SLEW_ANGLE", "SLEW_DURATION", "PD_NATURAL_FREQUENCY", "PD_DAMPING",
     "paper_rod", "default_hub", "spacecraft_with", "median_time", "machine_info",
     "write_json", "markdown_table", "fmt", "slew_inputs", "pd_closed_loop", "slew_response",
-    "slew_errors",
+    "slew_errors", "revision", "run_in_checkout",
 ]
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -234,3 +235,49 @@ def slew_errors(response: dict, reference: dict) -> dict:
         out["tip"] = float(np.max(np.abs(response["tip"] - reference["tip"]))
                            / np.max(np.abs(reference["tip"])))
     return out
+
+
+# ---------------------------------------------------------------------------------------------
+# before/after runs: a workload timed in a fresh process of another checkout
+# ---------------------------------------------------------------------------------------------
+_THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
+
+
+def revision(tree: Path) -> str:
+    """The checkout's commit and whether it has changes of its own ("unknown" outside git)."""
+    try:
+        head = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
+                              capture_output=True, text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "-C", str(tree), "status", "--porcelain",
+                                "--untracked-files=no"], capture_output=True, text=True,
+                               check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + (" + local changes" if dirty else "")
+
+
+def run_in_checkout(tree: Path, code: str, *args, what: str, blas: str = "inherit") -> dict:
+    """Run ``python -c code *args`` in a fresh process with the checkout ``tree`` first on the
+    path; its last line of output read as JSON, with ``load_before`` (the load average when
+    it started) added unless the child gave one.
+
+    ``blas``: ``"inherit"`` this process's BLAS thread settings, ``"one"`` one BLAS thread (as
+    a Dask worker runs), ``"default"`` none set (a user's default). ``what`` names the workload
+    in the error raised when the child fails.
+    """
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    if blas == "one":
+        env.update({k: "1" for k in _THREAD_VARIABLES})
+    elif blas == "default":
+        for k in _THREAD_VARIABLES:
+            env.pop(k, None)
+    elif blas != "inherit":
+        raise ValueError(f"blas must be 'inherit', 'one' or 'default'; got {blas!r}")
+    load = [round(x, 2) for x in os.getloadavg()]
+    done = subprocess.run([sys.executable, "-c", code, *map(str, args)], capture_output=True,
+                          text=True, env=env, cwd=str(tree))
+    if done.returncode != 0:
+        raise RuntimeError(f"{what} in {tree} failed:\n{done.stderr[-2000:]}")
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result.setdefault("load_before", load)
+    return result

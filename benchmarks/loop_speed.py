@@ -30,14 +30,12 @@ from __future__ import annotations
 import _common  # noqa: F401  (BLAS threads, sys.path)
 
 import argparse
-import json
-import os
-import subprocess
 import sys
 import textwrap
 from pathlib import Path
 
-from _common import RESULTS, machine_info, markdown_table, write_json
+from _common import (RESULTS, machine_info, markdown_table, revision, run_in_checkout,
+                     write_json)
 
 HERE = Path(__file__).resolve().parent.parent
 
@@ -84,28 +82,8 @@ WORKLOADS = {"sweep_sample": "one sample of the shipped sweep scene (exact-beam 
              "planar_loop": "one planar design-loop evaluation (paper's rod, 20 modes)"}
 
 
-def revision(tree: Path) -> str:
-    """The checkout's commit and whether it has changes of its own."""
-    try:
-        head = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
-                              capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(tree), "status", "--porcelain",
-                                "--untracked-files=no"], capture_output=True, text=True,
-                               check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return head + (" + local changes" if dirty else "")
-
-
 def run_child(tree: Path, workload: str, n: int) -> dict:
-    env = dict(os.environ, PYTHONPATH=str(tree))
-    out = subprocess.run([sys.executable, "-c", CHILD, str(tree), workload, str(n)],
-                         capture_output=True, text=True, env=env, cwd=str(tree))
-    if out.returncode != 0:
-        raise RuntimeError(f"{workload} in {tree} failed:\n{out.stderr[-2000:]}")
-    result = json.loads(out.stdout.strip().splitlines()[-1])
-    result["load_before"] = [round(x, 2) for x in os.getloadavg()]
-    return result
+    return run_in_checkout(tree, CHILD, tree, workload, n, what=workload)
 
 
 def main() -> int:

@@ -30,8 +30,6 @@ import _common  # noqa: F401  (BLAS threads, sys.path)
 
 import argparse
 import json
-import os
-import subprocess
 import sys
 import tempfile
 import textwrap
@@ -39,7 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from _common import RESULTS, machine_info, markdown_table, write_json
+from _common import (RESULTS, machine_info, markdown_table, revision, run_in_checkout,
+                     write_json)
 
 HERE = Path(__file__).resolve().parent.parent
 STAGES = ("build_truth", "build_design", "lqr", "close_loop", "simulate")
@@ -179,44 +178,13 @@ CHILD_THREADS = textwrap.dedent("""
 """)
 
 
-def revision(tree: Path) -> str:
-    """The checkout's commit and whether it has changes of its own."""
-    try:
-        head = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
-                              capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(tree), "status", "--porcelain",
-                                "--untracked-files=no"], capture_output=True, text=True,
-                               check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return head + (" + local changes" if dirty else "")
-
-
 def run_child(tree: Path, repeats: int, out: Path) -> dict:
-    env = dict(os.environ, PYTHONPATH=str(tree), OPENBLAS_NUM_THREADS="1",
-               OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
-    load = [round(x, 2) for x in os.getloadavg()]
-    done = subprocess.run([sys.executable, "-c", CHILD, str(tree), str(repeats), str(out)],
-                          capture_output=True, text=True, env=env, cwd=str(tree))
-    if done.returncode != 0:
-        raise RuntimeError(f"the stages in {tree} failed:\n{done.stderr[-2000:]}")
-    result = json.loads(done.stdout.strip().splitlines()[-1])
-    result["load_before"] = load
-    return result
+    return run_in_checkout(tree, CHILD, tree, repeats, out, what="the stages", blas="one")
 
 
 def run_threads_child(tree: Path, repeats: int) -> dict:
-    env = {k: v for k, v in os.environ.items()
-           if k not in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")}
-    env["PYTHONPATH"] = str(tree)
-    load = [round(x, 2) for x in os.getloadavg()]
-    done = subprocess.run([sys.executable, "-c", CHILD_THREADS, str(tree), str(repeats)],
-                          capture_output=True, text=True, env=env, cwd=str(tree))
-    if done.returncode != 0:
-        raise RuntimeError(f"the build in {tree} failed:\n{done.stderr[-2000:]}")
-    result = json.loads(done.stdout.strip().splitlines()[-1])
-    result["load_before"] = load
-    return result
+    return run_in_checkout(tree, CHILD_THREADS, tree, repeats, what="the build",
+                           blas="default")
 
 
 def differences(before: Path, after: Path) -> dict:

@@ -47,14 +47,13 @@ from __future__ import annotations
 import _common  # noqa: F401  (BLAS threads, sys.path)
 
 import argparse
-import json
 import os
-import subprocess
 import sys
 import textwrap
 from pathlib import Path
 
-from _common import RESULTS, machine_info, markdown_table, write_json
+from _common import (RESULTS, machine_info, markdown_table, revision, run_in_checkout,
+                     write_json)
 
 HERE = Path(__file__).resolve().parent.parent
 
@@ -116,28 +115,10 @@ WORKLOADS = {"sweep_sample": "one sample of the shipped sweep scene (CPU, one BL
              "planar_loop": "one planar design-loop evaluation (paper's rod, 20 modes)"}
 
 
-def revision(tree: Path) -> str:
-    """The checkout's commit and whether it has changes of its own."""
-    try:
-        head = subprocess.run(["git", "-C", str(tree), "rev-parse", "--short", "HEAD"],
-                              capture_output=True, text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "-C", str(tree), "status", "--porcelain",
-                                "--untracked-files=no"], capture_output=True, text=True,
-                               check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-    return head + (" + local changes" if dirty else "")
-
-
 def run_child(tree: Path, workload: str, n: int) -> dict:
-    env = dict(os.environ, PYTHONPATH=str(tree))
-    if workload.endswith("_sample"):     # as a Dask worker runs it
-        env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
-    out = subprocess.run([sys.executable, "-c", CHILD, str(tree), workload, str(n)],
-                         capture_output=True, text=True, env=env, cwd=str(tree))
-    if out.returncode != 0:
-        raise RuntimeError(f"{workload} in {tree} failed:\n{out.stderr[-2000:]}")
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    # a sample as a Dask worker runs it: one BLAS thread
+    return run_in_checkout(tree, CHILD, tree, workload, n, what=workload,
+                           blas="one" if workload.endswith("_sample") else "inherit")
 
 
 def estimate(run: dict, n_target: int = 10_000, cores: int = 2) -> dict:
