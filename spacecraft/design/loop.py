@@ -46,6 +46,7 @@ from ..scene.read import Scene, load_scene, models_scene, scene_dict
 from .manoeuvre import (FlownManoeuvre, check_slew_limits, close_flown_loop, delay_facts, flies,
                         loop_delay)
 from .models import ModelBuilder, ProgressCallback, RunStats
+from .naming import MOTION_WORDS, plural
 from .responses import appendage_peaks, diverged_at, simulate_manoeuvre, trace
 from .tables import describe_model, equivalence_table
 from .tuning import digital_facts, rigid_crossover
@@ -582,13 +583,25 @@ class DesignLoop(ModelBuilder):
         resolved = {}
         if n_modes is not None:
             method = scene.fidelity.method
+            per_motion = self.truth_modes_per_motion(n_modes)
             for a in scene.appendages:
-                if a.truth == "beam":
+                if a.truth != "beam":
+                    continue
+                counts = per_motion.get(a.name, {})
+                if "lowest coupled modes" in counts:      # modes ranked together: the k lowest
+                    k = counts["lowest coupled modes"]
+                    w = resolved_frequency(self.beam(a), k, method, three_axis=True)
+                    what = plural(k, f"{method} mode")
+                elif counts:                              # a mode count per motion
+                    w = resolved_frequency(self.beam(a), n_modes, method, three_axis=True,
+                                           modes_per_motion=counts)
+                    what = (plural(sum(counts.values()), f"{method} mode") + ": " + ", ".join(
+                        f"{MOTION_WORDS[m]} {c}" for m, c in counts.items() if c))
+                else:
                     w = resolved_frequency(self.beam(a), n_modes, method,
                                            three_axis=self.three_axis)
-                    resolved[a.name] = (w, f"{n_modes} {method} mode"
-                                           f"{'s' if n_modes != 1 else ''}",
-                                        bool(w >= band or converged))
+                    what = plural(n_modes, f"{method} mode")
+                resolved[a.name] = (w, what, bool(w >= band or converged))
         return band, resolved
 
     def equivalence_tables(self, models) -> list:

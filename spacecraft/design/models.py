@@ -364,8 +364,9 @@ class ModelBuilder:
         if not seen:
             return beam.truncated(n_modes, method=method)
         if getattr(beam, "is_uniform", False):
-            return beam.truncated(n_modes, method=method,
-                                  modes_per_motion=motion_counts(beam, n_modes, method, seen))
+            counts = motion_counts(beam, n_modes, method, seen)
+            # n_modes of the truncation is its planar (x-y) model's: the x-y part of this one
+            return beam.truncated(max(1, counts["xy"]), method=method, modes_per_motion=counts)
         return beam.truncated(self.coupled_floor(beam) - 1 + n_modes, method=method)
 
     def coupled_floor(self, beam) -> int:

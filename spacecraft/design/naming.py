@@ -12,7 +12,12 @@ from __future__ import annotations
 
 __all__ = ["FIT_LABELS", "design_label", "controller_label", "loop_label", "variant_colour",
            "UNSTABLE_COLOUR", "CAUTION_COLOUR", "EXACT_COLOUR", "REFERENCE_COLOUR", "TRUTH_STYLE", "DESIGN_STYLE",
-           "BASILISK_STYLE", "BASILISK_COLOUR", "plural"]
+           "BASILISK_STYLE", "BASILISK_COLOUR", "MOTION_WORDS", "plural"]
+
+#: A three-axis beam's motions in words, by the keys of a truncation's modes per motion
+#: (:attr:`appendages.ModalBeam.modes_per_motion`).
+MOTION_WORDS = {"xy": "bending in x-y", "xz": "bending in x-z", "torsion": "torsion",
+                "axial": "axial motion"}
 
 #: Names of the design models by fit criterion (and of a scene's own design model).
 FIT_LABELS = {"poles-and-zeros": "chain, flexsat fit", "frequencies": "chain, paper's fit",

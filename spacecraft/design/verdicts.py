@@ -71,6 +71,7 @@ References
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -522,12 +523,31 @@ def verdict_dict(verdict) -> dict:
     return out
 
 
-def resolved_frequency(beam, n_modes: int, method: str, *, three_axis: bool = False) -> float:
+def resolved_frequency(beam, n_modes: int, method: str, *, three_axis: bool = False,
+                       modes_per_motion: Mapping | None = None) -> float:
     """Highest frequency [rad/s] up to which a truncation of ``beam`` to ``n_modes`` modes
     represents it: its n-th clamped (cantilever) frequency for Craig-Bampton (fixed-interface
     modes [2]_), its n-th free-free bending frequency for the free-free and residual
     truncations; ``three_axis``: the n-th of all motions together (both bending planes,
-    torsion, axial), as a three-axis truncation keeps the n lowest of them."""
+    torsion, axial), as a three-axis truncation keeps the n lowest of them.
+
+    ``modes_per_motion`` (``{"xy": .., "xz": .., "torsion": .., "axial": ..}``, a three-axis
+    truncation that keeps modes per motion, e.g. the lowest of a stiff motion an output sees):
+    the highest kept frequency below the lowest one left out, of any motion; every mode of the
+    beam below it is in the model. For the n lowest of all motions this is the n-th."""
+    if modes_per_motion is not None:
+        kind = "cantilever_frequencies" if method == "craig-bampton" else "natural_frequencies"
+        rods = {"torsion": beam.torsion_rod(), "axial": beam.axial_rod()}
+        kept, first_out = [], math.inf
+        for motion, count in modes_per_motion.items():
+            model = beam.planar_view(motion) if motion in ("xy", "xz") else rods[motion]
+            if model is None:
+                continue
+            w = np.asarray(getattr(model, kind)(int(count) + 1), dtype=float)
+            kept.extend(w[:int(count)])
+            first_out = min(first_out, float(w[int(count)]))
+        below = [w for w in kept if w < first_out]
+        return float(max(below)) if below else 0.0
     if not three_axis:
         if method == "craig-bampton":
             return float(beam.cantilever_frequencies(n_modes)[-1])

@@ -894,13 +894,13 @@ def plot_W(result, path: Path, stats, exact: bool) -> str:
             curves.append(("exact beam", models["beam"], "-", EXACT_COLOUR, 1.6))
             stats.exact_reference_evaluations += 1
         truth = models["truth"]
-        truth_name = _model_name(truth)
+        truth_name = _model_name(truth, scene.three_axis)
         curves.append((f"truth model: {truth_name}", truth, "--", "#7f7f7f", 1.4))
         for variant, d in result.designs.items():
             model = d["appendages"][a.name]
             if model is truth:
                 continue
-            label = f"{design_label(variant)}: {_model_name(model)}"
+            label = f"{design_label(variant)}: {_model_name(model, scene.three_axis)}"
             if any(c[1] is model for c in curves):
                 continue
             curves.append((label, model, "-.", variant_colour(variant), 1.2))
@@ -965,11 +965,17 @@ _W_PANELS = {
 }
 
 
-def _model_name(model) -> str:
+def _model_name(model, three_axis: bool = False) -> str:
     name = type(model).__name__
     if hasattr(model, "n_modes"):
         method = getattr(model, "method", None)
-        return f"beam, {plural(model.n_modes, (method + ' mode') if method else 'mode')}"
+        n = model.n_modes
+        if three_axis:
+            try:
+                n = sum(model.modes_per_motion.values())   # every motion's, not x-y's
+            except (AttributeError, ValueError):
+                pass   # a beam whose motions couple: its n_modes lowest coupled modes
+        return f"beam, {plural(n, (method + ' mode') if method else 'mode')}"
     if hasattr(model, "n_bodies"):
         return f"{model.n_bodies}-body chain"
     return name

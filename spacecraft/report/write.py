@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..design.naming import controller_label, design_label, plural
+from ..design.naming import MOTION_WORDS, controller_label, design_label, plural
 from .flown import basilisk_wheel_blocks, flown_blocks, flown_summary_lines
 from .output import MARKER, default_output_folder, output_folder
 from .pages import Tone, bad, markdown, markdown_text, number, render_html, warn
@@ -441,10 +441,6 @@ def _question(data: dict) -> list:
     return [("h2", "The question"), ("ul", items)]
 
 
-#: A three-axis beam's motions in words (spacecraft.design.models.ModelBuilder.seen_motions).
-_MOTION_WORDS = {"xy": "bending in x-y", "xz": "bending in x-z", "torsion": "torsion",
-                 "axial": "axial motion"}
-
 
 def _models(data: dict) -> list:
     b: list = [("h2", "Models")]
@@ -465,7 +461,7 @@ def _models(data: dict) -> list:
                         for name, counts in per_motion.items()) + ".")
             if kept:
                 text += (" Each keeps the lowest mode of every motion a reported output sees (" +
-                         ", ".join(_MOTION_WORDS.get(m, m) for m in kept) + "), however stiff, "
+                         ", ".join(MOTION_WORDS.get(m, m) for m in kept) + "), however stiff, "
                          "so that no output of the truth model misses that motion for want of a "
                          "mode; n_modes counts the modes beyond those.")
             b.append(("p", text))
@@ -651,7 +647,7 @@ def _closed_loop_fidelity(choice: dict) -> list:
             f"{_fmt(record['band'], 4)} rad/s, its least damping ratio and, once those have "
             "settled, its margins (the largest relative changes below). ")
     if record["converged"]:
-        text += f"{n} modes per beam meet it."
+        text += f"{plural(n, 'mode')} per beam meet{'s' if n == 1 else ''} it."
     else:
         text = warn(text + f"The search stopped at {n} modes per beam (the scene's limits) "
                            "without meeting it.")

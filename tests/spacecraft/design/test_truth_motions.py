@@ -170,3 +170,43 @@ def test_a_beam_with_a_tip_body_keeps_the_fewest_lowest_modes_that_move_every_ti
     assert not unmodelled
     for row in data["closed_loops"]:
         assert min(row["appendages"]["truth"]["rod"].values()) > 0.0
+
+
+@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("beam", [WING, BOOM], ids=["wing", "boom"])
+def test_the_resolved_frequency_of_counts_per_motion(beam, method):
+    """The frequency a truncation with modes per motion resolves the beam up to: every mode of
+    the beam up to it is kept, the lowest mode left out lies above it, and for the n lowest of
+    all motions it is the rule of thumb's n-th (resolved_frequency without counts)."""
+    from spacecraft.design.verdicts import resolved_frequency
+
+    kind = "cantilever_frequencies" if method == "craig-bampton" else "natural_frequencies"
+    rods = {"torsion": beam.torsion_rod(), "axial": beam.axial_rod()}
+    for n in range(1, 5):
+        assert resolved_frequency(beam, n, method, three_axis=True, modes_per_motion=motion_counts(
+            beam, n, method)) == pytest.approx(resolved_frequency(beam, n, method,
+                                                                  three_axis=True), rel=1e-12)
+        counts = motion_counts(beam, n, method, SEEN)
+        w = resolved_frequency(beam, n, method, three_axis=True, modes_per_motion=counts)
+        for motion, count in counts.items():
+            model = beam.planar_view(motion) if motion in ("xy", "xz") else rods[motion]
+            f = getattr(model, kind)(count + 1)
+            # no mode left out at or below w (1e-12: the frequencies' rounding)
+            assert f[count] > w * (1.0 + 1e-12), (n, motion)
+        assert w in [float(x) for motion, count in counts.items()
+                     for x in getattr(beam.planar_view(motion) if motion in ("xy", "xz")
+                                      else rods[motion], kind)(max(count, 1))[:count]]
+
+
+def test_the_truth_models_planar_view_is_its_x_y_part_and_the_report_names_every_mode():
+    """The truth beam's planar model (x-y bending: its W, poles, the W plot's resonances) is
+    the x-y part of its three-axis model, and the report counts every motion's modes."""
+    data = _run(**{"outputs.exact_reference": False, "manoeuvre": None})
+    for name, truth in data["truth"]["models"].items():
+        counts = truth["modes_per_motion"]
+        assert truth["n_modes"] == counts["xy"]
+        beam = WING if name.startswith("wing") else BOOM
+        planar = beam.truncated(counts["xy"], method="craig-bampton").poles()
+        assert truth["natural_frequencies"] == pytest.approx(list(planar[:6]), rel=1e-12)
+        resolved = data["truth"]["resolved"][name]
+        assert resolved["model"].startswith(f"{sum(counts.values())} craig-bampton modes: ")
