@@ -11,7 +11,7 @@ Compiled code is cached on disk, so that a process loads it (~0.3 s) instead of 
 it (~2.5 s of CPU): where numba puts it (``NUMBA_CACHE_DIR`` if set, else ``__pycache__``
 beside this file when writable, else the user's cache directory), and when none of those is
 writable (a read-only installation run by a user without a writable home) in a private
-directory under the system's temporary directory (:func:`_cached`); only if that fails too
+directory under the system's temporary directory (:func:`cached_njit`); only if that fails too
 is the loop compiled in every process, uncached.
 """
 
@@ -25,7 +25,7 @@ import numba
 import numpy as np
 from numba import njit
 
-__all__ = ["modal_recursion"]
+__all__ = ["cached_njit", "modal_recursion"]
 
 
 def _private_directory() -> str | None:
@@ -47,15 +47,19 @@ def _private_directory() -> str | None:
     return path
 
 
-def _cached(function):
-    """``njit(cache=True, nogil=True)(function)``, with the fallbacks of the module docstring.
+def cached_njit(function=None, /, **options):
+    """``njit(cache=True, nogil=True, **options)(function)``, with the fallbacks of the module
+    docstring (every compiled kernel of the package is decorated so); ``@cached_njit(**options)``
+    passes further options to numba (e.g. ``error_model="numpy"``).
 
     numba raises RuntimeError ("no locator available") at decoration when no cache location
     is writable; its user-provided locator reads ``numba.config.CACHE_DIR`` at that moment
     and keeps the path, so the private directory is set for this decoration only.
     """
+    if function is None:
+        return lambda f: cached_njit(f, **options)
     try:
-        return njit(cache=True, nogil=True)(function)
+        return njit(cache=True, nogil=True, **options)(function)
     except RuntimeError:
         pass
     directory = _private_directory()
@@ -63,15 +67,15 @@ def _cached(function):
         previous = numba.config.CACHE_DIR
         numba.config.CACHE_DIR = directory
         try:
-            return njit(cache=True, nogil=True)(function)
+            return njit(cache=True, nogil=True, **options)(function)
         except RuntimeError:
             pass
         finally:
             numba.config.CACHE_DIR = previous
-    return njit(nogil=True)(function)
+    return njit(nogil=True, **options)(function)
 
 
-@_cached
+@cached_njit
 def modal_recursion(f00, f01, f10, f11, cl_starts, cl_offsets, cl_phi, G0, G1, use_G1,
                     HD, weights, U, z0, Y, Z, store, n_block, limit):
     """Propagate the modal recursion; return the number of samples kept (see below).

@@ -237,6 +237,26 @@ class ModalEvaluator:
             G += _dense_response(Ad, Bd, Cd, s)
         return G
 
+    def modal_sums(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None:
+        """G as sums alone, ``(poles, residues, feedthrough, markov)``, or None.
+
+        G(s) = D + sum_i R_i / (s - lam_i) + sum_j M_j / s^(j+1) (s taken from ``center``),
+        the residues R_i one row (p m,) per pole, M_j the Markov parameters of a rigid-body
+        block with exactly zero eigenvalues (shape (0, p m): none): the form a compiled
+        evaluation sums without per-call overhead (:mod:`controllers.loop`). None when the
+        evaluator also needs a triangular solve (a rigid-body block with non-zero
+        eigenvalues) or dense solves (ill-conditioned parts) at each point.
+        """
+        if self.dense or (self.k and self.rigid_markov is None):
+            return None
+        pm = self.residues.shape[1]
+        markov = (self.rigid_markov if self.rigid_markov is not None
+                  else np.zeros((0, pm), dtype=complex))
+        return (np.ascontiguousarray(self.lam, dtype=complex),
+                np.ascontiguousarray(self.residues, dtype=complex),
+                np.ascontiguousarray(self.D.reshape(-1), dtype=complex),
+                np.ascontiguousarray(markov, dtype=complex))
+
     def poles(self) -> np.ndarray:
         """Eigenvalues of A (shifted back by ``center``), complex128."""
         dense = [np.linalg.eigvals(Ad) for Ad, _, _ in self.dense]

@@ -13,23 +13,100 @@ z-transform, exact at the samples).
 from __future__ import annotations
 
 import math
+import warnings
 
 import control
 import numpy as np
 
 from .delay import DelayedSampledPlant, delayed_closed_loop, total_delay
-from .frequency import modal_evaluator, siso_zeros
+from .frequency import ModalEvaluator, modal_evaluator, siso_zeros
 from .arguments import describe, frequency_grid
 from .signals import (OMEGA, THETA, TORQUE, check_controller, check_pair, check_plant,
                       fed_back_signals, is_digital, reference_inputs, signal_names)
 from .threads import limits_blas_threads, total_states
 
 __all__ = ["LoopTransfer", "close_loop", "loop_frequency_response", "controller_roots",
-           "resonance_points", "window_angle_steps", "UNDAMPED_LADDER"]
+           "resonance_points", "window_angle_steps", "UNDAMPED_LADDER", "loops_at_a_time",
+           "sensitivity", "compiled_available"]
 
 #: Relative offsets from an undamped pole at which :func:`resonance_points` adds points (on both
 #: sides): between the innermost point of its half-power window (3.7e-9) and round-off.
 UNDAMPED_LADDER = 10.0 ** -np.arange(9.0, 13.01, 0.5)
+
+_kernel = None
+
+
+def _compiled():
+    """The compiled loop evaluation (:mod:`controllers._loop_kernel`), imported (compiled, or
+    loaded from the disk cache) on first use; None when numba is not installed: the
+    evaluators' numpy path runs instead."""
+    global _kernel
+    if _kernel is None:
+        try:
+            from . import _loop_kernel
+        except ImportError:              # numba not installed
+            _kernel = False
+        except Exception as error:       # numba installed but unusable (a broken install)
+            warnings.warn(f"flexsat: the compiled loop evaluation could not be loaded "
+                          f"({error!s:.200}); evaluating loops with numpy instead",
+                          RuntimeWarning, stacklevel=3)
+            _kernel = False
+        else:
+            _kernel = _loop_kernel
+    return _kernel or None
+
+
+def compiled_available() -> bool:
+    """Whether loops are evaluated by the compiled kernel (numba installed and loadable);
+    else by the numpy path, to the same values within round-off."""
+    return _compiled() is not None
+
+
+def sensitivity(L: np.ndarray) -> np.ndarray:
+    """The sensitivity at the loop's inputs, S = (I + L)^-1, at each frequency.
+
+    Parameters
+    ----------
+    L : ndarray, shape (f, m, m), complex
+        The loop broken at its m inputs at f frequencies (negative-feedback convention).
+
+    Returns
+    -------
+    ndarray, shape (f, m, m), complex
+        From an LU factorisation with partial pivoting either way: compiled, one frequency at
+        a time, when numba is available, else numpy's batched inverse (the same arithmetic, to
+        round-off); inf or NaN where I + L is singular or L is not finite (the compiled path;
+        numpy's raises LinAlgError on an exactly singular I + L).
+    """
+    L = np.asarray(L)
+    m = L.shape[1]
+    kernel = _compiled()
+    if kernel is not None:
+        S = np.empty(L.shape, dtype=complex)
+        kernel.sensitivity(np.ascontiguousarray(L, dtype=complex), S)
+        return S
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return np.linalg.inv(np.eye(m) + L)  # LU with the identity as right-hand side
+
+
+def loops_at_a_time(L: np.ndarray) -> np.ndarray:
+    """Every loop-at-a-time function of loop values, L_i = 1 / S_ii - 1 (:func:`sensitivity`).
+
+    Parameters
+    ----------
+    L : ndarray, shape (f, m, m), complex
+        The loop broken at its m inputs at f frequencies (negative-feedback convention).
+
+    Returns
+    -------
+    ndarray, shape (f, m), complex
+        L_i: the loop broken at input i with the other loops closed (an injection at input i
+        returns through 1 / (1 + L_i) = S_ii; Skogestad & Postlethwaite, Multivariable
+        Feedback Control, 2nd ed., sec. 9.3).
+    """
+    S = sensitivity(L)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
 
 
 def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
@@ -280,6 +357,17 @@ class LoopTransfer:
             self._plant_discretised = p
         self.plant = plant
         self.controller = controller
+        # plant and controller as modal sums: L evaluated by the compiled kernel
+        self._sums = None
+        if (not self.frd and isinstance(self.plant_ev, ModalEvaluator)
+                and _compiled() is not None):
+            plant_sums, controller_sums = (self.plant_ev.modal_sums(),
+                                           self.controller_ev.modal_sums())
+            if plant_sums is not None and controller_sums is not None:
+                self._sums = tuple(
+                    part for poles, residues, d, markov in (plant_sums, controller_sums)
+                    for part in (poles, np.ascontiguousarray(residues.real),
+                                 np.ascontiguousarray(residues.imag), d, markov))
 
     def _point(self, omega: np.ndarray) -> np.ndarray:
         omega = np.asarray(omega, dtype=float)
@@ -296,8 +384,8 @@ class LoopTransfer:
                              "by more than 1e15 rad, lost to round-off: check the delay's unit "
                              "[s]")
         z = self._point(omega)
-        K = self.controller_ev(z)  # (f, m, n_meas)
         if self.frd:
+            K = self.controller_ev(z)  # (f, m, n_meas)
             P = self._interpolated_plant(omega)  # (f, n_meas)
             if self.digital:
                 # zero-order hold seen from continuous time, aliasing neglected:
@@ -307,7 +395,14 @@ class LoopTransfer:
             if self.delay > 0.0:
                 P = P * np.exp(-1j * omega * self.delay)[:, None]
             return -np.sum(K[:, 0, :] * P, axis=1)[:, None, None]
-        L = -(K @ self.plant_ev(z))
+        if self._sums is not None:
+            m = len(self.ch.torques)
+            L = np.empty((z.size, m, m), dtype=complex)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                _compiled().loop_matrix(z - self.plant_ev.center, z - self.controller_ev.center,
+                                        *self._sums, L)
+        else:
+            L = -(self.controller_ev(z) @ self.plant_ev(z))
         if self.delay > 0.0 and not self.digital:
             L = L * np.exp(-1j * omega * self.delay)[:, None, None]
         return L
@@ -329,10 +424,7 @@ class LoopTransfer:
         L = self.matrix(omega)
         if L.shape[1] == 1:
             return L[:, :, 0]
-        m = L.shape[1]
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            S = np.linalg.inv(np.eye(m) + L)  # LU with the identity as right-hand side
-            return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
+        return loops_at_a_time(L)
 
     def _interpolated_plant(self, omega: np.ndarray) -> np.ndarray:
         """FRD plant rows at omega: exact on its grid, in between linear in log frequency for

@@ -47,7 +47,8 @@ import numpy as np
 
 from .delay import check_delay, total_delay
 from .refine import refine
-from .loop import LoopTransfer, close_loop, loop_frequency_response
+from .loop import (LoopTransfer, close_loop, loop_frequency_response, loops_at_a_time,
+                   sensitivity)
 from .arguments import describe, frequency_grid
 from .signals import AXES, check_controller, check_pair, check_plant, is_digital
 from .stability import continuous_poles
@@ -518,9 +519,7 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
     def broken_all(w: np.ndarray) -> np.ndarray:
         """Every loop-at-a-time L_i = 1/S_ii - 1 (LoopTransfer.broken_all), (f, m)."""
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            L = matrix(w)
-            S = np.linalg.inv(np.eye(m) + L)  # LU with the identity as right-hand side
-            return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
+            return loops_at_a_time(matrix(w))
 
     # L on the grid once: the loop-at-a-time functions and the singular values all follow from
     # S = (I + L)^-1 there; only the refinements evaluate L again
@@ -528,7 +527,7 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
         if L_grid is None:
             L_grid = matrix(omega)
         R = np.eye(m) + L_grid
-        S = np.linalg.inv(R)  # LU with the identity as right-hand side
+        S = sensitivity(L_grid)
         per_axis = dict(zip(axes, _loops_margins(
             lambda w, owner: _at_distinct(broken_all, w)[np.arange(w.size), owner], omega,
             1.0 / np.diagonal(S, axis1=1, axis2=2).T - 1.0, delay=tau, undamped=undamped)))
@@ -536,8 +535,9 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
     def singular_values(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(sigma_max(S - I/2), sigma_min(I + L)) at each frequency."""
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            R = np.eye(m) + matrix(w)
-            S = np.linalg.inv(R)  # LU with the identity as right-hand side
+            L = matrix(w)
+            R = np.eye(m) + L
+            S = sensitivity(L)
             return (np.linalg.svd(S - 0.5 * np.eye(m), compute_uv=False)[:, 0],
                     np.linalg.svd(R, compute_uv=False)[:, -1])
 
