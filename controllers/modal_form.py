@@ -208,7 +208,6 @@ def block_diagonal_form(A, *, max_coupling: float = DEFAULT_MAX_COUPLING
     T, Q = scipy.linalg.schur(A_balanced, output="real", overwrite_a=True, check_finite=False)
     form = _Decoupling(np.asfortranarray(T), max_coupling)
     form.split(0, n)
-    form.decouple_pairs()
     starts = np.array(sorted(form.starts) + [n])
     # The condition number that matters for round-off is that of V without its (exact)
     # diagonal scaling: W = Q Y (one product, used for both).
@@ -656,13 +655,6 @@ class _Decoupling:
     A step [[I, X], [0, I]] changes Y's columns of the trailing part (Y[:, m:b] +=
     Y[:, a:m] X); a swap of diagonal blocks by trexc's rotation G changes Y's columns of
     the range (Y[:, a:b] G).  Y's rows from b on vanish in the columns a:b throughout.
-
-    The ranges of two diagonal blocks (the last level of the division, half of its
-    equations) are left by ``split`` to :meth:`decouple_pairs`, which solves them together:
-    their equations involve only their own diagonal and off-diagonal blocks, which no other
-    step changes, and their steps touch only their own columns of Y, so they commute with
-    every step outside their range and follow those inside the ranges that contain them
-    (done first) as in the recursion.
     """
 
     def __init__(self, T: np.ndarray, max_coupling: float):
@@ -676,7 +668,6 @@ class _Decoupling:
         # never enters a range that ``sequential`` has reordered, so the 1 x 1 / 2 x 2
         # structure it sees is this one (a scan per range cost O(n log n) Python steps).
         self._block_starts = [i for i, _ in _schur_blocks(T, 0, self.n)]
-        self._pairs: list[tuple[int, int, int]] = []      # two-block ranges (a, m, b)
 
     def _solve(self, k: int, m: int, b: int) -> np.ndarray | None:
         """X with T11 X - X T22 = -T12 for the ranges k:m and m:b, or None if it is
@@ -705,9 +696,6 @@ class _Decoupling:
             self.starts.append(a)
             return
         m = self._block_starts[first + count // 2]
-        if count == 2:
-            self._pairs.append((a, m, b))
-            return
         X = self._solve(a, m, b)
         if X is None:
             self.sequential(a, b)
@@ -716,46 +704,6 @@ class _Decoupling:
             self._apply(a, m, b, X)
         self.split(a, m)
         self.split(m, b)
-
-    def decouple_pairs(self) -> None:
-        """Decouple the two-block ranges that :meth:`split` left, with one batched solve per
-        pair of block sizes (:func:`_sylvester_kronecker`: systems of at most 4 x 4, where
-        one LAPACK call each costs less than its Python around it); a pair whose solution
-        exceeds the bound or does not solve its equation to round-off (close eigenvalues)
-        goes the way of :meth:`split` (trsyl, then :meth:`sequential`)."""
-        pairs, self._pairs = self._pairs, []
-        by_sizes: dict[tuple[int, int], list[int]] = {}
-        for a, m, b in pairs:
-            by_sizes.setdefault((m - a, b - m), []).append(a)
-        T, Y, eps = self.T, self.Y, np.finfo(float).eps
-        retry = []
-        for (s, t), firsts in by_sizes.items():
-            r1 = np.array(firsts)[:, None] + np.arange(s)                  # (K, s)
-            r2 = r1[:, -1:] + 1 + np.arange(t)                              # (K, t)
-            T11 = T[r1[:, :, None], r1[:, None, :]]
-            T22 = T[r2[:, :, None], r2[:, None, :]]
-            T12 = T[r1[:, :, None], r2[:, None, :]]
-            with np.errstate(all="ignore"):
-                X = _sylvester_kronecker(T11, T22, T12)      # T11 X - X T22 = -T12
-                size = np.abs(X).max(axis=(1, 2))
-                # as _solves: a backward-stable solve's residual
-                residual = np.abs(T11 @ X - X @ T22 + T12).max(axis=(1, 2))
-                ok = (size <= self.max_coupling) & (
-                    residual <= 64 * s * eps * self.norm_T * np.maximum(size, 1.0))
-            retry += [(int(r1[k, 0]), int(r2[k, 0]), int(r2[k, -1]) + 1)
-                      for k in np.flatnonzero(~ok)]
-            r1, r2, X = r1[ok], r2[ok], X[ok]
-            Y[:, r2] += np.einsum("nks,kst->nkt", Y[:, r1], X)
-            T[r1[:, :, None], r2[:, None, :]] = 0.0
-            self.starts += r1[:, 0].tolist() + r2[:, 0].tolist()
-        for a, m, b in retry:
-            X = self._solve(a, m, b)
-            if X is None:
-                self.sequential(a, b)
-                continue
-            if X.any():
-                self._apply(a, m, b, X)
-            self.starts += [a, m]
 
     def sequential(self, a: int, b: int) -> None:
         """Bavely and Stewart on the range a:b: the leading block is decoupled from the

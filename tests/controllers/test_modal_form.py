@@ -487,70 +487,11 @@ def test_sequential_decoupling_moves_the_nearest_block_within_a_range(capfd):
     assert "DTREXC" not in captured.out + captured.err
 
 
-def _pairs_one_by_one(self):
-    """The recursion's own path for the two-block ranges (trsyl, then Bavely and Stewart
-    where it fails), as before they were batched: the reference of the test below."""
-    pairs, self._pairs = self._pairs, []
-    for a, m, b in pairs:
-        X = self._solve(a, m, b)
-        if X is None:
-            self.sequential(a, b)
-            continue
-        if X.any():
-            self._apply(a, m, b, X)
-        self.starts += [a, m]
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2, 3])
-def test_batched_pairs_decouple_as_one_by_one(monkeypatch, seed):
-    """The last level of the division (ranges of two diagonal blocks) is solved in one
-    batched Kronecker solve per pair of block sizes; every pair gives the same form as
-    trsyl one pair at a time, to round-off: real eigenvalues (1 x 1 blocks) between
-    oscillators (2 x 2), and an oscillator pair 1e-11 apart and coupled, which neither
-    path can decouple within the bound (max|X| ~ 1e11: it falls back to Bavely and Stewart
-    and forms a cluster either way).
-
-    Tolerance: each elementary X is backward stable either way, its forward error
-    ~eps ||T|| / sep |X| with sep >= 1e-2 ||T|| between any two blocks of a pair here
-    (the close oscillators end in one cluster), so V agrees to ~1e2 eps cond(V) |V|;
-    1e4 eps cond(V) of room."""
-    import controllers.modal_form as modal_form
-
-    rng = np.random.default_rng(seed)
-    n_osc, n_real = 8, 5
-    omegas = np.geomspace(1.0, 300.0, n_osc)
-    blocks = [np.array([[-0.01 * w, w], [-w, -0.01 * w]]) for w in omegas]
-    blocks += [np.array([[-r]]) for r in np.geomspace(0.5, 200.0, n_real)]
-    close = np.array([[0.0, 1.0, 1.0, 0.0], [-49.0, -0.02, 0.0, 0.0],
-                      [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, -(7.0 + 1e-11) ** 2, -0.02]])
-    blocks.append(close)
-    order = rng.permutation(len(blocks))
-    A = np.zeros((2 * n_osc + n_real + 4,) * 2)
-    at = 0
-    for k in order:
-        size = blocks[k].shape[0]
-        A[at:at + size, at:at + size] = blocks[k]
-        at += size
-    S = rng.standard_normal(A.shape)
-    A = S @ A @ np.linalg.inv(S)
-    batched = block_diagonal_form(A)
-    monkeypatch.setattr(modal_form._Decoupling, "decouple_pairs", _pairs_one_by_one)
-    reference = block_diagonal_form(A)
-    check_factorisation(A, batched)
-    check_factorisation(A, reference)
-    np.testing.assert_array_equal(batched.starts, reference.starts)
-    tol = 1e4 * EPS * reference.condition
-    np.testing.assert_allclose(batched.V, reference.V, rtol=0, atol=tol * np.abs(reference.V).max())
-    for got, want in zip(batched.blocks, reference.blocks):
-        np.testing.assert_allclose(got, want, rtol=0, atol=tol * np.abs(A).max())
-    assert np.isclose(batched.condition, reference.condition, rtol=1e-6, atol=0)
-
-
-def test_a_batched_pair_that_cannot_be_decoupled_forms_a_cluster():
+def test_a_pair_that_cannot_be_decoupled_forms_a_cluster():
     """Two coupled oscillators 1e-11 rad/s apart and nothing else: the Schur form has two
-    blocks, the one range of the batched level; its solution is unbounded (max|X| ~ 1e11),
-    so it goes the recursion's way (trsyl, then Bavely and Stewart) and the pair stays one
-    4 x 4 block, the factorisation exact to round-off."""
+    blocks, the division's one range; its Sylvester solution is unbounded (max|X| ~ 1e11),
+    so Bavely and Stewart take the range and the pair stays one 4 x 4 block, the
+    factorisation exact to round-off."""
     rng = np.random.default_rng(4)
     close = np.array([[0.0, 1.0, 1.0, 0.0], [-49.0, -0.02, 0.0, 0.0],
                       [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, -(7.0 + 1e-11) ** 2, -0.02]])
