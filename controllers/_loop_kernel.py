@@ -9,8 +9,10 @@ forms L = -K P, one frequency at a time: no temporaries of (frequencies x poles)
 on a few frequencies (a refinement step) costs microseconds, not numpy's per-call overhead
 of several array operations. :func:`sensitivity` gives (I + L)^-1 (the loop-at-a-time
 functions and the singular values follow from it) from a pivoted LU factorisation, the same
-arithmetic as numpy's inverse without its per-call cost. Both are cached on disk as :mod:`controllers._modal_kernel`'s
-loop is (:func:`controllers._modal_kernel.cached_njit`).
+arithmetic as numpy's inverse without its per-call cost; :func:`unit_circle_count` the
+eigenvalues of L outside the unit circle where no eigenvalue problem is needed. All are
+cached on disk as :mod:`controllers._modal_kernel`'s loop is
+(:func:`controllers._modal_kernel.cached_njit`).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import numpy as np
 
 from ._modal_kernel import cached_njit
 
-__all__ = ["loop_matrix", "sensitivity"]
+__all__ = ["loop_matrix", "sensitivity", "unit_circle_count"]
 
 
 @cached_njit(error_model="numpy")
@@ -213,3 +215,68 @@ def sensitivity(L, S):
                 x[b] = x[b] * _inverse(R[b, b])
             for b in range(m):
                 S[i, b, a] = x[b]
+
+
+@cached_njit(error_model="numpy")
+def unit_circle_count(L, error_factor, count):
+    """Write into ``count`` (f,) the number of eigenvalues outside the unit circle of each
+    2 x 2 or 3 x 3 matrix of L (f, m, m) where it is decided without eigenvalues: 0 where
+    ||L||_F < 1; else m - k where the term c_k z^k of det(z I - L) dominates on the circle
+    (Rouche's theorem, each |c_k| taken with its rounding bound ``error_factor`` times the sum
+    of the moduli of its products; :func:`controllers.margins._outside_unit_circle`, the same
+    arithmetic); -1 where undecided, -2 where L is not finite."""
+    m = L.shape[1]
+    size = np.empty(4)
+    error = np.empty(4)
+    for i in range(L.shape[0]):
+        finite = True
+        frobenius = 0.0
+        for a in range(m):
+            for b in range(m):
+                v = L[i, a, b]
+                if not (np.isfinite(v.real) and np.isfinite(v.imag)):
+                    finite = False
+                frobenius += v.real * v.real + v.imag * v.imag
+        if not finite:
+            count[i] = -2
+            continue
+        if np.sqrt(frobenius) < 1.0:
+            count[i] = 0
+            continue
+        if m == 3:
+            l00, l01, l02 = L[i, 0, 0], L[i, 0, 1], L[i, 0, 2]
+            l10, l11, l12 = L[i, 1, 0], L[i, 1, 1], L[i, 1, 2]
+            l20, l21, l22 = L[i, 2, 0], L[i, 2, 1], L[i, 2, 2]
+            m12 = l11 * l22 - l12 * l21
+            a12 = abs(l11) * abs(l22) + abs(l12) * abs(l21)
+            m02 = l00 * l22 - l02 * l20
+            a02 = abs(l00) * abs(l22) + abs(l02) * abs(l20)
+            m01 = l00 * l11 - l01 * l10
+            a01 = abs(l00) * abs(l11) + abs(l01) * abs(l10)
+            n12 = l10 * l22 - l12 * l20
+            b12 = abs(l10) * abs(l22) + abs(l12) * abs(l20)
+            n11 = l10 * l21 - l11 * l20
+            b11 = abs(l10) * abs(l21) + abs(l11) * abs(l20)
+            det = l00 * m12 - l01 * n12 + l02 * n11
+            size[0] = abs(det)
+            size[1] = abs(m01 + m02 + m12)
+            size[2] = abs(l00 + l11 + l22)
+            error[0] = error_factor * (abs(l00) * a12 + abs(l01) * b12 + abs(l02) * b11)
+            error[1] = error_factor * (a01 + a02 + a12)
+            error[2] = error_factor * (abs(l00) + abs(l11) + abs(l22))
+        else:
+            l00, l01, l10, l11 = L[i, 0, 0], L[i, 0, 1], L[i, 1, 0], L[i, 1, 1]
+            size[0] = abs(l00 * l11 - l01 * l10)
+            size[1] = abs(l00 + l11)
+            error[0] = error_factor * (abs(l00) * abs(l11) + abs(l01) * abs(l10))
+            error[1] = error_factor * (abs(l00) + abs(l11))
+        size[m] = 1.0
+        error[m] = 0.0
+        total = 0.0
+        for k in range(m + 1):
+            total += size[k] + error[k]
+        decided = -1
+        for k in range(m + 1):
+            if (size[k] - error[k]) > total - (size[k] + error[k]):
+                decided = m - k
+        count[i] = decided

@@ -47,8 +47,8 @@ import numpy as np
 
 from .delay import check_delay, total_delay
 from .refine import refine
-from .loop import (LoopTransfer, close_loop, loop_frequency_response, loops_at_a_time,
-                   sensitivity)
+from .loop import (LoopTransfer, close_loop, compiled_kernel, loop_frequency_response,
+                   loops_at_a_time, sensitivity)
 from .arguments import describe, frequency_grid
 from .signals import AXES, check_controller, check_pair, check_plant, is_digital
 from .stability import continuous_poles
@@ -1033,11 +1033,26 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     ||L^-1||_F < 1 (every |lambda| > 1): the eigenvalues are computed at a few points of a
     grid only.
     """
+    kernel = compiled_kernel()
+
     def count_at(w, L=None):
         with np.errstate(all="ignore"):
             L = matrix(w) if L is None else L
-            finite = np.all(np.isfinite(L), axis=(1, 2))
             m = L.shape[1]
+            if kernel is not None and m in (2, 3):
+                # the same decisions compiled, eigenvalues where they decide nothing
+                count = np.empty(L.shape[0], dtype=np.int64)
+                kernel.unit_circle_count(np.ascontiguousarray(L, dtype=complex),
+                                         _COEFFICIENT_ERROR, count)
+                finite = count != -2
+                lam = np.full(L.shape[:2], np.nan, dtype=complex)
+                hard = np.flatnonzero(count == -1)
+                count[~finite] = 0
+                if hard.size:
+                    lam[hard] = np.linalg.eigvals(L[hard])
+                    count[hard] = np.sum(np.abs(lam[hard]) > 1.0, axis=1)
+                return count, lam, finite
+            finite = np.all(np.isfinite(L), axis=(1, 2))
             count = np.zeros(L.shape[0], dtype=int)
             lam = np.full(L.shape[:2], np.nan, dtype=complex)
             small = finite & (np.sqrt(np.sum(np.abs(L) ** 2, axis=(1, 2))) < 1.0)

@@ -8,6 +8,7 @@
 - S = (I + L)^-1 and the loops at a time from the pivoted LU equal numpy's inverse to the
   condition number of I + L times round-off, also for the nearly rank-one huge L beside an
   undamped pole, and are not finite (no exception) where I + L is singular;
+- the compiled count of eigenvalues outside the unit circle decides as the numpy one;
 - the margins with the numpy path (numba missing) equal those with the kernel to round-off.
 """
 import dataclasses
@@ -150,3 +151,36 @@ def test_margins_without_numba_equal_those_with_the_kernel(case, monkeypatch):
             assert compiled[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
         else:
             assert compiled[key] == value, key
+
+
+@pytest.mark.parametrize("m", [2, 3])
+def test_compiled_unit_circle_count_decides_as_the_numpy_one(m):
+    """Random stacks over six decades and the resonance form: 0 below a unit Frobenius norm,
+    elsewhere the numpy path's Rouche decision (the same arithmetic: equal but where a
+    rounding bound is met to the last bit, none here), -2 where L is not finite; every count
+    given is the number of eigenvalues outside the circle."""
+    from controllers import _loop_kernel
+    from controllers.margins import _COEFFICIENT_ERROR, _outside_unit_circle
+
+    rng = np.random.default_rng(5)
+    n = 4000
+    L = ((rng.normal(size=(n, m, m)) + 1j * rng.normal(size=(n, m, m)))
+         * 10.0 ** rng.uniform(-3, 3, size=(n, 1, 1)))
+    u = rng.normal(size=(n, m)) + 1j * rng.normal(size=(n, m))
+    L[: n // 2] = (10.0 ** rng.uniform(1, 8, size=(n // 2, 1, 1)) * u[: n // 2, :, None]
+                   * u[: n // 2, None, :].conj() + 1e-2 * L[: n // 2])
+    L[7, 1, 0] = np.nan
+    L[9, 0, 0] = np.inf
+    count = np.empty(n, dtype=np.int64)
+    _loop_kernel.unit_circle_count(L, _COEFFICIENT_ERROR, count)
+    finite = np.all(np.isfinite(L), axis=(1, 2))
+    assert np.array_equal(count == -2, ~finite)
+    with np.errstate(invalid="ignore"):
+        small = finite & (np.linalg.norm(L, axis=(1, 2)) < 1.0)
+    assert np.all(count[small] == 0)
+    rest = finite & ~small
+    np.testing.assert_array_equal(count[rest], _outside_unit_circle(L[rest]))
+    decided = count >= 0
+    exact = np.sum(np.abs(np.linalg.eigvals(L[decided])) > 1.0, axis=1)
+    np.testing.assert_array_equal(count[decided], exact)
+    assert decided.mean() > 0.5
