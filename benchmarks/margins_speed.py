@@ -14,6 +14,11 @@ Run::
     git worktree add /tmp/before <commit>
     OPENBLAS_NUM_THREADS=1 python benchmarks/margins_speed.py --before /tmp/before [--repeats 15]
 
+Also the one-time cost of the compiled loop kernels (controllers._loop_kernel): the first
+margins call of a fresh process with an empty numba cache (compiling them) and of a second
+process that loads them from that cache (what a sweep worker or a CLI run pays), after a
+simulation has loaded numba and the simulator's compiled loop, as in a design loop.
+
 Writes benchmarks/results/margins_speed.{json,md}.
 """
 
@@ -33,8 +38,8 @@ import time
 import warnings
 from pathlib import Path
 
-from _common import (RESULTS, machine_info, markdown_table, paper_rod, spacecraft_with,
-                     write_json)
+from _common import (ROOT, RESULTS, machine_info, markdown_table, paper_rod,
+                     run_in_checkout, spacecraft_with, write_json)
 import controllers
 from appendages.chain import HingedChain
 
@@ -62,6 +67,54 @@ def loops() -> dict:
         planar = controllers.lqr(planar_design, attitude_weight=(J * 0.1 ** 2) ** 2,
                                  rate_weight=0.0, torque_weight=1.0)
     return {"three_axis": (truth, three), "design_loop": (planar_truth, planar)}
+
+
+# the first margins call of a fresh process on a rigid three-axis hub with a PD controller
+# (the compile cost does not depend on the loop's size), after a simulation that loaded numba
+# and the simulator's compiled loop, as in a design loop
+FIRST_CALL = r"""
+import json, time
+import numpy as np, control
+import controllers
+from controllers.simulate import Simulator
+T = np.arange(200_000) * 0.01
+Simulator(control.ss([[0.0, 1.0], [-4.0, -0.1]], [[0.0], [1.0]], [[1.0, 0.0]], 0.0),
+          0.01).outputs(T, np.ones((1, T.size)))
+A, B, C = np.zeros((6, 6)), np.zeros((6, 3)), np.zeros((6, 6))
+for i in range(3):
+    A[2 * i, 2 * i + 1] = 1.0
+    B[2 * i + 1, i] = 1e-3
+    C[i, 2 * i] = C[3 + i, 2 * i + 1] = 1.0
+plant = control.ss(A, B, C, 0.0, inputs=[f"torque_{a}" for a in "xyz"],
+                   outputs=[f"theta_{a}" for a in "xyz"] + [f"omega_{a}" for a in "xyz"])
+K = controllers.pd(plant, natural_frequency=0.1, damping=0.7)
+cpu, wall = time.process_time(), time.perf_counter()
+controllers.margins(plant, K)
+first = (time.process_time() - cpu, time.perf_counter() - wall)
+cpu = time.process_time()
+controllers.margins(plant, K)
+print(json.dumps({"first_cpu_s": first[0], "first_wall_s": first[1],
+                  "second_cpu_s": time.process_time() - cpu}))
+"""
+
+
+def first_calls() -> dict:
+    """The first margins call of a process that compiles the loop kernels (empty cache) and
+    of one that loads them (the cache the first wrote), one BLAS thread."""
+    out = {}
+    previous = os.environ.get("NUMBA_CACHE_DIR")
+    with tempfile.TemporaryDirectory(prefix="margins_numba_") as cache:
+        os.environ["NUMBA_CACHE_DIR"] = cache
+        try:
+            for key in ("compile", "load"):
+                out[key] = run_in_checkout(ROOT, FIRST_CALL, what="first margins call",
+                                           blas="one")
+        finally:
+            if previous is None:
+                os.environ.pop("NUMBA_CACHE_DIR", None)
+            else:
+                os.environ["NUMBA_CACHE_DIR"] = previous
+    return out
 
 
 def before_package(source: Path):
@@ -101,8 +154,11 @@ def main() -> None:
     for name, (plant, controller) in loops().items():
         old, new = flat(before.margins(plant, controller)), flat(controllers.margins(plant,
                                                                                     controller))
-        worst = max((abs(new[k] - v) / abs(v) if v != 0 and math.isfinite(v) and new[k] != v
-                     else 0.0) for k, v in old.items())
+        change = {k: (abs(new[k] - v) / abs(v) if v != 0 and math.isfinite(v) and new[k] != v
+                      else 0.0) for k, v in old.items()}
+        worst = max(change.values())
+        moved = ", ".join(f"{k} {c:.1e}" for k, c in sorted(change.items(), key=lambda x: -x[1])
+                          if c > 1e-9) or "none"
         times: dict = {"before": [], "after": []}
         load = [os.getloadavg()]
         for _ in range(args.repeats):
@@ -113,12 +169,14 @@ def main() -> None:
         load.append(os.getloadavg())
         median = {k: statistics.median(v) for k, v in times.items()}
         results["loops"][name] = {"cpu_s": times, "median_cpu_s": median,
-                                  "largest_relative_change": worst, "before": old,
+                                  "largest_relative_change": worst,
+                                  "relative_changes": change, "before": old,
                                   "after": new, "load_before_after": load}
         rows.append([name, f"{median['before'] * 1e3:.1f}", f"{median['after'] * 1e3:.1f}",
                      f"{median['after'] / median['before']:.2f}",
                      f"{min(times['before']) * 1e3:.1f}", f"{min(times['after']) * 1e3:.1f}",
-                     f"{worst:.1e}", f"{load[0][0]:.1f} / {load[1][0]:.1f}"])
+                     f"{worst:.1e}", moved, f"{load[0][0]:.1f} / {load[1][0]:.1f}"])
+    first = results["first_call"] = first_calls()
     write_json("margins_speed.json", results)
     text = "\n".join([
         "# Margins of the design loops, before and after",
@@ -129,7 +187,15 @@ def main() -> None:
         "",
         markdown_table(["loop", "before CPU median [ms]", "after CPU median [ms]", "ratio",
                         "before min [ms]", "after min [ms]", "largest relative change of a "
-                        "margin", "load (1 min) before / after"], rows),
+                        "margin", "margins changed beyond 1e-9 relative",
+                        "load (1 min) before / after"], rows),
+        "",
+        "The compiled loop kernels' one-time cost (a rigid three-axis hub's first margins call in "
+        "a fresh process after a simulation loaded numba; one BLAS thread): compiling them "
+        f"{first['compile']['first_cpu_s']:.2f} s CPU ({first['compile']['first_wall_s']:.2f} s "
+        f"wall, load {first['compile']['load_before'][0]:.1f}), loading them from the disk cache "
+        f"{first['load']['first_cpu_s']:.2f} s CPU ({first['load']['first_wall_s']:.2f} s wall); "
+        f"the second call {first['load']['second_cpu_s'] * 1e3:.1f} ms.",
     ])
     (RESULTS / "margins_speed.md").write_text(text + "\n")
     print(text)
