@@ -190,6 +190,11 @@ def main() -> None:
                         "margin", "margins changed beyond 1e-9 relative",
                         "load (1 min) before / after"], rows),
         "",
+        "The three-axis loop's phase, delay and modulus margins sit beside undamped modes "
+        "(within 1e-13 of a mode's frequency, margins of hundredths of a degree): they are known "
+        "to about 3e-4 relative (their spread between OpenBLAS kernels, pinned in "
+        "tests/controllers/test_margins_speed.py), and a change below that is round-off there.",
+        "",
         "The compiled loop kernels' one-time cost (a rigid three-axis hub's first margins call in "
         "a fresh process after a simulation loaded numba; one BLAS thread): compiling them "
         f"{first['compile']['first_cpu_s']:.2f} s CPU ({first['compile']['first_wall_s']:.2f} s "

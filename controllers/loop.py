@@ -27,7 +27,7 @@ from .threads import limits_blas_threads, total_states
 
 __all__ = ["LoopTransfer", "close_loop", "loop_frequency_response", "controller_roots",
            "resonance_points", "window_angle_steps", "UNDAMPED_LADDER", "loops_at_a_time",
-           "sensitivity", "compiled_available", "compiled_kernel"]
+           "sensitivity", "compiled_kernel"]
 
 #: Relative offsets from an undamped pole at which :func:`resonance_points` adds points (on both
 #: sides): between the innermost point of its half-power window (3.7e-9) and round-off.
@@ -56,15 +56,10 @@ def _compiled():
     return _kernel or None
 
 
-def compiled_available() -> bool:
-    """Whether loops are evaluated by the compiled kernel (numba installed and loadable);
-    else by the numpy path, to the same values within round-off."""
-    return _compiled() is not None
-
-
 def compiled_kernel():
     """The module of compiled loop functions (:mod:`controllers._loop_kernel`), or None when
-    numba is not available (callers then take their numpy path)."""
+    numba is not available: loops are then evaluated by the numpy path, to the same values
+    within round-off."""
     return _compiled()
 
 
