@@ -44,6 +44,10 @@ Modes::
     python benchmarks/bench_sweep.py --only-per-sample
     python benchmarks/bench_sweep.py --scene three_axis --big 400 --cli-samples 200
                                                 # a three-axis sweep scene (sweep_three_axis.*)
+    python benchmarks/bench_sweep.py --idle [--seconds 20] [--repeats 3]
+                                                # the CPU an idle LocalCluster of the sweep
+                                                # takes, with Dask's default timers and with
+                                                # the sweep's (sweep_idle.*)
     python benchmarks/bench_sweep.py --ten-thousand-before PATH [--big N]
                                                 # 4. only, with the checkout at PATH (before
                                                 # a change) and this one, one after the other
@@ -183,6 +187,60 @@ def task_overhead(n_tasks: int) -> dict:
             "task_seconds": TASK_SECONDS, "fraction_of_a_task": per_task / TASK_SECONDS,
             "cpu_fraction_of_a_task": cpu_per_task / TASK_SECONDS,
             "load_before": run["load_before"], "load_after": run["load_after"]}
+
+
+#: Dask's defaults of the settings :data:`spacecraft.sweep.execute.LOCAL_CLUSTER_CONFIG` changes.
+DASK_DEFAULTS = {"distributed.worker.profile.enabled": True,
+                 "distributed.admin.system-monitor.interval": "500ms",
+                 "distributed.admin.tick.interval": "20ms",
+                 "distributed.worker.memory.monitor-interval": "100ms"}
+#: The settings the sweep's LocalCluster had before the event-loop and memory timers.
+SWEEP_BEFORE = {"distributed.worker.profile.enabled": False,
+                "distributed.admin.system-monitor.interval": "5s"}
+
+
+def idle(seconds: float, repeats: int) -> dict:
+    """CPU time an idle LocalCluster of 2 workers takes [s of CPU per s of wall], started as
+    the sweep starts it (:func:`spacecraft.sweep.execute.open_executor`), with Dask's default
+    timers and with the sweep's (:data:`spacecraft.sweep.execute.LOCAL_CLUSTER_CONFIG`),
+    alternating: this process (client, scheduler and nannies) and the two worker processes
+    (``psutil``), measured over ``seconds`` after 2 s of settling."""
+    import psutil
+    from spacecraft.sweep import execute
+
+    def cpu(process) -> float:
+        t = process.cpu_times()
+        return t.user + t.system
+
+    sweep = dict(execute.LOCAL_CLUSTER_CONFIG)
+    configs = {"Dask's defaults": {**sweep, **DASK_DEFAULTS},
+               "profiler off, system monitor 5 s (the sweep's earlier settings)":
+                   {**sweep, **DASK_DEFAULTS, **SWEEP_BEFORE},
+               "the sweep's": sweep}
+    rounds: dict = {name: [] for name in configs}
+    try:
+        for _ in range(repeats):
+            for name, config in configs.items():
+                execute.LOCAL_CLUSTER_CONFIG.clear()
+                execute.LOCAL_CLUSTER_CONFIG.update(config)
+                executor = execute.open_executor(workers=2)
+                try:
+                    workers = psutil.Process().children(recursive=True)
+                    time.sleep(2.0)
+                    before, c0 = load(), time.process_time()
+                    w0 = [cpu(w) for w in workers]
+                    time.sleep(seconds)
+                    c1, w1 = time.process_time(), [cpu(w) for w in workers]
+                finally:
+                    executor.close()
+                rounds[name].append({"main_cpu_per_s": (c1 - c0) / seconds,
+                                     "workers_cpu_per_s": (sum(w1) - sum(w0)) / seconds,
+                                     "load_before": before, "load_after": load()})
+    finally:
+        execute.LOCAL_CLUSTER_CONFIG.clear()
+        execute.LOCAL_CLUSTER_CONFIG.update(sweep)
+    return {"seconds": seconds, "sweep_config": sweep, "dask_defaults": DASK_DEFAULTS,
+            "rounds": rounds}
 
 
 def speed_up(n: int, repeats: int) -> dict:
@@ -489,6 +547,11 @@ def main(argv=None) -> int:
                       help="only the --big samples end to end, first with the flexsat checkout "
                            "at PATH (before a change), then with this one, in one run "
                            "(sweep_end_to_end.json)")
+    mode.add_argument("--idle", action="store_true",
+                      help="only the CPU an idle LocalCluster of the sweep takes, Dask's "
+                           "default timers against the sweep's (sweep_idle.json)")
+    parser.add_argument("--seconds", type=float, default=20.0,
+                        help="with --idle: seconds each idle cluster is measured")
     parser.add_argument("--samples-per-sample", type=int, default=40)
     parser.add_argument("--speed-up-samples", type=int, default=2000)
     parser.add_argument("--repeats", type=int, default=3)
@@ -504,6 +567,27 @@ def main(argv=None) -> int:
         return scene_benchmark(args.scene, args)
     if args.ten_thousand_before is not None:
         return before_and_after(args.ten_thousand_before.resolve(), args.big)
+    if args.idle:
+        result = {"machine": machine_info(), "idle": idle(args.seconds, args.repeats)}
+        write_json("sweep_idle.json", result)
+        rows = []
+        for name, runs in result["idle"]["rounds"].items():
+            for r in runs:
+                rows.append([name, f"{1e3 * r['main_cpu_per_s']:.1f}",
+                             f"{1e3 * r['workers_cpu_per_s']:.1f}",
+                             f"{r['load_before']} -> {r['load_after']}"])
+        text = "\n".join([
+            "# An idle LocalCluster of a sweep: the CPU its timers take", "",
+            f"`python benchmarks/bench_sweep.py --idle` on {result['machine']['date_utc']} UTC "
+            f"({result['machine']['cpu']}, {result['machine']['nproc']} cores): 2 workers "
+            f"started as `flexsat sweep` starts them, idle for {args.seconds:g} s, with Dask's "
+            "default timers, the sweep's earlier settings and its own "
+            "(`spacecraft.sweep.execute.LOCAL_CLUSTER_CONFIG`), alternating.", "",
+            markdown_table(["settings", "this process (client, scheduler, nannies) [ms CPU/s]",
+                            "the 2 workers [ms CPU/s]", "load"], rows), ""])
+        (RESULTS / "sweep_idle.md").write_text(text + "\n")
+        print(text)
+        return 0
     if args.only_per_sample:
         result = {"machine": machine_info(), "per_sample": per_sample(args.samples_per_sample)}
         write_json("sweep_per_sample.json", result)

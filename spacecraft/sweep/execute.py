@@ -21,7 +21,7 @@ Batches
     Parquet part, so 2 s keeps a 10,000-sample sweep to about a hundred files), and at most a
     quarter of the samples per worker (the load stays balanced). Besides, an idle LocalCluster
     takes a few per cent of a core (scheduler, client, heartbeats:
-    :data:`_LOCAL_CLUSTER_CONFIG`). At most
+    :data:`LOCAL_CLUSTER_CONFIG`). At most
     ``2 x workers + 1`` tasks are in flight; a finished batch is written before another is sent.
     A worker lost mid-task (killed, out of memory) costs its batch's time: each task carries
     its context and is run again elsewhere (:meth:`Executor.run`).
@@ -62,7 +62,8 @@ from .evaluate import METRICS, Context, evaluate, evaluate_batch
 from .parameters import SweepError, SweepSpec
 
 __all__ = ["TASK_SECONDS", "LOCAL_CLUSTER_SECONDS", "SCHEDULER_TIMEOUT", "TASK_RETRIES",
-           "Progress", "Executor", "open_executor", "connect", "check_workers", "SampleStore",
+           "LOCAL_CLUSTER_CONFIG", "Progress", "Executor", "open_executor", "connect",
+           "check_workers", "SampleStore",
            "table_from_columns", "schema", "run_samples", "batch_size"]
 
 #: Target duration of one Dask task [s].
@@ -76,11 +77,17 @@ SCHEDULER_TIMEOUT = 10.0
 #: re-runs the task elsewhere, up to ``distributed.scheduler.allowed-failures`` times).
 TASK_RETRIES = 2
 #: Dask settings of the LocalCluster a sweep starts (not of a cluster given to it): no
-#: statistical profiler in the workers (it samples the running task's stack every 10 ms) and a
-#: system monitor every 5 s instead of 0.5 s: an idle worker then takes about half the CPU
-#: time it would (``benchmarks/bench_sweep.py``), time taken from the samples.
-_LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
-                         "distributed.admin.system-monitor.interval": "5s"}
+#: statistical profiler in the workers (it samples the running task's stack every 10 ms), a
+#: system monitor every 5 s instead of 0.5 s, the event loops' responsiveness check every 1 s
+#: instead of 20 ms and the nannies' memory check every 1 s instead of 0.1 s. What the
+#: cluster's processes do between tasks is CPU time taken from the samples on a machine with
+#: as many workers as cores: an idle cluster of 2 workers takes about a fifth of the CPU it
+#: takes with Dask's defaults (``benchmarks/bench_sweep.py --idle``). A worker's memory limit
+#: is still enforced, within a second; a task that blocks an event loop is still reported.
+LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
+                         "distributed.admin.system-monitor.interval": "5s",
+                         "distributed.admin.tick.interval": "1s",
+                         "distributed.worker.memory.monitor-interval": "1s"}
 _PARTS = "samples"
 _SETTINGS = "sweep.json"
 #: Key of a part's Parquet metadata holding the SHA-256 of its content (:func:`_digest`).
@@ -417,13 +424,13 @@ def open_executor(*, client=None, scheduler: str | None = None, workers: int | N
     import dask
     from distributed import Client, LocalCluster
 
-    with dask.config.set(_LOCAL_CLUSTER_CONFIG):
+    with dask.config.set(LOCAL_CLUSTER_CONFIG):
         # the scheduler's HTTP server (its dashboard and health routes; dashboard_address
         # None still binds the default 8787) on a free port: no "Port 8787 is already in use"
         # beside another cluster
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                dashboard_address=":0", silence_logs=logging.ERROR)
-    client = Client(cluster, set_as_default=False)
+        client = Client(cluster, set_as_default=False)
     return Executor("local-cluster", client, n, [cluster, client])
 
 
