@@ -144,13 +144,25 @@ class ExactReference:
         self.three_axis = bool(hub.three_axis)
         self.n_hub = 6 if self.three_axis else 3
         self.n_root = 6 if self.three_axis else 2
-        self._kinematics = []
+        # Z(s) = s**2 M + sum over distinct appendages of vec(D(s)) K (module docstring): the
+        # congruences G^T D G of the mounts sharing an appendage as one constant matrix K,
+        # ``K[a*r + b, i*n + j] = sum G_ai G_bj``, so that every frequency's sum is one matrix
+        # product (n, r*r) @ (r*r, n*n), and the hub's and the axial rigid masses as one M
+        self._mass = np.array(hub.mass_matrix, dtype=float)
+        self._congruences: dict = {}
         for mount in self.mounts:
             if self.three_axis:
-                self._kinematics.append((mount.transformation(), None))
+                G = mount.transformation()
             else:
-                G = mount.kinematics()
-                self._kinematics.append((G[1:], G[0]))
+                kinematics = mount.kinematics()
+                G, axial = kinematics[1:], kinematics[0]
+                self._mass = self._mass + mount.appendage.mass * np.outer(axial, axial)
+            K = np.einsum("ai,bj->abij", G, G).reshape(G.shape[0] ** 2, self.n_hub ** 2)
+            key = id(mount.appendage)
+            if key in self._congruences:
+                self._congruences[key] = (mount.appendage, self._congruences[key][1] + K)
+            else:
+                self._congruences[key] = (mount.appendage, K)
         self._clamped: dict = {}
 
     # -- Z(s) -------------------------------------------------------------------------------------
@@ -163,20 +175,13 @@ class ExactReference:
         frequencies) or huge (at its free poles), where inverting W_i loses every digit.
         """
         s = np.asarray(s, dtype=complex)
-        s2 = (s**2)[..., None, None]
-        Z = self.hub.mass_matrix * s2
-        evaluated: dict = {}
-        for mount, (G, axial) in zip(self.mounts, self._kinematics):
-            key = id(mount.appendage)
-            D = evaluated.get(key)
-            if D is None:
-                D = dynamic_stiffness_of(mount.appendage, s, undamped=undamped,
-                                         n_root=self.n_root)
-                evaluated[key] = D
-            Z = Z + G.T @ D @ G
-            if axial is not None:
-                Z = Z + mount.appendage.mass * np.outer(axial, axial) * s2
-        return Z
+        flat = s.reshape(-1)
+        n = self.n_hub
+        Z = (flat**2)[:, None] * self._mass.reshape(1, n * n)
+        for appendage, K in self._congruences.values():
+            D = dynamic_stiffness_of(appendage, flat, undamped=undamped, n_root=self.n_root)
+            Z += D.reshape(flat.size, -1) @ K
+        return Z.reshape(s.shape + (n, n))
 
     def attitude_compliance(self, omega: np.ndarray) -> np.ndarray:
         r"""theta/torque at s = i omega: shape ``omega.shape + (1, 1)`` planar, ``(3, 3)``.
