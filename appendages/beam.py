@@ -69,6 +69,7 @@ References
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -271,6 +272,16 @@ def characteristic_roots(kind: str, n: int) -> np.ndarray:
         "kind must be 'free-free', 'clamped-free', 'pinned-free', 'sliding-free' or 'w2'; "
         f"got {describe(kind)}"
     )
+
+
+@functools.lru_cache(maxsize=64)
+def _shared_roots(kind: str, n: int) -> np.ndarray:
+    """:func:`characteristic_roots` (dimensionless: the same for every beam), computed once
+    per process for each (kind, n) and shared read-only; a beam asks for the same n as it
+    would compute, so its roots are those :func:`characteristic_roots` gives, to the bit."""
+    roots = characteristic_roots(kind, n)
+    roots.flags.writeable = False
+    return roots
 
 
 def _shape_terms(kind: str, xk: np.ndarray):
@@ -955,7 +966,7 @@ class Beam:
         limits.check("n", int(n), "roots", "frequencies of a beam at once")
         cached = self._cache.get(kind)
         if cached is None or cached.size < n:
-            cached = characteristic_roots(kind, max(n, 16))
+            cached = _shared_roots(kind, max(n, 16))
             self._cache[kind] = cached
         return cached[:n]
 
