@@ -64,7 +64,7 @@ from .parameters import SweepError, SweepSpec
 __all__ = ["TASK_SECONDS", "LOCAL_CLUSTER_SECONDS", "SCHEDULER_TIMEOUT", "TASK_RETRIES",
            "LOCAL_CLUSTER_CONFIG", "Progress", "Executor", "open_executor", "connect",
            "check_workers", "SampleStore",
-           "table_from_columns", "schema", "run_samples", "batch_size"]
+           "table_from_columns", "schema", "run_samples", "batch_size", "batch_bounds"]
 
 #: Target duration of one Dask task [s].
 TASK_SECONDS = 2.0
@@ -442,6 +442,24 @@ def batch_size(seconds_per_sample: float, n_todo: int, n_workers: int) -> int:
     return min(by_time, by_balance)
 
 
+def batch_bounds(n_todo: int, size: int, n_workers: int, *, tail: bool = True) -> list[int]:
+    """Where the batches of ``n_todo`` samples start and end: ``[0, b1, ..., n_todo]``.
+
+    Batches of ``size`` samples, but (``tail``, several workers) the last ``n_workers x size``
+    samples in batches of a quarter of that: the workers run their last tasks side by side,
+    and a worker that finishes first waits for the others by at most a quarter task's time
+    instead of a whole one's (the samples and their order are the same).
+    """
+    size = max(1, int(size))
+    start = n_todo
+    if tail and n_workers > 1 and size > 1:
+        start = max(0, n_todo - n_workers * size)
+    bounds = list(range(0, start, size))
+    small = max(1, math.ceil(size / 4))
+    bounds += list(range(start, n_todo, small)) if start < n_todo else []
+    return bounds + [n_todo] if n_todo else [0]
+
+
 # ---------------------------------------------------------------------------------------------
 # the output folder
 # ---------------------------------------------------------------------------------------------
@@ -731,7 +749,8 @@ def run_samples(context: Context, spec: SweepSpec, executor: Executor, *,
     progress : bool
         Progress bar on stderr.
     batch : int, optional
-        Samples per task (default :func:`batch_size`).
+        Samples per task (default :func:`batch_size`, the last round of tasks on a cluster
+        in smaller batches: :func:`batch_bounds`).
 
     Returns
     -------
@@ -749,7 +768,9 @@ def run_samples(context: Context, spec: SweepSpec, executor: Executor, *,
     size = batch or batch_size(seconds_per_sample, todo.size, executor.n_workers)
     values = spec.values() if values is None else np.asarray(values, dtype=float)
     values = values[todo]
-    batches = [(todo[k:k + size].tolist(), values[k:k + size]) for k in range(0, todo.size, size)]
+    bounds = batch_bounds(todo.size, size, executor.n_workers,
+                          tail=batch is None and executor.client is not None)
+    batches = [(todo[a:b].tolist(), values[a:b]) for a, b in zip(bounds[:-1], bounds[1:])]
     bar = Progress(n, done.size, enabled=progress)
     tables = []
     t0 = time.perf_counter()
