@@ -44,7 +44,8 @@ import scipy.linalg
 from appendages import limits
 from appendages.interface import S_RANGE, describe, equilibrate, inverse_symmetric
 
-__all__ = ["ExactReference", "clamped_frequencies", "dynamic_stiffness_of", "frequency_vector"]
+__all__ = ["ExactReference", "clamped_frequencies", "dynamic_stiffness_of", "frequency_vector",
+           "planar_rotation_response"]
 
 _CHUNK = 65536  # frequencies per evaluation of Z in the count
 
@@ -126,6 +127,54 @@ def clamped_frequencies(appendage, omega_max: float, *, n_root: int = 2) -> np.n
     d = equilibrate(Kii, Mii)
     lam = scipy.linalg.eigvalsh(Kii * np.outer(d, d), Mii * np.outer(d, d))
     return np.sqrt(np.clip(lam, 0.0, None))
+
+
+#: From this many frequencies on, a planar attitude response is solved by
+#: :func:`planar_rotation_response` (a few array operations over all of them) instead of one
+#: LAPACK solve per frequency, which costs more for a long grid and less for a few points.
+_ELIMINATION_POINTS = 32
+
+
+def planar_rotation_response(Z: np.ndarray) -> np.ndarray:
+    """``(Z^-1)[2, 2]`` of a stack of 3x3 matrices, shape ``Z.shape[:-2]``: the third component
+    of the solution of ``Z x = e_3``.
+
+    Gaussian elimination with partial pivoting, as LAPACK's ``zgesv`` does it for each matrix
+    (pivot: the largest ``|Re| + |Im|`` in the column), written over the whole stack at once:
+    the same backward-stable algorithm, its results equal to a per-matrix solve to rounding. A
+    singular matrix gives a non-finite entry (a zero pivot), the others are unaffected.
+    """
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return _eliminate(np.asarray(Z, dtype=complex))
+
+
+def _eliminate(Z: np.ndarray) -> np.ndarray:
+    n = Z.shape[:-2]
+    A = Z.reshape(-1, 3, 3)
+
+    def size(z):
+        return np.abs(z.real) + np.abs(z.imag)
+
+    # first column: the pivot row moves to the top (its rows in order p, then the other two)
+    p = np.argmax(size(A[:, :, 0]), axis=1)
+    order = np.array([[0, 1, 2], [1, 0, 2], [2, 1, 0]])[p]
+    A = np.take_along_axis(A, order[:, :, None], axis=1)
+    b = (order == 2).astype(complex)          # e_3, permuted with the rows
+    l1 = A[:, 1, 0] / A[:, 0, 0]
+    l2 = A[:, 2, 0] / A[:, 0, 0]
+    a11 = A[:, 1, 1] - l1 * A[:, 0, 1]
+    a12 = A[:, 1, 2] - l1 * A[:, 0, 2]
+    a21 = A[:, 2, 1] - l2 * A[:, 0, 1]
+    a22 = A[:, 2, 2] - l2 * A[:, 0, 2]
+    b1 = b[:, 1] - l1 * b[:, 0]
+    b2 = b[:, 2] - l2 * b[:, 0]
+    # second column: rows 1 and 2 exchanged where the lower holds the larger pivot
+    swap = size(a21) > size(a11)
+    a11, a21 = np.where(swap, a21, a11), np.where(swap, a11, a21)
+    a12, a22 = np.where(swap, a22, a12), np.where(swap, a12, a22)
+    b1, b2 = np.where(swap, b2, b1), np.where(swap, b1, b2)
+    m = a21 / a11
+    return ((b2 - m * b1) / (a22 - m * a12)).reshape(n)
 
 
 class ExactReference:
@@ -222,13 +271,18 @@ class ExactReference:
         rotation = slice(2, 3) if not self.three_axis else slice(3, 6)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             Z = self.hub_dynamic_stiffness(s)
-            unit = np.zeros((self.n_hub, rotation.stop - rotation.start))
-            unit[rotation] = np.eye(rotation.stop - rotation.start)
-            try:
-                response = np.linalg.solve(Z, np.broadcast_to(unit, Z.shape[:-1] + unit.shape[-1:]))
-                response = response[..., rotation, :]
-            except np.linalg.LinAlgError:
-                response = np.full(omega.shape + (unit.shape[1],) * 2, np.nan, dtype=complex)
+            if not self.three_axis and omega.size >= _ELIMINATION_POINTS:
+                response = planar_rotation_response(Z)[..., None, None]
+            else:
+                unit = np.zeros((self.n_hub, rotation.stop - rotation.start))
+                unit[rotation] = np.eye(rotation.stop - rotation.start)
+                try:
+                    response = np.linalg.solve(
+                        Z, np.broadcast_to(unit, Z.shape[:-1] + unit.shape[-1:]))
+                    response = response[..., rotation, :]
+                except np.linalg.LinAlgError:
+                    response = np.full(omega.shape + (unit.shape[1],) * 2, np.nan,
+                                       dtype=complex)
         bad = ~np.all(np.isfinite(response), axis=(-2, -1))
         if np.any(bad):
             raise ValueError(
