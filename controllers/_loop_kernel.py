@@ -5,9 +5,9 @@ numba is missing).
 :func:`loop_matrix` sums the partial fractions of plant and controller,
 G(s) = D + sum_k R_k / (s - lambda_k) + sum_j M_j / s^(j+1) (the modal sums of
 :class:`controllers.frequency.ModalEvaluator`, the last term its rigid-body Markov sum), and
-forms L = -K P, one frequency at a time: no temporaries of (frequencies x poles), so a call
-on a few frequencies (a refinement step) costs microseconds, not numpy's per-call overhead
-of several array operations. :func:`sensitivity` gives (I + L)^-1 (the loop-at-a-time
+forms L = -K P, a block of frequencies at a time (the sums vectorised over the block): no
+temporaries of (frequencies x poles), and a call on a few frequencies (a refinement step)
+costs microseconds, not numpy's per-call overhead of several array operations. :func:`sensitivity` gives (I + L)^-1 (the loop-at-a-time
 functions and the singular values follow from it) from a pivoted LU factorisation, the same
 arithmetic as numpy's inverse without its per-call cost; :func:`unit_circle_count` the
 eigenvalues of L outside the unit circle where no eigenvalue problem is needed. All are
