@@ -213,6 +213,11 @@ class ExactReference:
             else:
                 self._congruences[key] = (mount.appendage, K)
         self._clamped: dict = {}
+        # the attitude response's right-hand sides: the unit torques on the rotations
+        self._rotation = slice(2, 3) if not self.three_axis else slice(3, 6)
+        n_rotations = self._rotation.stop - self._rotation.start
+        self._unit = np.zeros((self.n_hub, n_rotations))
+        self._unit[self._rotation] = np.eye(n_rotations)
 
     # -- Z(s) -------------------------------------------------------------------------------------
     def hub_dynamic_stiffness(self, s: np.ndarray, *, undamped: bool = False) -> np.ndarray:
@@ -268,14 +273,12 @@ class ExactReference:
         Raises ValueError where the undamped spacecraft has a natural frequency.
         """
         s = 1j * omega
-        rotation = slice(2, 3) if not self.three_axis else slice(3, 6)
+        rotation, unit = self._rotation, self._unit
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             Z = self.hub_dynamic_stiffness(s)
             if not self.three_axis and omega.size >= _ELIMINATION_POINTS:
                 response = planar_rotation_response(Z)[..., None, None]
             else:
-                unit = np.zeros((self.n_hub, rotation.stop - rotation.start))
-                unit[rotation] = np.eye(rotation.stop - rotation.start)
                 try:
                     response = np.linalg.solve(
                         Z, np.broadcast_to(unit, Z.shape[:-1] + unit.shape[-1:]))
@@ -283,8 +286,8 @@ class ExactReference:
                 except np.linalg.LinAlgError:
                     response = np.full(omega.shape + (unit.shape[1],) * 2, np.nan,
                                        dtype=complex)
-        bad = ~np.all(np.isfinite(response), axis=(-2, -1))
-        if np.any(bad):
+        if not np.isfinite(response).all():
+            bad = ~np.all(np.isfinite(response), axis=(-2, -1))
             raise ValueError(
                 "omega hits a natural frequency of the undamped spacecraft, where the response "
                 f"is infinite [rad/s]: {describe(omega[bad])}; give the appendages damping or "
