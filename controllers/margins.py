@@ -582,9 +582,10 @@ def _at_distinct(function: Callable[[np.ndarray], np.ndarray], w: np.ndarray) ->
     frequency of ``w``: the refinements ask for the loop at one frequency for several of its
     functions (the loops at a time, their phase and gain crossovers and dips)."""
     w = np.asarray(w, dtype=float).reshape(-1)
-    distinct, where = np.unique(w, return_inverse=True)
-    if distinct.size == w.size:
+    ordered = np.sort(w)
+    if not (ordered[1:] == ordered[:-1]).any():   # a sort: a quarter of np.unique's cost
         return function(w)
+    distinct, where = np.unique(w, return_inverse=True)
     return function(distinct)[where.reshape(-1)]
 
 

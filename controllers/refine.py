@@ -42,6 +42,7 @@ bracket).
 """
 from __future__ import annotations
 
+import math
 from typing import Callable
 
 import numpy as np
@@ -68,8 +69,11 @@ _MINIMUM_SPACING = 1e-4
 # the probes' offsets from their centre, in units of their spacing
 _OFFSETS = np.array([-1.0, 0.0, 1.0])
 # root brackets are probed three at a time once at most this many are left: until then one
-# probe each (the Illinois step), when the points rather than the calls cost
+# probe each (the Illinois step), when the points rather than the calls cost; up to this many
+# brackets are stepped one by one in Python floats, more in numpy arrays
 _FEW = 16
+# the probes of no bracket
+_NO_PROBES = np.zeros((0, 3))
 
 
 def _illinois_points(k, a, b, ga, gb, checked, suspect, iteration):
@@ -126,17 +130,6 @@ def _probes(centre, spacing, lo, hi) -> np.ndarray:
     inside = _INSIDE * np.minimum(spacing, hi - lo)
     return np.minimum(np.maximum(centre[:, None] + spacing[:, None] * _OFFSETS,
                                  (lo + inside)[:, None]), (hi - inside)[:, None])
-
-
-def _forward_fill(x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rows of points (n, k) with a non-finite value replaced by their left neighbour (point
-    and value): column 0 must be finite."""
-    x, f = x.copy(), f.copy()
-    for j in range(1, x.shape[1]):
-        bad = ~np.isfinite(f[:, j])
-        x[bad, j] = x[bad, j - 1]
-        f[bad, j] = f[bad, j - 1]
-    return x, f
 
 
 def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
@@ -223,15 +216,22 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
                     use = (c0 > a) & (c0 < b) & (h0 >= 0) & (h0 < 0.25 * (b - a))
                     c = np.where(use, c0, c)
                     h = np.where(use, np.maximum(h0, ROOT_TOLERANCE * b), h)
-            pm = _probes(cm[km], hm[km], lo[km], hi[km])
-            if newton:
+            pm = _probes(cm[km], hm[km], lo[km], hi[km]) if km.size else _NO_PROBES
+            if not kr.size:
+                pr = _NO_PROBES
+            elif newton:
                 pr = _probes(c[kr], h[kr], a[kr], b[kr])
             else:
                 pr, bisect = _illinois_points(kr, a, b, ga, gb, checked, suspect, iteration)
             per = pr.shape[1]
-            values = np.asarray(evaluate(np.concatenate([pr.ravel(), pm.ravel()]),
-                                         np.concatenate([np.repeat(rt[kr], per),
-                                                         np.repeat(mt[km], 3)])), dtype=float)
+            if not km.size:
+                x, task = pr.ravel(), np.repeat(rt[kr], per)
+            elif not kr.size:
+                x, task = pm.ravel(), np.repeat(mt[km], 3)
+            else:
+                x = np.concatenate([pr.ravel(), pm.ravel()])
+                task = np.concatenate([np.repeat(rt[kr], per), np.repeat(mt[km], 3)])
+            values = np.asarray(evaluate(x, task), dtype=float)
             fr = values[:per * kr.size].reshape(-1, per)
             fmp = values[per * kr.size:].reshape(-1, 3)
             if kr.size and newton:
@@ -241,7 +241,8 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
                 _illinois_step(kr, pr[:, 0], fr[:, 0], bisect, a, b, fa, fb, ga, gb, last,
                                scale, suspect, r_active)
             if km.size:
-                _minimum_step(km, pm, fmp, lo, xm, hi, fm, cm, hm, floor, m_active)
+                (_minimum_step if km.size <= _FEW else _minimum_steps)(
+                    km, pm, fmp, lo, xm, hi, fm, cm, hm, floor, m_active)
 
         found = np.where(np.abs(fa) <= np.abs(fb), a, b)
         at_root = np.minimum(np.abs(fa), np.abs(fb))
@@ -263,70 +264,134 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
 
 # the pairs (a, p0), (p0, p1), (p1, p2), (p2, b) in the order a bracket prefers them: those
 # beside the centre probe p1 first
-_PAIR_PRIORITY = np.array([1, 0, 0, 1])
+_PAIR_PRIORITY = (1, 0, 0, 1)
+
+
+def _quotient(x: float, y: float) -> float:
+    """x / y of Python floats as numpy divides them: +-inf or NaN where y is zero."""
+    if y != 0.0:
+        return x / y
+    if x == 0.0 or x != x:
+        return math.nan
+    return math.copysign(math.inf, x) * math.copysign(1.0, y)
 
 
 def _root_step(k, p, fp, a, b, fa, fb, c, h, scale, checked, stalls, active,
                iteration) -> None:
-    """One iteration of the root brackets ``k`` probed at ``p`` (values ``fp``), in place."""
-    n = k.size
-    rows = np.arange(n)
-    xs, fs = np.empty((n, 5)), np.empty((n, 5))
-    xs[:, 0], xs[:, 1:4], xs[:, 4] = a[k], p, b[k]
-    fs[:, 0], fs[:, 1:4], fs[:, 4] = fa[k], fp, fb[k]
-    finite = np.isfinite(fp)
-    if not finite.all():
-        xs, fs = _forward_fill(xs, fs)
-    # the bracket: a sign change among a, p0, p1, p2, b, one beside the centre first
-    sign = np.sign(fs)
-    change = sign[:, :-1] * sign[:, 1:] < 0
-    j = np.argmin(np.where(change, _PAIR_PRIORITY, 9), axis=1)
-    na, nb = xs[rows, j], xs[rows, j + 1]
-    nfa, nfb = fs[rows, j], fs[rows, j + 1]
-    # a probe exactly on the root ends its bracket there
-    exact = finite & (fp == 0.0)
-    hit = exact.any(axis=1)
-    if hit.any():
-        at = p[rows, np.argmax(exact, axis=1)]
-        na, nb = np.where(hit, at, na), np.where(hit, at, nb)
-        nfa, nfb = np.where(hit, 0.0, nfa), np.where(hit, 0.0, nfb)
-    a[k], b[k], fa[k], fb[k] = na, nb, nfa, nfb
-    width = nb - na
-    # Newton from the middle probe, the slope from the outer two
-    step = -fp[:, 1] * (p[:, 2] - p[:, 0]) / (fp[:, 2] - fp[:, 0])
-    newton = p[:, 1] + step
-    # a Newton point just beyond an end (the root at the end, to round-off) is taken at the end:
-    # the probes about it then close the bracket from the other side
-    good = ((newton > na - 0.5 * np.abs(step)) & (newton < nb + 0.5 * np.abs(step))
-            & (np.abs(fp[:, 1]) <= scale[k]))  # NaN: False
-    newton = np.minimum(np.maximum(newton, na), nb)
-    if iteration % 2 == 1:
-        # a bracket that fails to halve in two iterations twice in a row is bisected (a pole,
-        # a flat stretch); once, it may be Newton closing in from one side
-        slow = width > 0.5 * checked[k]
-        stalls[k] = np.where(slow, stalls[k] + 1, 0)
-        good &= stalls[k] < 2
-        stalls[k] = np.where(stalls[k] >= 2, 0, stalls[k])
-        checked[k] = width
-    # probes that straddled the root (the bracket between two of them): the next ones half the
-    # Newton step apart; else a whole step, the estimate having been further off
-    straddled = (j == 1) | (j == 2)
-    newton_spacing = np.maximum(np.where(straddled, 0.5, 1.0) * np.abs(step),
-                                0.3 * ROOT_TOLERANCE * nb)
-    if good.all():
-        centre, spacing = newton, newton_spacing
-    else:
-        secant = (na * nfb - nb * nfa) / (nfb - nfa)
-        secant = np.where((secant > na) & (secant < nb), secant, 0.5 * (na + nb))
-        centre = np.where(good, newton, secant)
-        spacing = np.where(good, newton_spacing, 0.25 * width)
-    c[k], h[k] = centre, np.minimum(spacing, 0.5 * width)
-    active[k] = (~hit & (width > ROOT_TOLERANCE * nb)
-                 & (np.minimum(np.abs(nfa), np.abs(nfb)) <= 1e3 * scale[k]))
+    """One iteration of the root brackets ``k`` probed at ``p`` (values ``fp``), in place.
+
+    The brackets are few (at most _FEW): each is stepped in Python floats (the arithmetic of
+    numpy's elementwise operations, without their per-call cost on arrays of a few entries)."""
+    check = iteration % 2 == 1
+    rows = zip(k.tolist(), p.tolist(), fp.tolist(), a[k].tolist(), b[k].tolist(),
+               fa[k].tolist(), fb[k].tolist(), scale[k].tolist(), checked[k].tolist(),
+               stalls[k].tolist())
+    for i, (p0, p1, p2), (f0, f1, f2), ai, bi, fai, fbi, si, ci, ti in rows:
+        # the bracket: a sign change among a, p0, p1, p2, b (a non-finite value replaced by
+        # its left neighbour, point and value), one beside the centre p1 first
+        xs, fs = [ai, p0, p1, p2, bi], [fai, f0, f1, f2, fbi]
+        for q in range(1, 5):
+            if not math.isfinite(fs[q]):
+                xs[q], fs[q] = xs[q - 1], fs[q - 1]
+        j = 0
+        best = 9
+        for q in range(4):
+            if (fs[q] > 0.0 > fs[q + 1]) or (fs[q] < 0.0 < fs[q + 1]):
+                if _PAIR_PRIORITY[q] < best:
+                    j, best = q, _PAIR_PRIORITY[q]
+        na, nb, nfa, nfb = xs[j], xs[j + 1], fs[j], fs[j + 1]
+        # a probe exactly on the root ends its bracket there
+        hit = f0 == 0.0 or f1 == 0.0 or f2 == 0.0
+        if hit:
+            na = nb = p0 if f0 == 0.0 else p1 if f1 == 0.0 else p2
+            nfa = nfb = 0.0
+        a[i], b[i], fa[i], fb[i] = na, nb, nfa, nfb
+        width = nb - na
+        # Newton from the middle probe, the slope from the outer two
+        step = _quotient(-f1 * (p2 - p0), f2 - f0)
+        newton = p1 + step
+        # a Newton point just beyond an end (the root at the end, to round-off) is taken at
+        # the end: the probes about it then close the bracket from the other side
+        good = (na - 0.5 * abs(step) < newton < nb + 0.5 * abs(step)) and abs(f1) <= si
+        if check:
+            # a bracket that fails to halve in two iterations twice in a row is bisected (a
+            # pole, a flat stretch); once, it may be Newton closing in from one side
+            ti = ti + 1 if width > 0.5 * ci else 0
+            good = good and ti < 2
+            stalls[i] = 0 if ti >= 2 else ti
+            checked[i] = width
+        if good:
+            # probes that straddled the root (the bracket between two of them): the next ones
+            # half the Newton step apart; else a whole step, the estimate having been further
+            # off
+            centre = min(max(newton, na), nb)
+            spacing = max((0.5 if j in (1, 2) else 1.0) * abs(step), 0.3 * ROOT_TOLERANCE * nb)
+        else:
+            centre = _quotient(na * nfb - nb * nfa, nfb - nfa)
+            if not na < centre < nb:
+                centre = 0.5 * (na + nb)
+            spacing = 0.25 * width
+        c[i], h[i] = centre, min(spacing, 0.5 * width)
+        active[i] = (not hit and width > ROOT_TOLERANCE * nb
+                     and min(abs(nfa), abs(nfb)) <= 1e3 * si)
 
 
 def _minimum_step(k, p, fp, lo, x, hi, fx, c, h, floor, active) -> None:
-    """One iteration of the minimum brackets ``k`` probed at ``p`` (values ``fp``), in place."""
+    """One iteration of the minimum brackets ``k`` probed at ``p`` (values ``fp``), in place,
+    each in Python floats: for a few brackets (at most _FEW), the arithmetic of numpy's
+    elementwise operations without their per-call cost (:func:`_minimum_steps` for many)."""
+    inf = math.inf
+    rows = zip(k.tolist(), p.tolist(), fp.tolist(), lo[k].tolist(), x[k].tolist(),
+               hi[k].tolist(), fx[k].tolist(), h[k].tolist(), floor[k].tolist())
+    for j, (p0, p1, p2), (f0, f1, f2), lj, xj, hj, fj, sj, floor_j in rows:
+        # the best of the known point and the probes (a non-finite value: none; ties keep the
+        # known best, as np.argmin the first)
+        points = (xj, p0, p1, p2)
+        candidates = (fj, f0 if math.isfinite(f0) else inf, f1 if math.isfinite(f1) else inf,
+                      f2 if math.isfinite(f2) else inf)
+        i = 0
+        if fj == fj:
+            for q in (1, 2, 3):
+                if candidates[q] < candidates[i]:
+                    i = q
+        best, fbest = points[i], candidates[i]
+        # the new bracket: the nearest points on either side of the best
+        below, above = -inf, inf
+        for point in (lj, hj, xj, p0, p1, p2):
+            if best > point > below:
+                below = point
+            if best < point < above:
+                above = point
+        nlo = below if math.isfinite(below) else lj
+        nhi = above if math.isfinite(above) else hj
+        # the vertex of the parabola through the probes (Newton on f' with f', f'' from them)
+        d01, d12 = _quotient(f1 - f0, p1 - p0), _quotient(f2 - f1, p2 - p1)
+        curvature = _quotient(d12 - d01, p2 - p0)
+        vertex = 0.5 * (p0 + p1) - _quotient(0.5 * d01, curvature)
+        good = (math.isfinite(vertex) and math.isfinite(curvature) and curvature > 0.0
+                and nlo < vertex < nhi)
+        converged = False
+        if good:
+            step = abs(vertex - p1)
+            # converged: the parabola through probes a local spacing apart predicts no value
+            # below the best beyond round-off (the value is what is wanted), or the vertex is
+            # the best probe
+            predicted = f0 + d01 * (vertex - p0) + curvature * (vertex - p0) * (vertex - p1)
+            converged = ((sj <= 100.0 * floor_j
+                          and fbest - predicted <= MINIMUM_VALUE_TOLERANCE * abs(fbest))
+                         or (i == 2 and step <= 1e-2 * floor_j))
+            centre, spacing = vertex, max(step, floor_j)
+        else:
+            centre, spacing = best, 0.25 * (nhi - nlo)
+        lo[j], hi[j], x[j], fx[j] = nlo, nhi, best, fbest
+        c[j] = centre
+        h[j] = min(spacing, 0.5 * (nhi - nlo))
+        active[j] = not converged and (nhi - nlo) > MINIMUM_TOLERANCE * best
+
+
+def _minimum_steps(k, p, fp, lo, x, hi, fx, c, h, floor, active) -> None:
+    """One iteration of the minimum brackets ``k`` probed at ``p`` (values ``fp``), in place,
+    vectorised: :func:`_minimum_step`'s arithmetic on many brackets at once."""
     rows = np.arange(k.size)
     values = np.where(np.isfinite(fp), fp, np.inf)
     points = np.column_stack([x[k], p])

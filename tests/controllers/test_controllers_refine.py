@@ -159,3 +159,60 @@ def test_three_axis_modulus_margins_are_the_functions_minima():
     w = m.min_singular_value_frequency * np.linspace(1 - 1e-3, 1 + 1e-3, 20001)
     sigma = np.linalg.svd(np.eye(3) + loop.matrix(w), compute_uv=False)[:, -1]
     assert m.min_singular_value <= sigma.min() * (1 + 1e-12)
+
+
+def test_flat_stretches_and_exact_zeros_do_not_break_a_step():
+    """The steps divide by differences of probed values and points; where those are zero (a
+    function constant about the probes, a probe exactly on the root) the step falls back to
+    bisection or ends, as numpy's inf and NaN would make it, instead of dividing by zero.
+    A jump of f = sign(x - r) is bisected down to the stopping width about r (it is no root:
+    |f| stays 1 at the ends, so not found); f = x - 2 on a grid whose first probe lands on 2
+    exactly ends there; a constant function's minimum stays where it was, at its value."""
+    r = math.sqrt(2.0)
+    (root, found), _ = refine(lambda x, task: np.sign(x - r),
+                              roots=(np.array([0]), np.array([1.0]), np.array([2.0]),
+                                     np.array([-1.0]), np.array([1.0])))
+    assert not found[0]
+    assert abs(root[0] - r) <= 2.0 * ROOT_TOLERANCE * r
+    (root, found), _ = refine(lambda x, task: x - 2.0,
+                              roots=(np.array([0]), np.array([1.0]), np.array([3.0]),
+                                     np.array([-1.0]), np.array([1.0])))
+    assert found[0] and root[0] == 2.0
+    _, (x, fx) = refine(lambda x, task: np.full(x.size, 3.0),
+                        minima=(np.array([0]), np.array([1.0]), np.array([2.0]),
+                                np.array([3.0]), np.array([3.0]), np.array([3.0]),
+                                np.array([3.0])))
+    assert fx[0] == 3.0 and 1.0 <= x[0] <= 3.0
+
+
+def test_a_few_minima_are_stepped_as_many_are():
+    """A few minimum brackets are stepped one by one in Python floats, many in numpy arrays:
+    the same arithmetic, so the same new brackets, probes and stopping decisions to the bit,
+    on random parabolas, kinks and non-finite probes."""
+    from controllers.refine import _minimum_step, _minimum_steps
+    rng = np.random.default_rng(7)
+    n = 200
+    k = np.arange(n)
+    x = rng.uniform(1.0, 2.0, n)
+    width = 10.0 ** rng.uniform(-9, -1, n)
+    lo, hi = x - width * rng.uniform(0.1, 1.0, n), x + width * rng.uniform(0.1, 1.0, n)
+    p = np.sort(rng.uniform(lo[:, None], hi[:, None], (n, 3)), axis=1)
+    p[::17, 1] = p[::17, 0]                         # coinciding probes
+    centre = x + width * rng.uniform(-0.5, 0.5, n)
+    fp = np.where((np.arange(n) % 3 == 0)[:, None], np.abs(p - centre[:, None]),
+                  (p - centre[:, None]) ** 2) + 1.0
+    fp[::11, 2] = np.nan
+    fp[::13, 0] = np.inf
+    fp[::19] = 1.0                                  # flat
+    fx = np.where(np.arange(n) % 5 == 0, 1.0, 1.0 + width)
+    h = width * rng.uniform(1e-6, 0.5, n)
+    floor = width * 1e-4
+    states = []
+    with np.errstate(all="ignore"):
+        for step in (_minimum_step, _minimum_steps):
+            state = [v.copy() for v in (lo, x, hi, fx)] + [np.zeros(n), h.copy(), floor,
+                                                             np.ones(n, dtype=bool)]
+            step(k, p, fp, *state)
+            states.append(state)
+    for one, many in zip(*states):
+        np.testing.assert_array_equal(one, many)
