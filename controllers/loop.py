@@ -172,14 +172,53 @@ def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
     measured = fed_back_signals(plant, controller)
     refs = reference_inputs(controller, signal_names(plant, "output"))
     p_in, p_out = signal_names(plant, "input"), signal_names(plant, "output")
-    c_in = list(controller.input_labels)
     disturbances = [n for n in p_in if n not in ch.torques]
     if is_digital(controller):
         plant = control.c2d(plant, controller.dt, method="zoh")
+    A, B, C, D = _closed_loop_matrices(plant, controller, ch.torques, measured, refs,
+                                      disturbances)
+    n_p, n_c = plant.nstates, controller.nstates
+    inputs = refs + disturbances
+    outputs = p_out + list(ch.torques)
+    states = [f"plant_x{i}" for i in range(n_p)] + [f"controller_x{i}" for i in range(n_c)]
+    return control.ss(A, B, C, D, plant.dt, inputs=inputs, outputs=outputs, states=states,
+                      name="closed_loop")
+
+
+def _closed_loop_matrices(plant: control.StateSpace, controller: control.StateSpace, torques,
+                         measured, refs=(), disturbances=(), *, cut: int | None = None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The state-space matrices (A, B, C, D) of :func:`close_loop`'s undelayed loop, as plain
+    arrays (no signal names checked or attached).
+
+    Parameters
+    ----------
+    plant : control.StateSpace
+        The plant, already sampled where the controller is digital.
+    controller : control.StateSpace
+    torques, measured, refs, disturbances : sequence of str
+        The plant's torque inputs, the measurements fed back, the controller's reference
+        inputs and the plant's other inputs (the closed loop's inputs: refs, then
+        disturbances).
+    cut : int, optional
+        A torque output of the controller (its index) not fed back: the loop with that
+        torque's loop open and the others closed (its poles are those of the loop-at-a-time
+        function of that torque that L does not have).
+
+    Returns
+    -------
+    A, B, C, D : ndarray
+        As :func:`close_loop` returns them (states: plant, then controller).
+    """
+    p_in, p_out = list(plant.input_labels), list(plant.output_labels)
+    c_in = list(controller.input_labels)
     Ap, Bp, Cp, Dp = (np.asarray(M, dtype=float) for M in (plant.A, plant.B, plant.C, plant.D))
     Ac, Bc, Cc, Dc = (np.asarray(M, dtype=float)
                       for M in (controller.A, controller.B, controller.C, controller.D))
-    i_t = [p_in.index(n) for n in ch.torques]
+    if cut is not None:
+        Cc, Dc = Cc.copy(), Dc.copy()
+        Cc[cut], Dc[cut] = 0.0, 0.0
+    i_t = [p_in.index(n) for n in torques]
     i_d = [p_in.index(n) for n in disturbances]
     i_m = [p_out.index(n) for n in measured]
     j_m = [c_in.index(n) for n in measured]
@@ -210,11 +249,7 @@ def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
     C = np.vstack([np.hstack([Cp, np.zeros((Cp.shape[0], n_c))]) + Dp[:, i_t] @ Fx, Fx])
     D = np.vstack([np.hstack([Dp[:, i_t] @ Fr, Dp[:, i_d] + Dp[:, i_t] @ Fd]),
                    np.hstack([Fr, Fd])])
-    inputs = refs + disturbances
-    outputs = p_out + list(ch.torques)
-    states = [f"plant_x{i}" for i in range(n_p)] + [f"controller_x{i}" for i in range(n_c)]
-    return control.ss(np.vstack([A_top, A_bot]), np.vstack([B_top, B_bot]), C, D, plant.dt,
-                      inputs=inputs, outputs=outputs, states=states, name="closed_loop")
+    return np.vstack([A_top, A_bot]), np.vstack([B_top, B_bot]), C, D
 
 
 def _close_loop_frd(plant: control.FrequencyResponseData, controller: control.StateSpace,
@@ -478,16 +513,11 @@ class LoopTransfer:
             return np.zeros(0, dtype=complex)
         if getattr(self, "_loop_at_a_time_poles", None) is not None:
             return self._loop_at_a_time_poles.copy()
-        roots = []
-        for i in range(self.ch.n_axes):
-            cut = control.ss(self.controller.A, self.controller.B,
-                             np.where(np.arange(self.ch.n_axes)[:, None] == i, 0.0,
-                                      self.controller.C),
-                             np.where(np.arange(self.ch.n_axes)[:, None] == i, 0.0,
-                                      self.controller.D), self.controller.dt,
-                             inputs=list(self.controller.input_labels),
-                             outputs=list(self.controller.output_labels))
-            roots.append(np.linalg.eigvals(close_loop(self.plant, cut).A))
+        # the closed loop's state matrix with torque i's loop open, as plain arrays (the
+        # plant sampled once for a digital controller, as close_loop samples it)
+        roots = [np.linalg.eigvals(_closed_loop_matrices(
+            self._plant_discretised, self.controller, self.ch.torques, self.measured,
+            cut=i)[0]) for i in range(self.ch.n_axes)]
         # computed once per loop (the grid and the poles both need them)
         self._loop_at_a_time_poles = np.concatenate(roots).astype(complex)
         return self._loop_at_a_time_poles.copy()
