@@ -13,6 +13,7 @@ from .modes import INFLUENCE_TOL, FlexibleMode, flexible_modes, rigid_body_inert
 from .timeresp import (METRIC_UNITS, disturbance_response, manoeuvre_metrics, metrics,
                        profile_response, slew, slew_profile, step_response)
 from .compare import Comparison, compare
+from .delay import PLAUSIBLE_DELAY, LongDelayWarning
 from .discretise import DiscretisationOverflowWarning
 from .lqr import (KalmanNoise, LQRDesign, lqr, lqr_design, rate_reference_state,
                   reference_state)
@@ -32,6 +33,7 @@ __all__ = [
     "Comparison",
     "DiscretisationOverflowWarning",
     "INFLUENCE_TOL",
+    "LongDelayWarning",
     "MARGIN",
     "RemovedMode",
     "ReactionWheel",
@@ -42,6 +44,7 @@ __all__ = [
     "KalmanNoise",
     "LQRDesign",
     "METRIC_UNITS",
+    "PLAUSIBLE_DELAY",
     "PROFILE_KINDS",
     "Profile",
     "Shaper",

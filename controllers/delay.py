@@ -33,6 +33,15 @@ loop's other inputs (references, disturbances) are held over each step like any
 zero-order-hold input: sampled at the step midpoints t_n + dt/2, their error is O(dt^2) as well.
 This needs dt <= 2 tau.
 
+A delay that looks like a unit slip
+-----------------------------------
+Attitude loops have milliseconds to a few hundred milliseconds of computation and transport
+delay. A delay above :data:`PLAUSIBLE_DELAY` (1 s) is legal and used as given, but more likely
+milliseconds given as seconds (``delay=20`` for 20 ms): every public function that takes a
+loop delay warns about it (:class:`LongDelayWarning`, naming the parameter, its value and the
+likely slip; :func:`warns_long_delay`), once per call, and the scene reader about
+``controller.delay`` by key with the same rule (:func:`long_delay`).
+
 References
 ----------
 G. F. Franklin, J. D. Powell, M. L. Workman, Digital Control of Dynamic Systems, 3rd ed.,
@@ -42,12 +51,16 @@ sec. 2.3 (sampling a system with a time delay).
 """
 from __future__ import annotations
 
+import contextvars
+import functools
+import inspect
 import math
 import warnings
 
 import control
 import numpy as np
 
+from .arguments import user_stacklevel
 from .discretise import DiscretisationOverflowWarning, discretise
 from .frequency import ModalEvaluator
 from .signals import check_pair, fed_back_signals, is_digital, reference_inputs, signal_names
@@ -55,7 +68,8 @@ from .threads import limits_blas_threads, total_states
 
 __all__ = ["split_delay", "delayed_discretisation", "DelayedSampledPlant",
            "delayed_closed_loop", "check_delay", "total_delay", "DELAY_SNAP",
-           "MAX_DELAY_STATES"]
+           "MAX_DELAY_STATES", "MAX_DELAY", "PLAUSIBLE_DELAY", "LongDelayWarning", "long_delay",
+           "warns_long_delay"]
 
 #: A fractional part of the delay within this many samples of 0 or 1 is taken as 0 (the
 #: delay a whole number of samples: round-off of tau / T).
@@ -67,11 +81,93 @@ MAX_DELAY_STATES = 10_000
 
 #: Longest delay [s] accepted: omega * delay stays finite up to 1e200 rad/s.
 MAX_DELAY = 1e100
+#: A loop delay above this [s] is warned about as a likely unit slip: attitude loops have
+#: milliseconds to a few hundred milliseconds of computation and transport delay; above,
+#: milliseconds given as seconds is likelier (:class:`LongDelayWarning`; the scene reader's
+#: ``controller.delay`` by the same rule).
+PLAUSIBLE_DELAY = 1.0
+
+
+class LongDelayWarning(UserWarning):
+    """A loop delay above :data:`PLAUSIBLE_DELAY` [s] given to a public function: legal, and
+    used as given, but more likely milliseconds given as seconds (the message names the
+    parameter, its value and the likely slip)."""
+
+
+# True while a call of a function decorated by warns_long_delay runs in this context: the
+# delay it was given has been looked at, and the functions it calls with it say nothing more
+_DELAY_SEEN = contextvars.ContextVar("controllers_delay_seen", default=False)
+
+
+def long_delay(delay: float) -> str | None:
+    """The likely mistake of a loop delay above :data:`PLAUSIBLE_DELAY`.
+
+    Parameters
+    ----------
+    delay : float, s
+
+    Returns
+    -------
+    str or None
+        ``"a loop delay of 20 s is long for an attitude loop (milliseconds to a few hundred):
+        did you give milliseconds? 20 ms = 0.02 s"``, or None for a delay of at most
+        :data:`PLAUSIBLE_DELAY` (or one that is not a finite number: its check says why).
+    """
+    if not (isinstance(delay, (int, float, np.integer, np.floating))
+            and not isinstance(delay, (bool, np.bool_))
+            and PLAUSIBLE_DELAY < float(delay) <= MAX_DELAY):
+        return None
+    delay = float(delay)
+    return (f"a loop delay of {delay:g} s is long for an attitude loop (milliseconds to a few "
+            f"hundred): did you give milliseconds? {delay:g} ms = {delay / 1e3:g} s")
+
+
+def warns_long_delay(function):
+    """Decorator of a public function that takes a loop delay as its parameter ``delay`` [s]:
+    a delay above :data:`PLAUSIBLE_DELAY` is warned about (:class:`LongDelayWarning` at the
+    caller's line: ``"delay = 20 s: a loop delay of 20 s is long ..."``, :func:`long_delay`)
+    and then used as given.
+
+    Once per call: the functions such a function calls with the delay (close_loop inside
+    pointing, a LoopTransfer inside margins) say nothing more. A caller that has reported the
+    value itself (the scene reader, by key) silences the class with :mod:`warnings` filters.
+    """
+    parameters = list(inspect.signature(function).parameters.values())
+    names = [p.name for p in parameters]
+    if "delay" not in names:
+        raise TypeError(f"{function.__qualname__} has no parameter 'delay' to check")
+    position = names.index("delay")
+    if parameters[position].kind not in (inspect.Parameter.POSITIONAL_ONLY,
+                                         inspect.Parameter.POSITIONAL_OR_KEYWORD):
+        position = None     # keyword-only
+
+    @functools.wraps(function)
+    def checked(*args, **kwargs):
+        if _DELAY_SEEN.get():
+            return function(*args, **kwargs)
+        if "delay" in kwargs:
+            delay = kwargs["delay"]
+        elif position is not None and len(args) > position:
+            delay = args[position]
+        else:
+            delay = None    # the default: no delay
+        said = long_delay(delay)
+        if said is not None:
+            warnings.warn(f"delay = {float(delay):g} s: {said}", LongDelayWarning,
+                          stacklevel=user_stacklevel())
+        token = _DELAY_SEEN.set(True)
+        try:
+            return function(*args, **kwargs)
+        finally:
+            _DELAY_SEEN.reset(token)
+
+    return checked
 
 
 def check_delay(delay, name: str = "delay") -> float:
     """A delay [s]: a real number >= 0 and finite (0 for none); TypeError or ValueError naming
-    it otherwise, a warning-free value for a plausible one."""
+    it otherwise. (A long one is legal: the public functions warn about it,
+    :func:`warns_long_delay`.)"""
     if isinstance(delay, bool) or not isinstance(delay, (int, float, np.floating, np.integer)):
         raise TypeError(f"{name} must be a real number [s]; got {type(delay).__name__}")
     delay = float(delay)
@@ -101,6 +197,7 @@ def total_delay(controller, delay, computation_delay) -> float:
     return delay
 
 
+@warns_long_delay
 def split_delay(delay: float, dt: float) -> tuple[int, float]:
     """tau = (k + f) dt with k a non-negative integer and 0 <= f < 1 (f within DELAY_SNAP of 0
     or 1 taken as 0)."""
@@ -117,6 +214,7 @@ def split_delay(delay: float, dt: float) -> tuple[int, float]:
     return int(k), float(f)
 
 
+@warns_long_delay
 def delayed_discretisation(A, B, dt: float, delay: float):
     """Exact zero-order-hold discretisation of x' = A x + B u(t - delay).
 
@@ -175,6 +273,7 @@ class DelayedSampledPlant:
         The delayed inputs and the outputs of the response.
     """
 
+    @warns_long_delay
     def __init__(self, plant: control.StateSpace, dt: float, delay: float, inputs, outputs):
         if not isinstance(plant, control.StateSpace) or not plant.isctime(strict=True):
             raise TypeError("plant must be a continuous control.StateSpace; got "
@@ -218,6 +317,7 @@ def _check_dt(dt) -> float:
     return dt
 
 
+@warns_long_delay
 @limits_blas_threads(total_states)
 def delayed_closed_loop(plant: control.StateSpace, controller: control.StateSpace,
                         delay: float, *, dt: float | None = None) -> control.StateSpace:

@@ -18,7 +18,7 @@ import warnings
 import control
 import numpy as np
 
-from .delay import DelayedSampledPlant, delayed_closed_loop, total_delay
+from .delay import DelayedSampledPlant, delayed_closed_loop, total_delay, warns_long_delay
 from .frequency import ModalEvaluator, modal_evaluator, siso_zeros
 from .arguments import describe, frequency_grid
 from .signals import (OMEGA, THETA, TORQUE, check_controller, check_pair, check_plant,
@@ -110,6 +110,7 @@ def loops_at_a_time(L: np.ndarray) -> np.ndarray:
         return 1.0 / np.diagonal(S, axis1=1, axis2=2) - 1.0
 
 
+@warns_long_delay
 def close_loop(plant, controller: control.StateSpace, *, delay: float = 0.0,
                computation_delay: bool = False, dt: float | None = None):
     """Close the attitude loop by signal names.
@@ -344,6 +345,7 @@ class LoopTransfer:
     functions have and L has not.
     """
 
+    @warns_long_delay
     def __init__(self, plant, controller, delay: float = 0.0):
         self.ch = ch = check_pair(plant, controller, allow_frd=True)
         self.delay = float(delay)
@@ -767,6 +769,7 @@ def resonance_points(roots, w_lo: float, w_hi: float, *, poles=None) -> np.ndarr
     return np.unique(np.concatenate(points))
 
 
+@warns_long_delay
 @limits_blas_threads(total_states)
 def loop_frequency_response(plant, controller, omega: np.ndarray | None = None, *,
                             delay: float = 0.0, computation_delay: bool = False

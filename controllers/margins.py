@@ -45,7 +45,7 @@ from typing import Callable, Sequence
 import control
 import numpy as np
 
-from .delay import check_delay, total_delay
+from .delay import check_delay, total_delay, warns_long_delay
 from .refine import refine
 from .loop import (LoopTransfer, close_loop, compiled_kernel, loop_frequency_response,
                    loops_at_a_time, sensitivity)
@@ -305,6 +305,7 @@ def _inverse_cubic_guess(omega: np.ndarray, values: np.ndarray, i: np.ndarray
     return centre, spacing
 
 
+@warns_long_delay
 @limits_blas_threads(total_states)
 def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float = 0.0,
             computation_delay: bool = False) -> Margins:
@@ -387,6 +388,7 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
     return first if refined.size == omega.size else on(refined)
 
 
+@warns_long_delay
 def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
                       L: np.ndarray | None = None, *, delay: float = 0.0,
                       axes: Sequence[str] | None = None,
@@ -681,6 +683,7 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
     return best, w_best
 
 
+@warns_long_delay
 def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
                  L: np.ndarray | None = None, *, delay: float = 0.0,
                  undamped: np.ndarray | None = None) -> Margins:
@@ -1360,6 +1363,7 @@ def _mode_spillover(plant, closed_poles: np.ndarray) -> tuple[ModeSpillover, ...
     return tuple(sorted(out, key=lambda m: m.frequency))
 
 
+@warns_long_delay
 @limits_blas_threads(total_states)
 def spillover(truth_plant, controller, *, delay: float = 0.0,
               computation_delay: bool = False) -> SpilloverVerdict:
@@ -1596,6 +1600,7 @@ def _nyquist_count(omega: np.ndarray, L: np.ndarray, p_rhp: int, what: str) -> i
     return int(round(z))
 
 
+@warns_long_delay
 def loop_verdict(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
                  L: np.ndarray | None = None, *, open_loop_unstable: int = 0,
                  delay: float = 0.0, axes: Sequence[str] | None = None) -> SpilloverVerdict:

@@ -113,7 +113,7 @@ import numpy as np
 import scipy.linalg
 
 from .arguments import describe, positive, real_number
-from .delay import check_delay, total_delay
+from .delay import check_delay, total_delay, warns_long_delay
 from .frequency import modal_evaluator
 from .loop import close_loop
 from .margins import loop_nyquist_count, spillover, unstable_poles
@@ -143,6 +143,7 @@ def noise_input_names(ch) -> tuple[tuple[str, ...], tuple[str, ...]]:
             tuple(f"{OMEGA}{NOISE}{ch.suffix(i)}" for i in range(ch.n_axes)))
 
 
+@warns_long_delay
 def close_loop_with_sensors(plant: control.StateSpace, controller: control.StateSpace, *,
                             delay: float = 0.0, computation_delay: bool = False,
                             dt: float | None = None) -> control.StateSpace:
@@ -270,6 +271,7 @@ class PointingBudget:
         return out
 
 
+@warns_long_delay
 def pointing(plant: control.StateSpace, controller: control.StateSpace, noise: SensorNoise,
              *, window: float, placement: str = "random", outputs=None, delay: float = 0.0,
              computation_delay: bool = False) -> PointingBudget:

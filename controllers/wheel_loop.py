@@ -53,6 +53,7 @@ import control
 import numpy as np
 
 from .arguments import describe, real_number
+from .delay import warns_long_delay
 from .discretise import discretise, discretise_blocks
 from .loop import close_loop
 from .signals import Channels, channels
@@ -179,6 +180,7 @@ class WheelLoop:
         any error of :func:`.close_loop`.
     """
 
+    @warns_long_delay
     def __init__(self, plant: control.StateSpace, controller: control.StateSpace,
                  wheels: WheelSet, *, delay: float = 0.0, computation_delay: bool = False,
                  dt: float | None = None) -> None:
@@ -742,6 +744,7 @@ def _check_state(X0, n: int) -> np.ndarray:
     return X0
 
 
+@warns_long_delay
 def simulate_wheels(plant: control.StateSpace, controller: control.StateSpace,
                     wheels: WheelSet, T, U=None, X0=None, *, delay: float = 0.0,
                     computation_delay: bool = False, dt: float | None = None,

@@ -67,6 +67,7 @@ from controllers.pointing import PointingNotComputed
 from controllers.signals import tip_outputs
 
 from ..scene.reader import SceneError
+from ..scene.specs import quiet_unit_slips
 from .responses import (discrete_outputs, disturbance_inputs, disturbance_weights,
                         outputs_until_overflow, response_data, time_grid)
 
@@ -120,7 +121,9 @@ def flown_keys(scene) -> list[str]:
 
 def loop_delay(controller_spec) -> dict:
     """The scene's loop delay as keyword arguments of :func:`controllers.close_loop`,
-    :func:`controllers.margins` and :func:`controllers.spillover`."""
+    :func:`controllers.margins` and :func:`controllers.spillover` (called under
+    :func:`~spacecraft.scene.specs.quiet_unit_slips`: the reader warned about a long delay by
+    key)."""
     return {"delay": controller_spec.delay,
             "computation_delay": controller_spec.computation_delay}
 
@@ -140,7 +143,8 @@ def close_flown_loop(plant, K, scene) -> control.StateSpace:
     if dt is None and not K.isdtime(strict=True):
         # no manoeuvre: the loop's poles only, sampled finely enough for the delay
         dt = 2.0 * c.delay
-    return controllers.close_loop(plant, K, dt=dt, **loop_delay(c))
+    with quiet_unit_slips():
+        return controllers.close_loop(plant, K, dt=dt, **loop_delay(c))
 
 
 def _error(scene, key: str, message: str) -> SceneError:
@@ -410,8 +414,9 @@ class FlownManoeuvre:
         held = m.step if _midpoint(K, scene.controller) else None
         stats = self.builder.stats
         if scene.wheels is not None:
-            wheel_loop = controllers.WheelLoop(plant, K, scene.wheels.build(), dt=held,
-                                               **loop_delay(scene.controller))
+            with quiet_unit_slips():
+                wheel_loop = controllers.WheelLoop(plant, K, scene.wheels.build(), dt=held,
+                                                   **loop_delay(scene.controller))
             labels = wheel_loop.inputs
             U_in = self._inputs(labels, profile, J, T, together=True, held=held)
             stats.simulations += 1
@@ -718,7 +723,7 @@ def pointing_figures(plant, K, scene) -> dict:
     s = scene.sensors
     tips = tip_outputs(list(plant.output_labels))
     try:
-        with np.errstate(all="ignore"), warnings.catch_warnings():
+        with np.errstate(all="ignore"), warnings.catch_warnings(), quiet_unit_slips():
             warnings.simplefilter("ignore", RuntimeWarning)
             budget = controllers.pointing(plant, K, s.noise(), window=s.rpe_window,
                                           placement=s.placement, outputs=tips,

@@ -36,6 +36,7 @@ from .fidelity import (MAX_MODES, FidelityChoice, choose_n_modes, clamped_freque
 from ..dynamics.hub import Hub, Mount
 from ..scene.limits import estimate_cost
 from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
+from ..scene.specs import quiet_unit_slips
 from .exact_grid import (POINTS_PER_DECADE, POINTS_PER_MODE, exact_grid, locating_spacecraft,
                          locator_model)
 from .manoeuvre import loop_delay
@@ -488,7 +489,7 @@ class ModelBuilder:
             plant, _ = self.design_plant(variant, n_modes)
             K = (controller if controller is not None
                  else self.tuned(variant, kind, n_modes).controller)
-            with np.errstate(all="ignore"), warnings.catch_warnings():
+            with np.errstate(all="ignore"), warnings.catch_warnings(), quiet_unit_slips():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 return controllers.margins(plant, K, **loop_delay(self.scene.controller))
         return self.cached(("design margins", self.design_key(variant, n_modes), kind,
@@ -501,7 +502,7 @@ class ModelBuilder:
         delay = loop_delay(self.scene.controller) if delayed else {}
 
         def build():
-            with np.errstate(all="ignore"), warnings.catch_warnings():
+            with np.errstate(all="ignore"), warnings.catch_warnings(), quiet_unit_slips():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 return controllers.spillover(plant, controller, **delay)
         return self.cached(("spillover", id(plant), id(controller), tuple(delay.items())),
@@ -741,6 +742,7 @@ class ModelBuilder:
         m = 3 if self.three_axis else 1
         P = np.moveaxis(np.asarray(frd.frdata)[:m, :m], -1, 0)
         self.stats.exact_reference_evaluations += 1
-        return exact_loop_verdict(self.exact_spacecraft(), controller, frd.omega, theta=P,
-                                  delay=self.scene.controller.total_delay,
-                                  locating=self.locating_spacecraft() if m > 1 else None)
+        with quiet_unit_slips():
+            return exact_loop_verdict(self.exact_spacecraft(), controller, frd.omega, theta=P,
+                                      delay=self.scene.controller.total_delay,
+                                      locating=self.locating_spacecraft() if m > 1 else None)

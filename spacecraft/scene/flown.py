@@ -37,6 +37,7 @@ import math
 import warnings
 
 from appendages.unit_slips import radians_in_degrees
+from controllers.delay import PLAUSIBLE_DELAY, long_delay
 from controllers.noise import PLAUSIBLE as NOISE_PLAUSIBLE
 
 from .specs import SensorsSpec, ShaperSpec, WheelsSpec
@@ -56,10 +57,6 @@ SHAPER_BASES = ("bang-coast-bang", "smooth")
 SATURATIONS = ("scale", "clip")
 #: Where t lies in its RPE window (``sensors.placement``; :data:`controllers.pointing.PLACEMENTS`).
 PLACEMENTS = ("random", "end")
-#: A loop delay above this [s] is warned about: attitude loops have milliseconds to a few
-#: hundred milliseconds of computation and transport delay; above, milliseconds given as
-#: seconds is likelier.
-PLAUSIBLE_DELAY = 1.0
 #: The keys of the manoeuvre table this module reads.
 MANOEUVRE_KEYS = ("profile", "feedforward", "torque_limit", "rate_limit", "jerk_limit",
                   "shaper")
@@ -79,10 +76,9 @@ def read_delay(r, t: dict, path: str, sample_time: float | None) -> tuple[float,
     """``controller.delay`` [s] (default 0) and ``controller.computation_delay`` (default
     false; a digital controller's only)."""
     delay = r.number(t, "delay", path, "controller.delay", default=0.0)
-    if delay > PLAUSIBLE_DELAY:
-        r.warn(f"{path}.delay", f"a loop delay of {delay:g} s is long for an attitude loop "
-               f"(milliseconds to a few hundred): did you give milliseconds? {delay:g} ms = "
-               f"{delay / 1e3:g} s")
+    # the rule of the Python API's functions (above controllers.PLAUSIBLE_DELAY); the run
+    # passes this value to them with their warning silenced (specs.quiet_unit_slips)
+    r.warn(f"{path}.delay", long_delay(delay))
     computation = r.boolean(t, "computation_delay", path, False)
     if computation and sample_time is None:
         raise r.error(f"{path}.computation_delay", "is one sample of a digital controller, and "

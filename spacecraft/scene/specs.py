@@ -50,12 +50,16 @@ SIMULATORS = ("flexsat", "basilisk")
 
 @contextlib.contextmanager
 def quiet_unit_slips():
-    """Build appendages from a read scene without the constructors' unit-slip warnings
-    (:class:`appendages.unit_slips.UnitWarning`): the reader reported them by key."""
+    """Build appendages from a read scene, and pass its loop delay to :mod:`controllers`,
+    without the unit-slip warnings of the constructors and functions
+    (:class:`appendages.unit_slips.UnitWarning`, :class:`controllers.LongDelayWarning`): the
+    reader reported them by key."""
     from appendages.unit_slips import UnitWarning
+    from controllers.delay import LongDelayWarning
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UnitWarning)
+        warnings.simplefilter("ignore", LongDelayWarning)
         yield
 
 

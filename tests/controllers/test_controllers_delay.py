@@ -19,6 +19,10 @@ from controllers.delay import delayed_discretisation, split_delay
 from controllers.margins import MAX_DELAY_GRID
 from plants import modal_plant, three_axis_plant
 
+# delays of seconds on purpose (the slow loops' delay margins): not the unit slip they are
+# warned about as (tests/controllers/test_delay_unit_slip.py)
+pytestmark = pytest.mark.filterwarnings("ignore::controllers.LongDelayWarning")
+
 J = 250.0
 DESIGN = modal_plant(J, [(2.0, 0.005, 0.04, 0.04), (7.0, 0.002, 0.02, 0.02)])
 TRUTH = modal_plant(J, [(1.9, 0.005, 0.041, 0.041), (6.6, 0.002, 0.021, 0.021),

@@ -19,6 +19,10 @@ import pytest
 import controllers
 from plants import modal_plant
 
+# delays of seconds on purpose (the slow loops' delay margins): not the unit slip they are
+# warned about as (tests/controllers/test_delay_unit_slip.py)
+pytestmark = pytest.mark.filterwarnings("ignore::controllers.LongDelayWarning")
+
 margins_module = importlib.import_module("controllers.margins")
 
 J = 250.0
