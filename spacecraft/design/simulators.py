@@ -22,6 +22,12 @@ controller as three-axis flight software, the eigen-axis slew about ``manoeuvre.
 the signals per axis (``theta_x/_y/_z``...) and per tip motion (``<name>_tip_deflection_y``,
 ``_z``, ``<name>_tip_twist``), a reaction wheel as one such wheel on each hub axis.
 
+Without ``simulator.sample_rate``, a continuous controller's flight-software rate is chosen
+(:func:`spacecraft.basilisk.default_sample_time`) on the loop Basilisk flies: the chains as it
+holds them (three axes: inextensible), so a chain's axial spring, held rigid, asks for no rate
+(an undamped one, which an explicit chain may have, would ask for thousands of samples a
+second).
+
 Stiff chains: without ``simulator.dt`` the run is sized to what the flight software can act on.
 A chain's torsion whose first frequency (root held) is above the flight software's sampling
 frequency 2 pi / T is held rigid, in Basilisk and in the linear chain compared alike, and what
@@ -108,6 +114,11 @@ def _checked_steps(scene, plant, controller, kind: str, spacecraft) -> float:
     m, sim = scene.manoeuvre, scene.simulator
     digital = controller.dt not in (None, 0, True)
     given = sim.sample_time is not None
+    # the loop Basilisk flies: its chains as it holds them (three axes: axial motion rigid,
+    # so an undamped axial spring of a chain asks for no rate)
+    flown = chain_spacecraft(spacecraft)
+    if flown is not spacecraft:
+        plant = flown.plant(prune=True)
     T = sim.sample_time or default_sample_time(plant, controller)
     source = ("simulator.sample_rate" if given and not digital else
               "the controller's sample rate" if digital else
@@ -129,7 +140,7 @@ def _checked_steps(scene, plant, controller, kind: str, spacecraft) -> float:
                            f"{MIN_SAMPLES}: raise the rate or lengthen the manoeuvre")
     if sim.dt is not None:
         # the modes Basilisk integrates (three axes: its chains, axial motion held)
-        modes = chain_spacecraft(spacecraft).modes()[0]
+        modes = flown.modes()[0]
         w_max = float(np.max(modes)) if np.size(modes) else 0.0
         try:
             dynamics_step(w_max, T, sim.dt)
