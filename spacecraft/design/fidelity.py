@@ -51,8 +51,26 @@ Three axes: every motion an output sees
     (:func:`motion_counts`; a beam whose modes are not split by motion, with a tip body or
     segments, keeps the fewest lowest modes that move every such tip motion and one more per
     n: :meth:`spacecraft.design.models.ModelBuilder.truncation`). Each n adds a mode, so the
-    closed-loop rule below never compares a model with itself. A stiff motion's one mode with
-    the Craig-Bampton constraint modes gives its quasi-static response in the loops' band.
+    closed-loop rule never compares a model with itself. A stiff motion's one mode with the
+    Craig-Bampton constraint modes does not give its quasi-static tip response: the static
+    flexibility of its higher modes is missing (a uniform rod's tip twist under a uniform load
+    from its first cantilever mode alone is 32/pi^3 = 1.032 of the exact one, whatever the
+    mode's frequency); the tip-output rule below adds those modes.
+
+Holding the tip outputs
+    The tip figures a report prints (tip deflections, twists, root loads) are held by a rule of
+    their own (:func:`refine_for_tip_outputs`), run at the open-loop rule's n before the
+    closed-loop rule: each such output's response per hub torque on the open-loop rule's low
+    band (below the first resonance and anti-resonance, where a slew's quasi-static tip figures
+    are made and a relative change means something whatever the damping;
+    :func:`output_changes`) is compared between the truncation and one with a mode more of the
+    motion that moves it (a uniform three-axis beam: per appendage and motion,
+    :data:`OUTPUT_MOTIONS`; a beam whose modes are ranked together, or a planar beam: its
+    lowest modes), and modes of that motion are added until one more changes it by at most the
+    tolerance. Each comparison costs one eigen-decomposition of an undamped truth model and its
+    response on 40 frequencies; no time simulation. The motions' floors are kept as n grows
+    (:func:`motion_counts` with ``floors``). The band does not see modes above it that a
+    sharp-edged input (a torque pulse) rings: such figures hold to a few times the tolerance.
 
 Dropping what the signals cannot reach
     :meth:`Spacecraft.plant` with ``prune=True`` drops the modes that no input excites or no
@@ -80,7 +98,8 @@ from appendages.interface import describe
 
 __all__ = ["FidelityChoice", "choose_n_modes", "motion_counts", "low_band", "transfer_theta_torque", "gain_error",
            "closed_loop_change", "refine_for_closed_loop", "DAMPING_SCALE",
-           "clamped_frequencies"]
+           "clamped_frequencies", "transfer", "OUTPUT_MOTIONS", "NEGLIGIBLE", "output_changes",
+           "refine_for_tip_outputs"]
 
 #: Largest number of modes per beam the search from a tolerance tries (also within the scene's
 #: limits.modes), whatever limits.modes allows: Craig-Bampton frequency errors fall like n**-4,
@@ -118,6 +137,10 @@ class FidelityChoice:
     closed_loop : dict or None
         The closed-loop rule's record (:func:`refine_for_closed_loop`): ``band`` [rad/s],
         ``trials`` (per n: the changes from n to n + 1), ``converged``.
+    tip : dict or None
+        The tip-output rule's record (:func:`refine_for_tip_outputs`; None without reported
+        tip outputs or root loads): ``band`` [rad/s], ``n_modes`` (the n it held them at),
+        ``trials``, ``floors`` (appendage -> motion -> modes kept at least), ``converged``.
     """
 
     n_modes: int
@@ -128,6 +151,7 @@ class FidelityChoice:
     trials: list
     open_loop_n_modes: int | None = None
     closed_loop: dict | None = None
+    tip: dict | None = None
 
     def as_dict(self) -> dict:
         """JSON-ready form."""
@@ -137,7 +161,8 @@ class FidelityChoice:
                 "trials": self.trials,
                 "open_loop_n_modes": (self.n_modes if self.open_loop_n_modes is None
                                       else self.open_loop_n_modes),
-                **({"closed_loop": self.closed_loop} if self.closed_loop is not None else {})}
+                **({"closed_loop": self.closed_loop} if self.closed_loop is not None else {}),
+                **({"tip": self.tip} if self.tip is not None else {})}
 
 
 def clamped_frequencies(beam, omega_max: float, *, three_axis: bool = False) -> np.ndarray:
@@ -157,10 +182,12 @@ def clamped_frequencies(beam, omega_max: float, *, three_axis: bool = False) -> 
     return w[:int(np.searchsorted(w, omega_max, side="right")) + 1]
 
 
-def motion_counts(beam, n_modes: int, method: str, seen: tuple = ()) -> dict:
+def motion_counts(beam, n_modes: int, method: str, seen: tuple = (),
+                  floors: dict | None = None) -> dict:
     """Modes per motion of a three-axis truncation that keeps, of a uniform beam, the lowest
-    mode of every motion in ``seen`` that the beam has and, beyond those, the ``n_modes``
-    lowest of all its motions (and any tying with the last: a round section's twin).
+    mode of every motion in ``seen`` that the beam has (the ``floors[motion]`` lowest where
+    given) and, beyond those, the ``n_modes`` lowest of all its motions (and any tying with the
+    last: a round section's twin).
 
     Parameters
     ----------
@@ -173,6 +200,10 @@ def motion_counts(beam, n_modes: int, method: str, seen: tuple = ()) -> dict:
     seen : tuple of str
         Motions (``"xy"``, ``"xz"``, ``"torsion"``, ``"axial"``) whose lowest mode is kept
         whatever its frequency.
+    floors : dict, optional
+        motion -> the number of its lowest modes kept whatever their frequencies (at least one
+        for a motion in ``seen``; capped at the modes the motion has): what the tip-output rule
+        adds (:func:`refine_for_tip_outputs`).
 
     Returns
     -------
@@ -185,14 +216,16 @@ def motion_counts(beam, n_modes: int, method: str, seen: tuple = ()) -> dict:
         :attr:`appendages.ModalBeam.modes_per_motion`.
     """
     kind = "cantilever_frequencies" if method == "craig-bampton" else "natural_frequencies"
-    k = int(n_modes) + 1
+    floors = floors or {}
+    k = max([int(n_modes)] + [int(v) for v in floors.values()]) + 1
     frequencies = {"xy": getattr(beam.planar_view("xy"), kind)(k),
                    "xz": getattr(beam.planar_view("xz"), kind)(k)}
     for name, rod in (("torsion", beam.torsion_rod()), ("axial", beam.axial_rod())):
         frequencies[name] = getattr(rod, kind)(k) if rod is not None else np.zeros(0)
-    floor = {name: int(name in seen and f.size > 0) for name, f in frequencies.items()}
+    floor = {name: min(max(int(name in seen), int(floors.get(name, 0))), f.size)
+             for name, f in frequencies.items()}
     rest = np.sort(np.concatenate([f[floor[name]:] for name, f in frequencies.items()]))
-    if not seen:
+    if not seen and not any(floor.values()):
         cutoff = rest[int(n_modes) - 1] * (1.0 + 1e-12)
     else:
         # distinct frequencies: a round section's twins count once, so that n + 1 always adds
@@ -216,12 +249,21 @@ def transfer_theta_torque(plant: control.StateSpace, omega: np.ndarray) -> np.nd
     """theta/torque [rad/(N m)] of a state-space plant at j*omega: complex, shape
     ``omega.shape + (m, m)``, m = 1 for a planar plant (torque to theta), 3 for a three-axis
     one (torque_x.._z to theta_x.._z, hub axes)."""
-    inputs, outputs = list(plant.input_labels), list(plant.output_labels)
+    inputs = list(plant.input_labels)
     if "torque" in inputs:
-        i_in, i_out = [inputs.index("torque")], [outputs.index("theta")]
-    else:
-        i_in = [inputs.index(f"torque_{a}") for a in "xyz"]
-        i_out = [outputs.index(f"theta_{a}") for a in "xyz"]
+        return transfer(plant, omega, ["torque"], ["theta"])
+    return transfer(plant, omega, [f"torque_{a}" for a in "xyz"],
+                    [f"theta_{a}" for a in "xyz"])
+
+
+def transfer(plant: control.StateSpace, omega: np.ndarray, inputs: list, outputs: list
+             ) -> np.ndarray:
+    """The frequency response of a state-space plant at j*omega from the named inputs to the
+    named outputs (units of the signals): complex, shape ``omega.shape + (len(outputs),
+    len(inputs))``."""
+    labels_in, labels_out = list(plant.input_labels), list(plant.output_labels)
+    i_in = [labels_in.index(name) for name in inputs]
+    i_out = [labels_out.index(name) for name in outputs]
     A = np.asarray(plant.A, dtype=float)
     B = np.asarray(plant.B, dtype=float)[:, i_in]
     C = np.asarray(plant.C, dtype=float)[i_out]
@@ -478,3 +520,126 @@ def refine_for_closed_loop(closed_loops: Callable[[int], dict], n_start: int, *,
             return n, {"band": band, "trials": trials, "converged": True}
         n, current = n + 1, finer
     return n, {"band": band, "trials": trials, "converged": False}
+
+
+#: Suffix of an appendage's reported output -> (the motion of a uniform three-axis beam that
+#: moves it, its unit); planar outputs are moved by the bending (``"bending"``). Tip
+#: deflections in the appendage's x-y and x-z planes, its twist, the root force along and
+#: across it and the root moments about its axes (:mod:`spacecraft.dynamics.coupling`).
+OUTPUT_MOTIONS = {
+    "_tip_deflection": ("bending", "m"), "_root_force": ("bending", "N"),
+    "_root_moment": ("bending", "N m"),
+    "_tip_deflection_y": ("xy", "m"), "_tip_deflection_z": ("xz", "m"),
+    "_tip_twist": ("torsion", "rad"),
+    "_root_force_x": ("axial", "N"), "_root_force_y": ("xy", "N"), "_root_force_z": ("xz", "N"),
+    "_root_moment_x": ("torsion", "N m"), "_root_moment_y": ("xz", "N m"),
+    "_root_moment_z": ("xy", "N m"),
+}
+
+#: An output whose response on the band stays below this fraction of the largest response of
+#: the outputs of its unit is not compared (its relative change is round-off: e.g. a motion a
+#: symmetric load leaves still); such a figure is 1e-9 of its neighbours' in the report.
+NEGLIGIBLE = 1e-9
+
+
+def output_changes(before: control.StateSpace, after: control.StateSpace, omega: np.ndarray,
+                   inputs: list, outputs: dict) -> dict:
+    """How much each output's frequency response changes from one model to a finer one.
+
+    Parameters
+    ----------
+    before, after : control.StateSpace
+        The two plants (the same named inputs and outputs).
+    omega : ndarray, rad/s
+        Frequencies compared.
+    inputs : list of str
+        The inputs (the hub torques).
+    outputs : dict
+        Output name -> its unit (outputs of one unit are compared with one another's size,
+        :data:`NEGLIGIBLE`).
+
+    Returns
+    -------
+    dict
+        Output name -> max over omega of |H_after(w) - H_before(w)| / max over omega of
+        |H_after(w)|, |.| the 2-norm over the inputs (the output's row): a change relative to
+        the largest response on the band, as a peak in the time domain sees it (a pointwise
+        ratio would blow up at a zero of one input's response). 0 for a negligible output.
+    """
+    names = list(outputs)
+    h_before = transfer(before, omega, inputs, names)
+    h_after = transfer(after, omega, inputs, names)
+    size = np.linalg.norm(h_after, axis=2).max(axis=0)            # per output
+    change = np.linalg.norm(h_after - h_before, axis=2).max(axis=0)
+    largest: dict = {}
+    for name, value in zip(names, size):
+        largest[outputs[name]] = max(largest.get(outputs[name], 0.0), float(value))
+    out = {}
+    for name, value, delta in zip(names, size, change):
+        if not value > NEGLIGIBLE * largest[outputs[name]]:
+            out[name] = 0.0
+        else:
+            out[name] = float(delta / value)
+    return out
+
+
+def refine_for_tip_outputs(compare: Callable[[dict, dict], dict], add: Callable[[dict, set], dict],
+                           motion_of: Callable[[str], tuple], motions: set, *, tolerance: float,
+                           max_rounds: int = 200) -> tuple[dict, dict]:
+    """The fewest modes per appendage and motion that hold the reported tip outputs.
+
+    From the truncation the other rules chose (``floors`` empty), a mode of every motion a
+    reported output sees is added (``add``) and each output's frequency response is compared
+    between the two models (``compare``, :func:`output_changes`); the modes of the motions whose
+    outputs changed by more than ``tolerance`` are kept and the comparison repeated for those,
+    until every output changes by at most the tolerance when one more mode of its motion is
+    added (n against n + 1, as the closed-loop rule: an upper estimate of the error of n where
+    the modal series converge monotonically or alternate, as a stiff motion's quasi-static
+    tip response does).
+
+    Parameters
+    ----------
+    compare : callable (floors, floors) -> dict
+        Output -> relative change from the first model to the second.
+    add : callable (floors, set of motions) -> floors
+        The floors with one more mode of each of the motions (those at their cap left as they
+        are).
+    motion_of : callable output -> motion
+        The (appendage, motion) whose modes move an output.
+    motions : set
+        Every (appendage, motion) an output sees.
+    tolerance : float
+        Relative tolerance (the scene's ``fidelity.tolerance``).
+    max_rounds : int
+        A guard: the search stops after this many comparisons.
+
+    Returns
+    -------
+    floors : dict
+        (appendage, motion) -> modes kept at least (``add``'s record).
+    record : dict
+        ``trials`` (per comparison: ``added`` motions, ``changes`` per output, ``largest``
+        change), ``converged`` (False: a motion at its cap, or the guard, stopped the search).
+    """
+    floors: dict = {}
+    trying = set(motions)
+    capped: set = set()
+    trials = []
+    for _ in range(max_rounds):
+        finer = add(floors, trying)
+        added = {k for k in trying if finer.get(k) != floors.get(k)}
+        capped |= trying - added
+        if not added:
+            break   # every motion that misses the tolerance is at its cap
+        changes = compare(floors, finer)
+        trials.append({"added": [list(k) for k in sorted(added)], "changes": changes,
+                       "largest": max(changes.values(), default=0.0)})
+        failing = {motion_of(o) for o, c in changes.items() if not c <= tolerance}
+        if not failing - capped:
+            return floors, {"trials": trials, "converged": not failing}
+        keep = failing & added
+        # the finer model as built when every motion it added misses, or none does (the
+        # misses then come from other motions' modes: kept, so that each round adds a mode)
+        floors = finer if keep in (added, set()) else add(floors, keep)
+        trying = failing - capped
+    return floors, {"trials": trials, "converged": False}

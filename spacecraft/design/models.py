@@ -31,8 +31,9 @@ import controllers
 from appendages.interface import FlexsatError
 
 from ..dynamics.coupling import Spacecraft
-from .fidelity import (MAX_MODES, FidelityChoice, choose_n_modes, clamped_frequencies,
-                       motion_counts, refine_for_closed_loop)
+from .fidelity import (MAX_MODES, OUTPUT_MOTIONS, FidelityChoice, choose_n_modes,
+                       clamped_frequencies, motion_counts, output_changes,
+                       refine_for_closed_loop, refine_for_tip_outputs)
 from ..dynamics.hub import Hub, Mount
 from ..scene.limits import estimate_cost
 from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
@@ -197,6 +198,9 @@ class ModelBuilder:
                                if scene.three_axis else scene.hub.inertia)
         self._cache: dict = {}
         self._modal_spacecraft: set = set()
+        # appendage -> {motion: modes kept at least}: what the tip-output rule added
+        # (:meth:`tip_fidelity`); empty until it has run
+        self.tip_floors: dict = {}
 
     @property
     def three_axis(self) -> bool:
@@ -350,7 +354,7 @@ class ModelBuilder:
             return ()
         return ("xy", "xz", "torsion") + (("axial",) if outputs.root_loads else ())
 
-    def truncation(self, beam, n_modes: int):
+    def truncation(self, beam, n_modes: int, floors: dict | None = None):
         """``beam`` truncated by the scene's method: its ``n_modes`` lowest (planar: bending)
         modes; in a three-axis scene that reports tip outputs, with ``n_modes`` chosen from the
         tolerance, also the lowest mode of every motion they see (:meth:`seen_motions`) that
@@ -359,16 +363,59 @@ class ModelBuilder:
         (:func:`spacecraft.design.fidelity.motion_counts`); a beam whose modes are ranked
         together (a tip body, segments) keeps its ``k0 - 1 + n_modes`` lowest modes, k0 the
         fewest lowest modes that move every seen tip motion (:meth:`coupled_floor`). Either
-        way each added n adds a mode."""
+        way each added n adds a mode.
+
+        ``floors`` (what the tip-output rule adds, :meth:`tip_fidelity`): a uniform three-axis
+        beam keeps at least ``floors[motion]`` modes of each motion (and the ``n_modes``
+        lowest beyond them); a planar beam ``floors["bending"]`` modes more, a three-axis beam
+        whose modes are ranked together ``floors["coupled"]`` lowest modes more."""
         method = self.scene.fidelity.method
         seen = self.seen_motions()
+        floors = floors or {}
         if not seen:
-            return beam.truncated(n_modes, method=method)
+            return beam.truncated(n_modes + floors.get("bending", 0), method=method)
         if getattr(beam, "is_uniform", False):
-            counts = motion_counts(beam, n_modes, method, seen)
+            counts = motion_counts(beam, n_modes, method, seen, floors)
             # n_modes of the truncation is its planar (x-y) model's: the x-y part of this one
             return beam.truncated(max(1, counts["xy"]), method=method, modes_per_motion=counts)
-        return beam.truncated(self.coupled_floor(beam) - 1 + n_modes, method=method)
+        return beam.truncated(self.coupled_floor(beam) - 1 + n_modes + floors.get("coupled", 0),
+                              method=method)
+
+    def floors_key(self, floors: dict | None = None) -> tuple:
+        """A cache key of per-appendage floors (default: :attr:`tip_floors`)."""
+        floors = self.tip_floors if floors is None else floors
+        return tuple(sorted((name, tuple(sorted(f.items()))) for name, f in floors.items() if f))
+
+    def tip_outputs(self) -> dict:
+        """The reported outputs of truncated beams the tip-output rule holds, output name ->
+        ((appendage, motion), unit): with ``fidelity.n_modes`` chosen from the tolerance, the
+        tip deflections (and twists) with ``outputs.tip_deflection`` and the root loads with
+        ``outputs.root_loads``, of every appendage whose truth is a truncated beam. A motion
+        is a uniform three-axis beam's (:data:`spacecraft.design.fidelity.OUTPUT_MOTIONS`),
+        ``"coupled"`` for a three-axis beam whose modes are ranked together, ``"bending"``
+        in the plane."""
+        scene = self.scene
+        out = {}
+        if self.given is not None or scene.fidelity.n_modes is not None:
+            return out
+        wanted = (("_tip_deflection", "_tip_twist") if scene.outputs.tip_deflection else ()) + (
+            ("_root_force", "_root_moment") if scene.outputs.root_loads else ())
+        for a in scene.appendages:
+            if a.truth != "beam":
+                continue
+            uniform = getattr(self.beam(a), "is_uniform", False)
+            for suffix, (motion, unit) in OUTPUT_MOTIONS.items():
+                three = suffix[-2:] in ("_x", "_y", "_z") or suffix == "_tip_twist"
+                if three != self.three_axis or not suffix.startswith(wanted):
+                    continue
+                if self.three_axis and not uniform:
+                    motion = "coupled"
+                elif self.three_axis and motion == "axial" and self.beam(a).axial_rod() is None:
+                    continue
+                elif self.three_axis and motion == "torsion" and self.beam(a).torsion_rod() is None:
+                    continue
+                out[a.name + suffix] = ((a.name, motion), unit)
+        return out
 
     def coupled_floor(self, beam) -> int:
         """The fewest lowest modes of a three-axis beam whose modes are ranked together (a tip
@@ -409,11 +456,13 @@ class ModelBuilder:
         if spec.truth == "modal":
             return self.beam(spec)  # all the modes of the data: FE-exact
         if spec.truth == "beam":
+            floors = self.tip_floors.get(spec.name)
+
             def build():
                 with self.scene_values("fidelity"):
-                    return self.truncation(self.beam(spec), n_modes)
-            return self.cached(("truncated", spec.name, n_modes, self.scene.fidelity.method),
-                               build)
+                    return self.truncation(self.beam(spec), n_modes, floors)
+            return self.cached(("truncated", spec.name, n_modes, self.scene.fidelity.method,
+                                self.floors_key({spec.name: floors or {}})), build)
         return self.chain(spec, spec.truth_chain or spec.chain)
 
     def design_model(self, spec: AppendageSpec, variant: str, n_modes: int | None):
@@ -454,7 +503,7 @@ class ModelBuilder:
         if self.given is not None:
             return self.given.truth
         models = [self.truth_model(a, n_modes) for a in self.scene.appendages]
-        return self.spacecraft(("truth", n_modes), models)
+        return self.spacecraft(("truth", n_modes, self.floors_key()), models)
 
     def design_plant(self, variant: str, n_modes: int | None):
         """The plant the controllers are tuned on (tip deflections when the LQR weighs them)."""
@@ -517,7 +566,7 @@ class ModelBuilder:
 
     def truth_plant(self, n_modes: int | None):
         """The truth plant of the verdicts (torque to theta, omega; pruned as the scene says)."""
-        return self.plant(self.truth_spacecraft(n_modes), ("truth", n_modes),
+        return self.plant(self.truth_spacecraft(n_modes), ("truth", n_modes, self.floors_key()),
                           prune=self.scene.fidelity.prune)[0]
 
     def truth_loops(self, n_modes: int) -> dict:
@@ -638,9 +687,79 @@ class ModelBuilder:
                                         method=scene.fidelity.method,
                                         first_zero=self.first_clamped_frequency(),
                                         n_max=self.max_modes())
+        if self.tip_outputs():
+            with self.stage("holding the tip outputs"):
+                choice = self.tip_fidelity(choice)
         with self.stage("converging the closed loops"):
             choice = self.closed_loop_fidelity(choice, bandwidth)
         return choice.n_modes, choice
+
+    def tip_fidelity(self, choice: FidelityChoice) -> FidelityChoice:
+        """The open-loop choice with the modes the reported tip outputs need
+        (:func:`spacecraft.design.fidelity.refine_for_tip_outputs`): at the chosen n, each tip
+        output's (and root load's) response per hub torque on the open-loop rule's band,
+        undamped, is compared between the truncation and one with a mode more of the motion
+        that moves it (per appendage), and modes of that motion are added until the change is
+        within the tolerance; sets :attr:`tip_floors` (the closed-loop rule then adds modes
+        from there) and records the search in ``choice.tip``. A stiff motion's one mode with
+        the Craig-Bampton constraint modes misses the static flexibility of its higher modes
+        (a uniform rod's tip twist under a uniform load: 32/pi^3 = 1.032 of the exact one),
+        which a slew's quasi-static tip figures show in full."""
+        scene = self.scene
+        n = choice.n_modes
+        outputs = self.tip_outputs()
+        units = {name: unit for name, (_, unit) in outputs.items()}
+        cap = self.max_modes()
+        specs = {a.name: a for a in scene.appendages}
+        inputs = ["torque_x", "torque_y", "torque_z"] if self.three_axis else ["torque"]
+        omega = np.geomspace(choice.band[0], choice.band[1], 40)
+
+        def per_beam(floors: dict) -> dict:
+            out: dict = {}
+            for (name, motion), k in floors.items():
+                out.setdefault(name, {})[motion] = k
+            return out
+
+        def plant(floors: dict):
+            beams = per_beam(floors)
+
+            def build():
+                models = [self.truncation(self.undamped_beam(a), n, beams.get(a.name))
+                          if a.truth == "beam" else self.truth_model(a, n)
+                          for a in scene.appendages]
+                sc = self.spacecraft(("undamped tip", n, self.floors_key(beams)), models)
+                return self.plant(sc, ("undamped tip", n, self.floors_key(beams)),
+                                  tip=scene.outputs.tip_deflection,
+                                  root_loads=scene.outputs.root_loads,
+                                  prune=scene.fidelity.prune)[0]
+            with self.scene_values("fidelity"):
+                return build()
+
+        def add(floors: dict, motions: set) -> dict:
+            out = dict(floors)
+            for name, motion in motions:
+                beam = self.undamped_beam(specs[name])
+                if motion in ("bending", "coupled"):
+                    if n + floors.get((name, motion), 0) + 1 <= cap:
+                        out[(name, motion)] = floors.get((name, motion), 0) + 1
+                    continue
+                mine = {m: k for (b, m), k in floors.items() if b == name}
+                counts = motion_counts(beam, n, scene.fidelity.method, self.seen_motions(),
+                                       mine)
+                if counts[motion] + 1 <= cap:
+                    out[(name, motion)] = counts[motion] + 1
+            return out
+
+        def compare(before: dict, after: dict) -> dict:
+            return output_changes(plant(before), plant(after), omega, inputs, units)
+
+        motions = {motion for motion, _ in outputs.values()}
+        floors, record = refine_for_tip_outputs(compare, add, lambda o: outputs[o][0], motions,
+                                                tolerance=scene.fidelity.tolerance)
+        self.tip_floors = per_beam(floors)
+        record = {"band": list(choice.band), "n_modes": n, **record,
+                  "floors": self.tip_floors}
+        return dataclasses.replace(choice, tip=record)
 
     def closed_loop_fidelity(self, choice: FidelityChoice, bandwidth: float) -> FidelityChoice:
         """The open-loop choice refined until the scene's closed loops converge
@@ -668,7 +787,10 @@ class ModelBuilder:
         more per motion a reported output sees: :meth:`truncation`)."""
         scene = self.scene
         cap = min(MAX_MODES, scene.limits.modes)
-        floor = len(self.seen_motions())
+        seen = self.seen_motions()
+        # the modes the tip-output rule added beyond the one a motion has anyway
+        floor = len(seen) + max((sum(k - (m in seen) for m, k in f.items())
+                                 for f in self.tip_floors.values()), default=0)
         while cap > 1:
             trial = scene.replace(fidelity=dataclasses.replace(scene.fidelity,
                                                                n_modes=cap + floor))

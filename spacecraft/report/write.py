@@ -477,6 +477,7 @@ def _models(data: dict) -> list:
             b.append(("table", ["n_modes", "frequency error [-]", "gain error [-]"],
                       [[t["n_modes"], _fmt(t["frequency_error"], 3), _fmt(t["gain_error"], 3)]
                        for t in choice["trials"]]))
+            b += _tip_fidelity(choice)
             b += _closed_loop_fidelity(choice)
         else:
             b.append(("p", "n_modes was given by the scene (fidelity.n_modes)."))
@@ -632,6 +633,27 @@ def _lqr_gains(c: dict) -> tuple[list, list]:
     rows = [[state, *(_fmt(k, 4) for k in K[:, i]), *(_fmt(v, 4) for v in L[i])]
             for i, state in enumerate(c["states"])]
     return header, rows
+
+
+def _tip_fidelity(choice: dict) -> list:
+    """What the tip-output rule added (spacecraft.design.fidelity.refine_for_tip_outputs)."""
+    record = choice.get("tip")
+    if not record:
+        return []
+    added = "; ".join(f"{name} " + ", ".join(f"{m} {k}" for m, k in f.items())
+                      for name, f in record["floors"].items() if f)
+    text = (f"Then the tip outputs: at {plural(record['n_modes'], 'mode')} per beam, each "
+            "reported tip deflection, twist and root load per hub torque on "
+            f"[{_fmt(record['band'][0], 3)}, {_fmt(record['band'][1], 3)}] rad/s is compared "
+            "with a model holding one more mode of the motion that moves it, and modes of that "
+            "motion are added until it changes by less than the tolerance. ")
+    text += (f"Modes kept for them: {added}." if added else "No mode was needed for them.")
+    if not record["converged"]:
+        text = warn(text + " The search stopped at the scene's limits without meeting it.")
+    rows = [["; ".join(" ".join(k) for k in t["added"]), _fmt(t["largest"], 3),
+             max(t["changes"], key=t["changes"].get) if t["changes"] else "-"]
+            for t in record["trials"]]
+    return [("p", text), ("table", ["a mode more of", "largest change [-]", "output"], rows)]
 
 
 def _closed_loop_fidelity(choice: dict) -> list:

@@ -178,7 +178,7 @@ def _chain_bodies(chain) -> int:
     return chain.n_bodies if chain.from_beam is not None else len(chain.lengths)
 
 
-def appendage_dof(spec, which: str, n_modes: int | None) -> tuple[int, str]:
+def appendage_dof(spec, which: str, n_modes: int | None, floor: int = 0) -> tuple[int, str]:
     """Elastic degrees of freedom of an appendage's truth or design model, and the key behind.
 
     Parameters
@@ -187,6 +187,9 @@ def appendage_dof(spec, which: str, n_modes: int | None) -> tuple[int, str]:
     which : {"truth", "design"}
     n_modes : int or None
         Bending modes of a truncated beam (None: the smallest, 1, as a tolerance search starts).
+    floor : int
+        Modes a truncated beam keeps beyond ``n_modes`` (a three-axis truncation's lowest mode
+        of every motion a reported output sees).
 
     Returns
     -------
@@ -197,9 +200,9 @@ def appendage_dof(spec, which: str, n_modes: int | None) -> tuple[int, str]:
     """
     kind = spec.truth if which == "truth" else spec.design
     if which == "design" and kind == "truth":
-        return appendage_dof(spec, "truth", n_modes)
+        return appendage_dof(spec, "truth", n_modes, floor)
     if kind == "beam":
-        return (1 if n_modes is None else n_modes), "fidelity.n_modes"
+        return (1 if n_modes is None else n_modes) + floor, "fidelity.n_modes"
     if kind == "modal":
         return spec.modal.n_modes, "modal"
     if kind == "fit":
@@ -240,15 +243,23 @@ def estimate_cost(scene) -> SceneCost:
     A plant of N elastic degrees of freedom on the hub has at most 2 (3 + N) states (hub
     translation and rotation plus the appendages' modes or hinges; pruning only removes).
     A truth beam chosen from ``fidelity.tolerance`` is counted with one mode: the search stops
-    at the smallest sufficient number, and the runner caps it by the limits.
+    at the smallest sufficient number, and the runner caps it by the limits; in three axes with
+    reported tip outputs or root loads, also with the lowest mode of every motion they see
+    (both bending planes and torsion, and the axial motion with root loads), which such a
+    truncation keeps whatever n (:meth:`spacecraft.design.models.ModelBuilder.truncation`).
     Memory: a response keeps time, inputs and outputs (8 bytes per sample each); one simulation
     needs in addition its chunked work arrays, at most about (states + 4 inputs + 2 outputs)
     values per sample.
     """
     apps = scene.appendages
     n_modes = scene.fidelity.n_modes
-    truth = [appendage_dof(a, "truth", n_modes) for a in apps]
-    design = [appendage_dof(a, "design", n_modes) for a in apps]
+    outputs = scene.outputs
+    # the modes per motion a three-axis truncation chosen from the tolerance keeps beyond n
+    floor = (3 + bool(outputs.root_loads)
+             if scene.three_axis and n_modes is None
+             and (outputs.tip_deflection or outputs.root_loads) else 0)
+    truth = [appendage_dof(a, "truth", n_modes, floor) for a in apps]
+    design = [appendage_dof(a, "design", n_modes, floor) for a in apps]
     # every design variant (one per fit criterion) has fits of the same size
     truth_states = 2 * (3 + sum(d for d, _ in truth))
     design_states = 2 * (3 + sum(d for d, _ in design))

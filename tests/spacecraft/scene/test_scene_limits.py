@@ -292,3 +292,35 @@ def test_limits_are_whole_numbers_except_memory_and_basilisk_seconds():
             with pytest.raises(ValueError, match=rf"limit {f.name} must be a whole number"):
                 Limits(**{f.name: 2.5})
             assert type(getattr(Limits(**{f.name: 7.0}), f.name)) is int
+
+
+@pytest.mark.parametrize("tip, root_loads, floor", [(True, False, 3), (False, True, 4),
+                                                    (False, False, 0)])
+def test_the_estimate_counts_the_modes_a_three_axis_truncation_keeps_per_motion(tip, root_loads,
+                                                                               floor):
+    """A three-axis truth chosen from the tolerance keeps the lowest mode of every motion a
+    reported output sees (both bending planes and torsion; axial with root loads) beyond n:
+    the estimate counts them (the hub's three rotations the rigid states). A rectangular wing (no twin
+    modes) designed on its truth: the smallest truth plant the search builds (n = 1) has
+    exactly the estimated states."""
+    from spacecraft.design.loop import DesignLoop
+
+    wing = {"section": "rectangular", "length": 6.0, "width": 2.0, "thickness": 0.04,
+            "density": 40.0, "youngs_modulus": 7e8, "poisson_ratio": 0.3}
+    raw = {"hub": {"mass": 800.0, "inertia": [[900.0, 0.0, 0.0], [0.0, 700.0, 0.0],
+                                              [0.0, 0.0, 600.0]]},
+           "appendages": [{"name": "wing", "position": [0.0, 1.0, 0.0],
+                           "orientation": [90.0, 0.0, 0.0], "beam": wing, "design": "truth"}],
+           "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}},
+           "outputs": {"tip_deflection": tip, "root_loads": root_loads}}
+    scene = load_scene(raw, source="wing")
+    cost = estimate_cost(scene)
+    assert cost.plant_states == 2 * (3 + 1 + floor)
+    loop = DesignLoop(scene)
+    counts = loop.truth_model(scene.appendages[0], 1).modes_per_motion
+    assert sum(counts.values()) == 1 + floor
+    plant = loop.truth_spacecraft(1).plant(tip_deflection=tip, root_loads=root_loads)
+    assert plant.nstates == cost.plant_states
+    # a given n_modes is the lowest n of all motions: no floor
+    given = load_scene({**raw, "fidelity": {"n_modes": 5}}, source="wing")
+    assert estimate_cost(given).plant_states == 2 * (3 + 5)
