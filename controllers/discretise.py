@@ -22,10 +22,9 @@ import warnings
 
 import numpy as np
 import scipy.linalg
-import scipy.sparse
-import scipy.sparse.csgraph
 
 from .arguments import user_stacklevel
+from .frequency import decoupled_parts
 
 __all__ = ["DiscretisationOverflowWarning", "discretise", "discretise_blocks", "expm_2x2"]
 
@@ -52,9 +51,7 @@ def discretise(A, B, dt, hold):
     if n <= 2:
         labels = np.zeros(n, dtype=int)
     else:
-        labels = scipy.sparse.csgraph.connected_components(
-            scipy.sparse.csr_matrix(A != 0.0), directed=True,
-            connection="weak")[1]
+        labels = decoupled_parts(A != 0.0)[1]
     # Blocks of equal size go through one stacked expm call (a modal plant
     # has dozens of 2 x 2 blocks; one BLAS-heavy call each would add up).
     by_size: dict[int, list] = {}

@@ -22,8 +22,8 @@ import scipy.sparse.csgraph
 
 from .arguments import frequency_grid
 
-__all__ = ["CHUNK_BYTES", "ModalEvaluator", "frequency_response_data", "modal_evaluator",
-           "siso_zeros"]
+__all__ = ["CHUNK_BYTES", "ModalEvaluator", "decoupled_parts", "frequency_response_data",
+           "modal_evaluator", "siso_zeros"]
 
 #: Largest temporary of one chunk of a frequency sweep [bytes]: the (frequencies x poles)
 #: complex matrix of 1 / (s - lambda). 16 MiB: a 400-mode plant (802 poles) is evaluated
@@ -131,7 +131,7 @@ class ModalEvaluator:
         # A = Tb Ab Tb^-1 with Tb[perm[j], j] = scale[j]
         Cb = self.C[:, perm] * scale[None, :]
         Bb = self.B[perm] / scale[:, None]
-        n_parts, part_of = _parts(Ab != 0.0)
+        n_parts, part_of = decoupled_parts(Ab != 0.0)
         sizes = np.bincount(part_of, minlength=n_parts)
         order = np.argsort(part_of, kind="stable")
         starts = np.concatenate([[0], np.cumsum(sizes)])
@@ -271,12 +271,14 @@ class ModalEvaluator:
         return w[w > self.rigid_tol]
 
 
-def _parts(pattern: np.ndarray) -> tuple[int, np.ndarray]:
+def decoupled_parts(pattern: np.ndarray) -> tuple[int, np.ndarray]:
     """Weakly connected components of the directed graph with adjacency ``pattern`` (n, n)
-    (bool): (number of parts, part of each node). Small graphs by the transitive closure of
-    the symmetrised pattern (repeated boolean squaring, a few small products), large ones by
-    scipy's sparse graph search; the labels number the parts in the order of their first
-    node either way."""
+    (bool): (number of parts, part of each node); with ``pattern = A != 0`` the decoupled
+    parts of a state matrix A (the modes of a modal realisation). Small graphs by the
+    transitive closure of the symmetrised pattern (repeated boolean squaring, a few small
+    products: a fraction of the cost of building scipy's sparse graph), large ones by scipy's
+    sparse graph search; the labels number the parts in the order of their first node either
+    way (scipy's own numbering)."""
     n = pattern.shape[0]
     if n > _DENSE_PARTS:
         n_parts, labels = scipy.sparse.csgraph.connected_components(
@@ -299,7 +301,7 @@ def _parts(pattern: np.ndarray) -> tuple[int, np.ndarray]:
     return n_parts, rank[labels]
 
 
-# graphs up to this many nodes are split into parts densely (_parts)
+# graphs up to this many nodes are split into parts densely (decoupled_parts)
 _DENSE_PARTS = 256
 
 

@@ -547,7 +547,12 @@ def _cost(plant, q_theta, q_omega, r, tip_names, W_tip):
     Cw = plant.C[rows]
     Dw = plant.D[np.ix_(rows, i_t)]
     r0 = float(r[0]) if r.size == 1 else float(np.exp(np.mean(np.log(r))))
-    W = scipy.linalg.block_diag(np.diag(np.concatenate([q_theta, q_omega])), W_tip)
+    # W = blockdiag(diag(q_theta, q_omega), W_tip), assigned (scipy's block_diag costs more
+    # than the rest of the cost's set-up)
+    k = 2 * q_theta.size
+    W = np.zeros((k + W_tip.shape[0],) * 2)
+    W[np.arange(k), np.arange(k)] = np.concatenate([q_theta, q_omega])
+    W[k:, k:] = W_tip
     with np.errstate(over="ignore", invalid="ignore"):
         Q = Cw.T @ (W / r0) @ Cw
         N = Cw.T @ (W / r0) @ Dw

@@ -33,11 +33,9 @@ from dataclasses import dataclass
 import control
 import numpy as np
 import scipy.linalg
-import scipy.sparse
-import scipy.sparse.csgraph
 
 from .arguments import describe, real_number
-from .frequency import ModalEvaluator, modal_evaluator
+from .frequency import ModalEvaluator, decoupled_parts, modal_evaluator
 from .loop import close_loop
 from .signals import OMEGA, THETA, TORQUE, channels, check_plant, is_digital, require_signal
 from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, continuous_poles
@@ -368,8 +366,7 @@ def design_model(plant: control.StateSpace, *, critical: float, J, what: str
     norm = max(np.linalg.norm(Ab, 1), np.finfo(float).tiny)
     rigid_tol = 1e-6 * math.sqrt(max(norm, 1.0))  # as ModalEvaluator: sqrt(eps)-perturbed
     cluster_tol = _CLUSTER_RTOL * norm            # Jordan blocks and repeated frequencies
-    n_parts, part_of = scipy.sparse.csgraph.connected_components(
-        scipy.sparse.csr_matrix(A != 0.0), directed=True, connection="weak")
+    n_parts, part_of = decoupled_parts(A != 0.0)
     if _nothing_to_remove(Ab, d, part_of, n_parts, b, c_theta, c_omega, Jh, critical,
                           rigid_tol, cluster_tol):
         return plant, [], np.zeros(0, dtype=complex)
