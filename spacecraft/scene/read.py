@@ -172,7 +172,10 @@ key                                    unit       meaning
                                                   torque the plant receives is the command of
                                                   ``delay`` earlier, exactly in every verdict
                                                   (margins, Nyquist, the delay margin) and in
-                                                  the simulation; default 0
+                                                  the simulation; default 0. Above 1 s
+                                                  (:data:`controllers.PLAUSIBLE_DELAY`) it is
+                                                  run as given and warned about: milliseconds
+                                                  given as seconds?
 ``controller.computation_delay``       -          a digital controller's own computation delay:
                                                   one sample added to ``delay``; default false
 ``controller.given``                   -          one controller given as state-space numbers
