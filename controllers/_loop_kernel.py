@@ -21,7 +21,7 @@ import numpy as np
 
 from ._modal_kernel import cached_njit
 
-__all__ = ["loop_matrix", "sensitivity", "unit_circle_count"]
+__all__ = ["eigenvalues", "loop_matrix", "sensitivity", "unit_circle_count"]
 
 
 @cached_njit(error_model="numpy")
@@ -280,3 +280,194 @@ def unit_circle_count(L, error_factor, count):
             if (size[k] - error[k]) > total - (size[k] + error[k]):
                 decided = m - k
         count[i] = decided
+
+
+_ULP = 2.220446049250313e-16      # LAPACK's dlamch('P'): the unit round-off times the base
+_MAX_SWEEPS = 30                  # QR steps per eigenvalue before it counts as not converged
+
+
+@cached_njit(error_model="numpy")
+def _cabs1(x):
+    """|Re x| + |Im x| (LAPACK's cabs1)."""
+    return abs(x.real) + abs(x.imag)
+
+
+@cached_njit(error_model="numpy")
+def _balance(H, m):
+    """Scale H in place by a diagonal similarity of powers of two (exact) until each row and
+    column have comparable off-diagonal sizes (LAPACK's zgebal without permutations; Parlett &
+    Reinsch's rule: scale by f where (c f + r / f) < 0.95 (c + r))."""
+    radix = 2.0
+    for _ in range(64):
+        converged = True
+        for i in range(m):
+            c = 0.0
+            r = 0.0
+            for j in range(m):
+                if j != i:
+                    c += _cabs1(H[j, i])
+                    r += _cabs1(H[i, j])
+            if c == 0.0 or r == 0.0:
+                continue
+            g = r / radix
+            f = 1.0
+            s = c + r
+            while c < g and f < 1e150:
+                f *= radix
+                c *= radix * radix
+            g = r * radix
+            while c >= g and f > 1e-150:
+                f /= radix
+                c /= radix * radix
+            if (c + r) / f < 0.95 * s:
+                converged = False
+                for j in range(m):
+                    H[i, j] = H[i, j] / f
+                    H[j, i] = H[j, i] * f
+        if converged:
+            break
+
+
+@cached_njit(error_model="numpy")
+def _hessenberg(H, m):
+    """Reduce H to upper Hessenberg form in place by unitary Householder similarities
+    H <- P H P, P = I - 2 v v^H / (v^H v) zeroing column k below its subdiagonal."""
+    v = np.empty(m, dtype=np.complex128)
+    for k in range(m - 2):
+        norm = 0.0
+        for a in range(k + 1, m):
+            norm += H[a, k].real * H[a, k].real + H[a, k].imag * H[a, k].imag
+        norm = np.sqrt(norm)
+        tail = 0.0
+        for a in range(k + 2, m):
+            tail += _cabs1(H[a, k])
+        if tail == 0.0:
+            continue
+        x0 = H[k + 1, k]
+        phase = x0 / abs(x0) if x0 != 0 else complex(1.0, 0.0)
+        for a in range(m):
+            v[a] = 0.0
+        v[k + 1] = x0 + phase * norm
+        for a in range(k + 2, m):
+            v[a] = H[a, k]
+        vv = 0.0
+        for a in range(k + 1, m):
+            vv += v[a].real * v[a].real + v[a].imag * v[a].imag
+        beta = 2.0 / vv
+        # P H: rows k+1.., every column
+        for b in range(m):
+            dot = complex(0.0, 0.0)
+            for a in range(k + 1, m):
+                dot += v[a].conjugate() * H[a, b]
+            dot *= beta
+            for a in range(k + 1, m):
+                H[a, b] -= v[a] * dot
+        # (P H) P: columns k+1.., every row
+        for a in range(m):
+            dot = complex(0.0, 0.0)
+            for b in range(k + 1, m):
+                dot += H[a, b] * v[b]
+            dot *= beta
+            for b in range(k + 1, m):
+                H[a, b] -= dot * v[b].conjugate()
+        for a in range(k + 2, m):
+            H[a, k] = 0.0
+
+
+@cached_njit(error_model="numpy")
+def _hessenberg_eigenvalues(H, m, lam):
+    """The eigenvalues of an upper Hessenberg H (m x m) into lam, by single-shift implicit
+    complex QR steps (Wilkinson's shift, an exceptional shift every 10 steps without
+    deflation; a subdiagonal entry is set to zero where it is below the unit round-off times
+    its two diagonal neighbours, LAPACK zlahqr's classical test). False if some eigenvalue
+    did not converge in _MAX_SWEEPS steps (H is then left part-reduced)."""
+    hi = m - 1
+    steps = 0
+    while hi >= 0:
+        # the active block [lo, hi]: from the last negligible subdiagonal entry
+        lo = hi
+        while lo > 0:
+            h = _cabs1(H[lo, lo - 1])
+            if h <= _ULP * (_cabs1(H[lo - 1, lo - 1]) + _cabs1(H[lo, lo])) or h < 1e-300:
+                H[lo, lo - 1] = 0.0
+                break
+            lo -= 1
+        if lo == hi:
+            lam[hi] = H[hi, hi]
+            hi -= 1
+            steps = 0
+            continue
+        steps += 1
+        if steps > _MAX_SWEEPS:
+            return False
+        a = H[hi - 1, hi - 1]
+        b = H[hi - 1, hi]
+        c = H[hi, hi - 1]
+        d = H[hi, hi]
+        if steps % 10 == 0:
+            shift = d + 0.75 * abs(c.real)
+        else:
+            # the eigenvalue of the trailing 2 x 2 nearer d: d - b c / (p + q),
+            # p = (a - d) / 2, q = sqrt(p^2 + b c) signed so that |p + q| is the larger
+            p = 0.5 * (a - d)
+            q = np.sqrt(p * p + b * c)
+            if (p.real * q.real + p.imag * q.imag) < 0.0:
+                q = -q
+            pq = p + q
+            shift = d - (b * c) / pq if pq != 0 else d
+        # one implicit QR step on the active block: the first rotation from the shifted first
+        # column, then the bulge chased down the subdiagonal
+        for k in range(lo, hi):
+            if k == lo:
+                x = H[lo, lo] - shift
+                y = H[lo + 1, lo]
+            else:
+                x = H[k, k - 1]
+                y = H[k + 1, k - 1]
+            ax = abs(x)
+            ay = abs(y)
+            if ay == 0.0:
+                continue
+            norm = np.hypot(ax, ay)
+            if ax == 0.0:
+                cr = 0.0
+                s = y.conjugate() / ay
+            else:
+                cr = ax / norm
+                s = (x / ax) * y.conjugate() / norm
+            # rows k, k + 1 by G = [[c, s], [-conj(s), c]]
+            start = k - 1 if k > lo else lo
+            for j in range(start, hi + 1):
+                t1 = H[k, j]
+                t2 = H[k + 1, j]
+                H[k, j] = cr * t1 + s * t2
+                H[k + 1, j] = -s.conjugate() * t1 + cr * t2
+            if k > lo:
+                H[k + 1, k - 1] = 0.0
+            # columns k, k + 1 by G^H
+            stop = k + 2 if k + 2 < hi else hi
+            for i in range(lo, stop + 1):
+                t1 = H[i, k]
+                t2 = H[i, k + 1]
+                H[i, k] = cr * t1 + s.conjugate() * t2
+                H[i, k + 1] = -s * t1 + cr * t2
+    return True
+
+
+@cached_njit(error_model="numpy")
+def eigenvalues(L, lam, converged):
+    """Write the eigenvalues of each small matrix of L (f, m, m), finite, into ``lam`` (f, m)
+    and whether they converged into ``converged`` (f,): balanced by powers of two, reduced to
+    Hessenberg form by Householder reflections and deflated by shifted complex QR steps, the
+    steps of LAPACK's zgeev for the eigenvalues alone (Golub & Van Loan, Matrix Computations,
+    4th ed., secs. 7.4-7.5) and as backward stable (each set is that of a matrix within a few
+    unit round-offs of L in norm), without its per-matrix cost (a few microseconds a 3 x 3)."""
+    m = L.shape[1]
+    H = np.empty((m, m), dtype=np.complex128)
+    for i in range(L.shape[0]):
+        for a in range(m):
+            for b in range(m):
+                H[a, b] = L[i, a, b]
+        _balance(H, m)
+        _hessenberg(H, m)
+        converged[i] = _hessenberg_eigenvalues(H, m, lam[i])

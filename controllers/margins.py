@@ -1053,7 +1053,7 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
                 hard = np.flatnonzero(count == -1)
                 count[~finite] = 0
                 if hard.size:
-                    lam[hard] = np.linalg.eigvals(L[hard])
+                    lam[hard] = _eigenvalues(L[hard])
                     count[hard] = np.sum(np.abs(lam[hard]) > 1.0, axis=1)
                 return count, lam, finite
             finite = np.all(np.isfinite(L), axis=(1, 2))
@@ -1083,7 +1083,7 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
         finite = np.all(np.isfinite(L), axis=(1, 2))
         lam = np.full(L.shape[:2], np.inf, dtype=complex)
         if finite.any():
-            lam[finite] = np.linalg.eigvals(L[finite])
+            lam[finite] = _eigenvalues(L[finite])
         return lam, finite
 
     def product_at(w, task=None):
@@ -1168,6 +1168,23 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
             out.append((float(w[k]), complex(lam[k, j]), -1 if change > 0 else 1))
     out.sort(key=lambda crossing: crossing[0])
     return out
+
+
+def _eigenvalues(L: np.ndarray) -> np.ndarray:
+    """The eigenvalues (f, m) of each finite matrix of a stack (f, m, m): compiled for
+    m <= 3 (:func:`controllers._loop_kernel.eigenvalues`, zgeev's steps for eigenvalues alone,
+    without numpy's per-matrix cost of several microseconds), numpy's otherwise and for any
+    matrix whose QR steps did not converge."""
+    kernel = compiled_kernel()
+    if kernel is None or L.shape[1] > 3 or L.shape[0] == 0:
+        return np.linalg.eigvals(L)
+    L = np.ascontiguousarray(L, dtype=complex)
+    lam = np.empty(L.shape[:2], dtype=complex)
+    converged = np.empty(L.shape[0], dtype=np.bool_)
+    kernel.eigenvalues(L, lam, converged)
+    if not converged.all():
+        lam[~converged] = np.linalg.eigvals(L[~converged])
+    return lam
 
 
 # a characteristic polynomial coefficient's rounding error, relative to the sum of the moduli
