@@ -647,7 +647,10 @@ def _tip_fidelity(choice: dict) -> list:
             f"[{_fmt(record['band'][0], 3)}, {_fmt(record['band'][1], 3)}] rad/s is compared "
             "with a model holding one more mode of the motion that moves it, and modes of that "
             "motion are added until it changes by less than the tolerance. ")
-    text += (f"Modes kept for them: {added}." if added else "No mode was needed for them.")
+    text += (f"Modes kept for them: {added} (a motion of a three-axis beam: at least so "
+             "many of its modes, n_modes counting those beyond; bending in the plane, or a beam "
+             "whose modes are ranked together ('coupled'): so many modes more than n_modes)."
+             if added else "No mode was needed for them.")
     if not record["converged"]:
         text = warn(text + " The search stopped at the scene's limits without meeting it.")
     rows = [["; ".join(" ".join(k) for k in t["added"]), _fmt(t["largest"], 3),
