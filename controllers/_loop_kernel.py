@@ -21,7 +21,7 @@ import numpy as np
 
 from ._modal_kernel import cached_njit
 
-__all__ = ["eigenvalues", "loop_matrix", "sensitivity", "unit_circle_count"]
+__all__ = ["eigenvalues", "loop_matrix", "sensitivity", "shifted_frobenius", "unit_circle_count"]
 
 
 @cached_njit(error_model="numpy")
@@ -471,3 +471,18 @@ def eigenvalues(L, lam, converged):
         _balance(H, m)
         _hessenberg(H, m)
         converged[i] = _hessenberg_eigenvalues(H, m, lam[i])
+
+
+@cached_njit(error_model="numpy")
+def shifted_frobenius(S, shift, out):
+    """Write ||S_i - shift I||_F of each matrix of S (f, m, m) into ``out`` (f,) (inf or NaN
+    where S_i is not finite), without forming S - shift I."""
+    m = S.shape[1]
+    for i in range(S.shape[0]):
+        total = 0.0
+        for a in range(m):
+            for b in range(m):
+                v = S[i, a, b]
+                re = v.real - shift if a == b else v.real
+                total += re * re + v.imag * v.imag
+        out[i] = np.sqrt(total)

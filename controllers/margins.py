@@ -528,7 +528,6 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         if L_grid is None:
             L_grid = matrix(omega)
-        R = np.eye(m) + L_grid
         S = sensitivity(L_grid)
         per_axis = dict(zip(axes, _loops_margins(
             lambda w, owner: _at_distinct(broken_all, w)[np.arange(w.size), owner], omega,
@@ -544,15 +543,16 @@ def _multiloop_margins(matrix: Callable[[np.ndarray], np.ndarray], axes: tuple, 
                     np.linalg.svd(R, compute_uv=False)[:, -1])
 
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        finite = np.all(np.isfinite(R), axis=(1, 2)) & np.all(np.isfinite(S), axis=(1, 2))
+        finite = np.all(np.isfinite(L_grid), axis=(1, 2)) & np.all(np.isfinite(S), axis=(1, 2))
         peak = np.full(omega.size, np.nan)
         smallest = np.full(omega.size, np.nan)
         # the grid scan only locates the extrema (their values are recomputed by the SVD and
         # refined below): sigma_min(I + L) = 1 / sigma_max(S), and sigma_max of a 3 x 3 in
         # closed form, a tenth of the cost of a batched SVD over thousands of frequencies,
         # and only where the Frobenius norm says it may be the largest
-        peak[finite] = _peak_singular_values(S[finite] - 0.5 * np.eye(m))
-        smallest[finite] = 1.0 / _peak_singular_values(S[finite])
+        S_finite = S if finite.all() else S[finite]
+        peak[finite] = _peak_singular_values(S_finite, 0.5)
+        smallest[finite] = 1.0 / _peak_singular_values(S_finite)
     ok = np.isfinite(peak) & np.isfinite(smallest)
     disk_peak, w_disk = _refined_extremum(lambda w: singular_values(w)[0], omega[ok], peak[ok],
                                           maximum=True)
@@ -597,28 +597,40 @@ def _at_distinct(function: Callable[[np.ndarray], np.ndarray], w: np.ndarray) ->
 _PEAK_SLACK = 1e-5
 
 
-def _peak_singular_values(A: np.ndarray) -> np.ndarray:
-    """sigma_max of each matrix of a stack (f, m, m) wherever it may be the largest of the
-    stack or within 1e-6 of it, and at those points' neighbours (:func:`_largest_singular_values`);
-    elsewhere the lower bound ||A||_F / sqrt(m), which lies below (1 - 1e-5) times the largest.
+def _peak_singular_values(A: np.ndarray, shift: float = 0.0) -> np.ndarray:
+    """sigma_max of each matrix of a stack (f, m, m) minus ``shift`` times the identity
+    wherever it may be the largest of the stack or within 1e-6 of it, and at those points'
+    neighbours (:func:`_largest_singular_values`); elsewhere the lower bound ||A||_F / sqrt(m),
+    which lies below (1 - 1e-5) times the largest.
 
     sigma_max <= ||A||_F, so a point whose Frobenius norm is below (1 - 1e-5) times a known
     sigma_max of the stack can be neither its maximum nor within 1e-6 of it: the stack's
     largest value, the points :func:`_refined_extremum` takes as near it and their neighbours
     are those of :func:`_largest_singular_values` on the whole stack, at the cost of a few of
-    its points (the largest singular value peaks at the loop's few sharp resonances)."""
+    its points (the largest singular value peaks at the loop's few sharp resonances). The
+    shifted matrices are formed at those points only."""
     f, m = A.shape[0], A.shape[1] if A.ndim == 3 else 0
     if f == 0:
         return np.zeros(0)
+
+    def shifted(index: np.ndarray) -> np.ndarray:
+        return A[index] - shift * np.eye(m) if shift else A[index]
+
+    kernel = compiled_kernel()
     with np.errstate(over="ignore", invalid="ignore"):
-        frobenius = np.sqrt(np.einsum("fij,fij->f", A.real, A.real)
-                            + np.einsum("fij,fij->f", A.imag, A.imag))
+        if kernel is not None and A.dtype == complex:
+            frobenius = np.empty(f)
+            kernel.shifted_frobenius(np.ascontiguousarray(A), float(shift), frobenius)
+        else:
+            B = A - shift * np.eye(m) if shift else A
+            frobenius = np.sqrt(np.einsum("fij,fij->f", B.real, B.real)
+                                + np.einsum("fij,fij->f", B.imag, B.imag))
     out = frobenius / math.sqrt(m)
     top = np.argsort(frobenius)[-4:]
-    known = max(float(np.max(out)), float(np.max(_largest_singular_values(A[top]))))
+    known = max(float(np.max(out)), float(np.max(_largest_singular_values(shifted(top)))))
     candidate = np.flatnonzero(~(frobenius < (1.0 - _PEAK_SLACK) * known))
     near = np.unique(np.clip(np.concatenate([candidate - 1, candidate, candidate + 1]), 0, f - 1))
-    out[near] = _largest_singular_values(A[near])
+    out[near] = _largest_singular_values(shifted(near))
     return out
 
 

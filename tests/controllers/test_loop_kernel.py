@@ -229,3 +229,26 @@ def test_compiled_eigenvalues_are_backward_stable_and_numpys(m):
     clear = np.all(np.abs(np.abs(reference) - 1.0) > 1e-9, axis=1)
     np.testing.assert_array_equal(np.sum(np.abs(lam[random][clear]) > 1.0, axis=1),
                                   np.sum(np.abs(reference[clear]) > 1.0, axis=1))
+
+
+def test_shifted_frobenius_and_shifted_peaks_are_numpys():
+    """||S - c I||_F compiled equals numpy's norm of the formed difference to 1e-14 relative
+    (sums of squares in another order; measured ~2e-16), is not finite where S is not, and the
+    shifted peak singular values equal those of the formed difference (the same points'
+    closed forms: 1e-12 relative, the closed form's own accuracy)."""
+    from controllers import _loop_kernel
+    from controllers.margins import _peak_singular_values
+
+    rng = np.random.default_rng(8)
+    S = (rng.normal(size=(500, 3, 3)) + 1j * rng.normal(size=(500, 3, 3))) * 10.0 ** rng.uniform(
+        -3, 3, size=(500, 1, 1))
+    out = np.empty(500)
+    _loop_kernel.shifted_frobenius(S, 0.5, out)
+    np.testing.assert_allclose(out, np.linalg.norm(S - 0.5 * np.eye(3), axis=(1, 2)),
+                               rtol=1e-14, atol=0)
+    S[3, 1, 2] = np.nan
+    _loop_kernel.shifted_frobenius(S[:5], 0.5, out[:5])
+    assert not np.isfinite(out[3]) and np.isfinite(out[[0, 1, 2, 4]]).all()
+    S = S[4:]
+    np.testing.assert_allclose(_peak_singular_values(S, 0.5),
+                               _peak_singular_values(S - 0.5 * np.eye(3)), rtol=1e-12, atol=0)
