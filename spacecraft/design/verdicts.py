@@ -71,6 +71,7 @@ References
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Mapping
 
 import numpy as np
@@ -306,8 +307,8 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: floa
     ValueError
         A digital controller, or a grid too narrow for the Nyquist criterion.
     """
-    from controllers.loop import LoopTransfer, controller_roots, resonance_points
-    from controllers.margins import loop_verdict, unstable_poles
+    from controllers.loop import LoopTransfer, resonance_points
+    from controllers.margins import loop_verdict
     from controllers.signals import channels
 
     ch = channels(controller, "controller")
@@ -330,14 +331,12 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: floa
                              f"{' or '.join(str(x) for x in shapes)}; got {P.dtype} of shape "
                              f"{P.shape}")
         P = P.astype(complex).reshape((-1, m, m))[order]
-    gains = _measurement_gains(controller, ch)
+    gains, controller_root_list, open_loop_unstable = _controller_facts(controller, ch)
     # the exact grid and the controller's lightly damped roots inside it (P evaluated at the
     # points added: a controller's root may sit on a lightly damped mode, between whose grid
     # points an interpolated plant is no bracket); it counts the encirclements and brackets the
     # margins, which are then found on the exact loop function
-    inputs = list(controller.input_labels)
-    measured = [n for n in ch.measurements if n in inputs]
-    roots = [controller_roots(controller, measured, ch.torques)]
+    roots = [controller_root_list]
     if ch.mimo:
         if locating is None:
             from .exact_grid import locating_spacecraft
@@ -364,7 +363,7 @@ def exact_loop_verdict(spacecraft, controller, omega, *, theta=None, delay: floa
 
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         L = loop_of(grid, P_grid)
-    return loop_verdict(loop, grid, L, open_loop_unstable=unstable_poles(controller),
+    return loop_verdict(loop, grid, L, open_loop_unstable=open_loop_unstable,
                         delay=delay, axes=ch.axes if ch.mimo else None)
 
 
@@ -383,6 +382,48 @@ def _exact_compliance(spacecraft, omega: np.ndarray) -> np.ndarray:
             except ValueError:
                 pass
         return out
+
+
+def _controller_facts(controller, ch):
+    """What the exact-beam verdict needs of a controller alone: ``(gains, roots, unstable)``,
+    its measurement gains (:func:`_measurement_gains`), its poles and channel zeros
+    (:func:`controllers.loop.controller_roots`) and its poles in the right half-plane
+    (:func:`controllers.margins.unstable_poles`).
+
+    Kept while the controller lives and given again for the same matrices and signal names
+    (compared entry by entry, so a controller changed in place is worked out anew): a
+    controller judged on many spacecraft (a sweep's nominal controller, one per sample) is
+    worked out once.
+    """
+    from controllers.loop import controller_roots
+    from controllers.margins import unstable_poles
+
+    inputs, outputs = tuple(controller.input_labels), tuple(controller.output_labels)
+    matrices = tuple(np.asarray(x) for x in (controller.A, controller.B, controller.C,
+                                            controller.D))
+    key = (inputs, outputs, controller.dt)
+    try:
+        known = _CONTROLLER_FACTS.get(controller)
+    except TypeError:  # a controller that cannot be weakly referenced: not kept
+        known = None
+    if known is not None and known[0] == key and all(
+            a.shape == b.shape and a.dtype == b.dtype and np.array_equal(a, b)
+            for a, b in zip(known[1], matrices)):
+        return known[2]
+    measured = [n for n in ch.measurements if n in inputs]
+    roots = np.array(controller_roots(controller, measured, ch.torques))
+    roots.setflags(write=False)
+    facts = (_measurement_gains(controller, ch), roots, unstable_poles(controller))
+    try:
+        _CONTROLLER_FACTS[controller] = (key, tuple(m.copy() for m in matrices), facts)
+    except TypeError:
+        pass
+    return facts
+
+
+# a controller's facts for the exact-beam verdict, while the controller lives
+# (_controller_facts)
+_CONTROLLER_FACTS: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 def _measurement_gains(controller, ch):

@@ -158,3 +158,25 @@ def test_a_loop_delay_enters_the_exact_margins(loop):
     assert abs(float(abs(L)) - 1.0) < 1e-9 + 2.0 * step
     assert abs(delayed.phase_margin - pm) < 1e-9
     assert delayed.delay == tau
+
+
+def test_a_controller_changed_in_place_is_judged_anew(loop):
+    # the exact verdict keeps what it works out of a controller alone (its gains, roots and
+    # unstable poles) while the controller lives: judged again after its matrices changed in
+    # place, it must give the verdict of a new controller with those matrices, not the old one
+    import copy
+
+    from spacecraft.design.verdicts import exact_loop_verdict
+
+    result, _, K, _ = loop
+    sc = DesignLoop(result.scene).exact_spacecraft()
+    omega = np.asarray(result.exact_frd.omega)
+    theta = np.asarray(result.exact_frd.frdata)[0, 0]
+    K = copy.deepcopy(K)
+    first = exact_loop_verdict(sc, K, omega, theta=theta)
+    assert exact_loop_verdict(sc, K, omega, theta=theta).margins == first.margins
+    K.D[...] *= 3.0                    # three times the gains, the same object
+    changed = exact_loop_verdict(sc, K, omega, theta=theta)
+    fresh = exact_loop_verdict(sc, copy.deepcopy(K), omega, theta=theta)
+    assert changed.margins == fresh.margins
+    assert changed.margins.phase_margin != first.margins.phase_margin
