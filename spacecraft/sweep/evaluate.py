@@ -392,8 +392,8 @@ def evaluate(context: Context, values, *, index: int | None = None) -> dict:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            scene = load_scene(apply_values(context.base, context.parameters, values),
-                               source=source)
+            scene = load_scene(apply_values(context.base, context.parameters, values,
+                                            shared=True), source=source)
             row.update({k: v for k, v in evaluate_scene(context, scene).items() if k in row})
         except Exception as exc:  # a failed sample is recorded; the sweep goes on
             row = {k: _missing(METRICS[k][0]) for k in context.columns()}

@@ -306,11 +306,18 @@ def mirror_path(path: tuple, raw: Mapping) -> tuple | None:
     return (*path[:-2], j, i)
 
 
-def apply_values(raw: Mapping, parameters: Sequence["Parameter"], values) -> dict:
+def apply_values(raw: Mapping, parameters: Sequence["Parameter"], values, *,
+                 shared: bool = False) -> dict:
     """A deep copy of the scene mapping with each parameter set to its value (file units); an
     off-diagonal entry of an inertia tensor sets its symmetric partner too
-    (:func:`mirror_path`)."""
-    out = copy.deepcopy(dict(raw))
+    (:func:`mirror_path`).
+
+    ``shared``: copy only the tables and arrays on the parameters' paths and share the rest
+    with ``raw`` (for a mapping handed straight to
+    :func:`spacecraft.scene.read.load_scene`, which reads a copy of it, and changed nowhere
+    else: a sweep's sample)."""
+    out = dict(raw) if shared else copy.deepcopy(dict(raw))
+    copied: set = set()
     for p, value in zip(parameters, values):
         value = float(value)
         if p.integer and value.is_integer():
@@ -318,7 +325,11 @@ def apply_values(raw: Mapping, parameters: Sequence["Parameter"], values) -> dic
         mirror = mirror_path(p.path, out)
         for path in (p.path,) if mirror is None else (p.path, mirror):
             node = out
-            for step in path[:-1]:
+            for k, step in enumerate(path[:-1]):
+                if shared and path[:k + 1] not in copied:
+                    node[step] = (dict(node[step]) if isinstance(node[step], Mapping)
+                                  else list(node[step]))
+                    copied.add(path[:k + 1])
                 node = node[step]
             node[path[-1]] = value
     return out

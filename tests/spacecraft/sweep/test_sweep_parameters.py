@@ -172,6 +172,25 @@ def test_values_go_into_a_copy_of_the_scene_in_file_units():
     assert raw["hub"]["inertia"] == 50.0        # the original is untouched
 
 
+def test_values_shared_copy_sets_the_same_values_and_leaves_the_scene_untouched():
+    import copy
+
+    raw = scene()
+    before = copy.deepcopy(raw)
+    spec = spec_of({"hub.inertia": UNIFORM, "appendages.rod.direction":
+                    {"distribution": "uniform", "low": -5.0, "high": 5.0},
+                    "appendages.rod.beam.length": {"distribution": "uniform", "low": 9.0,
+                                                   "high": 11.0}})
+    values = [45.0, 2.5, 10.5]
+    out = apply_values(raw, spec.parameters, values, shared=True)
+    assert out == apply_values(raw, spec.parameters, values)
+    assert raw == before                         # nothing of the scene changed
+    # the tables on the paths are new, the others the scene's own
+    assert out["appendages"] is not raw["appendages"]
+    assert out["appendages"][0]["beam"] is not raw["appendages"][0]["beam"]
+    assert out["manoeuvre"] is raw["manoeuvre"]
+
+
 def test_load_sweep_overrides_the_scene_table():
     raw, spec, source = load_sweep(None, samples=7, seed=9, parameters={"hub.inertia": UNIFORM})
     assert spec.n_samples == 7 and spec.seed == 9 and spec.keys == ["hub.inertia"]
