@@ -10,7 +10,10 @@ temporaries of (frequencies x poles), and a call on a few frequencies (a refinem
 costs microseconds, not numpy's per-call overhead of several array operations. :func:`sensitivity` gives (I + L)^-1 (the loop-at-a-time
 functions and the singular values follow from it) from a pivoted LU factorisation, the same
 arithmetic as numpy's inverse without its per-call cost; :func:`unit_circle_count` the
-eigenvalues of L outside the unit circle where no eigenvalue problem is needed. All are
+eigenvalues of L outside the unit circle where no eigenvalue problem is needed, and
+:func:`eigenvalues` those of small matrices where it is (the steps of LAPACK's zgeev, without
+its per-matrix cost; its helpers inlined into it: one function to compile), and
+:func:`shifted_frobenius` the norms that screen a grid for the peak singular value. All are
 cached on disk as :mod:`controllers._modal_kernel`'s loop is
 (:func:`controllers._modal_kernel.cached_njit`).
 """
@@ -286,13 +289,13 @@ _ULP = 2.220446049250313e-16      # LAPACK's dlamch('P'): the unit round-off tim
 _MAX_SWEEPS = 30                  # QR steps per eigenvalue before it counts as not converged
 
 
-@cached_njit(error_model="numpy")
+@cached_njit(error_model="numpy", inline="always")
 def _cabs1(x):
     """|Re x| + |Im x| (LAPACK's cabs1)."""
     return abs(x.real) + abs(x.imag)
 
 
-@cached_njit(error_model="numpy")
+@cached_njit(error_model="numpy", inline="always")
 def _balance(H, m):
     """Scale H in place by a diagonal similarity of powers of two (exact) until each row and
     column have comparable off-diagonal sizes (LAPACK's zgebal without permutations; Parlett &
@@ -328,7 +331,7 @@ def _balance(H, m):
             break
 
 
-@cached_njit(error_model="numpy")
+@cached_njit(error_model="numpy", inline="always")
 def _hessenberg(H, m):
     """Reduce H to upper Hessenberg form in place by unitary Householder similarities
     H <- P H P, P = I - 2 v v^H / (v^H v) zeroing column k below its subdiagonal."""
@@ -374,7 +377,7 @@ def _hessenberg(H, m):
             H[a, k] = 0.0
 
 
-@cached_njit(error_model="numpy")
+@cached_njit(error_model="numpy", inline="always")
 def _hessenberg_eigenvalues(H, m, lam):
     """The eigenvalues of an upper Hessenberg H (m x m) into lam, by single-shift implicit
     complex QR steps (Wilkinson's shift, an exceptional shift every 10 steps without
