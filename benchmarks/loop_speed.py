@@ -21,8 +21,9 @@ are taken from the same run.
 Run::
 
     python benchmarks/loop_speed.py --before /tmp/before [--rounds 3] [--samples 60]
+        [--workloads planar_loop ...] [--name loop_speed]
 
-Writes ``benchmarks/results/loop_speed.json`` and ``loop_speed.md``.
+Writes ``benchmarks/results/<name>.json`` and ``<name>.md`` (``--name``, default ``loop_speed``).
 """
 
 from __future__ import annotations
@@ -94,11 +95,15 @@ def main() -> int:
     parser.add_argument("--samples", type=int, default=60, help="sweep samples per round")
     parser.add_argument("--loops", type=int, default=15,
                         help="design-loop evaluations per round")
+    parser.add_argument("--workloads", nargs="+", choices=list(WORKLOADS), default=list(WORKLOADS),
+                        help="the workloads to time (default: all three)")
+    parser.add_argument("--name", default="loop_speed",
+                        help="the results' file name under benchmarks/results/ (no suffix)")
     args = parser.parse_args()
     trees = {"before": args.before.resolve(), "after": HERE}
     result = {"machine": machine_info(), "revisions": {k: revision(v) for k, v in trees.items()},
               "rounds": args.rounds, "workloads": {}}
-    for workload in WORKLOADS:
+    for workload in args.workloads:
         n = args.samples if workload == "sweep_sample" else args.loops
         runs = {"before": [], "after": []}
         for _ in range(args.rounds):
@@ -111,7 +116,7 @@ def main() -> int:
             "cpu_median_ratio": best["after"]["cpu_median_s"] / best["before"]["cpu_median_s"],
             "cpu_min_ratio": best["after"]["cpu_min_s"] / best["before"]["cpu_min_s"],
             "wall_median_ratio": best["after"]["wall_median_s"] / best["before"]["wall_median_s"]}
-    write_json("loop_speed.json", result)
+    write_json(f"{args.name}.json", result)
     info = result["machine"]
     rows = []
     for workload, r in result["workloads"].items():
@@ -133,7 +138,7 @@ def main() -> int:
         "(lowest median CPU) of each; the load average (1, 5, 15 min) at its end.", "",
         markdown_table(["workload", "checkout", "CPU median / min [ms]",
                         "wall median / min [ms]", "load"], rows), ""])
-    (RESULTS / "loop_speed.md").write_text(text)
+    (RESULTS / f"{args.name}.md").write_text(text)
     print(text)
     return 0
 
