@@ -1183,10 +1183,12 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
 
 
 def _eigenvalues(L: np.ndarray) -> np.ndarray:
-    """The eigenvalues (f, m) of each finite matrix of a stack (f, m, m): compiled for
-    m <= 3 (:func:`controllers._loop_kernel.eigenvalues`, zgeev's steps for eigenvalues alone,
-    without numpy's per-matrix cost of several microseconds), numpy's otherwise and for any
-    matrix whose QR steps did not converge."""
+    """The eigenvalues (f, m) of each finite matrix of a stack (f, m, m): for m = 1 the
+    entries, for m = 2, 3 compiled (:func:`controllers._loop_kernel.eigenvalues`, zgeev's steps
+    for eigenvalues alone, without numpy's per-matrix cost of several microseconds), numpy's
+    otherwise and for any matrix whose QR steps did not converge."""
+    if L.shape[1] == 1:
+        return L[:, 0, :].astype(complex)      # a planar loop: L itself (no kernel to compile)
     kernel = compiled_kernel()
     if kernel is None or L.shape[1] > 3 or L.shape[0] == 0:
         return np.linalg.eigvals(L)
