@@ -310,6 +310,8 @@ class DesignLoop(ModelBuilder):
             "bandwidth_factor": scene.fidelity.bandwidth_factor,
             **({"choice": choice.as_dict()} if choice is not None else {}),
             **({"given": True} if self.given is not None else {}),
+            **({"pinned": scene.fidelity.pinned_floors()}
+               if scene.fidelity.modes_per_motion is not None else {}),
         }
         per_motion = self.truth_modes_per_motion(n_modes)
         if per_motion:

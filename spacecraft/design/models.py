@@ -199,8 +199,9 @@ class ModelBuilder:
         self._cache: dict = {}
         self._modal_spacecraft: set = set()
         # appendage -> {motion: modes kept at least}: what the tip-output rule added
-        # (:meth:`tip_fidelity`); empty until it has run
-        self.tip_floors: dict = {}
+        # (:meth:`tip_fidelity`), or what the scene pins beside a given n_modes
+        # (``fidelity.modes_per_motion``)
+        self.tip_floors: dict = scene.fidelity.pinned_floors()
 
     @property
     def three_axis(self) -> bool:
@@ -344,12 +345,15 @@ class ModelBuilder:
         bending in both planes (``<name>_tip_deflection_y``, ``_z``) and torsion
         (``<name>_tip_twist``); with ``outputs.root_loads`` also the axial motion (the root
         force along the appendage, ``<name>_root_force_x``). Empty for a planar scene, without
-        those outputs, or with ``fidelity.n_modes`` given (the user's count is kept as it is,
-        and a tip output it leaves without a mode is warned about:
-        :func:`spacecraft.design.loop.unmodelled_outputs`)."""
+        those outputs, or with ``fidelity.n_modes`` given alone (the user's count is kept as it
+        is, and a tip output it leaves without a mode is warned about:
+        :func:`spacecraft.design.loop.unmodelled_outputs`); with ``fidelity.modes_per_motion``
+        beside it, as from the tolerance."""
         scene = self.scene
         outputs = scene.outputs
-        if (not self.three_axis or scene.fidelity.n_modes is not None
+        fidelity = scene.fidelity
+        if (not self.three_axis
+                or (fidelity.n_modes is not None and fidelity.modes_per_motion is None)
                 or not (outputs.tip_deflection or outputs.root_loads)):
             return ()
         return ("xy", "xz", "torsion") + (("axial",) if outputs.root_loads else ())
@@ -357,7 +361,7 @@ class ModelBuilder:
     def truncation(self, beam, n_modes: int, floors: dict | None = None):
         """``beam`` truncated by the scene's method: its ``n_modes`` lowest (planar: bending)
         modes; in a three-axis scene that reports tip outputs, with ``n_modes`` chosen from the
-        tolerance, also the lowest mode of every motion they see (:meth:`seen_motions`) that
+        tolerance (or given with ``fidelity.modes_per_motion``), also the lowest mode of every motion they see (:meth:`seen_motions`) that
         the beam has, so that no tip output of the truth model reads 0 for want of a mode:
         a uniform beam keeps those and the ``n_modes`` lowest of the rest
         (:func:`spacecraft.design.fidelity.motion_counts`); a beam whose modes are ranked
@@ -365,14 +369,15 @@ class ModelBuilder:
         fewest lowest modes that move every seen tip motion (:meth:`coupled_floor`). Either
         way each added n adds a mode.
 
-        ``floors`` (what the tip-output rule adds, :meth:`tip_fidelity`): a uniform three-axis
+        ``floors`` (what the tip-output rule adds, :meth:`tip_fidelity`, or the scene pins,
+        ``fidelity.modes_per_motion``): a uniform three-axis
         beam keeps at least ``floors[motion]`` modes of each motion (and the ``n_modes``
         lowest beyond them); a planar beam ``floors["bending"]`` modes more, a three-axis beam
         whose modes are ranked together ``floors["coupled"]`` lowest modes more."""
         method = self.scene.fidelity.method
         seen = self.seen_motions()
         floors = floors or {}
-        if not seen:
+        if not seen and not (self.three_axis and floors):
             return beam.truncated(n_modes + floors.get("bending", 0), method=method)
         if getattr(beam, "is_uniform", False):
             counts = motion_counts(beam, n_modes, method, seen, floors)
@@ -792,8 +797,8 @@ class ModelBuilder:
         floor = len(seen) + max((sum(k - (m in seen) for m, k in f.items())
                                  for f in self.tip_floors.values()), default=0)
         while cap > 1:
-            trial = scene.replace(fidelity=dataclasses.replace(scene.fidelity,
-                                                               n_modes=cap + floor))
+            trial = scene.replace(fidelity=dataclasses.replace(
+                scene.fidelity, n_modes=cap + floor, modes_per_motion=None))
             if estimate_cost(trial).loop_states <= scene.limits.states:
                 break
             cap -= 1

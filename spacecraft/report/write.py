@@ -465,6 +465,16 @@ def _models(data: dict) -> list:
                          "so that no output of the truth model misses that motion for want of a "
                          "mode; n_modes counts the modes beyond those.")
             b.append(("p", text))
+        pinned = fid.get("pinned")
+        if pinned is not None:
+            b.append(("p", "The scene pins the modes per motion beside n_modes "
+                           "(fidelity.modes_per_motion" + (": " + "; ".join(
+                               f"{name} " + ", ".join(f"{m} {c}" for m, c in counts.items())
+                               for name, counts in pinned.items()) if pinned else
+                               ", empty: the lowest mode of every seen motion only") +
+                           "): the modes a run from fidelity.tolerance adds for its tip "
+                           "outputs, given here rather than chosen, so this run does not check "
+                           "them against a tolerance."))
         choice = fid.get("choice")
         if choice:
             b.append(("p", f"Why {fid['n_modes']}: n_modes is the smallest number meeting the "

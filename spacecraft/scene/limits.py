@@ -246,20 +246,29 @@ def estimate_cost(scene) -> SceneCost:
     at the smallest sufficient number, and the runner caps it by the limits; in three axes with
     reported tip outputs or root loads, also with the lowest mode of every motion they see
     (both bending planes and torsion, and the axial motion with root loads), which such a
-    truncation keeps whatever n (:meth:`spacecraft.design.models.ModelBuilder.truncation`).
+    truncation keeps whatever n (:meth:`spacecraft.design.models.ModelBuilder.truncation`),
+    and with the modes ``fidelity.modes_per_motion`` pins.
     Memory: a response keeps time, inputs and outputs (8 bytes per sample each); one simulation
     needs in addition its chunked work arrays, at most about (states + 4 inputs + 2 outputs)
     values per sample.
     """
     apps = scene.appendages
-    n_modes = scene.fidelity.n_modes
+    fidelity = scene.fidelity
+    n_modes = fidelity.n_modes
     outputs = scene.outputs
-    # the modes per motion a three-axis truncation chosen from the tolerance keeps beyond n
-    floor = (3 + bool(outputs.root_loads)
-             if scene.three_axis and n_modes is None
-             and (outputs.tip_deflection or outputs.root_loads) else 0)
-    truth = [appendage_dof(a, "truth", n_modes, floor) for a in apps]
-    design = [appendage_dof(a, "design", n_modes, floor) for a in apps]
+    # the modes per motion a three-axis truncation chosen from the tolerance (or given with
+    # modes pinned per motion) keeps beyond n
+    seen = (("xy", "xz", "torsion") + (("axial",) if outputs.root_loads else ())
+            if scene.three_axis and (n_modes is None or fidelity.modes_per_motion is not None)
+            and (outputs.tip_deflection or outputs.root_loads) else ())
+    pinned = fidelity.pinned_floors()
+
+    def floor(a) -> int:
+        mine = pinned.get(a.name, {})
+        return len(seen) + sum(max(0, k - (m in seen)) for m, k in mine.items())
+
+    truth = [appendage_dof(a, "truth", n_modes, floor(a)) for a in apps]
+    design = [appendage_dof(a, "design", n_modes, floor(a)) for a in apps]
     # every design variant (one per fit criterion) has fits of the same size
     truth_states = 2 * (3 + sum(d for d, _ in truth))
     design_states = 2 * (3 + sum(d for d, _ in design))

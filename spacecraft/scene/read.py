@@ -148,6 +148,13 @@ key                                    unit       meaning
                                                   n_modes (default 1e-3 when neither is given)
 ``fidelity.method``                    -          ``"craig-bampton"`` (default), ``"residual"``,
                                                   ``"free-free"``
+``fidelity.modes_per_motion.<name>.bending``  -  with ``fidelity.n_modes``: modes the
+                                                  truncated beam ``<name>`` keeps beyond
+                                                  n_modes (an integer >= 1): what a run from
+                                                  ``fidelity.tolerance`` adds for its tip
+                                                  outputs, reported in results.json as
+                                                  ``fidelity.choice.tip.floors``; with those
+                                                  and its n_modes a scene reruns that truth
 ``fidelity.bandwidth_factor``          -          frequencies up to this multiple of the
                                                   controller bandwidth must match; default 5
 ``fidelity.prune``                     -          drop modes the inputs cannot excite and the
@@ -344,6 +351,19 @@ key                                    unit       meaning
                                                   sees (both bending planes, torsion; with
                                                   ``outputs.root_loads`` also axial), which
                                                   are kept however stiff
+``fidelity.modes_per_motion``          -          with ``fidelity.n_modes``, a table (may be
+                                                  empty): the truncations then keep the lowest
+                                                  mode of every motion a tip output sees, as a
+                                                  run from ``fidelity.tolerance`` does, and
+``fidelity.modes_per_motion.<name>.<motion>``  -  per truncated beam ``<name>``, the modes
+                                                  that run's tip-output rule adds (results.json
+                                                  ``fidelity.choice.tip.floors``; with those
+                                                  and its n_modes a scene reruns that truth),
+                                                  an integer >= 1: a uniform beam's ``xy``,
+                                                  ``xz``, ``torsion``, ``axial``: at least
+                                                  this many modes of that motion; a beam with
+                                                  a tip body or segments: ``coupled``, lowest
+                                                  modes kept beyond n_modes
 ``wheels.spin_axes``                   -          ``[[x, y, z], ...]``: each wheel's spin axis
                                                   (hub axes; they must span x, y, z), or
 ``wheels.pyramid.cant_angle``          deg        four wheels about +z, each at this angle from
@@ -528,6 +548,7 @@ from .specs import (CONTROLLERS, EXPORTABLE, FMI_VERSIONS, MATCHES, METHODS, PLO
                           scene_dict)
 
 __all__ = [
+    "PINNED_MOTIONS",
     "SceneError",
     "Scene",
     "HubSpec",
@@ -1530,6 +1551,59 @@ def _check_cost(r: SceneReader, scene: Scene) -> None:
                       f"/ step {step:g} s)")
 
 
+#: The motions ``fidelity.modes_per_motion`` pins, by the kind of truncated beam: planar;
+#: three-axis uniform (its motions separate); three-axis with modes ranked together (a tip
+#: body, segments).
+PINNED_MOTIONS = {"planar": ("bending",), "uniform": ("xy", "xz", "torsion", "axial"),
+                  "coupled": ("coupled",)}
+
+
+def _read_modes_per_motion(r: SceneReader, data, appendages, n_modes) -> tuple | None:
+    """``fidelity.modes_per_motion`` (module table): None when not given; else per truncated
+    beam the pinned modes, ``((appendage, ((motion, count), ...)), ...)``, sorted by name."""
+    path = "fidelity.modes_per_motion"
+    if data is None:
+        return None
+    t = r.table(data, path)
+    if n_modes is None:
+        raise r.error(path, "goes with fidelity.n_modes (it pins the modes a run from "
+                      "fidelity.tolerance chooses for itself); give n_modes or leave it out")
+    specs = {a.name: a for a in appendages}
+    out = []
+    for name in sorted(t, key=str):
+        full = f"{path}.{name}"
+        if name not in specs:
+            raise r.error(full, "unknown appendage; expected one of "
+                          + ", ".join(sorted(specs)) + suggestion(name, sorted(specs)))
+        a = specs[name]
+        if a.truth != "beam":
+            raise r.error(full, f"pins modes of a truncated beam; appendage {name!r} has "
+                          f"truth = {a.truth!r}, not 'beam'")
+        kind = (("uniform" if a.beam.uniform else "coupled") if getattr(r, "three_axis", False)
+                else "planar")
+        allowed = PINNED_MOTIONS[kind]
+        counts = r.table(t[name], full)
+        if not counts:
+            raise r.error(full, "must name at least one motion: " + ", ".join(allowed))
+        pinned = []
+        for motion in sorted(counts, key=str):
+            key = f"{full}.{motion}"
+            if motion not in allowed:
+                what = {"planar": "a planar beam", "uniform": "a uniform three-axis beam",
+                        "coupled": "a three-axis beam whose modes are ranked together (a tip "
+                                   "body, segments)"}[kind]
+                raise r.error(key, f"not a motion of {what}; expected one of "
+                              + ", ".join(allowed) + suggestion(str(motion), list(allowed)))
+            value = counts[motion]
+            if (isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral)
+                    or value < 1):
+                raise r.error(key, f"must be an integer >= 1 [-]; got {shown_value(value)}")
+            r.check_limit(key, int(value), "modes")
+            pinned.append((str(motion), int(value)))
+        out.append((str(name), tuple(pinned)))
+    return tuple(out)
+
+
 def _read_scene(data: Mapping, source: str, limit_overrides: Mapping | None = None,
                 base: Path | None = None) -> Scene:
     r = SceneReader(source)
@@ -1570,13 +1644,15 @@ def _read_scene(data: Mapping, source: str, limit_overrides: Mapping | None = No
         raise r.error("fidelity", "give n_modes or tolerance, not both")
     if n_modes is None and tolerance is None:
         tolerance = 1e-3
+    pinned = _read_modes_per_motion(r, ft.pop("modes_per_motion", None), appendages, n_modes)
     fidelity = FidelitySpec(
-        n_modes=n_modes, tolerance=tolerance,
+        n_modes=n_modes, tolerance=tolerance, modes_per_motion=pinned,
         method=r.choice(ft, "method", "fidelity", METHODS, default="craig-bampton"),
         bandwidth_factor=r.number(ft, "bandwidth_factor", "fidelity",
                                   "fidelity.bandwidth_factor", default=5.0),
         prune=r.boolean(ft, "prune", "fidelity", True))
-    r.done(ft, "fidelity", {"n_modes", "tolerance", "method", "bandwidth_factor", "prune"})
+    r.done(ft, "fidelity", {"n_modes", "tolerance", "method", "bandwidth_factor", "prune",
+                            "modes_per_motion"})
 
     controller = _read_controller(r, r.take(t, "controller", "")[0], "controller")
     manoeuvre = None
@@ -1590,6 +1666,13 @@ def _read_scene(data: Mapping, source: str, limit_overrides: Mapping | None = No
                           r.boolean(ot, "root_loads", "outputs", False),
                           r.boolean(ot, "exact_reference", "outputs", False))
     r.done(ot, "outputs", {"tip_deflection", "root_loads", "exact_reference"})
+    if pinned == () and not (getattr(r, "three_axis", False)
+                             and (outputs.tip_deflection or outputs.root_loads)):
+        raise r.error("fidelity.modes_per_motion", "is empty, which pins nothing here: name a "
+                      "truncated beam's modes (fidelity.modes_per_motion.<name>.<motion>); an "
+                      "empty table only keeps the lowest mode of every motion a tip output "
+                      "sees, in a three-axis scene with outputs.tip_deflection or "
+                      "outputs.root_loads")
 
     et = r.table(t.pop("export", {}), "export")
     export = ExportSpec(fmu=r.boolean(et, "fmu", "export", False),

@@ -424,13 +424,25 @@ class AppendageSpec:
 
 @dataclasses.dataclass(frozen=True)
 class FidelitySpec:
-    """Truth-model fidelity: a fixed n_modes, or a tolerance from which n_modes is chosen."""
+    """Truth-model fidelity: a fixed n_modes, or a tolerance from which n_modes is chosen.
+
+    ``modes_per_motion`` (with ``n_modes`` only; None when not given): per truncated-beam
+    appendage, the modes pinned per motion, ``((appendage, ((motion, count), ...)), ...)``:
+    what a run from ``tolerance`` adds for its tip outputs (:meth:`pinned_floors`). Given (even
+    empty), a three-axis truncation keeps the lowest mode of every motion a tip output sees,
+    as a run from ``tolerance`` does.
+    """
 
     n_modes: int | None = None
     tolerance: float | None = 1e-3
     method: str = "craig-bampton"
     bandwidth_factor: float = 5.0
     prune: bool = True
+    modes_per_motion: tuple | None = None
+
+    def pinned_floors(self) -> dict:
+        """``modes_per_motion`` as ``{appendage: {motion: count}}`` (empty when not given)."""
+        return {name: dict(counts) for name, counts in self.modes_per_motion or ()}
 
 
 @dataclasses.dataclass(frozen=True)

@@ -10,7 +10,7 @@ one design model, on the truth model alone and the manoeuvre simulated whole:
    scales it to each beam, :mod:`appendages.fitting`), its plant, the controller tuned on it as
    every run tunes it; ``design = "nominal"``: the controller tuned once on the nominal scene,
    held fixed;
-2. truth: hub + beams truncated to the nominal scene's ``n_modes`` (fixed for the sweep); the
+2. truth: hub + beams truncated as the nominal scene's truth (fixed for the sweep); the
    closed-loop verdict from its eigenvalues and its gain, phase and modulus margins
    (:func:`controllers.spillover`);
 3. the slew on the truth loop (if the scene has a manoeuvre), slew and disturbance at once:
@@ -22,8 +22,12 @@ one design model, on the truth model alone and the manoeuvre simulated whole:
    the loop's one exact grid, :meth:`spacecraft.design.models.ModelBuilder.exact_grid`, at
    :data:`SAMPLE_GRID`'s density).
 
-The fidelity (``n_modes`` of the truth model) is chosen once, on the nominal scene, by the
-loop's rule, and held: every sample's truth model has as many modes. Where the exact reference
+The fidelity (``n_modes`` of the truth model) is chosen once, on the nominal scene with its tip
+outputs on, by the loop's rule, and held: the sample's scene gets ``fidelity.n_modes`` and, for
+what the rule adds per motion (a three-axis truth's lowest mode of each motion a tip output
+sees, the modes the tip-output rule adds), ``fidelity.modes_per_motion``, so that every
+sample's truth model has as many modes per motion as the nominal run's, and a sample's scene
+reruns alone (``flexsat run``) to the same numbers. Where the exact reference
 is on, the report gives the largest difference between the truth model's and the exact beam's
 modulus margins over the samples, and the number of verdicts they disagree on.
 
@@ -443,8 +447,10 @@ def _missing(kind: str):
 # ---------------------------------------------------------------------------------------------
 # preparing a sweep
 # ---------------------------------------------------------------------------------------------
-def _trim(raw: dict, scene, spec: SweepSpec, n_modes) -> tuple[dict, str, str]:
-    """The scene mapping reduced to the swept loop, and (variant, controller)."""
+def _trim(raw: dict, scene, spec: SweepSpec, n_modes, floors=None) -> tuple[dict, str, str]:
+    """The scene mapping reduced to the swept loop, and (variant, controller); with ``n_modes``
+    its fidelity fixed to it and (``floors``: ``{appendage: {motion: count}}``, a truth chosen
+    from the tolerance) to the modes pinned per motion (``fidelity.modes_per_motion``)."""
     import copy
 
     base = copy.deepcopy(raw)
@@ -471,6 +477,8 @@ def _trim(raw: dict, scene, spec: SweepSpec, n_modes) -> tuple[dict, str, str]:
         fidelity = base.setdefault("fidelity", {})
         fidelity.pop("tolerance", None)
         fidelity["n_modes"] = int(n_modes)
+        if floors is not None:
+            fidelity["modes_per_motion"] = {name: dict(f) for name, f in floors.items()}
     return base, variant, kind
 
 
@@ -501,16 +509,26 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
         raise SweepError(f"{source}: {flown[0]}: a sweep's sample is the ideal slew (the step "
                          "reference, no loop delay, wheels or sensor noise); sweep a scene "
                          "without it, or run this one with flexsat run")
-    n_modes = None
+    n_modes = floors = None
     if scene.has_beam_truth:
         if scene.fidelity.n_modes is not None:
             n_modes = scene.fidelity.n_modes
         else:
+            # chosen as a run of the scene chooses it, with the tip outputs every sample
+            # reports (a three-axis truth keeps a mode of each motion they see, and the modes
+            # the tip-output rule adds): pinned for the samples beside n_modes
+            chooser = scene
+            if not scene.outputs.tip_deflection:
+                chooser = scene.replace(outputs=dataclasses.replace(scene.outputs,
+                                                                    tip_deflection=True))
+            loop = DesignLoop(chooser)
             try:
-                n_modes = DesignLoop(scene).n_modes
+                n_modes = loop.n_modes
             except ValueError as exc:
                 raise SceneError(f"{source}: fidelity: {exc}") from None
-    base, variant, kind = _trim(raw, scene, spec, n_modes)
+            if loop.three_axis or loop.tip_floors:
+                floors = loop.tip_floors
+    base, variant, kind = _trim(raw, scene, spec, n_modes, floors)
     trimmed = load_scene(base, source=source)
     context = Context(base=base, source=source, parameters=spec.parameters, design=spec.design,
                       variant=variant, controller=kind, n_modes=n_modes,

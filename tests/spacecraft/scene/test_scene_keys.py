@@ -265,6 +265,13 @@ def _cases(kind: str) -> dict:
         "fidelity.bandwidth_factor": ({"fidelity.n_modes": None, "fidelity.tolerance": 1e-3},
                                       {"fidelity.bandwidth_factor": 2.0}),
         "fidelity.prune": ({}, {"fidelity.prune": False}),
+        # an empty table keeps a mode of each motion a tip output sees (three axes only)
+        "fidelity.modes_per_motion": ({"outputs.tip_deflection": True},
+                                      {"fidelity.modes_per_motion": {}}),
+        "fidelity.modes_per_motion.<name>.bending": (
+            {}, {"fidelity.modes_per_motion.rod.bending": 1}),
+        "fidelity.modes_per_motion.<name>.<motion>": (
+            {}, {"fidelity.modes_per_motion.rod.torsion": 2}),
         "controller": ({}, {"controller": {"lqr": LQR["controller.lqr"]}}),
         "controller.types": ({"controller.lqr": LQR["controller.lqr"]},
                              {"controller.types": ["pd", "lqr"]}),

@@ -243,6 +243,60 @@ def test_the_worst_scene_reruns_the_very_controller_the_sweep_judged():
 
 
 @pytest.mark.slow
+def test_a_sample_runs_on_the_truth_the_nominal_run_chose_from_its_tolerance():
+    """A scene whose fidelity comes from its tolerance, with tip outputs: the sweep pins the
+    nominal run's choice (n_modes and the modes per motion, ``fidelity.modes_per_motion``), so
+    the sample at the nominal point has the nominal run's truth model, mode for mode of each
+    motion, and its multiloop margins are spacecraft.run's of the nominal scene (1e-9 relative
+    on the truth model, the same matrices; 1e-6 on the exact beam, brackets of two grids).
+    A sample's worst-case scene carries the pins and reruns to the sample's margins."""
+    raw = scene()
+    raw["fidelity"] = {"tolerance": 1e-3}
+    raw["outputs"]["tip_deflection"] = True
+    spec = read_sweep({"parameters": PARAMETERS, "samples": 1, "seed": 2,
+                       "design": "per-sample"}, raw, "test")
+    context = prepare(raw, spec, "test")
+    nominal_raw = apply_values(raw, spec.parameters, spec.nominal)
+    nominal = DesignLoop(load_scene(nominal_raw))
+    expected = nominal.truth_modes_per_motion(nominal.n_modes)
+    assert expected["rod"]["torsion"] >= 1
+    at_nominal = apply_values(context.base, spec.parameters, spec.nominal)
+    sample = DesignLoop(load_scene(at_nominal))
+    assert context.n_modes == nominal.n_modes
+    assert sample.truth_modes_per_motion(context.n_modes) == expected
+    row = evaluate(context, spec.nominal)
+    ref = loop_margins(nominal_raw)
+    for prefix, rtol in (("truth", 1e-9), ("exact", 1e-6)):
+        for name in [f"{prefix}_{k}" for k in MARGINS] + [
+                k for k in THREE_AXIS_METRICS if k.startswith(prefix + "_")]:
+            assert row[name] == pytest.approx(ref[name], rel=rtol, abs=1e-12), name
+    values = spec.values()[0]
+    row = evaluate(context, values)
+    again = worst_scene(context, {p.key: v for p, v in zip(spec.parameters, values)}, row)
+    assert again["fidelity"]["modes_per_motion"] == context.base["fidelity"]["modes_per_motion"]
+    rerun = loop_margins(again)
+    for name in [f"truth_{k}" for k in MARGINS]:
+        assert rerun[name] == pytest.approx(row[name], rel=1e-9, abs=1e-12), name
+
+
+@pytest.mark.slow
+def test_the_shipped_three_axis_sweeps_samples_keep_the_nominal_runs_modes_per_motion():
+    """The shipped three-axis sweep (fidelity from the tolerance, tip outputs on): a sample's
+    truth keeps as many modes of each motion as the nominal run's (its wings' and boom's
+    torsion modes included, which the tip-output rule adds)."""
+    from spacecraft.sweep import load_sweep
+
+    raw, spec, source = load_sweep("three_axis", samples=4)
+    context = prepare(raw, spec, source)
+    nominal = DesignLoop(load_scene(apply_values(raw, spec.parameters, spec.nominal)))
+    expected = nominal.truth_modes_per_motion(nominal.n_modes)
+    sample = DesignLoop(load_scene(apply_values(context.base, spec.parameters,
+                                                spec.values()[1])))
+    assert sample.truth_modes_per_motion(context.n_modes) == expected
+    assert all(m["torsion"] >= 1 and m["xz"] >= 1 for m in expected.values())
+
+
+@pytest.mark.slow
 def test_a_three_axis_sweep_on_a_local_cluster_equals_the_serial_one():
     """Two worker processes (single-threaded BLAS) against this process: the same samples to
     rounding (1e-9 relative, 1e-12 absolute: margins refined to 1e-12 in frequency, a slew of
