@@ -17,7 +17,7 @@ from .delay import PLAUSIBLE_DELAY, LongDelayWarning
 from .discretise import DiscretisationOverflowWarning
 from .lqr import (KalmanNoise, LQRDesign, lqr, lqr_design, rate_reference_state,
                   reference_state)
-from .noise import SensorNoise
+from .noise import LargeNoiseWarning, SensorNoise
 from .pd import natural_frequency_from_bandwidth, pd, pd_gains, principal_axes
 from .pointing import PointingBudget, close_loop_with_sensors, pointing
 from .profiles import (PROFILE_KINDS, Profile, Shaper, bang_coast_bang, jerk_limited,
@@ -34,6 +34,7 @@ __all__ = [
     "DiscretisationOverflowWarning",
     "INFLUENCE_TOL",
     "LongDelayWarning",
+    "LargeNoiseWarning",
     "MARGIN",
     "RemovedMode",
     "ReactionWheel",

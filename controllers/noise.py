@@ -40,7 +40,7 @@ import numpy as np
 
 from .arguments import describe, positive, real_number
 
-__all__ = ["SensorNoise", "PLAUSIBLE"]
+__all__ = ["SensorNoise", "PLAUSIBLE", "LargeNoiseWarning"]
 
 #: Values above these look like a unit slip (a warning names the likely unit): attitude noise
 #: density [rad/sqrt(Hz)] (a star tracker: 1e-6 to 1e-4), angle random walk [rad/sqrt(s)]
@@ -49,6 +49,12 @@ __all__ = ["SensorNoise", "PLAUSIBLE"]
 PLAUSIBLE = {"attitude_density": (1e-2, "arcsec/sqrt(Hz) or deg/sqrt(Hz)"),
              "angle_random_walk": (1e-3, "deg/sqrt(h) or deg/sqrt(s)"),
              "bias_instability": (1e-3, "deg/h or deg/s")}
+
+class LargeNoiseWarning(UserWarning):
+    """A sensor noise level above :data:`PLAUSIBLE`: legal, and used as given, but more likely
+    a level in the data sheet's unit (arcsec, deg, hours) given unconverted (the message names
+    the parameter, its value and the likely units)."""
+
 
 _UNITS = {"attitude_density": "rad/sqrt(Hz)", "angle_random_walk": "rad/sqrt(s)",
           "bias_instability": "rad/s", "bias_correlation_time": "s"}
@@ -72,7 +78,7 @@ def _level(value, name: str) -> float | tuple[float, ...]:
     base = name.split("[")[0]
     if base in PLAUSIBLE and x > PLAUSIBLE[base][0]:
         warnings.warn(f"{name} = {x:.6g} {unit} is large for a spacecraft sensor: was it given "
-                      f"in {PLAUSIBLE[base][1]}? The value is used as {unit}", UserWarning,
+                      f"in {PLAUSIBLE[base][1]}? The value is used as {unit}", LargeNoiseWarning,
                       stacklevel=4)
     return x
 

@@ -50,16 +50,18 @@ SIMULATORS = ("flexsat", "basilisk")
 
 @contextlib.contextmanager
 def quiet_unit_slips():
-    """Build appendages from a read scene, and pass its loop delay to :mod:`controllers`,
-    without the unit-slip warnings of the constructors and functions
-    (:class:`appendages.unit_slips.UnitWarning`, :class:`controllers.LongDelayWarning`): the
-    reader reported them by key."""
+    """Build appendages and sensor noise from a read scene, and pass its loop delay to
+    :mod:`controllers`, without the unit-slip warnings of the constructors and functions
+    (:class:`appendages.unit_slips.UnitWarning`, :class:`controllers.LongDelayWarning`,
+    :class:`controllers.LargeNoiseWarning`): the reader reported them by key."""
     from appendages.unit_slips import UnitWarning
     from controllers.delay import LongDelayWarning
+    from controllers.noise import LargeNoiseWarning
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UnitWarning)
         warnings.simplefilter("ignore", LongDelayWarning)
+        warnings.simplefilter("ignore", LargeNoiseWarning)
         yield
 
 
@@ -658,13 +660,16 @@ class SensorsSpec:
     probability: float = 0.9973
 
     def noise(self):
-        """The :class:`controllers.SensorNoise`."""
+        """The :class:`controllers.SensorNoise` (a level that looks like a unit slip was
+        reported by key when the scene was read)."""
         import controllers
 
-        return controllers.SensorNoise(
-            attitude_density=self.attitude_density, angle_random_walk=self.angle_random_walk,
-            bias_instability=self.bias_instability,
-            bias_correlation_time=self.bias_correlation_time)
+        with quiet_unit_slips():
+            return controllers.SensorNoise(
+                attitude_density=self.attitude_density,
+                angle_random_walk=self.angle_random_walk,
+                bias_instability=self.bias_instability,
+                bias_correlation_time=self.bias_correlation_time)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -65,7 +65,7 @@ def test_noise_parameters_are_checked(kwargs, error, match):
     (dict(bias_instability=0.5, bias_correlation_time=100.0), r"deg/h"),
 ])
 def test_noise_that_looks_like_a_unit_slip_warns(kwargs, unit):
-    with pytest.warns(UserWarning, match=unit):
+    with pytest.warns(controllers.LargeNoiseWarning, match=unit):
         controllers.SensorNoise(**kwargs)
 
 

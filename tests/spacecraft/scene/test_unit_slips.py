@@ -279,3 +279,22 @@ def test_natural_frequency_from_bandwidth_against_the_direct_formula(damping):
     # far beyond the direct formula's reach: wn -> 2 z wb
     assert controllers.natural_frequency_from_bandwidth(1.0, 1e150) == pytest.approx(2e150,
                                                                                      rel=1e-15)
+
+
+def test_a_run_reports_a_sensor_noise_slip_once_by_key():
+    """A sensor level in arcsec/sqrt(Hz) given as rad/sqrt(Hz): warned about by key when the
+    scene is read, and not again by :class:`controllers.SensorNoise` when the run builds the
+    noise (controllers.LargeNoiseWarning is the constructor's own)."""
+    from spacecraft import run
+
+    data = tomllib.loads(scene_path("default_flown").read_text())
+    data["sensors"]["attitude_density"] = 0.05
+    data["export"] = {"fmu": False}
+    data["report"] = {"plots": False}
+    lines = [line for line in run(load_scene(data, source="noise.toml")).data["warnings"]
+             if "large for a spacecraft sensor" in line]
+    assert lines == ["UnitWarning: noise.toml: sensors.attitude_density: 0.05 rad/sqrt(Hz) is "
+                     "large for a spacecraft sensor: was it given in arcsec/sqrt(Hz) or "
+                     "deg/sqrt(Hz)? It is used as rad/sqrt(Hz)"]
+    with pytest.warns(controllers.LargeNoiseWarning, match=r"attitude_density = 0\.05"):
+        controllers.SensorNoise(attitude_density=0.05)
