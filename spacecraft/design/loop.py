@@ -600,9 +600,12 @@ class DesignLoop(ModelBuilder):
                     what = (plural(sum(counts.values()), f"{method} mode") + ": " + ", ".join(
                         f"{MOTION_WORDS[m]} {c}" for m, c in counts.items() if c))
                 else:
-                    w = resolved_frequency(self.beam(a), n_modes, method,
+                    # a planar truncation keeps its bending floor beyond n_modes
+                    k = n_modes + (0 if self.three_axis else
+                                   self.tip_floors.get(a.name, {}).get("bending", 0))
+                    w = resolved_frequency(self.beam(a), k, method,
                                            three_axis=self.three_axis)
-                    what = plural(n_modes, f"{method} mode")
+                    what = plural(k, f"{method} mode")
                 resolved[a.name] = (w, what, bool(w >= band or converged))
         return band, resolved
 

@@ -347,14 +347,17 @@ class ModelBuilder:
         force along the appendage, ``<name>_root_force_x``). Empty for a planar scene, without
         those outputs, or with ``fidelity.n_modes`` given alone (the user's count is kept as it
         is, and a tip output it leaves without a mode is warned about:
-        :func:`spacecraft.design.loop.unmodelled_outputs`); with ``fidelity.modes_per_motion``
-        beside it, as from the tolerance."""
+        :func:`spacecraft.design.loop.unmodelled_outputs`). With ``fidelity.modes_per_motion``
+        beside n_modes, the motions a tolerance run's tip outputs see (and axial with root
+        loads) whatever the outputs: the pinned truth is the same with tip outputs on or off."""
         scene = self.scene
         outputs = scene.outputs
         fidelity = scene.fidelity
-        if (not self.three_axis
-                or (fidelity.n_modes is not None and fidelity.modes_per_motion is None)
-                or not (outputs.tip_deflection or outputs.root_loads)):
+        if not self.three_axis:
+            return ()
+        pinned = fidelity.n_modes is not None and fidelity.modes_per_motion is not None
+        if not pinned and (fidelity.n_modes is not None
+                           or not (outputs.tip_deflection or outputs.root_loads)):
             return ()
         return ("xy", "xz", "torsion") + (("axial",) if outputs.root_loads else ())
 

@@ -242,6 +242,9 @@ def estimate_cost(scene) -> SceneCost:
     -----
     A plant of N elastic degrees of freedom on the hub has at most 2 (3 + N) states (hub
     translation and rotation plus the appendages' modes or hinges; pruning only removes).
+    A uniform three-axis beam of round section (rod, tube, square) counts its bending twins:
+    beyond a floor each of the n counts a distinct frequency, at most a pair, and without one
+    the n lowest may end on a twin.
     A truth beam chosen from ``fidelity.tolerance`` is counted with one mode: the search stops
     at the smallest sufficient number, and the runner caps it by the limits; in three axes with
     reported tip outputs or root loads, also with the lowest mode of every motion they see
@@ -258,14 +261,30 @@ def estimate_cost(scene) -> SceneCost:
     outputs = scene.outputs
     # the modes per motion a three-axis truncation chosen from the tolerance (or given with
     # modes pinned per motion) keeps beyond n
+    pinned_truth = n_modes is not None and fidelity.modes_per_motion is not None
     seen = (("xy", "xz", "torsion") + (("axial",) if outputs.root_loads else ())
-            if scene.three_axis and (n_modes is None or fidelity.modes_per_motion is not None)
-            and (outputs.tip_deflection or outputs.root_loads) else ())
+            if scene.three_axis and (pinned_truth or (
+                n_modes is None and (outputs.tip_deflection or outputs.root_loads))) else ())
     pinned = fidelity.pinned_floors()
 
     def floor(a) -> int:
         mine = pinned.get(a.name, {})
-        return len(seen) + sum(max(0, k - (m in seen)) for m, k in mine.items())
+        return (len(seen) + sum(max(0, k - (m in seen)) for m, k in mine.items())
+                + twins(a))
+
+    def twins(a) -> int:
+        # a uniform round section's bending modes come in x-y / x-z pairs: beyond a floor
+        # each of the n counts a distinct frequency, a pair at most (n more); without one the
+        # n lowest and a twin tying with the last (one more)
+        beam = a.beam
+        if not (scene.three_axis and a.truth == "beam" and getattr(beam, "uniform", False)):
+            return 0
+        d = dict(beam.dimensions)
+        round_ = beam.section in ("rod", "tube") or (
+            beam.section == "rectangular" and d.get("width") == d.get("thickness"))
+        if not round_:
+            return 0
+        return (1 if n_modes is None else n_modes) if (seen or pinned.get(a.name)) else 1
 
     truth = [appendage_dof(a, "truth", n_modes, floor(a)) for a in apps]
     design = [appendage_dof(a, "design", n_modes, floor(a)) for a in apps]

@@ -353,8 +353,10 @@ key                                    unit       meaning
                                                   are kept however stiff
 ``fidelity.modes_per_motion``          -          with ``fidelity.n_modes``, a table (may be
                                                   empty): the truncations then keep the lowest
-                                                  mode of every motion a tip output sees, as a
-                                                  run from ``fidelity.tolerance`` does, and
+                                                  mode of both bending planes and torsion (and
+                                                  axial with ``outputs.root_loads``), as a run
+                                                  from ``fidelity.tolerance`` with tip outputs
+                                                  does, whatever this scene reports, and
 ``fidelity.modes_per_motion.<name>.<motion>``  -  per truncated beam ``<name>``, the modes
                                                   that run's tip-output rule adds (results.json
                                                   ``fidelity.choice.tip.floors``; with those
@@ -1666,13 +1668,10 @@ def _read_scene(data: Mapping, source: str, limit_overrides: Mapping | None = No
                           r.boolean(ot, "root_loads", "outputs", False),
                           r.boolean(ot, "exact_reference", "outputs", False))
     r.done(ot, "outputs", {"tip_deflection", "root_loads", "exact_reference"})
-    if pinned == () and not (getattr(r, "three_axis", False)
-                             and (outputs.tip_deflection or outputs.root_loads)):
-        raise r.error("fidelity.modes_per_motion", "is empty, which pins nothing here: name a "
-                      "truncated beam's modes (fidelity.modes_per_motion.<name>.<motion>); an "
-                      "empty table only keeps the lowest mode of every motion a tip output "
-                      "sees, in a three-axis scene with outputs.tip_deflection or "
-                      "outputs.root_loads")
+    if pinned == () and not getattr(r, "three_axis", False):
+        raise r.error("fidelity.modes_per_motion", "is empty, which pins nothing in a planar "
+                      "scene: name a truncated beam's modes "
+                      "(fidelity.modes_per_motion.<name>.bending)")
 
     et = r.table(t.pop("export", {}), "export")
     export = ExportSpec(fmu=r.boolean(et, "fmu", "export", False),

@@ -431,8 +431,9 @@ class FidelitySpec:
     ``modes_per_motion`` (with ``n_modes`` only; None when not given): per truncated-beam
     appendage, the modes pinned per motion, ``((appendage, ((motion, count), ...)), ...)``:
     what a run from ``tolerance`` adds for its tip outputs (:meth:`pinned_floors`). Given (even
-    empty), a three-axis truncation keeps the lowest mode of every motion a tip output sees,
-    as a run from ``tolerance`` does.
+    empty), a three-axis truncation keeps the lowest mode of both bending planes and torsion
+    (and axial with root loads), as a run from ``tolerance`` with tip outputs does, whatever
+    the scene's outputs.
     """
 
     n_modes: int | None = None

@@ -117,7 +117,8 @@ METRICS: dict[str, tuple[str, str, str]] = {
     "peak_torque": ("float", "N*m", "peak torque during the slew"),
     "peak_attitude_error": ("float", "rad", "peak |theta - theta_ref| during the slew"),
     "final_attitude_error": ("float", "rad", "|theta - theta_ref| at the end of the slew"),
-    "n_modes": ("int", "-", "bending modes per truncated beam of the truth model"),
+    "n_modes": ("int", "-", "the truth's fidelity.n_modes (the modes each beam keeps, per "
+                "motion: the summary's loop.truth_modes)"),
     "controller": ("str", "-", "the sample's controller (design = per-sample): JSON of kind, "
                                "A, B, C, D (spacecraft.scene.given)"),
     "pd_kp": ("float", "N*m/rad", "the sample's PD proportional gain Kp (design = per-sample)"),
@@ -214,6 +215,11 @@ class Context:
         The scene has a manoeuvre (slew metrics).
     three_axis : bool
         A three-axis scene (the multiloop verdict's columns, :data:`THREE_AXIS_METRICS`).
+    truth_modes : dict
+        The modes every sample's truncated truth beam keeps, by appendage: per motion in three
+        axes (``{"xy": .., "xz": .., "torsion": .., "axial": ..}``, or
+        ``{"lowest coupled modes": k}``), ``{"bending": k}`` in the plane (empty without a
+        truncated beam).
     """
 
     base: dict
@@ -228,6 +234,7 @@ class Context:
     time_responses: bool = False
     nominal_record: dict | None = None
     three_axis: bool = False
+    truth_modes: dict = dataclasses.field(default_factory=dict)
 
     def columns(self) -> list[str]:
         """The metric columns this sweep records."""
@@ -482,6 +489,18 @@ def _trim(raw: dict, scene, spec: SweepSpec, n_modes, floors=None) -> tuple[dict
     return base, variant, kind
 
 
+def _truth_modes(scene, n_modes) -> dict:
+    """:attr:`Context.truth_modes` of the trimmed scene."""
+    if n_modes is None:
+        return {}
+    per_motion = DesignLoop(scene).truth_modes_per_motion(n_modes)
+    if per_motion:
+        return per_motion
+    pins = scene.fidelity.pinned_floors()
+    return {a.name: {"bending": int(n_modes) + pins.get(a.name, {}).get("bending", 0)}
+            for a in scene.appendages if a.truth == "beam"}
+
+
 def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
     """The shared part of every sample: trimmed scene, fixed fidelity, nominal controller.
 
@@ -535,7 +554,8 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
                       exact=(trimmed.outputs.exact_reference and trimmed.has_beam_truth
                              and trimmed.controller.sample_time is None),
                       time_responses=trimmed.manoeuvre is not None,
-                      three_axis=trimmed.three_axis)
+                      three_axis=trimmed.three_axis,
+                      truth_modes=_truth_modes(trimmed, n_modes))
     if spec.design == "nominal":
         tuned = DesignLoop(trimmed).tuned(variant, kind, n_modes)
         context.nominal_controller = tuned.controller

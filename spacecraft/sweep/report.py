@@ -207,6 +207,7 @@ def summarise(table, context, spec, *, nominal: dict, worst: list, timings: dict
         "settings": spec.as_dict(),
         "loop": {"controller": context.controller, "design_model": context.variant,
                  "design": context.design, "n_modes": context.n_modes,
+                 "truth_modes": context.truth_modes,
                  "exact_reference": context.exact,
                  "nominal_controller": context.nominal_record,
                  "three_axis": context.three_axis},
@@ -430,6 +431,18 @@ def instability_text(summary: dict) -> str:
     return text
 
 
+def _truth_words(loop: dict) -> str:
+    """The truth model's modes per beam, in words (from the summary's loop)."""
+    modes = loop.get("truth_modes") or {}
+    if not modes:
+        return (f"truth: {loop['n_modes']} modes per beam" if loop.get("n_modes") is not None
+                else "truth: no truncated beam")
+    words = {"bending": "", "lowest coupled modes": "lowest "}
+    return "truth modes per beam: " + "; ".join(
+        f"{name} " + ", ".join(f"{words.get(m, m + ' ')}{c}" for m, c in counts.items() if c)
+        for name, counts in modes.items())
+
+
 def _blocks(summary: dict, images: list) -> list:
     s = summary
     inst = s["instability"]
@@ -439,7 +452,7 @@ def _blocks(summary: dict, images: list) -> list:
                ("p", f"{s['samples']['total']} samples ({s['settings']['method']}, seed "
                      f"{s['settings']['seed']}); controller "
                      f"{loop['controller']} tuned on the {loop['design_model']} design model, "
-                     f"design = {loop['design']}; truth: {loop['n_modes']} modes per beam"
+                     f"design = {loop['design']}; {_truth_words(loop)}"
                      + ("; every sample also closed on the exact beam" if loop["exact_reference"]
                         else "") + f". Ran on {s['executor']}.")]
     if failed:

@@ -124,15 +124,62 @@ def test_a_planar_pin_adds_modes_beyond_n_modes():
         np.testing.assert_array_equal(getattr(a.root_model(), name), getattr(b.root_model(), name))
 
 
-def test_the_cost_estimate_counts_the_pinned_modes():
-    """n_modes 2, tip outputs on: the estimate counts the lowest mode of xy, xz and torsion
-    and the 2 beyond, 5 modes, 2 (3 + 5) = 16 plant states (the hub's 3 rigid motions); with
-    torsion pinned at 3, two torsion modes more: 2 (3 + 7) = 20."""
+def test_the_cost_estimate_counts_the_pinned_modes_and_the_twins():
+    """n_modes 2 of a round rod with a table: the lowest mode of xy, xz and torsion, and 2
+    distinct frequencies beyond them, each at most a twin pair (4 modes): 7 modes, 2 (3 + 7) =
+    20 plant states (the hub's 3 rigid motions); torsion pinned at 3, two torsion modes more:
+    2 (3 + 9) = 24. Both are the truncation's own count here (the rod's next levels are
+    bending pairs)."""
     raw = _scene(THREE_AXIS, modes_per_motion={})
     raw["outputs"] = {"tip_deflection": True}
-    assert estimate_cost(load_scene(raw)).plant_states == 2 * (3 + 5)
-    raw["fidelity"]["modes_per_motion"] = {"rod": {"torsion": 3}}
-    assert estimate_cost(load_scene(raw)).plant_states == 2 * (3 + 7)
+    for pins, modes in (({}, 7), ({"rod": {"torsion": 3}}, 9)):
+        raw["fidelity"]["modes_per_motion"] = pins
+        scene = load_scene(raw)
+        assert estimate_cost(scene).plant_states == 2 * (3 + modes)
+        loop = DesignLoop(scene)
+        assert sum(loop.truth_modes_per_motion(2)["rod"].values()) == modes
+
+
+@pytest.mark.parametrize("n", [1, 3, 8])
+@pytest.mark.parametrize("pins", [None, {}, {"boom": {"torsion": 5}}])
+@pytest.mark.parametrize("tip", [True, False])
+def test_the_cost_estimate_bounds_the_truth_the_run_builds(n, pins, tip):
+    """An upper bound (a bound that is not one would let a scene past limits.states): the
+    shipped three-axis scene (rectangular wings, a round boom whose bending modes come in
+    pairs), n_modes given alone or with pins, tip outputs on or off: the estimated plant
+    states are at least the truth's (its modes per motion summed)."""
+    raw = tomllib.loads(scene_path("three_axis").read_text())
+    raw["fidelity"] = {"n_modes": n} if pins is None else {"n_modes": n,
+                                                         "modes_per_motion": pins}
+    raw["outputs"]["tip_deflection"] = tip
+    scene = load_scene(raw)
+    loop = DesignLoop(scene)
+    modes = sum(sum(c.values()) for c in loop.truth_modes_per_motion(n).values())
+    assert estimate_cost(scene).plant_states >= 2 * (3 + modes)
+
+
+def test_the_pinned_truth_is_the_same_with_tip_outputs_on_or_off():
+    """Pins copied from a tolerance run with tip outputs rerun its truth in a scene that
+    reports none: the lowest mode of both bending planes and torsion is kept either way."""
+    raw = tomllib.loads(scene_path("three_axis").read_text())
+    raw["fidelity"] = {"n_modes": 1, "modes_per_motion": {"boom": {"torsion": 5}}}
+    counts = []
+    for tip in (True, False):
+        raw["outputs"]["tip_deflection"] = tip
+        loop = DesignLoop(load_scene(copy.deepcopy(raw)))
+        counts.append(loop.truth_modes_per_motion(1))
+    assert counts[0] == counts[1]
+    assert all(c["xy"] >= 1 and c["xz"] >= 1 and c["torsion"] >= 1 for c in counts[0].values())
+
+
+def test_a_planar_pin_is_in_the_resolved_band_the_report_gives():
+    """The truth of n_modes 2 with 3 bending modes pinned is a 5-mode truncation, and the run
+    says so where it tells how far the truth resolves the beam."""
+    data = run(load_scene(_scene(PLANAR, modes_per_motion={"rod": {"bending": 3}})),
+               time_responses=False).data
+    five = run(load_scene(_scene(PLANAR, n_modes=5)), time_responses=False).data
+    assert data["truth"]["resolved"]["rod"]["model"] == "5 craig-bampton modes"
+    assert data["truth"]["resolved"] == five["truth"]["resolved"]
 
 
 # -- refused by name -----------------------------------------------------------------------------
@@ -158,9 +205,7 @@ def test_the_cost_estimate_counts_the_pinned_modes():
     (THREE_AXIS, {"modes_per_motion": {"rod": 2}},
      r"fidelity\.modes_per_motion\.rod: must be a table"),
     (PLANAR, {"modes_per_motion": {}},
-     r"fidelity\.modes_per_motion: is empty, which pins nothing here"),
-    (THREE_AXIS, {"modes_per_motion": {}},     # no tip output: nothing is seen
-     r"fidelity\.modes_per_motion: is empty, which pins nothing here"),
+     r"fidelity\.modes_per_motion: is empty, which pins nothing in a planar scene"),
     (THREE_AXIS, {"modes_per_motion": {"rod": {"torsion": 100000}}},
      r"fidelity\.modes_per_motion\.rod\.torsion"),
 ])
@@ -178,14 +223,16 @@ def test_a_bad_pin_is_refused_by_name(base, fidelity, match):
 
 def test_a_beam_with_a_tip_body_pins_its_lowest_modes_together():
     """A tip body couples the motions: its modes are ranked together, and a pin adds lowest
-    modes beyond n_modes."""
+    modes beyond those an empty table keeps (the fewest lowest that move every tip motion,
+    and n_modes beyond them)."""
     raw = _scene(THREE_AXIS, modes_per_motion={"rod": {"coupled": 2}})
     raw["appendages"][0]["tip"] = {"mass": 2.0, "inertia": [[0.01, 0.0, 0.0], [0.0, 0.02, 0.0],
                                                             [0.0, 0.0, 0.02]]}
     raw["appendages"][0]["design"] = "truth"
     raw["appendages"][0].pop("fit")
     loop = DesignLoop(load_scene(raw))
-    plain = DesignLoop(load_scene(_scene({**raw, "fidelity": {"n_modes": 2}})))
+    plain = DesignLoop(load_scene(_scene({**raw, "fidelity": {"n_modes": 2,
+                                                              "modes_per_motion": {}}})))
     spec = loop.scene.appendages[0]
     assert loop.truth_model(spec, 2).n_modes == plain.truth_model(spec, 2).n_modes + 2
     raw["fidelity"]["modes_per_motion"] = {"rod": {"torsion": 2}}

@@ -294,6 +294,11 @@ def test_the_shipped_three_axis_sweeps_samples_keep_the_nominal_runs_modes_per_m
                                                 spec.values()[1])))
     assert sample.truth_modes_per_motion(context.n_modes) == expected
     assert all(m["torsion"] >= 1 and m["xz"] >= 1 for m in expected.values())
+    # the summary and the report say so (not n_modes alone)
+    assert context.truth_modes == expected
+    from spacecraft.sweep.report import _truth_words
+    words = _truth_words({"n_modes": context.n_modes, "truth_modes": context.truth_modes})
+    assert words.startswith("truth modes per beam: wing_left xy 2, xz 2, torsion ")
 
 
 @pytest.mark.slow
