@@ -600,9 +600,9 @@ class DesignLoop(ModelBuilder):
                     what = (plural(sum(counts.values()), f"{method} mode") + ": " + ", ".join(
                         f"{MOTION_WORDS[m]} {c}" for m, c in counts.items() if c))
                 else:
-                    # a planar truncation keeps its bending floor beyond n_modes
-                    k = n_modes + (0 if self.three_axis else
-                                   self.tip_floors.get(a.name, {}).get("bending", 0))
+                    # the truncation's own count (a planar one keeps its floor beyond n_modes)
+                    k = (n_modes if self.three_axis
+                         else int(self.truth_model(a, n_modes).n_modes))
                     w = resolved_frequency(self.beam(a), k, method,
                                            three_axis=self.three_axis)
                     what = plural(k, f"{method} mode")

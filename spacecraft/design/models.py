@@ -364,19 +364,19 @@ class ModelBuilder:
     def truncation(self, beam, n_modes: int, floors: dict | None = None):
         """``beam`` truncated by the scene's method: its ``n_modes`` lowest (planar: bending)
         modes; in a three-axis scene that reports tip outputs, with ``n_modes`` chosen from the
-        tolerance (or given with ``fidelity.modes_per_motion``), also the lowest mode of every motion they see (:meth:`seen_motions`) that
-        the beam has, so that no tip output of the truth model reads 0 for want of a mode:
-        a uniform beam keeps those and the ``n_modes`` lowest of the rest
-        (:func:`spacecraft.design.fidelity.motion_counts`); a beam whose modes are ranked
-        together (a tip body, segments) keeps its ``k0 - 1 + n_modes`` lowest modes, k0 the
-        fewest lowest modes that move every seen tip motion (:meth:`coupled_floor`). Either
-        way each added n adds a mode.
+        tolerance (or given with ``fidelity.modes_per_motion``), also the lowest mode of every
+        motion they see (:meth:`seen_motions`) that the beam has, so that no tip output of the
+        truth model reads 0 for want of a mode: a uniform beam keeps those and the ``n_modes``
+        lowest of the rest (:func:`spacecraft.design.fidelity.motion_counts`); a beam whose
+        modes are ranked together (a tip body, segments) keeps its ``k0 - 1 + n_modes`` lowest
+        modes, k0 the fewest lowest modes that move every seen tip motion
+        (:meth:`coupled_floor`). Either way each added n adds a mode.
 
         ``floors`` (what the tip-output rule adds, :meth:`tip_fidelity`, or the scene pins,
-        ``fidelity.modes_per_motion``): a uniform three-axis
-        beam keeps at least ``floors[motion]`` modes of each motion (and the ``n_modes``
-        lowest beyond them); a planar beam ``floors["bending"]`` modes more, a three-axis beam
-        whose modes are ranked together ``floors["coupled"]`` lowest modes more."""
+        ``fidelity.modes_per_motion``): a uniform three-axis beam keeps at least
+        ``floors[motion]`` modes of each motion (and the ``n_modes`` lowest beyond them); a
+        planar beam ``floors["bending"]`` modes more, a three-axis beam whose modes are ranked
+        together ``floors["coupled"]`` lowest modes more."""
         method = self.scene.fidelity.method
         seen = self.seen_motions()
         floors = floors or {}

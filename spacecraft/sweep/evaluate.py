@@ -493,11 +493,11 @@ def _truth_modes(scene, n_modes) -> dict:
     """:attr:`Context.truth_modes` of the trimmed scene."""
     if n_modes is None:
         return {}
-    per_motion = DesignLoop(scene).truth_modes_per_motion(n_modes)
+    loop = DesignLoop(scene)
+    per_motion = loop.truth_modes_per_motion(n_modes)
     if per_motion:
         return per_motion
-    pins = scene.fidelity.pinned_floors()
-    return {a.name: {"bending": int(n_modes) + pins.get(a.name, {}).get("bending", 0)}
+    return {a.name: {"bending": int(loop.truth_model(a, n_modes).n_modes)}
             for a in scene.appendages if a.truth == "beam"}
 
 
