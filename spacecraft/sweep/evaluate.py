@@ -74,9 +74,12 @@ import warnings
 
 import numpy as np
 
+from controllers.threads import blas_threads_for
+
 from ..design.loop import DesignLoop
 from ..design.verdicts import TIME_METRICS, withheld_metrics
 from ..scene.given import controller_record
+from ..scene.limits import estimate_cost
 from ..design.manoeuvre import flown_keys
 from ..scene.read import SceneError, load_scene
 from ..scene.reader import shorten
@@ -405,7 +408,11 @@ def evaluate(context: Context, values, *, index: int | None = None) -> dict:
         try:
             scene = load_scene(apply_values(context.base, context.parameters, values,
                                             shared=True), source=source)
-            row.update({k: v for k, v in evaluate_scene(context, scene).items() if k in row})
+            # one BLAS-thread region for the whole sample, sized as spacecraft.run sizes a
+            # run: the stages' own regions nested in it cost no call into the BLAS library
+            with blas_threads_for(estimate_cost(scene).loop_states):
+                metrics = evaluate_scene(context, scene)
+            row.update({k: v for k, v in metrics.items() if k in row})
         except Exception as exc:  # a failed sample is recorded; the sweep goes on
             row = {k: _missing(METRICS[k][0]) for k in context.columns()}
             row["error"] = shorten(f"{type(exc).__name__}: {exc}", 300, one_line=True)
