@@ -21,9 +21,10 @@ import pytest
 
 PACKAGES = ("appendages", "controllers", "fmu", "spacecraft")
 
-# The tests' shared helpers (tests/support: the independent FE models, plants, FMU cases) and
-# the folders of test modules whose fixtures other tests import (``from test_scene import
-# scene_with``) import by name: test module names are unique across the folders.
+# The tests' shared helpers (tests/support: the independent FE models, plants, FMU cases, the
+# small test scenes: ``from scenes import scene_with``) and the folders of test modules whose
+# fixtures other tests import (``from test_scene_flown import flown``) import by name: test
+# module names are unique across the folders.
 TESTS = pathlib.Path(__file__).resolve().parent
 for _folder in sorted({TESTS / "support", *(p.parent for p in TESTS.rglob("test_*.py"))}):
     if str(_folder) not in sys.path:

@@ -11,7 +11,8 @@ from appendages.equivalence import fit_chain
 from spacecraft import cli
 from spacecraft.design.loop import run
 
-# The small test scene of tests/spacecraft/scene/test_scene.py as a file: no FMUs, plots only when asked.
+# The scene tests' base scene (BASE of tests/support/scenes.py) as a file, titled, with tip
+# outputs and no equivalence section: no FMUs, plots only when asked.
 SCENE = """\
 title = "test boom"
 

@@ -18,7 +18,7 @@ import controllers
 from spacecraft.design.loop import DesignLoop, run
 from spacecraft.scene.read import load_scene
 
-from test_scene import scene_with
+from scenes import scene_with
 
 DPS = 40
 

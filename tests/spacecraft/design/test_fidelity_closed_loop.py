@@ -17,7 +17,7 @@ from spacecraft.design.fidelity import (DAMPING_SCALE, closed_loop_change, refin
 from spacecraft.design.loop import DesignLoop, run
 from spacecraft.scene.read import load_scene
 
-from test_scene import scene_with
+from scenes import scene_with
 
 TOL = 1e-3
 

@@ -2,7 +2,6 @@
 profile and its feedforward, the loop delay in every verdict, the wheels, the metrics from the
 end of the profile and the pointing figures, each against the library's own answer or a
 property that holds exactly."""
-import copy
 import math
 
 import numpy as np
@@ -13,6 +12,7 @@ import spacecraft
 from spacecraft.design.responses import trace
 from spacecraft.scene.read import SceneError, load_scene
 
+from scenes import scene_with
 from test_scene_flown import flown
 
 # the paper's rod, damped (0.5 %: the loops are stable, the delay margins finite), flexsat's
@@ -83,7 +83,7 @@ def test_metrics_from_the_end_of_the_profile(ideal):
 
 
 def test_todays_step_slew_gets_the_metrics_from_its_end_too():
-    result = spacecraft.run(copy.deepcopy(__import__("test_scene").BASE))
+    result = spacecraft.run(scene_with())
     row = result.data["closed_loops"][0]
     today, after = row["metrics"]["truth"], row["manoeuvre_metrics"]["truth"]
     assert after["profile_end"] == 60.0

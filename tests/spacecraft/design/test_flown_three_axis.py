@@ -13,6 +13,7 @@ import spacecraft
 from spacecraft.design.responses import trace
 from spacecraft.scene.read import SceneError, load_scene
 
+from scenes import rod_scene
 from test_scene_flown import THREE
 
 AXES = "xyz"
@@ -213,16 +214,13 @@ def test_a_delay_takes_omega_c_tau_off_each_axis_phase_margin(delayed_pair, verd
 
 @pytest.mark.slow
 def test_a_delay_beyond_the_margin_is_a_result():
-    # the 10 m rod of the scene-key walk, damped, on the three-axis hub, a PD of 1 rad/s: a
-    # delay margin of a tenth of a second (the margins resolve the delay's phase up to the
-    # loop's highest frequency, 2e6 rad/s here, on at most 2e6 frequencies)
-    from test_scene_keys import THREE_AXIS
-
-    rod = copy.deepcopy(THREE_AXIS)
-    rod["appendages"][0]["beam"]["damping_ratio"] = 0.005
-    rod["manoeuvre"].update(slew_axis=[1.0, 1.0, 0.5], step=0.02)
-    rod["controller"]["pd"]["natural_frequency"] = 1.0
-    rod["controller"]["delay"] = 0.01
+    # the small rod scene (tests/support/scenes.py: the 10 m rod, damped, on the three-axis
+    # hub), a PD of 1 rad/s: a delay margin of a tenth of a second (the margins resolve the
+    # delay's phase up to the loop's highest frequency, 2e6 rad/s here, on at most 2e6
+    # frequencies)
+    rod = rod_scene(three_axis=True, **{
+        "appendages.0.beam.damping_ratio": 0.005, "manoeuvre.slew_axis": [1.0, 1.0, 0.5],
+        "manoeuvre.step": 0.02, "controller.pd.natural_frequency": 1.0, "controller.delay": 0.01})
     probe = spacecraft.run(rod, time_responses=False)
     margin = probe.data["closed_loops"][0]["verdict"]["delay_margin"] + 0.01
     rod["controller"]["delay"] = 1.2 * margin

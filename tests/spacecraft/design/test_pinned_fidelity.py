@@ -16,27 +16,11 @@ import pytest
 from spacecraft.design.loop import DesignLoop, run
 from spacecraft.scene.limits import estimate_cost
 from spacecraft.scene.read import SceneError, load_scene, scene_path
+from scenes import rod_scene
 
-ROD = {"section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
-       "youngs_modulus": 2.06e11, "damping_ratio": 0.005}
-THREE_AXIS = {
-    "title": "pinned modes",
-    "hub": {"mass": 100.0, "inertia": [[60.0, 2.0, 0.0], [2.0, 50.0, 1.0], [0.0, 1.0, 40.0]]},
-    "appendages": [{"name": "rod", "position": [0.5, 0.0, 0.1],
-                    "orientation": [0.0, 0.0, 0.0], "beam": dict(ROD),
-                    "fit": {"n_bodies": 3, "match": "poles-and-zeros"}}],
-    "fidelity": {"n_modes": 2},
-    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1, "damping": 0.7}},
-    "manoeuvre": {"slew_angle": 10.0, "slew_time": 30.0, "duration": 45.0, "step": 0.25,
-                  "slew_axis": "z"},
-    "report": {"plots": False},
-    "export": {"fmu": False},
-}
-PLANAR = copy.deepcopy(THREE_AXIS)
-PLANAR["hub"]["inertia"] = 50.0
-PLANAR["appendages"][0].update(position=[0.5, 0.0], direction=0.0)
-del PLANAR["appendages"][0]["orientation"]
-del PLANAR["manoeuvre"]["slew_axis"]
+# the small rod scene (tests/support/scenes.py), in three axes and in the plane
+THREE_AXIS = rod_scene(three_axis=True)
+PLANAR = rod_scene()
 
 
 def _scene(base: dict, **fidelity) -> dict:

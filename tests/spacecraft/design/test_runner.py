@@ -12,7 +12,7 @@ from spacecraft import Hub, Mount, Spacecraft
 from spacecraft.report.write import output_folder, write_report
 from spacecraft.design.loop import run
 
-from test_scene import scene_with
+from scenes import scene_with
 
 WING = {"section": "rectangular", "length": 6.0, "width": 0.5, "thickness": 0.02,
         "density": 1600.0, "youngs_modulus": 7.0e10, "damping_ratio": 0.0}
@@ -299,8 +299,8 @@ def test_a_run_without_fmus_loads_no_fmu_toolchain_nor_dask():
 
     # this file's folder and the project's root by their paths, not the working directory's
     here = Path(__file__).resolve()
-    paths = [str(here.parents[1] / "scene"), str(here.parents[3])]  # test_scene's folder, the root
-    code = (f"import sys, json; sys.path[:0] = {paths!r}; from test_scene import scene_with; "
+    paths = [str(here.parents[2] / "support"), str(here.parents[3])]  # the tests' helpers, the root
+    code = (f"import sys, json; sys.path[:0] = {paths!r}; from scenes import scene_with; "
             "import spacecraft; spacecraft.run(scene_with(**{'report.equivalence': False})); "
             "print(' '.join(m for m in ('fmu', 'fmpy', 'dask', 'distributed', 'pyarrow') "
             "if m in sys.modules))")

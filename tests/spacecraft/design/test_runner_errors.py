@@ -16,7 +16,7 @@ from spacecraft.design.loop import run
 from spacecraft.design.responses import diverged_at, outputs_until_overflow
 from spacecraft.scene.read import SceneError
 
-from test_scene import scene_with
+from scenes import scene_with
 
 LQR = {"attitude_weight": 7.6, "torque_weight": 1.0}
 

@@ -13,6 +13,7 @@ import spacecraft
 from appendages import Beam
 from spacecraft.design.fidelity import motion_counts
 from spacecraft.design.loop import DesignLoop
+from scenes import rod_scene
 
 SEEN = ("xy", "xz", "torsion")
 # the shipped three-axis scene's wing (in-plane bending first at 236 rad/s) and boom (a round
@@ -124,17 +125,14 @@ def test_a_beam_with_a_tip_body_keeps_the_fewest_lowest_modes_that_move_every_ti
     the warning names it."""
     import numpy as np
 
-    rod = {"section": "rod", "length": 10.0, "diameter": diameter, "density": 7800.0,
-           "youngs_modulus": 2.06e11, "damping_ratio": 0.005}
-    raw = {"hub": {"mass": 100.0, "inertia": [[60.0, 2.0, 0.0], [2.0, 50.0, 1.0],
-                                              [0.0, 1.0, 40.0]]},
-           "appendages": [{"name": "rod", "position": [0.5, 0.0, 0.1],
-                           "orientation": [0.0, 0.0, 0.0], "beam": rod,
-                           "tip": {"mass": 1.0}, "design": "truth"}],
-           "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}},
-           "manoeuvre": {"slew_angle": 10.0, "slew_time": 30.0, "duration": 45.0,
-                         "step": 0.25, "slew_axis": [1.0, 1.0, 1.0]},
-           "outputs": {"tip_deflection": True}}
+    # the small three-axis rod scene (tests/support/scenes.py) with a tip body and the
+    # diameter given, tuned on the truth itself, its fidelity from the tolerance, slewed about
+    # (1, 1, 1)
+    raw = rod_scene(three_axis=True, **{
+        "appendages.0.beam.diameter": diameter, "appendages.0.tip": {"mass": 1.0},
+        "appendages.0.design": "truth", "appendages.0.fit": None, "fidelity": None,
+        "controller.pd.damping": None, "manoeuvre.slew_axis": [1.0, 1.0, 1.0],
+        "outputs": {"tip_deflection": True}, "title": None, "report": None, "export": None})
     loop = DesignLoop(spacecraft.load_scene(raw, source="tip body"))
     beam = loop.beam(loop.scene.appendages[0])
     k0 = loop.coupled_floor(beam)

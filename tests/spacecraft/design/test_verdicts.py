@@ -26,7 +26,7 @@ from spacecraft.design.verdicts import (DAMPING_DROP, MARGINAL, MIN_DAMPING, MIN
                                  MIN_GAIN_MARGIN, MIN_MODULUS_MARGIN, MIN_PHASE_MARGIN, growing,
                                  loop_warnings, margin_flags)
 
-from test_scene import scene_with
+from scenes import scene_with
 
 
 # ---------------------------------------------------------------------------------------------

@@ -10,7 +10,7 @@ from spacecraft.report.write import write_report
 from spacecraft.scene.read import SceneError, load_scene
 
 from test_flown_run import scene
-from test_scene import BASE, scene_with
+from scenes import BASE, scene_with
 
 
 @pytest.fixture(scope="module")

@@ -18,7 +18,7 @@ from spacecraft.report.write import write_report
 from spacecraft.design.loop import run
 from spacecraft.scene.read import load_scene
 
-from test_scene import scene_with
+from scenes import scene_with
 
 
 def _written(scene, folder):

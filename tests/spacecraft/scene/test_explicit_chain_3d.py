@@ -12,32 +12,21 @@ import pytest
 from appendages import HingedChain
 from spacecraft import SceneError, load_scene
 from spacecraft.design.models import ModelBuilder, RunStats
+from scenes import rod_chain, rod_scene
 
-# the rigid finite elements of a 10 m steel rod of 10 mm (tests/spacecraft/scene/
-# test_scene_keys.py), with torsion and axial springs by the lumped rule
-CHAIN = {"lengths": [2.5, 5.0, 2.5], "masses": [1.53, 3.06, 1.53],
-         "inertias": [0.797, 6.38, 0.797], "hinge_stiffnesses": [20.2, 20.2],
-         "hinge_dampings": [0.1, 0.1], "com_offsets": [1.25, 2.5, 1.25],
-         "torsional_inertias": [1.9e-5, 3.8e-5, 1.9e-5], "torsion_stiffnesses": [20.7, 20.7],
-         "axial_stiffnesses": [4.3e6, 4.3e6]}
+# the rigid finite elements of the small rod scene's 10 m steel rod of 10 mm
+# (tests/support/scenes.py), with torsion and axial springs by the lumped rule
+CHAIN = rod_chain(three_axis=True)
 THREE_D = {"inertias_y": [0.9, 6.0, 0.9], "hinge_stiffnesses_y": [25.0, 25.0],
            "hinge_dampings_y": [0.2, 0.2], "torsion_dampings": [1e-3, 1e-3],
            "axial_dampings": [10.0, 10.0]}
-SCENE = {
-    "hub": {"mass": 100.0, "inertia": [[60.0, 2.0, 0.0], [2.0, 50.0, 1.0], [0.0, 1.0, 40.0]]},
-    "appendages": [{"name": "rod", "position": [0.5, 0.0, 0.1], "orientation": [0.0, 0.0, 0.0],
-                    "truth": "chain", "chain": dict(CHAIN)}],
-    "fidelity": {"n_modes": 2},
-    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1, "damping": 0.7}},
-}
-PLANAR_SCENE = {"hub": {"mass": 100.0, "inertia": 50.0},
-                "appendages": [{"name": "rod", "position": [0.5, 0.0], "direction": 0.0,
-                                "truth": "chain",
-                                "chain": {k: v for k, v in CHAIN.items()
-                                          if k not in ("torsional_inertias",
-                                                       "torsion_stiffnesses",
-                                                       "axial_stiffnesses")}}],
-                "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}}}
+# the small rod scene with the chain as the rod's truth and design, no title, manoeuvre, report
+# or export tables (planar: no fidelity table either, the PD at its default damping)
+_AS_CHAIN = {"appendages.0.beam": None, "appendages.0.fit": None, "appendages.0.truth": "chain",
+             "title": None, "manoeuvre": None, "report": None, "export": None}
+SCENE = rod_scene(three_axis=True, **_AS_CHAIN, **{"appendages.0.chain": CHAIN})
+PLANAR_SCENE = rod_scene(**_AS_CHAIN, **{"appendages.0.chain": rod_chain(), "fidelity": None,
+                                         "controller.pd.damping": None})
 
 
 def _scene(change=None, base=SCENE):

@@ -1,40 +1,12 @@
 """Scene files: the embedded scenes load; every class of bad input gives a SceneError naming
 the file, the key path and the problem."""
-import copy
 import math
 
 import pytest
 
 from appendages.interface import FlexsatError
 from spacecraft.scene.read import SceneError, example_scenes, load_scene, scene_path
-
-# undamped: damped Craig-Bampton models project the beam's damping on their modes, which costs
-# seconds per model; the tests that need damping set it
-ROD = {"section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
-       "youngs_modulus": 2.06e11, "damping_ratio": 0.0}
-BASE = {
-    "hub": {"mass": 100.0, "inertia": 50.0},
-    "appendages": [{"name": "rod", "position": [0.5, 0.0], "beam": dict(ROD),
-                    "fit": {"match": "frequencies"}}],
-    "fidelity": {"n_modes": 3},
-    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}},
-    "manoeuvre": {"slew_angle": 10.0, "slew_time": 60.0, "duration": 120.0, "step": 0.5},
-}
-
-
-def scene_with(**changes):
-    """BASE with dotted-path changes, e.g. scene_with(**{"hub.mass": -1}); None deletes."""
-    data = copy.deepcopy(BASE)
-    for path, value in changes.items():
-        keys = path.split(".")
-        node = data
-        for key in keys[:-1]:
-            node = node[int(key)] if isinstance(node, list) else node.setdefault(key, {})
-        if value is None:
-            del node[keys[-1]]
-        else:
-            node[keys[-1]] = value
-    return data
+from scenes import scene_with
 
 
 def test_embedded_scenes_load():

@@ -10,7 +10,7 @@ import pytest
 from spacecraft.scene.flown import shaper_band
 from spacecraft.scene.read import SceneError, load_scene
 
-from test_scene import BASE, scene_with
+from scenes import BASE, scene_with
 
 FLOWN = {"manoeuvre.profile": "shaped", "manoeuvre.feedforward": True,
          "manoeuvre.torque_limit": 0.1, "manoeuvre.rate_limit": 0.5,

@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 from spacecraft.scene.read import Scene, SceneError, load_scene
 
 from test_cli import SCENE
-from test_scene import BASE
+from scenes import BASE
 
 EXAMPLES = int(os.environ.get("FLEXSAT_FUZZ_EXAMPLES", "150"))
 FUZZ = settings(max_examples=EXAMPLES, derandomize=True, deadline=None,

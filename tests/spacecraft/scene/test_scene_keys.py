@@ -23,41 +23,21 @@ import pytest
 from spacecraft import SceneError, load_scene, run, write_report
 from spacecraft.scene import read as scene_read
 from spacecraft.scene.read import example_scenes, scene_path
+from scenes import rod_chain, rod_scene
 
 DATA = Path(scene_path("real_appendages")).parent / "data"
 
-# -- the two base scenes: small and fast ---------------------------------------------------------
-ROD = {"section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
-       "youngs_modulus": 2.06e11, "damping_ratio": 0.005}
-PLANAR = {
-    "title": "key walk",
-    "hub": {"mass": 100.0, "inertia": 50.0},
-    "appendages": [{"name": "rod", "position": [0.5, 0.0], "direction": 0.0,
-                    "beam": dict(ROD), "fit": {"n_bodies": 3, "match": "poles-and-zeros"}}],
-    "fidelity": {"n_modes": 2},
-    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1, "damping": 0.7}},
-    "manoeuvre": {"slew_angle": 10.0, "slew_time": 30.0, "duration": 45.0, "step": 0.25},
-    "report": {"plots": False},
-    "export": {"fmu": False},
-}
-THREE_AXIS = copy.deepcopy(PLANAR)
-THREE_AXIS["hub"]["inertia"] = [[60.0, 2.0, 0.0], [2.0, 50.0, 1.0], [0.0, 1.0, 40.0]]
-THREE_AXIS["appendages"][0].update(position=[0.5, 0.0, 0.1], orientation=[0.0, 0.0, 0.0])
-del THREE_AXIS["appendages"][0]["direction"]
-THREE_AXIS["manoeuvre"]["slew_axis"] = "z"
+# -- the two base scenes: small and fast (tests/support/scenes.py) ------------------------------
+PLANAR = rod_scene()
+THREE_AXIS = rod_scene(three_axis=True)
 BASES = {"planar": PLANAR, "three_axis": THREE_AXIS}
 
 A = "appendages[0]"
 M = "manoeuvre"
-# rigid finite elements of the rod by hand (EJ = E pi d^4 / 64 = 101.1 N m^2, H = 5 m)
-CHAIN = {"lengths": [2.5, 5.0, 2.5], "masses": [1.53, 3.06, 1.53],
-         "inertias": [0.797, 6.38, 0.797], "hinge_stiffnesses": [20.2, 20.2],
-         "hinge_dampings": [0.1, 0.1], "com_offsets": [1.25, 2.5, 1.25], "root": "rigid"}
+# the rod's rigid finite elements by hand (three axes: with its torsion and axial springs)
+CHAIN = {**rod_chain(), "root": "rigid"}
 RFEM = {"from_beam": "rfem", "n_bodies": 3}
-# the same bodies in three axes: torsion (GJ = 77.6 N m^2, rho I_p = 7.66e-6 kg m) and axial
-# springs (EA = 1.62e7 N) of the rod by the lumped rule, x-z bending as x-y (the round rod)
-CHAIN_3 = {**CHAIN, "torsional_inertias": [1.9e-5, 3.8e-5, 1.9e-5],
-           "torsion_stiffnesses": [20.7, 20.7], "axial_stiffnesses": [4.3e6, 4.3e6]}
+CHAIN_3 = {**rod_chain(three_axis=True), "root": "rigid"}
 TUBE = {"section": "tube", "diameter": None, "outer_diameter": 0.02, "wall_thickness": 0.002}
 RECTANGLE = {"section": "rectangular", "diameter": None, "width": 0.05, "thickness": 0.01}
 UNIFORM = {"section": "uniform", "diameter": None, "density": None, "youngs_modulus": None,

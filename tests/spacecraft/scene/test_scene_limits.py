@@ -12,7 +12,7 @@ from spacecraft.scene.limits import Limits, estimate_cost
 from spacecraft.design.loop import run
 from spacecraft.scene.read import RANGES, SceneError, load_scene, read_limits
 
-from test_scene import scene_with
+from scenes import scene_with
 
 
 def refused(data, match, **kwargs):

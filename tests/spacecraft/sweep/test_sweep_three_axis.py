@@ -3,7 +3,6 @@ body's a failed sample), mount angles and section properties swept by key path; 
 one design loop's multiloop verdict, equal to the design loop's run of the scene with the
 sampled values; the worst case's scene reruns the very controller the sweep judged; the same
 on a Dask LocalCluster; the shipped three-axis sweep scene."""
-import copy
 import json
 import math
 import tomllib
@@ -19,25 +18,8 @@ from spacecraft.sweep.evaluate import (THREE_AXIS_METRICS, evaluate, prepare, si
 from spacecraft.sweep.parameters import apply_values, mirror_path, read_sweep
 from spacecraft.sweep.report import metric_label
 from spacecraft.sweep.worst import worst_scene
+from scenes import rod_scene
 
-ROD = {"section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
-       "youngs_modulus": 2.06e11, "damping_ratio": 0.005}
-#: A small three-axis scene: a steel rod on a hub with a full inertia tensor, PD tuned on the
-#: fitted 3-D chain, two modes a beam, a short slew about z, every loop judged on W6 too.
-SCENE = {
-    "title": "three-axis sweep test",
-    "hub": {"mass": 100.0, "inertia": [[60.0, 2.0, 0.0], [2.0, 50.0, 1.0], [0.0, 1.0, 40.0]]},
-    "appendages": [{"name": "rod", "position": [0.5, 0.0, 0.1],
-                    "orientation": [0.0, 0.0, 0.0], "beam": dict(ROD),
-                    "fit": {"n_bodies": 3, "match": "poles-and-zeros"}}],
-    "fidelity": {"n_modes": 2},
-    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1, "damping": 0.7}},
-    "manoeuvre": {"slew_angle": 10.0, "slew_time": 30.0, "duration": 45.0, "step": 0.25,
-                  "slew_axis": "z"},
-    "outputs": {"exact_reference": True},
-    "report": {"plots": False},
-    "export": {"fmu": False},
-}
 PARAMETERS = {
     "hub.inertia[0][0]": {"distribution": "uniform", "low": 55.0, "high": 65.0},
     "hub.inertia[0][1]": {"distribution": "uniform", "low": -4.0, "high": 4.0},
@@ -48,7 +30,10 @@ MARGINS = ("gain_margin", "phase_margin", "modulus_margin")
 
 
 def scene():
-    return copy.deepcopy(SCENE)
+    """The small three-axis rod scene (tests/support/scenes.py): a steel rod on a hub with a
+    full inertia tensor, PD tuned on the fitted 3-D chain, two modes a beam, a short slew about
+    z; every loop judged on W6 too."""
+    return rod_scene(three_axis=True, outputs={"exact_reference": True})
 
 
 # -- key paths -----------------------------------------------------------------------------------

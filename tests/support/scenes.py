@@ -1,0 +1,147 @@
+"""The small rod scenes the tests run in the plane and in three axes, held once.
+
+:func:`rod_scene`: a hub of 100 kg carries the paper's rod (PAPER.md: steel, L = 10 m,
+d = 10 mm, rho = 7800 kg/m^3, E = 2.06e11 Pa), lightly damped (damping ratio 0.005), clamped
+0.5 m off the hub's centre along x (three axes: 0.1 m above it, the rod along x). The controller
+is a PD of 0.1 rad/s tuned on the rod's three-body chain (poles-and-zeros fit); the truth keeps
+two modes a beam (``fidelity.n_modes = 2``); the slew is 10 deg in 30 s, simulated for 45 s at
+0.25 s; no plots and no FMUs. It is small so that a test can run it many times (the scene-key
+walk runs it for every documented key, in the plane and in three axes): one rod, three bodies
+and two modes a beam, a short coarse time grid, nothing written that a test does not ask for.
+
+The scene readers' tests start from a slower variant of it, :data:`BASE` (the rod undamped,
+three truth modes, a 60 s slew), edited by :func:`scene_with`. The same rod's rigid finite
+elements, worked out by hand, are :func:`rod_chain`: an explicit chain as a scene gives it.
+
+Units are the scene file's: SI, angles in degrees.
+"""
+from __future__ import annotations
+
+import copy
+
+__all__ = ["BASE", "rod_chain", "rod_scene", "scene_with", "with_changes"]
+
+_ROD = {"section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
+        "youngs_modulus": 2.06e11, "damping_ratio": 0.005}
+
+_PLANAR = {
+    "title": "small rod",
+    "hub": {"mass": 100.0, "inertia": 50.0},
+    "appendages": [{"name": "rod", "position": [0.5, 0.0], "direction": 0.0,
+                    "beam": _ROD, "fit": {"n_bodies": 3, "match": "poles-and-zeros"}}],
+    "fidelity": {"n_modes": 2},
+    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1, "damping": 0.7}},
+    "manoeuvre": {"slew_angle": 10.0, "slew_time": 30.0, "duration": 45.0, "step": 0.25},
+    "report": {"plots": False},
+    "export": {"fmu": False},
+}
+
+_THREE_AXIS = {
+    **_PLANAR,
+    # a full tensor: products of inertia couple the axes
+    "hub": {"mass": 100.0, "inertia": [[60.0, 2.0, 0.0], [2.0, 50.0, 1.0], [0.0, 1.0, 40.0]]},
+    "appendages": [{"name": "rod", "position": [0.5, 0.0, 0.1], "orientation": [0.0, 0.0, 0.0],
+                    "beam": _ROD, "fit": {"n_bodies": 3, "match": "poles-and-zeros"}}],
+    "manoeuvre": {**_PLANAR["manoeuvre"], "slew_axis": "z"},
+}
+
+#: The scene readers' planar base (:func:`scene_with` edits a copy; never change it in place):
+#: the same hub and rod, undamped (damped Craig-Bampton models project the beam's damping on
+#: their modes, which costs seconds per model; the tests that need damping set it), its chain
+#: fitted on the frequencies, three truth modes, a PD of 0.1 rad/s at its default damping, the
+#: slew in 60 s simulated for 120 s at 0.5 s; no title, report or export table.
+BASE = {
+    "hub": {"mass": 100.0, "inertia": 50.0},
+    "appendages": [{"name": "rod", "position": [0.5, 0.0], "beam": {**_ROD, "damping_ratio": 0.0},
+                    "fit": {"match": "frequencies"}}],
+    "fidelity": {"n_modes": 3},
+    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}},
+    "manoeuvre": {"slew_angle": 10.0, "slew_time": 60.0, "duration": 120.0, "step": 0.5},
+}
+
+# The rod's rigid finite elements by hand: three bodies, the inner one twice the outer ones
+# (lengths 2.5, 5, 2.5 m, masses rho A l, inertias m l^2 / 12), hinges of EJ / H with
+# EJ = E pi d^4 / 64 = 101.1 N m^2 and H = 5 m. In three axes also torsion (GJ = 77.6 N m^2,
+# rho I_p = 7.66e-6 kg m) and axial springs (EA = 1.62e7 N) by the lumped rule; x-z bending as
+# x-y (the rod is round).
+_CHAIN = {"lengths": [2.5, 5.0, 2.5], "masses": [1.53, 3.06, 1.53],
+          "inertias": [0.797, 6.38, 0.797], "hinge_stiffnesses": [20.2, 20.2],
+          "hinge_dampings": [0.1, 0.1], "com_offsets": [1.25, 2.5, 1.25]}
+_CHAIN_3 = {"torsional_inertias": [1.9e-5, 3.8e-5, 1.9e-5],
+            "torsion_stiffnesses": [20.7, 20.7], "axial_stiffnesses": [4.3e6, 4.3e6]}
+
+
+def with_changes(data: dict, changes: dict) -> dict:
+    """A deep copy of a scene with changes at dotted key paths.
+
+    Parameters
+    ----------
+    data : dict
+        A scene as the TOML reader gives it; left untouched.
+    changes : dict
+        Key path -> value. A path is table keys and list indices joined by dots
+        (``"appendages.0.beam.diameter"``); a missing table on the way is created; the value
+        is copied in, and None removes the key (which must be there: a removal that removes
+        nothing is a mistake in the test).
+
+    Returns
+    -------
+    dict
+    """
+    data = copy.deepcopy(data)
+    for path, value in changes.items():
+        keys = path.split(".")
+        node = data
+        for key in keys[:-1]:
+            node = node[int(key)] if isinstance(node, list) else node.setdefault(key, {})
+        last = int(keys[-1]) if isinstance(node, list) else keys[-1]
+        if value is None:
+            del node[last]
+        else:
+            node[last] = copy.deepcopy(value)
+    return data
+
+
+def rod_scene(three_axis: bool = False, **changes) -> dict:
+    """The small rod scene (see the module), as a new dict.
+
+    Parameters
+    ----------
+    three_axis : bool
+        False: the planar scene (hub inertia 50 kg m^2, the rod's direction 0 deg). True: the
+        three-axis scene (a full hub inertia tensor [kg m^2], the rod mounted at
+        (0.5, 0, 0.1) m with orientation (0, 0, 0) deg, the slew about z).
+    **changes
+        Dotted key paths to values, as :func:`with_changes` takes them
+        (``rod_scene(outputs={"exact_reference": True})``,
+        ``rod_scene(True, **{"appendages.0.beam.diameter": 0.05})``); None removes a key.
+
+    Returns
+    -------
+    dict
+    """
+    return with_changes(_THREE_AXIS if three_axis else _PLANAR, changes)
+
+
+def scene_with(**changes) -> dict:
+    """:data:`BASE` with changes at dotted key paths, as :func:`with_changes` takes them
+    (``scene_with(**{"hub.mass": -1})``); None removes a key."""
+    return with_changes(BASE, changes)
+
+
+def rod_chain(three_axis: bool = False) -> dict:
+    """The small rod's rigid finite elements as a scene's explicit ``chain`` table (SI units).
+
+    Parameters
+    ----------
+    three_axis : bool
+        Also the torsion and axial arrays a three-axis chain needs.
+
+    Returns
+    -------
+    dict
+        A new dict: lengths [m], masses [kg], inertias [kg m^2], hinge stiffnesses [N m/rad]
+        and dampings [N m s/rad], centre-of-mass offsets [m]; three axes also torsional
+        inertias [kg m^2], torsion [N m/rad] and axial [N/m] stiffnesses.
+    """
+    return copy.deepcopy({**_CHAIN, **_CHAIN_3} if three_axis else _CHAIN)
