@@ -345,6 +345,9 @@ class DesignLoop(ModelBuilder):
                     "models": _described(sc), "n_states": int(sim_plant.nstates), **info,
                     "coupled_frequencies": _coupled(sc)}
 
+        # the loops' real size (a beam's modes can ask for more than the read-time estimate
+        # counted): refused before the exact reference, tuning, margins and simulations
+        self.check_loop_states(n_modes)
         exact_frd = None
         if outputs.exact_reference:
             with self.stage("exact frequency-domain reference"):
@@ -445,6 +448,8 @@ class DesignLoop(ModelBuilder):
         scene = self.scene
         m = scene.manoeuvre
         n_modes = self.n_modes
+        self.check_loop_states(n_modes, variants=(variant,), kinds=(kind,),
+                               controller=controller, models=models)
         K = controller if controller is not None else self.tuned(variant, kind,
                                                                  n_modes).controller
         row: dict = {"design": variant, "controller": kind}
@@ -531,20 +536,6 @@ class DesignLoop(ModelBuilder):
             if flags:
                 row["peak_difference_flags"] = flags
         return out
-
-    def simulation_plant(self, which: str, variant: str, n_modes: int | None):
-        """The plant a manoeuvre is simulated on: the truth model (``which = "truth"``) or a
-        design model, with the outputs and disturbance inputs the specification asks for."""
-        scene = self.scene
-        m = scene.manoeuvre
-        if which == "truth":
-            sc, key = self.truth_spacecraft(n_modes), ("truth", n_modes)
-        else:
-            sc, key = self.design_spacecraft(variant, n_modes), self.design_key(variant, n_modes)
-        return self.plant(sc, key, tip=scene.outputs.tip_deflection,
-                          root_loads=scene.outputs.root_loads,
-                          disturbances=m is not None and m.disturbance is not None,
-                          prune=scene.fidelity.prune)[0]
 
     def simulate(self, loop, *, whole: bool = False) -> dict:
         """The manoeuvre on a closed loop: ``{"slew": ..., "disturbance": ... or None}``

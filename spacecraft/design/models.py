@@ -35,7 +35,7 @@ from .fidelity import (MAX_MODES, OUTPUT_MOTIONS, FidelityChoice, choose_n_modes
                        clamped_frequencies, motion_counts, output_changes,
                        refine_for_closed_loop, refine_for_tip_outputs)
 from ..dynamics.hub import Hub, Mount
-from ..scene.limits import estimate_cost
+from ..scene.limits import appendage_dof, controller_states, estimate_cost
 from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
 from ..scene.specs import quiet_unit_slips
 from .exact_grid import (POINTS_PER_DECADE, POINTS_PER_MODE, exact_grid, locating_spacecraft,
@@ -428,15 +428,16 @@ class ModelBuilder:
     def coupled_floor(self, beam) -> int:
         """The fewest lowest modes of a three-axis beam whose modes are ranked together (a tip
         body, segments) that move every tip motion :meth:`seen_motions` names (a tip row of
-        its root model with a non-zero entry), searched up to the most modes the scene's
-        search may try (:meth:`max_modes`); 1 when none up to there moves them all (the
-        warning ``truth_output_unmodelled`` then names what stays unmoved)."""
+        its root model with a non-zero entry), searched up to the largest truncation the
+        read-time count lets the loop hold (:meth:`truncation_cap`); 1 when none up to there
+        moves them all (the warning ``truth_output_unmodelled`` then names what stays
+        unmoved)."""
         rows = {"xy": 0, "xz": 1, "torsion": 2}
 
         def build():
             method = self.scene.fidelity.method
             wanted = [rows[m] for m in self.seen_motions() if m in rows]
-            for k in range(1, self.max_modes() + 1):
+            for k in range(1, self.truncation_cap() + 1):
                 with self.scene_values("fidelity"):
                     tip = beam.truncated(k, method=method).root_model(6).tip_rows
                 if all(np.asarray(tip[i]).any() for i in wanted):
@@ -520,6 +521,20 @@ class ModelBuilder:
                           self.design_key(variant, n_modes),
                           tip=lqr is not None and lqr.deflection_weight is not None,
                           prune=self.scene.fidelity.prune)
+
+    def simulation_plant(self, which: str, variant: str, n_modes: int | None):
+        """The plant a manoeuvre is simulated on: the truth model (``which = "truth"``) or a
+        design model, with the outputs and disturbance inputs the specification asks for."""
+        scene = self.scene
+        m = scene.manoeuvre
+        if which == "truth":
+            sc, key = self.truth_spacecraft(n_modes), ("truth", n_modes)
+        else:
+            sc, key = self.design_spacecraft(variant, n_modes), self.design_key(variant, n_modes)
+        return self.plant(sc, key, tip=scene.outputs.tip_deflection,
+                          root_loads=scene.outputs.root_loads,
+                          disturbances=m is not None and m.disturbance is not None,
+                          prune=scene.fidelity.prune)[0]
 
     def tuned(self, variant: str, kind: str, n_modes: int | None):
         """The controller ``kind`` tuned on a design variant (:func:`spacecraft.design.tuning.tune`),
@@ -790,15 +805,36 @@ class ModelBuilder:
                                    closed_loop=record)
 
     def max_modes(self) -> int:
-        """Most modes per beam the search from a tolerance may try: fidelity.MAX_MODES, within
-        limits.modes and the loop size limits.states allows (counting, in three axes, a mode
-        more per motion a reported output sees: :meth:`truncation`)."""
+        """Most modes per beam (n) the search from a tolerance may try: fidelity.MAX_MODES,
+        within limits.modes and the loop size limits.states allows. A three-axis beam whose
+        modes are ranked together (:meth:`truncation`) is counted with the modes it keeps
+        beyond n, ``k0 - 1`` (:meth:`coupled_floor`) and its pinned ones, which only its
+        modes tell; the other beams as :meth:`truncation_cap` counts them."""
+        scene = self.scene
+        cap = self.truncation_cap()
+        coupled = self.coupled_beams()
+        if not coupled:
+            return cap
+        kept = {a.name: self.floor_beyond_n() for a in scene.appendages if a.truth == "beam"}
+        for a in coupled:
+            kept[a.name] = (self.coupled_floor(self.beam(a)) - 1
+                            + self.tip_floors.get(a.name, {}).get("coupled", 0))
+        while cap > 1:
+            trial = scene.replace(fidelity=dataclasses.replace(
+                scene.fidelity, n_modes=cap, modes_per_motion=None))
+            if estimate_cost(trial, kept=kept).loop_states <= scene.limits.states:
+                break
+            cap -= 1
+        return cap
+
+    def truncation_cap(self) -> int:
+        """Most modes per beam within fidelity.MAX_MODES, limits.modes and the loop size
+        limits.states allows by the read-time count (:func:`spacecraft.scene.limits.estimate_cost`,
+        counting, in three axes, a mode more per motion a reported output sees and the modes
+        the tip-output rule added: :meth:`floor_beyond_n`)."""
         scene = self.scene
         cap = min(MAX_MODES, scene.limits.modes)
-        seen = self.seen_motions()
-        # the modes the tip-output rule added beyond the one a motion has anyway
-        floor = len(seen) + max((sum(k - (m in seen) for m, k in f.items())
-                                 for f in self.tip_floors.values()), default=0)
+        floor = self.floor_beyond_n()
         while cap > 1:
             trial = scene.replace(fidelity=dataclasses.replace(
                 scene.fidelity, n_modes=cap + floor, modes_per_motion=None))
@@ -806,6 +842,140 @@ class ModelBuilder:
                 break
             cap -= 1
         return cap
+
+    def floor_beyond_n(self) -> int:
+        """Modes a truncation keeps beyond n by the read-time count: one per motion a reported
+        output sees (:meth:`seen_motions`) and the modes the tip-output rule added beyond the
+        one a motion has anyway (the largest over the beams)."""
+        seen = self.seen_motions()
+        return len(seen) + max((sum(k - (m in seen) for m, k in f.items())
+                                for f in self.tip_floors.values()), default=0)
+
+    def coupled_beams(self) -> list:
+        """The appendages whose truth is a three-axis beam with modes ranked together (a tip
+        body, segments) truncated by its lowest modes (:meth:`truncation`): with motions a
+        reported output sees or modes pinned."""
+        if not self.three_axis or self.given is not None:
+            return []
+        seen = self.seen_motions()
+        return [a for a in self.scene.appendages
+                if a.truth == "beam" and not getattr(self.beam(a), "is_uniform", False)
+                and (seen or self.tip_floors.get(a.name))]
+
+    def check_loop_states(self, n_modes: int | None, *, variants=None, kinds=None,
+                          controller=None, models: tuple = ("design", "truth")) -> int:
+        """The states of the largest closed loop the run builds, refused over limits.states.
+
+        Counted on the plants as built (the models with the modes they keep: a beam whose
+        modes are ranked together keeps what its modes ask, which the read-time estimate
+        cannot know) and the controllers as they will be
+        (:func:`spacecraft.scene.limits.controller_states`, or ``controller``'s own states),
+        before any controller is tuned or loop closed, simulated or judged.
+
+        Parameters
+        ----------
+        n_modes : int or None
+            Modes per truncated beam of the truth model.
+        variants, kinds : sequence of str, optional
+            The design variants and controller types closed (default: the scene's).
+        controller : control.StateSpace, optional
+            A controller given instead of one tuned (a sweep's nominal controller).
+        models : tuple of str
+            The models the controllers are closed on: ``"design"`` and/or ``"truth"``.
+
+        Returns
+        -------
+        int
+            States of the largest closed loop (0 for a user's own models: not checked).
+
+        Raises
+        ------
+        SceneError
+            Over ``limits.states``, naming the appendage and the key that drive the size, the
+            states and the limit, and what to do.
+        """
+        if self.given is not None:
+            return 0
+        scene = self.scene
+        kinds = scene.controller.types if kinds is None else kinds
+        truth = (self.simulation_plant("truth", None, n_modes).nstates if "truth" in models
+                 else 0)
+        worst = (0, 0, "truth", None, None, 0)
+        for variant in (self.variants if variants is None else variants):
+            design = (self.simulation_plant("design", variant, n_modes).nstates
+                      if "design" in models else 0)
+            plant, which = (truth, "truth") if truth >= design else (design, "design")
+            for kind in kinds:
+                if controller is not None:
+                    k = int(controller.nstates)
+                else:
+                    states = (self.design_plant(variant, n_modes)[0].nstates if kind == "lqr"
+                              else 0)
+                    k = controller_states(scene.controller, kind, states, self.three_axis)
+                if plant + k > worst[0]:
+                    worst = (plant + k, plant, which, variant, kind, k)
+        total, plant, which, variant, kind, k = worst
+        limit = scene.limits.states
+        if total <= limit:
+            return total
+        key, why, advice = self.size_driver(which, variant, n_modes)
+        model = "truth model" if which == "truth" else f"design model ({variant})"
+        raise SceneError(
+            f"{scene.source}: {key}: the closed loop of the {kind.upper()} on the {model} "
+            f"would have {total} states ({plant} of the plant, {k} of the controller), over "
+            f"the limit {limit} (limits.states, states of the largest closed loop): {why}; "
+            f"{advice}, or if you really want more raise it: [limits] states = N in the "
+            "scene, or --limit states=N")
+
+    def size_driver(self, which: str, variant: str | None, n_modes: int | None):
+        """The appendage that contributes most coordinates to a model (``which``: "truth" or
+        "design") of the run: (the scene key behind its size, why it is that large, what to
+        do), for :meth:`check_loop_states`."""
+        scene = self.scene
+        sc = (self.truth_spacecraft(n_modes) if which == "truth"
+              else self.design_spacecraft(variant, n_modes))
+        names = sc.second_order_model().coordinate_names
+        counts = {a.name: sum(c.startswith(f"{a.name}.") for c in names)
+                  for a in scene.appendages}
+        spec = max(scene.appendages, key=lambda a: counts[a.name])
+        name, size = spec.name, counts[spec.name]
+        kind = spec.truth if which == "truth" else spec.design
+        if kind == "truth":
+            kind = spec.truth
+        if kind != "beam":
+            dof, rest = appendage_dof(spec, which, n_modes)
+            key = self.key(spec, rest)
+            return (key, f"appendage {name!r} has {size} coordinates ({rest})",
+                    f"lower {key}")
+        fidelity = scene.fidelity
+        pinned = fidelity.pinned_floors().get(name)
+        n_key = ("fidelity.n_modes" if fidelity.n_modes is not None
+                 else "fidelity.tolerance")
+        if spec in self.coupled_beams():
+            beam = self.beam(spec)
+            k0 = self.coupled_floor(beam)
+            extra = self.tip_floors.get(name, {}).get("coupled", 0)
+            body = getattr(spec.beam, "tip", None) is not None
+            key = self.key(spec, "tip" if body else spec.structure.kind)
+            ranked = "a tip body" if body else "segments"
+            seen = ", ".join(self.seen_motions())
+            why = (f"appendage {name!r} keeps {size} modes: "
+                   f"the {k0} lowest, the fewest that move every tip motion it must keep a "
+                   f"mode of ({seen}; its modes are ranked together: {ranked}), and n_modes - 1 "
+                   f"= {n_modes - 1} more"
+                   + (f" and {extra} pinned (fidelity.modes_per_motion.{name}.coupled)"
+                      if extra else ""))
+            if fidelity.modes_per_motion is not None:
+                advice = ("pin fewer modes (fidelity.n_modes, fidelity.modes_per_motion), or "
+                          "leave fidelity.modes_per_motion out (no mode of every motion kept)")
+            else:
+                advice = ("report fewer outputs (outputs.tip_deflection, outputs.root_loads: "
+                          "no mode of every motion kept) or ask for fewer modes "
+                          f"({n_key})")
+            return key, why, advice
+        key = f"fidelity.modes_per_motion.{name}" if pinned else n_key
+        return (key, f"appendage {name!r} keeps {size} modes",
+                "pin fewer modes (fidelity.n_modes, fidelity.modes_per_motion)")
 
     def first_clamped_frequency(self) -> float:
         """Lowest clamped-root frequency of the appendages [rad/s] (first zero of theta/torque)."""

@@ -26,7 +26,11 @@ fit_bodies        14           ``fit.n_bodies``: appendages' own limit (``append
                                appendages' too
 appendages        64           mounted appendages
 states            1200         states of the largest closed loop (upper bound: truth plant
-                               plus controller): tens of seconds and about 2 GB at the limit
+                               plus controller): tens of seconds and about 2 GB at the limit;
+                               counted again on the models the run builds, before any
+                               controller is tuned (a three-axis beam with a tip body or
+                               segments keeps the modes its tip motions need, which only its
+                               modes tell: ``ModelBuilder.check_loop_states``)
 samples           10,000,000   samples of one simulation (duration / step + 1); a sample
                                of a digital loop counts 20 (scipy's dlsim steps in
                                Python, some 30 times the continuous simulator's cost per
@@ -47,9 +51,10 @@ basilisk_seconds  600 s        estimated wall time of one Basilisk run (``simula
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 __all__ = ["Limits", "LIMIT_UNITS", "REAL_LIMITS", "SceneCost", "estimate_cost", "appendage_dof",
-           "DIGITAL_SAMPLE_COST", "library_limits"]
+           "controller_states", "DIGITAL_SAMPLE_COST", "library_limits"]
 
 #: Unit and meaning of each limit (for messages and ``--help``).
 LIMIT_UNITS = {
@@ -213,26 +218,60 @@ def appendage_dof(spec, which: str, n_modes: int | None, floor: int = 0) -> tupl
     return (n if chain.root == "hinged" else n - 1), key
 
 
+def controller_states(controller, kind: str, design_states: int, three_axis: bool) -> int:
+    """States of a scene's controller of type ``kind``, known before it is tuned.
+
+    Parameters
+    ----------
+    controller : spacecraft.scene.specs.ControllerSpec
+        The scene's ``[controller]`` table.
+    kind : {"pd", "lqr"}
+    design_states : int
+        States of the design plant the controller is tuned on.
+    three_axis : bool
+        A three-axis spacecraft (three torques).
+
+    Returns
+    -------
+    int
+        A given controller's (``controller.given`` of this type): its states. A PD's: each
+        filter, roll-off and notch, is second order per torque (:func:`controllers.pd`; the
+        PD itself is static). An LQR's: its Kalman estimator has the design plant's states (at
+        most: modes the loop cannot influence are left out, :func:`controllers.lqr`).
+    """
+    given = controller.given
+    if given is not None and given.kind == kind:
+        return int(given.n_states)
+    if kind == "pd":
+        pd = controller.pd
+        return (3 if three_axis else 1) * (2 * (pd.roll_off is not None)
+                                           + 2 * (pd.notch is not None))
+    return int(design_states)
+
+
 def _controller_states(scene, design_states: int) -> int:
-    """Upper bound of the controller's states: PD with filters, or LQR with its estimator."""
-    c = scene.controller
-    states = 0
-    if c.pd is not None:
-        # PD with a derivative filter, a roll-off and a notch (second order each, at most)
-        states = max(states, 2 + 2 * (c.pd.roll_off is not None) + 2 * (c.pd.notch is not None))
-    if c.lqr is not None:
-        # an observer of the design model plus the reference model
-        states = max(states, design_states + 2)
-    return states
+    """Upper bound of the controller's states at read time: two more than
+    :func:`controller_states` counts for the largest of the scene's controllers (a margin the
+    read-time bound has always kept; the run checks the loops it builds exactly,
+    :meth:`spacecraft.design.models.ModelBuilder.check_loop_states`)."""
+    return max((2 + controller_states(scene.controller, kind, design_states, scene.three_axis)
+                for kind in scene.controller.types), default=0)
 
 
-def estimate_cost(scene) -> SceneCost:
+def estimate_cost(scene, *, kept: Mapping[str, int] | None = None) -> SceneCost:
     """Upper bounds of a scene's plant and loop sizes, samples and response memory.
 
     Parameters
     ----------
     scene : spacecraft.scene.read.Scene
         A validated scene (its limits are not consulted here).
+    kept : mapping of str to int, optional
+        Modes a truncated truth beam keeps beyond ``fidelity.n_modes``, by appendage name,
+        where the caller knows them from the beam's modes (the run: a three-axis beam whose
+        modes are ranked together keeps its k0 - 1 lowest beyond n, k0 the fewest that move
+        every tip motion, :meth:`spacecraft.design.models.ModelBuilder.coupled_floor`);
+        counted instead of the read-time rule's floor (a uniform round beam's twins are still
+        added).
 
     Returns
     -------
@@ -268,6 +307,8 @@ def estimate_cost(scene) -> SceneCost:
     pinned = fidelity.pinned_floors()
 
     def floor(a) -> int:
+        if kept is not None and a.name in kept:
+            return int(kept[a.name]) + twins(a)
         mine = pinned.get(a.name, {})
         return (len(seen) + sum(max(0, k - (m in seen)) for m, k in mine.items())
                 + twins(a))

@@ -334,7 +334,8 @@ def evaluate_scene(context: Context, scene) -> dict:
     Raises
     ------
     SceneError
-        A controller that cannot be tuned on the sample's design model.
+        A controller that cannot be tuned on the sample's design model, or a loop over
+        ``limits.states`` (the sample's truth can keep more modes than the nominal's).
     """
     import json
 
@@ -342,6 +343,9 @@ def evaluate_scene(context: Context, scene) -> dict:
     loop.n_modes = n = context.n_modes
     out: dict = {"n_modes": -1 if n is None else int(n)}
     K = context.nominal_controller
+    # the sample's loop within limits.states, before a controller is tuned on it
+    loop.check_loop_states(n, variants=(context.variant,), kinds=(context.controller,),
+                           controller=K, models=("truth",))
     if K is None:
         tuned = loop.tuned(context.variant, context.controller, n)
         K = tuned.controller
@@ -564,7 +568,10 @@ def prepare(raw: dict, spec: SweepSpec, source: str) -> Context:
                       three_axis=trimmed.three_axis,
                       truth_modes=_truth_modes(trimmed, n_modes))
     if spec.design == "nominal":
-        tuned = DesignLoop(trimmed).tuned(variant, kind, n_modes)
+        nominal = DesignLoop(trimmed)
+        nominal.check_loop_states(n_modes, variants=(variant,), kinds=(kind,),
+                                  models=("truth",))
+        tuned = nominal.tuned(variant, kind, n_modes)
         context.nominal_controller = tuned.controller
         context.nominal_record = controller_description(tuned, kind)
     return context
