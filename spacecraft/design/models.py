@@ -35,7 +35,7 @@ from .fidelity import (MAX_MODES, OUTPUT_MOTIONS, FidelityChoice, choose_n_modes
                        clamped_frequencies, motion_counts, output_changes,
                        refine_for_closed_loop, refine_for_tip_outputs)
 from ..dynamics.hub import Hub, Mount
-from ..scene.limits import appendage_dof, controller_states, estimate_cost
+from ..scene.limits import appendage_dof, controller_states, delay_states, estimate_cost
 from ..scene.read import AppendageSpec, ChainSpec, Scene, SceneError
 from ..scene.specs import quiet_unit_slips
 from .exact_grid import (POINTS_PER_DECADE, POINTS_PER_MODE, exact_grid, locating_spacecraft,
@@ -868,8 +868,9 @@ class ModelBuilder:
 
         Counted on the plants as built (the models with the modes they keep: a beam whose
         modes are ranked together keeps what its modes ask, which the read-time estimate
-        cannot know) and the controllers as they will be
-        (:func:`spacecraft.scene.limits.controller_states`, or ``controller``'s own states),
+        cannot know), the controllers as they will be
+        (:func:`spacecraft.scene.limits.controller_states`, or ``controller``'s own states)
+        and a delayed loop's delay line (:func:`spacecraft.scene.limits.delay_states`),
         before any controller is tuned or loop closed, simulated or judged.
 
         Parameters
@@ -900,6 +901,7 @@ class ModelBuilder:
         kinds = scene.controller.types if kinds is None else kinds
         truth = (self.simulation_plant("truth", None, n_modes).nstates if "truth" in models
                  else 0)
+        delay = delay_states(scene)
         worst = (0, 0, "truth", None, None, 0)
         for variant in (self.variants if variants is None else variants):
             design = (self.simulation_plant("design", variant, n_modes).nstates
@@ -912,17 +914,26 @@ class ModelBuilder:
                     states = (self.design_plant(variant, n_modes)[0].nstates if kind == "lqr"
                               else 0)
                     k = controller_states(scene.controller, kind, states, self.three_axis)
-                if plant + k > worst[0]:
-                    worst = (plant + k, plant, which, variant, kind, k)
+                if plant + k + delay > worst[0]:
+                    worst = (plant + k + delay, plant, which, variant, kind, k)
         total, plant, which, variant, kind, k = worst
         limit = scene.limits.states
         if total <= limit:
             return total
-        key, why, advice = self.size_driver(which, variant, n_modes)
+        if delay > plant:
+            c = scene.controller
+            step = "the sample time" if c.sample_time is not None else "manoeuvre.step"
+            key, why, advice = ("controller.delay", f"the delay line holds the last "
+                                f"{delay // (3 if self.three_axis else 1)} commands of each "
+                                f"torque (the delay in steps of {step})",
+                                f"shorten controller.delay or lengthen {step}")
+        else:
+            key, why, advice = self.size_driver(which, variant, n_modes)
         model = "truth model" if which == "truth" else f"design model ({variant})"
         raise SceneError(
             f"{scene.source}: {key}: the closed loop of the {kind.upper()} on the {model} "
-            f"would have {total} states ({plant} of the plant, {k} of the controller), over "
+            f"would have {total} states ({plant} of the plant, {k} of the controller"
+            + (f", {delay} of the delay line" if delay else "") + "), over "
             f"the limit {limit} (limits.states, states of the largest closed loop): {why}; "
             f"{advice}, or if you really want more raise it: [limits] states = N in the "
             "scene, or --limit states=N")

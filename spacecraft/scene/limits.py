@@ -54,7 +54,7 @@ import dataclasses
 from collections.abc import Mapping
 
 __all__ = ["Limits", "LIMIT_UNITS", "REAL_LIMITS", "SceneCost", "estimate_cost", "appendage_dof",
-           "controller_states", "DIGITAL_SAMPLE_COST", "library_limits"]
+           "controller_states", "delay_states", "DIGITAL_SAMPLE_COST", "library_limits"]
 
 #: Unit and meaning of each limit (for messages and ``--help``).
 LIMIT_UNITS = {
@@ -249,6 +249,40 @@ def controller_states(controller, kind: str, design_states: int, three_axis: boo
     return int(design_states)
 
 
+def delay_states(scene) -> int:
+    """States of the delay line of a scene's delayed loop (0 without a delay).
+
+    A loop with ``controller.delay`` (or ``computation_delay``) is discrete on a step T: the
+    digital controller's sample time, else the manoeuvre's step (without one, twice the delay),
+    the command held over each step (:func:`spacecraft.design.manoeuvre.close_flown_loop`). Its
+    states end with the past commands the delay reaches back to, per torque k + 1 for a shift
+    (k + f) T with 0 < f < 1, k for f = 0 (:func:`controllers.delay.delayed_closed_loop`, f
+    as :func:`controllers.delay.split_delay` snaps it), the shift the whole delay for a
+    digital controller, the delay less the hold's mean delay T / 2 for a continuous one.
+    """
+    import warnings
+
+    from controllers.delay import LongDelayWarning, split_delay
+
+    c = scene.controller
+    tau = c.total_delay
+    if not tau > 0:
+        return 0
+    if c.sample_time is not None:
+        step, shift = c.sample_time, tau
+    else:
+        m = scene.manoeuvre
+        step = m.step if m is not None else 2.0 * c.delay
+        shift = max(tau - 0.5 * step, 0.0)
+    if not shift > 0:
+        return 0
+    with warnings.catch_warnings():
+        # a long delay is the reader's to report, by key
+        warnings.simplefilter("ignore", LongDelayWarning)
+        k, f = split_delay(shift, step)
+    return (3 if scene.three_axis else 1) * (k + (f > 0))
+
+
 def _controller_states(scene, design_states: int) -> int:
     """Upper bound of the controller's states at read time: two more than
     :func:`controller_states` counts for the largest of the scene's controllers (a margin the
@@ -333,10 +367,12 @@ def estimate_cost(scene, *, kept: Mapping[str, int] | None = None) -> SceneCost:
     truth_states = 2 * (3 + sum(d for d, _ in truth))
     design_states = 2 * (3 + sum(d for d, _ in design))
     plant_states = max(truth_states, design_states)
-    loop_states = plant_states + _controller_states(scene, design_states)
+    loop_states = plant_states + _controller_states(scene, design_states) + delay_states(scene)
     # the key behind the largest contribution
     contributions = [(d, key if key == "fidelity.n_modes" else f"appendages[{k}].{key}")
                      for dofs in (truth, design) for k, (d, key) in enumerate(dofs)]
+    # (a degree of freedom is two states)
+    contributions.append((delay_states(scene) / 2, "controller.delay"))
     loop_key = max(contributions)[1]
 
     m = scene.manoeuvre

@@ -16,6 +16,7 @@ the thinner the rod). A plant of N elastic coordinates on a three-axis hub turne
 2 (3 + N) states (the hub's three rotations; the centre of mass does not move).
 """
 import copy
+import warnings
 
 import numpy as np
 import pytest
@@ -186,3 +187,55 @@ def test_the_lqr_states_counted_before_tuning_bound_the_tuned_ones():
     K = loop.tuned("design", "lqr", N_MODES).controller
     assert K.nstates <= controller_states(loop.scene.controller, "lqr", plant.nstates, True)
     assert np.isfinite(K.A).all()
+
+
+def _rod_scene(three_axis: bool, controller: dict) -> dict:
+    """The rod without its tip body, one mode, in the plane or in three axes."""
+    raw = copy.deepcopy(SCENE)
+    raw["controller"] = controller
+    raw["fidelity"] = {"n_modes": 1}
+    raw["appendages"][0].pop("tip")
+    del raw["manoeuvre"]["step"]   # the default fits a digital or delayed loop
+    if not three_axis:
+        raw["hub"]["inertia"] = 50.0
+        raw["appendages"][0].update(position=[0.5, 0.0], direction=0.0)
+        del raw["appendages"][0]["orientation"]
+        del raw["manoeuvre"]["slew_axis"]
+    return raw
+
+
+PD = {"natural_frequency": 0.1, "roll_off": 5.0}
+LQR = {"attitude_weight": 1.0, "torque_weight": 1.0}
+
+
+@pytest.mark.parametrize("three_axis", [False, True])
+@pytest.mark.parametrize("controller", [
+    {"types": ["pd"], "pd": PD, "delay": 0.05},
+    {"types": ["pd"], "pd": {"natural_frequency": 0.1}, "delay": 0.3},
+    {"types": ["pd"], "pd": PD, "sample_rate": 10.0, "delay": 0.25},
+    # 0.2 s and one sample: 3 samples (tau / T = 2.9999... snapped)
+    {"types": ["lqr"], "lqr": LQR, "sample_rate": 10.0, "delay": 0.2,
+     "computation_delay": True},
+    {"types": ["lqr"], "lqr": LQR, "sample_rate": 10.0},
+], ids=["continuous", "continuous-long", "digital", "digital-computation", "no-delay"])
+def test_the_states_counted_before_tuning_are_those_of_the_loops_built(three_axis, controller):
+    """Plant, controller and a delayed loop's delay line (the past commands, per torque),
+    counted before any controller is tuned: the largest loop the run then closes has that
+    many states."""
+    loop = DesignLoop(load_scene(_rod_scene(three_axis, controller)), time_responses=False)
+    counted = loop.check_loop_states(1)
+    kind = controller["types"][0]
+    built = loop.closed_loops("design", kind).loops
+    assert counted == max(x.nstates for x in built.values())
+
+
+def test_a_long_delay_line_is_refused_by_its_key_when_the_scene_is_read():
+    """A digital PD at 10 Hz with a 5 s delay: the loop holds the last 50 commands; a planar
+    rod's truth of one mode has 2 (3 + 1) = 8 states (the estimate's), its loop 8 + 2 + 50."""
+    raw = _rod_scene(False, {"types": ["pd"], "pd": {"natural_frequency": 0.1},
+                             "sample_rate": 10.0, "delay": 5.0})
+    raw["manoeuvre"]["duration"] = 60.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # the reader's word on a long delay: not tested here
+        with pytest.raises(SceneError, match=r"controller\.delay: .*60 states.*limits\.states"):
+            load_scene(raw, limits={"states": 59})
