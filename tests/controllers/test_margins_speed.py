@@ -139,7 +139,11 @@ _PINNED = {
     "disk_margin": (1.4212632064213604e-05, 5e-2),
     "min_singular_value": (1.4212531065476238e-05, 5e-2),
 }
-_PINNED_DELAY_MARGIN = (7.283198457491322e-08, 1e-5)
+# the delay margin is the phase margin of the critical crossing (here the eigenvalue of L that
+# crosses the unit circle beside the y loop's 0.008 deg crossover) over its frequency, which is
+# resolved to 1e-13: it carries the phase margin's relative round-off, so the same tolerance
+# (a round-off change of the rigid-body modes of 2e-19 moved both by 1e-5)
+_PINNED_DELAY_MARGIN = (7.283198457491322e-08, 2e-3)
 
 
 @pytest.mark.slow
