@@ -76,6 +76,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from controllers.stability import continuous_poles
+
 __all__ = ["MIN_GAIN_MARGIN", "MIN_PHASE_MARGIN", "MIN_MODULUS_MARGIN", "MIN_DISK_MARGIN",
            "MIN_DAMPING", "DAMPING_DROP", "CAUTIONS", "MODE_ERROR", "MARGINAL", "STATUS_TEXT",
            "closed_loop_poles", "loop_status", "withheld_metrics", "design_warnings",
@@ -133,12 +135,9 @@ def s_plane_poles(poles, sample_time: float | None = None) -> np.ndarray:
 
 
 def closed_loop_poles(loop) -> np.ndarray:
-    """Poles of a closed loop in the s-plane [1/s] (:func:`s_plane_poles`)."""
-    A = np.asarray(loop.A, dtype=float)
-    if A.size == 0:
-        return np.zeros(0, dtype=complex)
-    return s_plane_poles(np.linalg.eigvals(A),
-                         float(loop.dt) if loop.isdtime(strict=True) else None)
+    """Poles of a closed loop in the s-plane [1/s], a digital loop's mapped from the z-plane
+    (:func:`controllers.stability.continuous_poles`)."""
+    return continuous_poles(loop)
 
 
 def loop_status(poles: np.ndarray, response, manoeuvre, metrics: dict | None) -> dict:
