@@ -598,9 +598,9 @@ class Spacecraft:
             # damping couples two modes when C_jk is more than round-off (symmetric wings leave
             # ~1e-12 between symmetric and antisymmetric modes)
             size = np.abs(Ck)
+            spread = mixing @ size      # mixing and Ck symmetric: size @ mixing.T is its transpose
             coupled = (size - np.diag(np.diag(size))) > np.maximum(
-                1e-12 * max(size.max(initial=0), 1e-300),
-                PRUNE_SAFETY * (mixing @ size + size @ mixing.T))
+                1e-12 * max(size.max(initial=0), 1e-300), PRUNE_SAFETY * (spread + spread.T))
             driven, seen = _closure(driven, coupled), _closure(seen, coupled)
             # modes of one (numerically) repeated frequency are one eigenspace, in a basis the
             # solver picks: kept or dropped together
