@@ -954,7 +954,7 @@ class ModelBuilder:
         if kind == "truth":
             kind = spec.truth
         if kind != "beam":
-            dof, rest = appendage_dof(spec, which, n_modes)
+            dof, rest = appendage_dof(spec, which, n_modes, three_axis=self.three_axis)
             key = self.key(spec, rest)
             return (key, f"appendage {name!r} has {size} coordinates ({rest})",
                     f"lower {key}")

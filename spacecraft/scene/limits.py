@@ -183,7 +183,8 @@ def _chain_bodies(chain) -> int:
     return chain.n_bodies if chain.from_beam is not None else len(chain.lengths)
 
 
-def appendage_dof(spec, which: str, n_modes: int | None, floor: int = 0) -> tuple[int, str]:
+def appendage_dof(spec, which: str, n_modes: int | None, floor: int = 0, *,
+                  three_axis: bool = False) -> tuple[int, str]:
     """Elastic degrees of freedom of an appendage's truth or design model, and the key behind.
 
     Parameters
@@ -195,27 +196,32 @@ def appendage_dof(spec, which: str, n_modes: int | None, floor: int = 0) -> tupl
     floor : int
         Modes a truncated beam keeps beyond ``n_modes`` (a three-axis truncation's lowest mode
         of every motion a reported output sees).
+    three_axis : bool
+        A three-axis spacecraft: each hinge of a chain moves in four ways (bending in both
+        planes, torsion, axial: :class:`appendages.HingedChain`'s three-axis root model).
 
     Returns
     -------
     (int, str)
-        Degrees of freedom (bending modes, or hinges of a chain) and the key path that sets them
+        Degrees of freedom (bending modes, or hinge motions of a chain) and the key path that
+        sets them
         (relative to the appendage: ``"fit.n_bodies"``, ``"chain"``...; ``"fidelity.n_modes"``
         is absolute).
     """
     kind = spec.truth if which == "truth" else spec.design
     if which == "design" and kind == "truth":
-        return appendage_dof(spec, "truth", n_modes, floor)
+        return appendage_dof(spec, "truth", n_modes, floor, three_axis=three_axis)
+    motions = 4 if three_axis else 1
     if kind == "beam":
         return (1 if n_modes is None else n_modes) + floor, "fidelity.n_modes"
     if kind == "modal":
         return spec.modal.n_modes, "modal"
     if kind == "fit":
-        return spec.fit.n_bodies - 1, "fit.n_bodies"
+        return motions * (spec.fit.n_bodies - 1), "fit.n_bodies"
     chain, key = ((spec.truth_chain, "truth_chain") if which == "truth" and spec.truth_chain
                   else (spec.chain, "chain"))
     n = _chain_bodies(chain)
-    return (n if chain.root == "hinged" else n - 1), key
+    return motions * (n if chain.root == "hinged" else n - 1), key
 
 
 def controller_states(controller, kind: str, design_states: int, three_axis: bool) -> int:
@@ -314,7 +320,18 @@ def estimate_cost(scene, *, kept: Mapping[str, int] | None = None) -> SceneCost:
     Notes
     -----
     A plant of N elastic degrees of freedom on the hub has at most 2 (3 + N) states (hub
-    translation and rotation plus the appendages' modes or hinges; pruning only removes).
+    translation and rotation plus the appendages' modes or hinges; pruning only removes); a
+    three-axis one 2 (3 + N) under torques (the hub's rotations), 2 (6 + N) with its
+    translations, driven by a disturbance force and not pruned. A three-axis chain's hinge
+    moves in four ways (bending in both planes, torsion, axial).
+    The loop adds the controller (:func:`controller_states`, and two states of margin) and a
+    delayed loop's delay line (:func:`delay_states`).
+    A three-axis beam whose modes are ranked together (a tip body, segments) keeps, when a
+    reported output or a pin asks for a mode of every tip motion, the fewest lowest modes k0
+    that move them all and n - 1 more: k0 follows from its modes, which this estimate does not
+    compute (it counts n and a mode per motion); the run counts the loops it builds and
+    refuses one over limits.states before tuning
+    (:meth:`spacecraft.design.models.ModelBuilder.check_loop_states`).
     A uniform three-axis beam of round section (rod, tube, square) counts its bending twins:
     beyond a floor each of the n counts a distinct frequency, at most a pair, and without one
     the n lowest may end on a twin.
@@ -361,11 +378,17 @@ def estimate_cost(scene, *, kept: Mapping[str, int] | None = None) -> SceneCost:
             return 0
         return (1 if n_modes is None else n_modes) if (seen or pinned.get(a.name)) else 1
 
-    truth = [appendage_dof(a, "truth", n_modes, floor(a)) for a in apps]
-    design = [appendage_dof(a, "design", n_modes, floor(a)) for a in apps]
+    three = scene.three_axis
+    truth = [appendage_dof(a, "truth", n_modes, floor(a), three_axis=three) for a in apps]
+    design = [appendage_dof(a, "design", n_modes, floor(a), three_axis=three) for a in apps]
     # every design variant (one per fit criterion) has fits of the same size
-    truth_states = 2 * (3 + sum(d for d, _ in truth))
-    design_states = 2 * (3 + sum(d for d, _ in design))
+    m = scene.manoeuvre
+    # the hub's rotations (and the planar hub's translations); a three-axis plant driven by
+    # forces keeps its three translations unless pruned away (unseen by every output)
+    rigid = 6 if (three and m is not None and m.disturbance is not None
+                  and not fidelity.prune) else 3
+    truth_states = 2 * (rigid + sum(d for d, _ in truth))
+    design_states = 2 * (rigid + sum(d for d, _ in design))
     plant_states = max(truth_states, design_states)
     loop_states = plant_states + _controller_states(scene, design_states) + delay_states(scene)
     # the key behind the largest contribution

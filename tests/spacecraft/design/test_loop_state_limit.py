@@ -239,3 +239,32 @@ def test_a_long_delay_line_is_refused_by_its_key_when_the_scene_is_read():
         warnings.simplefilter("ignore")   # the reader's word on a long delay: not tested here
         with pytest.raises(SceneError, match=r"controller\.delay: .*60 states.*limits\.states"):
             load_scene(raw, limits={"states": 59})
+
+
+@pytest.mark.parametrize("three_axis", [False, True])
+@pytest.mark.parametrize("design", ["truth", "fit", "chain"])
+@pytest.mark.parametrize("prune", [True, False])
+@pytest.mark.parametrize("force", [False, True])
+def test_the_read_time_estimate_bounds_the_loops_of_beams_with_separate_motions(
+        three_axis, design, prune, force):
+    """Where no beam's modes are ranked together, the read-time estimate is an upper bound of
+    the loops the run builds: a three-axis chain's hinges move in four ways (a three-body fit
+    of the rod, 2 x 4 hinge coordinates), a three-axis plant driven by a force and not pruned
+    keeps the hub's translations."""
+    from scenes import rod_chain
+
+    raw = _rod_scene(three_axis, {"types": ["pd"], "pd": PD})
+    rod = raw["appendages"][0]
+    rod["design"] = design
+    if design == "fit":
+        rod["fit"] = {"n_bodies": 3}
+    elif design == "chain":
+        rod["chain"] = rod_chain(three_axis)
+    raw["fidelity"]["prune"] = prune
+    if force:
+        raw["manoeuvre"]["disturbance"] = (
+            {"input": "force", "amplitude": 1.0, "axis": [0.0, 1.0, 0.0]} if three_axis
+            else {"input": "force_y", "amplitude": 1.0})
+    loaded = load_scene(raw)
+    built = DesignLoop(loaded, time_responses=False).check_loop_states(1)
+    assert estimate_cost(loaded).loop_states >= built

@@ -113,9 +113,12 @@ def test_the_cost_estimate_counts_the_pinned_modes_and_the_twins():
     distinct frequencies beyond them, each at most a twin pair (4 modes): 7 modes, 2 (3 + 7) =
     20 plant states (the hub's 3 rigid motions); torsion pinned at 3, two torsion modes more:
     2 (3 + 9) = 24. Both are the truncation's own count here (the rod's next levels are
-    bending pairs)."""
+    bending pairs). The rod is designed on its truth (its three-body chain would have 2 (3 +
+    4 x 2) = 22 states, each hinge moving in four ways)."""
     raw = _scene(THREE_AXIS, modes_per_motion={})
     raw["outputs"] = {"tip_deflection": True}
+    del raw["appendages"][0]["fit"]
+    raw["appendages"][0]["design"] = "truth"
     for pins, modes in (({}, 7), ({"rod": {"torsion": 3}}, 9)):
         raw["fidelity"]["modes_per_motion"] = pins
         scene = load_scene(raw)
