@@ -322,7 +322,7 @@ def estimate_cost(scene, *, kept: Mapping[str, int] | None = None) -> SceneCost:
     A plant of N elastic degrees of freedom on the hub has at most 2 (3 + N) states (hub
     translation and rotation plus the appendages' modes or hinges; pruning only removes); a
     three-axis one 2 (3 + N) under torques (the hub's rotations), 2 (6 + N) with its
-    translations, driven by a disturbance force and not pruned. A three-axis chain's hinge
+    translations, with disturbance inputs. A three-axis chain's hinge
     moves in four ways (bending in both planes, torsion, axial).
     The loop adds the controller (:func:`controller_states`, and two states of margin) and a
     delayed loop's delay line (:func:`delay_states`).
@@ -383,10 +383,9 @@ def estimate_cost(scene, *, kept: Mapping[str, int] | None = None) -> SceneCost:
     design = [appendage_dof(a, "design", n_modes, floor(a), three_axis=three) for a in apps]
     # every design variant (one per fit criterion) has fits of the same size
     m = scene.manoeuvre
-    # the hub's rotations (and the planar hub's translations); a three-axis plant driven by
-    # forces keeps its three translations unless pruned away (unseen by every output)
-    rigid = 6 if (three and m is not None and m.disturbance is not None
-                  and not fidelity.prune) else 3
+    # the hub's rotations (and the planar hub's translations); a three-axis plant with
+    # disturbance inputs has its three translations too (pruning may keep them)
+    rigid = 6 if (three and m is not None and m.disturbance is not None) else 3
     truth_states = 2 * (rigid + sum(d for d, _ in truth))
     design_states = 2 * (rigid + sum(d for d, _ in design))
     plant_states = max(truth_states, design_states)

@@ -249,8 +249,8 @@ def test_the_read_time_estimate_bounds_the_loops_of_beams_with_separate_motions(
         three_axis, design, prune, force):
     """Where no beam's modes are ranked together, the read-time estimate is an upper bound of
     the loops the run builds: a three-axis chain's hinges move in four ways (a three-body fit
-    of the rod, 2 x 4 hinge coordinates), a three-axis plant driven by a force and not pruned
-    keeps the hub's translations."""
+    of the rod, 2 x 4 hinge coordinates), a three-axis plant with disturbance inputs may keep
+    the hub's translations."""
     from scenes import rod_chain
 
     raw = _rod_scene(three_axis, {"types": ["pd"], "pd": PD})
