@@ -745,10 +745,13 @@ def _mode_mixing(lam: np.ndarray) -> np.ndarray:
 
 
 def _whole_clusters(active: np.ndarray, lam: np.ndarray) -> np.ndarray:
-    """``active`` with every mode of a cluster of eigenvalues equal to 1e4 eps max(lam)
-    (:func:`_mode_mixing`) active if one of them is."""
+    """``active`` with every elastic mode of a cluster of eigenvalues equal to 1e4 eps max(lam)
+    (:func:`_mode_mixing`) active if one of them is. The rigid-body modes (lam = 0 exactly) are
+    not a solver's arbitrary basis but the physical translations and principal rotations
+    (:meth:`Spacecraft._rigid_modes`): each is decided on its own."""
     order = np.argsort(lam, kind="stable")
     tight = np.diff(lam[order]) <= 1e4 * np.finfo(float).eps * float(np.max(lam, initial=0.0))
+    tight &= lam[order][1:] > 0.0
     cluster = np.empty(lam.size, dtype=int)
     cluster[order] = np.concatenate([[0], np.cumsum(~tight)])
     any_active = np.zeros(lam.size, dtype=bool)
