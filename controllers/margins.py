@@ -1104,12 +1104,23 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
         with np.errstate(all="ignore"):
             return np.where(ok, np.prod(np.abs(lam) - 1.0, axis=1).real, np.nan)
 
-    count, _, finite = count_at(omega, L)
+    count, lam, finite = count_at(omega, L)
+    m = lam.shape[1]
     grid, count = omega[finite], count[finite]
     i = np.nonzero(count[:-1] != count[1:])[0]
-    if i.size == 0:
-        return []
     a, b, ca, cb = grid[i].astype(float), grid[i + 1].astype(float), count[i], count[i + 1]
+    if m > 1:
+        # an eigenvalue that grazes the unit circle between two grid points crosses it twice
+        # there, the count the same at both: found as a minimum of its distance to the circle
+        pairs = _grazing_pairs(eigenvalues_at, count_at, grid, count,
+                               None if L is None else L[finite])
+        if pairs[0].size:
+            a, b = np.concatenate([a, pairs[0]]), np.concatenate([b, pairs[1]])
+            ca, cb = np.concatenate([ca, pairs[2]]), np.concatenate([cb, pairs[3]])
+            order = np.argsort(a, kind="stable")
+            a, b, ca, cb = a[order], b[order], ca[order], cb[order]
+    if a.size == 0:
+        return []
     out = []
     single = np.abs(cb - ca) == 1
     if single.any():
@@ -1148,38 +1159,120 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     # each step counts at sections - 1 points inside every bracket at once (one evaluation of
     # L for all): the bracket shrinks sections-fold per call instead of two-fold; the few
     # brackets left once the others are refined as roots are cut into more sections, the
-    # evaluations' cost then being their calls, not their points
-    for _ in range(100):
-        active = (b - a) > 1e-13 * b
-        if not active.any():
+    # evaluations' cost then being their calls, not their points. A bracket whose count
+    # changes by more than at the change it closes in on (several crossings between two grid
+    # points, apart) leaves the rest of its change to a bracket from there to its end, bisected
+    # in turn (at most m - 1 times: each takes one crossing at least)
+    for _ in range(m):
+        end, end_count = b.copy(), cb.copy()
+        for _ in range(100):
+            active = (b - a) > 1e-13 * b
+            if not active.any():
+                break
+            idx = np.nonzero(active)[0]
+            sections = max(_SECTIONS, _BISECTION_POINTS // idx.size)
+            fractions = np.arange(1, sections) / sections
+            points = a[idx, None] + (b[idx] - a[idx])[:, None] * fractions  # (k, sections - 1)
+            cm, _, ok = count_at(points.ravel())
+            # a point on an undamped pole (non-finite L): counted as the bracket's start
+            cm = np.where(ok, cm, np.repeat(ca[idx], fractions.size)).reshape(points.shape)
+            moved = cm != ca[idx, None]
+            first = np.where(moved.any(axis=1), np.argmax(moved, axis=1), fractions.size)
+            rows = np.arange(idx.size)
+            inside = first < fractions.size
+            # the count changes between the last point that keeps the start's count and the
+            # first that does not (or the bracket's end)
+            a[idx[first > 0]] = points[rows, first - 1][first > 0]
+            b[idx[inside]] = points[rows[inside], first[inside]]
+            cb[idx[inside]] = cm[rows[inside], first[inside]]
+        w = 0.5 * (a + b)
+        lam, ok = eigenvalues_at(w)
+        for k in range(w.size):
+            if not ok[k]:
+                continue
+            change = int(cb[k]) - int(ca[k])
+            closest = np.argsort(np.abs(np.abs(lam[k]) - 1.0))[:abs(change)]
+            for j in closest:
+                out.append((float(w[k]), complex(lam[k, j]), -1 if change > 0 else 1))
+        rest = np.flatnonzero((cb != end_count) & (b < end))
+        if rest.size == 0:
             break
-        idx = np.nonzero(active)[0]
-        sections = max(_SECTIONS, _BISECTION_POINTS // idx.size)
-        fractions = np.arange(1, sections) / sections
-        points = a[idx, None] + (b[idx] - a[idx])[:, None] * fractions      # (k, sections - 1)
-        cm, _, ok = count_at(points.ravel())
-        # a point on an undamped pole (non-finite L): counted as the bracket's start
-        cm = np.where(ok, cm, np.repeat(ca[idx], fractions.size)).reshape(points.shape)
-        moved = cm != ca[idx, None]
-        first = np.where(moved.any(axis=1), np.argmax(moved, axis=1), fractions.size)
-        rows = np.arange(idx.size)
-        inside = first < fractions.size
-        # the count changes between the last point that keeps the start's count and the first
-        # that does not (or the bracket's end)
-        a[idx[first > 0]] = points[rows, first - 1][first > 0]
-        b[idx[inside]] = points[rows[inside], first[inside]]
-        cb[idx[inside]] = cm[rows[inside], first[inside]]
-    w = 0.5 * (a + b)
-    lam, ok = eigenvalues_at(w)
-    for k in range(w.size):
-        if not ok[k]:
-            continue
-        change = int(cb[k]) - int(ca[k])
-        closest = np.argsort(np.abs(np.abs(lam[k]) - 1.0))[:abs(change)]
-        for j in closest:
-            out.append((float(w[k]), complex(lam[k, j]), -1 if change > 0 else 1))
+        a, b, ca, cb = b[rest], end[rest], cb[rest], end_count[rest]
     out.sort(key=lambda crossing: crossing[0])
     return out
+
+
+def _grazing_pairs(eigenvalues_at, count_at, grid: np.ndarray, count: np.ndarray,
+                   L: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Brackets (a, b, count at a, count at b) of the unit-circle crossings that come in pairs
+    between two grid points: an eigenvalue of L that leaves the circle and comes back (or
+    enters and leaves) between them, the count of eigenvalues outside the same at both.
+
+    With the moduli of the eigenvalues sorted, rho_1 >= ... >= rho_m (continuous in omega),
+    and c eigenvalues outside at three neighbouring grid points, such a pair makes
+    f_out = 1 - rho_(c+1) (c < m) or f_in = rho_c - 1 (c > 0), positive at the points, negative
+    in between. Each local minimum of f_out or f_in on the grid whose two neighbours have the
+    same count is refined between them (:func:`controllers.refine.refine`); where the refined
+    minimum is negative, the count there differs, and the two crossings are bracketed on
+    either side of it (then bisected on the count with the grid's brackets)."""
+    empty = np.zeros(0)
+    if grid.size < 3:
+        return empty, empty, empty.astype(int), empty.astype(int)
+    lam, ok = (eigenvalues_at(grid) if L is None else
+               (_eigenvalues(L), np.ones(grid.size, dtype=bool)))
+    m = lam.shape[1]
+    rho = -np.sort(-np.abs(lam), axis=1)                        # (f, m), decreasing
+    rows = np.arange(grid.size)
+    with np.errstate(invalid="ignore"):
+        f_out = np.where(count < m, 1.0 - rho[rows, np.minimum(count, m - 1)], np.inf)
+        f_in = np.where(count > 0, rho[rows, np.maximum(count - 1, 0)] - 1.0, np.inf)
+    same = ok[1:-1] & ok[:-2] & ok[2:] & (count[:-2] == count[1:-1]) & (count[2:] == count[1:-1])
+    tasks, lo, x, hi, f_lo, f_x, f_hi = [], [], [], [], [], [], []
+    for task, f in ((0, f_out), (1, f_in)):
+        mid = f[1:-1]
+        local = np.flatnonzero(same & np.isfinite(mid) & (mid < f[:-2]) & (mid <= f[2:])) + 1
+        tasks.append(np.full(local.size, task) * grid.size + local)
+        lo.append(grid[local - 1])
+        x.append(grid[local])
+        hi.append(grid[local + 1])
+        f_lo.append(f[local - 1])
+        f_x.append(f[local])
+        f_hi.append(f[local + 1])
+    tasks = np.concatenate(tasks).astype(int)
+    if tasks.size == 0:
+        return empty, empty, empty.astype(int), empty.astype(int)
+    # task t: function t // grid.size (0: f_out, 1: f_in) with the count of grid point
+    # t % grid.size
+    base = count[tasks % grid.size]
+
+    def distance(w, task):
+        lam_w, ok_w = eigenvalues_at(w)
+        r = -np.sort(-np.abs(lam_w), axis=1)
+        c = count[task % grid.size]
+        k = task // grid.size
+        with np.errstate(invalid="ignore"):
+            value = np.where(k == 0, 1.0 - r[np.arange(w.size), np.minimum(c, m - 1)],
+                             r[np.arange(w.size), np.maximum(c - 1, 0)] - 1.0)
+        return np.where(ok_w, value, np.nan)
+
+    index = np.arange(tasks.size)
+    _, (w_min, f_min) = refine(lambda w, k: distance(w, tasks[k]),
+                               minima=(index, *(np.concatenate(v) for v in
+                                                (lo, x, hi, f_lo, f_x, f_hi))))
+    crossed = np.flatnonzero(f_min < 0.0)
+    # (one pair per grid interval: f_out's and f_in's minima at one grid point would bracket
+    # the same crossings twice)
+    crossed = crossed[np.unique(tasks[crossed] % grid.size, return_index=True)[1]]
+    if crossed.size == 0:
+        return empty, empty, empty.astype(int), empty.astype(int)
+    c_at, _, ok_at = count_at(w_min[crossed])
+    keep = ok_at & (c_at != base[crossed])
+    crossed, c_at = crossed[keep], c_at[keep]
+    lo_all, hi_all = np.concatenate(lo)[crossed], np.concatenate(hi)[crossed]
+    at = w_min[crossed]
+    c0 = base[crossed]
+    return (np.concatenate([lo_all, at]), np.concatenate([at, hi_all]),
+            np.concatenate([c0, c_at]), np.concatenate([c_at, c0]))
 
 
 def _eigenvalues(L: np.ndarray) -> np.ndarray:
