@@ -98,7 +98,9 @@ class _Diff:
             self.numbers[key] = (r, path, a, b)
 
     def as_dict(self) -> dict:
+        every = {k: {"rel": v[0]} for k, v in self.numbers.items()}
         return {"discrete": self.discrete,
+                "by_kind": {k: {"rel": v[0], "key": v[1]} for k, v in _by_kind(every).items()},
                 "sign_flips": {k: {"count": len(v), "first": v[:5]} for k, v in self.signs.items()},
                 "numbers": {k: {"rel": v[0], "path": v[1], "a": v[2], "b": v[3]}
                             for k, v in sorted(self.numbers.items(),
@@ -160,8 +162,11 @@ def _compare_report(a: Path, b: Path, diff: _Diff) -> None:
     la, lb = a.read_text().splitlines(), b.read_text().splitlines()
     if len(la) != len(lb):
         diff.discrete.append(f"report.md: {len(la)} != {len(lb)} lines")
+    timings = False
     for i, (x, y) in enumerate(zip(la, lb)):
-        if "s (" in x and "wall" in x:  # a run time, not a result
+        if x.startswith("#"):
+            timings = x.strip("# ").lower() == "timings"  # a sweep's run times
+        if timings or "time per stage" in x:  # run times, not results
             continue
         compare_text(x, y, "report.md", f"report.md:{i + 1}", diff)
 
@@ -264,7 +269,7 @@ def main(argv: list[str] | None = None) -> dict:
              "| run | discrete | sign flips (keys) | " + " | ".join(k for k, _ in _KINDS)
              + " | other (key) |", "|---" * (4 + len(_KINDS)) + "|"]
     for name, d in result["comparisons"].items():
-        kinds = _by_kind(d["numbers"])
+        kinds = {k: (v["rel"], v["key"]) for k, v in d["by_kind"].items()}
         flips = ", ".join(f"{k} {v['count']}" for k, v in d["sign_flips"].items()) or "-"
         cells = [f"{kinds[k][0]:.1e}" if k in kinds else "-" for k, _ in _KINDS]
         other = kinds.get("other")
