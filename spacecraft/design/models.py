@@ -737,9 +737,14 @@ class ModelBuilder:
         inputs = ["torque_x", "torque_y", "torque_z"] if self.three_axis else ["torque"]
         omega = np.geomspace(choice.band[0], choice.band[1], 40)
 
+        order = {a.name: i for i, a in enumerate(scene.appendages)}
+
         def per_beam(floors: dict) -> dict:
+            # in the scene's order of appendages, motions sorted: the floors' order (in the
+            # report and results.json) does not follow a set's, which varies per process
             out: dict = {}
-            for (name, motion), k in floors.items():
+            for (name, motion), k in sorted(floors.items(),
+                                            key=lambda item: (order[item[0][0]], item[0][1])):
                 out.setdefault(name, {})[motion] = k
             return out
 
@@ -760,7 +765,7 @@ class ModelBuilder:
 
         def add(floors: dict, motions: set) -> dict:
             out = dict(floors)
-            for name, motion in motions:
+            for name, motion in sorted(motions):
                 beam = self.undamped_beam(specs[name])
                 if motion in ("bending", "coupled"):
                     if n + floors.get((name, motion), 0) + 1 <= cap:

@@ -664,9 +664,17 @@ def _tip_fidelity(choice: dict) -> list:
     if not record["converged"]:
         text = warn(text + " The search stopped at the scene's limits without meeting it.")
     rows = [["; ".join(" ".join(k) for k in t["added"]), _fmt(t["largest"], 3),
-             max(t["changes"], key=t["changes"].get) if t["changes"] else "-"]
-            for t in record["trials"]]
+             _largest_changes(t["changes"])] for t in record["trials"]]
     return [("p", text), ("table", ["a mode more of", "largest change [-]", "output"], rows)]
+
+
+def _largest_changes(changes: dict) -> str:
+    """The outputs whose change is within 1e-3 of the largest (twin appendages tie to round-off,
+    which of them is larger is the CPU's rounding), in name order; "-" for none."""
+    if not changes:
+        return "-"
+    top = max(changes.values())
+    return ", ".join(sorted(o for o, c in changes.items() if c >= top * (1.0 - 1e-3)))
 
 
 def _closed_loop_fidelity(choice: dict) -> list:
