@@ -350,6 +350,13 @@ class Spacecraft:
                 )
             V = V.copy()
             V[:, :r] = self._rigid_modes(V[:, :r], model.mass)
+            # each elastic mode's sign fixed (the solver's is its rounding's: the states of a
+            # modal plant, and the gains on them, would change sign from one CPU to another):
+            # its first coordinate above 1e-3 of its largest is positive
+            E = V[:, r:]
+            if E.size:
+                first = np.argmax(np.abs(E) > 1e-3 * np.abs(E).max(axis=0), axis=0)
+                V[:, r:] = E * np.where(E[first, np.arange(E.shape[1])] < 0, -1.0, 1.0)
             cached = (np.sqrt(lam), V)
             self._cache["modes"] = cached
         return cached[0].copy(), cached[1]
