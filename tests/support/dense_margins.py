@@ -75,32 +75,28 @@ __all__ = ["DenseLoop", "dense_margins", "loop_roots"]
 AXES = ("x", "y", "z")
 
 
+def _select(system, inputs, outputs):
+    """(A, B, C, D) of ``system`` restricted to the named inputs and outputs."""
+    i_in = [list(system.input_labels).index(n) for n in inputs]
+    i_out = [list(system.output_labels).index(n) for n in outputs]
+    return (np.asarray(system.A, dtype=float), np.asarray(system.B, dtype=float)[:, i_in],
+            np.asarray(system.C, dtype=float)[i_out],
+            np.asarray(system.D, dtype=float)[np.ix_(i_out, i_in)])
+
+
 def _blocks(plant, controller):
     """(Ap, Bp, Cp, Dp) torques -> measurements and (Ac, Bc, Cc, Dc) measurements -> torques,
     the plant sampled (zero-order hold) for a digital controller."""
     torques = [f"torque_{a}" for a in AXES]
-    p_in, p_out = list(plant.input_labels), list(plant.output_labels)
-    c_in, c_out = list(controller.input_labels), list(controller.output_labels)
-    measured = [n for n in c_in if n in p_out]
-    i_t = [p_in.index(n) for n in torques]
-    i_m = [p_out.index(n) for n in measured]
-    Ap = np.asarray(plant.A, dtype=float)
-    Bp = np.asarray(plant.B, dtype=float)[:, i_t]
-    Cp = np.asarray(plant.C, dtype=float)[i_m]
-    Dp = np.asarray(plant.D, dtype=float)[np.ix_(i_m, i_t)]
+    measured = [n for n in controller.input_labels if n in list(plant.output_labels)]
+    Ap, Bp, Cp, Dp = _select(plant, torques, measured)
     dt = float(controller.dt or 0.0)
     if dt > 0.0:
         # zero-order hold: exp([[A, B], [0, 0]] dt) = [[Ad, Bd], [0, I]]
         n, m = Bp.shape
         E = scipy.linalg.expm(np.block([[Ap, Bp], [np.zeros((m, n + m))]]) * dt)
         Ap, Bp = E[:n, :n], E[:n, n:]
-    j_m = [c_in.index(n) for n in measured]
-    i_u = [c_out.index(n) for n in torques]
-    Ac = np.asarray(controller.A, dtype=float)
-    Bc = np.asarray(controller.B, dtype=float)[:, j_m]
-    Cc = np.asarray(controller.C, dtype=float)[i_u]
-    Dc = np.asarray(controller.D, dtype=float)[np.ix_(i_u, j_m)]
-    return (Ap, Bp, Cp, Dp), (Ac, Bc, Cc, Dc), dt
+    return (Ap, Bp, Cp, Dp), _select(controller, measured, torques), dt
 
 
 def frequency_response(A, B, C, D, x, chunk: int = 20000) -> np.ndarray:
