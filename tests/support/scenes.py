@@ -10,16 +10,24 @@ walk runs it for every documented key, in the plane and in three axes): one rod,
 and two modes a beam, a short coarse time grid, nothing written that a test does not ask for.
 
 The scene readers' tests start from a slower variant of it, :data:`BASE` (the rod undamped,
-three truth modes, a 60 s slew), edited by :func:`scene_with`. The same rod's rigid finite
-elements, worked out by hand, are :func:`rod_chain`: an explicit chain as a scene gives it.
+three truth modes, a 60 s slew), edited by :func:`scene_with`; :data:`BASE_TOML` is the same
+scene as a file's text for the command's tests. The same rod's rigid finite elements, worked
+out by hand, are :func:`rod_chain`: an explicit chain as a scene gives it.
+
+Beside them: the manoeuvre as flown (:data:`FLOWN`, :func:`flown`, :func:`flown_damped`),
+the run with both controllers on twelve truth modes (:data:`LOOP_SCENE`), a three-axis boom
+(:data:`THREE_AXIS_BOOM`) and the shipped default sweep scene (:func:`default_sweep_scene`).
 
 Units are the scene file's: SI, angles in degrees.
 """
 from __future__ import annotations
 
 import copy
+import tomllib
 
-__all__ = ["BASE", "rod_chain", "rod_scene", "scene_with", "with_changes"]
+__all__ = ["BASE", "BASE_TOML", "FLOWN", "FLOWN_DAMPED", "LOOP_SCENE", "THREE_AXIS_BOOM",
+           "default_sweep_scene", "flown", "flown_damped", "rod_chain", "rod_scene",
+           "scene_with", "with_changes"]
 
 _ROD = {"section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
         "youngs_modulus": 2.06e11, "damping_ratio": 0.005}
@@ -57,6 +65,97 @@ BASE = {
     "fidelity": {"n_modes": 3},
     "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}},
     "manoeuvre": {"slew_angle": 10.0, "slew_time": 60.0, "duration": 120.0, "step": 0.5},
+}
+
+#: :data:`BASE` as a scene file's text, titled, with tip outputs and no equivalence section (no
+#: FMUs; plots only when asked): the command's tests write it to a file.
+BASE_TOML = """\
+title = "test boom"
+
+[hub]
+mass = 100.0
+inertia = 50.0
+
+[[appendages]]
+name = "rod"
+position = [0.5, 0.0]
+
+[appendages.beam]
+section = "rod"
+length = 10.0
+diameter = 0.01
+density = 7800.0
+youngs_modulus = 2.06e11
+
+[appendages.fit]
+match = "frequencies"
+
+[fidelity]
+n_modes = 3
+
+[controller]
+types = ["pd"]
+
+[controller.pd]
+natural_frequency = 0.1
+
+[manoeuvre]
+slew_angle = 10.0
+slew_time = 60.0
+duration = 120.0
+step = 0.5
+
+[outputs]
+tip_deflection = true
+
+[report]
+equivalence = false
+"""
+
+#: The manoeuvre as flown, as changes to :data:`BASE` (dotted key paths): a shaped profile with
+#: feedforward under torque and rate limits, a 0.2 s loop delay, a 0.1 s step, wheels that
+#: saturate and attitude sensor noise.
+FLOWN = {"manoeuvre.profile": "shaped", "manoeuvre.feedforward": True,
+         "manoeuvre.torque_limit": 0.1, "manoeuvre.rate_limit": 0.5,
+         "controller.delay": 0.2, "manoeuvre.step": 0.1,
+         "wheels": {"torque_limit": 0.2, "momentum_limit": 4.0, "spin_inertia": 0.02},
+         "sensors": {"attitude_density": 1e-5, "angle_random_walk": 1e-6, "rpe_window": 10.0}}
+
+#: :data:`FLOWN`'s rod damped (0.5 %: the loops are stable, the delay margins finite), flexsat's
+#: fit, tip outputs, PD and LQR.
+FLOWN_DAMPED = {"appendages.0.beam.damping_ratio": 0.005,
+                "appendages.0.fit": {"match": "poles-and-zeros"},
+                "outputs": {"tip_deflection": True}, "controller.types": ["pd", "lqr"],
+                "controller.lqr": {"attitude_weight": 7.6, "torque_weight": 1.0}}
+
+#: A three-axis spacecraft: an 820 kg hub with a full inertia tensor [kg m^2] and a CFRP tube
+#: boom (4 m, 50 mm, 1 mm wall) at a point off the hub's axes, flexsat's fit, three truth modes,
+#: a PD of 0.1 rad/s, a 10 deg slew in 60 s about an axis off the principal ones.
+THREE_AXIS_BOOM = {
+    "hub": {"mass": 820.0, "inertia": [[950.0, 12.0, -8.0], [12.0, 780.0, 15.0],
+                                       [-8.0, 15.0, 640.0]]},
+    "appendages": [{"name": "boom", "position": [0.6, 0.3, -0.9],
+                    "beam": {"section": "tube", "length": 4.0, "outer_diameter": 0.05,
+                             "wall_thickness": 0.001, "density": 1600.0,
+                             "youngs_modulus": 1.2e11},
+                    "fit": {"match": "poles-and-zeros"}}],
+    "fidelity": {"n_modes": 3},
+    "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}},
+    "manoeuvre": {"slew_angle": 10.0, "slew_time": 60.0, "step": 0.5,
+                  "slew_axis": [1.0, 1.0, 0.5]}}
+
+#: The paper's rod, damped, on twelve truth modes with PD and LQR, tip outputs and the exact
+#: reference: the design loop's end-to-end scene (a 150 s slew at 0.1 s).
+LOOP_SCENE = {
+    "hub": {"mass": 100.0, "inertia": 50.0},
+    "appendages": [{"name": "rod", "position": [0.5, 0.0], "beam": dict(_ROD),
+                    "fit": {"match": "poles-and-zeros"}}],
+    "fidelity": {"n_modes": 12},
+    "controller": {"types": ["pd", "lqr"], "pd": {"natural_frequency": 0.1},
+                   "lqr": {"attitude_weight": 7.6, "torque_weight": 1.0}},
+    "manoeuvre": {"slew_angle": 10.0, "slew_time": 60.0, "duration": 150.0, "step": 0.1},
+    "outputs": {"tip_deflection": True, "exact_reference": True},
+    "report": {"equivalence": False},
 }
 
 # The rod's rigid finite elements by hand: three bodies, the inner one twice the outer ones
@@ -145,3 +244,24 @@ def rod_chain(three_axis: bool = False) -> dict:
         inertias [kg m^2], torsion [N m/rad] and axial [N/m] stiffnesses.
     """
     return copy.deepcopy({**_CHAIN, **_CHAIN_3} if three_axis else _CHAIN)
+
+
+def flown(**changes) -> dict:
+    """:data:`BASE` flown (:data:`FLOWN`), with changes at dotted key paths; None removes a key
+    (one of FLOWN's: it is left out)."""
+    merged = {**FLOWN, **changes}
+    return scene_with(**{k: v for k, v in merged.items() if not (v is None and k in FLOWN)})
+
+
+def flown_damped(**changes) -> dict:
+    """:func:`flown` with :data:`FLOWN_DAMPED`, and changes at dotted key paths."""
+    return flown(**{**FLOWN_DAMPED, **changes})
+
+
+def default_sweep_scene() -> dict:
+    """The shipped default sweep scene as a new dict, without its ``[sweep]`` table."""
+    from spacecraft.sweep import sweep_scene_path
+
+    raw = tomllib.loads(sweep_scene_path("default").read_text())
+    raw.pop("sweep")
+    return raw

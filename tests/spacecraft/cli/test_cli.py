@@ -11,56 +11,14 @@ from appendages.equivalence import fit_chain
 from spacecraft import cli
 from spacecraft.design.loop import run
 
-# The scene tests' base scene (BASE of tests/support/scenes.py) as a file, titled, with tip
-# outputs and no equivalence section: no FMUs, plots only when asked.
-SCENE = """\
-title = "test boom"
+from scenes import BASE_TOML
 
-[hub]
-mass = 100.0
-inertia = 50.0
-
-[[appendages]]
-name = "rod"
-position = [0.5, 0.0]
-
-[appendages.beam]
-section = "rod"
-length = 10.0
-diameter = 0.01
-density = 7800.0
-youngs_modulus = 2.06e11
-
-[appendages.fit]
-match = "frequencies"
-
-[fidelity]
-n_modes = 3
-
-[controller]
-types = ["pd"]
-
-[controller.pd]
-natural_frequency = 0.1
-
-[manoeuvre]
-slew_angle = 10.0
-slew_time = 60.0
-duration = 120.0
-step = 0.5
-
-[outputs]
-tip_deflection = true
-
-[report]
-equivalence = false
-"""
 
 
 @pytest.fixture
 def scene_file(tmp_path):
     path = tmp_path / "boom.toml"
-    path.write_text(SCENE)
+    path.write_text(BASE_TOML)
     return path
 
 
@@ -109,7 +67,7 @@ def test_progress_goes_to_stderr(scene_file, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_no_plots_flag_and_plots_when_asked(scene_file, tmp_path):
-    text = SCENE.replace("equivalence = false", "equivalence = false\nplots = [\"slew\", "
+    text = BASE_TOML.replace("equivalence = false", "equivalence = false\nplots = [\"slew\", "
                                                 "\"poles\"]")
     scene_file.write_text(text)
     assert flexsat("run", scene_file, "--out", tmp_path / "a", "--quiet") == 0
@@ -128,7 +86,7 @@ def test_no_plots_flag_and_plots_when_asked(scene_file, tmp_path):
     (("mass = 100.0", "mass = 'heavy'"), r"boom\.toml: hub\.mass: must be a number"),
 ])
 def test_user_errors_exit_2_with_one_line(scene_file, tmp_path, capsys, edit, message):
-    scene_file.write_text(SCENE.replace(*edit))
+    scene_file.write_text(BASE_TOML.replace(*edit))
     out = tmp_path / "o"
     assert flexsat("run", scene_file, "--out", out, "--quiet") == 2
     err = capsys.readouterr().err
@@ -344,7 +302,7 @@ def test_fit_shows_progress_on_stderr_unless_quiet(capsys):
 # ---------------------------------------------------------------------------------------------
 # issue 15 wired into the command: FMI 2.0 and 3.0, SSP, digital controllers
 # ---------------------------------------------------------------------------------------------
-DIGITAL_LQR = SCENE.replace('types = ["pd"]', 'types = ["lqr"]\nsample_rate = 5.0').replace(
+DIGITAL_LQR = BASE_TOML.replace('types = ["pd"]', 'types = ["lqr"]\nsample_rate = 5.0').replace(
     "[controller.pd]\nnatural_frequency = 0.1",
     "[controller.lqr]\nattitude_weight = 7.6\ntorque_weight = 1.0").replace(
     "step = 0.5\n", "").replace('match = "frequencies"', 'match = "poles-and-zeros"').replace(
@@ -395,7 +353,7 @@ def test_a_digital_lqr_exports_fmi2_fmi3_and_ssp_through_run(tmp_path, capsys):
 def test_export_options_refuse_contradictions(scene_file, tmp_path, capsys):
     assert flexsat("run", scene_file, "--ssp", "--no-fmu", "--out", tmp_path / "o") == 2
     assert "--no-fmu contradicts" in capsys.readouterr().err
-    scene_file.write_text(SCENE + '\n[export]\nfmu = true\nsystems = ["plant"]\n')
+    scene_file.write_text(BASE_TOML + '\n[export]\nfmu = true\nsystems = ["plant"]\n')
     assert flexsat("run", scene_file, "--ssp", "--out", tmp_path / "p") == 2
     # the scene reader checks the option's key with the scene's, and says which option set it
     err = capsys.readouterr().err
@@ -450,8 +408,9 @@ def test_simulator_basilisk_without_bsk_is_one_line_exit_2(scene_file, tmp_path,
 
 
 def test_simulator_basilisk_refuses_a_scene_it_cannot_run(scene_file, tmp_path, capsys):
-    scene_file.write_text(SCENE.replace("step = 0.5\n", 'step = 0.5\n\n[manoeuvre.disturbance]\n'
-                                        'input = "rod_tip_force"\namplitude = 1.0\n'))
+    scene_file.write_text(BASE_TOML.replace("step = 0.5\n", 'step = 0.5\n\n'
+                                            '[manoeuvre.disturbance]\n'
+                                            'input = "rod_tip_force"\namplitude = 1.0\n'))
     assert flexsat("run", scene_file, "--simulator", "basilisk", "--out", tmp_path / "o") == 2
     assert "manoeuvre.disturbance.input: a tip force is not applied by the Basilisk model" \
         in capsys.readouterr().err
@@ -481,7 +440,7 @@ def test_package_names_resolve_on_first_use():
 
 def test_the_last_line_counts_in_words(scene_file, tmp_path, capsys):
     """Before: 'wrote report.md, report.html, results.json, 1 plots to ...'."""
-    scene_file.write_text(SCENE.replace("equivalence = false",
+    scene_file.write_text(BASE_TOML.replace("equivalence = false",
                                         'equivalence = false\nplots = ["slew"]'))
     assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet") == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]

@@ -18,23 +18,11 @@ import spacecraft
 from spacecraft import DesignLoop, Spacecraft
 from spacecraft.scene.read import SceneError
 
-SCENE = {
-    "hub": {"mass": 100.0, "inertia": 50.0},
-    "appendages": [{"name": "rod", "position": [0.5, 0.0], "beam": {
-        "section": "rod", "length": 10.0, "diameter": 0.01, "density": 7800.0,
-        "youngs_modulus": 2.06e11, "damping_ratio": 0.005}, "fit": {"match": "poles-and-zeros"}}],
-    "fidelity": {"n_modes": 12},
-    "controller": {"types": ["pd", "lqr"], "pd": {"natural_frequency": 0.1},
-                   "lqr": {"attitude_weight": 7.6, "torque_weight": 1.0}},
-    "manoeuvre": {"slew_angle": 10.0, "slew_time": 60.0, "duration": 150.0, "step": 0.1},
-    "outputs": {"tip_deflection": True, "exact_reference": True},
-    "report": {"equivalence": False},
-}
-
+from scenes import LOOP_SCENE
 
 @pytest.fixture(scope="module")
 def scene_run():
-    return spacecraft.run(SCENE)
+    return spacecraft.run(LOOP_SCENE)
 
 
 def _own_models(loop: DesignLoop) -> dict:
@@ -45,9 +33,9 @@ def _own_models(loop: DesignLoop) -> dict:
 
 
 def test_own_spacecraft_give_the_scenes_numbers(scene_run):
-    models = _own_models(DesignLoop(SCENE))
-    own = DesignLoop(**models, controller=SCENE["controller"], manoeuvre=SCENE["manoeuvre"],
-                     outputs={"tip_deflection": True}).run()
+    models = _own_models(DesignLoop(LOOP_SCENE))
+    own = DesignLoop(**models, controller=LOOP_SCENE["controller"],
+                     manoeuvre=LOOP_SCENE["manoeuvre"], outputs={"tip_deflection": True}).run()
     assert len(own.data["closed_loops"]) == len(scene_run.data["closed_loops"]) == 2
     for mine, theirs in zip(own.data["closed_loops"], scene_run.data["closed_loops"]):
         assert (mine["design"], mine["controller"]) == (theirs["design"], theirs["controller"])
@@ -68,7 +56,7 @@ def test_own_spacecraft_give_the_scenes_numbers(scene_run):
 
 
 def test_one_controller_at_a_time_is_the_runs_row(scene_run):
-    loop = DesignLoop(SCENE)
+    loop = DesignLoop(LOOP_SCENE)
     loop.n_modes = 12
     c = loop.closed_loops("poles-and-zeros", "pd")
     row = scene_run.data["closed_loops"][0]
@@ -91,7 +79,7 @@ def test_a_given_controller_is_judged_as_it_is():
     the PD with a 5 rad/s roll-off, whose gain margin is finite on the design and the truth
     model (an LQR on a fitted chain damped at the rod's first cantilever frequency has none on
     its design model)."""
-    scene = dict(SCENE, controller={"types": ["pd"], "pd": {"natural_frequency": 0.1,
+    scene = dict(LOOP_SCENE, controller={"types": ["pd"], "pd": {"natural_frequency": 0.1,
                                                             "roll_off": 5.0}})
     scene.pop("manoeuvre")
     nominal = spacecraft.run(scene)
@@ -113,7 +101,7 @@ def test_a_given_controller_is_judged_as_it_is():
 
 
 def test_own_models_without_a_manoeuvre_tune_and_judge_only():
-    models = _own_models(DesignLoop(SCENE))
+    models = _own_models(DesignLoop(LOOP_SCENE))
     result = DesignLoop(truth=models["truth"], design=models["design"]["poles-and-zeros"],
                         controller={"pd": {"natural_frequency": 0.1}}).run()
     (row,) = result.data["closed_loops"]
@@ -141,11 +129,11 @@ def test_own_models_without_a_manoeuvre_tune_and_judge_only():
 ])
 def test_bad_arguments_are_named(kwargs, error, match):
     if kwargs.get("truth") == "T":
-        kwargs["truth"] = _own_models(DesignLoop(SCENE))["truth"]
+        kwargs["truth"] = _own_models(DesignLoop(LOOP_SCENE))["truth"]
     with pytest.raises(error, match=match):
         DesignLoop(**kwargs)
 
 
 def test_spacecraft_exports_the_design_loop():
     assert spacecraft.DesignLoop is DesignLoop and "DesignLoop" in spacecraft.__all__
-    assert isinstance(DesignLoop(SCENE).truth_spacecraft(3), Spacecraft)
+    assert isinstance(DesignLoop(LOOP_SCENE).truth_spacecraft(3), Spacecraft)

@@ -12,20 +12,7 @@ import spacecraft
 from spacecraft.design.responses import trace
 from spacecraft.scene.read import SceneError, load_scene
 
-from scenes import scene_with
-from test_scene_flown import flown
-
-# the paper's rod, damped (0.5 %: the loops are stable, the delay margins finite), flexsat's
-# fit, three truth modes; PD and LQR
-DAMPED = {"appendages.0.beam.damping_ratio": 0.005,
-          "appendages.0.fit": {"match": "poles-and-zeros"},
-          "outputs": {"tip_deflection": True}, "controller.types": ["pd", "lqr"],
-          "controller.lqr": {"attitude_weight": 7.6, "torque_weight": 1.0}}
-
-
-def scene(**changes):
-    return flown(**{**DAMPED, **changes})
-
+from scenes import flown_damped, scene_with
 
 def rows(result):
     return {row["controller"]: row for row in result.data["closed_loops"]}
@@ -34,7 +21,8 @@ def rows(result):
 @pytest.fixture(scope="module")
 def ideal():
     """The shaped feedforward slew without delay or wheels."""
-    return spacecraft.run(scene(**{"controller.delay": None, "wheels": None, "sensors": None}))
+    return spacecraft.run(flown_damped(**{"controller.delay": None, "wheels": None,
+                                                 "sensors": None}))
 
 
 def test_the_flown_slew_is_the_librarys_profile_response(ideal):
@@ -92,9 +80,9 @@ def test_todays_step_slew_gets_the_metrics_from_its_end_too():
 
 
 def test_wheels_that_never_saturate_give_the_linear_flight(ideal):
-    free = spacecraft.run(scene(**{"controller.delay": None, "sensors": None,
-                                   "wheels": {"torque_limit": 100.0, "momentum_limit": 1e4,
-                                              "spin_inertia": 0.05}}))
+    free = spacecraft.run(flown_damped(**{"controller.delay": None, "sensors": None,
+                                          "wheels": {"torque_limit": 100.0, "momentum_limit": 1e4,
+                                                     "spin_inertia": 0.05}}))
     for key, response in ideal.responses.items():
         wheeled = free.responses[key]
         for name in ("theta", "torque", "rod_tip_deflection"):
@@ -115,8 +103,9 @@ def test_wheels_that_never_saturate_give_the_linear_flight(ideal):
 def test_a_saturating_wheel_is_said_in_words_and_warned_about():
     # the profile needs 0.062 N m, feedback adds to it during the slew (0.076 N m): a wheel of
     # 0.07 N m can fly the slew (its shortest time 34 s) but saturates on the way
-    result = spacecraft.run(scene(**{"controller.delay": None, "sensors": None,
-                                     "wheels": {"torque_limit": 0.07, "momentum_limit": 4.0}}))
+    result = spacecraft.run(flown_damped(**{"controller.delay": None, "sensors": None,
+                                            "wheels": {"torque_limit": 0.07,
+                                                       "momentum_limit": 4.0}}))
     saturated = [row for row in result.data["closed_loops"] if row["wheels"]["truth"]["saturated"]]
     assert saturated
     for row in saturated:
@@ -139,8 +128,8 @@ def delayed_pair():
     base = {"manoeuvre.profile": None, "manoeuvre.feedforward": None,
             "manoeuvre.torque_limit": None, "manoeuvre.rate_limit": None, "wheels": None,
             "sensors": None, "outputs": {"tip_deflection": True, "exact_reference": True}}
-    without = spacecraft.run(scene(**{**base, "controller.delay": None}))
-    with_delay = spacecraft.run(scene(**{**base, "controller.delay": 0.1}))
+    without = spacecraft.run(flown_damped(**{**base, "controller.delay": None}))
+    with_delay = spacecraft.run(flown_damped(**{**base, "controller.delay": 0.1}))
     return without, with_delay
 
 
@@ -176,11 +165,11 @@ def test_the_delay_is_in_the_flown_loops_and_their_poles(delayed_pair):
 
 
 def test_a_delay_beyond_the_margin_is_a_result():
-    probe = spacecraft.run(scene(**{"wheels": None, "sensors": None,
-                                    "controller.delay": 0.05}), time_responses=False)
+    probe = spacecraft.run(flown_damped(**{"wheels": None, "sensors": None,
+                                           "controller.delay": 0.05}), time_responses=False)
     margin = rows(probe)["pd"]["verdict"]["delay_margin"] + 0.05
-    result = spacecraft.run(scene(**{"wheels": None, "controller.delay": 1.2 * margin,
-                                     "manoeuvre.step": min(0.1, 2.4 * margin)}))
+    result = spacecraft.run(flown_damped(**{"wheels": None, "controller.delay": 1.2 * margin,
+                                            "manoeuvre.step": min(0.1, 2.4 * margin)}))
     row = rows(result)["pd"]
     assert not row["verdict"]["stable"] and row["undelayed_stable"]
     assert row["status"]["truth"]["status"] in ("unstable", "diverges")
@@ -193,7 +182,7 @@ def test_a_delay_beyond_the_margin_is_a_result():
 
 
 def test_pointing_figures_are_the_librarys(ideal):
-    result = spacecraft.run(scene(**{"wheels": None}))
+    result = spacecraft.run(flown_damped(**{"wheels": None}))
     s = result.scene.sensors
     for row in result.data["closed_loops"]:
         K = result.designs[row["design"]]["controllers"][row["controller"]]
@@ -211,8 +200,10 @@ def test_pointing_figures_are_the_librarys(ideal):
 
 
 def test_a_digital_controllers_computation_delay_is_one_sample():
-    result = spacecraft.run(scene(**{"controller.delay": None, "controller.sample_rate": 10.0,
-                                     "controller.computation_delay": True, "wheels": None}))
+    result = spacecraft.run(flown_damped(**{"controller.delay": None,
+                                                   "controller.sample_rate": 10.0,
+                                                   "controller.computation_delay": True,
+                                                   "wheels": None}))
     for row in result.data["closed_loops"]:
         assert row["verdict"]["delay"] == pytest.approx(0.1, rel=1e-12)
         assert row["design_margins"]["delay"] == pytest.approx(0.1, rel=1e-12)
@@ -235,7 +226,7 @@ def test_a_digital_controllers_computation_delay_is_one_sample():
 ])
 def test_what_cannot_fly_the_slew_is_refused_by_key(changes, match):
     with pytest.raises(SceneError, match=match) as info:
-        spacecraft.run(scene(**changes))
+        spacecraft.run(flown_damped(**changes))
     import re
 
     found = re.search(match, str(info.value))
@@ -243,7 +234,7 @@ def test_what_cannot_fly_the_slew_is_refused_by_key(changes, match):
         inertia = 275.668          # the spacecraft's, as the message gives it
         theta, w = math.radians(10.0), math.radians(0.5)
         if "wheels" in changes:
-            wheels = load_scene(scene(**changes)).wheels.build()
+            wheels = load_scene(flown_damped(**changes)).wheels.build()
             shortest = controllers.shortest_slew_time(wheels, theta, inertia)
         else:
             a = 0.02 / inertia
@@ -256,7 +247,7 @@ def test_a_sweep_refuses_a_flown_scene_by_key():
     from spacecraft.sweep.evaluate import prepare
     from spacecraft.sweep.parameters import SweepError, read_sweep
 
-    raw = scene()
+    raw = flown_damped()
     spec = read_sweep({"parameters": {"hub.inertia": {"distribution": "uniform", "low": 40.0,
                                                       "high": 60.0}}}, raw, "test")
     with pytest.raises(SweepError, match=r"test: controller\.delay: a sweep's sample is the "
@@ -275,7 +266,7 @@ def test_a_delayed_continuous_loop_converges_at_second_order_in_the_step():
     # step midpoints gave 3 and 2e-4 rad)
     theta = {}
     for step in (0.1, 0.05, 0.025):
-        result = spacecraft.run(scene(**{
+        result = spacecraft.run(flown_damped(**{
             "wheels": None, "sensors": None, "controller.delay": 0.1, "manoeuvre.step": step,
             "manoeuvre.disturbance": {"input": "disturbance_torque", "amplitude": 0.01,
                                       "start": 70.33, "length": 10.0}}))

@@ -13,13 +13,12 @@ import spacecraft
 from spacecraft.design.responses import trace
 from spacecraft.scene.read import SceneError, load_scene
 
-from scenes import rod_scene
-from test_scene_flown import THREE
+from scenes import THREE_AXIS_BOOM, rod_scene
 
 AXES = "xyz"
 # the 820 kg hub with its full inertia tensor and the CFRP boom off every principal axis; a
 # 10 deg eigen-axis slew about (1, 1, 0.5) in 60 s, bang-coast-bang with feedforward
-BASE = copy.deepcopy(THREE)
+BASE = copy.deepcopy(THREE_AXIS_BOOM)
 BASE["manoeuvre"].update(duration=90.0, step=0.1, profile="bang-coast-bang", feedforward=True,
                          torque_limit=0.5, rate_limit=0.5)
 BASE["appendages"][0]["beam"]["damping_ratio"] = 0.005   # damped: finite delay margins

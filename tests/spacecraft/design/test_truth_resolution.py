@@ -14,7 +14,7 @@ from spacecraft.design.loop import DesignLoop
 from spacecraft.design.verdicts import design_warnings
 from spacecraft.report.pages import markdown
 from spacecraft.report.write import report_blocks
-from test_design_loop import SCENE as ROD_SCENE
+from scenes import LOOP_SCENE as ROD_SCENE
 
 # the design-loop tests' rod and slew, one truth mode and a faster PD (its band above 1 rad/s)
 SCENE = {**{key: copy.deepcopy(ROD_SCENE[key]) for key in ("hub", "appendages", "manoeuvre")},

@@ -9,17 +9,18 @@ import spacecraft
 from spacecraft.report.write import write_report
 from spacecraft.scene.read import SceneError, load_scene
 
-from test_flown_run import scene
-from scenes import BASE, scene_with
+from scenes import BASE, flown_damped, scene_with
 
 
 @pytest.fixture(scope="module")
 def written(tmp_path_factory):
     folder = tmp_path_factory.mktemp("flown")
-    data = scene(**{"wheels": {"torque_limit": 0.07, "momentum_limit": 4.0, "spin_inertia": 0.02},
-                    "controller.delay": 0.1, "report": {"plots": True},
-                    "manoeuvre.disturbance": {"input": "disturbance_torque", "amplitude": 0.005,
-                                              "start": 100.0, "length": 5.0}})
+    data = flown_damped(**{"wheels": {"torque_limit": 0.07, "momentum_limit": 4.0,
+                                      "spin_inertia": 0.02},
+                           "controller.delay": 0.1, "report": {"plots": True},
+                           "manoeuvre.disturbance": {"input": "disturbance_torque",
+                                                     "amplitude": 0.005, "start": 100.0,
+                                                     "length": 5.0}})
     result = spacecraft.run(data)
     write_report(result, folder)
     return result, folder
@@ -82,7 +83,7 @@ def test_the_time_series_carry_the_wheels_with_units(written):
 
 def test_plots_true_draws_the_flown_plots_only_where_they_show_something():
     assert set(load_scene(None).report.plots) == {"slew", "loop", "poles", "W"}
-    flown = load_scene(scene(**{"report": {"plots": True}}))
+    flown = load_scene(flown_damped(**{"report": {"plots": True}}))
     assert set(flown.report.plots) == {"slew", "loop", "poles", "W", "profile", "wheels"}
     with pytest.raises(SceneError, match=r"report\.plots: asks for 'wheels' but the scene has "
                                          r"none"):

@@ -9,7 +9,7 @@ import controllers
 from spacecraft import run
 from spacecraft.scene.read import load_scene
 
-from test_scene_flown import flown
+from scenes import flown
 
 
 @pytest.mark.slow

@@ -10,31 +10,7 @@ import pytest
 from spacecraft.scene.flown import shaper_band
 from spacecraft.scene.read import SceneError, load_scene
 
-from scenes import BASE, scene_with
-
-FLOWN = {"manoeuvre.profile": "shaped", "manoeuvre.feedforward": True,
-         "manoeuvre.torque_limit": 0.1, "manoeuvre.rate_limit": 0.5,
-         "controller.delay": 0.2, "manoeuvre.step": 0.1,
-         "wheels": {"torque_limit": 0.2, "momentum_limit": 4.0, "spin_inertia": 0.02},
-         "sensors": {"attitude_density": 1e-5, "angle_random_walk": 1e-6, "rpe_window": 10.0}}
-
-THREE = {"hub": {"mass": 820.0, "inertia": [[950.0, 12.0, -8.0], [12.0, 780.0, 15.0],
-                                             [-8.0, 15.0, 640.0]]},
-         "appendages": [{"name": "boom", "position": [0.6, 0.3, -0.9],
-                         "beam": {"section": "tube", "length": 4.0, "outer_diameter": 0.05,
-                                  "wall_thickness": 0.001, "density": 1600.0,
-                                  "youngs_modulus": 1.2e11},
-                         "fit": {"match": "poles-and-zeros"}}],
-         "fidelity": {"n_modes": 3},
-         "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.1}},
-         "manoeuvre": {"slew_angle": 10.0, "slew_time": 60.0, "step": 0.5,
-                       "slew_axis": [1.0, 1.0, 0.5]}}
-
-
-def flown(**changes):
-    """The test scene flown (FLOWN), with dotted-path changes; None removes a key."""
-    merged = {**FLOWN, **changes}
-    return scene_with(**{k: v for k, v in merged.items() if not (v is None and k in FLOWN)})
+from scenes import BASE, THREE_AXIS_BOOM, flown
 
 
 def test_the_default_keys_keep_todays_scene():
@@ -97,7 +73,7 @@ def test_the_shortest_shaper_that_holds_the_frequency_error_is_chosen():
 
 
 def test_a_three_axis_scene_reads_per_wheel_limits_pyramid_and_per_axis_noise():
-    data = copy.deepcopy(THREE)
+    data = copy.deepcopy(THREE_AXIS_BOOM)
     data["wheels"] = {"torque_limit": [0.1, 0.1, 0.2, 0.2], "momentum_limit": 4.0,
                       "pyramid": {"cant_angle": 54.7356}}
     data["sensors"] = {"attitude_density": [1e-5, 1e-5, 3e-5], "rpe_window": 10.0}
@@ -215,7 +191,7 @@ def test_a_digital_rpe_window_is_whole_samples():
 
 
 def test_three_axis_wheel_axes_that_do_not_span_are_refused():
-    data = copy.deepcopy(THREE)
+    data = copy.deepcopy(THREE_AXIS_BOOM)
     data["wheels"] = {"torque_limit": 0.1, "momentum_limit": 4.0,
                       "spin_axes": [[1, 0, 0], [0, 1, 0], [1, 1, 0]]}
     with pytest.raises(SceneError, match=r"wheels\.spin_axes: spin_axes do not span the "
@@ -285,7 +261,7 @@ def test_wild_values_at_every_flown_key():
     one-line SceneError naming a key."""
     from test_scene_fuzz import check, mutate
 
-    bases = [flown(), {**copy.deepcopy(THREE), "wheels": {"torque_limit": 0.1,
+    bases = [flown(), {**copy.deepcopy(THREE_AXIS_BOOM), "wheels": {"torque_limit": 0.1,
                                                           "momentum_limit": 4.0,
                                                           "pyramid": {}}}]
     for value in (math.nan, -1.0, 0.0, 1e300, 10**400, "x" * 10_000, [[[[1.0]]]], {"a": 1},

@@ -23,7 +23,7 @@ from hypothesis import strategies as st
 
 from spacecraft.scene.read import Scene, SceneError, load_scene
 
-from test_cli import SCENE
+from scenes import BASE_TOML
 from scenes import BASE
 
 EXAMPLES = int(os.environ.get("FLEXSAT_FUZZ_EXAMPLES", "150"))
@@ -158,7 +158,7 @@ def test_mutated_scene_dicts_give_a_scene_or_one_line_naming_a_key(mutations, n_
     check(lambda: load_scene(data), "<dict>", unknown)
 
 
-LINES = SCENE.splitlines()
+LINES = BASE_TOML.splitlines()
 toml_fragments = st.one_of(
     st.text(max_size=40),
     st.sampled_from(["mass = nan", "mass = inf", "inertia = -1", "[hub]", "[[appendages]]",

@@ -12,7 +12,7 @@ from spacecraft.scene.read import load_scene
 from spacecraft.sweep.evaluate import METRICS, evaluate, evaluate_batch, prepare
 from spacecraft.sweep.parameters import apply_values, read_sweep
 
-from test_sweep_parameters import scene
+from scenes import default_sweep_scene
 
 PARAMETERS = {"hub.inertia": {"distribution": "uniform", "low": 40.0, "high": 60.0},
               "appendages.rod.beam.damping_ratio": {"distribution": "loguniform",
@@ -21,7 +21,7 @@ PARAMETERS = {"hub.inertia": {"distribution": "uniform", "low": 40.0, "high": 60
 
 def frequency_fit_scene():
     """The default sweep scene with the paper's fit."""
-    raw = scene()
+    raw = default_sweep_scene()
     raw["appendages"][0]["fit"]["match"] = "frequencies"
     return raw
 
@@ -38,7 +38,7 @@ def test_a_sample_is_the_runners_design_loop():
     poles-and-zeros fit: the sample's chain is the run's, from the same memoised
     dimensionless fit); the exact-beam margins, found on the exact loop function, do not
     depend on the grid (a grid four times as dense gives them to 1e-9)."""
-    raw = scene()
+    raw = default_sweep_scene()
     context, spec = context_of(raw, design="per-sample")
     values = [45.0, 0.003]
     row = evaluate(context, values)

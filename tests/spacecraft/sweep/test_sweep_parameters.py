@@ -1,31 +1,25 @@
 """Sweep parameters: key paths into a scene, distributions, sampling plans, bad input."""
 import math
-import tomllib
 
 import numpy as np
 import pytest
 
-from spacecraft.sweep import SweepError, load_sweep, sweep_scene_path
+from spacecraft.sweep import SweepError, load_sweep
 from spacecraft.sweep.parameters import (MAX_SAMPLES, apply_values, check_box, read_sweep,
                                          resolve_key)
 
-
-def scene():
-    """The shipped default sweep scene as a dict, without its [sweep] table."""
-    raw = tomllib.loads(sweep_scene_path("default").read_text())
-    raw.pop("sweep")
-    return raw
+from scenes import default_sweep_scene
 
 
 def spec_of(parameters, **settings):
-    return read_sweep({"parameters": parameters, **settings}, scene(), "test")
+    return read_sweep({"parameters": parameters, **settings}, default_sweep_scene(), "test")
 
 
 UNIFORM = {"distribution": "uniform", "low": 40.0, "high": 60.0}
 
 
 def test_key_paths_resolve_appendages_by_name_and_array_indices():
-    raw = scene()
+    raw = default_sweep_scene()
     assert resolve_key("hub.inertia", raw) == ("hub", "inertia")
     assert resolve_key("appendages.rod.beam.youngs_modulus", raw) == \
         ("appendages", 0, "beam", "youngs_modulus")
@@ -74,18 +68,18 @@ def test_a_box_reaching_non_physical_values_names_the_key():
                     {"distribution": "normal", "mean": 2.06e11, "std": 1.0e11}})
     with pytest.raises(SweepError, match=r"'appendages.rod.beam.youngs_modulus'.*reaches "
                                          r"-9.4e\+10.*must be positive"):
-        check_box(spec, scene(), "test")
+        check_box(spec, default_sweep_scene(), "test")
     # truncating it makes it physical
     spec = spec_of({"appendages.rod.beam.youngs_modulus":
                     {"distribution": "normal", "mean": 2.06e11, "std": 1.0e11, "low": 1e10}})
-    check_box(spec, scene(), "test", spec.values())
+    check_box(spec, default_sweep_scene(), "test", spec.values())
 
 
 def test_sample_counts_above_the_limit_are_refused_unless_raised():
     with pytest.raises(SweepError, match=f"exceed the limit of {MAX_SAMPLES}.*max_samples"):
         spec_of({"hub.inertia": UNIFORM}, samples=MAX_SAMPLES + 1)
     spec = read_sweep({"parameters": {"hub.inertia": UNIFORM}, "samples": MAX_SAMPLES + 1},
-                      scene(), "test", max_samples=MAX_SAMPLES + 1)
+                      default_sweep_scene(), "test", max_samples=MAX_SAMPLES + 1)
     assert spec.n_samples == MAX_SAMPLES + 1
     # a grid counts its product
     with pytest.raises(SweepError, match="36 samples exceed the limit of 30"):
@@ -103,9 +97,10 @@ def test_controller_parameters_need_per_sample_design():
 
 def test_unknown_sweep_keys_and_missing_parameters():
     with pytest.raises(SweepError, match=r"sweep.sample: unknown key"):
-        read_sweep({"sample": 3, "parameters": {"hub.inertia": UNIFORM}}, scene(), "test")
+        read_sweep({"sample": 3, "parameters": {"hub.inertia": UNIFORM}}, default_sweep_scene(),
+                   "test")
     with pytest.raises(SweepError, match="sweep.parameters: missing"):
-        read_sweep({"samples": 3}, scene(), "test")
+        read_sweep({"samples": 3}, default_sweep_scene(), "test")
     with pytest.raises(SweepError, match="sweep.method: must be one of"):
         spec_of({"hub.inertia": UNIFORM}, method="sobol")
 
@@ -164,7 +159,7 @@ def test_grid_is_the_cartesian_product_last_parameter_fastest():
 
 
 def test_values_go_into_a_copy_of_the_scene_in_file_units():
-    raw = scene()
+    raw = default_sweep_scene()
     spec = spec_of({"hub.inertia": UNIFORM, "appendages.rod.direction":
                     {"distribution": "uniform", "low": -5.0, "high": 5.0}})
     out = apply_values(raw, spec.parameters, [45.0, 2.5])
@@ -175,7 +170,7 @@ def test_values_go_into_a_copy_of_the_scene_in_file_units():
 def test_values_shared_copy_sets_the_same_values_and_leaves_the_scene_untouched():
     import copy
 
-    raw = scene()
+    raw = default_sweep_scene()
     before = copy.deepcopy(raw)
     spec = spec_of({"hub.inertia": UNIFORM, "appendages.rod.direction":
                     {"distribution": "uniform", "low": -5.0, "high": 5.0},
@@ -196,4 +191,4 @@ def test_load_sweep_overrides_the_scene_table():
     assert spec.n_samples == 7 and spec.seed == 9 and spec.keys == ["hub.inertia"]
     assert "sweep" not in raw and "default" in source
     with pytest.raises(SweepError, match="nothing to sweep"):
-        load_sweep(scene())
+        load_sweep(default_sweep_scene())
