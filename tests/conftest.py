@@ -21,14 +21,12 @@ import pytest
 
 PACKAGES = ("appendages", "controllers", "fmu", "spacecraft")
 
-# The tests' shared helpers (tests/support: the independent FE models, plants, FMU cases, the
-# small test scenes: ``from scenes import scene_with``) and the folders of test modules whose
-# fixtures other tests import (``from test_scene_flown import flown``) import by name: test
-# module names are unique across the folders.
+# The tests' shared helpers (tests/support: the independent reference models, plants, FMU
+# cases and FMI tools, the test scenes: ``from scenes import scene_with``) import by name; a
+# test module imports no other test module (tests/project/test_architecture.py).
 TESTS = pathlib.Path(__file__).resolve().parent
-for _folder in sorted({TESTS / "support", *(p.parent for p in TESTS.rglob("test_*.py"))}):
-    if str(_folder) not in sys.path:
-        sys.path.append(str(_folder))
+if str(TESTS / "support") not in sys.path:
+    sys.path.append(str(TESTS / "support"))
 
 
 def _import_everything():

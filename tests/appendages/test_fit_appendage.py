@@ -13,6 +13,7 @@ import scipy.linalg
 
 import fe3d
 import fe_planar
+from nastran_deck import lumped_mass_matrix
 from appendages import Beam, FitWarning, ModalAppendage, fit_chain, fit_chain_3d, nastran
 from appendages.equivalence import criterion, fit_targets, spectral_errors
 from appendages.fit3d import motion_frequencies, rod_chain_frequencies
@@ -120,8 +121,6 @@ def test_bad_fits_of_modal_data(boom):
 # -- three axes ------------------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def nastran_boom() -> ModalAppendage:
-    from test_nastran import lumped_mass_matrix
-
     modes = NastranModes.load(fe_data("beam_modes.npz"))
     return nastran.modal_appendage(modes, root=1, units=("in", "slinch"),
                                    mass_matrix=lumped_mass_matrix(), damping=0.004)

@@ -19,6 +19,7 @@ import controllers
 from controllers.loop import LoopTransfer, controller_roots, resonance_points
 from controllers.margins import (loop_nyquist_count, loop_verdict, multiloop_margins,
                                  unstable_poles)
+from loops import assert_same_margins, with_unstable_pole
 from plants import modal_plant, three_axis_plant
 
 J3 = np.array([[1200.0, 40.0, -25.0], [40.0, 900.0, 30.0], [-25.0, 30.0, 1500.0]])
@@ -35,21 +36,6 @@ def plant_and_loop(natural_frequency=0.15, augment=None):
     return plant, K
 
 
-def with_unstable_pole(K, a, c):
-    """The controller with, per axis, a state x' = a x + theta (a > 0: unstable) feeding
-    torque -c x. On a rigid axis of inertia J with PD gains kp, kd the loop's characteristic
-    polynomial is J s^3 + (kd - a J) s^2 + (kp - a kd) s + (c - a kp): by Routh stable for
-    a kp < c < a kp + (kd - a J)(kp - a kd)/J, unstable outside."""
-    A0, B0, C0, D0 = (np.asarray(x, dtype=float) for x in (K.A, K.B, K.C, K.D))
-    n0 = A0.shape[0]
-    inputs = list(K.input_labels)
-    A = np.block([[A0, np.zeros((n0, 3))], [np.zeros((3, n0)), a * np.eye(3)]])
-    B = np.vstack([B0, np.zeros((3, len(inputs)))])
-    B[n0 + np.arange(3), [inputs.index(f"theta_{x}") for x in "xyz"]] = 1.0
-    C = np.hstack([C0, -c * np.eye(3)])
-    return control.ss(A, B, C, D0, inputs=inputs, outputs=list(K.output_labels))
-
-
 def loop_function(plant, K):
     """(L(omega), the grid that resolves it) of the state-space loop."""
     transfer = LoopTransfer(plant, K)
@@ -59,17 +45,6 @@ def loop_function(plant, K):
 def closed_loop_unstable(plant, K) -> int:
     s = np.linalg.eigvals(controllers.close_loop(plant, K).A)
     return int(np.sum(s.real > 1e-10 * np.maximum(1.0, np.abs(s))))
-
-
-def assert_same_margins(a, b, tol=1e-9):
-    da, db = a.as_dict(), b.as_dict()
-    assert da.keys() == db.keys()
-    for key in da:
-        if math.isinf(da[key]):
-            assert da[key] == db[key], key
-        else:
-            assert abs(da[key] - db[key]) <= tol * max(1.0, abs(da[key])), (key, da[key], db[key])
-    assert abs(a.delay_margin - b.delay_margin) <= tol * max(1.0, abs(a.delay_margin))
 
 
 @pytest.mark.slow

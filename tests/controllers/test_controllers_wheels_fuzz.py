@@ -1,7 +1,7 @@
 """The methods of the wheels' and the pointing API (the functions and classes are fuzzed by
 tests/project/test_public_api_fuzz.py) refuse a bad argument by the parameter's name.
 
-Each parameter of each method gets each value of test_public_api_fuzz's BAD list, the others
+Each parameter of each method gets each value of the fuzz tests' BAD list (tests/support/fuzzing.py), the others
 their valid values; a call passes if it returns without a NaN in its numeric result, or raises
 ValueError or TypeError naming the parameter, or FloatingPointError saying that the response
 leaves the float64 range (inputs near 1e308); a RuntimeWarning fails it.
@@ -21,7 +21,7 @@ import controllers
 
 
 from plants import modal_plant  # noqa: E402
-from test_public_api_fuzz import BAD  # noqa: E402
+from fuzzing import BAD  # noqa: E402
 
 PLANT = modal_plant(50.0, [(2.0, 0.005, 0.04, 0.04)], tips=[("wing_tip_deflection", [0.5])],
                     disturbance=False)

@@ -15,7 +15,7 @@ from fmpy import extract, read_model_description, simulate_fmu
 from fmpy.fmi3 import FMU3Slave
 
 from fmu_cases import exported, hub
-from test_fmu_simulation import _augmented_exponential_mp, step_table, zoh_reference
+from fmu_references import augmented_exponential_mp, step_table, zoh_reference
 
 SWITCH_TIMES, VALUES = [0.0, 0.5, 1.5, 2.5], [0.0, 1.0, -2.0, 0.5]
 
@@ -81,7 +81,7 @@ def test_any_step_size_is_exact(h):
     finally:
         slave.freeInstance()
     assert (event, terminate, early, last) == (False, False, False, h)
-    expected = _augmented_exponential_mp(hub(), h, x, 0.7)
+    expected = augmented_exponential_mp(hub(), h, x, 0.7)
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12 * np.max(np.abs(expected)))
 
 

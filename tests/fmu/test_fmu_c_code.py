@@ -22,7 +22,7 @@ from fmpy import read_model_description
 from fmu import export
 from fmu.codegen import template_dir
 
-from test_fmu_misuse import CO_SIMULATION, DISCARD, ERROR, MODEL_EXCHANGE, OK, Binary
+from fmi_binary import CO_SIMULATION, DISCARD, ERROR, MODEL_EXCHANGE, OK, Binary
 
 J = 10.0  # hub inertia [kg m^2]
 
@@ -205,8 +205,8 @@ def test_double_free_reads_no_freed_memory(tmp_path):
 
 HUGE_STEPS = """
 import json, sys
-sys.path[:0] = [{tests!r}, {root!r}]
-from test_fmu_misuse import Binary
+sys.path[:0] = [{support!r}, {root!r}]
+from fmi_binary import Binary
 from pathlib import Path
 binary = Binary(Path({fmu!r}), Path({folder!r}))
 results = []
@@ -224,7 +224,8 @@ STEPS = [1e50, 1e100, 1e150, 1e155, 1e200, 1e300, 1e307, 3e307, 5e307, 1e308, 1.
 def run_steps(tmp_path, system, steps, states):
     path = export(system, tmp_path / "plant.fmu")
     here = Path(__file__).resolve()
-    script = HUGE_STEPS.format(tests=str(here.parent), root=str(here.parents[2]), fmu=str(path),
+    script = HUGE_STEPS.format(support=str(here.parents[1] / "support"),
+                               root=str(here.parents[2]), fmu=str(path),
                                folder=str(tmp_path / "plant"), steps=steps, states=states)
     # a step that hangs would hang this test: a separate process with a time limit (each
     # step takes microseconds to milliseconds)

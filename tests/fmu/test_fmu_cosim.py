@@ -16,6 +16,8 @@ import pytest
 
 from fmu import CosimulationError, cosimulate, export
 
+from fmu_cases import jacobi_controller
+
 J = 10.0  # hub inertia [kg m^2]
 KP, KD, FILTER = 20.0, 30.0, 40.0  # [N m/rad], [N m s/rad], derivative filter [rad/s]
 
@@ -52,17 +54,6 @@ def fmus(tmp_path_factory):
         "fpd": export(filtered_pd_controller(), folder / "fpd.fmu", step=0.01),
         "plant_me": export(hub_with_flexible_mode(), folder / "plant_me.fmu", interfaces="me"),
     }
-
-
-def jacobi_controller(controller_d):
-    """Discrete controller whose feedthrough acts through a one-step delay state z."""
-    Phi, Gamma = np.asarray(controller_d.A), np.asarray(controller_d.B)
-    C, D = np.asarray(controller_d.C), np.asarray(controller_d.D)
-    n, m = Gamma.shape
-    A = np.block([[Phi, np.zeros((n, m))], [np.zeros((m, n)), np.zeros((m, m))]])
-    B = np.vstack([Gamma, np.eye(m)])
-    return control.ss(A, B, np.hstack([C, D]), np.zeros_like(D), controller_d.dt,
-                      inputs=controller_d.input_labels, outputs=controller_d.output_labels)
 
 
 def monolithic(controller, h, t_end, reference, method, x0_plant=None):

@@ -27,7 +27,7 @@ import fmu.cosim
 from fmu import cosimulate, export
 
 from fmu_cases import SAMPLE_TIME, exported, lqr, loop_plant, monolithic_sampled_loop, sampled
-from test_fmu_cosim import jacobi_controller
+from fmu_cases import jacobi_controller
 
 VERSIONS = ["2.0", "3.0"]
 T = 0.1  # sample period of fmu_cases.sampled [s]

@@ -12,7 +12,6 @@
 import ctypes
 
 import control
-import mpmath
 import numpy as np
 import pytest
 import scipy.linalg
@@ -21,6 +20,8 @@ from fmpy.util import read_csv
 from fmpy.fmi2 import FMU2Model, FMU2Slave
 
 from fmu import export
+
+from fmu_references import augmented_exponential_mp, step_table, zoh_reference
 
 J = 10.0  # hub inertia [kg m^2]
 
@@ -48,24 +49,6 @@ def fmus(tmp_path_factory):
                       reference=True),
         "stiff": export(stiff_plant(), folder / "stiff.fmu", step=0.01),
     }
-
-
-def step_table(times, values, name="torque"):
-    """fmpy input table for a piecewise-constant signal: values[i] from times[i] on."""
-    rows = [(0.0, values[0])]
-    for t, before, after in zip(times[1:], values[:-1], values[1:]):
-        rows += [(t, before), (t, after)]
-    rows.append((1e3, values[-1]))
-    return np.array(rows, dtype=[("time", np.float64), (name, np.float64)])
-
-
-def zoh_reference(system, h, t_end, switch_times, values, x0=None):
-    """Outputs of c2d(system, h, zoh) at t_k = k h for the right-continuous steps."""
-    t = np.arange(int(round(t_end / h)) + 1) * h
-    u = np.array([values[np.searchsorted(switch_times, tk + 1e-12, side="right") - 1] for tk in t])
-    response = control.forced_response(control.c2d(system, h, "zoh"), T=t, U=u,
-                                       X0=0.0 if x0 is None else x0)
-    return t, np.asarray(response.outputs)
 
 
 def test_cs_equals_c2d_zoh(fmus):
@@ -159,18 +142,6 @@ def _slave(path, name):
     return slave, {v.name: v.valueReference for v in description.modelVariables}
 
 
-def _augmented_exponential_mp(system, h, x, u):
-    """x(h) = expm([[A, B], [0, 0]] h) [x; u] in 40-digit arithmetic (Van Loan 1978)."""
-    A, B = np.asarray(system.A), np.asarray(system.B)
-    n = A.shape[0]
-    M = np.zeros((n + 1, n + 1))
-    M[:n, :n], M[:n, n:] = A * h, B * h
-    mpmath.mp.dps = 40
-    E = mpmath.expm(mpmath.matrix(M.tolist()))
-    z = list(x) + [u]
-    return np.array([float(mpmath.fsum(E[i, j] * z[j] for j in range(n + 1))) for i in range(n)])
-
-
 @pytest.mark.parametrize("h", [0.037, 1e-6, 2.5, 0.1])
 def test_any_step_size_is_exact(fmus, h):
     """One fmi2DoStep of size h (not the default 0.01 s: computed in C by balancing and
@@ -194,7 +165,7 @@ def test_any_step_size_is_exact(fmus, h):
         finally:
             slave.terminate()
             slave.freeInstance()
-        expected = _augmented_exponential_mp(system, h, x, 0.7)
+        expected = augmented_exponential_mp(system, h, x, 0.7)
         np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12 * np.max(np.abs(expected)))
 
 
@@ -209,7 +180,7 @@ def test_default_step_is_exact(fmus):
     finally:
         slave.terminate()
         slave.freeInstance()
-    expected = _augmented_exponential_mp(stiff_plant(), 0.01, np.zeros(4), 0.7)
+    expected = augmented_exponential_mp(stiff_plant(), 0.01, np.zeros(4), 0.7)
     np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12 * np.max(np.abs(expected)))
 
 

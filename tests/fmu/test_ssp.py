@@ -22,7 +22,7 @@ from fmpy.ssp.ssd import read_ssd
 from fmu import CosimulationError, FMUBuildError, cosimulate_ssp, write_ssp
 
 from fmu_cases import SAMPLE_TIME, exported, lqr, loop_plant, monolithic_sampled_loop
-from test_fmu_cosim import jacobi_controller
+from fmu_cases import jacobi_controller
 
 VERSIONS = ["2.0", "3.0"]
 T_END = 3.0

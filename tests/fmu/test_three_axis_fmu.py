@@ -282,7 +282,7 @@ def test_fmusim(name, version, tmp_path):
     """fmusim CS at the reference step equals the FMU's reference files (python-control) to
     round-off, 1e-12 relative (left limits at input steps, as fmpy); fmusim's CVODE (fmusim-ir,
     see test_fmu_external_tools) at rtol 1e-8 to the solver's error, 1e-5 relative."""
-    from test_fmu_external_tools import assert_matches_reference, first_per_time, run, tool
+    from fmi_tools import assert_matches_reference, first_per_time, run, tool
     path = exported(name, version)
     stem = path.with_suffix("")
     h = repr(SAMPLE_TIME if system(name).dt else STEP)
@@ -305,7 +305,7 @@ def test_fmu_compliance_checker(name, tmp_path):
     summary; its CS result equals the reference files to round-off (1e-12 relative). Its ME is
     forward Euler at h = 1e-4 s, stable here (1 % damping, modes below 40 rad/s: h < 2 zeta /
     w); its first-order error is not compared (test_fmu_external_tools compares none)."""
-    from test_fmu_external_tools import (assert_matches_reference, early_events, first_per_time,
+    from fmi_tools import (assert_matches_reference, early_events, first_per_time,
                                          run, tool)
     checker = tool("fmuCheck.linux64")
     path = exported(name, "2.0")

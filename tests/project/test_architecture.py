@@ -304,3 +304,19 @@ def test_test_modules_have_unique_names():
             clashes.append(f"{seen[path.name].relative_to(ROOT)} and {path.relative_to(ROOT)}")
         seen.setdefault(path.name, path)
     assert not clashes, "test modules of the same name: " + "; ".join(clashes)
+
+
+def test_no_test_module_imports_another():
+    """What several test modules share lives in tests/support, apart from the tests: a test
+    module imported by another would run its module-level set-up there too, and hides the
+    shared piece among tests."""
+    tests = {path.stem: path for path in (ROOT / "tests").rglob("test_*.py")}
+    found = []
+    for path in sorted(tests.values()):
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            names = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                     else [node.module] if isinstance(node, ast.ImportFrom) and node.module
+                     else [])
+            found += [f"{path.relative_to(ROOT)} (line {node.lineno}) imports {name}"
+                      for name in names if name.split(".")[0] in tests]
+    assert not found, "move what is shared to tests/support: " + "; ".join(found)

@@ -38,8 +38,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-
-from plants import modal_plant  # noqa: E402
+from fuzzing import BAD
+from plants import modal_plant
 
 #: Packages whose ``__all__`` is the public API fuzzed here.
 PACKAGES = ("appendages", "controllers", "fmu", "spacecraft", "spacecraft.basilisk",
@@ -72,16 +72,6 @@ NEEDS_BASILISK = {"spacecraft.basilisk.require_basilisk", "spacecraft.basilisk.s
                   "spacecraft.basilisk.linearised"}
 #: Longest call [s] before it counts as a failure (work not estimated before it is done).
 TIMEOUT = 20.0
-
-
-class _Opaque:
-    def __repr__(self):
-        return "<opaque object>"
-
-
-#: The 16 bad values every parameter gets.
-BAD = (math.nan, math.inf, -math.inf, -1.0, 0.0, 1e308, -1e308, 5e-324, 1.0 + 1.0j, True, "x",
-       None, [], [math.nan], np.array([]), _Opaque())
 
 
 # -------------------------------------------------------------------------------------------

@@ -33,7 +33,7 @@ import fmu
 from plants import modal_plant
 
 __all__ = ["J", "SAMPLE_TIME", "hub", "pd", "loop_plant", "lqr", "sampled", "SYSTEMS",
-           "exported", "monolithic_sampled_loop"]
+           "exported", "monolithic_sampled_loop", "jacobi_controller"]
 
 J = 10.0  # hub inertia [kg m^2]
 #: Sample period of the digital LQR [s]
@@ -136,3 +136,14 @@ def monolithic_sampled_loop(t_end: float, h: float, reference: float) -> dict[st
         x = Phi @ x + Gamma @ u
     out["time"] = np.arange(n_steps + 1) * h
     return out
+
+
+def jacobi_controller(controller_d):
+    """Discrete controller whose feedthrough acts through a one-step delay state z."""
+    Phi, Gamma = np.asarray(controller_d.A), np.asarray(controller_d.B)
+    C, D = np.asarray(controller_d.C), np.asarray(controller_d.D)
+    n, m = Gamma.shape
+    A = np.block([[Phi, np.zeros((n, m))], [np.zeros((m, n)), np.zeros((m, m))]])
+    B = np.vstack([Gamma, np.eye(m)])
+    return control.ss(A, B, np.hstack([C, D]), np.zeros_like(D), controller_d.dt,
+                      inputs=controller_d.input_labels, outputs=controller_d.output_labels)

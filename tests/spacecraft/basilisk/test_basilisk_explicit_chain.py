@@ -13,6 +13,8 @@ scale).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -22,7 +24,10 @@ from spacecraft import Spacecraft, load_scene, run
 from spacecraft.basilisk import default_sample_time
 from spacecraft.design.models import ModelBuilder, RunStats
 
-from test_basilisk_three_axis import SMALL, soft_three_axis_scene
+from scenes import soft_three_axis_scene
+
+#: the scene's slew [rad]
+SMALL = math.radians(soft_three_axis_scene()["manoeuvre"]["slew_angle"])
 
 # runs Basilisk: skipped with the install hint where bsk is not installed (tests/conftest.py)
 needs_bsk = pytest.mark.basilisk

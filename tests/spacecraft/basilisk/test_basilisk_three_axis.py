@@ -34,6 +34,8 @@ from spacecraft import Hub, Mount, Spacecraft
 from spacecraft import basilisk as sb
 from spacecraft.dynamics.kinematics import euler_orientation, orientation_from_axis
 
+from scenes import soft_three_axis_scene
+
 # runs Basilisk: skipped with the install hint where bsk is not installed (tests/conftest.py)
 needs_bsk = pytest.mark.basilisk
 
@@ -610,26 +612,6 @@ def test_the_design_loops_basilisk_run_is_three_axis_too():
         reference = sb.slew_reference(SMALL, SLEW_TIME, AXIS)(response.time)
         for k, a in enumerate("xyz"):
             np.testing.assert_array_equal(inputs[f"theta_ref_{a}"], reference[:, k])
-
-
-def soft_three_axis_scene(**simulator) -> dict:
-    """A three-axis scene whose 2-body wing chain Basilisk runs in seconds (highest mode 51
-    rad/s): 200 kg hub with a full inertia tensor, a canted 4 m wing off the centre of mass, a
-    0.1 deg eigen-axis slew about (1, 1, 0.5), run in Basilisk with ``simulator`` keys."""
-    return {
-        "hub": {"mass": 200.0, "inertia": [[120.0, 3.0, -2.0], [3.0, 100.0, 4.0],
-                                           [-2.0, 4.0, 80.0]]},
-        "appendages": [{"name": "wing", "position": [0.0, 0.6, 0.1],
-                        "orientation": [90.0, 0.0, 20.0],
-                        "beam": {"section": "rectangular", "length": 4.0, "width": 0.3,
-                                 "thickness": 0.03, "density": 600.0, "youngs_modulus": 7e8,
-                                 "poisson_ratio": 0.3, "damping_ratio": 0.005},
-                        "fit": {"n_bodies": 2}}],
-        "controller": {"types": ["pd"], "pd": {"natural_frequency": 0.2, "damping": 0.7}},
-        "manoeuvre": {"slew_angle": 0.1, "slew_time": 15.0, "duration": 60.0, "step": 0.1,
-                      "slew_axis": [1.0, 1.0, 0.5]},
-        "outputs": {"tip_deflection": True}, "report": {"plots": False},
-        "simulator": {"name": "basilisk", **simulator}}
 
 
 @pytest.mark.slow

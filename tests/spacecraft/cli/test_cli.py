@@ -11,19 +11,8 @@ from appendages.equivalence import fit_chain
 from spacecraft import cli
 from spacecraft.design.loop import run
 
+from command import flexsat
 from scenes import BASE_TOML
-
-
-
-@pytest.fixture
-def scene_file(tmp_path):
-    path = tmp_path / "boom.toml"
-    path.write_text(BASE_TOML)
-    return path
-
-
-def flexsat(*args):
-    return cli.main([str(a) for a in args])
 
 
 def test_run_writes_the_report_folder(scene_file, tmp_path, capsys):

@@ -23,7 +23,7 @@ from spacecraft import Hub, Mount, Spacecraft
 from spacecraft.design.exact_grid import exact_grid, locator_model
 from spacecraft.design.verdicts import exact_loop_verdict
 
-from test_controllers_loop_function import assert_same_margins, with_unstable_pole
+from loops import assert_same_margins, with_unstable_pole
 
 R1 = Rotation.from_euler("zyx", [0.3, -0.4, 0.7]).as_matrix()
 R2 = Rotation.from_euler("zyx", [2.2, 0.5, -1.0]).as_matrix()

@@ -10,7 +10,7 @@ import numpy as np
 import scipy.linalg
 
 from spacecraft.dynamics import coupling
-from test_prune_round_off import twin_wings
+from spacecraft_models import twin_wings
 
 
 def test_modes_are_the_same_whatever_signs_the_solver_returns(monkeypatch):

@@ -21,7 +21,7 @@ import scipy.linalg
 from appendages import Beam, fit_chain_3d
 from spacecraft import Hub, Mount, Spacecraft
 from spacecraft.dynamics.kinematics import euler_orientation, orientation_from_axis
-from test_three_axis_chain import cross, lagrangian_matrices, random_chain
+from chain3d_reference import cross, lagrangian_matrices, random_chain
 
 RNG = np.random.default_rng(2024)
 CHAIN = random_chain(RNG, 4, "rigid")

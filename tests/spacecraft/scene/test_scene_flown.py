@@ -259,7 +259,7 @@ FLOWN_KEYS = [
 def test_wild_values_at_every_flown_key():
     """Every flown key with each wild value, in a planar and a three-axis scene: a Scene or a
     one-line SceneError naming a key."""
-    from test_scene_fuzz import check, mutate
+    from scene_fuzz import check, mutate
 
     bases = [flown(), {**copy.deepcopy(THREE_AXIS_BOOM), "wheels": {"torque_limit": 0.1,
                                                           "momentum_limit": 4.0,

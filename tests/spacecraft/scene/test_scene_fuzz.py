@@ -15,16 +15,15 @@ scene with lines replaced or inserted, read from a file (tomllib's errors includ
 import copy
 import math
 import os
-import re
 
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from spacecraft.scene.read import Scene, SceneError, load_scene
+from spacecraft.scene.read import Scene, load_scene
 
-from scenes import BASE_TOML
-from scenes import BASE
+from scene_fuzz import DELETE, check, mutate
+from scenes import BASE, BASE_TOML
 
 EXAMPLES = int(os.environ.get("FLEXSAT_FUZZ_EXAMPLES", "150"))
 FUZZ = settings(max_examples=EXAMPLES, derandomize=True, deadline=None,
@@ -62,13 +61,6 @@ KEYS = [
     ("report", "plots"), ("report", "equivalence"), ("limits",), ("limits", "modes"),
     ("limits", "samples"), ("limits", "memory"), ("limits", "states"),
 ]
-TOP = {"title", "hub", "appendages", "fidelity", "controller", "manoeuvre", "outputs", "export",
-       "report", "limits", "wheels", "sensors"}
-DELETE = object()
-# one key of a key path in a message: a plain key, or the repr of an odd one (shortened to
-# about 100 characters, then without its closing quote)
-SEGMENT = (r"""(?:[\w-]+|'(?:[^'\\]|\\.)*'|"(?:[^"\\]|\\.)*"|['"].*?\.\.\. \(\d+ """
-           r"""characters\))""")
 
 numbers = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True),
@@ -99,47 +91,6 @@ mutation = st.one_of(
     st.tuples(st.sampled_from(KEYS), st.one_of(values, st.just(DELETE))),
     unknown_keys.map(lambda t: (t[0] + (t[1],), 1.0)),
 )
-
-
-def mutate(data, path, value):
-    node = data
-    for key in path[:-1]:
-        if isinstance(node, dict):
-            node = node.setdefault(key, {})
-        elif isinstance(node, list) and isinstance(key, int) and key < len(node):
-            node = node[key]
-        else:
-            return
-    last = path[-1]
-    if isinstance(node, dict):
-        if value is DELETE:
-            node.pop(last, None)
-        else:
-            node[last] = copy.deepcopy(value)
-    elif isinstance(node, list) and isinstance(last, int) and last < len(node):
-        if value is not DELETE:
-            node[last] = copy.deepcopy(value)
-
-
-def check(load, source: str, unknown: set):
-    """load() gives a Scene or a one-line SceneError naming ``source`` and a key."""
-    try:
-        scene = load()
-    except SceneError as exc:
-        message = str(exc)
-        assert "\n" not in message and "\r" not in message, message
-        assert len(message) < 1200, len(message)
-        assert message.startswith(source + ": "), message
-        rest = message[len(source) + 2:]
-        if rest.startswith(("tables or arrays nested too deeply", "invalid TOML")):
-            return
-        match = re.match(rf"({SEGMENT})((?:\.{SEGMENT}|\[\d+\])*): ", rest)
-        assert match, message
-        first = match.group(1)
-        assert first in TOP or first in unknown or first[0] in "'\"", message
-        return
-    assert isinstance(scene, Scene)
-    assert math.isfinite(scene.hub.mass) and scene.hub.mass > 0
 
 
 @pytest.mark.slow
