@@ -79,7 +79,7 @@ from . import limits
 from .assembly import Segment
 from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
                       chebyshev_resonance_coefficients, hurwitz_tail_coefficients,
-                      modal_factor_sum, tail_series)
+                      ModalFactorSum, tail_series)
 from .checks import as_frequency_array, check_derived, check_range
 from .errors import describe
 from .interface import inverse_2x2, place_bending_planes
@@ -282,6 +282,45 @@ def _shared_roots(kind: str, n: int) -> np.ndarray:
     roots = characteristic_roots(kind, n)
     roots.flags.writeable = False
     return roots
+
+
+@functools.lru_cache(maxsize=64)
+def _clamped_free_sigma(n: int) -> np.ndarray:
+    """sigma_k of the first n clamped-free roots (:func:`_shape_terms`; dimensionless, the
+    same for every beam), computed once per process for each n and shared read-only."""
+    sigma, _ = _shape_terms("clamped-free", _shared_roots("clamped-free", max(n, 16))[:n])
+    sigma.flags.writeable = False
+    return sigma
+
+
+@functools.lru_cache(maxsize=64)
+def _participation_tail_sums(n: int) -> tuple[float, float, float]:
+    """The dimensionless sums of :meth:`Beam.cantilever_participation_tail` over the
+    clamped-free roots x_k, k > n: ``sum sigma**2/x**2``, ``sum sigma/x**3``, ``sum 1/x**4``
+    (the roots up to max(n, 16) one by one, the rest ``pi**-q zeta(q, K + 1/2)``, Hurwitz),
+    the same for every beam: computed once per process for each n."""
+    K = max(n, 16)
+    x = _shared_roots("clamped-free", K)[n:]
+    sigma, _ = _shape_terms("clamped-free", x)
+    zeta = scipy.special.zeta
+    plain = [math.pi**-q * float(zeta(q, K + 0.5)) for q in (2, 3, 4)]
+    return (math.fsum(sigma**2 / x**2) + plain[0], math.fsum(sigma / x**3) + plain[1],
+            math.fsum(1.0 / x**4) + plain[2])
+
+
+@functools.lru_cache(maxsize=64)
+def _modal_sum_constants(n: int, zeta: float) -> tuple[np.ndarray, np.ndarray]:
+    """The beam-independent factors of the tail of :meth:`Beam._cantilever_modal_stiffness`
+    beyond n modes: the Chebyshev coefficients ``U_m(-zeta)``, m < _TAIL_TERMS, and
+    ``pi**-q zeta(q, n + 1/2)`` (Hurwitz) for q = 6 + 2m, 7 + 2m, 8 + 2m, shape
+    (3, _TAIL_TERMS); computed once per process for each (n, zeta), shared read-only."""
+    cheb = chebyshev_resonance_coefficients(zeta, _TAIL_TERMS)
+    m = np.arange(_TAIL_TERMS)
+    orders = 2 * m[None, :] + np.array([[6], [7], [8]])
+    Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, n + 0.5)
+    cheb.flags.writeable = False
+    Z.flags.writeable = False
+    return cheb, Z
 
 
 def _shape_terms(kind: str, xk: np.ndarray):
@@ -1147,7 +1186,7 @@ class Beam:
         if self._segmented is not None:
             return self._segmented.cantilever_modes(n)[1]
         xk = self._roots("clamped-free", n)
-        sigma, _ = _shape_terms("clamped-free", xk)
+        sigma = _clamped_free_sigma(n)
         beta = xk / self.length
         scale = self.linear_density / math.sqrt(self.mass)
         return np.column_stack([2.0 * sigma / beta, 2.0 / beta**2]) * scale
@@ -1168,14 +1207,9 @@ class Beam:
         self._planar_data(n_root)
         if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 0:
             raise ValueError(f"n must be a non-negative integer (modes kept); got {describe(n)}")
-        K = max(n, 16)
         L = self.length
-        x = self._roots("clamped-free", K)[n:]
-        sigma, _ = _shape_terms("clamped-free", x)
-        zeta = scipy.special.zeta
-        plain = [math.pi**-q * float(zeta(q, K + 0.5)) for q in (2, 3, 4)]
-        sums = [math.fsum(sigma**2 / x**2) + plain[0], math.fsum(sigma / x**3) + plain[1],
-                math.fsum(1.0 / x**4) + plain[2]]
+        self._roots("clamped-free", max(n, 16))      # checks the number of roots
+        sums = _participation_tail_sums(int(n))
         f = 4.0 * self.linear_density * L
         return f * np.array([[sums[0], sums[1] * L], [sums[1] * L, sums[2] * L**2]])
 
@@ -1408,7 +1442,7 @@ class Beam:
         if rod is not None:
             if which == "W":
                 return rod.W(s)
-            return rod.dynamic_stiffness(s)
+            return rod.dynamic_stiffness(s, check=False)      # s checked by the caller
         with np.errstate(divide="ignore"):
             return 1.0 / (rigid_inertia * s**2) if which == "W" else rigid_inertia * s**2
 
@@ -1493,23 +1527,19 @@ class Beam:
             l = self.modal_participation(N)
             products = np.stack([l[:, 0] ** 2, l[:, 0] * l[:, 1], l[:, 1] ** 2], axis=1)
             R = self.cantilever_participation_tail(N)
-            zeta, L = self.damping_ratio, self.length
-            cheb = chebyshev_resonance_coefficients(zeta, _TAIL_TERMS)
-            m = np.arange(_TAIL_TERMS)
-            orders = 2 * m[None, :] + np.array([[6], [7], [8]])
-            Z = math.pi ** (-orders.astype(float)) * scipy.special.zeta(orders, N + 0.5)
+            L = self.length
+            cheb, Z = _modal_sum_constants(N, self.damping_ratio)
             scale = 4.0 * self.linear_density / L * c0**2 * np.array([L**2, L**3, L**4])[:, None]
-            data = (w, products, np.array([R[0, 0], R[0, 1], R[1, 1]]),
-                    (scale * cheb[None, :] * Z).T)
+            data = (ModalFactorSum(w, products, self.damping_ratio),
+                    np.array([R[0, 0], R[0, 1], R[1, 1]]), (scale * cheb[None, :] * Z).T)
             self._cache[key] = data
-        w, products, rest, coefficients = data
-        tail = tail_series(s / c0, coefficients)
-        entries = ((s**2)[:, None] * (modal_factor_sum(s, w, products, self.damping_ratio)
-                                      + rest) - tail)
-        D = np.empty((s.size, 2, 2), dtype=np.complex128)
-        D[:, 0, 0], D[:, 0, 1], D[:, 1, 1] = entries.T
-        D[:, 1, 0] = D[:, 0, 1]
-        return D
+        factor_sum, rest, coefficients = data
+        entries = factor_sum(s)
+        entries += rest
+        np.multiply((s**2)[:, None], entries, out=entries)  # (this order: the same rounding)
+        entries -= tail_series(s / c0, coefficients)
+        # [[D11, D12], [D12, D22]] from the entries (D11, D12, D22) of each point
+        return entries[:, [0, 1, 1, 2]].reshape(s.size, 2, 2)
 
     def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:
         r"""The damping of the cantilever modes k > n (:mod:`appendages.damping`), exactly.

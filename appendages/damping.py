@@ -49,7 +49,8 @@ from .errors import describe
 
 __all__ = ["CantileverDamping", "CONVENTIONS", "MAX_MODES", "check_damping_convention",
            "check_damping_ratio", "chebyshev_resonance_coefficients",
-           "hurwitz_tail_coefficients", "mode_groups", "modal_factor_sum", "tail_series"]
+           "hurwitz_tail_coefficients", "mode_groups", "modal_factor_sum", "ModalFactorSum",
+           "tail_series"]
 
 _REPAIR_POINTS = 32
 #: Most cantilever modes summed explicitly at one point.
@@ -255,15 +256,8 @@ def modal_factor_sum(s: np.ndarray, w: np.ndarray, weights: np.ndarray,
                      zeta: float) -> np.ndarray:
     r"""``sum_k weights_k (w_k**2 + 2 zeta w_k s)/(s**2 + 2 zeta w_k s + w_k**2)`` at flat s.
 
-    The modal sums of the damped root dynamic stiffness (:class:`~appendages.rod.Rod`,
-    :class:`~appendages.beam.Beam`): each mode's factor, 1 far below its frequency, about
-    ``w_k**2/s**2`` far above, ``1/(2 zeta)`` in size at resonance. The denominator is written
-    ``(s - i w_k)(s + i w_k) + 2 zeta w_k s`` (no difference of squares near a resonance). On
-    the imaginary axis (every s = i omega, a frequency response; many points) in real
-    arithmetic, several times quicker:
-    with ``a = (w_k - omega)(w_k + omega)`` and ``b = 2 zeta w_k omega`` the factor is
-    ``(w_k**2 a + b**2 - i b omega**2)/(a**2 + b**2)`` (no term cancels another beyond eps
-    of the factor's size; where a square leaves double precision, the complex form answers).
+    :class:`ModalFactorSum` of the modes, evaluated once (an appendage that evaluates the same
+    modes at many s keeps the object instead).
 
     Parameters
     ----------
@@ -278,25 +272,72 @@ def modal_factor_sum(s: np.ndarray, w: np.ndarray, weights: np.ndarray,
     -------
     ndarray of complex, shape (npts,) or (npts, k)
     """
-    two_zeta_w = (2.0 * zeta) * w
-    if s.size * w.size >= 4096 and not np.any(s.real):     # (small: complex is quicker)
-        omega = s.imag[:, None]
-        a = (w - omega) * (w + omega)
-        b = two_zeta_w * omega
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            scale = 1.0 / (a * a + b * b)
-            sound = np.isfinite(scale).all() and scale.min() > 0.0
-        if sound:
-            real = (w * w * a + b * b) * scale
-            imag = -(b * omega * omega) * scale
-            out = (real @ weights).astype(np.complex128)
-            out.imag = imag @ weights
-            return out
-    col = s[:, None]
-    damping = two_zeta_w * col
-    with np.errstate(divide="ignore", invalid="ignore"):
-        factor = (w * w + damping) / ((col - 1j * w) * (col + 1j * w) + damping)
-    return factor @ weights
+    return ModalFactorSum(w, weights, zeta)(s)
+
+
+class ModalFactorSum:
+    r"""``sum_k weights_k (w_k**2 + 2 zeta w_k s)/(s**2 + 2 zeta w_k s + w_k**2)`` of fixed
+    modes, at any flat s; its s-independent parts (``2 zeta w_k``, ``w_k**2``, ``i w_k``)
+    worked out once.
+
+    The modal sums of the damped root dynamic stiffness (:class:`~appendages.rod.Rod`,
+    :class:`~appendages.beam.Beam`): each mode's factor, 1 far below its frequency, about
+    ``w_k**2/s**2`` far above, ``1/(2 zeta)`` in size at resonance. The denominator is written
+    ``(s - i w_k)(s + i w_k) + 2 zeta w_k s`` (no difference of squares near a resonance). On
+    the imaginary axis (every s = i omega, a frequency response; many points) in real
+    arithmetic, several times quicker:
+    with ``a = (w_k - omega)(w_k + omega)`` and ``b = 2 zeta w_k omega`` the factor is
+    ``(w_k**2 a + b**2 - i b omega**2)/(a**2 + b**2)`` (no term cancels another beyond eps
+    of the factor's size; where a square leaves double precision, the complex form answers).
+
+    Parameters
+    ----------
+    w : ndarray, shape (N,)
+        The modes' frequencies [rad/s].
+    weights : ndarray, shape (N,) or (N, k)
+        Each mode's weight (e.g. its participation factors' products, kg or kg*m...).
+    zeta : float
+        Their damping ratio [-].
+    """
+
+    def __init__(self, w: np.ndarray, weights: np.ndarray, zeta: float):
+        self.w, self.weights, self.zeta = w, weights, zeta
+        self.two_zeta_w = (2.0 * zeta) * w
+        self.w_squared = w * w
+        self.i_w = 1j * w
+
+    def __call__(self, s: np.ndarray) -> np.ndarray:
+        """The sum at flat complex s [rad/s], shape (npts,) or (npts, k) (complex)."""
+        w, weights = self.w, self.weights
+        if s.size * w.size >= 4096 and not np.any(s.real):     # (small: complex is quicker)
+            # the operations of the formula in the class docstring, each into an array of its
+            # own kept for the next (no temporary per operation: these arrays are npts x N)
+            omega = s.imag[:, None]
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                a = np.subtract(w, omega)
+                a *= w + omega                          # a = (w_k - omega)(w_k + omega)
+                b = np.multiply(self.two_zeta_w, omega)  # b = 2 zeta w_k omega
+                bb = np.multiply(b, b)
+                scale = np.multiply(a, a)
+                scale += bb
+                np.divide(1.0, scale, out=scale)        # 1/(a**2 + b**2)
+                sound = np.isfinite(scale).all() and scale.min() > 0.0
+            if sound:
+                a *= self.w_squared
+                a += bb
+                a *= scale                              # (w_k**2 a + b**2)/(a**2 + b**2)
+                b *= omega
+                b *= omega
+                b *= scale                              # b omega**2/(a**2 + b**2)
+                out = (a @ weights).astype(np.complex128)
+                out.imag = b @ weights
+                np.negative(out.imag, out=out.imag)
+                return out
+        col = s[:, None]
+        damping = self.two_zeta_w * col
+        with np.errstate(divide="ignore", invalid="ignore"):
+            factor = (self.w_squared + damping) / ((col - self.i_w) * (col + self.i_w) + damping)
+        return factor @ weights
 
 
 def tail_series(v: np.ndarray, coefficients: np.ndarray, first_power: int = 4) -> np.ndarray:
@@ -319,11 +360,14 @@ def tail_series(v: np.ndarray, coefficients: np.ndarray, first_power: int = 4) -
     J = coefficients.shape[0]
     if v.size <= 32:
         return (v[:, None] ** np.arange(first_power, first_power + J)) @ coefficients
-    out = np.zeros((v.size,) + coefficients.shape[1:], dtype=np.complex128)
-    column = v if coefficients.ndim == 1 else v[:, None]
+    # Horner in place, one row per column of coefficients (contiguous rows), transposed back
+    columns = coefficients.reshape(J, -1)
+    out = np.zeros((columns.shape[1], v.size), dtype=np.complex128)
     for j in range(J - 1, -1, -1):
-        out = out * column + coefficients[j]
-    return out * column**first_power
+        out *= v
+        out += columns[j][:, None]
+    out *= v**first_power
+    return out[0] if coefficients.ndim == 1 else out.T
 
 
 def chebyshev_resonance_coefficients(zeta: float, n_terms: int) -> np.ndarray:

@@ -62,7 +62,7 @@ import scipy.special
 from . import limits
 from .damping import (MAX_MODES, CantileverDamping, check_damping_convention,
                       check_damping_ratio, chebyshev_resonance_coefficients,
-                      hurwitz_tail_coefficients, modal_factor_sum, tail_series)
+                      hurwitz_tail_coefficients, ModalFactorSum, tail_series)
 from .checks import as_frequency_array, check_range
 from .errors import describe
 
@@ -135,7 +135,7 @@ class Rod:
         self.damping_ratio = check_damping_ratio(damping_ratio)
         self.damping_convention = check_damping_convention(damping_convention)
         self._cantilever = None
-        self._modal = None
+        self._modal: dict = {}     # N -> the modal sum's data (grid and few points alternate)
 
     def __repr__(self) -> str:
         return (f"Rod(length={self.length!r}, stiffness={self.stiffness!r}, "
@@ -213,14 +213,22 @@ class Rod:
         psi = scipy.special.psi
         return 1.0 / (m * s**2) + 2.0 / (m * Omega**2) * (psi(1.0 - q) - psi(1.0 - p)) / (p - q)
 
-    def dynamic_stiffness(self, s) -> np.ndarray:
+    def dynamic_stiffness(self, s, *, check: bool = True) -> np.ndarray:
         """Exact root dynamic stiffness ``D = 1/W`` [N/m or N*m/rad], shape ``np.shape(s)``.
 
         Undamped: ``m s**2 tanh(z)/z``, infinite exactly at a clamped-free frequency; damped
         (cantilever convention): the modal sum of the module docstring; s = 0 gives 0 (a free
         rod offers no static stiffness).
+
+        Parameters
+        ----------
+        s : complex or array_like of complex, rad/s
+        check : bool
+            Check s (:func:`~appendages.checks.as_frequency_array`); False for a complex128
+            array already checked (a beam's W6 evaluates its rods at the s it checked).
         """
-        s = as_frequency_array(s)
+        if check:
+            s = as_frequency_array(s)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             return self._D(s)
 
@@ -286,23 +294,22 @@ class Rod:
             N *= 2
             if N > MAX_MODES:
                 return None
-        if self._modal is None or self._modal[0] != N:
+        if N not in self._modal:
             m, zeta = self.rigid_inertia, self.damping_ratio
             b = np.arange(1, N + 1) - 0.5
             j = np.arange(_TAIL_TERMS)
             scale = 2.0 * m / math.pi**2
             tail = (chebyshev_resonance_coefficients(zeta, _TAIL_TERMS) * Omega**2 * scale
                     * scipy.special.zeta(4.0 + j, N + 0.5))
-            self._modal = (N, b * Omega, scale / b**2,
-                           scale * float(scipy.special.zeta(2.0, N + 0.5)), tail)
-        _, w, l2, rest, tail = self._modal
+            self._modal[N] = (N, ModalFactorSum(b * Omega, scale / b**2, zeta),
+                              scale * float(scipy.special.zeta(2.0, N + 0.5)), tail)
+        _, factor_sum, rest, tail = self._modal[N]
         D = np.empty(s.size, dtype=np.complex128)
         chunk = max(1, 1_000_000 // N)
         for start in range(0, s.size, chunk):
             ss = s[start:start + chunk]
             series = tail_series(ss / Omega, tail)
-            D[start:start + chunk] = (ss**2 * (modal_factor_sum(ss, w, l2, self.damping_ratio)
-                                               + rest) - series)
+            D[start:start + chunk] = ss**2 * (factor_sum(ss) + rest) - series
         return D
 
     def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:

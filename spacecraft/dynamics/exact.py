@@ -280,8 +280,7 @@ class ExactReference:
                 response = planar_rotation_response(Z)[..., None, None]
             else:
                 try:
-                    response = np.linalg.solve(
-                        Z, np.broadcast_to(unit, Z.shape[:-1] + unit.shape[-1:]))
+                    response = np.linalg.solve(Z, unit)      # unit broadcast over Z
                     response = response[..., rotation, :]
                 except np.linalg.LinAlgError:
                     response = np.full(omega.shape + (unit.shape[1],) * 2, np.nan,

@@ -189,6 +189,31 @@ def test_modal_sum_of_the_damped_rod_member_equals_the_closed_form(zeta):
                                    rod._cantilever_damping()(far)[0, 0, 0], rtol=1e-14)
 
 
+def test_modal_sums_keep_their_data_for_every_number_of_modes():
+    """A rod's and a beam's damped modal sums (the exact loops evaluate a long grid, whose top
+    needs many modes, between evaluations at a few low frequencies, which need 16) keep the
+    data of each number of modes: the few points after the grid give what a fresh appendage
+    gives, to the bit (the same operations on the same numbers), and so does the grid; a rod
+    evaluated at a beam's checked s without checking it again (check=False) gives the same."""
+    def rod():
+        return Rod(2.0, 900.0, 0.5, damping_ratio=0.005)
+
+    def beam():
+        return Beam(10.0, 101.0, 0.612, damping_ratio=0.005)
+
+    for make, scale in ((rod, math.pi / rod().travel_time), (beam, beam().frequency_scale)):
+        few = 1j * scale * np.array([0.01, 0.3, 2.0])
+        grid = 1j * scale * np.logspace(-2, 3, 900)       # the top needs more than 16 modes
+        used = make()
+        first = used.dynamic_stiffness(few)
+        on_grid = used.dynamic_stiffness(grid)
+        np.testing.assert_array_equal(used.dynamic_stiffness(few), first)
+        np.testing.assert_array_equal(make().dynamic_stiffness(few), first)
+        np.testing.assert_array_equal(make().dynamic_stiffness(grid), on_grid)
+        if isinstance(used, Rod):
+            np.testing.assert_array_equal(used.dynamic_stiffness(few, check=False), first)
+
+
 @pytest.mark.slow
 def test_modal_sum_of_the_damped_rod_against_40_digits():
     """The rod's modal sum against the 40-digit D(s) of D_rod_mpmath, high in frequency too
