@@ -789,12 +789,29 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         grids.append((omega[finite], row[finite]))
 
     m = len(grids)
+    # the refinement's evaluations (frequencies, functions, values): every refined root is
+    # one of its probes (or a grid point), so the loop is not evaluated there again
+    evaluated: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
 
     def values_at(roots: list[np.ndarray]) -> list[np.ndarray]:
         owner = np.concatenate([np.full(r.size, j) for j, r in enumerate(roots)]).astype(int)
         if owner.size == 0:
             return [np.zeros(0, dtype=complex) for _ in roots]
-        values = evaluate(np.concatenate(roots), owner % m)
+        w, function = np.concatenate(roots), owner % m
+        values = np.empty(w.size, dtype=complex)
+        missing = np.ones(w.size, dtype=bool)
+        if evaluated:
+            w_all, function_all, values_all = (np.concatenate(v) for v in zip(*evaluated))
+            near = np.isin(w_all, w)
+            known = dict(zip(zip(w_all[near].tolist(), function_all[near].tolist()),
+                             values_all[near].tolist()))
+            for k, key in enumerate(zip(w.tolist(), function.tolist())):
+                value = known.get(key)
+                if value is not None:
+                    values[k] = value
+                    missing[k] = False
+        if missing.any():
+            values[missing] = evaluate(w[missing], function[missing])
         return [values[owner == j] for j in range(len(roots))]
 
     def crossing(w: np.ndarray, owner: np.ndarray) -> np.ndarray:
@@ -802,6 +819,7 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         evaluation of the loop per step refines the phase and the gain crossovers and the
         minima of |1 + L| together."""
         values = evaluate(w, owner % m)
+        evaluated.append((w, owner % m, np.array(values)))   # (a loop may reuse its buffer)
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(owner < m, values.imag,
                             np.where(owner < 2 * m, np.log(np.abs(values)),
@@ -843,7 +861,8 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         mine = np.flatnonzero(found & (owner == m + j))
         if mine.size == 0:
             continue
-        at = np.abs(1.0 + evaluate(root[mine], np.full(mine.size, j)))
+        # L there is known: the gain crossovers' values, after those exactly on the grid
+        at = np.abs(1.0 + L_gain[j][exact[m + j].size:])
         for k, d in zip(mine, at):
             if not d < best[j][0]:
                 continue
