@@ -260,9 +260,21 @@ def _sign_changes(grids: list[tuple[np.ndarray, np.ndarray]]) -> tuple[list, tup
         starts.append(i)
 
     def guesses() -> tuple[np.ndarray, np.ndarray]:
-        parts = [_inverse_cubic_guess(omega, values, i)
-                 for (omega, values), i in zip(grids, starts)]
-        return tuple(np.concatenate(p) for p in zip(*parts))
+        # the four grid points about each bracket that has them, of every function at once
+        windows = [(omega, values, i[(i >= 1) & (i + 2 < omega.size)])
+                   for (omega, values), i in zip(grids, starts)]
+        offsets = np.arange(-1, 3)
+        x = np.concatenate([omega[k[:, None] + offsets] for omega, _, k in windows])
+        f = np.concatenate([values[k[:, None] + offsets] for _, values, k in windows])
+        centre = np.full(sum(i.size for i in starts), np.nan)
+        spacing = centre.copy()
+        where = np.concatenate([np.flatnonzero((i >= 1) & (i + 2 < omega.size)) + first
+                                for (omega, _), i, first in
+                                zip(grids, starts, np.cumsum([0] + [i.size for i in starts]))])
+        if where.size:
+            centre[where], spacing[where] = _inverse_cubic_guess(x.astype(float),
+                                                                 f.real.astype(float))
+        return centre, spacing
 
     if not brackets:
         empty = np.zeros(0)
@@ -272,25 +284,16 @@ def _sign_changes(grids: list[tuple[np.ndarray, np.ndarray]]) -> tuple[list, tup
                    fb.astype(float)), guesses
 
 
-def _inverse_cubic_guess(omega: np.ndarray, values: np.ndarray, i: np.ndarray
-                         ) -> tuple[np.ndarray, np.ndarray]:
-    """(root estimate, its error) of the sign changes between omega[i] and omega[i + 1]: the
-    inverse interpolation cubic x(f) through the four grid points i - 1 .. i + 2 at f = 0
-    (Lagrange form) where f is strictly monotonic on them, and its distance to the regula
-    falsi point of the bracket; NaN where there are no four points or f is not monotonic."""
-    centre = np.full(i.size, np.nan)
-    spacing = np.full(i.size, np.nan)
-    ok = (i >= 1) & (i + 2 < omega.size)
-    k = i[ok]
-    if k.size == 0:
-        return centre, spacing
-    x = np.stack([omega[k - 1], omega[k], omega[k + 1], omega[k + 2]], axis=1).astype(float)
-    f = np.stack([values[k - 1], values[k], values[k + 1], values[k + 2]], axis=1).real
-    f = f.astype(float)
-    d = np.diff(f, axis=1)
+def _inverse_cubic_guess(x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(root estimate, its error) of sign changes between x[:, 1] and x[:, 2], from four
+    neighbouring grid points x (n, 4) and the function's values f there: the inverse
+    interpolation cubic x(f) through them at f = 0 (Lagrange form) where f is strictly
+    monotonic on them, and its distance to the regula falsi point of the bracket; NaN where f
+    is not monotonic or the estimate leaves the bracket."""
+    d = f[:, 1:] - f[:, :-1]
     monotonic = np.all(d > 0, axis=1) | np.all(d < 0, axis=1)
     with np.errstate(all="ignore"):
-        estimate = np.zeros(k.size)
+        estimate = np.zeros(x.shape[0])
         for m in range(4):
             term = x[:, m].copy()
             for q in range(4):
@@ -300,9 +303,7 @@ def _inverse_cubic_guess(omega: np.ndarray, values: np.ndarray, i: np.ndarray
         a, b, fa, fb = x[:, 1], x[:, 2], f[:, 1], f[:, 2]
         falsi = (a * fb - b * fa) / (fb - fa)
     good = monotonic & np.isfinite(estimate) & (estimate > a) & (estimate < b)
-    centre[np.flatnonzero(ok)[good]] = estimate[good]
-    spacing[np.flatnonzero(ok)[good]] = np.abs(estimate - falsi)[good]
-    return centre, spacing
+    return (np.where(good, estimate, np.nan), np.where(good, np.abs(estimate - falsi), np.nan))
 
 
 @warns_long_delay
@@ -802,14 +803,16 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         missing = np.ones(w.size, dtype=bool)
         if evaluated:
             w_all, function_all, values_all = (np.concatenate(v) for v in zip(*evaluated))
-            near = np.isin(w_all, w)
-            known = dict(zip(zip(w_all[near].tolist(), function_all[near].tolist()),
-                             values_all[near].tolist()))
-            for k, key in enumerate(zip(w.tolist(), function.tolist())):
-                value = known.get(key)
-                if value is not None:
-                    values[k] = value
-                    missing[k] = False
+            for j in range(m):
+                mine, asked = function_all == j, np.flatnonzero(function == j)
+                if not (asked.size and mine.any()):
+                    continue
+                order = np.argsort(w_all[mine])
+                w_j, values_j = w_all[mine][order], values_all[mine][order]
+                i = np.minimum(np.searchsorted(w_j, w[asked]), w_j.size - 1)
+                hit = w_j[i] == w[asked]
+                values[asked[hit]] = values_j[i[hit]]
+                missing[asked[hit]] = False
         if missing.any():
             values[missing] = evaluate(w[missing], function[missing])
         return [values[owner == j] for j in range(len(roots))]
