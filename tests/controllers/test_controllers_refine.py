@@ -216,3 +216,32 @@ def test_a_few_minima_are_stepped_as_many_are():
             states.append(state)
     for one, many in zip(*states):
         np.testing.assert_array_equal(one, many)
+
+
+def test_a_loop_that_reuses_its_output_buffer_has_the_margins_of_one_that_does_not():
+    """The margins read L at the refined crossovers from the refinement's own evaluations: a
+    loop function that returns (a view of) the same array every call, overwritten by the next
+    call, must give exactly the margins of one that returns a new array (same arithmetic,
+    same points)."""
+    J, w1, z1, k1 = 50.0, 2.0, 0.005, 0.4
+
+    def loop(w):
+        s = 1j * np.asarray(w, dtype=float)
+        P = 1.0 / (J * s ** 2) + k1 / (s ** 2 + 2 * z1 * w1 * s + w1 ** 2)
+        return (0.5 + 7.0 * s) * P  # PD: Kp 0.5 N m/rad, Kd 7 N m s/rad
+
+    buffer = np.zeros(0, dtype=complex)
+
+    def reusing(w):
+        nonlocal buffer
+        values = loop(w)
+        if buffer.size < values.size:
+            buffer = np.zeros(values.size, dtype=complex)
+        buffer[:] = np.nan   # the whole buffer as scratch: earlier results are gone
+        out = buffer[:values.size]
+        out[:] = values
+        return out
+
+    omega = np.unique(np.concatenate([np.geomspace(1e-3, 1e3, 600),
+                                      w1 * (1 + z1 * np.tan(np.linspace(-1.45, 1.45, 40)))]))
+    assert loop_margins(reusing, omega) == loop_margins(loop, omega)
