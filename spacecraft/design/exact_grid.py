@@ -69,7 +69,7 @@ def exact_grid(spacecraft: Spacecraft, bandwidth: float, *,
     """
     w_lo, w_hi = bandwidth * 1e-3, bandwidth * 1e3
     located = locating if locating is not None else locating_spacecraft(spacecraft, w_hi)
-    modes = located.modes()[0][located.n_rigid:]
+    modes = located.frequencies()[located.n_rigid:]    # the shapes are not needed
     modes = modes[modes < w_hi]
     # a beam's damping ratio, or modal data's largest
     zeta = max([getattr(m.appendage, "damping_ratio", 0.0) for m in spacecraft.mounts]

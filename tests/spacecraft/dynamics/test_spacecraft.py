@@ -104,6 +104,26 @@ def test_exact_frequency_response_matches_truncated_plant():
     np.testing.assert_allclose(omega, 1j * w * exact, rtol=1e-14)
 
 
+@pytest.mark.parametrize("make", [lambda: boom(ROD.truncated(12)),
+                                  lambda: boom(ROD.truncated(6), hub=(1e-3, 1e-4)),
+                                  lambda: wings(ROD.truncated(8))])
+def test_frequencies_alone_are_the_modes_frequencies(make):
+    """The eigenvalues alone (no shapes) of the assembled pencil are the frequencies of
+    modes(): rigid-body ones exactly 0, the elastic ones to rtol 1e-11 (the two LAPACK paths
+    differ in rounding, relative to the largest eigenvalue of the equilibrated pencil: the
+    lowest elastic modes carry up to ~1e-13 of it), on a heavy and a nearly massless hub
+    and on twin wings (repeated frequencies); once modes() has run, they are its own."""
+    alone, both = make(), make()
+    w = alone.frequencies()
+    w_modes = both.modes()[0]
+    assert w.shape == w_modes.shape and w.dtype == np.float64
+    assert np.all(w[:3] == 0.0) and np.all(w[3:] > 0.0)
+    np.testing.assert_allclose(w[3:], w_modes[3:], rtol=1e-11, atol=0.0)
+    assert np.array_equal(both.frequencies(), w_modes)
+    w[:] = -1.0      # a copy: the cached frequencies are not the caller's to change
+    assert np.all(alone.frequencies()[3:] > 0.0)
+
+
 def test_plant_signals_and_pruning_of_symmetric_modes():
     craft = wings(ROD.truncated(8))
     P = craft.plant(tip_deflection=True, root_loads=True, disturbances=True)
