@@ -705,9 +705,14 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
     The grid only brackets them: every crossing of |L| = 1 and of the negative real axis is
     refined on ``loop`` to 1e-13 relative in frequency (:func:`zero_crossings`), the
     minimum of |1 + L| between the grid neighbours of its grid minimum, all together
-    (:func:`controllers.refine.refine`); the margins are the values of ``loop`` there. A loop
-    known exactly (the exact distributed beam's response through W(s)) gives its margins to
-    the accuracy of its evaluation, not of a grid.
+    (:func:`controllers.refine.refine`); the margins are the values of ``loop`` there. Two
+    crossings between the same two grid points (|L| peaking just above 1 at a lightly damped
+    mode, L touching the negative real axis) leave no sign change on the grid: every grid
+    point where log|L| or Im L (Re L < 0) is nearer zero than both its neighbours, with their
+    sign, has the extremum between them refined too, and where it has the other sign both
+    crossings are refined on either side of it. A loop known exactly (the exact distributed
+    beam's response through W(s)) gives its margins to the accuracy of its evaluation, not of
+    a grid.
 
     Parameters
     ----------
@@ -715,8 +720,8 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
         ``loop(omega)`` -> L(j omega), complex array of the shape of ``omega`` (1-D, rad/s),
         negative-feedback convention (the loop is unstable at L = -1).
     omega : ndarray, rad/s
-        Increasing grid that resolves L (every crossing and the minimum of |1 + L| between two
-        of its points).
+        Increasing grid that resolves L: every crossing, or the extremum of a pair of them,
+        and the minimum of |1 + L| between two of its points.
     L : ndarray, optional
         ``loop(omega)``, if already known.
     delay : float, s
@@ -818,15 +823,17 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         return [values[owner == j] for j in range(len(roots))]
 
     def crossing(w: np.ndarray, owner: np.ndarray) -> np.ndarray:
-        """Im L_j for owner j < m, log|L_j| for owner m + j, |1 + L_j| for owner 2 m + j: one
-        evaluation of the loop per step refines the phase and the gain crossovers and the
-        minima of |1 + L| together."""
+        """Im L_j for owner j < m, log|L_j| for owner m + j, |1 + L_j| for owner 2 m + j, and
+        minus the first two for owner 3 m + j and 4 m + j: one evaluation of the loop per step
+        refines the phase and the gain crossovers, the minima of |1 + L| and the extrema of
+        the crossings' functions (:func:`_grazes`) together."""
         values = evaluate(w, owner % m)
         evaluated.append((w, owner % m, np.array(values)))   # (a loop may reuse its buffer)
+        kind = np.where(owner < 3 * m, owner, owner - 3 * m) // m
         with np.errstate(divide="ignore", invalid="ignore"):
-            return np.where(owner < m, values.imag,
-                            np.where(owner < 2 * m, np.log(np.abs(values)),
-                                     np.abs(1.0 + values)))
+            out = np.where(kind == 0, values.imag,
+                           np.where(kind == 1, np.log(np.abs(values)), np.abs(1.0 + values)))
+        return np.where(owner < 3 * m, out, -out)
 
     # phase crossovers: L real and negative (Im L changes sign where Re L < 0). Crossings where
     # |L| < 1e-9 (a gain margin above 180 dB) are round-off in Im L, not a margin.
@@ -843,9 +850,33 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         if 0 < i < w_grid.size - 1:
             minima.append((2 * m + j, w_grid[i - 1], w_grid[i], w_grid[i + 1], dist[i - 1],
                            dist[i], dist[i + 1]))
+    # a pair of crossings between two grid points (|L| peaking just above 1, L touching the
+    # negative real axis) leaves no sign change on the grid: the extremum of the function
+    # between such neighbours is refined with the minima of |1 + L| (the same evaluations)
+    functions = ([(w, row.imag, row.real < 0.0) for w, row in grids]
+                 + [(w, np.log(np.abs(row)), None) for w, row in grids])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        grazes = _grazes(functions, 3 * m)
+    tasks = minima + grazes
     (root, found), (w_min, dist_min) = refine(
         crossing, roots=brackets, guesses=guesses,
-        minima=tuple(np.array(v) for v in zip(*minima)) if minima else None)
+        minima=tuple(np.array(v) for v in zip(*tasks)) if tasks else None)
+    # where the function's extremum has the other sign, it crosses zero on either side of it
+    pairs, touches = [], []
+    for (task, lo, _, hi, f_lo, _, f_hi), x, fx in zip(grazes, w_min[len(minima):],
+                                                        dist_min[len(minima):]):
+        sign, j = (1.0, task) if task < 3 * m else (-1.0, task - 3 * m)
+        if fx == 0.0:
+            touches.append((j, x))
+        elif fx < 0.0:
+            pairs += [(j, lo, x, sign * f_lo, sign * fx), (j, x, hi, sign * fx, sign * f_hi)]
+    for j, x in touches:
+        exact[j] = np.append(exact[j], x)
+    if pairs:
+        more = tuple(np.array(v) for v in zip(*pairs))
+        (root_more, found_more), _ = refine(crossing, roots=more)
+        brackets = tuple(np.concatenate([old, new]) for old, new in zip(brackets, more))
+        root, found = np.concatenate([root, root_more]), np.concatenate([found, found_more])
     owner = brackets[0]
     roots = [np.concatenate([exact[j], root[found & (owner == j)]]) for j in range(2 * m)]
     refined = dict(zip((task - 2 * m for task, *_ in minima), zip(dist_min, w_min)))
@@ -911,6 +942,35 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
             mm, w_mm = at_crossover, w_gc
         out.append(Margins(float(gain_margin), float(phase_margin), mm, float(w_gc), float(w_pc),
                            w_mm, float(delay), float(delay_margin)))
+    return out
+
+
+def _grazes(functions: list[tuple[np.ndarray, np.ndarray, np.ndarray | None]],
+            negated: int) -> list[tuple]:
+    """Minimum brackets (task, lo, x, hi, f(lo), f(x), f(hi)) for
+    :func:`controllers.refine.refine` of the extrema where a function may cross zero twice
+    between two grid points, its sign the same at both.
+
+    ``functions[t] = (omega, values, relevant)``: function t on its grid, and where its zeros
+    matter (None: everywhere). A grid point where the function has the sign of both its
+    neighbours and is nearer zero than either (a local minimum of s f, s its sign there) is
+    such an extremum: the task is t (s = +1) or ``negated`` + t (s = -1, the function's
+    negative), and the values are those of s f. Where the refined minimum of s f is negative,
+    the function crosses zero on either side of it."""
+    out = []
+    for t, (omega, values, relevant) in enumerate(functions):
+        if values.size < 3:
+            continue
+        sign = np.sign(values)
+        size = np.abs(values)
+        middle = ((sign[1:-1] != 0) & (sign[:-2] == sign[1:-1]) & (sign[2:] == sign[1:-1])
+                  & (size[1:-1] < size[:-2]) & (size[1:-1] <= size[2:]))
+        if relevant is not None:
+            middle &= relevant[1:-1]
+        i = np.flatnonzero(middle) + 1
+        for k, s in zip(i.tolist(), sign[i].tolist()):
+            out.append((t if s > 0 else negated + t, omega[k - 1], omega[k], omega[k + 1],
+                        s * values[k - 1], s * values[k], s * values[k + 1]))
     return out
 
 
@@ -1131,16 +1191,16 @@ def _unit_crossings(matrix: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     grid, count = omega[finite], count[finite]
     i = np.nonzero(count[:-1] != count[1:])[0]
     a, b, ca, cb = grid[i].astype(float), grid[i + 1].astype(float), count[i], count[i + 1]
-    if m > 1:
-        # an eigenvalue that grazes the unit circle between two grid points crosses it twice
-        # there, the count the same at both: found as a minimum of its distance to the circle
-        pairs = _grazing_pairs(eigenvalues_at, count_at, grid, count,
-                               None if L is None else L[finite])
-        if pairs[0].size:
-            a, b = np.concatenate([a, pairs[0]]), np.concatenate([b, pairs[1]])
-            ca, cb = np.concatenate([ca, pairs[2]]), np.concatenate([cb, pairs[3]])
-            order = np.argsort(a, kind="stable")
-            a, b, ca, cb = a[order], b[order], ca[order], cb[order]
+    # an eigenvalue that grazes the unit circle between two grid points crosses it twice
+    # there, the count the same at both: found as a minimum of its distance to the circle (a
+    # planar loop's |L| peaking just above 1 between two grid points, or dipping just below)
+    pairs = _grazing_pairs(eigenvalues_at, count_at, grid, count,
+                           None if L is None else L[finite])
+    if pairs[0].size:
+        a, b = np.concatenate([a, pairs[0]]), np.concatenate([b, pairs[1]])
+        ca, cb = np.concatenate([ca, pairs[2]]), np.concatenate([cb, pairs[3]])
+        order = np.argsort(a, kind="stable")
+        a, b, ca, cb = a[order], b[order], ca[order], cb[order]
     if a.size == 0:
         return []
     out = []
