@@ -593,23 +593,24 @@ def _at_distinct(function: Callable[[np.ndarray], np.ndarray], w: np.ndarray) ->
 
 
 # a grid point whose Frobenius norm is below (1 - this) times a known largest singular value of
-# the grid cannot hold the grid's largest one nor one within 1e-6 of it (_peak_singular_values;
-# the closed form is accurate to about sqrt(eps) relative at worst)
-_PEAK_SLACK = 1e-5
+# the grid cannot hold the grid's largest one nor a peak within this of it, which a peak
+# resolved by the grid cannot pass between its grid points (_peak_singular_values,
+# _extremum_candidates; the closed form is accurate to about sqrt(eps) relative at worst)
+_PEAK_SLACK = 1e-2
 
 
 def _peak_singular_values(A: np.ndarray, shift: float = 0.0) -> np.ndarray:
     """sigma_max of each matrix of a stack (f, m, m) minus ``shift`` times the identity
-    wherever it may be the largest of the stack or within 1e-6 of it, and at those points'
-    neighbours (:func:`_largest_singular_values`); elsewhere the lower bound ||A||_F / sqrt(m),
-    which lies below (1 - 1e-5) times the largest.
+    wherever it may lie within 1 % (_PEAK_SLACK) of the largest of the stack, and at those
+    points' neighbours (:func:`_largest_singular_values`); elsewhere the lower bound
+    ||A||_F / sqrt(m), which lies below 0.99 times the largest.
 
-    sigma_max <= ||A||_F, so a point whose Frobenius norm is below (1 - 1e-5) times a known
-    sigma_max of the stack can be neither its maximum nor within 1e-6 of it: the stack's
-    largest value, the points :func:`_refined_extremum` takes as near it and their neighbours
-    are those of :func:`_largest_singular_values` on the whole stack, at the cost of a few of
-    its points (the largest singular value peaks at the loop's few sharp resonances). The
-    shifted matrices are formed at those points only."""
+    sigma_max <= ||A||_F, so a point whose Frobenius norm is below 0.99 times a known
+    sigma_max of the stack lies more than 1 % below its maximum: the stack's largest value,
+    every peak within 1 % of it (those :func:`_refined_extremum` may refine) and their
+    neighbours are those of :func:`_largest_singular_values` on the whole stack, at the cost
+    of some of its points (the largest singular value peaks at the loop's few sharp
+    resonances). The shifted matrices are formed at those points only."""
     f, m = A.shape[0], A.shape[1] if A.ndim == 3 else 0
     if f == 0:
         return np.zeros(0)
@@ -674,26 +675,69 @@ def _largest_singular_values(A: np.ndarray) -> np.ndarray:
     return scale * np.sqrt(np.maximum(lam, 0.0))
 
 
+def _extremum_candidates(omega: np.ndarray, values: np.ndarray,
+                         limit: float | None = None) -> np.ndarray:
+    """Indices of the grid points whose minimum of a function (``values`` on the increasing
+    grid ``omega``) is refined: the grid's least value, every point within 1e-6 of it, and
+    every local minimum of the grid that could pass it between its two neighbours.
+
+    A minimum the grid resolves lies between a point and its two neighbours, about as far
+    below the point as the vertex of the parabola through the three: with differences
+    d1, d2 >= 0 to the neighbours at distances h1, h2, by
+    (d2 h1^2 - d1 h2^2)^2 / (4 h1 h2 (h1 + h2) (d1 h2 + d2 h1)). A local minimum counts if
+    its value less four times that (at most ``limit`` times the least value's modulus, if
+    given: where ``values`` are exact only so near the least) reaches the least value: a
+    second resonance sampled coarser than the first can hide a lower minimum behind a higher
+    grid value."""
+    i = int(np.argmin(values))
+    best = values[i]
+    keep = values <= best + 1e-6 * abs(best)
+    if values.size >= 3:
+        g, lo, hi = values[1:-1], values[:-2], values[2:]
+        h1, h2 = omega[1:-1] - omega[:-2], omega[2:] - omega[1:-1]
+        d1, d2 = lo - g, hi - g
+        with np.errstate(all="ignore"):
+            slack = 4.0 * ((d2 * h1 * h1 - d1 * h2 * h2) ** 2
+                           / (4.0 * h1 * h2 * (h1 + h2) * (d1 * h2 + d2 * h1)))
+        slack = np.where(np.isfinite(slack), slack, np.inf)
+        if limit is not None:
+            slack = np.minimum(slack, limit * abs(best))
+        keep[1:-1] |= (g <= lo) & (g <= hi) & (g - slack <= best)
+    keep[i] = True
+    return np.flatnonzero(keep)
+
+
 def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
                       ) -> tuple[float, float]:
     """Grid extremum of f refined between the grid neighbours
     (:func:`controllers.refine.refine`). ``values`` (to 1e-6 relative) only locate it: f itself
-    gives the values at the grid points within 1e-6 of the extremum, and the best of them is
-    refined."""
+    gives the values at the candidates of :func:`_extremum_candidates` (``values`` exact
+    within _PEAK_SLACK of the extremum: :func:`_peak_singular_values`), and the best of them
+    and every local extremum among them are refined together."""
     sign = -1.0 if maximum else 1.0
-    i = int(np.argmin(sign * values))
-    near = np.flatnonzero(sign * values <= sign * values[i] + 1e-6 * abs(values[i]))
-    exact = np.asarray(f(omega[near]), dtype=float)
-    i = int(near[np.argmin(sign * exact)])
+    near = _extremum_candidates(omega, sign * values, _PEAK_SLACK)
+    exact = sign * np.asarray(f(omega[near]), dtype=float)
+    i = int(near[np.argmin(exact)])
     best, w_best = float(exact[near == i][0]), float(omega[i])
-    if 0 < i < omega.size - 1:
-        _, (x, fx) = refine(lambda w, task: sign * np.asarray(f(w), dtype=float),
-                            minima=([0], [omega[i - 1]], [omega[i]], [omega[i + 1]],
-                                    [sign * values[i - 1]], [sign * best],
-                                    [sign * values[i + 1]]))
-        if sign * fx[0] != best or x[0] != w_best:
-            best, w_best = float(sign * fx[0]), float(x[0])
-    return best, w_best
+    # the best candidate, and each interior one that is a local minimum of the exact values
+    # among its neighbours' grid values
+    n = omega.size
+    inner = (near > 0) & (near < n - 1)
+    k = near[inner]
+    local = (exact[inner] <= sign * values[np.maximum(k - 1, 0)]) & (
+        exact[inner] <= sign * values[np.minimum(k + 1, n - 1)])
+    start = np.unique(np.concatenate([k[local], [i] if 0 < i < n - 1 else []]).astype(int))
+    if start.size:
+        fx = np.array([exact[near == j][0] for j in start])
+        _, (x, fmin) = refine(lambda w, task: sign * np.asarray(f(w), dtype=float),
+                              minima=(np.zeros(start.size, dtype=int), omega[start - 1],
+                                      omega[start], omega[start + 1],
+                                      sign * values[start - 1], fx,
+                                      sign * values[start + 1]))
+        j = int(np.argmin(fmin))
+        if fmin[j] < best:
+            best, w_best = float(fmin[j]), float(x[j])
+    return sign * best, w_best
 
 
 @warns_long_delay
@@ -842,20 +886,32 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         exact, brackets, guesses = _sign_changes([(w, row.imag) for w, row in grids]
                                                  + [(w, np.log(np.abs(row))) for w, row in grids])
     # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
+    # (and every other local minimum that could pass it between its grid neighbours, but
+    # those whose neighbours hold an undamped pole between them or lie within 1e-6 of one:
+    # there |1 + L| is the distance of L's line to -1, whose dip _undamped_dips searches)
+    poles = np.sort(np.asarray(undamped, dtype=float)) if undamped is not None else np.zeros(0)
     grid_minima, minima = [], []
     for j, (w_grid, row) in enumerate(grids):
         dist = np.abs(1.0 + row)
-        i = int(np.argmin(dist))
-        grid_minima.append((float(dist[i]), float(w_grid[i])))
-        if 0 < i < w_grid.size - 1:
-            minima.append((2 * m + j, w_grid[i - 1], w_grid[i], w_grid[i + 1], dist[i - 1],
-                           dist[i], dist[i + 1]))
+        best_i = int(np.argmin(dist))
+        grid_minima.append((float(dist[best_i]), float(w_grid[best_i])))
+        for i in _extremum_candidates(w_grid, dist).tolist():
+            if not (0 < i < w_grid.size - 1 and dist[i] <= dist[i - 1]
+                    and dist[i] <= dist[i + 1]):
+                continue
+            w_lo, w_hi = w_grid[i - 1] * (1.0 - 1e-6), w_grid[i + 1] * (1.0 + 1e-6)
+            beside = np.searchsorted(poles, w_hi, side="right") > np.searchsorted(poles, w_lo)
+            if i == best_i or not beside:
+                minima.append((2 * m + j, w_grid[i - 1], w_grid[i], w_grid[i + 1],
+                               dist[i - 1], dist[i], dist[i + 1]))
     # a pair of crossings between two grid points (|L| peaking just above 1, L touching the
     # negative real axis) leaves no sign change on the grid: the extremum of the function
     # between such neighbours is refined with the minima of |1 + L| (the same evaluations)
-    functions = ([(w, row.imag, row.real < 0.0) for w, row in grids]
-                 + [(w, np.log(np.abs(row)), None) for w, row in grids])
+    # (L touching the negative real axis where |L| is above the 1e-9 below which Im L is
+    # round-off)
     with np.errstate(divide="ignore", invalid="ignore"):
+        functions = ([(w, row.imag, (row.real < 0.0) & (np.abs(row) > 1e-9)) for w, row in grids]
+                     + [(w, np.log(np.abs(row)), None) for w, row in grids])
         grazes = _grazes(functions, 3 * m)
     tasks = minima + grazes
     (root, found), (w_min, dist_min) = refine(
@@ -879,7 +935,10 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         root, found = np.concatenate([root, root_more]), np.concatenate([found, found_more])
     owner = brackets[0]
     roots = [np.concatenate([exact[j], root[found & (owner == j)]]) for j in range(2 * m)]
-    refined = dict(zip((task - 2 * m for task, *_ in minima), zip(dist_min, w_min)))
+    refined: dict[int, tuple] = {}
+    for (task, *_), d, w in zip(minima, dist_min, w_min):
+        refined[task - 2 * m] = min(refined.get(task - 2 * m, (math.inf, math.nan)),
+                                    (float(d), float(w)))
     phase_roots, gain_roots = roots[:m], roots[m:]
     values = values_at(roots)
     L_phase, L_gain = values[:m], values[m:]

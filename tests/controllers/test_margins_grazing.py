@@ -205,3 +205,21 @@ def test_each_loop_at_a_time_finds_its_own_graze():
     assert m.loop_at_a_time["y"].delay_margin == pytest.approx(truth, rel=1e-8)
     # the multivariable delay margin (the eigenvalues of L crossing the unit circle)
     assert m.delay_margin == pytest.approx(truth, rel=1e-8)
+
+
+def test_the_modulus_margin_is_the_lower_of_two_dips_the_coarser_grid_point_hides():
+    """|1 + L| dips twice: to 0.3 at w = 1, on a grid point, and to 0.29 at w = 2, halfway
+    between two grid points 0.1 apart, where the grid shows 0.415. The modulus margin is the
+    lower dip, 0.29, which a refinement of the grid's least value alone misses."""
+
+    def L(w):
+        w = np.asarray(w, dtype=float)
+        depth = np.minimum(0.3 + (w - 1.0) ** 2, 0.29 + 50.0 * (w - 2.0) ** 2)
+        return -1.0 + depth * np.exp(0.3j)
+
+    grid = np.concatenate([np.linspace(0.2, 1.4, 7), np.linspace(1.55, 3.05, 16)])
+    assert np.isclose(grid, 1.0).any() and not np.isclose(grid, 2.0).any()
+    assert np.abs(1.0 + L(grid)).min() == pytest.approx(0.3, rel=1e-12)
+    m = loop_margins(L, grid)
+    assert m.modulus_margin == pytest.approx(0.29, rel=1e-10)
+    assert m.modulus_margin_frequency == pytest.approx(2.0, rel=1e-5)
