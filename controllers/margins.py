@@ -593,21 +593,21 @@ def _at_distinct(function: Callable[[np.ndarray], np.ndarray], w: np.ndarray) ->
 
 
 # a grid point whose Frobenius norm is below (1 - this) times a known largest singular value of
-# the grid cannot hold the grid's largest one nor a peak within this of it, which a peak
-# resolved by the grid cannot pass between its grid points (_peak_singular_values,
-# _extremum_candidates; the closed form is accurate to about sqrt(eps) relative at worst)
-_PEAK_SLACK = 1e-2
+# the grid cannot hold the grid's largest one nor a peak within this of it: every peak within
+# this of the largest is refined (_peak_singular_values, _refined_extremum; the closed form is
+# accurate to about sqrt(eps) relative at worst)
+_PEAK_SLACK = 0.1
 
 
 def _peak_singular_values(A: np.ndarray, shift: float = 0.0) -> np.ndarray:
     """sigma_max of each matrix of a stack (f, m, m) minus ``shift`` times the identity
-    wherever it may lie within 1 % (_PEAK_SLACK) of the largest of the stack, and at those
+    wherever it may lie within 10 % (_PEAK_SLACK) of the largest of the stack, and at those
     points' neighbours (:func:`_largest_singular_values`); elsewhere the lower bound
-    ||A||_F / sqrt(m), which lies below 0.99 times the largest.
+    ||A||_F / sqrt(m), which lies below 0.9 times the largest.
 
-    sigma_max <= ||A||_F, so a point whose Frobenius norm is below 0.99 times a known
-    sigma_max of the stack lies more than 1 % below its maximum: the stack's largest value,
-    every peak within 1 % of it (those :func:`_refined_extremum` may refine) and their
+    sigma_max <= ||A||_F, so a point whose Frobenius norm is below 0.9 times a known
+    sigma_max of the stack lies more than 10 % below its maximum: the stack's largest value,
+    every peak within 10 % of it (those :func:`_refined_extremum` refines) and their
     neighbours are those of :func:`_largest_singular_values` on the whole stack, at the cost
     of some of its points (the largest singular value peaks at the loop's few sharp
     resonances). The shifted matrices are formed at those points only."""
@@ -676,33 +676,21 @@ def _largest_singular_values(A: np.ndarray) -> np.ndarray:
 
 
 def _extremum_candidates(omega: np.ndarray, values: np.ndarray,
-                         limit: float | None = None) -> np.ndarray:
+                         window: float = math.inf) -> np.ndarray:
     """Indices of the grid points whose minimum of a function (``values`` on the increasing
     grid ``omega``) is refined: the grid's least value, every point within 1e-6 of it, and
-    every local minimum of the grid that could pass it between its two neighbours.
+    every local minimum of the grid within ``window`` times the least value's modulus of it
+    (default: every local minimum).
 
-    A minimum the grid resolves lies between a point and its two neighbours, about as far
-    below the point as the vertex of the parabola through the three: with differences
-    d1, d2 >= 0 to the neighbours at distances h1, h2, by
-    (d2 h1^2 - d1 h2^2)^2 / (4 h1 h2 (h1 + h2) (d1 h2 + d2 h1)). A local minimum counts if
-    its value less four times that (at most ``limit`` times the least value's modulus, if
-    given: where ``values`` are exact only so near the least) reaches the least value: a
-    second resonance sampled coarser than the first can hide a lower minimum behind a higher
-    grid value."""
+    A resonance sampled coarser than another, or a broad minimum on the grid's logarithmic
+    stretch (about 3 % between points), can hide a lower minimum behind a higher grid value:
+    a grid value says little of how far the true minimum beside it lies below it."""
     i = int(np.argmin(values))
     best = values[i]
     keep = values <= best + 1e-6 * abs(best)
     if values.size >= 3:
-        g, lo, hi = values[1:-1], values[:-2], values[2:]
-        h1, h2 = omega[1:-1] - omega[:-2], omega[2:] - omega[1:-1]
-        d1, d2 = lo - g, hi - g
-        with np.errstate(all="ignore"):
-            slack = 4.0 * ((d2 * h1 * h1 - d1 * h2 * h2) ** 2
-                           / (4.0 * h1 * h2 * (h1 + h2) * (d1 * h2 + d2 * h1)))
-        slack = np.where(np.isfinite(slack), slack, np.inf)
-        if limit is not None:
-            slack = np.minimum(slack, limit * abs(best))
-        keep[1:-1] |= (g <= lo) & (g <= hi) & (g - slack <= best)
+        g = values[1:-1]
+        keep[1:-1] |= (g <= values[:-2]) & (g <= values[2:]) & (g <= best + window * abs(best))
     keep[i] = True
     return np.flatnonzero(keep)
 
@@ -711,8 +699,9 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
                       ) -> tuple[float, float]:
     """Grid extremum of f refined between the grid neighbours
     (:func:`controllers.refine.refine`). ``values`` (to 1e-6 relative) only locate it: f itself
-    gives the values at the candidates of :func:`_extremum_candidates` (``values`` exact
-    within _PEAK_SLACK of the extremum: :func:`_peak_singular_values`), and the best of them
+    gives the values at the candidates of :func:`_extremum_candidates` (every local extremum
+    within _PEAK_SLACK of the grid's, where ``values`` are exact:
+    :func:`_peak_singular_values`), and the best of them
     and every local extremum among them are refined together."""
     sign = -1.0 if maximum else 1.0
     near = _extremum_candidates(omega, sign * values, _PEAK_SLACK)
@@ -886,9 +875,9 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
         exact, brackets, guesses = _sign_changes([(w, row.imag) for w, row in grids]
                                                  + [(w, np.log(np.abs(row))) for w, row in grids])
     # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
-    # (and every other local minimum that could pass it between its grid neighbours, but
-    # those whose neighbours hold an undamped pole between them or lie within 1e-6 of one:
-    # there |1 + L| is the distance of L's line to -1, whose dip _undamped_dips searches)
+    # (and every other local minimum of the grid, but those whose neighbours hold an undamped
+    # pole between them or lie within 1e-6 of one: there |1 + L| is the distance of L's line
+    # to -1, whose dip _undamped_dips searches)
     poles = np.sort(np.asarray(undamped, dtype=float)) if undamped is not None else np.zeros(0)
     grid_minima, minima = [], []
     for j, (w_grid, row) in enumerate(grids):

@@ -223,3 +223,32 @@ def test_the_modulus_margin_is_the_lower_of_two_dips_the_coarser_grid_point_hide
     m = loop_margins(L, grid)
     assert m.modulus_margin == pytest.approx(0.29, rel=1e-10)
     assert m.modulus_margin_frequency == pytest.approx(2.0, rel=1e-5)
+
+
+def test_the_modulus_margin_at_a_broad_minimum_between_log_grid_points():
+    """A hub (1746 kg m^2) with four lightly damped modes (one non-collocated) under a PD
+    rolled off at 5.58 rad/s: |1 + L| has its grid's least value at the 56.3 rad/s mode
+    (0.1311) and a broad minimum at 4.24 rad/s, between two points of the grid's logarithmic
+    stretch (3 % apart: grid 0.1313), whose true value is 0.1276. Reference: a bounded scalar
+    search of |1 + L| on the plain state-space evaluation."""
+    modes = [(3.76629, 0.000587102, 0.0110859, 0.0110859),
+             (11.2166, 0.00176084, 0.0181183, 0.0181183),
+             (23.6699, 0.00825866, 0.0177282, -0.0251146),
+             (56.2928, 0.00012146, 0.0171954, 0.0171954)]
+    P = modal_plant(1746.3, modes, disturbance=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        K = controllers.pd(modal_plant(1746.3, [], disturbance=False), natural_frequency=1.6028,
+                           damping=0.73574, roll_off=5.5782)
+    L = plain_loop(P, K)
+    broad = minimize_scalar(lambda w: abs(1.0 + L(w)), bounds=(4.0, 4.5), method="bounded",
+                            options={"xatol": 1e-10})
+    loop = LoopTransfer(P, K)
+    grid = loop.grid()
+    on_grid = np.abs(1.0 + loop.matrix(grid)[:, 0, 0])
+    # the premise: the grid's least value is elsewhere, above the broad minimum by over 1 %
+    assert abs(grid[np.argmin(on_grid)] - 56.29) < 0.1
+    assert on_grid.min() > 1.01 * broad.fun
+    m = controllers.margins(P, K)
+    assert m.modulus_margin == pytest.approx(broad.fun, rel=1e-9)
+    assert m.modulus_margin_frequency == pytest.approx(broad.x, rel=1e-4)
