@@ -329,7 +329,8 @@ def margins(plant, controller, *, omega: np.ndarray | None = None, delay: float 
         Frequency grid; default: logarithmic, 1e-3 x the lowest to 1e3 x the highest
         characteristic frequency, refined with 41 points across the half-power band of every
         pole with damping ratio below 0.3 (lightly damped modes of plant and controller).
-        Crossings and the minimum of |1 + L| are then refined on the exact L. With a delay the
+        Crossings (pairs between two grid points too) and the minima of |1 + L| are then
+        refined on the exact L (:func:`loop_margins`). With a delay the
         default grid is refined so that omega delay changes by at most pi/4 between points
         where |L| can lower the margins (:func:`harmless_gain`; at most MAX_DELAY_GRID points);
         a given grid is used as it is.
@@ -402,8 +403,9 @@ def multiloop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarra
     smallest singular value of I + L, the delay margin): the same code computes both, so a
     loop known only by its frequency response (the exact distributed spacecraft's, through
     W6) gets the margins a state-space model of it would. The grid only brackets: crossings are
-    refined on ``loop`` to 1e-13 relative in frequency, the extrema of the singular values by
-    a bounded scalar search between grid neighbours.
+    refined on ``loop`` to 1e-13 relative in frequency (pairs between two grid points
+    included), the extrema of the singular values (every grid peak within 10 % of the
+    largest) by a bounded scalar search between grid neighbours.
 
     Parameters
     ----------
@@ -737,7 +739,7 @@ def loop_margins(loop: Callable[[np.ndarray], np.ndarray], omega: np.ndarray,
 
     The grid only brackets them: every crossing of |L| = 1 and of the negative real axis is
     refined on ``loop`` to 1e-13 relative in frequency (:func:`zero_crossings`), the
-    minimum of |1 + L| between the grid neighbours of its grid minimum, all together
+    minima of |1 + L| between the grid neighbours of each of its grid minima, all together
     (:func:`controllers.refine.refine`); the margins are the values of ``loop`` there. Two
     crossings between the same two grid points (|L| peaking just above 1 at a lightly damped
     mode, L touching the negative real axis) leave no sign change on the grid: every grid
@@ -874,7 +876,7 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
     with np.errstate(divide="ignore"):
         exact, brackets, guesses = _sign_changes([(w, row.imag) for w, row in grids]
                                                  + [(w, np.log(np.abs(row))) for w, row in grids])
-    # modulus margin: min |1 + L|, refined between the neighbours of the grid minimum
+    # modulus margin: min |1 + L|, refined between the neighbours of the grid's least value
     # (and every other local minimum of the grid, but those whose neighbours hold an undamped
     # pole between them or lie within 1e-6 of one: there |1 + L| is the distance of L's line
     # to -1, whose dip _undamped_dips searches)
