@@ -692,7 +692,8 @@ def _extremum_candidates(omega: np.ndarray, values: np.ndarray,
     keep = values <= best + 1e-6 * abs(best)
     if values.size >= 3:
         g = values[1:-1]
-        keep[1:-1] |= (g <= values[:-2]) & (g <= values[2:]) & (g <= best + window * abs(best))
+        limit = best + window * abs(best) if math.isfinite(window) else math.inf
+        keep[1:-1] |= (g <= values[:-2]) & (g <= values[2:]) & (g <= limit)
     keep[i] = True
     return np.flatnonzero(keep)
 
@@ -719,7 +720,7 @@ def _refined_extremum(f, omega: np.ndarray, values: np.ndarray, *, maximum: bool
         exact[inner] <= sign * values[np.minimum(k + 1, n - 1)])
     start = np.unique(np.concatenate([k[local], [i] if 0 < i < n - 1 else []]).astype(int))
     if start.size:
-        fx = np.array([exact[near == j][0] for j in start])
+        fx = exact[np.searchsorted(near, start)]
         _, (x, fmin) = refine(lambda w, task: sign * np.asarray(f(w), dtype=float),
                               minima=(np.zeros(start.size, dtype=int), omega[start - 1],
                                       omega[start], omega[start + 1],

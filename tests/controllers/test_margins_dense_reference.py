@@ -28,6 +28,7 @@ import pytest
 
 import controllers
 from dense_margins import AXES, dense_margins
+from loops import random_pd
 from plants import three_axis_plant
 
 RTOL = 1e-6
@@ -60,19 +61,7 @@ def random_loop(seed: int):
     kind = rng.integers(0, 4)
     wn = w1 * rng.uniform(0.05, 0.45)
     damping = rng.uniform(0.5, 0.9)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        if kind == 0:
-            K = controllers.pd(rigid, natural_frequency=wn, damping=damping)
-        elif kind == 1:
-            K = controllers.pd(rigid, natural_frequency=wn, damping=damping,
-                               notch=w1 * rng.uniform(0.9, 1.1))
-        elif kind == 2:
-            K = controllers.pd(rigid, natural_frequency=wn, damping=damping,
-                               roll_off=wn * rng.uniform(2.5, 8.0))
-        else:
-            K = controllers.pd(rigid, natural_frequency=wn, damping=damping,
-                               sample_time=math.pi / (wn * rng.uniform(8.0, 40.0)))
+    K = random_pd(rng, rigid, w1, kind, wn, damping)
     return plant, K
 
 

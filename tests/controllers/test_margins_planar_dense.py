@@ -30,6 +30,7 @@ import pytest
 
 import controllers
 from controllers.loop import LoopTransfer
+from loops import random_pd
 from plants import modal_plant
 
 SEEDS = [0, 3, 8, 21, 64, 150, 357, 438]
@@ -55,19 +56,7 @@ def random_loop(seed: int):
     kind = int(rng.integers(0, 4))
     wn = w[0] * rng.uniform(0.05, 0.6)
     damping = rng.uniform(0.4, 0.9)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        if kind == 0:
-            K = controllers.pd(rigid, natural_frequency=wn, damping=damping)
-        elif kind == 1:
-            K = controllers.pd(rigid, natural_frequency=wn, damping=damping,
-                               notch=w[0] * rng.uniform(0.9, 1.1))
-        elif kind == 2:
-            K = controllers.pd(rigid, natural_frequency=wn, damping=damping,
-                               roll_off=wn * rng.uniform(2.5, 8.0))
-        else:
-            K = controllers.pd(rigid, natural_frequency=wn, damping=damping,
-                               sample_time=math.pi / (wn * rng.uniform(8.0, 40.0)))
+    K = random_pd(rng, rigid, w[0], kind, wn, damping)
     delay = 0.0 if rng.random() < 0.5 else rng.uniform(0.01, 1.0) / wn
     return plant, K, delay
 

@@ -1,13 +1,16 @@
-"""Loop helpers the margin tests share: a controller given an unstable pole, and margins
-compared field by field."""
+"""Loop helpers the margin tests share: a controller given an unstable pole, margins compared
+field by field, and the random PD variants of the dense-reference tests."""
 from __future__ import annotations
 
 import math
+import warnings
 
 import control
 import numpy as np
 
-__all__ = ["assert_same_margins", "with_unstable_pole"]
+import controllers
+
+__all__ = ["assert_same_margins", "with_unstable_pole", "random_pd"]
 
 
 def with_unstable_pole(K, a, c):
@@ -34,3 +37,22 @@ def assert_same_margins(a, b, tol=1e-9):
         else:
             assert abs(da[key] - db[key]) <= tol * max(1.0, abs(da[key])), (key, da[key], db[key])
     assert abs(a.delay_margin - b.delay_margin) <= tol * max(1.0, abs(a.delay_margin))
+
+
+def random_pd(rng, rigid, first_mode: float, kind: int, wn: float, damping: float):
+    """A PD tuned on the rigid ``rigid`` plant (natural frequency ``wn`` [rad/s], ``damping``)
+    of the variant ``kind``: 0 plain, 1 notched at 0.9-1.1 x ``first_mode`` [rad/s], 2 rolled
+    off at 2.5-8 x ``wn``, 3 digital at 8-40 samples per pi / ``wn``; the variant's one
+    random number drawn from the generator ``rng``."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        if kind == 0:
+            return controllers.pd(rigid, natural_frequency=wn, damping=damping)
+        if kind == 1:
+            return controllers.pd(rigid, natural_frequency=wn, damping=damping,
+                                  notch=first_mode * rng.uniform(0.9, 1.1))
+        if kind == 2:
+            return controllers.pd(rigid, natural_frequency=wn, damping=damping,
+                                  roll_off=wn * rng.uniform(2.5, 8.0))
+        return controllers.pd(rigid, natural_frequency=wn, damping=damping,
+                              sample_time=math.pi / (wn * rng.uniform(8.0, 40.0)))
