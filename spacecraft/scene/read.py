@@ -321,9 +321,13 @@ key                                    unit       meaning
                                                   default 0.3 (a section is needed: torsion
                                                   and axial motion; no ``"uniform"``); planar
                                                   scenes refuse it
-``appendages[i].chain``                -          a rigid root; ``from_beam = "rfem"`` (the 3-D
-                                                  rigid finite elements of the beam) or the
-                                                  arrays: ``lengths``, ``masses``,
+``appendages[i].chain``                -          ``from_beam = "rfem"`` (the 3-D rigid
+                                                  finite elements of the beam, a rigid root)
+                                                  or the arrays (``root = "hinged"``: every
+                                                  per-joint array one entry longer, its first
+                                                  the joint between mount and body 1, sprung
+                                                  in each motion the arrays spring):
+                                                  ``lengths``, ``masses``,
                                                   ``com_offsets`` shared by every motion,
                                                   ``inertias``, ``hinge_stiffnesses``,
                                                   ``hinge_dampings`` of x-y bending (about the
@@ -1286,9 +1290,12 @@ def _check_three_axis_appendage(r: SceneReader, t: dict, path: str, beam) -> Non
         chain = t.get(key)
         if not isinstance(chain, Mapping):
             continue
-        if chain.get("root", "rigid") == "hinged":
-            raise r.error(f"{path}.{key}.root", "a hinged root (a drive hinge about one axis) "
-                          "is planar; a three-axis chain has a rigid root")
+        if chain.get("root", "rigid") == "hinged" and "from_beam" in chain:
+            raise r.error(f"{path}.{key}.root", "'hinged' with from_beam = 'rfem' is planar "
+                          "(one drive spring, root_stiffness [N m/rad], about the bending "
+                          "axis); a three-axis chain with a hinged root gives its arrays, "
+                          "every per-joint array with a first entry for the joint between "
+                          "mount and body 1")
     explicit = any(isinstance(t.get(key), Mapping) and "from_beam" not in t[key]
                    for key in ("chain", "truth_chain"))
     if beam is None and not explicit:

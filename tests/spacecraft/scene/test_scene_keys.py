@@ -208,10 +208,15 @@ def _cases(kind: str) -> dict:
                                       {f"{A}.chain.hinge_dampings": [0.5, 0.5]}),
         f"{A}.chain.com_offsets": (explicit,
                                    {f"{A}.chain.com_offsets": [1.0, 2.5, 1.0]}),
+        # a hinged root: every per-joint array one entry longer (three axes: a soft drive
+        # hinge in x-y bending, the root joint as stiff as the next in the other motions)
         f"{A}.chain.root": (explicit,
                             {f"{A}.chain.root": "hinged",
                              f"{A}.chain.hinge_stiffnesses": [5.0, 20.2, 20.2],
-                             f"{A}.chain.hinge_dampings": None}),
+                             f"{A}.chain.hinge_dampings": None,
+                             **({f"{A}.chain.torsion_stiffnesses": [20.7] * 3,
+                                 f"{A}.chain.axial_stiffnesses": [4.3e6] * 3}
+                                if three else {})}),
         f"{A}.chain.inertias_y": (explicit, {f"{A}.chain.inertias_y": [0.9, 6.0, 0.9]}),
         f"{A}.chain.hinge_stiffnesses_y": (explicit,
                                            {f"{A}.chain.hinge_stiffnesses_y": [25.0, 25.0]}),
