@@ -171,6 +171,25 @@ _CHAIN_3 = {"torsional_inertias": [1.9e-5, 3.8e-5, 1.9e-5],
             "torsion_stiffnesses": [20.7, 20.7], "axial_stiffnesses": [4.3e6, 4.3e6]}
 
 
+def edited(text: str, *edits: tuple[str, str]) -> str:
+    """A scene's TOML text with each ``(old, new)`` edit made in turn.
+
+    Each ``old`` must occur exactly once in the text as edited so far: an edit that changes
+    nothing (the base scene changed under the test) or could change the wrong line is a
+    mistake in the test, not a scene to run.
+
+    Raises
+    ------
+    AssertionError
+        Naming the edit and how often its text occurs.
+    """
+    for old, new in edits:
+        count = text.count(old)
+        assert count == 1, f"the edit {old!r} -> {new!r:.60} finds {count} occurrences, not 1"
+        text = text.replace(old, new)
+    return text
+
+
 def with_changes(data: dict, changes: dict) -> dict:
     """A deep copy of a scene with changes at dotted key paths.
 

@@ -12,7 +12,7 @@ from spacecraft import cli
 from spacecraft.design.loop import run
 
 from command import flexsat
-from scenes import BASE_TOML
+from scenes import BASE_TOML, edited
 
 
 def test_run_writes_the_report_folder(scene_file, tmp_path, capsys):
@@ -56,8 +56,8 @@ def test_progress_goes_to_stderr(scene_file, tmp_path, capsys):
 
 @pytest.mark.slow
 def test_no_plots_flag_and_plots_when_asked(scene_file, tmp_path):
-    text = BASE_TOML.replace("equivalence = false", "equivalence = false\nplots = [\"slew\", "
-                                                "\"poles\"]")
+    text = edited(BASE_TOML, ("equivalence = false",
+                              "equivalence = false\nplots = [\"slew\", \"poles\"]"))
     scene_file.write_text(text)
     assert flexsat("run", scene_file, "--out", tmp_path / "a", "--quiet") == 0
     assert sorted(p.name for p in (tmp_path / "a" / "plots").iterdir()) == [
@@ -75,7 +75,7 @@ def test_no_plots_flag_and_plots_when_asked(scene_file, tmp_path):
     (("mass = 100.0", "mass = 'heavy'"), r"boom\.toml: hub\.mass: must be a number"),
 ])
 def test_user_errors_exit_2_with_one_line(scene_file, tmp_path, capsys, edit, message):
-    scene_file.write_text(BASE_TOML.replace(*edit))
+    scene_file.write_text(edited(BASE_TOML, edit))
     out = tmp_path / "o"
     assert flexsat("run", scene_file, "--out", out, "--quiet") == 2
     err = capsys.readouterr().err
@@ -291,11 +291,12 @@ def test_fit_shows_progress_on_stderr_unless_quiet(capsys):
 # ---------------------------------------------------------------------------------------------
 # issue 15 wired into the command: FMI 2.0 and 3.0, SSP, digital controllers
 # ---------------------------------------------------------------------------------------------
-DIGITAL_LQR = BASE_TOML.replace('types = ["pd"]', 'types = ["lqr"]\nsample_rate = 5.0').replace(
-    "[controller.pd]\nnatural_frequency = 0.1",
-    "[controller.lqr]\nattitude_weight = 7.6\ntorque_weight = 1.0").replace(
-    "step = 0.5\n", "").replace('match = "frequencies"', 'match = "poles-and-zeros"').replace(
-    "n_modes = 3", "n_modes = 2").replace("duration = 120.0", "duration = 30.0")
+DIGITAL_LQR = edited(
+    BASE_TOML, ('types = ["pd"]', 'types = ["lqr"]\nsample_rate = 5.0'),
+    ("[controller.pd]\nnatural_frequency = 0.1",
+     "[controller.lqr]\nattitude_weight = 7.6\ntorque_weight = 1.0"),
+    ("step = 0.5\n", ""), ('match = "frequencies"', 'match = "poles-and-zeros"'),
+    ("n_modes = 3", "n_modes = 2"), ("duration = 120.0", "duration = 30.0"))
 
 
 @pytest.mark.slow
@@ -397,9 +398,9 @@ def test_simulator_basilisk_without_bsk_is_one_line_exit_2(scene_file, tmp_path,
 
 
 def test_simulator_basilisk_refuses_a_scene_it_cannot_run(scene_file, tmp_path, capsys):
-    scene_file.write_text(BASE_TOML.replace("step = 0.5\n", 'step = 0.5\n\n'
-                                            '[manoeuvre.disturbance]\n'
-                                            'input = "rod_tip_force"\namplitude = 1.0\n'))
+    scene_file.write_text(edited(BASE_TOML, ("step = 0.5\n", 'step = 0.5\n\n'
+                                             '[manoeuvre.disturbance]\n'
+                                             'input = "rod_tip_force"\namplitude = 1.0\n')))
     assert flexsat("run", scene_file, "--simulator", "basilisk", "--out", tmp_path / "o") == 2
     assert "manoeuvre.disturbance.input: a tip force is not applied by the Basilisk model" \
         in capsys.readouterr().err
@@ -429,8 +430,8 @@ def test_package_names_resolve_on_first_use():
 
 def test_the_last_line_counts_in_words(scene_file, tmp_path, capsys):
     """Before: 'wrote report.md, report.html, results.json, 1 plots to ...'."""
-    scene_file.write_text(BASE_TOML.replace("equivalence = false",
-                                        'equivalence = false\nplots = ["slew"]'))
+    scene_file.write_text(edited(BASE_TOML, ("equivalence = false",
+                                             'equivalence = false\nplots = ["slew"]')))
     assert flexsat("run", scene_file, "--out", tmp_path / "o", "--quiet") == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert last == f"wrote report.md, report.html, results.json, 1 plot to {tmp_path / 'o'}"

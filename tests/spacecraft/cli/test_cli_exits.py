@@ -26,7 +26,7 @@ import spacecraft.design.loop
 from spacecraft.report.output import OWNER
 
 from command import flexsat
-from scenes import BASE_TOML
+from scenes import BASE_TOML, edited
 
 ROOT = Path(__file__).resolve().parents[3]
 
@@ -84,12 +84,12 @@ def test_a_diverging_loop_exits_0_and_the_report_says_where_it_stopped(scene_fil
     """The LQR on the paper's chain, UNSTABLE on the damped truth beam, for 40000 s: before, the
     run crashed with "simulation overflowed" (exit 1)."""
     scene_file.write_text(
-        BASE_TOML.replace('types = ["pd"]', 'types = ["lqr"]')
-        .replace("[controller.pd]\nnatural_frequency = 0.1",
-                 "[controller.lqr]\nattitude_weight = 7.6\ntorque_weight = 1.0")
-        .replace("duration = 120.0", "duration = 40000.0")
-        .replace("youngs_modulus = 2.06e11", "youngs_modulus = 2.06e11\ndamping_ratio = 0.005")
-        .replace("n_modes = 3", "n_modes = 2"))
+        edited(BASE_TOML, ('types = ["pd"]', 'types = ["lqr"]'),
+               ("[controller.pd]\nnatural_frequency = 0.1",
+                "[controller.lqr]\nattitude_weight = 7.6\ntorque_weight = 1.0"),
+               ("duration = 120.0", "duration = 40000.0"),
+               ("youngs_modulus = 2.06e11", "youngs_modulus = 2.06e11\ndamping_ratio = 0.005"),
+               ("n_modes = 3", "n_modes = 2")))
     out = tmp_path / "o"
     assert flexsat("run", scene_file, "--out", out, "--quiet", "--no-fmu") == 0
     said = "UNSTABLE: diverges, simulation stopped at t = "
@@ -115,7 +115,7 @@ def test_a_diverging_loop_exits_0_and_the_report_says_where_it_stopped(scene_fil
 def test_scene_errors_exit_2_with_one_line(scene_file, tmp_path, capsys, edit, message):
     import re
 
-    scene_file.write_text(BASE_TOML.replace(*edit))
+    scene_file.write_text(edited(BASE_TOML, edit))
     out = tmp_path / "o"
     assert flexsat("run", scene_file, "--out", out, "--quiet", "--no-fmu") == 2
     line = one_line(capsys)
@@ -130,7 +130,7 @@ def test_limit_option_raises_and_lowers_limits(scene_file, tmp_path, capsys):
     assert flexsat("run", scene_file, "--out", tmp_path / "b", "--quiet", "--no-fmu",
                    "--limit", "samples=100") == 2
     assert "manoeuvre.step: 241 samples per simulation" in one_line(capsys)
-    scene_file.write_text(BASE_TOML.replace("test boom", "t" * 5000))
+    scene_file.write_text(edited(BASE_TOML, ("test boom", "t" * 5000)))
     assert flexsat("run", scene_file, "--out", tmp_path / "c", "--quiet", "--no-fmu") == 2
     assert "title: a text of 5000 characters: over the limit 4096" in one_line(capsys)
     assert flexsat("run", scene_file, "--out", tmp_path / "c", "--quiet", "--no-fmu",
@@ -371,7 +371,7 @@ EVIL = "<script>alert(1)</script> *bold* _it_ [x](http://e) `c` | ~~s~~ &amp;"
 
 
 def test_title_is_escaped_in_markdown_and_html(scene_file, tmp_path):
-    scene_file.write_text(BASE_TOML.replace('title = "test boom"', f"title = '{EVIL}'"))
+    scene_file.write_text(edited(BASE_TOML, ('title = "test boom"', f"title = '{EVIL}'")))
     out = tmp_path / "o"
     assert flexsat("run", scene_file, "--out", out, "--quiet", "--no-fmu") == 0
     md, page = (out / "report.md").read_text(), (out / "report.html").read_text()

@@ -19,6 +19,7 @@ import spacecraft.sweep
 from spacecraft.design.loop import run
 from spacecraft.sweep import run_sweep, sweep_scene_path
 from spacecraft.cli.sweep import main
+from scenes import edited
 
 ROOT = Path(__file__).resolve().parents[3]
 pytestmark = pytest.mark.slow
@@ -178,7 +179,7 @@ def test_the_command_writes_the_report_and_refuses_bad_input(tmp_path, capsys):
     assert 0.0 <= lo <= hi <= 1.0
     # bad input: one line on stderr, exit 2
     scene = tmp_path / "bad.toml"
-    raw = sweep_scene_path("default").read_text().replace('"hub.inertia"', '"hub.inertai"')
+    raw = edited(sweep_scene_path("default").read_text(), ('"hub.inertia"', '"hub.inertai"'))
     scene.write_text(raw)
     assert main([str(scene), "--out", str(tmp_path / "bad"), "--quiet"]) == 2
     err = capsys.readouterr().err.strip()
