@@ -908,7 +908,8 @@ def _loops_margins(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray], ome
     tasks = minima + grazes
     (root, found), (w_min, dist_min) = refine(
         crossing, roots=brackets, guesses=guesses,
-        minima=tuple(np.array(v) for v in zip(*tasks)) if tasks else None)
+        minima=tuple(np.array(v) for v in zip(*tasks)) if tasks else None,
+        sign_only=np.arange(len(tasks)) >= len(minima))
     # where the function's extremum has the other sign, it crosses zero on either side of it
     pairs, touches = [], []
     for (task, lo, _, hi, f_lo, _, f_hi), x, fx in zip(grazes, w_min[len(minima):],
@@ -1391,7 +1392,8 @@ def _grazing_pairs(eigenvalues_at, count_at, grid: np.ndarray, count: np.ndarray
     index = np.arange(tasks.size)
     _, (w_min, f_min) = refine(lambda w, k: distance(w, tasks[k]),
                                minima=(index, *(np.concatenate(v) for v in
-                                                (lo, x, hi, f_lo, f_x, f_hi))))
+                                                (lo, x, hi, f_lo, f_x, f_hi))),
+                               sign_only=np.ones(index.size, dtype=bool))
     crossed = np.flatnonzero(f_min < 0.0)
     # (one pair per grid interval: f_out's and f_in's minima at one grid point would bracket
     # the same crossings twice)

@@ -31,7 +31,11 @@ iterations:
   (below it f'' drowns in round-off). It ends when the parabola through probes near that
   floor predicts no value below the best by more than MINIMUM_VALUE_TOLERANCE (relative), when
   the best point is the probed centre and the next vertex lies within 1e-2 of that floor of it,
-  or when hi - lo <= MINIMUM_TOLERANCE x.
+  or when hi - lo <= MINIMUM_TOLERANCE x. A minimum whose sign alone is wanted (the extremum
+  of a function that may cross zero twice between two grid points, positive at both) also
+  ends at a probe below zero, or once the parabola through probes near that floor predicts
+  no value below half the best: the value there is then positive by a margin far beyond what
+  the same parabola is trusted to for the first rule.
 
 References
 ----------
@@ -134,7 +138,7 @@ def _probes(centre, spacing, lo, hi) -> np.ndarray:
 
 def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
            roots: tuple | None = None, minima: tuple | None = None, *,
-           guesses: tuple | None = None
+           guesses: tuple | None = None, sign_only: np.ndarray | None = None
            ) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
     """Refine root brackets and minimum brackets of many functions together.
 
@@ -157,6 +161,11 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
         the first three probes are placed there instead of about regula falsi's point a
         quarter of the bracket apart (called only when the brackets are few enough to be
         probed so from the start).
+    sign_only : array of bool, optional
+        Per minimum bracket (given ``fx > 0``): only whether the minimum lies below zero is
+        wanted. Such a bracket also ends at the first probe below zero (returned as its
+        point), or once the local parabola predicts no value below half the best (module
+        docstring); its point and value are then the best found, not the converged minimum.
 
     Returns
     -------
@@ -174,6 +183,11 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
     lo, xm, hi, flo, fm, fhi = (np.array(v, dtype=float) for v in (lo, xm, hi, flo, fm, fhi))
     rt, mt = np.asarray(rt, dtype=int), np.asarray(mt, dtype=int)
     nr = a.size
+    sign = (np.zeros(mt.size, dtype=bool) if sign_only is None
+            else np.asarray(sign_only, dtype=bool).reshape(-1))
+    if sign.size != mt.size:
+        raise ValueError(f"sign_only must have one entry per minimum bracket ({mt.size}); got "
+                         f"{sign.size}")
 
     with np.errstate(all="ignore"):
         scale = np.maximum(np.abs(fa), np.abs(fb))
@@ -242,7 +256,7 @@ def refine(evaluate: Callable[[np.ndarray, np.ndarray], np.ndarray],
                                scale, suspect, r_active)
             if km.size:
                 (_minimum_step if km.size <= _FEW else _minimum_steps)(
-                    km, pm, fmp, lo, xm, hi, fm, cm, hm, floor, m_active)
+                    km, pm, fmp, lo, xm, hi, fm, cm, hm, floor, sign, m_active)
 
         found = np.where(np.abs(fa) <= np.abs(fb), a, b)
         at_root = np.minimum(np.abs(fa), np.abs(fb))
@@ -336,14 +350,16 @@ def _root_step(k, p, fp, a, b, fa, fb, c, h, scale, checked, stalls, active,
                      and min(abs(nfa), abs(nfb)) <= 1e3 * si)
 
 
-def _minimum_step(k, p, fp, lo, x, hi, fx, c, h, floor, active) -> None:
+def _minimum_step(k, p, fp, lo, x, hi, fx, c, h, floor, sign, active) -> None:
     """One iteration of the minimum brackets ``k`` probed at ``p`` (values ``fp``), in place,
     each in Python floats: for a few brackets (at most _FEW), the arithmetic of numpy's
-    elementwise operations without their per-call cost (:func:`_minimum_steps` for many)."""
+    elementwise operations without their per-call cost (:func:`_minimum_steps` for many);
+    ``sign``: the brackets whose sign alone is wanted (:func:`refine`)."""
     inf = math.inf
     rows = zip(k.tolist(), p.tolist(), fp.tolist(), lo[k].tolist(), x[k].tolist(),
-               hi[k].tolist(), fx[k].tolist(), h[k].tolist(), floor[k].tolist())
-    for j, (p0, p1, p2), (f0, f1, f2), lj, xj, hj, fj, sj, floor_j in rows:
+               hi[k].tolist(), fx[k].tolist(), h[k].tolist(), floor[k].tolist(),
+               sign[k].tolist())
+    for j, (p0, p1, p2), (f0, f1, f2), lj, xj, hj, fj, sj, floor_j, sign_j in rows:
         # the best of the known point and the probes (a non-finite value: none; ties keep the
         # known best, as np.argmin the first)
         points = (xj, p0, p1, p2)
@@ -379,17 +395,20 @@ def _minimum_step(k, p, fp, lo, x, hi, fx, c, h, floor, active) -> None:
             predicted = f0 + d01 * (vertex - p0) + curvature * (vertex - p0) * (vertex - p1)
             converged = ((sj <= 100.0 * floor_j
                           and fbest - predicted <= MINIMUM_VALUE_TOLERANCE * abs(fbest))
-                         or (i == 2 and step <= 1e-2 * floor_j))
+                         or (i == 2 and step <= 1e-2 * floor_j)
+                         or (sign_j and sj <= 100.0 * floor_j and predicted >= 0.5 * fbest))
             centre, spacing = vertex, max(step, floor_j)
         else:
             centre, spacing = best, 0.25 * (nhi - nlo)
+        # the sign alone wanted: a value below zero settles it
+        converged = converged or (sign_j and fbest < 0.0)
         lo[j], hi[j], x[j], fx[j] = nlo, nhi, best, fbest
         c[j] = centre
         h[j] = min(spacing, 0.5 * (nhi - nlo))
         active[j] = not converged and (nhi - nlo) > MINIMUM_TOLERANCE * best
 
 
-def _minimum_steps(k, p, fp, lo, x, hi, fx, c, h, floor, active) -> None:
+def _minimum_steps(k, p, fp, lo, x, hi, fx, c, h, floor, sign, active) -> None:
     """One iteration of the minimum brackets ``k`` probed at ``p`` (values ``fp``), in place,
     vectorised: :func:`_minimum_step`'s arithmetic on many brackets at once."""
     rows = np.arange(k.size)
@@ -419,6 +438,10 @@ def _minimum_steps(k, p, fp, lo, x, hi, fx, c, h, floor, active) -> None:
     local = h[k] <= 100.0 * floor[k]
     converged = good & ((local & (fbest - predicted <= MINIMUM_VALUE_TOLERANCE * np.abs(fbest)))
                         | ((i == 2) & (step <= 1e-2 * floor[k])))
+    # the sign alone wanted: a value below zero settles it, or a local parabola whose least
+    # value is above half the best
+    wanted = sign[k]
+    converged |= wanted & ((fbest < 0.0) | (good & local & (predicted >= 0.5 * fbest)))
     centre = np.where(good, vertex, best)
     spacing = np.where(good, np.maximum(step, floor[k]), 0.25 * (nhi - nlo))
     lo[k], hi[k], x[k], fx[k] = nlo, nhi, best, fbest

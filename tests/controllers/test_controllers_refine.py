@@ -185,10 +185,38 @@ def test_flat_stretches_and_exact_zeros_do_not_break_a_step():
     assert fx[0] == 3.0 and 1.0 <= x[0] <= 3.0
 
 
+@pytest.mark.parametrize("n_brackets", [3, 40])
+def test_a_minimum_whose_sign_alone_is_wanted(n_brackets):
+    """f(x) = (x - c)^2 / w^2 + d on brackets [c - w, c + w] about points c + 3 w / 4 where
+    f > 0, with depths d from -0.5 to 0.5 (closed form: the minimum d at c): a sign-only
+    bracket comes back with a value below zero exactly where d < 0 (a point inside, where f
+    is that value), and with one never below the true minimum d where d > 0 and at most 2 d
+    (the bracket stops once the parabola through its probes, f itself, predicts a least value
+    d of at least half the best): the sign is right either way. A sign_only mask of the wrong
+    size is refused."""
+    rng = np.random.default_rng(3)
+    c = rng.uniform(1.0, 2.0, n_brackets)
+    w = 10.0 ** rng.uniform(-6, -2, n_brackets)
+    d = np.linspace(-0.5, 0.5, n_brackets + 1)[:n_brackets] + 0.5 / (n_brackets + 1)
+    f = lambda x, t: (x - c[t]) ** 2 / w[t] ** 2 + d[t]   # noqa: E731
+    t = np.arange(n_brackets)
+    lo, x0, hi = c - w, c + 0.75 * w, c + w
+    minima = (t, lo, x0, hi, f(lo, t), f(x0, t), f(hi, t))
+    assert np.all(minima[5] > 0)
+    _, (x, fx) = refine(f, minima=minima, sign_only=np.ones(n_brackets, dtype=bool))
+    assert np.all((lo < x) & (x < hi))
+    np.testing.assert_array_equal(fx, f(x, t))
+    assert np.array_equal(fx < 0, d < 0)
+    assert np.all(fx[d > 0] >= d[d > 0]) and np.all(fx[d > 0] <= 2.0 * d[d > 0] * (1 + 1e-12))
+    with pytest.raises(ValueError, match="sign_only must have one entry per minimum bracket"):
+        refine(f, minima=minima, sign_only=np.ones(n_brackets + 1, dtype=bool))
+
+
 def test_a_few_minima_are_stepped_as_many_are():
     """A few minimum brackets are stepped one by one in Python floats, many in numpy arrays:
     the same arithmetic, so the same new brackets, probes and stopping decisions to the bit,
-    on random parabolas, kinks and non-finite probes."""
+    on random parabolas, kinks, non-finite probes and probes below zero, half the brackets
+    wanting the sign of their minimum alone."""
     from controllers.refine import _minimum_step, _minimum_steps
     rng = np.random.default_rng(7)
     n = 200
@@ -204,6 +232,8 @@ def test_a_few_minima_are_stepped_as_many_are():
     fp[::11, 2] = np.nan
     fp[::13, 0] = np.inf
     fp[::19] = 1.0                                  # flat
+    fp[::23, 1] = -0.5                              # below zero: a sign-only bracket ends
+    sign = rng.uniform(size=n) < 0.5
     fx = np.where(np.arange(n) % 5 == 0, 1.0, 1.0 + width)
     h = width * rng.uniform(1e-6, 0.5, n)
     floor = width * 1e-4
@@ -211,7 +241,7 @@ def test_a_few_minima_are_stepped_as_many_are():
     with np.errstate(all="ignore"):
         for step in (_minimum_step, _minimum_steps):
             state = [v.copy() for v in (lo, x, hi, fx)] + [np.zeros(n), h.copy(), floor,
-                                                             np.ones(n, dtype=bool)]
+                                                             sign, np.ones(n, dtype=bool)]
             step(k, p, fp, *state)
             states.append(state)
     for one, many in zip(*states):
