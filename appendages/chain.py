@@ -58,7 +58,7 @@ import scipy.linalg
 from . import limits
 from .checks import RANGES, as_frequency_array, check_range
 from .errors import describe
-from .interface import (FiniteAppendage, RootModel, equilibrate, inverse_2x2, place_bending_planes,
+from .interface import (FiniteAppendage, RootModel, inverse_2x2, place_bending_planes,
                         three_axis_root_model)
 
 __all__ = ["HingedChain", "MOLENAAR_K", "chain_matrices", "proportional_hinge_dampings",

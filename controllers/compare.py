@@ -17,8 +17,8 @@ import numpy as np
 
 from .loop import close_loop, loop_frequency_response
 from .margins import SpilloverVerdict, margins, spillover
-from .signals import (THETA, THETA_REF, TIP_SUFFIX, TORQUE, check_controller, check_plant,
-                      channels, tip_outputs)
+from .signals import (THETA, TORQUE, check_controller, check_plant, channels,
+                      tip_outputs)
 from .timeresp import METRIC_UNITS, check_slew, metrics, signal_trace, slew, time_grid
 
 __all__ = ["Comparison", "compare", "metric_table", "difference_columns"]

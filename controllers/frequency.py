@@ -122,7 +122,6 @@ class ModalEvaluator:
                                                                               p * m)
 
     def _decompose(self, A: np.ndarray) -> None:
-        n = A.shape[0]
         # balancing (an exact diagonal similarity, powers of 2, and a permutation) brings a
         # modal block [[0, 1], [-w^2, -2 zeta w]] to norm ~w; the rigid-body Jordan block's
         # eigenvalues are then perturbed by ~sqrt(eps |A|), far below this tolerance

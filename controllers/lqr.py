@@ -34,8 +34,7 @@ from .frequency import modal_evaluator
 from .modes import design_model, inertia_matrix, rigid_body_inertia, verify_loop
 from .pd import check_sampling, rigid_crossover
 from .riccati import modal_correction, solve_care, solve_dare
-from .signals import (OMEGA, THETA, THETA_REF, TIP_SUFFIX, TORQUE, channels, check_plant,
-                      tip_outputs)
+from .signals import channels, check_plant, tip_outputs
 from .loop import close_loop
 from .stability import (MARGIN, MAX_SCALE_RATIO, RemovedMode, continuous_poles,
                         warn_removed_modes)

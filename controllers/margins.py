@@ -50,7 +50,7 @@ from .refine import refine
 from .loop import (LoopTransfer, close_loop, compiled_kernel, loop_frequency_response,
                    loops_at_a_time, sensitivity)
 from .arguments import describe, frequency_grid
-from .signals import AXES, check_controller, check_pair, check_plant, is_digital
+from .signals import AXES, check_controller, check_plant, is_digital
 from .stability import continuous_poles
 from .threads import limits_blas_threads, total_states
 

@@ -37,7 +37,7 @@ import scipy.linalg
 from .arguments import describe, real_number
 from .frequency import ModalEvaluator, decoupled_parts, modal_evaluator
 from .loop import close_loop
-from .signals import OMEGA, THETA, TORQUE, channels, check_plant, is_digital, require_signal
+from .signals import channels, check_plant, is_digital, require_signal
 from .stability import MARGIN, MAX_SCALE_RATIO, RemovedMode, continuous_poles
 
 __all__ = ["FlexibleMode", "INFLUENCE_TOL", "design_model", "flexible_modes", "inertia_matrix",

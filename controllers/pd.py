@@ -34,7 +34,7 @@ from .frequency import modal_evaluator
 from .margins import zero_crossings
 from .modes import flexible_modes, inertia_matrix, rigid_body_inertia, verify_loop
 from .arguments import check_choice, check_inertia, describe, positive, real_array, real_number
-from .signals import OMEGA, THETA, THETA_REF, TORQUE, channels, check_plant
+from .signals import channels, check_plant
 from .stability import warn_removed_modes
 from .threads import limits_blas_threads, total_states
 

@@ -28,7 +28,7 @@ from typing import Union
 
 import numpy as np
 
-from .checks import check_cosimulation_run, real_number, shorten
+from .checks import check_cosimulation_run, shorten
 from .errors import CosimulationError
 
 __all__ = ["FMUSlave", "Signal", "cosimulate", "run_loop"]

@@ -29,7 +29,6 @@ plant per signal set, one simulator (matrix exponential) per closed loop.
 from __future__ import annotations
 
 import dataclasses
-import math
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -43,16 +42,16 @@ from controllers.threads import blas_threads_for
 from ..dynamics.survey import modal_survey
 from ..scene.limits import estimate_cost, library_limits
 from ..scene.read import Scene, load_scene, models_scene, scene_dict
-from .manoeuvre import (FlownManoeuvre, check_slew_limits, close_flown_loop, delay_facts, flies,
-                        loop_delay)
+from .manoeuvre import (FlownManoeuvre, check_slew_limits, close_flown_loop, delay_facts,
+                        flies)
 from .models import ModelBuilder, ProgressCallback, RunStats
 from .naming import MOTION_WORDS, plural
 from .responses import appendage_peaks, diverged_at, simulate_manoeuvre, trace
 from .tables import describe_model, equivalence_table
 from .tuning import digital_facts, rigid_crossover
-from .verdicts import (closed_loop_poles, crossover_frequencies, design_warnings,
-                       exact_loop_verdict, growing, loop_status, margin_flags, margins_dict,
-                       resolved_frequency, verdict_dict, withheld_metrics)
+from .verdicts import (closed_loop_poles, crossover_frequencies, design_warnings, growing,
+                       loop_status, margin_flags, margins_dict, resolved_frequency,
+                       verdict_dict, withheld_metrics)
 
 __all__ = ["DesignLoop", "ClosedLoops", "RunResult", "RunStats", "run", "warning_lines",
            "input_warning_lines", "check_options", "unmodelled_outputs"]

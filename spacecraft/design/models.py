@@ -23,7 +23,6 @@ import warnings
 from collections.abc import Callable
 from pathlib import Path
 
-import control
 import numpy as np
 
 import appendages
