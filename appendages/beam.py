@@ -79,7 +79,7 @@ from . import limits
 from .assembly import Segment
 from .damping import (CantileverDamping, check_damping_convention, check_damping_ratio,
                       chebyshev_resonance_coefficients, hurwitz_tail_coefficients,
-                      ModalFactorSum, tail_series)
+                      CantileverModalSums)
 from .checks import as_frequency_array, check_derived, check_range
 from .errors import describe
 from .interface import inverse_2x2, place_bending_planes
@@ -321,6 +321,40 @@ def _modal_sum_constants(n: int, zeta: float) -> tuple[np.ndarray, np.ndarray]:
     cheb.flags.writeable = False
     Z.flags.writeable = False
     return cheb, Z
+
+
+def _joint_modal_sums(motions: list, rods: list, zeta: float) -> tuple:
+    """For :meth:`Beam._modal_stiffness6`: the :class:`~appendages.damping.CantileverModalSums`
+    of a beam's motions, the entries of the flattened 6 x 6 D6 they fill and the column of the
+    sums that fills each.
+
+    ``motions`` are the terms of the x-y plane (columns D11, D12, D22), of the x-z plane if it
+    differs, then of the elastic rods, whose motions (``"axial"``, ``"torsion"``) ``rods``
+    names. The x-z plane's coupling enters D6 negated
+    (:func:`~appendages.interface.place_bending_planes`), so its terms are negated (exactly);
+    with equal planes the x-y plane's terms get that negated column as a fourth.
+    """
+    def picked(motion, picks):
+        w, weights, rest, coefficients, scale = motion
+        index = [column for column, _ in picks]
+        sign = np.array([factor for _, factor in picks])
+        return w, weights[:, index] * sign, rest[index] * sign, coefficients[:, index] * sign, \
+            scale
+
+    n_planes = len(motions) - len(rods)
+    xy = [[(1, 1)], [(1, 5), (5, 1)], [(5, 5)]]
+    xz = [[(2, 2)], [(2, 4), (4, 2)], [(4, 4)]]
+    if n_planes == 1:
+        terms = [picked(motions[0], [(0, 1.0), (1, 1.0), (2, 1.0), (1, -1.0)])]
+        places = [xy[0] + xz[0], xy[1], xy[2] + xz[2], xz[1]]
+    else:
+        terms = [motions[0], picked(motions[1], [(0, 1.0), (1, -1.0), (2, 1.0)])]
+        places = xy + xz
+    terms += motions[n_planes:]
+    places += [[(0, 0)] if motion == "axial" else [(3, 3)] for motion in rods]
+    entries = [6 * row + col for targets in places for row, col in targets]
+    columns = [column for column, targets in enumerate(places) for _ in targets]
+    return CantileverModalSums(terms, zeta), np.array(entries), np.array(columns)
 
 
 def _shape_terms(kind: str, xk: np.ndarray):
@@ -1428,14 +1462,45 @@ class Beam:
         if self._segmented is not None:
             return self._segmented.dynamic_stiffness6(s)
         s = as_frequency_array(s)
+        D6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
+        if self._modal_stiffness6(s.ravel(), D6.reshape(-1, 6, 6)):
+            return D6
         D_xy = self._dynamic_stiffness(s)
         D_xz = D_xy if self._planes_equal() else self.planar_view("xz")._dynamic_stiffness(s)
-        D6 = np.zeros(s.shape + (6, 6), dtype=np.complex128)
         place_bending_planes(D6, D_xy, D_xz)
         D6[..., 0, 0] = self._rod_entry(self.axial_rod(), self.mass, s, "D")
         D6[..., 3, 3] = self._rod_entry(self.torsion_rod(),
                                         self.torsional_inertia * self.length, s, "D")
         return D6
+
+    def _modal_stiffness6(self, s: np.ndarray, D6: np.ndarray) -> bool:
+        """D6 at flat s into ``D6`` (npts, 6, 6), zero on entry, by the cantilever modal sums
+        of every motion together (:class:`~appendages.damping.CantileverModalSums`; the beam's
+        damping ratio is every motion's), each motion's sum the one :meth:`dynamic_stiffness`
+        and the rods give; False (nothing written) where they do not apply: undamped, the
+        free-free convention, or beyond a motion's cap on modes."""
+        if not (self.damping_ratio > 0.0 and self.damping_convention == "cantilever"):
+            return False
+        top = float(np.abs(s).max()) if s.size else 0.0
+        planes = [self] if self._planes_equal() else [self, self.planar_view("xz")]
+        rods = [(0, self.axial_rod(), self.mass),
+                (3, self.torsion_rod(), self.torsional_inertia * self.length)]
+        members = planes + [rod for _, rod, _ in rods if rod is not None]
+        sizes = tuple(member._modal_sum_size(top) for member in members)
+        if None in sizes:
+            return False
+        key = ("cantilever_modal_sums6", sizes)
+        cached = self._cache.get(key)
+        if cached is None:
+            motions = [member._modal_motion(n) for member, n in zip(members, sizes)]
+            cached = self._cache[key] = _joint_modal_sums(
+                motions, [rod.motion for rod in members[len(planes):]], self.damping_ratio)
+        sums, entries, columns = cached
+        D6.reshape(s.size, 36)[:, entries] = sums(s)[:, columns]
+        for index, rod, inertia in rods:
+            if rod is None:
+                D6[:, index, index] = inertia * s**2
+        return True
 
     @staticmethod
     def _rod_entry(rod, rigid_inertia: float, s: np.ndarray, which: str) -> np.ndarray:
@@ -1513,16 +1578,38 @@ class Beam:
         :class:`~appendages.damping.CantileverDamping` to rounding, at a fraction of the cost
         (no repair about the undamped poles, one pass over the points); s = 0 gives 0.
         """
+        N = self._modal_sum_size(float(np.abs(s).max()) if s.size else 0.0)
+        if N is None:
+            return None
+        key = ("cantilever_modal_sums", N)
+        sums = self._cache.get(key)
+        if sums is None:
+            sums = self._cache[key] = CantileverModalSums([self._modal_motion(N)],
+                                                          self.damping_ratio)
+        entries = sums(s)
+        # [[D11, D12], [D12, D22]] from the entries (D11, D12, D22) of each point
+        return entries[:, [0, 1, 1, 2]].reshape(s.size, 2, 2)
+
+    def _modal_sum_size(self, top: float) -> int | None:
+        """N of :meth:`_cantilever_modal_stiffness` at points up to ``top`` = max|s| [rad/s]:
+        a power of two, at least 16, with every mode up to 10 top; None beyond
+        :data:`_MODAL_MAX_MODES`."""
         c0 = self.frequency_scale
-        top = float(np.abs(s).max()) if s.size else 0.0
         N = 16
         while ((N + 0.5) * math.pi) ** 2 * c0 < 10.0 * top:
             N *= 2
             if N > _MODAL_MAX_MODES:
                 return None
+        return N
+
+    def _modal_motion(self, N: int) -> tuple:
+        """This plane's terms of :class:`~appendages.damping.CantileverModalSums` with N
+        explicit modes (:meth:`_cantilever_modal_stiffness`), worked out once: the entries
+        (D11, D12, D22) of the products l_k l_k^T, of R_N and of the tail's coefficients."""
         key = ("cantilever_modal", N)
-        data = self._cache.get(key)
-        if data is None:
+        motion = self._cache.get(key)
+        if motion is None:
+            c0 = self.frequency_scale
             w = self.cantilever_frequencies(N)
             l = self.modal_participation(N)
             products = np.stack([l[:, 0] ** 2, l[:, 0] * l[:, 1], l[:, 1] ** 2], axis=1)
@@ -1530,16 +1617,9 @@ class Beam:
             L = self.length
             cheb, Z = _modal_sum_constants(N, self.damping_ratio)
             scale = 4.0 * self.linear_density / L * c0**2 * np.array([L**2, L**3, L**4])[:, None]
-            data = (ModalFactorSum(w, products, self.damping_ratio),
-                    np.array([R[0, 0], R[0, 1], R[1, 1]]), (scale * cheb[None, :] * Z).T)
-            self._cache[key] = data
-        factor_sum, rest, coefficients = data
-        entries = factor_sum(s)
-        entries += rest
-        np.multiply((s**2)[:, None], entries, out=entries)  # (this order: the same rounding)
-        entries -= tail_series(s / c0, coefficients)
-        # [[D11, D12], [D12, D22]] from the entries (D11, D12, D22) of each point
-        return entries[:, [0, 1, 1, 2]].reshape(s.size, 2, 2)
+            motion = self._cache[key] = (w, products, np.array([R[0, 0], R[0, 1], R[1, 1]]),
+                                         (scale * cheb[None, :] * Z).T, c0)
+        return motion
 
     def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:
         r"""The damping of the cantilever modes k > n (:mod:`appendages.damping`), exactly.

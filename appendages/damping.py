@@ -49,10 +49,12 @@ from .errors import describe
 
 __all__ = ["CantileverDamping", "CONVENTIONS", "MAX_MODES", "check_damping_convention",
            "check_damping_ratio", "chebyshev_resonance_coefficients",
-           "hurwitz_tail_coefficients", "mode_groups", "modal_factor_sum", "ModalFactorSum",
-           "tail_series"]
+           "hurwitz_tail_coefficients", "mode_groups", "modal_factor_sum", "CantileverModalSums",
+           "ModalFactorSum", "tail_series"]
 
 _REPAIR_POINTS = 32
+#: Most entries (points x modes) for which CantileverModalSums evaluates its motions together.
+_JOINT = 32768
 #: Most cantilever modes summed explicitly at one point.
 MAX_MODES = 16384
 #: Relative gap below which cantilever frequencies form one group (equal frequencies).
@@ -341,15 +343,16 @@ class ModalFactorSum:
 
 
 def tail_series(v: np.ndarray, coefficients: np.ndarray, first_power: int = 4) -> np.ndarray:
-    """``sum_j coefficients_j v**(first_power + j)`` at flat complex v: the Hurwitz tails of
-    the modal sums.
+    """``sum_j coefficients_j v**(first_power + j)`` at complex v: the Hurwitz tails of the
+    modal sums.
 
     A few points: the integer powers at once (numpy's integer power, a few ulp each: one array
     operation); many: Horner's scheme (numpy's complex integer power is slow on long arrays).
 
     Parameters
     ----------
-    v : ndarray of complex, shape (npts,)
+    v : ndarray of complex, shape (npts,) or (npts, k)
+        One v for every column of ``coefficients``, or (2-D) one per column.
     coefficients : ndarray, shape (J,) or (J, k)
     first_power : int
 
@@ -358,16 +361,113 @@ def tail_series(v: np.ndarray, coefficients: np.ndarray, first_power: int = 4) -
     ndarray of complex, shape (npts,) or (npts, k)
     """
     J = coefficients.shape[0]
-    if v.size <= 32:
-        return (v[:, None] ** np.arange(first_power, first_power + J)) @ coefficients
+    powers = np.arange(first_power, first_power + J)
+    if v.shape[0] <= 32:
+        if v.ndim == 1:
+            return (v[:, None] ** powers) @ coefficients
+        return np.einsum("nkj,jk->nk", v[:, :, None] ** powers, coefficients)
     # Horner in place, one row per column of coefficients (contiguous rows), transposed back
     columns = coefficients.reshape(J, -1)
-    out = np.zeros((columns.shape[1], v.size), dtype=np.complex128)
+    rows = v if v.ndim == 1 else v.T
+    out = np.zeros((columns.shape[1], v.shape[0]), dtype=np.complex128)
     for j in range(J - 1, -1, -1):
-        out *= v
+        out *= rows
         out += columns[j][:, None]
-    out *= v**first_power
+    out *= rows**first_power
     return out[0] if coefficients.ndim == 1 else out.T
+
+
+class CantileverModalSums:
+    r"""The damped root dynamic stiffness of one or several motions of an appendage by their
+    cantilever modal sums, evaluated together.
+
+    Each motion (a bending plane, torsion, axial motion) with its first N modes is
+
+        D(s) = s**2 (F(s) + R) - T(s/c),
+
+    F the :class:`ModalFactorSum` of those modes with their weights (products of participation
+    factors), R the participation of the modes beyond N and T the series
+    ``sum_j t_j v**(4+j)`` of their resonance factors in ``v = s/c`` (c the motion's frequency
+    scale; :func:`tail_series`), as
+    :meth:`appendages.beam.Beam.dynamic_stiffness` and :meth:`appendages.rod.Rod.dynamic_stiffness`
+    derive them (cantilever convention). The motions of one appendage share its damping ratio,
+    so at a few points (a step of a refinement) the factors of all their modes are formed in
+    one pass, summed with block-diagonal weights, and the series of all motions taken in one
+    Horner scheme: numpy's cost per operation is paid once, not once per motion. At many
+    points each motion is evaluated alone (arrays of one motion's modes stay in the cache;
+    together they cost more per entry, measured). A motion's value is its own sum either way,
+    to rounding: the zero weights of the other motions add exact zeros, and a value that is not
+    finite (s exactly on a damped pole) is recomputed motion by motion so that it stays in its
+    own motion's columns.
+
+    Parameters
+    ----------
+    motions : sequence of tuple
+        Per motion ``(w, weights, rest, coefficients, scale)``: the frequencies, shape (N,)
+        [rad/s]; their weights, (N, k); the rest R, (k,); the coefficients t_j, (J, k), J the
+        same for every motion; the frequency scale c [rad/s].
+    zeta : float
+        The damping ratio of every mode [-].
+
+    Attributes
+    ----------
+    columns : list of slice
+        Each motion's columns of the result.
+    """
+
+    def __init__(self, motions, zeta: float):
+        motions = self._motions = list(motions)
+        self._zeta = zeta
+        self._parts = None
+        widths = [motion[1].shape[1] for motion in motions]
+        edges = np.cumsum([0] + widths)
+        self.columns = [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+        self.n_modes = sum(motion[0].size for motion in motions)
+        # every motion's modes and weights side by side (the weights block-diagonal), its rest
+        # and its series' coefficients
+        weights = np.zeros((self.n_modes, edges[-1]))
+        row = 0
+        for (w, weight, _, _, _), columns in zip(motions, self.columns):
+            weights[row:row + w.size, columns] = weight
+            row += w.size
+        self.factors = ModalFactorSum(np.concatenate([motion[0] for motion in motions]),
+                                      weights, zeta)
+        self._rest = np.concatenate([motion[2] for motion in motions])
+        self._coefficients = np.concatenate([motion[3] for motion in motions], axis=1)
+        self._motion_of_column = np.repeat(np.arange(len(motions)), widths)
+        self._scales = np.array([float(motion[4]) for motion in motions])
+
+    def __call__(self, s: np.ndarray) -> np.ndarray:
+        """Every motion's D at flat complex s [rad/s], shape (npts, K) (complex): motion m in
+        the columns ``columns[m]`` (its k entries)."""
+        if len(self._motions) > 1 and s.size * self.n_modes > _JOINT:
+            return np.concatenate([part(s) for part in self._alone()], axis=1)
+        chunk = max(1, 1_000_000 // max(self.n_modes, 1))   # (arrays of points x modes)
+        if s.size <= chunk:
+            out = self._evaluate(s)
+        else:
+            out = np.concatenate([self._evaluate(s[start:start + chunk])
+                                  for start in range(0, s.size, chunk)])
+        if len(self._motions) > 1 and not np.isfinite(out).all():
+            return np.concatenate([part(s) for part in self._alone()], axis=1)
+        return out
+
+    def _alone(self) -> list:
+        """One CantileverModalSums per motion, made once."""
+        if self._parts is None:
+            self._parts = [CantileverModalSums([motion], self._zeta) for motion in self._motions]
+        return self._parts
+
+    def _evaluate(self, s: np.ndarray) -> np.ndarray:
+        total = self.factors(s)
+        total += self._rest
+        np.multiply((s**2)[:, None], total, out=total)  # (this order: one motion's rounding)
+        if self._scales.size == 1:
+            v = s / self._scales[0]
+        else:   # each column at its own motion's v
+            v = (s[:, None] / self._scales)[:, self._motion_of_column]
+        total -= tail_series(v, self._coefficients)
+        return total
 
 
 def chebyshev_resonance_coefficients(zeta: float, n_terms: int) -> np.ndarray:

@@ -62,7 +62,7 @@ import scipy.special
 from . import limits
 from .damping import (MAX_MODES, CantileverDamping, check_damping_convention,
                       check_damping_ratio, chebyshev_resonance_coefficients,
-                      hurwitz_tail_coefficients, ModalFactorSum, tail_series)
+                      hurwitz_tail_coefficients, CantileverModalSums)
 from .checks import as_frequency_array, check_range
 from .errors import describe
 
@@ -135,7 +135,7 @@ class Rod:
         self.damping_ratio = check_damping_ratio(damping_ratio)
         self.damping_convention = check_damping_convention(damping_convention)
         self._cantilever = None
-        self._modal: dict = {}     # N -> the modal sum's data (grid and few points alternate)
+        self._modal: dict = {}     # N -> the modal sums (grid and few points alternate)
 
     def __repr__(self) -> str:
         return (f"Rod(length={self.length!r}, stiffness={self.stiffness!r}, "
@@ -287,30 +287,41 @@ class Rod:
         :class:`~appendages.damping.CantileverDamping`, to rounding, at a fraction of its
         cost (no circle mean about the undamped poles); s = 0 gives 0.
         """
+        N = self._modal_sum_size(float(np.abs(s).max()) if s.size else 0.0)
+        if N is None:
+            return None
+        sums = self._modal.get(N)
+        if sums is None:
+            sums = self._modal[N] = CantileverModalSums([self._modal_motion(N)],
+                                                        self.damping_ratio)
+        return sums(s)[:, 0]
+
+    def _modal_sum_size(self, top: float) -> int | None:
+        """N of :meth:`_cantilever_modal_stiffness` at points up to ``top`` = max|s| [rad/s]:
+        a power of two, at least 16, with every mode up to 10 top; None beyond
+        :data:`~appendages.damping.MAX_MODES`."""
         Omega = math.pi / self.travel_time
-        top = float(np.abs(s).max()) if s.size else 0.0
         N = 16
         while (N + 0.5) * Omega < 10.0 * top:
             N *= 2
             if N > MAX_MODES:
                 return None
-        if N not in self._modal:
-            m, zeta = self.rigid_inertia, self.damping_ratio
-            b = np.arange(1, N + 1) - 0.5
-            j = np.arange(_TAIL_TERMS)
-            scale = 2.0 * m / math.pi**2
-            tail = (chebyshev_resonance_coefficients(zeta, _TAIL_TERMS) * Omega**2 * scale
-                    * scipy.special.zeta(4.0 + j, N + 0.5))
-            self._modal[N] = (N, ModalFactorSum(b * Omega, scale / b**2, zeta),
-                              scale * float(scipy.special.zeta(2.0, N + 0.5)), tail)
-        _, factor_sum, rest, tail = self._modal[N]
-        D = np.empty(s.size, dtype=np.complex128)
-        chunk = max(1, 1_000_000 // N)
-        for start in range(0, s.size, chunk):
-            ss = s[start:start + chunk]
-            series = tail_series(ss / Omega, tail)
-            D[start:start + chunk] = ss**2 * (factor_sum(ss) + rest) - series
-        return D
+        return N
+
+    def _modal_motion(self, N: int) -> tuple:
+        """The terms of :class:`~appendages.damping.CantileverModalSums` with N explicit modes
+        (:meth:`_cantilever_modal_stiffness`): frequencies, weights l_k**2, R_N, the tail's
+        coefficients, Omega."""
+        Omega = math.pi / self.travel_time
+        m, zeta = self.rigid_inertia, self.damping_ratio
+        b = np.arange(1, N + 1) - 0.5
+        j = np.arange(_TAIL_TERMS)
+        scale = 2.0 * m / math.pi**2
+        tail = (chebyshev_resonance_coefficients(zeta, _TAIL_TERMS) * Omega**2 * scale
+                * scipy.special.zeta(4.0 + j, N + 0.5))
+        return (b * Omega, (scale / b**2)[:, None],
+                np.array([scale * float(scipy.special.zeta(2.0, N + 0.5))]), tail[:, None],
+                Omega)
 
     def _cantilever_tail(self, s: np.ndarray, n: int) -> np.ndarray:
         """The damping of the cantilever modes k > n, exactly: ``l_k**2 = 2 m/(b_k pi)**2``,

@@ -212,6 +212,9 @@ class ExactReference:
                 self._congruences[key] = (mount.appendage, self._congruences[key][1] + K)
             else:
                 self._congruences[key] = (mount.appendage, K)
+        # complex once here, not at every product with the complex D (the same numbers)
+        self._congruences = {key: (appendage, K.astype(complex))
+                             for key, (appendage, K) in self._congruences.items()}
         self._clamped: dict = {}
         # the attitude response's right-hand sides: the unit torques on the rotations
         self._rotation = slice(2, 3) if not self.three_axis else slice(3, 6)

@@ -276,6 +276,74 @@ def test_tail_series_few_and_many_points():
                     assert abs(got[i, k] - complex(exact)) <= 1e-14 * size
 
 
+def _motion_alone(member, s):
+    """One motion's damped D at flat s through its own modal sum (the per-motion path)."""
+    D = member.dynamic_stiffness(s)
+    return D.reshape(s.size, -1)[:, [0, 1, 3]] if D.ndim == 3 else D[:, None]
+
+
+def _terms_size(member, s):
+    """Sum over its terms of the size of a motion's modal sum at s (each column): s^2 times
+    |weight| |factor| of every explicit mode and |R|, plus |t_j| |v|^(4+j) of its series; the
+    rounding of any order of summation is a few eps per term of it."""
+    w, weights, rest, coefficients, scale = member._modal_motion(
+        member._modal_sum_size(float(np.abs(s).max())))
+    zeta = member.damping_ratio
+    ss = s[:, None]
+    factor = (w**2 + 2 * zeta * w * ss) / ((ss - 1j * w) * (ss + 1j * w) + 2 * zeta * w * ss)
+    powers = np.abs(s / scale)[:, None] ** np.arange(4, 4 + coefficients.shape[0])
+    return (np.abs(s)[:, None] ** 2 * (np.abs(factor) @ np.abs(weights) + np.abs(rest))
+            + powers @ np.abs(coefficients))
+
+
+@pytest.mark.parametrize("n", [1, 3, 32, 33, 200, 3000])
+@pytest.mark.parametrize("section", ["rectangular", "tube"])
+def test_three_axis_modal_sums_of_every_motion_at_once(section, n):
+    """Beam.dynamic_stiffness6 sums the modes of both bending planes, torsion and axial motion
+    together (appendages.damping.CantileverModalSums): every entry is each motion's own sum
+    (the planar beam of its plane, the rod), to a few eps of the size of its terms (only the
+    order of summation and the choice of real or complex arithmetic differ), placed as
+    W6's layout places it (the x-z coupling negated), zero elsewhere; on and off the axis, a
+    few points (integer powers in the series), tens (Horner) and a grid (each motion alone);
+    bending planes that differ (a plate-like wing) and equal ones (a tube)."""
+    beam = (Beam.rectangular(6.0, 2.0, 0.04, 40.0, 7e8, damping_ratio=0.005)
+            if section == "rectangular" else
+            Beam.tube(4.0, 0.05, 0.001, 1600.0, 1.2e11, damping_ratio=0.02))
+    rng = np.random.default_rng(n)
+    w1 = float(beam.cantilever_frequencies(1)[0])
+    omega = w1 * 10 ** rng.uniform(-2, 2.5, n)
+    xy, xz = beam, beam.planar_view("xz")
+    places = [(xy, [(1, 1), (1, 5), (5, 5)], 1), (xz, [(2, 2), (2, 4), (4, 4)], -1),
+              (beam.axial_rod(), [(0, 0)], 1), (beam.torsion_rod(), [(3, 3)], 1)]
+    for s in (1j * omega, omega * (-0.02 + 1j)):
+        D6 = beam.dynamic_stiffness6(s)
+        filled = np.zeros((6, 6), bool)
+        for member, entries, sign in places:
+            alone, size = _motion_alone(member, s), _terms_size(member, s)
+            for column, (i, j) in enumerate(entries):
+                expected = alone[:, column] * (sign if i != j else 1)
+                assert np.all(np.abs(D6[:, i, j] - expected) <= 64 * 2.2e-16 * size[:, column])
+                np.testing.assert_array_equal(D6[:, j, i], D6[:, i, j])
+                filled[i, j] = filled[j, i] = True
+        assert np.all(D6[:, ~filled] == 0)
+
+
+def test_joint_modal_sums_keep_a_non_finite_value_in_its_own_motion():
+    """appendages.damping.CantileverModalSums: one motion's sum that is not finite (here a mode
+    whose square overflows) does not reach the other motions' columns through the zero
+    weights between them (0 x inf): they come out as each motion alone gives them."""
+    from appendages.damping import CantileverModalSums
+
+    beam = Beam.rectangular(6.0, 2.0, 0.04, 40.0, 7e8, damping_ratio=0.005)
+    good = beam._modal_motion(16)
+    w, weights, rest, coefficients, scale = beam.torsion_rod()._modal_motion(16)
+    broken = (np.concatenate([w[:-1], [1e200]]), weights, rest, coefficients, scale)
+    s = 1j * np.array([0.5, 3.0, 40.0])
+    joint = CantileverModalSums([good, broken], 0.005)(s)
+    np.testing.assert_array_equal(joint[:, :3], CantileverModalSums([good], 0.005)(s))
+    assert not np.isfinite(joint[:, 3]).all()
+
+
 def _coupled_pole(beam, hub_mass, hub_inertia, guess):
     """The coupled pole near ``guess`` of a hub carrying the beam at its centre, from the exact
     Z(s) = M_hub s^2 + G^T D(s) G: a root of ``(s - guess) det Z(s)`` (the factor removes the
