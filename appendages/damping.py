@@ -388,17 +388,17 @@ class CantileverModalSums:
     F the :class:`ModalFactorSum` of those modes with their weights (products of participation
     factors), R the participation of the modes beyond N and T the series
     ``sum_j t_j v**(4+j)`` of their resonance factors in ``v = s/c`` (c the motion's frequency
-    scale; :func:`tail_series`), as
-    :meth:`appendages.beam.Beam.dynamic_stiffness` and :meth:`appendages.rod.Rod.dynamic_stiffness`
-    derive them (cantilever convention). The motions of one appendage share its damping ratio,
-    so at a few points (a step of a refinement) the factors of all their modes are formed in
-    one pass, summed with block-diagonal weights, and the series of all motions taken in one
-    Horner scheme: numpy's cost per operation is paid once, not once per motion. At many
-    points each motion is evaluated alone (arrays of one motion's modes stay in the cache;
-    together they cost more per entry, measured). A motion's value is its own sum either way,
-    to rounding: the zero weights of the other motions add exact zeros, and a value that is not
-    finite (s exactly on a damped pole) is recomputed motion by motion so that it stays in its
-    own motion's columns.
+    scale; :func:`tail_series`), as :meth:`appendages.beam.Beam.dynamic_stiffness` and
+    :meth:`appendages.rod.Rod.dynamic_stiffness` derive them (cantilever convention). The
+    motions of one appendage share its damping ratio, so at a few points (a step of a
+    refinement) the factors of all their modes are formed in one pass and summed with
+    block-diagonal weights, and the series of all motions are taken together: numpy's cost per
+    operation is paid once, not once per motion. At many points each motion is evaluated
+    alone (arrays of one motion's modes stay in the cache; together they cost more per entry,
+    measured). A motion's value is its own sum either way, to rounding: the zero weights of
+    the other motions add exact zeros, and a value that is not finite (an overflow, s exactly
+    on a damped pole) is recomputed motion by motion, so that it stays in its own motion's
+    columns.
 
     Parameters
     ----------
@@ -416,9 +416,10 @@ class CantileverModalSums:
     """
 
     def __init__(self, motions, zeta: float):
-        motions = self._motions = list(motions)
-        self._zeta = zeta
-        self._parts = None
+        motions = list(motions)
+        # several motions: each alone too, for many points and for a value not finite
+        self._parts = None if len(motions) == 1 else [CantileverModalSums([motion], zeta)
+                                                      for motion in motions]
         widths = [motion[1].shape[1] for motion in motions]
         edges = np.cumsum([0] + widths)
         self.columns = [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
@@ -436,34 +437,30 @@ class CantileverModalSums:
         self._coefficients = np.concatenate([motion[3] for motion in motions], axis=1)
         self._motion_of_column = np.repeat(np.arange(len(motions)), widths)
         self._scales = np.array([float(motion[4]) for motion in motions])
+        self._scale = float(motions[0][4])
+        self._chunk = max(1, 1_000_000 // max(self.n_modes, 1))    # (arrays of points x modes)
 
     def __call__(self, s: np.ndarray) -> np.ndarray:
         """Every motion's D at flat complex s [rad/s], shape (npts, K) (complex): motion m in
         the columns ``columns[m]`` (its k entries)."""
-        if len(self._motions) > 1 and s.size * self.n_modes > _JOINT:
-            return np.concatenate([part(s) for part in self._alone()], axis=1)
-        chunk = max(1, 1_000_000 // max(self.n_modes, 1))   # (arrays of points x modes)
-        if s.size <= chunk:
-            out = self._evaluate(s)
-        else:
-            out = np.concatenate([self._evaluate(s[start:start + chunk])
-                                  for start in range(0, s.size, chunk)])
-        if len(self._motions) > 1 and not np.isfinite(out).all():
-            return np.concatenate([part(s) for part in self._alone()], axis=1)
+        if self._parts is None:         # one motion
+            if s.size <= self._chunk:
+                return self._evaluate(s)
+            return np.concatenate([self._evaluate(s[start:start + self._chunk])
+                                   for start in range(0, s.size, self._chunk)])
+        if s.size * self.n_modes > _JOINT:
+            return np.concatenate([part(s) for part in self._parts], axis=1)
+        out = self._evaluate(s)
+        if not np.isfinite(out).all():
+            return np.concatenate([part(s) for part in self._parts], axis=1)
         return out
-
-    def _alone(self) -> list:
-        """One CantileverModalSums per motion, made once."""
-        if self._parts is None:
-            self._parts = [CantileverModalSums([motion], self._zeta) for motion in self._motions]
-        return self._parts
 
     def _evaluate(self, s: np.ndarray) -> np.ndarray:
         total = self.factors(s)
         total += self._rest
         np.multiply((s**2)[:, None], total, out=total)  # (this order: one motion's rounding)
-        if self._scales.size == 1:
-            v = s / self._scales[0]
+        if self._parts is None:
+            v = s / self._scale
         else:   # each column at its own motion's v
             v = (s[:, None] / self._scales)[:, self._motion_of_column]
         total -= tail_series(v, self._coefficients)
