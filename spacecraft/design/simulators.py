@@ -56,7 +56,7 @@ import warnings
 import numpy as np
 
 __all__ = ["basilisk_runs", "basilisk_disturbances", "summary", "basilisk_wheel_summary",
-           "step_notes",
+           "peak_difference_text", "step_notes",
            "SIGNALS", "MIN_SAMPLES", "ACCURATE_STEP", "WHEEL_SPEED_WARNING"]
 
 #: Signals compared, in the report's order (those both responses have).
@@ -416,12 +416,18 @@ def step_notes(result, given: bool, differences: dict) -> list:
     return notes
 
 
-def _part(entry) -> str:
+def peak_difference_text(entry) -> str:
+    """A peak difference of :func:`spacecraft.basilisk.compare` (``entry``, or None) in words:
+    the difference and its share of the reference's peak, or, where it exceeds that peak (a
+    motion the reference barely has, e.g. a tip twist that only Basilisk's nonlinear
+    kinematics makes in a slew about the bending axes), the reference's peak itself: a share
+    of millions of per cent says nothing the two numbers do not say better."""
     if entry is None:
         return "n/a"
-    if entry["relative"] is None:
-        return f"{entry['peak_difference']:.3g}"
-    return f"{entry['peak_difference']:.3g} ({100.0 * entry['relative']:.3g} % of its peak)"
+    difference = f"{entry['peak_difference']:.3g}"
+    if entry["relative"] is None or entry["relative"] > 1.0:
+        return f"{difference} (above its peak there, {entry['peak']:.3g})"
+    return f"{difference} ({100.0 * entry['relative']:.3g} % of its peak)"
 
 
 def truth_label(scene) -> str:
@@ -462,7 +468,8 @@ def summary(differences: dict, truth_name: str = "the distributed beam (truth)")
     attitude = [n for n in ("theta", "theta_x", "theta_y", "theta_z") if n in chain]
     tips = sorted(n for n in chain if n.endswith(("_tip_deflection", "_tip_deflection_y",
                                                   "_tip_deflection_z", "_tip_twist")))
-    parts = [f"{name} [{_unit(name)}] differs from {truth_name} by {_part(truth.get(name))} "
-             f"and from the linear chain by {_part(chain.get(name))}"
+    parts = [f"{name} [{_unit(name)}] differs from {truth_name} by "
+             f"{peak_difference_text(truth.get(name))} and from the linear chain by "
+             f"{peak_difference_text(chain.get(name))}"
              for name in attitude + tips]
     return "; ".join(parts) if parts else "no common signals"

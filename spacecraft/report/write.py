@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from ..design.naming import MOTION_WORDS, controller_label, design_label, plural
+from ..design.simulators import peak_difference_text
 from .flown import basilisk_wheel_blocks, flown_blocks, flown_summary_lines
 from .output import MARKER, default_output_folder, output_folder
 from .pages import Tone, bad, markdown, markdown_text, number, render_html, warn
@@ -776,12 +777,9 @@ def _basilisk(data: dict) -> list:
         for name in d.get("basilisk_vs_chain", {}):
             row = [controller_label(kind), name]
             for key in ("basilisk_vs_truth", "basilisk_vs_chain", "chain_vs_truth"):
-                v = d.get(key, {}).get(name)
                 # 3 significant digits: the nonlinearity is often 1e-5 of the peak, which a
                 # fixed "0.00 %" would hide
-                row.append("n/a" if v is None else
-                           f"{_fmt(v['peak_difference'], 3)} ({100.0 * v['relative']:.3g} %)"
-                           if v["relative"] is not None else _fmt(v["peak_difference"], 3))
+                row.append(peak_difference_text(d.get(key, {}).get(name)))
             out.append(row)
         b.append(("p", f"{controller_label(kind)}: {e['summary']}"))
         b += [("p", f"{controller_label(kind)}: {note}.") for note in e.get("notes", [])]

@@ -612,6 +612,26 @@ def test_the_summary_names_the_truth_model_it_compares_with():
     assert "beam" not in said
 
 
+def test_a_difference_above_the_references_peak_is_given_beside_that_peak():
+    """A signal that the reference barely has (a tip twist of 1e-9 rad on the linear chain in
+    a slew about the bending axes, 6e-5 rad in Basilisk from its nonlinear kinematics) is
+    reported with the reference's peak, not as millions of per cent of it; a difference below
+    the peak keeps its share; a reference at exactly 0 is named so too."""
+    from spacecraft.design.simulators import peak_difference_text, summary
+
+    twist = {"peak": 1.0e-9, "peak_difference": 6.0e-5, "relative": 6.0e4}
+    assert peak_difference_text(twist) == "6e-05 (above its peak there, 1e-09)"
+    assert peak_difference_text({"peak": 0.0, "peak_difference": 2e-6, "relative": None}) == \
+        "2e-06 (above its peak there, 0)"
+    assert peak_difference_text({"peak": 2.0, "peak_difference": 0.5, "relative": 0.25}) == \
+        "0.5 (25 % of its peak)"
+    assert peak_difference_text(None) == "n/a"
+    said = summary({"basilisk_vs_chain": {"wing_tip_twist": twist}})
+    assert "wing_tip_twist [rad] differs from the distributed beam (truth) by n/a and from " \
+           "the linear chain by 6e-05 (above its peak there, 1e-09)" in said
+    assert "%" not in said
+
+
 @pytest.mark.slow
 @needs_bsk
 def test_a_wheel_no_motor_could_spin_is_warned_about_by_key():
