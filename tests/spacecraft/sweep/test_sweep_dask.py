@@ -272,3 +272,28 @@ def test_a_local_cluster_beside_another_warns_nothing():
     finally:
         if taken is not None:
             taken.close()
+
+
+def test_local_cluster_workers_keep_the_allocator_of_a_process_alone():
+    """The sweep's LocalCluster workers: no MALLOC_TRIM_THRESHOLD_ (Dask's nannies set 65536,
+    which makes glibc map and unmap every array of a frequency grid; spacecraft.sweep.execute,
+    LOCAL_CLUSTER_CONFIG), still one BLAS thread each; Dask's configuration as it was after."""
+    import os
+
+    import dask
+    import distributed  # noqa: F401  (its configuration's defaults)
+
+    from spacecraft.sweep.execute import open_executor
+
+    before = dask.config.get("distributed.nanny.pre-spawn-environ")
+    executor = open_executor(workers=2)
+    try:
+        environ = executor.client.run(lambda: {k: os.environ.get(k) for k in (
+            "MALLOC_TRIM_THRESHOLD_", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS")})
+    finally:
+        executor.close()
+    assert len(environ) == 2
+    for worker in environ.values():
+        assert worker["MALLOC_TRIM_THRESHOLD_"] is None
+        assert worker["OPENBLAS_NUM_THREADS"] == "1" and worker["OMP_NUM_THREADS"] == "1"
+    assert dask.config.get("distributed.nanny.pre-spawn-environ") == before
