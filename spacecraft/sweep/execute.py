@@ -5,10 +5,11 @@ Where the samples run
       (``--scheduler tcp://host:8786``); its workers need flexsat installed. An address is
       reached before any work or file (:func:`connect`): a wrong one, a refused connection or a
       service that does not answer as a Dask scheduler within :data:`SCHEDULER_TIMEOUT` is
-      one line naming the problem. Its workers run as its nannies start them: Dask's default
-      ``MALLOC_TRIM_THRESHOLD_`` costs a sample about 8 % (:data:`LOCAL_CLUSTER_CONFIG`; start
-      the workers with ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_`` set to
-      null in their Dask configuration to avoid it);
+      one line naming the problem. Its workers run as its nannies start them: with Dask's
+      default ``MALLOC_TRIM_THRESHOLD_`` a sample spends more system time
+      (:data:`LOCAL_CLUSTER_CONFIG`; start the workers with
+      ``distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_`` set to null in their Dask
+      configuration to avoid it);
     * otherwise a ``LocalCluster`` of worker processes, one single-threaded worker per core
       (``workers=`` / ``--workers`` to choose; Dask gives each worker process one BLAS thread);
     * a tiny sweep (one worker asked, or less than :data:`LOCAL_CLUSTER_SECONDS` of work) runs
@@ -91,9 +92,8 @@ TASK_RETRIES = 2
 #: ``MALLOC_TRIM_THRESHOLD_ = 65536`` (memory returned to the system as soon as 64 KiB are
 #: free at the top of the heap), which also fixes glibc's threshold for serving an allocation
 #: by its own mapping at 128 KiB: every array of a sample's frequency grids is then mapped,
-#: touched page by page and unmapped again. A sample costs about 8 % more CPU so (measured in
-#: one process, alternating, ``benchmarks/results/sweep_10000.md``), for memory the workers of
-#: a sweep, a few hundred MB, do not need back.
+#: touched page by page and unmapped again, system time for memory that the workers of a
+#: sweep, a few hundred MB, do not need back (``benchmarks/results/sweep_10000.md``).
 LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
                          "distributed.admin.system-monitor.interval": "5s",
                          "distributed.admin.tick.interval": "1s",
