@@ -416,18 +416,19 @@ def step_notes(result, given: bool, differences: dict) -> list:
     return notes
 
 
-def peak_difference_text(entry) -> str:
+def peak_difference_text(entry, *, short: bool = False) -> str:
     """A peak difference of :func:`spacecraft.basilisk.compare` (``entry``, or None) in words:
     the difference and its share of the reference's peak, or, where it exceeds that peak (a
     motion the reference barely has, e.g. a tip twist that only Basilisk's nonlinear
     kinematics makes in a slew about the bending axes), the reference's peak itself: a share
-    of millions of per cent says nothing the two numbers do not say better."""
+    of millions of per cent says nothing the two numbers do not say better. ``short``: for a
+    table whose heading says what the share is of."""
     if entry is None:
         return "n/a"
     difference = f"{entry['peak_difference']:.3g}"
     if entry["relative"] is None or entry["relative"] > 1.0:
-        return f"{difference} (above its peak there, {entry['peak']:.3g})"
-    return f"{difference} ({100.0 * entry['relative']:.3g} % of its peak)"
+        return f"{difference} ({'peak' if short else 'above its peak there,'} {entry['peak']:.3g})"
+    return f"{difference} ({100.0 * entry['relative']:.3g} %{'' if short else ' of its peak'})"
 
 
 def truth_label(scene) -> str:

@@ -767,7 +767,8 @@ def _basilisk(data: dict) -> list:
                    f"controller as flight software at {_fmt(first['sample_time'])} s (RK4 step "
                    f"{_fmt(first['dt'])} s); flexsat predicts the same sampled-data loop on the "
                    "linear chain and on the truth model (exact at the samples). Peak "
-                   "differences over the manoeuvre, relative to the reference's peak:"))
+                   "differences over the manoeuvre, relative to the reference's peak (its "
+                   "peak itself where the difference is larger):"))
     header = ["controller", "signal", f"Basilisk - flexsat: {first.get('truth', 'truth model')}",
               "Basilisk - flexsat linear chain (nonlinearity)",
               "flexsat: linear chain - truth (the chain's cost)"]
@@ -779,7 +780,7 @@ def _basilisk(data: dict) -> list:
             for key in ("basilisk_vs_truth", "basilisk_vs_chain", "chain_vs_truth"):
                 # 3 significant digits: the nonlinearity is often 1e-5 of the peak, which a
                 # fixed "0.00 %" would hide
-                row.append(peak_difference_text(d.get(key, {}).get(name)))
+                row.append(peak_difference_text(d.get(key, {}).get(name), short=True))
             out.append(row)
         b.append(("p", f"{controller_label(kind)}: {e['summary']}"))
         b += [("p", f"{controller_label(kind)}: {note}.") for note in e.get("notes", [])]

@@ -626,6 +626,9 @@ def test_a_difference_above_the_references_peak_is_given_beside_that_peak():
     assert peak_difference_text({"peak": 2.0, "peak_difference": 0.5, "relative": 0.25}) == \
         "0.5 (25 % of its peak)"
     assert peak_difference_text(None) == "n/a"
+    assert peak_difference_text(twist, short=True) == "6e-05 (peak 1e-09)"
+    assert peak_difference_text({"peak": 2.0, "peak_difference": 0.5, "relative": 0.25},
+                                short=True) == "0.5 (25 %)"
     said = summary({"basilisk_vs_chain": {"wing_tip_twist": twist}})
     assert "wing_tip_twist [rad] differs from the distributed beam (truth) by n/a and from " \
            "the linear chain by 6e-05 (above its peak there, 1e-09)" in said
