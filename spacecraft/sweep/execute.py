@@ -93,7 +93,9 @@ TASK_RETRIES = 2
 #: free at the top of the heap), which also fixes glibc's threshold for serving an allocation
 #: by its own mapping at 128 KiB: every array of a sample's frequency grids is then mapped,
 #: touched page by page and unmapped again, system time for memory that the workers of a
-#: sweep, a few hundred MB, do not need back (``benchmarks/results/sweep_10000.md``).
+#: sweep, a few hundred MB, do not need back (``benchmarks/results/sweep_10000.md``). A value
+#: in this process's environment is kept: the user's, or one that the nannies of an earlier
+#: Dask cluster in this process left there (they write it into ``os.environ``).
 LOCAL_CLUSTER_CONFIG = {"distributed.worker.profile.enabled": False,
                          "distributed.admin.system-monitor.interval": "5s",
                          "distributed.admin.tick.interval": "1s",

@@ -274,11 +274,16 @@ def test_a_local_cluster_beside_another_warns_nothing():
             taken.close()
 
 
-def test_local_cluster_workers_keep_the_allocator_of_a_process_alone():
+def test_local_cluster_workers_keep_the_allocator_of_a_process_alone(monkeypatch):
     """The sweep's LocalCluster workers: no MALLOC_TRIM_THRESHOLD_ (Dask's nannies set 65536,
     which makes glibc map and unmap every array of a frequency grid; spacecraft.sweep.execute,
-    LOCAL_CLUSTER_CONFIG), still one BLAS thread each; Dask's configuration as it was after."""
+    LOCAL_CLUSTER_CONFIG), still one BLAS thread each; Dask's configuration as it was after.
+    (A value already in this process's environment is the user's, or one that an earlier
+    cluster's nannies left there, as the other tests' clusters here do: it is kept, so the
+    test starts without one.)"""
     import os
+
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
 
     import dask
     import distributed  # noqa: F401  (its configuration's defaults)
