@@ -1760,7 +1760,7 @@ class Beam:
         tuple of 3 ndarrays of complex
             The three distinct entries (1,1), (1,2), (2,2), each of shape ``s.shape``.
         """
-        zeta, m, L, c0 = self.damping_ratio, self.mass, self.length, self.frequency_scale
+        zeta, c0 = self.damping_ratio, self.frequency_scale
         flat = s.ravel()
         skip = np.full(flat.size, -1, dtype=np.int64) if exclude is None \
             else np.asarray(exclude, dtype=np.int64).ravel()

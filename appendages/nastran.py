@@ -514,7 +514,6 @@ def modal_appendage(modes: NastranModes, *, root: int, units, axes=None, mass_ma
         rigid = D.T @ (M_full @ D)
         if gpwg is not None:
             _compare_rigid(rigid, gpwg, name, "the grid point weight generator's (GPWG)")
-        source = "mass_matrix"
     else:
         if gpwg is None and modes.rigid_body_mass is None:
             raise NastranError(f"{name}: no rigid mass: request the grid point weight generator "
