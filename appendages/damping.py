@@ -54,7 +54,7 @@ __all__ = ["CantileverDamping", "CONVENTIONS", "MAX_MODES", "check_damping_conve
 
 _REPAIR_POINTS = 32
 #: Most entries (points x modes) for which CantileverModalSums evaluates its motions together.
-_JOINT = 32768
+_JOINT = 49152
 #: Most cantilever modes summed explicitly at one point.
 MAX_MODES = 16384
 #: Relative gap below which cantilever frequencies form one group (equal frequencies).

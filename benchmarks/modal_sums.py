@@ -66,7 +66,7 @@ from appendages.beam import Beam
 
 POINTS = (1, 3, 30, 300, 1000, 3000, 10000)
 #: Table 2's points x modes (the points: the nearest whole number for each member).
-THRESHOLD_SIZES = (4096, 8192, 16384, 24576, 32768, 40960, 49152, 65536, 98304, 131072,
+THRESHOLD_SIZES = (4096, 8192, 16384, 24576, 32768, 40960, 49152, 65536, 81920, 98304, 131072,
                    196608, 294912)
 OMEGA_MIN, OMEGA_MAX = 1.0, 30.0     # rad/s
 TOLERANCE = 64 * np.finfo(float).eps
