@@ -112,6 +112,7 @@ def test_modal_sum_of_the_damped_rod_equals_the_closed_form(zeta):
                                    beam._cantilever_damping()(far)[0], rtol=1e-14)
 
 
+@pytest.mark.slow
 def test_rod_cantilever_damping_against_the_modal_sum():
     """D = m s^2 - s^4 sum_k l_k^2/(s^2 + 2 zeta w_k s + w_k^2) with l_k^2 = 2 m/((k - 1/2)
     pi)^2 and w_k = (k - 1/2) pi/tau (Blevins table 8-19), by mpmath.nsum in 30 digits:
@@ -151,6 +152,7 @@ def D_rod_mpmath(rod, s, dps=40):
 
 
 @pytest.mark.parametrize("zeta", [1e-4, 5e-3, 0.05, 0.15])
+@pytest.mark.slow
 def test_modal_sum_of_the_damped_rod_member_equals_the_closed_form(zeta):
     """A rod's damped D(s) by its modal sum (Rod._cantilever_modal_stiffness: the torsion and
     axial entries of W6 in the three-axis sweeps' exact loops) against the closed form
@@ -189,6 +191,7 @@ def test_modal_sum_of_the_damped_rod_member_equals_the_closed_form(zeta):
                                    rod._cantilever_damping()(far)[0, 0, 0], rtol=1e-14)
 
 
+@pytest.mark.slow
 def test_modal_sums_keep_their_data_for_every_number_of_modes():
     """A rod's and a beam's damped modal sums (the exact loops evaluate a long grid, whose top
     needs many modes, between evaluations at a few low frequencies, which need 16) keep the

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import warnings
 
+import pytest
 import scipy.optimize
 
 from appendages import FitWarning
@@ -18,6 +19,7 @@ from appendages import fitting
 from spacecraft.design.loop import DesignLoop
 
 
+@pytest.mark.slow
 def test_the_stepped_wings_xz_fit_converges(monkeypatch):
     statuses: dict = {}     # one fit (its bounds' arrays) -> the statuses of its runs
     alive = []              # those arrays, kept so that no later fit's reuses their id

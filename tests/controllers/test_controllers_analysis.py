@@ -243,6 +243,7 @@ def test_gain_margin_third_order_closed_form():
     assert m.gain_margin == pytest.approx(20 * math.log10(6 / k), rel=1e-12)
 
 
+@pytest.mark.slow
 def test_margins_flexible_loop_agree_with_python_control():
     plant = modal_plant(J, [(2.0, 0.002, 1.0, 0.004), (7.0, 0.002, 1.0, 0.002)])
     # tuned on the rigid hub (same J): the roll-off destabilises the 7 rad/s mode of this plant,

@@ -166,6 +166,7 @@ def test_export_into_folder_uses_system_name(tmp_path):
     assert read_model_description(str(path)).coSimulation.modelIdentifier == "my_body"
 
 
+@pytest.mark.slow
 def test_guid_is_deterministic_and_content_dependent(tmp_path):
     a = read_model_description(str(export(rigid_body(), tmp_path / "a.fmu", model_name="body"))).guid
     b = read_model_description(str(export(rigid_body(), tmp_path / "b.fmu", model_name="body"))).guid

@@ -228,6 +228,7 @@ def test_sampled_documentation_states_the_sampling():
 
 
 @pytest.mark.parametrize("version", VERSIONS)
+@pytest.mark.slow
 def test_state_nominals_in_the_model_description_and_the_me_api(version):
     """The nominals come from the model's scaling: for the loop plant (hub J = 10 kg m^2,
     modes at 3 and 12 rad/s with participations 0.05 and 0.03) a unit torque moves the
@@ -254,6 +255,7 @@ def test_state_nominals_in_the_model_description_and_the_me_api(version):
     assert list(values) == [nominals[n] for n in names]
 
 
+@pytest.mark.slow
 def test_nominals_can_be_given(tmp_path):
     path = export(hub(), tmp_path / "h.fmu", nominals=[1.0, 2.0, 1e-3, 3e-3])
     variables = {v.name: v for v in read_model_description(str(path)).modelVariables}

@@ -158,6 +158,7 @@ def assert_equal_to(result, expected, decimate=1):
 @pytest.mark.parametrize("plant_version,controller_version",
                          [("2.0", "2.0"), ("3.0", "3.0"), ("2.0", "3.0")])
 @pytest.mark.parametrize("divisions", [1, 5])
+@pytest.mark.slow
 def test_digital_lqr_loop_equals_the_monolithic_sampled_loop(plant_version, controller_version,
                                                              divisions):
     """Plant FMU (continuous) + digital LQR FMU (sampled every T), Gauss-Seidel master with

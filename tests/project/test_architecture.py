@@ -284,6 +284,7 @@ def test_no_import_circle(package):
 
 
 @pytest.mark.parametrize("package", _cases(REMAINING_PRIVATE))
+@pytest.mark.slow
 def test_no_private_name_imported_across_modules(package):
     _, private = _import_graph()
     found = [f"{m} (line {line}) uses {name}" for m, line, name in private
@@ -306,6 +307,7 @@ def test_test_modules_have_unique_names():
     assert not clashes, "test modules of the same name: " + "; ".join(clashes)
 
 
+@pytest.mark.slow
 def test_no_test_module_imports_another():
     """What several test modules share lives in tests/support, apart from the tests: a test
     module imported by another would run its module-level set-up there too, and hides the

@@ -48,6 +48,7 @@ def _foreign_private_accesses(path: Path) -> list:
 
 
 @pytest.mark.parametrize("package", ["appendages", "controllers", "fmu"])
+@pytest.mark.slow
 def test_no_private_attribute_of_another_module_is_used(package):
     found = [hit for path in sorted((ROOT / package).rglob("*.py"))
              for hit in _foreign_private_accesses(path)]

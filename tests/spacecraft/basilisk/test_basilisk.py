@@ -349,6 +349,7 @@ def test_two_chains_and_controller_kinds():
 
 
 @needs_bsk
+@pytest.mark.slow
 def test_slew_comparison_against_a_beam_truth():
     # The three differences of one call are consistent: per signal, |Basilisk - truth| <=
     # |Basilisk - chain| + |chain - truth| (triangle inequality of the peaks, with round-off
@@ -372,6 +373,7 @@ def test_slew_comparison_against_a_beam_truth():
 
 
 @needs_bsk
+@pytest.mark.slow
 def test_disturbances_are_held_as_in_the_sampled_loop():
     sc = winged(tapered_chain(3))
     # pulses of the size of the slew's own torque (7e-3 N*m peak at 0.1 deg): the terms the
@@ -390,6 +392,7 @@ def test_disturbances_are_held_as_in_the_sampled_loop():
 
 
 @needs_bsk
+@pytest.mark.slow
 def test_rigid_spacecraft_slews_past_180_degrees_exactly():
     # A one-body chain on a rigid root is folded into the hub: a rigid body, whose planar
     # rotation J theta'' = torque is linear at any angle. Basilisk's MRPs switch to the shadow

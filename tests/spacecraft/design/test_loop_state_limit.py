@@ -108,6 +108,7 @@ def test_an_lqr_is_refused_before_it_is_designed():
     assert stats.lqr_designs == 0 and stats.simulations == 0
 
 
+@pytest.mark.slow
 def test_a_scene_at_the_limit_runs():
     result = run(load_scene(scene(limit=BUILT)))
     assert max(loop.nstates for loop in result.loops.values()) == BUILT
@@ -115,6 +116,7 @@ def test_a_scene_at_the_limit_runs():
         "lowest coupled modes": K0[0.2] - 1 + N_MODES}
 
 
+@pytest.mark.slow
 def test_flexsat_run_exits_2_with_one_line_and_no_folder(tmp_path, capsys):
     path = tmp_path / "rod.toml"
     path.write_text(to_toml(scene()))
@@ -129,6 +131,7 @@ def test_flexsat_run_exits_2_with_one_line_and_no_folder(tmp_path, capsys):
                          "--limit", f"states={BUILT}"]) == 0
 
 
+@pytest.mark.slow
 def test_a_sweep_sample_over_the_limit_fails_with_its_reason():
     """The nominal rod (0.2 m: 34 states) runs; a sample of a thinner rod (0.1 m: k0 = 13,
     2 (3 + 12 + 6) = 42 states) is over the limit 40 and fails, counted with its reason."""
@@ -144,6 +147,7 @@ def test_a_sweep_sample_over_the_limit_fails_with_its_reason():
     assert "appendages[0].tip" in bad["error"]
 
 
+@pytest.mark.slow
 def test_the_tolerance_search_tries_no_truth_over_the_limit():
     """From the tolerance, the most modes the search may try are sized by the rod's real
     count: the truth at that n fits the limit and one more mode would not."""

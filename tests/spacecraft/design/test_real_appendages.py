@@ -147,6 +147,7 @@ def test_the_report_gives_the_modal_table_and_the_tables_of_each_appendage(resul
         modes[k]["frequency"] / (2 * math.pi), rel=1e-15)
 
 
+@pytest.mark.slow
 def test_the_scene_reads_without_warnings():
     scene = load_scene("real_appendages")
     assert scene.input_warnings == ()

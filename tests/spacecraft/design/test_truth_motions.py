@@ -64,6 +64,7 @@ def _run(**overrides):
     return DesignLoop(scene).run().data
 
 
+@pytest.mark.slow
 def test_the_tolerance_driven_truth_moves_every_tip_output(tmp_path):
     from spacecraft import write_report
 
@@ -90,6 +91,7 @@ def test_the_tolerance_driven_truth_moves_every_tip_output(tmp_path):
                 assert value > 0.0, (row["controller"], name, key)
 
 
+@pytest.mark.slow
 def test_root_loads_keep_the_axial_motion_too():
     """The root force along an appendage sees its axial motion: with outputs.root_loads each
     uniform beam keeps its lowest axial mode too (and, without tip outputs, still the lowest of
@@ -101,6 +103,7 @@ def test_root_loads_keep_the_axial_motion_too():
         assert all(counts[m] >= 1 for m in (*SEEN, "axial"))
 
 
+@pytest.mark.slow
 def test_a_given_n_modes_is_kept_and_its_unmodelled_tips_are_named():
     data = _run(**{"fidelity.n_modes": 3, "fidelity.tolerance": None})
     assert data["fidelity"]["motions_kept"] == []
@@ -179,6 +182,7 @@ def test_the_resolved_frequency_of_counts_per_motion(beam, method):
                                       else rods[motion], kind)(max(count, 1))[:count]]
 
 
+@pytest.mark.slow
 def test_the_truth_models_planar_view_is_its_x_y_part_and_the_report_names_every_mode():
     """The truth beam's planar model (x-y bending: its W, poles, the W plot's resonances) is
     the x-y part of its three-axis model, and the report counts every motion's modes."""

@@ -9,6 +9,7 @@ from spacecraft.scene.read import SceneError, example_scenes, load_scene, scene_
 from scenes import scene_with
 
 
+@pytest.mark.slow
 def test_embedded_scenes_load():
     names = example_scenes()
     assert {"default", "single_boom", "two_wings", "hinged_wing"} <= set(names)

@@ -256,6 +256,7 @@ FLOWN_KEYS = [
 ]
 
 
+@pytest.mark.slow
 def test_wild_values_at_every_flown_key():
     """Every flown key with each wild value, in a planar and a three-axis scene: a Scene or a
     one-line SceneError naming a key."""

@@ -114,6 +114,7 @@ def test_rfem_chains_of_every_beam_are_the_python_apis():
             np.testing.assert_array_equal(getattr(got, name), getattr(want, name), err_msg=name)
 
 
+@pytest.mark.slow
 def test_a_null_tip_body_is_the_bare_beam():
     data = scene_data()
     data["appendages"][2]["tip"] = {"mass": 0.0}
@@ -217,6 +218,7 @@ def test_bad_values_are_refused_by_key(edit, match):
         load_scene(data)
 
 
+@pytest.mark.slow
 def test_unit_slips_are_warned_about_by_key():
     data = scene_data()
     data["appendages"][0]["stepped_beam"]["segments"][1]["youngs_modulus"] = 2.0e5

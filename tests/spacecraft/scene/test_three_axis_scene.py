@@ -212,6 +212,7 @@ def test_run_writes_the_per_axis_report_plots_fmus_and_ssp(report):
     assert series["units"][series["columns"].index("wing_left_tip_twist")] == "rad"
 
 
+@pytest.mark.slow
 def test_run_frequencies_equal_the_spacecraft_built_in_python(report):
     """The scene's exact coupled frequencies against the example built directly (the boom's
     orientation from its axis; an axisymmetric tube, so its roll does not matter): agreement
@@ -242,6 +243,7 @@ def test_run_frequencies_equal_the_spacecraft_built_in_python(report):
     np.testing.assert_allclose(truth.natural_frequencies(12), exact, rtol=1e-5)
 
 
+@pytest.mark.slow
 def test_digital_controllers_in_a_three_axis_scene():
     """controller.sample_rate = 10 Hz: PD and LQR discretised, closed as sampled-data loops;
     both stable on the truth model and at the target after 120 s (1e-2 of the slew)."""

@@ -76,6 +76,7 @@ def default_scene_data():
         return tomllib.load(stream)
 
 
+@pytest.mark.slow
 def test_the_embedded_scenes_look_meant():
     for name in example_scenes():
         assert load_scene(name).input_warnings == (), name
@@ -281,6 +282,7 @@ def test_natural_frequency_from_bandwidth_against_the_direct_formula(damping):
                                                                                      rel=1e-15)
 
 
+@pytest.mark.slow
 def test_a_run_reports_a_sensor_noise_slip_once_by_key():
     """A sensor level in arcsec/sqrt(Hz) given as rad/sqrt(Hz): warned about by key when the
     scene is read, and not again by :class:`controllers.SensorNoise` when the run builds the

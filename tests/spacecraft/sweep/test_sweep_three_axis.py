@@ -171,6 +171,7 @@ def test_each_sample_is_the_design_loops_run_of_the_sampled_scene():
         assert all(table[f"peak_torque_{a}"][i] > 0 for a in "xyz")
 
 
+@pytest.mark.slow
 def test_a_tensor_that_is_no_rigid_bodys_is_a_failed_sample_counted_apart():
     """A grid over two principal moments whose low ends are each valid but break the triangle
     inequality together (J_xx + J_yy >= J_zz: 42 + 42 < 90, while 42 + 60 and 60 + 42 are not):
