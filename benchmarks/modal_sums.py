@@ -192,27 +192,23 @@ def main() -> int:
             beam.dynamic_stiffness6(points(2))
             [sums] = joint_sums(beam)
             modes = int(sums.n_modes)
-            rows1, rows2 = [], []
             loads = [load()]
-            for n in POINTS:
-                s = points(n)
-                r = compare(together, alone, beam, s, seconds)
-                r.update(points=n, points_x_modes=n * modes,
-                         joint=n * modes <= damping._JOINT)
-                rows1.append(r)
-                print(name, "together/alone", n, f"{r['ratio_median']:.3f}",
-                      f"{r['largest_difference']:.1e}", file=sys.stderr, flush=True)
-            loads.append(load())
-            for size in THRESHOLD_SIZES:
-                n = max(1, round(size / modes))
-                s = points(n)
-                r = compare(forced, together, beam, s, seconds)
-                r.update(points=n, points_x_modes=n * modes,
-                         joint=n * modes <= damping._JOINT)
-                rows2.append(r)
-                print(name, "forced/shipped", n, f"{r['ratio_median']:.3f}",
-                      f"{r['largest_difference']:.1e}", file=sys.stderr, flush=True)
-            loads.append(load())
+
+            def rows(label, first, second, point_counts):
+                out = []
+                for n in point_counts:
+                    r = compare(first, second, beam, points(n), seconds)
+                    r.update(points=n, points_x_modes=n * modes,
+                             joint=n * modes <= damping._JOINT)
+                    out.append(r)
+                    print(name, label, n, f"{r['ratio_median']:.3f}",
+                          f"{r['largest_difference']:.1e}", file=sys.stderr, flush=True)
+                loads.append(load())
+                return out
+
+            rows1 = rows("together/alone", together, alone, POINTS)
+            rows2 = rows("forced/shipped", forced, together,
+                         [max(1, round(size / modes)) for size in THRESHOLD_SIZES])
             if len(joint_sums(beam)) != 1:
                 print(f"warning: {name}: the rows did not all use the same modes; points x "
                       "modes is wrong for some", file=sys.stderr)
